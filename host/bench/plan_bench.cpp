@@ -1,0 +1,28 @@
+// Planning throughput on part.gcode (not a ctest test): prints "plan throughput: N lines/s".
+#include <fmt/format.h>
+
+#include <chrono>
+#include <string>
+
+#include "fpgacnc/plan/planner.h"
+
+int main(int argc, char** argv) {
+  const std::string path = argc > 1 ? argv[1] : std::string(FPGACNC_CORPUS_DIR) + "/part.gcode";
+  fpgacnc::config::MachineConfig cfg;
+  double best = 0.0;
+  uint64_t lines = 0;
+  for (int rep = 0; rep < 5; ++rep) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto plan = fpgacnc::plan::plan_gcode_file(path, cfg, {});
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    lines = 0;
+    for (const auto& it : plan.items) {
+      if (const auto* seg = std::get_if<fpgacnc::plan::Segment>(&it)) {
+        lines = std::max<uint64_t>(lines, static_cast<uint64_t>(seg->source_line));
+      }
+    }
+    best = std::max(best, static_cast<double>(lines) / s);
+  }
+  fmt::print("plan throughput: {:.0f} lines/s ({} on {} lines, best of 5)\n", best, path, lines);
+  return 0;
+}

@@ -1,0 +1,110 @@
+// fpgacnc plan FILE [--config F] [--csv OUT] [--hex OUT] [--feed-override PCT]
+#include <fmt/format.h>
+
+#include <fstream>
+#include <memory>
+
+#include "commands.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/plan/stepfile.h"
+#include "fpgacnc/protocol/v1.h"
+
+namespace fpgacnc::cli {
+namespace {
+
+struct PlanArgs {
+  std::string input;
+  std::string csv_out;
+  std::string hex_out;
+  bool quiet = false;
+  CommonOptions common;
+};
+
+void print_summary(const plan::Plan& p, const config::MachineConfig& cfg) {
+  const auto& s = p.stats;
+  fmt::print(
+      "summary: {} segments ({} rapid, {} cutting, {} arc chords), {} dwells, {} heater "
+      "commands (recorded, not sent by v1)\n",
+      s.segments, s.rapid_segments, s.cutting_segments, s.arc_chords, s.dwells, s.heater_commands);
+  fmt::print(
+      "path length {:.3f} mm, estimated time {:.1f} s (no acceleration), feed override "
+      "{}%\n",
+      s.path_length_mm, s.estimated_time_s, cfg.feed_override_pct);
+  fmt::print("v1 init numerators X {} Y {}\n", p.numerator[0], p.numerator[1]);
+  fmt::print(
+      "warnings: {} feeds clamped to [1, 65535], {} feeds limited by axis max, {} moves "
+      "split (> INT32_MAX steps), {} Z/E-only moves not driven by v1\n",
+      s.feed_clamped, s.feed_limited, s.split_moves, s.ze_only_moves);
+  if (p.input.modal_arc_as_line || p.input.arc_radius_mismatch) {
+    fmt::print(
+        "input warnings: {} modal G2/G3 lines without I/J/R run as straight lines, {} arcs "
+        "whose end radius differs from the start radius (planned as spirals)\n",
+        p.input.modal_arc_as_line, p.input.arc_radius_mismatch);
+  }
+  fmt::print("final position: steps X {} Y {} Z {} E {}; mm X {:.4f} Y {:.4f} Z {:.4f} E {:.4f}\n",
+             p.final_steps[0], p.final_steps[1], p.final_steps[2], p.final_steps[3], p.final_mm[0],
+             p.final_mm[1], p.final_mm[2], p.final_mm[3]);
+}
+
+void run_plan(const PlanArgs& a) {
+  const config::MachineConfig cfg = load_config(a.common);
+  plan::PlanOptions po;
+  po.feed_override_pct = cfg.feed_override_pct;
+  const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
+  // Packing validates every segment for v1 before anything is written.
+  const auto bytes = protocol::v1::job_bytes(p);
+  if (!a.quiet) {
+    size_t idx = 0;
+    std::string out;
+    for (const auto& item : p.items) {
+      if (const auto* s = std::get_if<plan::Segment>(&item)) {
+        out += fmt::format("{:6} line {:6} code {} steps X {:9} Y {:9} Z {:7} E {:7} feed {}\n",
+                           idx++, s->source_line, s->code, s->steps[0], s->steps[1], s->steps[2],
+                           s->steps[3], s->feed_v1);
+      } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+        out += fmt::format("     - line {:6} dwell {:.3f} s\n", d->source_line, d->seconds);
+      } else if (const auto* h = std::get_if<plan::HeaterCommand>(&item)) {
+        out += fmt::format("     - line {:6} heater M{} S{} (not sent by v1)\n", h->source_line,
+                           h->mcode, h->s);
+      }
+      if (out.size() > (1 << 16)) {
+        std::fwrite(out.data(), 1, out.size(), stdout);
+        out.clear();
+      }
+    }
+    std::fwrite(out.data(), 1, out.size(), stdout);
+  }
+  print_summary(p, cfg);
+  if (!a.csv_out.empty()) plan::write_step_file(a.csv_out, p, cfg);
+  if (!a.hex_out.empty()) {
+    std::ofstream f(a.hex_out);
+    if (!f) throw std::runtime_error(fmt::format("{}: error: cannot create file", a.hex_out));
+    // One packet per line: the init packet, then each motion packet.
+    size_t pos = 0;
+    auto line = [&](size_t n) {
+      for (size_t i = 0; i < n; ++i) f << (i ? " " : "") << fmt::format("{:02X}", bytes[pos + i]);
+      f << '\n';
+      pos += n;
+    };
+    line(protocol::v1::kInitSize);
+    while (pos < bytes.size()) line(protocol::v1::kMotionSize);
+    if (!f) throw std::runtime_error(fmt::format("{}: error: write error", a.hex_out));
+  }
+}
+
+}  // namespace
+
+void register_plan(CLI::App& app) {
+  auto args = std::make_shared<PlanArgs>();
+  auto* sub = app.add_subcommand("plan", "Plan a G-code file (or step-file CSV) into v1 segments");
+  sub->add_option("FILE", args->input, "G-code file or step-file CSV")->required();
+  sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
+  sub->add_option("--csv", args->csv_out, "write the segments as a step-file CSV");
+  sub->add_option("--hex", args->hex_out, "write the v1 byte stream as hex, one packet a line");
+  sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
+      ->check(CLI::Range(1.0, 1000.0));
+  sub->add_flag("-q,--quiet", args->quiet, "print only the summary");
+  sub->callback([args] { run_plan(*args); });
+}
+
+}  // namespace fpgacnc::cli

@@ -1,0 +1,57 @@
+// Machine configuration: loaded from a TOML file (see host/machine.example.toml).
+// Defaults match the original laboratory machine (DE1-SoC at 50 MHz, 1/32 microstep GT2 belt,
+// 20-tooth pulley: 160 steps/mm on X and Y; 400 steps/mm on a T8 lead-screw Z; 100 steps/mm on E).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "fpgacnc/error.h"
+
+namespace fpgacnc::config {
+
+enum Axis : int { kX = 0, kY = 1, kZ = 2, kE = 3 };
+inline constexpr int kAxes = 4;
+inline constexpr std::array<char, kAxes> kAxisNames{'X', 'Y', 'Z', 'E'};
+
+struct StepTiming {  // in clocks of clk_hz
+  uint32_t step_high = 100;
+  uint32_t step_low = 100;
+  uint32_t dir_setup = 200;
+  uint32_t dir_hold = 200;
+};
+
+struct MachineConfig {
+  std::array<double, kAxes> steps_per_mm{160.0, 160.0, 400.0, 100.0};
+  std::array<double, kAxes> max_feed_mm_min{12000.0, 12000.0, 600.0, 3000.0};
+  uint64_t clk_hz = 50'000'000;
+  uint32_t baud = 115200;
+  std::string port;             // "" = none given
+  std::string protocol = "v1";  // only "v1" for now
+  double rapid_feed_mm_min = 3000.0;
+  double default_feed_mm_min = 1000.0;  // feed before the first F word
+  double arc_tolerance_mm = 0.01;       // max chord sagitta
+  StepTiming step_timing;
+  double ack_timeout_s = 10.0;
+  double feed_override_pct = 100.0;
+  // true: G1/G2/G3 cut only while M3/M4 is active with S>0 (or no S given);
+  // false: original v1 semantics, every G1/G2/G3 is laser-on.
+  bool laser_requires_m3 = true;
+};
+
+// Thrown for an unreadable file, a syntax error, an unknown key or a wrong type/value.
+// what(): "FILE:LINE:COL: error: key 'a.b': MESSAGE".
+class Error : public SourceError {
+ public:
+  using SourceError::SourceError;
+};
+
+// Loads a TOML file; keys absent from the file keep their defaults.
+MachineConfig load_machine_config(const std::string& path);
+// Same from TOML text (name used in error messages).
+MachineConfig parse_machine_config(const std::string& text, const std::string& name);
+// Checks ranges (positive steps/mm, feeds, clk, baud, protocol name); throws Error naming `name`.
+void validate(const MachineConfig& cfg, const std::string& name);
+
+}  // namespace fpgacnc::config

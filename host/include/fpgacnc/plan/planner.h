@@ -1,0 +1,106 @@
+// Planner: interpreter moves -> v1 segments (straight moves in integer steps).
+// mm -> steps rounds the ABSOLUTE target (std::llround(mm * steps_per_mm)) so rounding never
+// accumulates; arcs are cut into chords whose sagitta is within the arc tolerance; a move longer
+// than a v1 packet can carry (|steps| > INT32_MAX) is split into equal parts, never clamped.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/gcode/interpreter.h"
+
+namespace fpgacnc::plan {
+
+using Steps4 = std::array<int64_t, 4>;  // X Y Z E
+
+struct Segment {
+  // 0 rapid / laser off, 1 G1, 2 G2 chord, 3 G3 chord. A non-cutting G1/G2/G3 (laser off)
+  // is code 0 but keeps its programmed feed.
+  uint8_t code = 0;
+  Steps4 steps{};            // relative steps of this segment
+  uint16_t feed_v1 = 1;      // dominant axis feed, mm/min, in [1, 65535]
+  double length_mm = 0.0;    // XYZ path length of the segment
+  double feed_mm_min = 0.0;  // commanded path feed (rapid feed for rapids)
+  int source_line = 0;       // G-code (or step file) line
+  Steps4 target{};           // absolute position in steps after the segment
+};
+
+struct Dwell {
+  double seconds = 0.0;
+  int source_line = 0;
+};
+
+// M104/M109/M140/M190, carried for a future heater-capable protocol; the v1 packer skips them.
+struct HeaterCommand {
+  int mcode = 0;
+  double s = 0.0;
+  bool has_s = false;
+  int source_line = 0;
+};
+
+using PlanItem = std::variant<Segment, Dwell, HeaterCommand>;
+
+struct Stats {
+  uint64_t segments = 0;
+  uint64_t rapid_segments = 0;    // code 0
+  uint64_t cutting_segments = 0;  // code 1..3
+  uint64_t arc_chords = 0;
+  uint64_t dwells = 0;
+  uint64_t heater_commands = 0;  // recorded, not sent by v1
+  uint64_t feed_clamped = 0;     // v1 feed outside [1, 65535] (warning)
+  uint64_t feed_limited = 0;     // feed reduced to respect an axis max feed (warning)
+  uint64_t split_moves = 0;      // moves split because |steps| > INT32_MAX
+  uint64_t ze_only_moves = 0;    // Z/E-only moves not driven by v1 (sent as 0,0 steps)
+  double path_length_mm = 0.0;
+  double estimated_time_s = 0.0;  // sum of length / feed plus dwells (no acceleration)
+};
+
+struct Plan {
+  std::vector<PlanItem> items;
+  Stats stats;
+  std::array<uint32_t, 2> numerator{18'750'000, 18'750'000};  // v1 init packet (X, Y)
+  Steps4 final_steps{};
+  std::array<double, 4> final_mm{};
+  std::string source;  // input file name
+  gcode::Stats input;  // interpreter statistics (empty for a step file)
+};
+
+struct PlanOptions {
+  double feed_override_pct = 100.0;  // applies to feeds, not to rapids
+};
+
+// v1 init numerator for one axis: clk_hz * 60 / steps_per_mm (integer). Throws if it does not fit.
+uint32_t v1_numerator(uint64_t clk_hz, double steps_per_mm);
+
+// Point on an arc cut into chords: chord end points in mm (the last is exactly move.end).
+std::vector<gcode::Vec4> arc_chord_points(const gcode::Move& move, double tolerance_mm);
+
+class Planner {
+ public:
+  Planner(const config::MachineConfig& cfg, PlanOptions options);
+  void add(const gcode::Command& command);
+  Plan finish();  // moves the plan out
+
+ private:
+  void add_move(const gcode::Move& m);
+  void add_straight(const gcode::Vec4& target_mm, uint8_t code, double feed, bool rapid, int line);
+  config::MachineConfig cfg_;
+  PlanOptions opt_;
+  Plan plan_;
+  Steps4 pos_{};  // absolute steps
+};
+
+Plan plan_program(const gcode::Program& program, const config::MachineConfig& cfg,
+                  PlanOptions options);
+// Parses and plans a G-code file in one streaming pass (no intermediate command list).
+Plan plan_gcode_file(const std::string& path, const config::MachineConfig& cfg,
+                     PlanOptions options);
+// G-code file or step-file CSV (by extension .csv or by a CSV header in the first line).
+Plan plan_input_file(const std::string& path, const config::MachineConfig& cfg,
+                     PlanOptions options);
+
+}  // namespace fpgacnc::plan

@@ -1,0 +1,158 @@
+#include "fpgacnc/config/machine.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <sstream>
+#include <toml.hpp>
+
+namespace fpgacnc::config {
+namespace {
+
+class Reader {
+ public:
+  Reader(std::string name) : name_(std::move(name)) {}
+
+  [[noreturn]] void fail(const toml::value& v, const std::string& key, const std::string& msg) {
+    const auto loc = v.location();
+    throw Error(name_, static_cast<int>(loc.line()), static_cast<int>(loc.column()),
+                fmt::format("key '{}': {}", key, msg));
+  }
+
+  double number(const toml::value& v, const std::string& key) {
+    if (v.is_integer()) return static_cast<double>(v.as_integer());
+    if (v.is_floating()) return v.as_floating();
+    fail(v, key, "expected a number");
+  }
+  uint64_t unsigned_int(const toml::value& v, const std::string& key, uint64_t max) {
+    if (!v.is_integer()) fail(v, key, "expected an integer");
+    const auto i = v.as_integer();
+    if (i < 0 || static_cast<uint64_t>(i) > max) fail(v, key, "out of range");
+    return static_cast<uint64_t>(i);
+  }
+  std::string string(const toml::value& v, const std::string& key) {
+    if (!v.is_string()) fail(v, key, "expected a string");
+    return v.as_string().str;
+  }
+  bool boolean(const toml::value& v, const std::string& key) {
+    if (!v.is_boolean()) fail(v, key, "expected true or false");
+    return v.as_boolean();
+  }
+  void axes(const toml::value& v, const std::string& key, std::array<double, kAxes>& out) {
+    if (!v.is_table()) fail(v, key, "expected a table with keys x, y, z, e");
+    for (const auto& [k, sub] : v.as_table()) {
+      const std::string full = key + "." + k;
+      int a = -1;
+      if (k == "x") a = kX;
+      if (k == "y") a = kY;
+      if (k == "z") a = kZ;
+      if (k == "e") a = kE;
+      if (a < 0) fail(sub, full, "unknown key (expected x, y, z or e)");
+      const double d = number(sub, full);
+      if (!(d > 0.0)) fail(sub, full, "must be > 0");
+      out[static_cast<size_t>(a)] = d;
+    }
+  }
+
+  MachineConfig read(const toml::value& root) {
+    MachineConfig c;
+    for (const auto& [k, v] : root.as_table()) {
+      if (k == "steps_per_mm") {
+        axes(v, k, c.steps_per_mm);
+      } else if (k == "max_feed_mm_min") {
+        axes(v, k, c.max_feed_mm_min);
+      } else if (k == "clk_hz") {
+        c.clk_hz = unsigned_int(v, k, 1'000'000'000'000ULL);
+        if (c.clk_hz == 0) fail(v, k, "must be > 0");
+      } else if (k == "baud") {
+        c.baud = static_cast<uint32_t>(unsigned_int(v, k, 100'000'000));
+        if (c.baud == 0) fail(v, k, "must be > 0");
+      } else if (k == "port") {
+        c.port = string(v, k);
+      } else if (k == "protocol") {
+        c.protocol = string(v, k);
+        if (c.protocol != "v1") fail(v, k, "only \"v1\" is supported");
+      } else if (k == "rapid_feed_mm_min") {
+        c.rapid_feed_mm_min = positive(v, k);
+      } else if (k == "default_feed_mm_min") {
+        c.default_feed_mm_min = positive(v, k);
+      } else if (k == "arc_tolerance_mm") {
+        c.arc_tolerance_mm = positive(v, k);
+      } else if (k == "ack_timeout_s") {
+        c.ack_timeout_s = positive(v, k);
+      } else if (k == "feed_override") {
+        c.feed_override_pct = positive(v, k);
+      } else if (k == "laser_requires_m3") {
+        c.laser_requires_m3 = boolean(v, k);
+      } else if (k == "step_timing") {
+        if (!v.is_table()) fail(v, k, "expected a table");
+        for (const auto& [tk, tv] : v.as_table()) {
+          const std::string full = k + "." + tk;
+          const auto clocks = static_cast<uint32_t>(unsigned_int(tv, full, 0xFFFFFFFFu));
+          if (tk == "step_high") {
+            c.step_timing.step_high = clocks;
+          } else if (tk == "step_low") {
+            c.step_timing.step_low = clocks;
+          } else if (tk == "dir_setup") {
+            c.step_timing.dir_setup = clocks;
+          } else if (tk == "dir_hold") {
+            c.step_timing.dir_hold = clocks;
+          } else {
+            fail(tv, full, "unknown key");
+          }
+          if (clocks == 0) fail(tv, full, "must be >= 1 clock");
+        }
+      } else {
+        fail(v, k, "unknown key");
+      }
+    }
+    return c;
+  }
+
+ private:
+  double positive(const toml::value& v, const std::string& key) {
+    const double d = number(v, key);
+    if (!(d > 0.0) || d > 1e9) fail(v, key, "must be > 0");
+    return d;
+  }
+  std::string name_;
+};
+
+MachineConfig parse_stream(std::istream& in, const std::string& name) {
+  toml::value root;
+  try {
+    root = toml::parse(in, name);
+  } catch (const std::exception& e) {
+    throw Error(name, 0, 0, fmt::format("TOML syntax: {}", e.what()));
+  }
+  MachineConfig c = Reader(name).read(root);
+  validate(c, name);
+  return c;
+}
+
+}  // namespace
+
+MachineConfig load_machine_config(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path, 0, 0, "cannot open configuration file");
+  return parse_stream(f, path);
+}
+
+MachineConfig parse_machine_config(const std::string& text, const std::string& name) {
+  std::istringstream s(text);
+  return parse_stream(s, name);
+}
+
+void validate(const MachineConfig& c, const std::string& name) {
+  for (int a = 0; a < kAxes; ++a) {
+    if (!(c.steps_per_mm[static_cast<size_t>(a)] > 0.0)) {
+      throw Error(name, 0, 0,
+                  fmt::format("steps_per_mm.{} must be > 0", kAxisNames[static_cast<size_t>(a)]));
+    }
+  }
+  if (c.protocol != "v1") throw Error(name, 0, 0, "protocol: only \"v1\" is supported");
+  if (c.clk_hz == 0 || c.baud == 0) throw Error(name, 0, 0, "clk_hz and baud must be > 0");
+  if (!(c.feed_override_pct > 0.0)) throw Error(name, 0, 0, "feed_override must be > 0");
+}
+
+}  // namespace fpgacnc::config

@@ -1,0 +1,83 @@
+#include <gtest/gtest.h>
+
+#include "fpgacnc/config/machine.h"
+
+using fpgacnc::config::MachineConfig;
+
+TEST(Config, DefaultsMatchTheOriginalMachine) {
+  MachineConfig c;
+  EXPECT_EQ(c.steps_per_mm[0], 160.0);
+  EXPECT_EQ(c.steps_per_mm[1], 160.0);
+  EXPECT_EQ(c.steps_per_mm[2], 400.0);
+  EXPECT_EQ(c.steps_per_mm[3], 100.0);
+  EXPECT_EQ(c.clk_hz, 50'000'000u);
+  EXPECT_EQ(c.baud, 115200u);
+  EXPECT_EQ(c.rapid_feed_mm_min, 3000.0);
+  EXPECT_EQ(c.arc_tolerance_mm, 0.01);
+  EXPECT_EQ(c.step_timing.step_high, 100u);
+  EXPECT_EQ(c.step_timing.dir_setup, 200u);
+  EXPECT_EQ(c.ack_timeout_s, 10.0);
+  EXPECT_TRUE(c.laser_requires_m3);
+}
+
+TEST(Config, ExampleFileLoadsAndEqualsDefaults) {
+  const auto c = fpgacnc::config::load_machine_config(FPGACNC_HOST_DIR "/machine.example.toml");
+  MachineConfig d;
+  EXPECT_EQ(c.steps_per_mm, d.steps_per_mm);
+  EXPECT_EQ(c.max_feed_mm_min, d.max_feed_mm_min);
+  EXPECT_EQ(c.clk_hz, d.clk_hz);
+  EXPECT_EQ(c.baud, d.baud);
+  EXPECT_EQ(c.port, d.port);
+  EXPECT_EQ(c.rapid_feed_mm_min, d.rapid_feed_mm_min);
+  EXPECT_EQ(c.default_feed_mm_min, d.default_feed_mm_min);
+  EXPECT_EQ(c.arc_tolerance_mm, d.arc_tolerance_mm);
+  EXPECT_EQ(c.ack_timeout_s, d.ack_timeout_s);
+  EXPECT_EQ(c.feed_override_pct, d.feed_override_pct);
+  EXPECT_EQ(c.laser_requires_m3, d.laser_requires_m3);
+  EXPECT_EQ(c.step_timing.dir_hold, d.step_timing.dir_hold);
+}
+
+TEST(Config, ParsesValues) {
+  const auto c = fpgacnc::config::parse_machine_config(
+      "baud = 1000000\nport = \"/dev/ttyUSB1\"\nlaser_requires_m3 = false\n"
+      "[steps_per_mm]\nx = 80\n[step_timing]\nstep_high = 1\n",
+      "m.toml");
+  EXPECT_EQ(c.baud, 1000000u);
+  EXPECT_EQ(c.port, "/dev/ttyUSB1");
+  EXPECT_FALSE(c.laser_requires_m3);
+  EXPECT_EQ(c.steps_per_mm[0], 80.0);
+  EXPECT_EQ(c.steps_per_mm[1], 160.0);
+  EXPECT_EQ(c.step_timing.step_high, 1u);
+}
+
+TEST(Config, UnknownKeyNamesFileAndKey) {
+  try {
+    fpgacnc::config::parse_machine_config("baud = 9600\nbogus = 1\n", "m.toml");
+    FAIL();
+  } catch (const fpgacnc::config::Error& e) {
+    EXPECT_EQ(e.file(), "m.toml");
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_NE(std::string(e.what()).find("'bogus'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("[steps_per_mm]\nw = 1\n", "m.toml"),
+               fpgacnc::config::Error);
+}
+
+TEST(Config, WrongTypeNamesKey) {
+  try {
+    fpgacnc::config::parse_machine_config("[steps_per_mm]\nx = \"many\"\n", "m.toml");
+    FAIL();
+  } catch (const fpgacnc::config::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("m.toml:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("steps_per_mm.x"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("baud = 1.5\n", "m.toml"),
+               fpgacnc::config::Error);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("laser_requires_m3 = 1\n", "m.toml"),
+               fpgacnc::config::Error);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("protocol = \"v9\"\n", "m.toml"),
+               fpgacnc::config::Error);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("baud = \n", "m.toml"),
+               fpgacnc::config::Error);
+  EXPECT_THROW(fpgacnc::config::load_machine_config("/nonexistent/m.toml"), fpgacnc::config::Error);
+}
