@@ -15,12 +15,7 @@ int main(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     const auto plan = fpgacnc::plan::plan_gcode_file(path, cfg, {});
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    lines = 0;
-    for (const auto& it : plan.items) {
-      if (const auto* seg = std::get_if<fpgacnc::plan::Segment>(&it)) {
-        lines = std::max<uint64_t>(lines, static_cast<uint64_t>(seg->source_line));
-      }
-    }
+    lines = plan.input.lines;
     best = std::max(best, static_cast<double>(lines) / s);
   }
   fmt::print("plan throughput: {:.0f} lines/s ({} on {} lines, best of 5)\n", best, path, lines);

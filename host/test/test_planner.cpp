@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -157,4 +159,16 @@ TEST(Planner, StreamingFilePlanEqualsProgramPlan) {
   const auto b = pl::plan_program(fpgacnc::gcode::parse_file(path), c, {});
   EXPECT_EQ(fpgacnc::protocol::v1::job_bytes(a), fpgacnc::protocol::v1::job_bytes(b));
   EXPECT_EQ(a.final_steps, b.final_steps);
+}
+
+// Measured, not asserted: planning throughput on the 2 MB printer job.
+TEST(Planner, ThroughputOnPartGcode) {
+  const std::string path = std::string(FPGACNC_CORPUS_DIR) + "/part.gcode";
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto p = pl::plan_gcode_file(path, {}, {});
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GT(p.stats.segments, 40000u);
+  std::printf("plan throughput: %.0f lines/s (%llu lines in %.3f s)\n",
+              static_cast<double>(p.input.lines) / s,
+              static_cast<unsigned long long>(p.input.lines), s);
 }

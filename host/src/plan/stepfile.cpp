@@ -111,6 +111,9 @@ Plan read_step_file(std::istream& in, const std::string& name, const config::Mac
       ++plan.stats.cutting_segments;
     }
     plan.stats.path_length_mm += s.length_mm;
+    // v1 timing: the dominant axis moves at feed_v1 mm/min.
+    const double dom = std::max(std::fabs(dx), std::fabs(dy));
+    plan.stats.estimated_time_s += dom / s.feed_v1 * 60.0;
     plan.items.emplace_back(s);
   }
   if (n == 0) throw StepFileError(name, 1, 1, "empty step file (no header)");
