@@ -1,0 +1,38 @@
+# fpgacnc top-level Makefile: thin wrapper over CMake/CTest.
+BUILD ?= build
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
+DEMO_JOB ?= examples/jsdc-laser.gcode
+DEMO_ARGS ?= --config examples/demo-machine.toml --plot $(BUILD)/demo-path.svg
+
+.PHONY: all deps configure build test lint bench demo synth format clean
+
+all: build
+
+# Install the Debian packages that are missing (a no-op when all are present).
+deps:
+	@./scripts/install-deps.sh
+
+configure: deps
+	@if [ ! -f $(BUILD)/CMakeCache.txt ]; then cmake -S . -B $(BUILD) $(CMAKE_FLAGS); fi
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 1200
+
+lint: deps
+	./scripts/lint.sh
+
+bench: build
+	./scripts/bench.sh $(BUILD)
+
+demo: build
+	$(BUILD)/host/fpgacnc stream $(DEMO_JOB) $(DEMO_ARGS)
+
+format:
+	find host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD)

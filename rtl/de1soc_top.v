@@ -1,0 +1,121 @@
+// de1soc_top: Terasic DE1-SoC board top for protocol v1, with the original controller's pin
+// names (hardware.md): 50 MHz clk, KEY[0] as rst_n, USB-UART on GPIO_0[0..1], X/Y STEP/DIR and
+// the laser enable on GPIO_0[2..6].
+//   LEDR[0] busy, LEDR[1] laser, LEDR[2] dir_x, LEDR[3] dir_y, LEDR[7] heartbeat (1 Hz),
+//   LEDR[8] a framing error was seen, LEDR[9] a packet was dropped (watchdog or overrun).
+//   HEX5 last motion code, HEX4 'b' busy / '0' idle, HEX3-2 packet count (low byte),
+//   HEX1-0 last feed (low byte), as on the original.
+// The reset button is synchronized (two flops) and released synchronously.
+`default_nettype none
+
+module de1soc_top #(
+    parameter CLK_HZ = 50_000_000,
+    parameter BAUD   = 115_200
+) (
+    input  wire       clk,
+    input  wire       rst_n,
+    input  wire       rx,
+    output wire       tx,
+    output wire       dir_x,
+    output wire       step_x,
+    output wire       dir_y,
+    output wire       step_y,
+    output wire       laser,
+    output wire [9:0] LEDR,
+    output wire [6:0] HEX0,
+    output wire [6:0] HEX1,
+    output wire [6:0] HEX2,
+    output wire [6:0] HEX3,
+    output wire [6:0] HEX4,
+    output wire [6:0] HEX5
+);
+
+  localparam integer HALF_SECOND = CLK_HZ / 2;
+  localparam HB_W = $clog2(HALF_SECOND);
+
+  reg [1:0] rst_sync_reg = 2'b11;
+  always @(posedge clk) rst_sync_reg <= {rst_sync_reg[0], ~rst_n};
+  wire rst = rst_sync_reg[1];
+
+  wire [1:0] step, dir;
+  wire busy, running, seg_start, seg_done;
+  wire [63:0] position;
+  wire [1:0] last_code;
+  wire [15:0] last_feed, packet_count, frame_errors, timeouts, overruns, violations;
+  wire [31:0] last_period, numerator_x, numerator_y;
+
+  cnc_core #(
+      .CLK_HZ(CLK_HZ),
+      .BAUD  (BAUD),
+      .N_AXES(2)
+  ) u_core (
+      .clk         (clk),
+      .rst         (rst),
+      .rx          (rx),
+      .tx          (tx),
+      .step        (step),
+      .dir         (dir),
+      .laser       (laser),
+      .cfg_wr      (1'b0),
+      .cfg_addr    (8'd0),
+      .cfg_wdata   (16'd0),
+      .busy        (busy),
+      .running     (running),
+      .seg_start   (seg_start),
+      .seg_done    (seg_done),
+      .position    (position),
+      .last_code   (last_code),
+      .last_feed   (last_feed),
+      .last_period (last_period),
+      .packet_count(packet_count),
+      .frame_errors(frame_errors),
+      .timeouts    (timeouts),
+      .overruns    (overruns),
+      .violations  (violations),
+      .numerator_x (numerator_x),
+      .numerator_y (numerator_y)
+  );
+
+  // The status the board does not display.
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire unused_status = &{running, seg_start, seg_done, position, last_period, numerator_x,
+                         numerator_y, packet_count[15:8], frame_errors[15:1], timeouts[15:1],
+                         overruns[15:1], violations, last_feed[15:8]};
+  /* verilator lint_on UNUSEDSIGNAL */
+
+  reg [HB_W-1:0] hb_cnt_reg;
+  reg hb_reg;
+  reg frame_seen_reg, drop_seen_reg;
+  always @(posedge clk) begin
+    if (hb_cnt_reg == HALF_SECOND[HB_W-1:0] - 1'b1) begin
+      hb_cnt_reg <= {HB_W{1'b0}};
+      hb_reg     <= ~hb_reg;
+    end else begin
+      hb_cnt_reg <= hb_cnt_reg + 1'b1;
+    end
+    if (frame_errors != 16'd0) frame_seen_reg <= 1'b1;
+    if (timeouts != 16'd0 || overruns != 16'd0) drop_seen_reg <= 1'b1;
+    if (rst) begin
+      hb_cnt_reg     <= {HB_W{1'b0}};
+      hb_reg         <= 1'b0;
+      frame_seen_reg <= 1'b0;
+      drop_seen_reg  <= 1'b0;
+    end
+  end
+
+  assign step_x = step[0];
+  assign dir_x  = dir[0];
+  assign step_y = step[1];
+  assign dir_y  = dir[1];
+  assign LEDR   = {drop_seen_reg, frame_seen_reg, hb_reg, 3'b000, dir[1], dir[0], laser, busy};
+
+  hex7seg u_hex0 (.digit(last_feed[3:0]),    .seg_n(HEX0));
+  hex7seg u_hex1 (.digit(last_feed[7:4]),    .seg_n(HEX1));
+  hex7seg u_hex2 (.digit(packet_count[3:0]), .seg_n(HEX2));
+  hex7seg u_hex3 (.digit(packet_count[7:4]), .seg_n(HEX3));
+  hex7seg u_hex4 (.digit(busy ? 4'hB : 4'h0), .seg_n(HEX4));
+  hex7seg u_hex5 (.digit({2'b00, last_code}), .seg_n(HEX5));
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,128 @@
+// packet_decoder_v1: byte-exact decoder of the original controller's protocol (protocol v1).
+//
+// Input: a byte stream (s_axis_*) from uart_rx. s_axis_tready is always high: the decoder never
+// stalls the UART.
+// Packets (big-endian fields):
+//   init   : 9 bytes, first byte 0xFF, NUMERATOR_X uint32, NUMERATOR_Y uint32
+//   motion : 11 bytes, first byte = motion code (only bits [1:0] are used), steps_x int32,
+//            steps_y int32, feed uint16
+// Output: one command per complete packet on m_axis_* (held until accepted):
+//   m_axis_tuser = 1 for init, 0 for motion
+//   m_axis_tdata = {code[1:0], a[31:0], b[31:0], feed[15:0]}
+//                  init:   a = NUMERATOR_X, b = NUMERATOR_Y, code = 3, feed = 0
+//                  motion: a = steps_x,     b = steps_y
+// Latency: the command is valid on the clock after the packet's last byte is accepted.
+// Watchdog: when a packet has started and no byte arrives for WATCHDOG_CLKS clocks, the partial
+// packet is dropped (timeout strobe) and the next byte starts a new packet.
+// Overrun: a packet completing while the previous command is still not accepted is dropped
+// (overrun strobe). A v1 host waits for the ACK of each move, so this only happens on misuse.
+`default_nettype none
+
+module packet_decoder_v1 #(
+    parameter WATCHDOG_CLKS = 5_000_000  // 100 ms at 50 MHz
+) (
+    input wire clk,
+    input wire rst,
+
+    input  wire [7:0] s_axis_tdata,
+    input  wire       s_axis_tvalid,
+    output wire       s_axis_tready,
+
+    output wire [81:0] m_axis_tdata,
+    output wire        m_axis_tuser,
+    output wire        m_axis_tvalid,
+    input  wire        m_axis_tready,
+
+    output wire timeout,      // 1-clock strobe: partial packet dropped by the watchdog
+    output wire overrun,      // 1-clock strobe: complete packet dropped, output still full
+    output wire packet_done   // 1-clock strobe: a complete packet was decoded and queued
+);
+
+  localparam WD_W = $clog2(WATCHDOG_CLKS + 1);
+  localparam integer WD_LAST_I = WATCHDOG_CLKS - 1;
+  localparam [WD_W-1:0] WD_LAST = WD_LAST_I[WD_W-1:0];
+
+  reg  [    3:0] count_reg;  // bytes of the current packet received so far
+  reg            is_init_reg;
+  reg  [    1:0] code_reg;
+  reg  [   71:0] shift_reg;  // bytes 1..9 so far (byte 10 is the one arriving), MSB first
+  reg  [WD_W-1:0] idle_reg;  // clocks since the last byte of a started packet
+
+  reg  [   81:0] out_data_reg;
+  reg            out_user_reg;
+  reg            out_valid_reg;
+  reg            timeout_reg;
+  reg            overrun_reg;
+  reg            done_reg;
+
+  wire           take = s_axis_tvalid;
+  wire           first = (count_reg == 4'd0);
+  wire           start_init = first && (s_axis_tdata == 8'hFF);
+  wire [    3:0] length = (first ? start_init : is_init_reg) ? 4'd9 : 4'd11;
+  wire           last = take && (count_reg == length - 4'd1);
+  wire [   79:0] shifted = {shift_reg[71:0], s_axis_tdata};
+
+  always @(posedge clk) begin
+    timeout_reg <= 1'b0;
+    overrun_reg <= 1'b0;
+    done_reg    <= 1'b0;
+    if (out_valid_reg && m_axis_tready) out_valid_reg <= 1'b0;
+
+    if (take) begin
+      idle_reg <= {WD_W{1'b0}};
+      if (first) begin
+        is_init_reg <= start_init;
+        code_reg    <= s_axis_tdata[1:0];
+      end
+      shift_reg <= shifted[71:0];
+      if (last) begin
+        count_reg <= 4'd0;
+        if (out_valid_reg && !m_axis_tready) begin
+          overrun_reg <= 1'b1;
+        end else begin
+          out_valid_reg <= 1'b1;
+          done_reg      <= 1'b1;
+          out_user_reg  <= is_init_reg;
+          // init: 8 payload bytes are in shifted[63:0]; motion: 10 bytes in shifted[79:0]
+          if (is_init_reg) out_data_reg <= {2'b11, shifted[63:32], shifted[31:0], 16'd0};
+          else out_data_reg <= {code_reg, shifted[79:48], shifted[47:16], shifted[15:0]};
+        end
+      end else begin
+        count_reg <= count_reg + 4'd1;
+      end
+    end else if (!first) begin
+      if (idle_reg == WD_LAST) begin
+        count_reg   <= 4'd0;
+        idle_reg    <= {WD_W{1'b0}};
+        timeout_reg <= 1'b1;
+      end else begin
+        idle_reg <= idle_reg + {{(WD_W - 1) {1'b0}}, 1'b1};
+      end
+    end
+
+    if (rst) begin
+      count_reg     <= 4'd0;
+      is_init_reg   <= 1'b0;
+      code_reg      <= 2'd0;
+      shift_reg     <= 72'd0;
+      idle_reg      <= {WD_W{1'b0}};
+      out_data_reg  <= 82'd0;
+      out_user_reg  <= 1'b0;
+      out_valid_reg <= 1'b0;
+      timeout_reg   <= 1'b0;
+      overrun_reg   <= 1'b0;
+      done_reg      <= 1'b0;
+    end
+  end
+
+  assign s_axis_tready = 1'b1;
+  assign m_axis_tdata  = out_data_reg;
+  assign m_axis_tuser  = out_user_reg;
+  assign m_axis_tvalid = out_valid_reg;
+  assign timeout       = timeout_reg;
+  assign overrun       = overrun_reg;
+  assign packet_done   = done_reg;
+
+endmodule
+
+`default_nettype wire

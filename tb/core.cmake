@@ -1,0 +1,18 @@
+# Verilated models of the core blocks, shared by the benches, the simulated board and the
+# benchmarks.
+fpgacnc_verilated(vexec TOP segment_executor
+                  SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/dda_linear.v
+                          ${FPGACNC_RTL_DIR}/step_pulse.v)
+fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
+fpgacnc_verilated(vdecoder TOP packet_decoder_v1 SOURCES ${FPGACNC_RTL_DIR}/packet_decoder_v1.v)
+fpgacnc_verilated(vcore TOP cnc_core SOURCES ${FPGACNC_CORE_RTL})
+fpgacnc_verilated(vcore_trace TRACE TOP cnc_core PREFIX Vcnc_core_trace SOURCES ${FPGACNC_CORE_RTL})
+fpgacnc_verilated(vde1soc TOP de1soc_top
+                  SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/hex7seg.v
+                          ${FPGACNC_RTL_DIR}/de1soc_top.v
+                  ARGS -GCLK_HZ=50000000)
+
+fpgacnc_bench(test_segment_executor LABEL rtl
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_executor.cpp LIBS vexec fmt::fmt)
+fpgacnc_bench(test_segment_prep LABEL rtl
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_prep.cpp LIBS vprep fmt::fmt)
