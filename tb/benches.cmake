@@ -1,0 +1,6 @@
+# Decoder, system benches (cnc_core and the DE1-SoC top through their pins) and the core
+# benchmark. The Verilated models (vdecoder, vcore, vde1soc, vexec) come from core.cmake.
+fpgacnc_bench(test_packet_decoder LABEL rtl
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_packet_decoder.cpp LIBS vdecoder fmt::fmt)
+fpgacnc_bench(test_cnc_core LABEL system
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core.cpp LIBS vcore fmt::fmt)
