@@ -4,3 +4,5 @@ fpgacnc_bench(test_packet_decoder LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_packet_decoder.cpp LIBS vdecoder fmt::fmt)
 fpgacnc_bench(test_cnc_core LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core.cpp LIBS vcore fmt::fmt)
+fpgacnc_bench(test_de1soc_top LABEL system
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_de1soc_top.cpp LIBS vde1soc fmt::fmt)
