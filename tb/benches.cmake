@@ -6,3 +6,9 @@ fpgacnc_bench(test_cnc_core LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core.cpp LIBS vcore fmt::fmt)
 fpgacnc_bench(test_de1soc_top LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_de1soc_top.cpp LIBS vde1soc fmt::fmt)
+
+# Benchmark (not a test): step timing accuracy, Verilator speed, maximum step rate.
+add_executable(bench_core ${CMAKE_CURRENT_SOURCE_DIR}/bench_core.cpp)
+fpgacnc_warnings(bench_core)
+target_include_directories(bench_core PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+target_link_libraries(bench_core PRIVATE vcore vexec fmt::fmt)

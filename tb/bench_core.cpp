@@ -1,0 +1,288 @@
+// Benchmark of the core (not a test): for a fixed seeded run it prints
+//   (a) the worst step-time error against the ideal k*T/n schedule and the worst jitter, over
+//       random segments driven straight into segment_executor (vexec) with random 1..12-clock
+//       timing settings (the UART + cfg path of cnc_core would be ~4 000 clocks per packet);
+//   (b) Verilator speed of cnc_core (vcore) in simulated clocks per wall second, idle and while
+//       executing a long move received through the UART pins;
+//   (c) the maximum aggregate step rate with 1-clock settings: a segment with equal steps on all
+//       4 axes at period 2 on vexec (cnc_core's v1 packets carry only X and Y).
+// Lines start with "bench:". FPGACNC_SEED overrides the seed.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "Vcnc_core.h"
+#include "Vsegment_executor.h"
+#include "common/seed.h"
+#include "common/step_monitor.h"
+#include "common/uart_bits.h"
+#include "verilated.h"
+
+namespace {
+
+using fpgacnc::tb::AxisTiming;
+using fpgacnc::tb::StepMonitor;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kAxes = 4;
+constexpr double kClkHz = 50e6;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+uint64_t mag(int64_t v) {
+  return static_cast<uint64_t>(v < 0 ? -v : v);
+}
+
+class Exec {
+ public:
+  Exec() : ctx_(std::make_unique<VerilatedContext>()), mon_(kAxes) {
+    m_ = std::make_unique<Vsegment_executor>(ctx_.get());
+    set_timing(std::vector<AxisTiming>(kAxes, AxisTiming{1, 1, 1, 1}));
+    m_->rst = 1;
+    tick();
+    tick();
+    m_->rst = 0;
+    tick();
+  }
+  ~Exec() { m_->final(); }
+
+  void set_timing(const std::vector<AxisTiming>& t) {
+    m_->cfg_step_high = m_->cfg_step_low = m_->cfg_dir_setup = m_->cfg_dir_hold = 0;
+    for (int a = 0; a < kAxes; ++a) {
+      m_->cfg_step_high |= static_cast<uint64_t>(t[a].high) << (16 * a);
+      m_->cfg_step_low |= static_cast<uint64_t>(t[a].low) << (16 * a);
+      m_->cfg_dir_setup |= static_cast<uint64_t>(t[a].setup) << (16 * a);
+      m_->cfg_dir_hold |= static_cast<uint64_t>(t[a].hold) << (16 * a);
+    }
+  }
+  void tick() {
+    m_->clk = 0;
+    m_->eval();
+    m_->clk = 1;
+    m_->eval();
+    ++cycle_;
+    mon_.sample(cycle_, m_->step, m_->dir);
+    if (m_->seg_start) start_ = cycle_;
+    if (m_->violation) ++violations_;
+  }
+  // Runs one segment; returns its run start R (0 for an empty one).
+  uint64_t run(const int64_t* steps, uint64_t period) {
+    while (!m_->s_axis_tready) tick();
+    uint64_t n_dom = 0;
+    for (int a = 0; a < kAxes; ++a) n_dom = std::max(n_dom, mag(steps[a]));
+    const uint64_t total = period * n_dom;
+    m_->s_axis_code = 1;
+    m_->s_axis_dir = 0;
+    for (int a = 0; a < kAxes; ++a) {
+      if (steps[a] > 0) m_->s_axis_dir |= 1u << a;
+      m_->s_axis_steps[a] = static_cast<uint32_t>(mag(steps[a]));
+      const uint64_t tmn = total - mag(steps[a]);
+      m_->s_axis_tmn[2 * a] = static_cast<uint32_t>(tmn);
+      m_->s_axis_tmn[2 * a + 1] = static_cast<uint32_t>(tmn >> 32);
+    }
+    m_->s_axis_total = total;
+    m_->s_axis_tvalid = 1;
+    start_ = 0;
+    tick();
+    m_->s_axis_tvalid = 0;
+    while (!m_->s_axis_tready) tick();
+    tick();
+    return start_;
+  }
+  void idle(uint64_t n) {
+    for (uint64_t i = 0; i < n; ++i) tick();
+  }
+  StepMonitor& mon() { return mon_; }
+  uint64_t cycle() const { return cycle_; }
+  uint64_t violations() const { return violations_; }
+
+ private:
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<Vsegment_executor> m_;
+  StepMonitor mon_;
+  uint64_t cycle_ = 0, start_ = 0, violations_ = 0;
+};
+
+// (a) step-time error and jitter over random segments.
+void bench_accuracy(uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  auto uni = [&](uint64_t lo, uint64_t hi) {
+    return std::uniform_int_distribution<uint64_t>(lo, hi)(rng);
+  };
+  Exec e;
+  size_t idx[kAxes] = {0, 0, 0, 0};
+  double worst_err = 0;
+  uint64_t worst_jitter = 0, steps_total = 0, mismatches = 0;
+  int segments = 0;
+  const auto t0 = Clock::now();
+  for (int batch = 0; batch < 40; ++batch) {
+    std::vector<AxisTiming> t(kAxes);
+    uint64_t pmin = 0;
+    for (auto& at : t) {
+      at = AxisTiming{uint32_t(uni(1, 12)), uint32_t(uni(1, 12)), uint32_t(uni(1, 40)),
+                      uint32_t(uni(1, 40))};
+      pmin = std::max<uint64_t>(pmin, at.high + at.low);
+    }
+    e.idle(200);
+    e.set_timing(t);
+    for (int i = 0; i < 25; ++i) {
+      int64_t steps[kAxes];
+      for (auto& s : steps) {
+        const int64_t n = static_cast<int64_t>(uni(0, 5) == 0 ? 0 : uni(1, 3000));
+        s = uni(0, 1) ? n : -n;
+      }
+      const uint64_t period = pmin + uni(0, pmin);
+      uint64_t n_dom = 0;
+      for (auto s : steps) n_dom = std::max(n_dom, mag(s));
+      const uint64_t T = period * n_dom;
+      const uint64_t R = e.run(steps, period);
+      ++segments;
+      for (int a = 0; a < kAxes; ++a) {
+        const auto& tr = e.mon().axis(a);
+        const uint64_t n = mag(steps[a]);
+        if (tr.rises.size() < idx[a] + n) {
+          ++mismatches;
+          idx[a] = tr.rises.size();
+          continue;
+        }
+        uint64_t min_iv = UINT64_MAX, max_iv = 0;
+        for (uint64_t k = 1; k <= n; ++k) {
+          const uint64_t rise = tr.rises[idx[a] + k - 1];
+          const double ideal = static_cast<double>(R) + static_cast<double>(k) *
+                                                            static_cast<double>(T) /
+                                                            static_cast<double>(n);
+          worst_err = std::max(worst_err, std::abs(static_cast<double>(rise) - ideal));
+          if (k > 1) {
+            const uint64_t iv = rise - tr.rises[idx[a] + k - 2];
+            min_iv = std::min(min_iv, iv);
+            max_iv = std::max(max_iv, iv);
+          }
+        }
+        if (n > 2) worst_jitter = std::max(worst_jitter, max_iv - min_iv);
+        idx[a] += n;
+        steps_total += n;
+      }
+    }
+  }
+  const double wall = seconds_since(t0);
+  std::printf("bench: accuracy source: segment_executor (vexec) driven directly, seed %llu\n",
+              static_cast<unsigned long long>(seed));
+  std::printf("bench: segments %d, steps %llu, clocks %llu, %.2f s wall\n", segments,
+              static_cast<unsigned long long>(steps_total),
+              static_cast<unsigned long long>(e.cycle()), wall);
+  std::printf("bench: worst step error %.4f clocks (bound: < 1)\n", worst_err);
+  std::printf("bench: worst jitter %llu clocks\n", static_cast<unsigned long long>(worst_jitter));
+  std::printf("bench: step count mismatches %llu, timing violations %llu\n",
+              static_cast<unsigned long long>(mismatches),
+              static_cast<unsigned long long>(e.violations()));
+}
+
+// (b) Verilator speed of cnc_core, idle and during a long move received on rx.
+void bench_core_speed() {
+  auto ctx = std::make_unique<VerilatedContext>();
+  auto m = std::make_unique<Vcnc_core>(ctx.get());
+  fpgacnc::tb::UartDriver drv(kClkHz, 115200);
+  uint64_t cycle = 0;
+  auto tick = [&]() {
+    m->rx = static_cast<uint8_t>(drv.tick());
+    m->clk = 0;
+    m->eval();
+    m->clk = 1;
+    m->eval();
+    ++cycle;
+  };
+  m->rx = 1;
+  m->cfg_wr = 0;
+  m->rst = 1;
+  tick();
+  tick();
+  m->rst = 0;
+  tick();
+
+  const uint64_t idle_clocks = 10'000'000;
+  auto t0 = Clock::now();
+  for (uint64_t i = 0; i < idle_clocks; ++i) tick();
+  const double idle_rate = static_cast<double>(idle_clocks) / seconds_since(t0);
+
+  // G1 X 4000 Y -3000 at feed 6000: P = 3125, T = 12.5 M clocks.
+  const uint8_t pkt[11] = {0x01, 0x00, 0x00, 0x0F, 0xA0, 0xFF, 0xFF, 0xF4, 0x48, 0x17, 0x70};
+  for (uint8_t b : pkt) drv.push(b);
+  while (!drv.idle() || !m->running) tick();
+  uint64_t steps = 0;
+  uint8_t prev_step = 0;
+  const uint64_t c0 = cycle;
+  t0 = Clock::now();
+  while (m->running) {
+    tick();
+    steps += static_cast<uint64_t>(__builtin_popcount(m->step & ~prev_step & 0xFu));
+    prev_step = m->step;
+  }
+  const double wall = seconds_since(t0);
+  const double move_rate = static_cast<double>(cycle - c0) / wall;
+  m->final();
+  std::printf("bench: cnc_core (vcore, 4 axes) idle: %.2f M clocks/s (%.3f x real time)\n",
+              idle_rate / 1e6, idle_rate / kClkHz);
+  std::printf(
+      "bench: cnc_core (vcore, 4 axes) during a move: %.2f M clocks/s (%.3f x real time), "
+      "%llu clocks, %llu steps\n",
+      move_rate / 1e6, move_rate / kClkHz, static_cast<unsigned long long>(cycle - c0),
+      static_cast<unsigned long long>(steps));
+}
+
+// (c) maximum step rate: equal steps on 4 axes, period 2, 1-clock settings.
+void bench_max_rate() {
+  Exec e;
+  const int64_t n = 1'000'000;
+  const int64_t steps[kAxes] = {n, -n, n, -n};
+  const uint64_t before = e.cycle();
+  const auto t0 = Clock::now();
+  const uint64_t R = e.run(steps, 2);
+  const double wall = seconds_since(t0);
+  uint64_t total = 0;
+  uint64_t first = UINT64_MAX, last = 0;
+  for (int a = 0; a < kAxes; ++a) {
+    const auto& tr = e.mon().axis(a);
+    total += tr.rises.size();
+    if (!tr.rises.empty()) {
+      first = std::min(first, tr.rises.front());
+      last = std::max(last, tr.rises.back());
+    }
+  }
+  // Rate over the segment: n steps per axis in T = 2n clocks.
+  const double seconds = static_cast<double>(2 * n) / kClkHz;
+  const double per_axis = static_cast<double>(e.mon().axis(0).rises.size()) / seconds;
+  std::printf(
+      "bench: max rate source: segment_executor (vexec), 4 axes x %lld steps, period 2, "
+      "STEP high/low/setup/hold 1 clock\n",
+      static_cast<long long>(n));
+  std::printf(
+      "bench: max rate run start R=%llu, last rise at R+%llu (T=%lld), %llu clocks "
+      "simulated in %.2f s, violations %llu\n",
+      static_cast<unsigned long long>(R), static_cast<unsigned long long>(last - R),
+      static_cast<long long>(2 * n), static_cast<unsigned long long>(e.cycle() - before), wall,
+      static_cast<unsigned long long>(e.violations()));
+  std::printf("bench: max step rate per axis %.0f steps/s (limit CLK_HZ/2 = %.0f)\n", per_axis,
+              kClkHz / 2);
+  std::printf("bench: max aggregate step rate %.0f steps/s (%llu steps on 4 axes)\n",
+              static_cast<double>(total) / seconds, static_cast<unsigned long long>(total));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Verilated::commandArgs(argc, argv);
+  const uint64_t seed = fpgacnc::tb::test_seed(20260503, "bench_core");
+  const auto t0 = Clock::now();
+  bench_accuracy(seed);
+  bench_core_speed();
+  bench_max_rate();
+  std::printf("bench: total wall time %.1f s\n", seconds_since(t0));
+  return 0;
+}
