@@ -14,9 +14,14 @@
 #include "common/seed.h"
 #include "common/step_monitor.h"
 #include "common/uart_bits.h"
+#include "common/v1_packets.h"
 #include "verilated.h"
 
 namespace {
+
+using fpgacnc::tb::init_packet;
+using fpgacnc::tb::motion_packet;
+using fpgacnc::tb::put32;
 
 using fpgacnc::tb::AxisTiming;
 using fpgacnc::tb::StepMonitor;
@@ -30,24 +35,6 @@ constexpr uint32_t kDefaultNumerator = 18'750'000;
 constexpr uint64_t kFeed0Period = 62'500;
 constexpr uint64_t kWatchdog = 5'000'000;
 constexpr uint64_t kByteClocks = 4341;  // 10 bits at 115200 baud, rounded up
-
-void put32(std::vector<uint8_t>& v, uint32_t x) {
-  for (int s = 24; s >= 0; s -= 8) v.push_back(static_cast<uint8_t>(x >> s));
-}
-std::vector<uint8_t> init_packet(uint32_t nx, uint32_t ny) {
-  std::vector<uint8_t> v{0xFF};
-  put32(v, nx);
-  put32(v, ny);
-  return v;
-}
-std::vector<uint8_t> motion_packet(uint8_t code, int32_t sx, int32_t sy, uint16_t feed) {
-  std::vector<uint8_t> v{code};
-  put32(v, static_cast<uint32_t>(sx));
-  put32(v, static_cast<uint32_t>(sy));
-  v.push_back(static_cast<uint8_t>(feed >> 8));
-  v.push_back(static_cast<uint8_t>(feed));
-  return v;
-}
 
 uint64_t mag(int64_t v) {
   return static_cast<uint64_t>(v < 0 ? -v : v);

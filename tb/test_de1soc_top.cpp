@@ -10,9 +10,14 @@
 #include "Vde1soc_top.h"
 #include "common/step_monitor.h"
 #include "common/uart_bits.h"
+#include "common/v1_packets.h"
 #include "verilated.h"
 
 namespace {
+
+using fpgacnc::tb::init_packet;
+using fpgacnc::tb::motion_packet;
+using fpgacnc::tb::put32;
 
 using fpgacnc::tb::AxisTiming;
 using fpgacnc::tb::StepMonitor;
@@ -32,10 +37,6 @@ constexpr uint8_t kHex0 = seg_n(0b0111111);
 constexpr uint8_t kHex1 = seg_n(0b0000110);
 constexpr uint8_t kHex2 = seg_n(0b1011011);
 constexpr uint8_t kHex7 = seg_n(0b0000111);
-
-void put32(std::vector<uint8_t>& v, uint32_t x) {
-  for (int s = 24; s >= 0; s -= 8) v.push_back(static_cast<uint8_t>(x >> s));
-}
 
 class BoardBench {
  public:

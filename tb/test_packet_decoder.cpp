@@ -11,9 +11,14 @@
 
 #include "Vpacket_decoder_v1.h"
 #include "common/seed.h"
+#include "common/v1_packets.h"
 #include "verilated.h"
 
 namespace {
+
+using fpgacnc::tb::init_packet;
+using fpgacnc::tb::motion_packet;
+using fpgacnc::tb::put32;
 
 constexpr uint64_t kWatchdog = 5'000'000;  // WATCHDOG_CLKS default (100 ms at 50 MHz)
 
@@ -31,26 +36,6 @@ std::ostream& operator<<(std::ostream& os, const Command& c) {
   return os << (c.init ? "init" : "motion") << "{code " << c.code << ", a "
             << static_cast<int32_t>(c.a) << ", b " << static_cast<int32_t>(c.b) << ", feed "
             << c.feed << "}";
-}
-
-void put32(std::vector<uint8_t>& v, uint32_t x) {
-  for (int s = 24; s >= 0; s -= 8) v.push_back(static_cast<uint8_t>(x >> s));
-}
-
-std::vector<uint8_t> init_packet(uint32_t nx, uint32_t ny) {
-  std::vector<uint8_t> v{0xFF};
-  put32(v, nx);
-  put32(v, ny);
-  return v;
-}
-
-std::vector<uint8_t> motion_packet(uint8_t code, int32_t sx, int32_t sy, uint16_t feed) {
-  std::vector<uint8_t> v{code};
-  put32(v, static_cast<uint32_t>(sx));
-  put32(v, static_cast<uint32_t>(sy));
-  v.push_back(static_cast<uint8_t>(feed >> 8));
-  v.push_back(static_cast<uint8_t>(feed));
-  return v;
 }
 
 // Reference model of the byte framing (protocol-v1.md), without the watchdog.

@@ -125,7 +125,7 @@ class ExecBench {
 };
 
 struct SegmentCheck {
-  double worst_error = 0;   // |rise - ideal| in clocks
+  double worst_error = 0;     // |rise - ideal| in clocks
   uint64_t worst_jitter = 0;  // max - min step interval within a segment, per axis
 };
 
@@ -140,9 +140,9 @@ void check_segment(const StepMonitor& mon, const Segment& s, uint64_t R, size_t*
     const auto& tr = mon.axis(a);
     const uint64_t n = ExecBench::mag(s.steps[a]);
     // rises belonging to this segment: the next n rises in the trace
-    ASSERT_GE(tr.rises.size(), idx[a] + n) << "axis " << a << ": expected " << n << " steps, got "
-                                           << tr.rises.size() - idx[a] << " (segment at " << R
-                                           << ")";
+    ASSERT_GE(tr.rises.size(), idx[a] + n)
+        << "axis " << a << ": expected " << n << " steps, got " << tr.rises.size() - idx[a]
+        << " (segment at " << R << ")";
     uint64_t min_iv = UINT64_MAX, max_iv = 0, prev = R;
     for (uint64_t k = 1; k <= n; ++k) {
       const uint64_t rise = tr.rises[idx[a] + k - 1];
@@ -150,9 +150,8 @@ void check_segment(const StepMonitor& mon, const Segment& s, uint64_t R, size_t*
       const uint64_t expect = R + static_cast<uint64_t>((kt + n - 1) / n);
       ASSERT_EQ(rise, expect) << "axis " << a << " step " << k << "/" << n << " T=" << T
                               << " P=" << s.period << " start R=" << R;
-      const double ideal = static_cast<double>(R) + static_cast<double>(k) *
-                                                        static_cast<double>(T) /
-                                                        static_cast<double>(n);
+      const double ideal = static_cast<double>(R) +
+                           static_cast<double>(k) * static_cast<double>(T) / static_cast<double>(n);
       out->worst_error = std::max(out->worst_error, std::abs(static_cast<double>(rise) - ideal));
       ASSERT_EQ(tr.rise_dir[idx[a] + k - 1], s.steps[a] > 0 ? 1 : 0)
           << "axis " << a << " DIR wrong at step " << k << " cycle " << rise;

@@ -131,7 +131,8 @@ TEST(SegmentPrep, RandomArithmetic) {
     uint16_t feed = static_cast<uint16_t>(rng());
     if (i % 11 == 0) feed = 0;
     const int code = static_cast<int>(rng() % 4);
-    const uint64_t lat = b.send(false, code, static_cast<uint32_t>(sx), static_cast<uint32_t>(sy), feed);
+    const uint64_t lat =
+        b.send(false, code, static_cast<uint32_t>(sx), static_cast<uint32_t>(sy), feed);
     ASSERT_EQ(lat, 68u);
     const uint64_t ax = static_cast<uint64_t>(sx < 0 ? -static_cast<int64_t>(sx) : sx);
     const uint64_t ay = static_cast<uint64_t>(sy < 0 ? -static_cast<int64_t>(sy) : sy);
