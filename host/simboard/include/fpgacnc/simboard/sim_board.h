@@ -1,0 +1,157 @@
+// SimBoard: the Verilated cnc_core behind a pseudo-terminal, the embedded stand-in for the
+// DE1-SoC board. Any serial client (the host's SerialLink, a terminal, pyserial) opens path()
+// (/dev/pts/N) and talks to the RTL exactly as to the real board over a USB-UART:
+//   - bytes written to the pty reach the core's `rx` pin as 8N1 UART bits at the baud rate
+//     (tb::UartDriver, fractional bit timing: 434.03 clocks per bit at 50 MHz / 115200);
+//   - `tx` is sampled every clock (tb::UartMonitor) and each decoded byte is written back to
+//     the pty master;
+//   - every STEP/DIR/LASER edge (and TX edges when asked) is recorded with its clock cycle;
+//   - with an FST path the traced model (Vcnc_core_trace) writes a waveform.
+//
+// Time policy. Simulated time advances clock by clock while anything is in flight: rx bits
+// queued or being sent, the core busy (a move prepared or running), a STEP pulse high, tx
+// sending; it keeps running `kQuietCycles` clocks past the last activity. When all is quiet the
+// board blocks in poll() on the pty master WITHOUT advancing clocks, so simulated time does not
+// depend on how fast or slow the host is: a stop-and-wait host (v1) writes its next packet only
+// after it has received the ACK, which the board flushes the moment the byte's stop bit is
+// decoded, so every packet finds the board quiet and starts on the next clock; edge timestamps
+// are reproducible run to run. While busy, the pty is read (non-blocking) every
+// `poll_interval_cycles` clocks (1024 by default, well under one UART frame of 4340 clocks),
+// and everything read is queued in the rx driver, so a packet whose bytes are already written
+// never sees a gap on the line because of the polling. Bytes written while the board is busy
+// start at the next poll boundary (or right after the bytes already queued).
+//
+// Threads: start() runs the board in its own thread until stop() (the destructor stops it);
+// run_until() runs the same loop in the caller's thread. pause() freezes the board (no clocks,
+// no bytes read or answered; the pty stays open) to model a board that stopped answering.
+// Accessors (stats(), edges(), ...) are safe while the thread runs (they lock between clock
+// chunks and copy).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/simboard/edges.h"
+
+namespace fpgacnc::simboard {
+
+// Thrown for a bad board option (clock, baud), a pty or file failure.
+class BoardError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct BoardOptions {
+  // The Verilated model is built for 50 MHz and 115200 baud (cnc_core parameters): any other
+  // value is rejected by the constructor with a BoardError.
+  double clk_hz = 50e6;
+  uint32_t baud = 115200;
+  // Step timing per axis written through the cfg port after reset (address axis * 4 + field).
+  // Unset: the RTL defaults (100/100/200/200 clocks).
+  std::optional<std::array<config::StepTiming, kBoardAxes>> step_timing;
+  std::string fst_path;    // "" = no waveform (untraced model, fastest)
+  bool record_tx = false;  // also record TX pin edges
+  size_t reserve_edges = size_t{1} << 20;
+  uint32_t poll_interval_cycles = 1024;
+};
+
+struct BoardStats {
+  uint64_t cycles = 0;        // clocks simulated since reset release
+  double wall_s = 0.0;        // wall time since start (or since the first run_until)
+  double sim_wall_s = 0.0;    // wall time spent advancing clocks (not blocked while quiet)
+  double clocks_per_s = 0.0;  // cycles / sim_wall_s
+  uint64_t bytes_in = 0;      // read from the pty (host -> board)
+  uint64_t bytes_out = 0;     // decoded from tx and written to the pty (board -> host)
+  uint64_t edges = 0;
+  uint64_t moves_done = 0;    // seg_done strobes
+  uint16_t frame_errors = 0;  // core counters
+  uint16_t timeouts = 0;
+  uint16_t violations = 0;
+  std::array<int64_t, kBoardAxes> position{};  // core's position registers
+};
+
+class SimBoard {
+ public:
+  // Clock cycles of inactivity after which the board counts as quiet.
+  static constexpr uint64_t kQuietCycles = 32;
+
+  // Creates the pty and the model, resets the core and writes the step timing. Throws
+  // BoardError.
+  explicit SimBoard(BoardOptions options = {});
+  // Convenience: clock, baud and step timing (all axes) from a machine configuration.
+  static BoardOptions options_from_config(const config::MachineConfig& cfg);
+  ~SimBoard();
+  SimBoard(const SimBoard&) = delete;
+  SimBoard& operator=(const SimBoard&) = delete;
+
+  // Slave side of the pseudo-terminal, e.g. /dev/pts/7 (raw mode).
+  const std::string& path() const { return path_; }
+  const BoardOptions& options() const { return opt_; }
+
+  void start();  // own thread; throws if already running
+  void stop();   // joins the thread (the pty stays open until destruction)
+  bool running() const { return thread_.joinable(); }
+  void pause();  // freeze: no clocks, no bytes read or answered
+  void resume();
+  bool paused() const { return paused_.load(); }
+
+  // Runs the board in the caller's thread until `done(*this)` is true (checked between clock
+  // chunks and while blocked, at least every 10 ms) or `wall_timeout` passes. Returns whether
+  // `done` became true. Not while start()ed.
+  bool run_until(const std::function<bool(const SimBoard&)>& done,
+                 std::chrono::milliseconds wall_timeout);
+  // Runs until quiet (nothing in flight) in the caller's thread, at most `max_cycles`.
+  void run_cycles_until_quiet(uint64_t max_cycles);
+  // Blocks until the board thread is quiet (nothing in flight, all output flushed) or timeout.
+  bool wait_quiet(std::chrono::milliseconds timeout) const;
+
+  BoardStats stats() const;
+  uint64_t cycle() const;
+  std::vector<Edge> edges() const;                 // copy
+  std::vector<uint64_t> move_done_cycles() const;  // copy
+  std::array<int64_t, kBoardAxes> net_steps() const;
+  void write_edges_csv(const std::string& path) const;
+  // One-line summary of stats() for reports.
+  std::string stats_line() const;
+
+  // Implementation detail (model, UART driver/monitor, recorder), defined in sim_board.cpp.
+  struct Model;
+
+ private:
+  void open_pty();
+  void reset_and_configure();
+  // One pass of the loop: returns after a chunk of clocks or a blocking wait.
+  void step_loop(int block_ms);
+  uint64_t run_chunk(uint64_t max_cycles);
+  void read_pty();
+  void flush_out();
+  bool quiet_locked() const;
+
+  BoardOptions opt_;
+  std::string path_;
+  int master_ = -1;
+  int slave_ = -1;
+  int wake_ = -1;  // eventfd: wakes poll() for stop/pause
+  std::unique_ptr<Model> model_;
+
+  mutable std::mutex mu_;  // guards the model state and the recorder between chunks
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> paused_{false};
+  std::atomic<bool> quiet_{true};
+  std::chrono::steady_clock::time_point t_start_{};
+  bool started_clock_ = false;
+  double sim_wall_s_ = 0.0;
+};
+
+}  // namespace fpgacnc::simboard

@@ -1,0 +1,40 @@
+#include "fpgacnc/simboard/runner.h"
+
+namespace fpgacnc::simboard {
+
+BoardLink::BoardLink(BoardOptions options)
+    : board_(std::make_unique<SimBoard>(std::move(options))) {
+  board_->start();
+  serial_ = std::make_unique<link::SerialLink>(board_->path(), board_->options().baud);
+}
+
+BoardLink::~BoardLink() {
+  serial_.reset();
+  board_->stop();
+}
+
+BoardRunResult run_plan_on_board(const plan::Plan& plan, const BoardOptions& board,
+                                 const BoardRunOptions& options) {
+  BoardLink lk(board);
+  link::StreamOptions so = options.stream;
+  if (options.on_ack) {
+    so.progress = [&](size_t done, size_t total) {
+      if (options.stream.progress) options.stream.progress(done, total);
+      options.on_ack(lk.board(), done, total);
+    };
+  }
+  BoardRunResult r;
+  r.port = lk.name();
+  r.report = link::stream_v1(lk, plan, so);
+  // The last ACK has reached the host: every STEP edge is recorded by then. Let the board go
+  // quiet (end of the ACK frame) before reading its figures.
+  lk.board().wait_quiet(std::chrono::milliseconds(2000));
+  lk.board().stop();
+  r.stats = lk.board().stats();
+  r.edges = lk.board().edges();
+  r.move_done_cycles = lk.board().move_done_cycles();
+  r.net_steps = net_steps(r.edges);
+  return r;
+}
+
+}  // namespace fpgacnc::simboard

@@ -1,0 +1,478 @@
+#include "fpgacnc/simboard/sim_board.h"
+
+#include <Vcnc_core.h>
+#include <Vcnc_core_trace.h>
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <poll.h>
+#include <stdlib.h>
+#include <sys/eventfd.h>
+#include <termios.h>
+#include <unistd.h>
+#include <verilated.h>
+#include <verilated_fst_c.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <deque>
+
+#include "common/uart_bits.h"
+
+namespace fpgacnc::simboard {
+
+struct SimBoard::Model {
+  std::unique_ptr<VerilatedContext> ctx;
+  std::unique_ptr<Vcnc_core> core;              // untraced (fast)
+  std::unique_ptr<Vcnc_core_trace> core_trace;  // traced, when an FST path is given
+  std::unique_ptr<VerilatedFstC> fst;
+  tb::UartDriver driver;
+  tb::UartMonitor monitor;
+  EdgeRecorder rec;
+  uint64_t cycle = 0;        // rising edges since reset release
+  uint64_t last_active = 0;  // last cycle with something in flight
+  uint32_t prev_sig = 0;     // step | dir << 4 | laser << 8 | tx << 9
+  uint32_t sig_mask = 0x1ff;
+  std::vector<uint8_t> out;  // decoded tx bytes not yet written to the pty
+  uint64_t bytes_in = 0, bytes_out = 0;
+  uint64_t trace_time = 0;
+
+  Model(double clk_hz, double baud, size_t reserve)
+      : ctx(std::make_unique<VerilatedContext>()),
+        driver(clk_hz, baud),
+        monitor(clk_hz, baud),
+        rec(reserve) {}
+};
+
+namespace {
+
+[[noreturn]] void sys_fail(const std::string& what) {
+  throw BoardError(fmt::format("simulated board: {}: {}", what, std::strerror(errno)));
+}
+
+// Half period in trace time units (ps): 50 MHz -> 20 ns period.
+constexpr uint64_t kHalfPeriodPs = 10'000;
+
+template <class M>
+inline void clock_once(M& m, VerilatedFstC* fst, uint64_t& t) {
+  m.clk = 1;
+  m.eval();
+  if (fst) fst->dump(t += kHalfPeriodPs);
+  m.clk = 0;
+  m.eval();
+  if (fst) fst->dump(t += kHalfPeriodPs);
+}
+
+// The hot loop, instantiated for the untraced and the traced model. Stops after `max_cycles`,
+// when the board has been quiet for kQuietCycles, or right after a tx byte was decoded (so the
+// caller flushes it to the host at once).
+template <class M>
+uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quiet_cycles) {
+  VerilatedFstC* fst = s.fst.get();
+  tb::UartDriver& drv = s.driver;
+  tb::UartMonitor& mon = s.monitor;
+  bool drv_idle = drv.idle();
+  uint64_t cyc = s.cycle;
+  uint64_t last_active = s.last_active;
+  uint32_t prev = s.prev_sig;
+  const uint32_t mask = s.sig_mask;
+  const uint64_t end = cyc + max_cycles;
+  bool got_byte = false;
+  while (cyc < end) {
+    if (!drv_idle) {
+      m.rx = static_cast<uint8_t>(drv.tick());
+      drv_idle = drv.idle();
+    }
+    clock_once(m, fst, s.trace_time);
+    ++cyc;
+    const uint32_t tx = m.tx;
+    const uint32_t sig = (static_cast<uint32_t>(m.step) | (static_cast<uint32_t>(m.dir) << 4) |
+                          (static_cast<uint32_t>(m.laser) << 8) | (tx << 9)) &
+                         mask;
+    if (sig != prev) [[unlikely]] {
+      uint32_t diff = sig ^ prev;
+      while (diff) {
+        const int b = __builtin_ctz(diff);
+        diff &= diff - 1;
+        s.rec.add(cyc, static_cast<uint8_t>(b), static_cast<uint8_t>((sig >> b) & 1u));
+      }
+      prev = sig;
+    }
+    if (m.seg_done) [[unlikely]]
+      s.rec.add_move_done(cyc);
+    if (tx == 0 || mon.busy()) {
+      if (auto byte = mon.sample(static_cast<int>(tx), cyc)) {
+        s.out.push_back(byte->value);
+        ++s.bytes_out;
+        got_byte = true;
+      }
+    }
+    if (m.busy || m.step || !drv_idle || tx == 0 || mon.busy()) {
+      last_active = cyc;
+    } else if (got_byte || cyc - last_active > quiet_cycles) {
+      break;
+    }
+  }
+  const uint64_t n = cyc - s.cycle;
+  s.cycle = cyc;
+  s.last_active = last_active;
+  s.prev_sig = prev;
+  return n;
+}
+
+template <class M>
+void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
+  m.rst = 1;
+  m.rx = 1;
+  m.cfg_wr = 0;
+  m.clk = 0;
+  m.eval();
+  for (int i = 0; i < 8; ++i) clock_once(m, s.fst.get(), s.trace_time);
+  m.rst = 0;
+  clock_once(m, s.fst.get(), s.trace_time);
+  if (o.step_timing) {
+    for (int a = 0; a < kBoardAxes; ++a) {
+      const auto& t = (*o.step_timing)[static_cast<size_t>(a)];
+      const uint32_t v[4] = {t.step_high, t.step_low, t.dir_setup, t.dir_hold};
+      for (int f = 0; f < 4; ++f) {
+        m.cfg_wr = 1;
+        m.cfg_addr = static_cast<uint8_t>(a * 4 + f);
+        m.cfg_wdata = static_cast<uint16_t>(v[f]);
+        clock_once(m, s.fst.get(), s.trace_time);
+      }
+    }
+    m.cfg_wr = 0;
+    // Let the shadow set become active (the core is idle).
+    for (int i = 0; i < 4; ++i) clock_once(m, s.fst.get(), s.trace_time);
+  }
+  s.prev_sig = (static_cast<uint32_t>(m.step) | (static_cast<uint32_t>(m.dir) << 4) |
+                (static_cast<uint32_t>(m.laser) << 8) | (static_cast<uint32_t>(m.tx) << 9)) &
+               s.sig_mask;
+  s.cycle = 0;
+  s.last_active = 0;
+}
+
+template <class M>
+void fill_stats(const M& m, BoardStats& st) {
+  st.frame_errors = m.frame_errors;
+  st.timeouts = m.timeouts;
+  st.violations = m.violations;
+  for (int a = 0; a < kBoardAxes; ++a) {
+    st.position[static_cast<size_t>(a)] = static_cast<int32_t>(m.position[a]);
+  }
+}
+
+}  // namespace
+
+BoardOptions SimBoard::options_from_config(const config::MachineConfig& cfg) {
+  BoardOptions o;
+  o.clk_hz = static_cast<double>(cfg.clk_hz);
+  o.baud = cfg.baud;
+  std::array<config::StepTiming, kBoardAxes> t;
+  t.fill(cfg.step_timing);
+  o.step_timing = t;
+  return o;
+}
+
+SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
+  if (opt_.clk_hz != 50e6) {
+    throw BoardError(
+        fmt::format("simulated board: clk_hz {} not supported: the Verilated cnc_core is built for "
+                    "50000000 Hz",
+                    opt_.clk_hz));
+  }
+  if (opt_.baud != 115200) {
+    throw BoardError(fmt::format(
+        "simulated board: baud {} not supported: the Verilated cnc_core is built for 115200 "
+        "baud",
+        opt_.baud));
+  }
+  if (opt_.step_timing) {
+    for (const auto& t : *opt_.step_timing) {
+      for (uint32_t v : {t.step_high, t.step_low, t.dir_setup, t.dir_hold}) {
+        if (v < 1 || v > 65535) {
+          throw BoardError(fmt::format(
+              "simulated board: step timing value {} out of range [1, 65535] clocks", v));
+        }
+      }
+    }
+  }
+  const double frame_clocks = 10.0 * opt_.clk_hz / opt_.baud;
+  if (opt_.poll_interval_cycles == 0 || opt_.poll_interval_cycles > frame_clocks / 2) {
+    throw BoardError(fmt::format(
+        "simulated board: poll interval {} clocks must be in [1, {}] (half a UART frame)",
+        opt_.poll_interval_cycles, static_cast<uint64_t>(frame_clocks / 2)));
+  }
+  model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges);
+  if (!opt_.record_tx)
+    model_->sig_mask = 0x1ff;
+  else
+    model_->sig_mask = 0x3ff;
+  if (!opt_.fst_path.empty()) {
+    model_->ctx->traceEverOn(true);
+    model_->core_trace = std::make_unique<Vcnc_core_trace>(model_->ctx.get(), "cnc_core");
+    model_->fst = std::make_unique<VerilatedFstC>();
+    model_->core_trace->trace(model_->fst.get(), 99);
+    model_->fst->set_time_unit("1ps");
+    model_->fst->set_time_resolution("1ps");
+    model_->fst->open(opt_.fst_path.c_str());
+    if (!model_->fst->isOpen()) {
+      throw BoardError(fmt::format("{}: error: cannot create FST waveform", opt_.fst_path));
+    }
+  } else {
+    model_->core = std::make_unique<Vcnc_core>(model_->ctx.get(), "cnc_core");
+  }
+  open_pty();
+  reset_and_configure();
+}
+
+SimBoard::~SimBoard() {
+  stop();
+  if (model_) {
+    if (model_->fst) model_->fst->close();
+    if (model_->core) model_->core->final();
+    if (model_->core_trace) model_->core_trace->final();
+  }
+  if (slave_ >= 0) ::close(slave_);
+  if (master_ >= 0) ::close(master_);
+  if (wake_ >= 0) ::close(wake_);
+}
+
+void SimBoard::open_pty() {
+  master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (master_ < 0) sys_fail("posix_openpt");
+  if (::grantpt(master_) != 0) sys_fail("grantpt");
+  if (::unlockpt(master_) != 0) sys_fail("unlockpt");
+  char name[128];
+  if (::ptsname_r(master_, name, sizeof name) != 0) sys_fail("ptsname");
+  path_ = name;
+  // Keep a slave descriptor open so the master never sees a hang-up between clients, and set
+  // raw mode on it (no echo, no line editing, no CR/NL translation: 8-bit clean).
+  slave_ = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (slave_ < 0) sys_fail(fmt::format("open {}", path_));
+  termios t{};
+  if (::tcgetattr(slave_, &t) != 0) sys_fail("tcgetattr");
+  ::cfmakeraw(&t);
+  ::cfsetispeed(&t, B115200);
+  ::cfsetospeed(&t, B115200);
+  t.c_cflag |= CLOCAL | CREAD;
+  t.c_cc[VMIN] = 1;
+  t.c_cc[VTIME] = 0;
+  if (::tcsetattr(slave_, TCSANOW, &t) != 0) sys_fail("tcsetattr");
+  const int fl = ::fcntl(master_, F_GETFL);
+  if (fl < 0 || ::fcntl(master_, F_SETFL, fl | O_NONBLOCK) != 0) sys_fail("fcntl O_NONBLOCK");
+  wake_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (wake_ < 0) sys_fail("eventfd");
+}
+
+void SimBoard::reset_and_configure() {
+  if (model_->core)
+    reset_and_cfg(*model_->core, *model_, opt_);
+  else
+    reset_and_cfg(*model_->core_trace, *model_, opt_);
+}
+
+void SimBoard::read_pty() {
+  uint8_t buf[4096];
+  for (;;) {
+    const ssize_t n = ::read(master_, buf, sizeof buf);
+    if (n > 0) {
+      for (ssize_t i = 0; i < n; ++i) model_->driver.push(buf[i]);
+      model_->bytes_in += static_cast<uint64_t>(n);
+      if (static_cast<size_t>(n) < sizeof buf) return;
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    return;  // EAGAIN (nothing), EIO (no client): nothing to read
+  }
+}
+
+void SimBoard::flush_out() {
+  auto& out = model_->out;
+  size_t done = 0;
+  while (done < out.size()) {
+    const ssize_t n = ::write(master_, out.data() + done, out.size() - done);
+    if (n > 0) {
+      done += static_cast<size_t>(n);
+    } else if (n < 0 && errno == EINTR) {
+      continue;
+    } else {
+      break;  // EAGAIN: the client is not reading; keep the rest for later
+    }
+  }
+  out.erase(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(done));
+}
+
+bool SimBoard::quiet_locked() const {
+  const Model& s = *model_;
+  return s.driver.idle() && s.out.empty() && s.cycle - s.last_active > kQuietCycles;
+}
+
+uint64_t SimBoard::run_chunk(uint64_t max_cycles) {
+  if (model_->core) return run_cycles(*model_->core, *model_, max_cycles, kQuietCycles);
+  return run_cycles(*model_->core_trace, *model_, max_cycles, kQuietCycles);
+}
+
+void SimBoard::step_loop(int block_ms) {
+  bool quiet;
+  {
+    std::lock_guard<std::mutex> l(mu_);
+    if (!paused_) read_pty();
+    quiet = paused_ || quiet_locked();
+  }
+  quiet_.store(quiet);
+  if (quiet) {
+    // Nothing in flight: block without advancing clocks until the host writes (or a wake-up).
+    pollfd p[2] = {{master_, static_cast<short>(paused_ ? 0 : POLLIN), 0}, {wake_, POLLIN, 0}};
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      if (!paused_ && !model_->out.empty()) p[0].events |= POLLOUT;
+    }
+    const int r = ::poll(p, 2, block_ms);
+    if (r > 0 && (p[1].revents & POLLIN)) {
+      uint64_t v;
+      [[maybe_unused]] ssize_t n = ::read(wake_, &v, sizeof v);
+    }
+    if (r > 0 && (p[0].revents & POLLHUP)) {
+      // No client has the slave open (we keep one, so this is rare): avoid spinning.
+      ::usleep(1000);
+    }
+    std::lock_guard<std::mutex> l(mu_);
+    if (!paused_) flush_out();
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::lock_guard<std::mutex> l(mu_);
+  run_chunk(opt_.poll_interval_cycles);
+  flush_out();
+  sim_wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void SimBoard::start() {
+  if (thread_.joinable()) throw BoardError("simulated board: already running");
+  stop_ = false;
+  if (!started_clock_) {
+    t_start_ = std::chrono::steady_clock::now();
+    started_clock_ = true;
+  }
+  thread_ = std::thread([this] {
+    while (!stop_.load(std::memory_order_relaxed)) step_loop(100);
+  });
+}
+
+void SimBoard::stop() {
+  if (!thread_.joinable()) return;
+  stop_ = true;
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  thread_.join();
+}
+
+void SimBoard::pause() {
+  paused_ = true;
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+}
+
+void SimBoard::resume() {
+  paused_ = false;
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+}
+
+bool SimBoard::run_until(const std::function<bool(const SimBoard&)>& done,
+                         std::chrono::milliseconds wall_timeout) {
+  if (thread_.joinable()) throw BoardError("simulated board: run_until while start()ed");
+  if (!started_clock_) {
+    t_start_ = std::chrono::steady_clock::now();
+    started_clock_ = true;
+  }
+  const auto deadline = std::chrono::steady_clock::now() + wall_timeout;
+  for (;;) {
+    if (done(*this)) return true;
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    step_loop(10);
+  }
+}
+
+void SimBoard::run_cycles_until_quiet(uint64_t max_cycles) {
+  if (thread_.joinable()) throw BoardError("simulated board: run while start()ed");
+  std::lock_guard<std::mutex> l(mu_);
+  uint64_t n = 0;
+  while (n < max_cycles) {
+    read_pty();
+    if (quiet_locked()) break;
+    n += run_chunk(std::min<uint64_t>(opt_.poll_interval_cycles, max_cycles - n));
+    flush_out();
+  }
+}
+
+bool SimBoard::wait_quiet(std::chrono::milliseconds timeout) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      if (quiet_locked()) return true;
+    }
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+BoardStats SimBoard::stats() const {
+  std::lock_guard<std::mutex> l(mu_);
+  BoardStats st;
+  const Model& s = *model_;
+  st.cycles = s.cycle;
+  st.wall_s =
+      started_clock_
+          ? std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count()
+          : 0.0;
+  st.sim_wall_s = sim_wall_s_;
+  st.clocks_per_s = sim_wall_s_ > 0 ? static_cast<double>(s.cycle) / sim_wall_s_ : 0.0;
+  st.bytes_in = s.bytes_in;
+  st.bytes_out = s.bytes_out;
+  st.edges = s.rec.edges().size();
+  st.moves_done = s.rec.move_done_cycles().size();
+  if (s.core)
+    fill_stats(*s.core, st);
+  else
+    fill_stats(*s.core_trace, st);
+  return st;
+}
+
+uint64_t SimBoard::cycle() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return model_->cycle;
+}
+
+std::vector<Edge> SimBoard::edges() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return model_->rec.edges();
+}
+
+std::vector<uint64_t> SimBoard::move_done_cycles() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return model_->rec.move_done_cycles();
+}
+
+std::array<int64_t, kBoardAxes> SimBoard::net_steps() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return model_->rec.net_steps();
+}
+
+void SimBoard::write_edges_csv(const std::string& path) const {
+  std::lock_guard<std::mutex> l(mu_);
+  model_->rec.write_csv(path, opt_.clk_hz);
+}
+
+std::string SimBoard::stats_line() const {
+  const BoardStats s = stats();
+  return fmt::format(
+      "{} cycles ({:.3f} s simulated) in {:.2f} s of simulation ({:.2f} s wall): {:.2f} M "
+      "clocks/s; {} bytes in, {} bytes out, {} edges, {} moves done",
+      s.cycles, static_cast<double>(s.cycles) / opt_.clk_hz, s.sim_wall_s, s.wall_s,
+      s.clocks_per_s / 1e6, s.bytes_in, s.bytes_out, s.edges, s.moves_done);
+}
+
+}  // namespace fpgacnc::simboard

@@ -1,0 +1,331 @@
+// Simulated board tests (label system): the host's SerialLink and v1 streamer talk to the
+// Verilated cnc_core through the board's pseudo-terminal, exactly as to a real port.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <variant>
+
+#include "fpgacnc/link/serial_link.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/simboard/plot.h"
+#include "fpgacnc/simboard/runner.h"
+#include "fpgacnc/simboard/sim_board.h"
+
+namespace sb = fpgacnc::simboard;
+namespace lk = fpgacnc::link;
+namespace cfgns = fpgacnc::config;
+namespace plan = fpgacnc::plan;
+using namespace std::chrono_literals;
+
+namespace {
+
+// The original controller's worked examples (protocol-v1.md).
+const std::vector<uint8_t> kInit = {0xFF, 0x01, 0x1E, 0x1A, 0x30, 0x01, 0x1E, 0x1A, 0x30};
+const std::vector<uint8_t> kMotion = {0x01, 0x00, 0x00, 0x01, 0x40, 0xFF,
+                                      0xFF, 0xFF, 0x60, 0x04, 0xB0};
+
+size_t count_edges(const std::vector<sb::Edge>& e, uint8_t signal, uint8_t value) {
+  return static_cast<size_t>(std::count_if(e.begin(), e.end(), [&](const sb::Edge& x) {
+    return x.signal == signal && x.value == value;
+  }));
+}
+
+TEST(SimBoard, RejectsOtherClockAndBaud) {
+  sb::BoardOptions o;
+  o.baud = 9600;
+  EXPECT_THROW({ sb::SimBoard b(o); }, sb::BoardError);
+  o.baud = 115200;
+  o.clk_hz = 100e6;
+  EXPECT_THROW({ sb::SimBoard b(o); }, sb::BoardError);
+}
+
+TEST(SimBoard, PtyRoundTripOriginalExample) {
+  sb::SimBoard board;
+  ASSERT_EQ(board.path().rfind("/dev/pts/", 0), 0u) << board.path();
+  board.start();
+  lk::SerialLink link(board.path(), 115200);
+  link.flush_input();
+  link.write(kInit);
+  link.write(kMotion);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto b = link.read_byte(5000ms);
+  ASSERT_TRUE(b.has_value()) << "no ACK within 5 s";
+  EXPECT_EQ(*b, 0xAA);
+  ASSERT_TRUE(board.wait_quiet(2000ms));
+  board.stop();
+  const auto e = board.edges();
+  // 320 X steps with DIR X high, 160 Y steps with DIR Y low.
+  EXPECT_EQ(count_edges(e, sb::step_signal(0), 1), 320u);
+  EXPECT_EQ(count_edges(e, sb::step_signal(1), 1), 160u);
+  EXPECT_EQ(count_edges(e, sb::dir_signal(0), 1), 1u);
+  EXPECT_EQ(count_edges(e, sb::dir_signal(1), 1), 0u);
+  const auto n = board.net_steps();
+  EXPECT_EQ(n[0], 320);
+  EXPECT_EQ(n[1], -160);
+  // G1: the laser was on for exactly one interval, during the move.
+  const auto st = board.stats();
+  const auto laser = sb::high_intervals(e, sb::kLaser, st.cycles);
+  ASSERT_EQ(laser.size(), 1u);
+  for (const auto& x : e) {
+    if (x.signal < 2 && x.value) {
+      EXPECT_GE(x.cycle, laser[0].begin);
+      EXPECT_LE(x.cycle, laser[0].end);  // the laser falls on the last STEP rise
+    }
+  }
+  EXPECT_EQ(st.bytes_in, 20u);
+  EXPECT_EQ(st.bytes_out, 1u);
+  EXPECT_EQ(st.moves_done, 1u);
+  EXPECT_EQ(st.position[0], 320);
+  EXPECT_EQ(st.position[1], -160);
+  fmt::print("round trip: {} (ACK after {:.3f} s wall)\n", board.stats_line(),
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+}
+
+// STEP rises of one axis, in order, with the DIR level at that cycle.
+struct Rise {
+  uint64_t cycle;
+  int dir;
+};
+std::vector<Rise> rises(const std::vector<sb::Edge>& e, int axis) {
+  std::vector<Rise> r;
+  int dir = 0;
+  for (const auto& x : e) {
+    if (x.signal == sb::dir_signal(axis)) dir = x.value;
+    if (x.signal == sb::step_signal(axis) && x.value) r.push_back(Rise{x.cycle, dir ? 1 : -1});
+  }
+  return r;
+}
+
+// Runs a corpus job host -> SerialLink -> pty -> Verilated cnc_core and checks it against the
+// plan.
+void run_corpus_job(const std::string& name, const cfgns::MachineConfig& cfg) {
+  const std::string path = std::string(FPGACNC_CORPUS_DIR) + "/" + name;
+  plan::PlanOptions po;
+  po.feed_override_pct = cfg.feed_override_pct;
+  const plan::Plan p = plan::plan_input_file(path, cfg, po);
+  std::vector<plan::Segment> segs;
+  for (const auto& it : p.items) {
+    if (const auto* s = std::get_if<plan::Segment>(&it)) segs.push_back(*s);
+  }
+  sb::BoardRunOptions ro;
+  ro.stream.ack_timeout = 10s;
+  const auto t0 = std::chrono::steady_clock::now();
+  const sb::BoardRunResult r = sb::run_plan_on_board(p, sb::SimBoard::options_from_config(cfg), ro);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Every move acknowledged.
+  EXPECT_EQ(r.report.moves, segs.size());
+  EXPECT_EQ(r.report.acks, segs.size());
+  EXPECT_EQ(r.report.warnings, 0u);
+  EXPECT_EQ(r.stats.frame_errors, 0u);
+  EXPECT_EQ(r.stats.timeouts, 0u);
+  // Net steps from the recorded STEP/DIR edges equal the interpreter's final target, exactly.
+  // v1 carries X and Y only: Z (and E) are not driven by the board, so they are not compared
+  // (the plan's Z target is not zero for the milling job).
+  EXPECT_EQ(r.net_steps[0], p.final_steps[0]) << "X";
+  EXPECT_EQ(r.net_steps[1], p.final_steps[1]) << "Y";
+  EXPECT_EQ(r.net_steps[2], 0);
+  EXPECT_EQ(r.net_steps[3], 0);
+  EXPECT_EQ(r.stats.position[0], p.final_steps[0]);
+  EXPECT_EQ(r.stats.position[1], p.final_steps[1]);
+
+  // Laser high exactly during cutting moves. The moves run one at a time (stop-and-wait), so
+  // the k-th segment owns the next |steps_x| X rises and |steps_y| Y rises, in order.
+  const auto laser = sb::high_intervals(r.edges, sb::kLaser, r.stats.cycles);
+  const auto rx = rises(r.edges, 0), ry = rises(r.edges, 1);
+  size_t ix = 0, iy = 0, il = 0, cutting_with_steps = 0, bad_dir = 0, steps_outside = 0,
+         rapid_steps_lit = 0;
+  auto lit = [&](uint64_t c) {
+    auto it = std::upper_bound(laser.begin(), laser.end(), c,
+                               [](uint64_t v, const sb::Interval& i) { return v < i.begin; });
+    if (it == laser.begin()) return false;
+    --it;
+    return c >= it->begin && c < it->end;
+  };
+  for (const auto& s : segs) {
+    const uint64_t nx = static_cast<uint64_t>(std::llabs(s.steps[0]));
+    const uint64_t ny = static_cast<uint64_t>(std::llabs(s.steps[1]));
+    ASSERT_LE(ix + nx, rx.size());
+    ASSERT_LE(iy + ny, ry.size());
+    const bool cutting = s.code != 0 && nx + ny > 0;
+    std::vector<uint64_t> cycles;
+    for (uint64_t k = 0; k < nx; ++k, ++ix) {
+      if (rx[ix].dir != (s.steps[0] > 0 ? 1 : -1)) ++bad_dir;
+      cycles.push_back(rx[ix].cycle);
+    }
+    for (uint64_t k = 0; k < ny; ++k, ++iy) {
+      if (ry[iy].dir != (s.steps[1] > 0 ? 1 : -1)) ++bad_dir;
+      cycles.push_back(ry[iy].cycle);
+    }
+    if (cutting) {
+      ASSERT_LT(il, laser.size()) << "cutting move at line " << s.source_line << " has no laser";
+      // The laser rises before the first STEP of the move and falls on its last STEP rise.
+      for (uint64_t c : cycles) {
+        if (c < laser[il].begin || c > laser[il].end) ++steps_outside;
+      }
+      ++il;
+      ++cutting_with_steps;
+    } else {
+      for (uint64_t c : cycles) {
+        if (lit(c)) ++rapid_steps_lit;
+      }
+    }
+  }
+  EXPECT_EQ(ix, rx.size());
+  EXPECT_EQ(iy, ry.size());
+  EXPECT_EQ(bad_dir, 0u);
+  EXPECT_EQ(laser.size(), cutting_with_steps);
+  EXPECT_EQ(steps_outside, 0u);
+  EXPECT_EQ(rapid_steps_lit, 0u);
+  EXPECT_EQ(r.stats.violations, 0u);
+
+  fmt::print(
+      "{}: {} moves ({} cutting with steps, {} laser intervals), {} edges; board {} cycles "
+      "({:.2f} s simulated), {:.2f} M clocks/s, {:.1f} s of simulation; job wall {:.1f} s; "
+      "net steps X {} Y {} (planned X {} Y {})\n",
+      name, segs.size(), cutting_with_steps, laser.size(), r.edges.size(), r.stats.cycles,
+      static_cast<double>(r.stats.cycles) / 50e6, r.stats.clocks_per_s / 1e6, r.stats.sim_wall_s,
+      wall, r.net_steps[0], r.net_steps[1], p.final_steps[0], p.final_steps[1]);
+  if (const char* out = std::getenv("SIMBOARD_PLOT_DIR")) {
+    sb::PlotOptions o;
+    o.steps_per_mm = {cfg.steps_per_mm[0], cfg.steps_per_mm[1]};
+    o.title = name + " on the simulated board";
+    sb::write_plot_svg(std::string(out) + "/" + name + ".svg", r.edges, sb::commanded_path(p, cfg),
+                       o);
+  }
+}
+
+// Test machine: the original 160 steps/mm, 115200 baud and DRV8825 step timing, with the
+// motion sped up so that each job is simulated cycle by cycle in about a minute on one core:
+// the scaled figures are the feed override, the rapid feed and the axis max feeds (the UART,
+// packets, ACKs and pulse timing rules stay those of the real machine).
+cfgns::MachineConfig fast_config(double override_pct, double rapid) {
+  cfgns::MachineConfig c;
+  c.feed_override_pct = override_pct;
+  c.rapid_feed_mm_min = rapid;
+  c.max_feed_mm_min = {60000.0, 60000.0, 60000.0, 60000.0};
+  return c;
+}
+
+// Laser job, 2361 segments: F100 engraving x25 (2500 mm/min), rapids 20000 mm/min
+// (about 15 s of machine time instead of 304 s).
+TEST(SimBoardCorpus, JsdcLaser) {
+  run_corpus_job("jsdc-laser.gcode", fast_config(2500.0, 20000.0));
+}
+
+// Milling calibration job, 1893 segments (all code 0: no M3, so no laser): F355 x100
+// (35500 mm/min), rapids 40000 mm/min, Z max feed raised so Z moves do not slow X/Y
+// (about 20 s of machine time instead of 1931 s).
+TEST(SimBoardCorpus, CircleDiamondSquare) {
+  run_corpus_job("Circle_Diamond_Square_Calibration.gcode", fast_config(10000.0, 40000.0));
+}
+
+// A board that stops answering in the middle of a job: the streamer fails within its ACK
+// timeout, naming the last acknowledged move.
+TEST(SimBoardFailure, PausedBoardTimesOut) {
+  cfgns::MachineConfig cfg = fast_config(2500.0, 20000.0);
+  plan::PlanOptions po;
+  po.feed_override_pct = cfg.feed_override_pct;
+  const plan::Plan p =
+      plan::plan_input_file(std::string(FPGACNC_CORPUS_DIR) + "/jsdc-laser.gcode", cfg, po);
+  sb::BoardRunOptions ro;
+  ro.stream.ack_timeout = 1500ms;
+  std::chrono::steady_clock::time_point paused_at{};
+  ro.on_ack = [&](sb::SimBoard& b, size_t done, size_t) {
+    if (done == 5) {
+      b.pause();
+      paused_at = std::chrono::steady_clock::now();
+    }
+  };
+  std::string what;
+  try {
+    sb::run_plan_on_board(p, sb::SimBoard::options_from_config(cfg), ro);
+  } catch (const lk::Error& e) {
+    what = e.what();
+  }
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - paused_at).count();
+  ASSERT_FALSE(what.empty()) << "the stream did not fail";
+  fmt::print("failure after {:.2f} s: {}\n", waited, what);
+  // Moves 0..4 acknowledged; move 5 never is.
+  std::vector<const plan::Segment*> segs;
+  for (const auto& it : p.items) {
+    if (const auto* s = std::get_if<plan::Segment>(&it)) segs.push_back(s);
+  }
+  EXPECT_NE(
+      what.find(fmt::format("last acknowledged move: segment 4 (line {})", segs[4]->source_line)),
+      std::string::npos)
+      << what;
+  EXPECT_NE(what.find("no ACK"), std::string::npos) << what;
+  EXPECT_GE(waited, 1.4);
+  EXPECT_LT(waited, 3.0);
+}
+
+// Same with stop(): the board thread ends (the pty stays open), the host times out.
+TEST(SimBoardFailure, StoppedBoardTimesOut) {
+  plan::Plan p;
+  plan::Steps4 pos{};
+  for (int i = 0; i < 4; ++i) {
+    plan::Segment s;
+    s.code = 1;
+    s.steps = {800, 0, 0, 0};  // 5 mm at 6000 mm/min: 50 ms of machine time each
+    s.feed_v1 = 6000;
+    s.source_line = 10 + i;
+    for (int a = 0; a < 4; ++a) pos[static_cast<size_t>(a)] += s.steps[static_cast<size_t>(a)];
+    s.target = pos;
+    p.items.push_back(s);
+  }
+  p.final_steps = pos;
+  sb::BoardRunOptions ro;
+  ro.stream.ack_timeout = 1000ms;
+  ro.on_ack = [&](sb::SimBoard& b, size_t done, size_t) {
+    if (done == 2) b.stop();
+  };
+  try {
+    sb::run_plan_on_board(p, sb::BoardOptions{}, ro);
+    FAIL() << "the stream did not fail";
+  } catch (const lk::Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("segment 2 (line 12)"), std::string::npos) << what;
+    EXPECT_NE(what.find("last acknowledged move: segment 1 (line 11)"), std::string::npos) << what;
+  }
+}
+
+TEST(SimBoardPlot, WritesSvgWithLegend) {
+  sb::EdgeRecorder rec;
+  // Two X steps forward with DIR high, laser on.
+  rec.add(1, sb::dir_signal(0), 1);
+  rec.add(5, sb::kLaser, 1);
+  rec.add(10, sb::step_signal(0), 1);
+  rec.add(12, sb::step_signal(0), 0);
+  rec.add(20, sb::step_signal(0), 1);
+  rec.add(22, sb::step_signal(0), 0);
+  rec.add(22, sb::kLaser, 0);
+  EXPECT_EQ(rec.net_steps()[0], 2);
+  std::vector<sb::CommandedSegment> cmd = {{0, 0, 2.0 / 160, 0, true}};
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string svg = (dir / "simboard_plot_test.svg").string();
+  sb::write_plot_svg(svg, rec.edges(), cmd, sb::PlotOptions{});
+  std::ifstream f(svg);
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("<svg"), std::string::npos);
+  EXPECT_NE(text.find("executed (STEP/DIR), laser on"), std::string::npos);
+  EXPECT_NE(text.find("X (mm)"), std::string::npos);
+  const std::string csv = (dir / "simboard_edges_test.csv").string();
+  rec.write_csv(csv, 50e6);
+  std::ifstream c(csv);
+  std::string header, first;
+  std::getline(c, header);
+  std::getline(c, first);
+  EXPECT_EQ(header, "cycle,time_s,signal,value");
+  EXPECT_EQ(first, "1,0.000000020,dir_x,1");
+  EXPECT_THROW(sb::write_plot_svg("/nonexistent-dir/x.svg", rec.edges(), cmd, sb::PlotOptions{}),
+               std::runtime_error);
+}
+
+}  // namespace
