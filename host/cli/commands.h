@@ -8,6 +8,7 @@
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/link/link.h"
+#include "fpgacnc/plan/planner.h"
 
 namespace fpgacnc::cli {
 
@@ -22,13 +23,31 @@ config::MachineConfig load_config(const CommonOptions& opt);
 
 void register_plan(CLI::App& app);
 
+// Outputs of `stream` that only the simulated board can give (--plot, --fst, --edges).
+struct SimOutputOptions {
+  std::string plot_path;
+  std::string fst_path;
+  std::string edges_csv;
+  bool any() const { return !plot_path.empty() || !fst_path.empty() || !edges_csv.empty(); }
+};
+
 // Hook for `stream` without --port: returns the link to use (e.g. start the simulated board).
 // The default throws "no --port given and no simulated board built in".
-using OpenDefaultLink = std::function<std::unique_ptr<link::Link>(const config::MachineConfig&)>;
+using OpenDefaultLink = std::function<std::unique_ptr<link::Link>(const config::MachineConfig&,
+                                                                  const SimOutputOptions&)>;
+// Called after a successful stream over the default link (board figures, plot).
+using AfterDefaultStream = std::function<void(
+    link::Link&, const plan::Plan&, const config::MachineConfig&, const SimOutputOptions&)>;
 struct StreamHooks {
   OpenDefaultLink open_default_link;
+  AfterDefaultStream after_default_stream;
 };
 StreamHooks default_stream_hooks();
+// Hooks that run the simulated board in-process (host/simboard).
+StreamHooks simboard_stream_hooks();
 void register_stream(CLI::App& app, StreamHooks hooks);
+
+// fpgacnc board [--config F] [--fst F] [--edges F.csv]: the simulated board alone on a pty.
+void register_board(CLI::App& app);
 
 }  // namespace fpgacnc::cli

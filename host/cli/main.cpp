@@ -13,8 +13,10 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "fpgacnc 0.1.0");
 
   fpgacnc::cli::register_plan(app);
-  fpgacnc::cli::register_stream(app, fpgacnc::cli::default_stream_hooks());
-  // Future: register_board(app); register_sim(app);
+  // Without --port, `stream` runs the simulated board in-process (board_cmd.cpp).
+  fpgacnc::cli::register_stream(app, fpgacnc::cli::simboard_stream_hooks());
+  fpgacnc::cli::register_board(app);
+  // Future: register_sim(app);
 
   try {
     app.parse(argc, argv);

@@ -1,7 +1,9 @@
 // fpgacnc stream FILE [--port DEV] [--config F] [--baud N] [--timeout S] [--feed-override PCT]
+//                     [--plot OUT.svg] [--fst OUT.fst] [--edges OUT.csv]
 //
-// Hook: without --port, StreamHooks::open_default_link is called (the simulated board will be
-// plugged in there); by default it throws.
+// Hook: without --port, StreamHooks::open_default_link is called (main.cpp plugs in the
+// simulated board, see board_cmd.cpp); the plain default throws. --plot/--fst/--edges need the
+// simulated board.
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -23,6 +25,7 @@ struct StreamArgs {
   uint32_t baud = 0;        // 0: from config
   double timeout_s = -1.0;  // negative: from config
   CommonOptions common;
+  SimOutputOptions sim;
 };
 
 // Progress bar on stderr (only when stderr is a terminal): moves done/total, rate, ETA.
@@ -56,6 +59,11 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   if (a.baud) cfg.baud = a.baud;
   if (a.timeout_s > 0) cfg.ack_timeout_s = a.timeout_s;
   std::string port = a.port.empty() ? cfg.port : a.port;
+  if (!port.empty() && a.sim.any()) {
+    throw link::Error(
+        "--plot, --fst and --edges need the simulated board: give no --port (and no port in "
+        "the configuration)");
+  }
 
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
@@ -64,7 +72,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
 
   std::unique_ptr<link::Link> lk;
   if (port.empty()) {
-    lk = hooks.open_default_link(cfg);
+    lk = hooks.open_default_link(cfg, a.sim);
   } else {
     lk = std::make_unique<link::SerialLink>(port, cfg.baud);
   }
@@ -83,13 +91,15 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   fmt::print("final position: steps X {} Y {} Z {} E {}; mm X {:.4f} Y {:.4f} Z {:.4f} E {:.4f}\n",
              r.final_steps[0], r.final_steps[1], r.final_steps[2], r.final_steps[3], r.final_mm[0],
              r.final_mm[1], r.final_mm[2], r.final_mm[3]);
+  if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, a.sim);
 }
 
 }  // namespace
 
 StreamHooks default_stream_hooks() {
   StreamHooks h;
-  h.open_default_link = [](const config::MachineConfig&) -> std::unique_ptr<link::Link> {
+  h.open_default_link = [](const config::MachineConfig&,
+                           const SimOutputOptions&) -> std::unique_ptr<link::Link> {
     throw link::Error("no --port given and no simulated board built in");
   };
   return h;
@@ -107,6 +117,11 @@ void register_stream(CLI::App& app, StreamHooks hooks) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
+  sub->add_option("--plot", args->sim.plot_path,
+                  "simulated board: plot of the executed vs commanded path (.svg, or .png with "
+                  "rsvg-convert)");
+  sub->add_option("--fst", args->sim.fst_path, "simulated board: FST waveform of the core");
+  sub->add_option("--edges", args->sim.edges_csv, "simulated board: STEP/DIR/LASER edge list CSV");
   sub->callback([args, hooks = std::move(hooks)] { run_stream(*args, hooks); });
 }
 

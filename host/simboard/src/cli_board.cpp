@@ -1,1 +1,105 @@
-// CLI glue for the simulated board (board command, default link for stream): see cli_board.h.
+#include "fpgacnc/simboard/cli_board.h"
+
+#include <fmt/format.h>
+#include <pthread.h>
+#include <signal.h>
+
+#include <cstdio>
+
+#include "fpgacnc/simboard/plot.h"
+#include "fpgacnc/simboard/runner.h"
+#include "fpgacnc/simboard/sim_board.h"
+
+namespace fpgacnc::simboard {
+namespace {
+
+void print_figures(const SimBoard& b) {
+  const BoardStats s = b.stats();
+  fmt::print(
+      "simulated board: {} cycles ({:.3f} s of machine time), {:.2f} M clocks/s ({:.2f} s "
+      "simulating, {:.2f} s wall), {} bytes in, {} bytes out, {} edges, {} moves done\n",
+      s.cycles, static_cast<double>(s.cycles) / b.options().clk_hz, s.clocks_per_s / 1e6,
+      s.sim_wall_s, s.wall_s, s.bytes_in, s.bytes_out, s.edges, s.moves_done);
+  if (s.frame_errors || s.timeouts || s.violations) {
+    fmt::print(
+        "simulated board: {} framing errors, {} packet timeouts, {} step timing violations\n",
+        s.frame_errors, s.timeouts, s.violations);
+  }
+}
+
+}  // namespace
+
+int run_board_command(const BoardCommandArgs& args) {
+  config::MachineConfig cfg;
+  if (!args.config_path.empty()) cfg = config::load_machine_config(args.config_path);
+  BoardOptions o = SimBoard::options_from_config(cfg);
+  o.fst_path = args.fst_path;
+  // SIGINT/SIGTERM are taken with sigwait() here; block them before the board thread starts so
+  // that it inherits the mask and the signal always reaches this thread.
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  SimBoard board(o);
+  board.start();
+  fmt::print("simulated board on {} ({} baud)\n", board.path(), o.baud);
+  if (!o.fst_path.empty()) fmt::print("FST waveform: {}\n", o.fst_path);
+  fmt::print("Ctrl-C (SIGINT) or SIGTERM stops it\n");
+  std::fflush(stdout);
+  int sig = 0;
+  sigwait(&set, &sig);
+  board.stop();
+  fmt::print("\nstopped by {}\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
+  print_figures(board);
+  const auto n = board.net_steps();
+  fmt::print("net steps from the edges: X {} Y {} Z {} E {}\n", n[0], n[1], n[2], n[3]);
+  if (!args.edges_csv.empty()) {
+    board.write_edges_csv(args.edges_csv);
+    fmt::print("edges written to {}\n", args.edges_csv);
+  }
+  pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
+  return 0;
+}
+
+std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
+                                              const SimOutputs& outputs) {
+  BoardOptions o = SimBoard::options_from_config(cfg);
+  o.fst_path = outputs.fst_path;
+  auto lk = std::make_unique<BoardLink>(o);
+  fmt::print("simulated board on {} ({} baud)\n", lk->board().path(), o.baud);
+  std::fflush(stdout);
+  return lk;
+}
+
+bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::MachineConfig& cfg,
+                      const SimOutputs& outputs) {
+  auto* bl = dynamic_cast<BoardLink*>(&lk);
+  if (!bl) return false;
+  SimBoard& b = bl->board();
+  b.wait_quiet(std::chrono::milliseconds(2000));
+  b.stop();
+  print_figures(b);
+  const auto edges = b.edges();
+  const auto n = net_steps(edges);
+  const bool ok = n[0] == plan.final_steps[0] && n[1] == plan.final_steps[1];
+  fmt::print(
+      "net steps from the edges: X {} Y {} (planned final target X {} Y {}: {}); Z and E are "
+      "not driven by v1\n",
+      n[0], n[1], plan.final_steps[0], plan.final_steps[1], ok ? "match" : "MISMATCH");
+  if (!outputs.plot_path.empty()) {
+    PlotOptions po;
+    po.steps_per_mm = {cfg.steps_per_mm[0], cfg.steps_per_mm[1]};
+    po.title = fmt::format("{} on the simulated board", plan.source);
+    write_plot_svg(outputs.plot_path, edges, commanded_path(plan, cfg), po);
+    fmt::print("plot written to {}\n", outputs.plot_path);
+  }
+  if (!outputs.fst_path.empty()) fmt::print("FST waveform written to {}\n", outputs.fst_path);
+  if (!outputs.edges_csv.empty()) {
+    write_edges_csv(outputs.edges_csv, edges, b.options().clk_hz);
+    fmt::print("edges written to {}\n", outputs.edges_csv);
+  }
+  return true;
+}
+
+}  // namespace fpgacnc::simboard

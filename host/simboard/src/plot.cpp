@@ -154,10 +154,13 @@ void write_plot_svg(const std::string& path, std::span<const Edge> edges,
   double wx = b.x1 - b.x0, wy = b.y1 - b.y0;
   if (wx <= 0) wx = 1;
   if (wy <= 0) wy = 1;
-  const double ml = 70, mr = 20, mt = 50, mb = 60;  // margins, px
-  const double pw = o.width_px - ml - mr, ph = o.height_px - mt - mb;
+  const double ml = 70, mr = 20, mt = 120, mb = 60;  // margins, px (title, legend on top)
+  const double pw = o.width_px - ml - mr;
+  double ph = o.height_px - mt - mb;
   const double scale = std::min(pw / wx, ph / wy);  // px per mm, same on both axes
-  const double ox = ml + (pw - wx * scale) / 2, oy = mt + (ph - wy * scale) / 2;
+  ph = wy * scale;                                  // the canvas fits the drawing's aspect
+  const double height_px = mt + ph + mb;
+  const double ox = ml + (pw - wx * scale) / 2, oy = mt;
   auto X = [&](double mm) { return ox + (mm - b.x0) * scale; };
   auto Y = [&](double mm) { return oy + (b.y1 - mm) * scale; };
   // Keep a point every 0.4 px of the executed path.
@@ -172,7 +175,7 @@ void write_plot_svg(const std::string& path, std::span<const Edge> edges,
                  "viewBox=\"0 0 {0} {1}\" font-family=\"sans-serif\" font-size=\"12\">\n"
                  "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
                  "<text x=\"{2}\" y=\"24\" font-size=\"16\">{3}</text>\n",
-                 o.width_px, o.height_px, ml, esc(o.title));
+                 o.width_px, height_px, ml, esc(o.title));
   // Axes with ticks in mm.
   const double ax0 = X(b.x0), ax1 = X(b.x1), ay0 = Y(b.y0), ay1 = Y(b.y1);
   fmt::format_to(out,
