@@ -33,7 +33,9 @@ struct SimBoard::Model {
   uint64_t last_active = 0;  // last cycle with something in flight
   uint32_t prev_sig = 0;     // step | dir << 4 | laser << 8 | tx << 9
   uint32_t sig_mask = 0x1ff;
-  std::vector<uint8_t> out;  // decoded tx bytes not yet written to the pty
+  bool never_active = true;   // nothing happened since reset: quiet
+  std::deque<uint8_t> inbox;  // read from the pty, not yet admitted to the rx driver
+  std::vector<uint8_t> out;   // decoded tx bytes not yet written to the pty
   uint64_t bytes_in = 0, bytes_out = 0;
   uint64_t trace_time = 0;
 
@@ -277,7 +279,7 @@ void SimBoard::read_pty() {
   for (;;) {
     const ssize_t n = ::read(master_, buf, sizeof buf);
     if (n > 0) {
-      for (ssize_t i = 0; i < n; ++i) model_->driver.push(buf[i]);
+      model_->inbox.insert(model_->inbox.end(), buf, buf + n);
       model_->bytes_in += static_cast<uint64_t>(n);
       if (static_cast<size_t>(n) < sizeof buf) return;
       continue;
@@ -305,7 +307,23 @@ void SimBoard::flush_out() {
 
 bool SimBoard::quiet_locked() const {
   const Model& s = *model_;
-  return s.driver.idle() && s.out.empty() && s.cycle - s.last_active > kQuietCycles;
+  return s.driver.idle() && s.out.empty() && s.inbox.empty() &&
+         (s.never_active || s.cycle - s.last_active > kQuietCycles);
+}
+
+// Bytes read from the pty start on the line: at once when bytes are already on the line (they
+// follow back to back) or something else is in flight; but when only the quiet tail is
+// running they wait for its end, so a host that answers an ACK quickly or slowly sees the same
+// cycle numbers.
+void SimBoard::admit_inbox() {
+  Model& s = *model_;
+  if (s.inbox.empty()) return;
+  const bool tail_done = s.never_active || s.cycle - s.last_active > kQuietCycles;
+  if (!s.driver.idle() || tail_done || s.last_active == s.cycle) {
+    for (uint8_t b : s.inbox) s.driver.push(b);
+    s.inbox.clear();
+    s.never_active = false;
+  }
 }
 
 uint64_t SimBoard::run_chunk(uint64_t max_cycles) {
@@ -317,7 +335,10 @@ void SimBoard::step_loop(int block_ms) {
   bool quiet;
   {
     std::lock_guard<std::mutex> l(mu_);
-    if (!paused_) read_pty();
+    if (!paused_) {
+      read_pty();
+      admit_inbox();
+    }
     quiet = paused_ || quiet_locked();
   }
   quiet_.store(quiet);
@@ -401,6 +422,7 @@ void SimBoard::run_cycles_until_quiet(uint64_t max_cycles) {
   uint64_t n = 0;
   while (n < max_cycles) {
     read_pty();
+    admit_inbox();
     if (quiet_locked()) break;
     n += run_chunk(std::min<uint64_t>(opt_.poll_interval_cycles, max_cycles - n));
     flush_out();

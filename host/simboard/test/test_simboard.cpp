@@ -86,6 +86,65 @@ TEST(SimBoard, PtyRoundTripOriginalExample) {
              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
+// Time policy: clocks do not advance while the board waits for the host, so the same job gives
+// the same edge list, cycle for cycle, run after run; the traced model (FST) gives the same
+// edges as the untraced one. The streamer writes the init packet and the first move without
+// waiting: whether the move's bytes arrive before the line went idle (back to back) or just
+// after (start after the 32-clock quiet tail) depends on the host's speed, so the lists are
+// compared relative to their first edge; from then on the stop-and-wait job is exact.
+TEST(SimBoard, EdgesReproducibleAndFstSameAsUntraced) {
+  plan::Plan p;
+  plan::Steps4 pos{};
+  const int64_t moves[][3] = {{1, 320, -160}, {0, -100, 40}, {3, 7, 250}, {0, 0, 0}, {2, -50, -3}};
+  int line = 1;
+  for (const auto& m : moves) {
+    plan::Segment s;
+    s.code = static_cast<uint8_t>(m[0]);
+    s.steps = {m[1], m[2], 0, 0};
+    s.feed_v1 = 20000;
+    s.source_line = line++;
+    pos[0] += m[1];
+    pos[1] += m[2];
+    s.target = pos;
+    p.items.push_back(s);
+  }
+  p.final_steps = pos;
+  sb::BoardRunOptions ro;
+  ro.stream.ack_timeout = 5000ms;
+  sb::BoardOptions o;
+  const auto a = sb::run_plan_on_board(p, o, ro);
+  const auto b = sb::run_plan_on_board(p, o, ro);
+  const std::string fst = (std::filesystem::temp_directory_path() / "simboard_test.fst").string();
+  o.fst_path = fst;
+  const auto c = sb::run_plan_on_board(p, o, ro);
+  ASSERT_EQ(a.edges.size(), b.edges.size());
+  ASSERT_EQ(a.edges.size(), c.edges.size());
+  ASSERT_FALSE(a.edges.empty());
+  const uint64_t a0 = a.edges[0].cycle, b0 = b.edges[0].cycle, c0 = c.edges[0].cycle;
+  for (const uint64_t x0 : {b0, c0}) {
+    EXPECT_TRUE(x0 == a0 || x0 == a0 + sb::SimBoard::kQuietCycles ||
+                a0 == x0 + sb::SimBoard::kQuietCycles)
+        << a0 << " " << x0;
+  }
+  for (size_t i = 0; i < a.edges.size(); ++i) {
+    ASSERT_EQ(a.edges[i].cycle - a0, b.edges[i].cycle - b0) << i;
+    ASSERT_EQ(a.edges[i].signal, b.edges[i].signal) << i;
+    ASSERT_EQ(a.edges[i].cycle - a0, c.edges[i].cycle - c0) << i;
+    ASSERT_EQ(a.edges[i].signal, c.edges[i].signal) << i;
+    ASSERT_EQ(a.edges[i].value, c.edges[i].value) << i;
+  }
+  EXPECT_EQ(a.net_steps[0], pos[0]);
+  EXPECT_EQ(a.net_steps[1], pos[1]);
+  ASSERT_EQ(a.move_done_cycles.size(), c.move_done_cycles.size());
+  for (size_t i = 0; i < a.move_done_cycles.size(); ++i) {
+    EXPECT_EQ(a.move_done_cycles[i] - a0, c.move_done_cycles[i] - c0);
+  }
+  EXPECT_GT(std::filesystem::file_size(fst), 1000u);
+  fmt::print("reproducible: {} edges, {} cycles; traced run {:.2f} M clocks/s, untraced {:.2f}\n",
+             a.edges.size(), a.stats.cycles, c.stats.clocks_per_s / 1e6,
+             a.stats.clocks_per_s / 1e6);
+}
+
 // STEP rises of one axis, in order, with the DIR level at that cycle.
 struct Rise {
   uint64_t cycle;

@@ -19,7 +19,13 @@
 // `poll_interval_cycles` clocks (1024 by default, well under one UART frame of 4340 clocks),
 // and everything read is queued in the rx driver, so a packet whose bytes are already written
 // never sees a gap on the line because of the polling. Bytes written while the board is busy
-// start at the next poll boundary (or right after the bytes already queued).
+// start at the next poll boundary (or right after the bytes already queued); bytes that arrive
+// while only the quiet tail (kQuietCycles after the last activity) is running wait for its end,
+// so a host that answers an ACK fast or slow gets the same cycle numbers. The one race left is
+// a host that writes a packet in pieces without waiting (the v1 streamer writes the init packet
+// and the first move back to back): a piece that arrives while earlier bytes are still on the
+// line follows them at once, one that arrives after the line went idle starts after the quiet
+// tail (32 clocks later). From the first ACK on, a stop-and-wait job is cycle-reproducible.
 //
 // Threads: start() runs the board in its own thread until stop() (the destructor stops it);
 // run_until() runs the same loop in the caller's thread. pause() freezes the board (no clocks,
@@ -134,6 +140,7 @@ class SimBoard {
   void step_loop(int block_ms);
   uint64_t run_chunk(uint64_t max_cycles);
   void read_pty();
+  void admit_inbox();
   void flush_out();
   bool quiet_locked() const;
 
