@@ -1,7 +1,10 @@
 // Simulated board tests (label system): the host's SerialLink and v1 streamer talk to the
 // Verilated cnc_core through the board's pseudo-terminal, exactly as to a real port.
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -143,6 +146,33 @@ TEST(SimBoard, EdgesReproducibleAndFstSameAsUntraced) {
   fmt::print("reproducible: {} edges, {} cycles; traced run {:.2f} M clocks/s, untraced {:.2f}\n",
              a.edges.size(), a.stats.cycles, c.stats.clocks_per_s / 1e6,
              a.stats.clocks_per_s / 1e6);
+}
+
+// The board in the caller's thread: a raw client on the pty writes the example, run_until()
+// simulates until the ACK has been sent, and the client reads it.
+TEST(SimBoard, RunUntilInCallerThread) {
+  sb::SimBoard board;
+  const int fd = ::open(board.path().c_str(), O_RDWR | O_NOCTTY);
+  ASSERT_GE(fd, 0);
+  std::vector<uint8_t> bytes = kInit;
+  bytes.insert(bytes.end(), kMotion.begin(), kMotion.end());
+  ASSERT_EQ(::write(fd, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
+  EXPECT_TRUE(
+      board.run_until([](const sb::SimBoard& b) { return b.stats().bytes_out >= 1; }, 10000ms));
+  pollfd p{fd, POLLIN, 0};
+  ASSERT_EQ(::poll(&p, 1, 2000), 1);
+  uint8_t ack = 0;
+  ASSERT_EQ(::read(fd, &ack, 1), 1);
+  EXPECT_EQ(ack, 0xAA);
+  const auto n = board.net_steps();
+  EXPECT_EQ(n[0], 320);
+  EXPECT_EQ(n[1], -160);
+  // Nothing in flight: the board blocks instead of advancing clocks.
+  board.run_cycles_until_quiet(100000);
+  const uint64_t c = board.cycle();
+  EXPECT_FALSE(board.run_until([](const sb::SimBoard&) { return false; }, 50ms));
+  EXPECT_EQ(board.cycle(), c);
+  ::close(fd);
 }
 
 // STEP rises of one axis, in order, with the DIR level at that cycle.
