@@ -64,6 +64,7 @@ int run_board_command(const BoardCommandArgs& args) {
 
 std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
                                               const SimOutputs& outputs) {
+  if (!outputs.plot_path.empty()) check_plot_path(outputs.plot_path);
   BoardOptions o = SimBoard::options_from_config(cfg);
   o.fst_path = outputs.fst_path;
   auto lk = std::make_unique<BoardLink>(o);

@@ -133,8 +133,7 @@ std::vector<CommandedSegment> commanded_path(const plan::Plan& plan,
   return out;
 }
 
-void write_plot_svg(const std::string& path, std::span<const Edge> edges,
-                    std::span<const CommandedSegment> commanded, const PlotOptions& o) {
+void check_plot_path(const std::string& path) {
   const bool png = path.size() > 4 && path.compare(path.size() - 4, 4, ".png") == 0;
   if (png && !on_path("rsvg-convert")) {
     throw std::runtime_error(fmt::format(
@@ -142,6 +141,12 @@ void write_plot_svg(const std::string& path, std::span<const Edge> edges,
         "write an .svg instead",
         path));
   }
+}
+
+void write_plot_svg(const std::string& path, std::span<const Edge> edges,
+                    std::span<const CommandedSegment> commanded, const PlotOptions& o) {
+  check_plot_path(path);
+  const bool png = path.size() > 4 && path.compare(path.size() - 4, 4, ".png") == 0;
   const std::string svg_path = png ? path.substr(0, path.size() - 4) + ".svg" : path;
 
   Bounds b;

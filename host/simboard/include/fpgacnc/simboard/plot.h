@@ -33,6 +33,10 @@ struct PlotOptions {
   double height_px = 900.0;
 };
 
+// Throws the error write_plot_svg would give for a .png path without rsvg-convert on PATH (to
+// fail before a job is streamed rather than after).
+void check_plot_path(const std::string& path);
+
 // Writes the plot. `edges` are the board's recorded edges (STEP/DIR/LASER). Throws
 // std::runtime_error naming the file (cannot create, or .png without rsvg-convert).
 void write_plot_svg(const std::string& path, std::span<const Edge> edges,
