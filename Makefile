@@ -31,6 +31,12 @@ bench: build
 demo: build
 	$(BUILD)/host/fpgacnc stream $(DEMO_JOB) $(DEMO_ARGS)
 
+# Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz.
+synth: deps
+	./scripts/synth_smoke.sh $(BUILD)/synth
+	./scripts/synth_report.sh $(BUILD)/synth
+	./scripts/ice40_timing.sh $(BUILD)/synth
+
 format:
 	find host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
 

@@ -7,9 +7,9 @@ PKGS=(
   verilator zlib1g-dev
   libsystemc-dev
   libgtest-dev googletest
-  yosys iverilog
+  yosys iverilog nextpnr-ice40
   libserialport-dev libcli11-dev libfmt-dev libtoml11-dev
-  python3 python3-serial
+  python3 python3-serial librsvg2-bin
 )
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then
