@@ -16,98 +16,30 @@
 #include <random>
 #include <vector>
 
-#include "Vcnc_core.h"
-#include "Vsegment_executor.h"
+#include "common/core_pins.h"
+#include "common/exec_harness.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
-#include "common/uart_bits.h"
 #include "verilated.h"
 
 namespace {
 
 using fpgacnc::tb::AxisTiming;
-using fpgacnc::tb::StepMonitor;
+using fpgacnc::tb::kClkHz;
+using fpgacnc::tb::mag;
+using fpgacnc::tb::Segment;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kAxes = 4;
-constexpr double kClkHz = 50e6;
+constexpr int kAxes = fpgacnc::tb::kExecAxes;
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-uint64_t mag(int64_t v) {
-  return static_cast<uint64_t>(v < 0 ? -v : v);
-}
-
-class Exec {
+// segment_executor with 1-clock step timing until a bench sets its own.
+class Exec : public fpgacnc::tb::ExecHarness {
  public:
-  Exec() : ctx_(std::make_unique<VerilatedContext>()), mon_(kAxes) {
-    m_ = std::make_unique<Vsegment_executor>(ctx_.get());
-    set_timing(std::vector<AxisTiming>(kAxes, AxisTiming{1, 1, 1, 1}));
-    m_->rst = 1;
-    tick();
-    tick();
-    m_->rst = 0;
-    tick();
-  }
-  ~Exec() { m_->final(); }
-
-  void set_timing(const std::vector<AxisTiming>& t) {
-    m_->cfg_step_high = m_->cfg_step_low = m_->cfg_dir_setup = m_->cfg_dir_hold = 0;
-    for (int a = 0; a < kAxes; ++a) {
-      m_->cfg_step_high |= static_cast<uint64_t>(t[a].high) << (16 * a);
-      m_->cfg_step_low |= static_cast<uint64_t>(t[a].low) << (16 * a);
-      m_->cfg_dir_setup |= static_cast<uint64_t>(t[a].setup) << (16 * a);
-      m_->cfg_dir_hold |= static_cast<uint64_t>(t[a].hold) << (16 * a);
-    }
-  }
-  void tick() {
-    m_->clk = 0;
-    m_->eval();
-    m_->clk = 1;
-    m_->eval();
-    ++cycle_;
-    mon_.sample(cycle_, m_->step, m_->dir);
-    if (m_->seg_start) start_ = cycle_;
-    if (m_->violation) ++violations_;
-  }
-  // Runs one segment; returns its run start R (0 for an empty one).
-  uint64_t run(const int64_t* steps, uint64_t period) {
-    while (!m_->s_axis_tready) tick();
-    uint64_t n_dom = 0;
-    for (int a = 0; a < kAxes; ++a) n_dom = std::max(n_dom, mag(steps[a]));
-    const uint64_t total = period * n_dom;
-    m_->s_axis_code = 1;
-    m_->s_axis_dir = 0;
-    for (int a = 0; a < kAxes; ++a) {
-      if (steps[a] > 0) m_->s_axis_dir |= 1u << a;
-      m_->s_axis_steps[a] = static_cast<uint32_t>(mag(steps[a]));
-      const uint64_t tmn = total - mag(steps[a]);
-      m_->s_axis_tmn[2 * a] = static_cast<uint32_t>(tmn);
-      m_->s_axis_tmn[2 * a + 1] = static_cast<uint32_t>(tmn >> 32);
-    }
-    m_->s_axis_total = total;
-    m_->s_axis_tvalid = 1;
-    start_ = 0;
-    tick();
-    m_->s_axis_tvalid = 0;
-    while (!m_->s_axis_tready) tick();
-    tick();
-    return start_;
-  }
-  void idle(uint64_t n) {
-    for (uint64_t i = 0; i < n; ++i) tick();
-  }
-  StepMonitor& mon() { return mon_; }
-  uint64_t cycle() const { return cycle_; }
-  uint64_t violations() const { return violations_; }
-
- private:
-  std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<Vsegment_executor> m_;
-  StepMonitor mon_;
-  uint64_t cycle_ = 0, start_ = 0, violations_ = 0;
+  Exec() : ExecHarness(std::vector<AxisTiming>(kAxes, AxisTiming{1, 1, 1, 1})) {}
 };
 
 // (a) step-time error and jitter over random segments.
@@ -124,29 +56,23 @@ void bench_accuracy(uint64_t seed) {
   const auto t0 = Clock::now();
   for (int batch = 0; batch < 40; ++batch) {
     std::vector<AxisTiming> t(kAxes);
-    uint64_t pmin = 0;
-    for (auto& at : t) {
-      at = AxisTiming{uint32_t(uni(1, 12)), uint32_t(uni(1, 12)), uint32_t(uni(1, 40)),
-                      uint32_t(uni(1, 40))};
-      pmin = std::max<uint64_t>(pmin, at.high + at.low);
-    }
+    for (auto& at : t) at = fpgacnc::tb::random_timing(uni, 12, 40);
+    const uint64_t pmin = fpgacnc::tb::min_period(t);
     e.idle(200);
     e.set_timing(t);
     for (int i = 0; i < 25; ++i) {
-      int64_t steps[kAxes];
-      for (auto& s : steps) {
+      Segment seg;
+      for (auto& s : seg.steps) {
         const int64_t n = static_cast<int64_t>(uni(0, 5) == 0 ? 0 : uni(1, 3000));
         s = uni(0, 1) ? n : -n;
       }
-      const uint64_t period = pmin + uni(0, pmin);
-      uint64_t n_dom = 0;
-      for (auto s : steps) n_dom = std::max(n_dom, mag(s));
-      const uint64_t T = period * n_dom;
-      const uint64_t R = e.run(steps, period);
+      seg.period = pmin + uni(0, pmin);
+      const uint64_t T = seg.total();
+      const uint64_t R = e.run(seg);
       ++segments;
       for (int a = 0; a < kAxes; ++a) {
         const auto& tr = e.mon().axis(a);
-        const uint64_t n = mag(steps[a]);
+        const uint64_t n = mag(seg.steps[a]);
         if (tr.rises.size() < idx[a] + n) {
           ++mismatches;
           idx[a] = tr.rises.size();
@@ -155,9 +81,7 @@ void bench_accuracy(uint64_t seed) {
         uint64_t min_iv = UINT64_MAX, max_iv = 0;
         for (uint64_t k = 1; k <= n; ++k) {
           const uint64_t rise = tr.rises[idx[a] + k - 1];
-          const double ideal = static_cast<double>(R) + static_cast<double>(k) *
-                                                            static_cast<double>(T) /
-                                                            static_cast<double>(n);
+          const double ideal = fpgacnc::tb::ideal_rise(R, k, T, n);
           worst_err = std::max(worst_err, std::abs(static_cast<double>(rise) - ideal));
           if (k > 1) {
             const uint64_t iv = rise - tr.rises[idx[a] + k - 2];
@@ -186,25 +110,11 @@ void bench_accuracy(uint64_t seed) {
 
 // (b) Verilator speed of cnc_core, idle and during a long move received on rx.
 void bench_core_speed() {
-  auto ctx = std::make_unique<VerilatedContext>();
-  auto m = std::make_unique<Vcnc_core>(ctx.get());
-  fpgacnc::tb::UartDriver drv(kClkHz, 115200);
-  uint64_t cycle = 0;
-  auto tick = [&]() {
-    m->rx = static_cast<uint8_t>(drv.tick());
-    m->clk = 0;
-    m->eval();
-    m->clk = 1;
-    m->eval();
-    ++cycle;
-  };
-  m->rx = 1;
-  m->cfg_wr = 0;
-  m->rst = 1;
-  tick();
-  tick();
-  m->rst = 0;
-  tick();
+  // Pins only: no STEP/DIR/tx monitors, so the rate is the model's.
+  fpgacnc::tb::PinHarness<Vcnc_core> h(fpgacnc::tb::kCoreAxes, fpgacnc::tb::kCorePins, false);
+  fpgacnc::tb::reset_core(h);
+  auto& m = h.dut();
+  auto tick = [&]() { h.tick(); };
 
   const uint64_t idle_clocks = 10'000'000;
   auto t0 = Clock::now();
@@ -212,27 +122,27 @@ void bench_core_speed() {
   const double idle_rate = static_cast<double>(idle_clocks) / seconds_since(t0);
 
   // G1 X 4000 Y -3000 at feed 6000: P = 3125, T = 12.5 M clocks.
-  const uint8_t pkt[11] = {0x01, 0x00, 0x00, 0x0F, 0xA0, 0xFF, 0xFF, 0xF4, 0x48, 0x17, 0x70};
-  for (uint8_t b : pkt) drv.push(b);
-  while (!drv.idle() || !m->running) tick();
+  const std::vector<uint8_t> pkt = {0x01, 0x00, 0x00, 0x0F, 0xA0, 0xFF,
+                                    0xFF, 0xF4, 0x48, 0x17, 0x70};
+  h.queue(pkt);
+  while (!h.rx_idle() || !m.running) tick();
   uint64_t steps = 0;
   uint8_t prev_step = 0;
-  const uint64_t c0 = cycle;
+  const uint64_t c0 = h.cycle();
   t0 = Clock::now();
-  while (m->running) {
+  while (m.running) {
     tick();
-    steps += static_cast<uint64_t>(__builtin_popcount(m->step & ~prev_step & 0xFu));
-    prev_step = m->step;
+    steps += static_cast<uint64_t>(__builtin_popcount(m.step & ~prev_step & 0xFu));
+    prev_step = m.step;
   }
   const double wall = seconds_since(t0);
-  const double move_rate = static_cast<double>(cycle - c0) / wall;
-  m->final();
+  const double move_rate = static_cast<double>(h.cycle() - c0) / wall;
   std::printf("bench: cnc_core (vcore, 4 axes) idle: %.2f M clocks/s (%.3f x real time)\n",
               idle_rate / 1e6, idle_rate / kClkHz);
   std::printf(
       "bench: cnc_core (vcore, 4 axes) during a move: %.2f M clocks/s (%.3f x real time), "
       "%llu clocks, %llu steps\n",
-      move_rate / 1e6, move_rate / kClkHz, static_cast<unsigned long long>(cycle - c0),
+      move_rate / 1e6, move_rate / kClkHz, static_cast<unsigned long long>(h.cycle() - c0),
       static_cast<unsigned long long>(steps));
 }
 
@@ -240,10 +150,10 @@ void bench_core_speed() {
 void bench_max_rate() {
   Exec e;
   const int64_t n = 1'000'000;
-  const int64_t steps[kAxes] = {n, -n, n, -n};
+  const Segment seg{1, {n, -n, n, -n}, 2};
   const uint64_t before = e.cycle();
   const auto t0 = Clock::now();
-  const uint64_t R = e.run(steps, 2);
+  const uint64_t R = e.run(seg);
   const double wall = seconds_since(t0);
   uint64_t total = 0;
   uint64_t first = UINT64_MAX, last = 0;

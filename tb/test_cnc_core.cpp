@@ -6,31 +6,22 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <memory>
 #include <random>
 #include <vector>
 
-#include "Vcnc_core.h"
+#include "common/core_pins.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
-#include "common/uart_bits.h"
 #include "common/v1_packets.h"
-#include "verilated.h"
 
 namespace {
 
 using fpgacnc::tb::init_packet;
 using fpgacnc::tb::motion_packet;
-using fpgacnc::tb::put32;
 
 using fpgacnc::tb::AxisTiming;
-using fpgacnc::tb::StepMonitor;
-using fpgacnc::tb::UartDriver;
-using fpgacnc::tb::UartMonitor;
 
-constexpr double kClkHz = 50e6;
-constexpr double kBaud = 115200;
-constexpr int kAxes = 4;
+constexpr int kAxes = fpgacnc::tb::kCoreAxes;
 constexpr uint32_t kDefaultNumerator = 18'750'000;
 constexpr uint64_t kFeed0Period = 62'500;
 constexpr uint64_t kWatchdog = 5'000'000;
@@ -51,72 +42,23 @@ struct Interval {
   uint64_t from, to;  // [from, to): first cycle seen high, first cycle seen low again
 };
 
-class CoreBench {
+// cnc_core through its pins, recording seg_start/seg_done, laser intervals and numerator_x changes.
+class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core> {
  public:
-  CoreBench()
-      : ctx_(std::make_unique<VerilatedContext>()),
-        drv_(kClkHz, kBaud),
-        umon_(kClkHz, kBaud),
-        mon_(kAxes) {
-    m_ = std::make_unique<Vcnc_core>(ctx_.get());
-    m_->rx = 1;
-    m_->cfg_wr = 0;
-    m_->rst = 1;
-    tick();
-    tick();
-    m_->rst = 0;
-    tick();
+  CoreBench() : PinHarness(kAxes, fpgacnc::tb::kCorePins) {
+    fpgacnc::tb::reset_core(*this);
     num_changes_.clear();  // the reset value is not a change
-  }
-  ~CoreBench() { m_->final(); }
-
-  void tick() {
-    m_->rx = static_cast<uint8_t>(drv_.tick());
-    m_->clk = 0;
-    m_->eval();
-    m_->clk = 1;
-    m_->eval();
-    ++cycle_;
-    mon_.sample(cycle_, m_->step, m_->dir);
-    if (auto b = umon_.sample(m_->tx, cycle_)) rx_bytes_.push_back(*b);
-    if (m_->seg_start) starts_.push_back(cycle_);
-    if (m_->seg_done) dones_.push_back(cycle_);
-    if (m_->laser && !laser_prev_) laser_.push_back(Interval{cycle_, 0});
-    if (!m_->laser && laser_prev_) laser_.back().to = cycle_;
-    laser_prev_ = m_->laser;
-    if (m_->numerator_x != prev_num_x_) {
-      num_changes_.push_back(NumChange{cycle_, m_->numerator_x, m_->busy != 0});
-      prev_num_x_ = m_->numerator_x;
-    }
-  }
-  void idle(uint64_t n) {
-    for (uint64_t i = 0; i < n; ++i) tick();
-  }
-
-  // Queues bytes on rx and runs until the last stop bit has been driven.
-  void send(const std::vector<uint8_t>& bytes) {
-    queue(bytes);
-    while (!drv_.idle()) tick();
-  }
-  void queue(const std::vector<uint8_t>& bytes) {
-    for (uint8_t b : bytes) drv_.push(b);
-  }
-
-  // Runs until the number of bytes received on tx exceeds `n` or `limit` clocks pass.
-  bool wait_bytes(size_t n, uint64_t limit) {
-    for (uint64_t i = 0; i < limit && rx_bytes_.size() <= n; ++i) tick();
-    return rx_bytes_.size() > n;
   }
 
   void cfg_write(int axis, int field, uint16_t value) {
-    m_->cfg_wr = 1;
-    m_->cfg_addr = static_cast<uint8_t>(axis * 4 + field);
-    m_->cfg_wdata = value;
+    dut().cfg_wr = 1;
+    dut().cfg_addr = static_cast<uint8_t>(axis * 4 + field);
+    dut().cfg_wdata = value;
     tick();
-    m_->cfg_wr = 0;
+    dut().cfg_wr = 0;
   }
 
-  int32_t position(int a) const { return static_cast<int32_t>(m_->position[a]); }
+  int32_t position(int a) { return static_cast<int32_t>(dut().position[a]); }
 
   struct NumChange {
     uint64_t cycle;
@@ -124,25 +66,28 @@ class CoreBench {
     bool busy;
   };
 
-  Vcnc_core& dut() { return *m_; }
-  StepMonitor& mon() { return mon_; }
-  uint64_t cycle() const { return cycle_; }
-  const std::vector<UartMonitor::Byte>& tx_bytes() const { return rx_bytes_; }
   const std::vector<uint64_t>& starts() const { return starts_; }
   const std::vector<uint64_t>& dones() const { return dones_; }
   const std::vector<Interval>& laser() const { return laser_; }
   const std::vector<NumChange>& num_changes() const { return num_changes_; }
 
+ protected:
+  void observe() override {
+    const Vcnc_core& m = dut();
+    if (m.seg_start) starts_.push_back(cycle());
+    if (m.seg_done) dones_.push_back(cycle());
+    if (m.laser && !laser_prev_) laser_.push_back(Interval{cycle(), 0});
+    if (!m.laser && laser_prev_) laser_.back().to = cycle();
+    laser_prev_ = m.laser;
+    if (m.numerator_x != prev_num_x_) {
+      num_changes_.push_back(NumChange{cycle(), m.numerator_x, m.busy != 0});
+      prev_num_x_ = m.numerator_x;
+    }
+  }
+
  private:
-  std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<Vcnc_core> m_;
-  UartDriver drv_;
-  UartMonitor umon_;
-  StepMonitor mon_;
-  uint64_t cycle_ = 0;
   bool laser_prev_ = false;
   uint32_t prev_num_x_ = 0;
-  std::vector<UartMonitor::Byte> rx_bytes_;
   std::vector<uint64_t> starts_, dones_;
   std::vector<Interval> laser_;
   std::vector<NumChange> num_changes_;

@@ -4,28 +4,19 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include "Vde1soc_top.h"
+#include "common/pin_harness.h"
 #include "common/step_monitor.h"
-#include "common/uart_bits.h"
 #include "common/v1_packets.h"
-#include "verilated.h"
 
 namespace {
 
-using fpgacnc::tb::init_packet;
-using fpgacnc::tb::motion_packet;
 using fpgacnc::tb::put32;
 
 using fpgacnc::tb::AxisTiming;
-using fpgacnc::tb::StepMonitor;
-using fpgacnc::tb::UartDriver;
-using fpgacnc::tb::UartMonitor;
 
-constexpr double kClkHz = 50e6;
-constexpr double kBaud = 115200;
 constexpr uint64_t kHalfSecond = 25'000'000;  // CLK_HZ / 2
 
 // Active-low segment patterns (bit 0 = a ... bit 6 = g).
@@ -38,58 +29,18 @@ constexpr uint8_t kHex1 = seg_n(0b0000110);
 constexpr uint8_t kHex2 = seg_n(0b1011011);
 constexpr uint8_t kHex7 = seg_n(0b0000111);
 
-class BoardBench {
+// The board's pins: X and Y STEP/DIR on GPIO, reset button KEY active low.
+constexpr fpgacnc::tb::PinAccess<Vde1soc_top> kBoardPins{
+    [](Vde1soc_top& m, bool asserted) { m.rst_n = asserted ? 0 : 1; },
+    [](const Vde1soc_top& m) { return static_cast<uint32_t>(m.step_x | (m.step_y << 1)); },
+    [](const Vde1soc_top& m) { return static_cast<uint32_t>(m.dir_x | (m.dir_y << 1)); },
+};
+
+// The board through its pins, checking LEDR and HEX4 against busy/laser/DIR every clock.
+class BoardBench : public fpgacnc::tb::PinHarness<Vde1soc_top> {
  public:
-  BoardBench()
-      : ctx_(std::make_unique<VerilatedContext>()),
-        drv_(kClkHz, kBaud),
-        umon_(kClkHz, kBaud),
-        mon_(2) {
-    m_ = std::make_unique<Vde1soc_top>(ctx_.get());
-    m_->rx = 1;
-    m_->rst_n = 1;
-  }
-  ~BoardBench() { m_->final(); }
+  BoardBench() : PinHarness(2, kBoardPins) {}
 
-  void tick() {
-    m_->rx = static_cast<uint8_t>(drv_.tick());
-    m_->clk = 0;
-    m_->eval();
-    m_->clk = 1;
-    m_->eval();
-    ++cycle_;
-    mon_.sample(cycle_, m_->step_x | (m_->step_y << 1), m_->dir_x | (m_->dir_y << 1));
-    if (auto b = umon_.sample(m_->tx, cycle_)) tx_.push_back(*b);
-    const bool busy = m_->LEDR & 1u;
-    if (busy) ++busy_cycles_;
-    if (m_->laser) ++laser_cycles_;
-    if (((m_->LEDR >> 1) & 1u) != m_->laser) ++bad_ledr_;
-    if (((m_->LEDR >> 2) & 1u) != m_->dir_x || ((m_->LEDR >> 3) & 1u) != m_->dir_y) ++bad_ledr_;
-    if (m_->laser && !busy) ++laser_not_busy_;
-    if (m_->HEX4 != (busy ? kHexB : kHex0)) {
-      if (bad_hex4_ == 0) first_bad_hex4_ = cycle_;
-      ++bad_hex4_;
-    }
-    // Every STEP rising edge is requested while busy: busy was high in the clock before the edge
-    // (the last STEP of a move rises on the same edge busy falls, after tick T, and stays high
-    // its 100 clocks after that).
-    const uint8_t steps = static_cast<uint8_t>(m_->step_x | (m_->step_y << 1));
-    if ((steps & ~prev_steps_ & 3u) && !prev_busy_) ++step_not_busy_;
-    prev_busy_ = busy;
-    prev_steps_ = steps;
-  }
-  void idle(uint64_t n) {
-    for (uint64_t i = 0; i < n; ++i) tick();
-  }
-  void send(const std::vector<uint8_t>& bytes) {
-    for (uint8_t b : bytes) drv_.push(b);
-    while (!drv_.idle()) tick();
-  }
-
-  Vde1soc_top& dut() { return *m_; }
-  StepMonitor& mon() { return mon_; }
-  uint64_t cycle() const { return cycle_; }
-  const std::vector<UartMonitor::Byte>& tx() const { return tx_; }
   uint64_t busy_cycles() const { return busy_cycles_; }
   uint64_t laser_cycles() const { return laser_cycles_; }
   uint64_t bad_ledr() const { return bad_ledr_; }
@@ -98,25 +49,38 @@ class BoardBench {
   uint64_t laser_not_busy() const { return laser_not_busy_; }
   uint64_t step_not_busy() const { return step_not_busy_; }
 
+ protected:
+  void observe() override {
+    const Vde1soc_top& m = dut();
+    const bool busy = m.LEDR & 1u;
+    if (busy) ++busy_cycles_;
+    if (m.laser) ++laser_cycles_;
+    if (((m.LEDR >> 1) & 1u) != m.laser) ++bad_ledr_;
+    if (((m.LEDR >> 2) & 1u) != m.dir_x || ((m.LEDR >> 3) & 1u) != m.dir_y) ++bad_ledr_;
+    if (m.laser && !busy) ++laser_not_busy_;
+    if (m.HEX4 != (busy ? kHexB : kHex0)) {
+      if (bad_hex4_ == 0) first_bad_hex4_ = cycle();
+      ++bad_hex4_;
+    }
+    // Every STEP rising edge is requested while busy: busy was high in the clock before the edge
+    // (the last STEP of a move rises on the same edge busy falls, after tick T, and stays high
+    // its 100 clocks after that).
+    const uint8_t steps = static_cast<uint8_t>(m.step_x | (m.step_y << 1));
+    if ((steps & ~prev_steps_ & 3u) && !prev_busy_) ++step_not_busy_;
+    prev_busy_ = busy;
+    prev_steps_ = steps;
+  }
+
  private:
-  std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<Vde1soc_top> m_;
-  UartDriver drv_;
-  UartMonitor umon_;
-  StepMonitor mon_;
-  uint64_t cycle_ = 0, busy_cycles_ = 0, laser_cycles_ = 0, bad_ledr_ = 0, bad_hex4_ = 0,
-           first_bad_hex4_ = 0, laser_not_busy_ = 0, step_not_busy_ = 0;
+  uint64_t busy_cycles_ = 0, laser_cycles_ = 0, bad_ledr_ = 0, bad_hex4_ = 0, first_bad_hex4_ = 0,
+           laser_not_busy_ = 0, step_not_busy_ = 0;
   uint8_t prev_steps_ = 0;
   bool prev_busy_ = false;
-  std::vector<UartMonitor::Byte> tx_;
 };
 
 TEST(De1SocTop, SmokeMoveLedsHexHeartbeat) {
   BoardBench b;
-  b.dut().rst_n = 0;
-  b.idle(10);
-  b.dut().rst_n = 1;
-  b.tick();
+  b.reset(10, 1);                      // the button held for 10 clocks
   const uint64_t release = b.cycle();  // first edge with rst_n high
   b.idle(20);
   EXPECT_EQ(b.dut().tx, 1);
@@ -132,12 +96,12 @@ TEST(De1SocTop, SmokeMoveLedsHexHeartbeat) {
   mv.push_back(0x70);
   b.send(mv);
   uint64_t guard = 0;
-  while (b.tx().empty() && ++guard < 200'000) b.tick();
-  ASSERT_EQ(b.tx().size(), 1u) << "no ACK by cycle " << b.cycle();
-  EXPECT_EQ(b.tx()[0].value, 0xAA);
-  EXPECT_TRUE(b.tx()[0].framing_ok);
+  while (b.tx_bytes().empty() && ++guard < 200'000) b.tick();
+  ASSERT_EQ(b.tx_bytes().size(), 1u) << "no ACK by cycle " << b.cycle();
+  EXPECT_EQ(b.tx_bytes()[0].value, 0xAA);
+  EXPECT_TRUE(b.tx_bytes()[0].framing_ok);
   b.idle(10'000);
-  ASSERT_EQ(b.tx().size(), 1u) << "more than one ACK";
+  ASSERT_EQ(b.tx_bytes().size(), 1u) << "more than one ACK";
 
   const auto& x = b.mon().axis(0);
   const auto& y = b.mon().axis(1);
@@ -148,7 +112,7 @@ TEST(De1SocTop, SmokeMoveLedsHexHeartbeat) {
   for (size_t i = 1; i < x.rises.size(); ++i) EXPECT_EQ(x.rises[i] - x.rises[i - 1], 3125u);
   for (int a = 0; a < 2; ++a)
     for (auto& v : b.mon().check_pulses(a, AxisTiming{})) ADD_FAILURE() << v;
-  EXPECT_GT(b.tx()[0].start_cycle, x.rises.back());
+  EXPECT_GT(b.tx_bytes()[0].start_cycle, x.rises.back());
   EXPECT_EQ(b.laser_cycles(), 12u * 3125u) << "laser high for T clocks";
   EXPECT_GE(b.busy_cycles(), 12u * 3125u) << "LEDR[0] busy during the move";
   EXPECT_EQ(b.laser_not_busy(), 0u);

@@ -4,124 +4,34 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
-#include <memory>
 #include <random>
 #include <vector>
 
-#include "Vsegment_executor.h"
+#include "common/exec_harness.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
-#include "verilated.h"
 
 namespace {
 
 using fpgacnc::tb::AxisTiming;
+using fpgacnc::tb::mag;
+using fpgacnc::tb::Segment;
 using fpgacnc::tb::StepMonitor;
 
-constexpr int kAxes = 4;
+constexpr int kAxes = fpgacnc::tb::kExecAxes;
 
-struct Segment {
-  int code = 1;
-  int64_t steps[kAxes] = {0, 0, 0, 0};  // signed
-  uint64_t period = 0;                  // dominant period P, clocks
-};
-
-class ExecBench {
+// The harness with the default step timing, failing the test when a segment does not finish.
+class ExecBench : public fpgacnc::tb::ExecHarness {
  public:
-  ExecBench() : ctx_(std::make_unique<VerilatedContext>()), mon_(kAxes) {
-    m_ = std::make_unique<Vsegment_executor>(ctx_.get());
-    set_timing(std::vector<AxisTiming>(kAxes));
-    m_->rst = 1;
-    tick();
-    tick();
-    m_->rst = 0;
-    tick();
-  }
-  ~ExecBench() { m_->final(); }
+  ExecBench() : ExecHarness(std::vector<AxisTiming>(kAxes)) {}
 
-  void set_timing(const std::vector<AxisTiming>& t) {
-    timing_ = t;
-    m_->cfg_step_high = m_->cfg_step_low = m_->cfg_dir_setup = m_->cfg_dir_hold = 0;
-    for (int a = 0; a < kAxes; ++a) {
-      m_->cfg_step_high |= static_cast<uint64_t>(t[a].high) << (16 * a);
-      m_->cfg_step_low |= static_cast<uint64_t>(t[a].low) << (16 * a);
-      m_->cfg_dir_setup |= static_cast<uint64_t>(t[a].setup) << (16 * a);
-      m_->cfg_dir_hold |= static_cast<uint64_t>(t[a].hold) << (16 * a);
-    }
-  }
-
-  void tick() {
-    m_->clk = 0;
-    m_->eval();
-    m_->clk = 1;
-    m_->eval();
-    ++cycle_;
-    mon_.sample(cycle_, m_->step, m_->dir);
-    if (m_->violation) ++violations_;
-    if (m_->seg_start) starts_.push_back(cycle_);
-    if (m_->laser) ++laser_cycles_;
-  }
-
-  // Offers one segment and runs until it is done. Returns the run start cycle R (first cycle with
-  // seg_start observed) or 0 for an empty segment; `accept` receives the accept edge.
   uint64_t run(const Segment& s, uint64_t* accept = nullptr) {
-    while (!m_->s_axis_tready) tick();
-    uint64_t n_dom = 0;
-    for (int a = 0; a < kAxes; ++a) n_dom = std::max<uint64_t>(n_dom, mag(s.steps[a]));
-    const uint64_t total = s.period * n_dom;
-    m_->s_axis_code = s.code;
-    m_->s_axis_dir = 0;
-    for (int a = 0; a < kAxes; ++a) {
-      if (s.steps[a] > 0) m_->s_axis_dir |= 1u << a;
-      m_->s_axis_steps[a] = static_cast<uint32_t>(mag(s.steps[a]));
-      const uint64_t tmn = total - mag(s.steps[a]);
-      m_->s_axis_tmn[2 * a] = static_cast<uint32_t>(tmn);
-      m_->s_axis_tmn[2 * a + 1] = static_cast<uint32_t>(tmn >> 32);
-    }
-    m_->s_axis_total = total;
-    m_->s_axis_tvalid = 1;
-    const size_t starts_before = starts_.size();
-    tick();
-    if (accept) *accept = cycle_;
-    m_->s_axis_tvalid = 0;
-    // Run until the executor is back in its idle state.
-    uint64_t guard = 0;
-    while (!m_->s_axis_tready) {
-      tick();
-      if (++guard > total + 1'000'000) {
-        ADD_FAILURE() << "segment did not finish within T + 1e6 clocks, T=" << total;
-        break;
-      }
-    }
-    tick();  // let the last STEP edge and seg_done be sampled
-    return starts_.size() > starts_before ? starts_.back() : 0;
+    const uint64_t R = ExecHarness::run(s, accept);
+    if (stalled()) ADD_FAILURE() << "segment did not finish within T + 1e6 clocks, T=" << s.total();
+    return R;
   }
-
-  void idle_until_pulses_done() {
-    while (!m_->idle) tick();
-  }
-  void idle(uint64_t clocks) {
-    for (uint64_t i = 0; i < clocks; ++i) tick();
-  }
-
-  static uint64_t mag(int64_t v) { return static_cast<uint64_t>(v < 0 ? -v : v); }
-
-  Vsegment_executor& dut() { return *m_; }
-  StepMonitor& mon() { return mon_; }
-  uint64_t cycle() const { return cycle_; }
-  uint64_t violations() const { return violations_; }
-  uint64_t laser_cycles() const { return laser_cycles_; }
-  const std::vector<AxisTiming>& timing() const { return timing_; }
-  int32_t position(int a) const { return static_cast<int32_t>(m_->position[a]); }
-
- private:
-  std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<Vsegment_executor> m_;
-  StepMonitor mon_;
-  std::vector<AxisTiming> timing_;
-  std::vector<uint64_t> starts_;
-  uint64_t cycle_ = 0, violations_ = 0, laser_cycles_ = 0;
 };
 
 struct SegmentCheck {
@@ -133,12 +43,10 @@ struct SegmentCheck {
 // direction at every rise, last step of every axis at R + T, jitter <= 1.
 void check_segment(const StepMonitor& mon, const Segment& s, uint64_t R, size_t* idx,
                    SegmentCheck* out) {
-  uint64_t n_dom = 0;
-  for (int a = 0; a < kAxes; ++a) n_dom = std::max(n_dom, ExecBench::mag(s.steps[a]));
-  const uint64_t T = s.period * n_dom;
+  const uint64_t T = s.total();
   for (int a = 0; a < kAxes; ++a) {
     const auto& tr = mon.axis(a);
-    const uint64_t n = ExecBench::mag(s.steps[a]);
+    const uint64_t n = mag(s.steps[a]);
     // rises belonging to this segment: the next n rises in the trace
     ASSERT_GE(tr.rises.size(), idx[a] + n)
         << "axis " << a << ": expected " << n << " steps, got " << tr.rises.size() - idx[a]
@@ -146,12 +54,10 @@ void check_segment(const StepMonitor& mon, const Segment& s, uint64_t R, size_t*
     uint64_t min_iv = UINT64_MAX, max_iv = 0, prev = R;
     for (uint64_t k = 1; k <= n; ++k) {
       const uint64_t rise = tr.rises[idx[a] + k - 1];
-      const unsigned __int128 kt = static_cast<unsigned __int128>(k) * T;
-      const uint64_t expect = R + static_cast<uint64_t>((kt + n - 1) / n);
+      const uint64_t expect = fpgacnc::tb::scheduled_rise(R, k, T, n);
       ASSERT_EQ(rise, expect) << "axis " << a << " step " << k << "/" << n << " T=" << T
                               << " P=" << s.period << " start R=" << R;
-      const double ideal = static_cast<double>(R) +
-                           static_cast<double>(k) * static_cast<double>(T) / static_cast<double>(n);
+      const double ideal = fpgacnc::tb::ideal_rise(R, k, T, n);
       out->worst_error = std::max(out->worst_error, std::abs(static_cast<double>(rise) - ideal));
       ASSERT_EQ(tr.rise_dir[idx[a] + k - 1], s.steps[a] > 0 ? 1 : 0)
           << "axis " << a << " DIR wrong at step " << k << " cycle " << rise;
@@ -261,16 +167,14 @@ TEST(SegmentExecutor, RandomSegmentsExactTiming) {
       if (kind < 3) {
         at = AxisTiming{1, 1, 1, 1};  // the fastest settings
       } else if (kind < 8) {
-        at = AxisTiming{uint32_t(uni(1, 12)), uint32_t(uni(1, 12)), uint32_t(uni(1, 40)),
-                        uint32_t(uni(1, 40))};
+        at = fpgacnc::tb::random_timing(uni, 12, 40);
       } else {
         at = AxisTiming{uint32_t(uni(1, 150)), uint32_t(uni(1, 150)), uint32_t(uni(1, 400)),
                         uint32_t(uni(0, 400))};
       }
     }
     if (kind < 3) ++one_clock_batches;
-    uint64_t pmin = 0;
-    for (auto& at : t) pmin = std::max<uint64_t>(pmin, at.high + at.low);
+    const uint64_t pmin = fpgacnc::tb::min_period(t);
     b.idle(1000);  // every DIR hold of the previous batch has elapsed
     b.set_timing(t);
     const uint64_t batch_start = b.cycle();
@@ -289,9 +193,7 @@ TEST(SegmentExecutor, RandomSegmentsExactTiming) {
       }
       s.period = pmin + uni(0, pmin < 20 ? 3 : pmin);
       const uint64_t R = b.run(s);
-      uint64_t n_dom = 0;
-      for (int a = 0; a < kAxes; ++a) n_dom = std::max(n_dom, ExecBench::mag(s.steps[a]));
-      if (n_dom == 0) {
+      if (s.n_dom() == 0) {
         ASSERT_EQ(R, 0u);
       } else {
         check_segment(b.mon(), s, R, idx, &c);
