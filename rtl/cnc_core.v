@@ -110,14 +110,18 @@ module cnc_core #(
   wire prep_busy;
   wire quiet = exec_idle && !prep_busy;
 
-  reg [16:0] pulse_max;
-  integer i;
-  always @(*) begin
-    pulse_max = 17'd0;
-    for (i = 0; i < N_AXES; i = i + 1)
-      if ({1'b0, cfg_high_reg[16*i+:16]} + {1'b0, cfg_low_reg[16*i+:16]} > pulse_max)
-        pulse_max = {1'b0, cfg_high_reg[16*i+:16]} + {1'b0, cfg_low_reg[16*i+:16]};
-  end
+  // min_period = max over axes of (STEP high + STEP low), at least 2: the fastest dominant period
+  // the pulse generators can follow. Computed by a scanner, one axis per clock (no comparator
+  // chain across axes): a change of the active settings reaches min_period_reg within
+  // 2 * N_AXES + 2 clocks, long before segment_prep uses it (34 clocks after it accepts a move,
+  // and settings change only while segment_prep is idle). Requires N_AXES <= 15.
+  localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
+  localparam integer AX_LAST_I = N_AXES - 1;
+  localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
+  reg [AXW-1:0] pm_idx_reg, pm_idx_d_reg;
+  reg [16:0] pm_sum_reg, pm_run_reg;
+  wire [16:0] pm_cand = (pm_idx_d_reg == {AXW{1'b0}} || pm_sum_reg > pm_run_reg) ? pm_sum_reg
+                                                                                 : pm_run_reg;
 
   always @(posedge clk) begin
     if (cfg_wr && cfg_addr[7:2] < N_AXES) begin
@@ -134,8 +138,12 @@ module cnc_core #(
       cfg_setup_reg <= shadow_setup_reg;
       cfg_hold_reg  <= shadow_hold_reg;
     end
+    pm_idx_reg   <= (pm_idx_reg == AX_LAST) ? {AXW{1'b0}} : pm_idx_reg + 1'b1;
+    pm_idx_d_reg <= pm_idx_reg;
+    pm_sum_reg   <= {1'b0, cfg_high_reg[16*pm_idx_reg+:16]} + {1'b0, cfg_low_reg[16*pm_idx_reg+:16]};
+    pm_run_reg   <= pm_cand;
     // STEP high and low are each at least one clock, so a period of at least 2.
-    min_period_reg <= (pulse_max < 17'd2) ? 32'd2 : {15'd0, pulse_max};
+    if (pm_idx_d_reg == AX_LAST) min_period_reg <= (pm_cand < 17'd2) ? 32'd2 : {15'd0, pm_cand};
     if (rst) begin
       shadow_high_reg  <= {N_AXES{STEP_HIGH[15:0]}};
       shadow_low_reg   <= {N_AXES{STEP_LOW[15:0]}};
@@ -146,6 +154,10 @@ module cnc_core #(
       cfg_setup_reg    <= {N_AXES{DIR_SETUP[15:0]}};
       cfg_hold_reg     <= {N_AXES{DIR_HOLD[15:0]}};
       min_period_reg   <= STEP_HIGH + STEP_LOW;
+      pm_idx_reg       <= {AXW{1'b0}};
+      pm_idx_d_reg     <= {AXW{1'b0}};
+      pm_sum_reg       <= 17'd0;
+      pm_run_reg       <= 17'd0;
     end
   end
 
