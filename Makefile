@@ -5,7 +5,7 @@ CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 DEMO_JOB ?= examples/jsdc-laser.gcode
 DEMO_ARGS ?= --config examples/demo-machine.toml --plot $(BUILD)/demo-path.svg
 
-.PHONY: all deps configure build test lint bench demo synth format clean
+.PHONY: all deps configure build test lint bench demo synth quartus format clean
 
 all: build
 
@@ -36,6 +36,10 @@ synth: deps
 	./scripts/synth_smoke.sh $(BUILD)/synth
 	./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth
+
+# Quartus compile and timing report (needs quartus_sh on the PATH; says what is missing otherwise).
+quartus:
+	./scripts/quartus.sh
 
 format:
 	find host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
