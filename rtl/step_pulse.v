@@ -87,6 +87,84 @@ module step_pulse (
   assign hold_ok   = (hold_cnt_reg >= cfg_hold);
   assign violation = violation_reg;
 
+`ifdef FORMAL
+  // Formal properties (scripts/formal.sh, k-induction). Assumes: reset in the first clock, the
+  // configuration stable. Monitors count clocks in the machine's terms; the asserts are the
+  // contract of the top comment.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+  reg [47:0] f_cfg_q;
+  always @(posedge clk) f_cfg_q <= {cfg_high, cfg_low, cfg_hold};
+  always @(*) if (f_past_valid) assume ({cfg_high, cfg_low, cfg_hold} == f_cfg_q);
+
+  reg        f_pulsed;    // a STEP pulse has ended since reset
+  reg        f_rose;      // a STEP rising edge happened since reset
+  reg [16:0] f_hi;        // clocks STEP has been high, counting this one
+  reg [16:0] f_lo;        // clocks STEP has been low since the last pulse, saturating at low_clks
+  reg [16:0] f_since;     // clocks since the last rising edge, saturating at 0x10000
+  always @(posedge clk) begin
+    if (step_reg && !(step_reg && cnt_reg == 16'd1)) f_hi <= f_hi + 17'd1;
+    if (!step_reg && f_lo < {1'b0, low_clks}) f_lo <= f_lo + 17'd1;
+    if (f_since != 17'h10000) f_since <= f_since + 17'd1;
+    if (step_reg && cnt_reg == 16'd1) begin
+      f_pulsed <= 1'b1;
+      f_lo     <= 17'd1;
+    end
+    if (want && can_rise) begin
+      f_rose  <= 1'b1;
+      f_hi    <= 17'd1;
+      f_since <= 17'd0;
+    end
+    if (rst) begin
+      f_pulsed <= 1'b0;
+      f_rose   <= 1'b0;
+      f_hi     <= 17'd0;
+      f_lo     <= 17'd0;
+      f_since  <= 17'd0;
+    end
+  end
+
+  always @(*)
+    if (f_past_valid) begin
+      // Induction invariants tying the monitors to the counters.
+      if (step_reg) begin
+        assert (f_rose);
+        assert (f_hi >= 17'd1 && f_hi <= {1'b0, high_clks});
+        assert ({1'b0, cnt_reg} == {1'b0, high_clks} - f_hi + 17'd1);
+      end else if (f_pulsed) begin
+        assert (f_lo >= 17'd1 && f_lo <= {1'b0, low_clks});
+        assert ({1'b0, cnt_reg} == {1'b0, low_clks} - f_lo);
+      end else begin
+        assert (cnt_reg == 16'd0);
+      end
+      if (f_pulsed) assert (f_rose);
+      assert (hold_cnt_reg <= cfg_hold);
+      assert (f_since <= 17'h10000);
+      if (f_rose && cfg_hold != 16'd0)
+        assert ({1'b0, hold_cnt_reg} == ((f_since + 17'd1 >= {1'b0, cfg_hold}) ?
+                                         {1'b0, cfg_hold} : f_since + 17'd1));
+      if (f_rose && step_reg) assert (f_since + 17'd1 == f_hi);
+      if (violation_reg) assert (pending_reg);
+      // hold_ok: a DIR write issued now lands at least cfg_hold clocks after the last rising edge.
+      if (hold_ok && f_rose) assert (f_since + 17'd1 >= {1'b0, cfg_hold});
+    end
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst)) begin
+      // STEP high lasts exactly cfg_high clocks (0 treated as 1).
+      if ($past(step_reg) && !step_reg) assert ($past(f_hi) == {1'b0, $past(high_clks)});
+      // STEP low lasts at least cfg_low clocks between pulses (0 treated as 1).
+      if (!$past(step_reg) && step_reg && $past(f_pulsed))
+        assert ($past(f_lo) >= {1'b0, $past(low_clks)});
+      // STEP rises exactly one clock after a request when idle.
+      if ($past(step_req) && $past(idle)) assert (step_reg && f_hi == 17'd1);
+      // DIR changes only on dir_wr, and then to dir_in.
+      if ($past(dir_wr)) assert (dir_reg == $past(dir_in));
+      else assert (dir_reg == $past(dir_reg));
+    end
+`endif
+
 endmodule
 
 `default_nettype wire
