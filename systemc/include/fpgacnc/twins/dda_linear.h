@@ -1,0 +1,42 @@
+// Twin of rtl/dda_linear.v: the exact DDA of one axis (docs/timing.md "Steps").
+//
+// Target `load`: a DdaLoad (n steps over T ticks), the delay naming the run-start edge R; tick
+// c of the segment is edge R + c. The k-th step (k = 1..n) falls on tick ceil(k * T / n) (128-bit
+// product): the twin computes each step time instead of ticking, and sends one step request
+// per step on initiator `step` (to the axis's step_pulse), delay = R + tick.
+#pragma once
+
+#include "fpgacnc/twins/tlm_common.h"
+
+namespace fpgacnc::twins {
+
+struct DdaLoad {
+  uint32_t steps;
+  uint64_t total;
+};
+
+class DdaLinearTwin : public sc_core::sc_module {
+ public:
+  tlm_utils::simple_target_socket<DdaLinearTwin> load;
+  tlm_utils::simple_initiator_socket<DdaLinearTwin> step;
+
+  DdaLinearTwin(sc_core::sc_module_name name, const CycleClock& clk)
+      : sc_module(name), load("load"), step("step"), clk_(clk) {
+    load.register_b_transport(this, &DdaLinearTwin::b_transport);
+  }
+
+ private:
+  void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
+    const DdaLoad l = payload<DdaLoad>(gp);
+    const Cycle r = clk_.at(delay);
+    gp.set_response_status(tlm::TLM_OK_RESPONSE);
+    PulseCmd none{false};
+    for (uint64_t k = 1; k <= l.steps; ++k)
+      transport(step, gp_, clk_, none, r + dda_tick(k, l.steps, l.total));
+  }
+
+  const CycleClock& clk_;
+  tlm::tlm_generic_payload gp_;
+};
+
+}  // namespace fpgacnc::twins

@@ -1,0 +1,163 @@
+// The clock-by-clock side of every RTL harness (the Verilated C++ model in rtl_runner.cpp, the
+// Verilated SystemC model in the co-simulation): the reset and configuration sequence, the rx
+// pin level before each edge (the StopAndWaitHost's frames, SenderTiming bit boundaries), and
+// after each edge the recording of pins and block events in the same form the twins give.
+// Cycle numbering: reset is held for 8 edges, released on the next (cycle -20), 16 cfg writes
+// (cycles -19..-4), 4 settle edges (-3..0); the job's first edge is cycle 1.
+#pragma once
+
+#include <optional>
+
+#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/twins/host_schedule.h"
+#include "fpgacnc/twins/run_result.h"
+
+namespace fpgacnc::twins {
+
+struct CfgWrite {
+  uint8_t addr;
+  uint16_t data;
+};
+inline std::vector<CfgWrite> cfg_writes(const std::array<AxisTiming, kAxes>& t) {
+  std::vector<CfgWrite> w;
+  for (int a = 0; a < kAxes; ++a) {
+    const AxisTiming& x = t[a];
+    const uint32_t v[4] = {x.high, x.low, x.setup, x.hold};
+    for (int f = 0; f < 4; ++f)
+      w.push_back(CfgWrite{static_cast<uint8_t>(a * 4 + f), static_cast<uint16_t>(v[f])});
+  }
+  return w;
+}
+inline constexpr int kResetEdges = 8;
+inline constexpr int kSettleEdges = 4;
+
+class RtlDriver {
+ public:
+  RtlDriver(const CoreParams& p, std::vector<HostPacket> packets, bool record_tx)
+      : p_(p),
+        sender_{p.clk_hz, p.baud},
+        timer_(p.clk_hz, p.baud),
+        host_(std::move(packets), sender_, timer_.tx_boundary(10)),
+        mask_(record_tx ? 0x3ffu : 0x1ffu) {
+    for (int i = 0; i <= 10; ++i) centre_[i] = ceil_div(static_cast<__int128>(2 * i + 1) * timer_.mod, 2 * timer_.inc);
+  }
+
+  // rx level for edge c (c >= 1).
+  int rx_for(Cycle c) {
+    if (next_frame_ >= frames_.size() && (!cur_ || c >= frames_[*cur_].start + sender_.frame()))
+      refill();
+    while (next_frame_ < frames_.size() && frames_[next_frame_].start <= c) cur_ = next_frame_++;
+    if (!cur_) return 1;
+    const HostFrame& f = frames_[*cur_];
+    const int64_t off = c - f.start;
+    if (off >= sender_.frame()) return 1;
+    return sender_.level(f.byte, off);
+  }
+
+  struct Outputs {
+    uint32_t step, dir;
+    bool laser, tx, busy, seg_start, seg_done;
+    uint16_t packet_count;
+  };
+  // Outputs seen after edge c.
+  void after_edge(Cycle c, const Outputs& o) {
+    const uint32_t sig = (o.step | (o.dir << 4) | (o.laser ? 1u << 8 : 0u) |
+                          (o.tx ? 1u << 9 : 0u)) & mask_;
+    if (sig != prev_sig_) {
+      const uint32_t ch = sig ^ prev_sig_;
+      for (uint8_t s = 0; s < 10; ++s)
+        if (ch >> s & 1u) r_.edges.push_back(simboard::Edge{static_cast<uint64_t>(c), s,
+                                                            static_cast<uint8_t>(sig >> s & 1u)});
+      prev_sig_ = sig;
+    }
+    if (o.packet_count != prev_count_) {
+      r_.packet_done.push_back(c - 1);
+      prev_count_ = o.packet_count;
+    }
+    if (o.seg_start) r_.seg_start.push_back(c);
+    if (o.seg_done) r_.seg_done.push_back(c);
+    // tx monitor: start edge, then samples at the bit centres.
+    if (!tx_start_) {
+      if (!o.tx && prev_tx_) {
+        tx_start_ = c;
+        tx_byte_ = 0;
+      }
+    } else {
+      const int64_t off = c - *tx_start_;
+      for (int i = 1; i <= 9; ++i) {
+        if (off != centre_[i]) continue;
+        if (i <= 8) tx_byte_ |= static_cast<uint8_t>((o.tx ? 1 : 0) << (i - 1));
+        else {
+          host_.on_tx_byte(*tx_start_, tx_byte_);
+          tx_start_.reset();
+        }
+      }
+    }
+    prev_tx_ = o.tx;
+    if (o.busy || o.step || tx_start_) last_active_ = c;
+    cycle_ = c;
+  }
+
+  // True when the job is over (every packet sent and answered, the core quiet, and the last
+  // ACK's frame ended) or the host waits for an ACK that does not come.
+  bool finished() const {
+    if (!r_.error.empty()) return true;
+    return host_.done() && cycle_ >= host_.ready() && cycle_ > last_active_ + 2;
+  }
+  // Checks for a missing ACK (call after after_edge).
+  void check_stall() {
+    if (host_.waiting() && next_frame_ >= frames_.size() && cycle_ > host_.ready() + 64 &&
+        cycle_ > last_active_ + 64 + 2 * timer_.tx_boundary(10))
+      r_.error = "no ACK for packet " + std::to_string(host_.packets_sent());
+  }
+
+  RunResult take_result(const std::array<int64_t, kAxes>& position, uint64_t timeouts,
+                        uint64_t overruns, uint64_t frame_errors, uint64_t violations) {
+    r_.acks = host_.acks;
+    r_.end_cycle = host_.ready();
+    if (!r_.edges.empty())
+      r_.end_cycle = std::max<Cycle>(r_.end_cycle, static_cast<Cycle>(r_.edges.back().cycle));
+    r_.position = position;
+    r_.moves_done = r_.seg_done.size();
+    r_.packets = r_.packet_done.size();
+    r_.timeouts = timeouts;
+    r_.overruns = overruns;
+    r_.frame_errors = frame_errors;
+    r_.violations = violations;
+    r_.packets_sent = host_.packets_sent();
+    return std::move(r_);
+  }
+  void reserve(size_t n) { r_.edges.reserve(n); }
+  const CoreParams& params() const { return p_; }
+
+ private:
+  // The next packet, once the current one's frames are all out.
+  void refill() {
+    if (host_.waiting() || host_.done()) return;
+    auto f = host_.next_packet();
+    if (f.empty()) return;
+    frames_ = std::move(f);
+    next_frame_ = 0;
+    cur_.reset();
+  }
+
+  CoreParams p_;
+  SenderTiming sender_;
+  BitTimer timer_;
+  StopAndWaitHost host_;
+  uint32_t mask_;
+  std::vector<HostFrame> frames_;
+  size_t next_frame_ = 0;
+  std::optional<size_t> cur_;
+  RunResult r_;
+  uint32_t prev_sig_ = 0;
+  uint16_t prev_count_ = 0;
+  bool prev_tx_ = true;
+  std::optional<Cycle> tx_start_;
+  uint8_t tx_byte_ = 0;
+  std::array<int64_t, 11> centre_{};
+  Cycle last_active_ = 0;
+  Cycle cycle_ = 0;
+};
+
+}  // namespace fpgacnc::twins

@@ -1,0 +1,30 @@
+// What a whole-job run gives, for either model (twins or Verilated RTL): the pin edge list and
+// the block-level event lists that the co-simulation compares, and the figures of the report.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/twins/timing.h"
+
+namespace fpgacnc::twins {
+
+struct RunResult {
+  std::vector<simboard::Edge> edges;  // STEP/DIR/LASER (and TX) by (cycle, signal)
+  std::vector<Cycle> acks;            // start edge of each ACK byte the host received
+  std::vector<Cycle> packet_done;     // decoder: edge after which packet_done is high
+  std::vector<Cycle> seg_start;       // executor: edge after which seg_start is high
+  std::vector<Cycle> seg_done;        // executor: edge after which seg_done is high
+  Cycle end_cycle = 0;                // job duration: last ACK's end or last edge, the later
+  std::array<int64_t, 4> position{};  // position counters of the core
+  uint64_t moves_done = 0, packets = 0, timeouts = 0, overruns = 0, frame_errors = 0,
+           violations = 0;
+  uint64_t packets_sent = 0;
+  double wall_s = 0.0;
+  std::string error;  // "" = the host got every ACK it waited for
+};
+
+}  // namespace fpgacnc::twins

@@ -1,0 +1,142 @@
+// Shared plumbing of the twins: the clock-cycle <-> sc_time mapping, the transaction payloads
+// that travel on the TLM sockets, and the pin recorder.
+//
+// Time (docs/systemc.md "Time"): one clock is 1e12 / CLK_HZ ps of sc_time (20 ns at 50 MHz).
+// A transaction's time is sc_time_stamp() + its annotated delay; it is the clock edge on which
+// the event it carries happens (a byte valid, a command accepted, ...). A target that accepts
+// later than offered (backpressure) increases the delay: on return, the delay names the edge on
+// which the transfer happened. No twin calls wait(): the host initiator is the only thread and
+// synchronizes through a quantum keeper, so a whole move runs in one call chain.
+#pragma once
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/simple_target_socket.h>
+
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/twins/timing.h"
+
+namespace fpgacnc::twins {
+
+using simboard::Edge;
+
+// Maps clock cycles to sc_time. `base` is the sc_time of cycle 0 (a harness that runs several
+// jobs in one elaboration starts each at a later base).
+class CycleClock {
+ public:
+  explicit CycleClock(uint64_t clk_hz) {
+    if (clk_hz == 0 || 1'000'000'000'000ull % clk_hz != 0)
+      throw std::invalid_argument("twins: CLK_HZ must divide 1e12 (clock period in whole ps)");
+    period_ps_ = 1'000'000'000'000ull / clk_hz;
+  }
+  void set_base(const sc_core::sc_time& base) { base_ps_ = base.value(); }
+  uint64_t period_ps() const { return period_ps_; }
+  // Cycle of the event at sc_time_stamp() + delay.
+  Cycle at(const sc_core::sc_time& delay) const {
+    const uint64_t t = (sc_core::sc_time_stamp() + delay).value();
+    return static_cast<Cycle>((t - base_ps_) / period_ps_);
+  }
+  // Delay from now to cycle c (c must not be in the past of the current time).
+  sc_core::sc_time delay_to(Cycle c) const {
+    const uint64_t t = base_ps_ + static_cast<uint64_t>(c) * period_ps_;
+    const uint64_t now = sc_core::sc_time_stamp().value();
+    if (t < now) throw std::logic_error("twins: event scheduled in the past");
+    return sc_core::sc_time::from_value(t - now);
+  }
+
+ private:
+  uint64_t period_ps_ = 20'000;
+  uint64_t base_ps_ = 0;
+};
+
+// Payloads (carried by data_ptr of a tlm_generic_payload, TLM_WRITE_COMMAND unless noted).
+struct RxFrame {  // host -> uart_rx: one 8N1 frame on the rx pin, start edge at the delay
+  uint8_t byte;
+};
+struct RxByte {  // uart_rx -> packet_decoder_v1: m_axis byte valid from the delay's edge
+  uint8_t byte;
+};
+struct Command {  // packet_decoder_v1 -> segment_prep (valid from the delay's edge)
+  bool init;
+  uint8_t code;
+  uint32_t a, b;  // NUMERATOR_X/Y or steps_x/steps_y (two's complement)
+  uint16_t feed;
+};
+struct Segment {  // segment_prep -> segment_executor (valid from the delay's edge)
+  uint8_t code;
+  std::array<bool, kAxes> dir;
+  std::array<uint32_t, kAxes> steps;
+  std::array<uint64_t, kAxes> tmn;
+  uint64_t total;
+  uint32_t period;
+  uint16_t feed;
+};
+// segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
+// address kDirWrite: DIR load of `dir` on the delay's edge; read (TLM_READ_COMMAND) fills the
+// pulse state.
+struct PulseCmd {
+  bool dir;
+};
+struct PulseState {
+  Cycle last_rise;  // hold reference: hold_ok from edge last_rise + hold
+  Cycle idle_from;  // first edge after which STEP is low and its low time elapsed
+  bool dir;
+};
+struct SegDone {};  // segment_executor -> status/ACK: seg_done strobe after the delay's edge
+struct TxByte {     // status/ACK -> uart_tx (offered from the delay's edge; accept returned)
+  uint8_t byte;
+};
+struct LineFrame {  // uart_tx -> host: a frame whose start edge is the delay's edge
+  uint8_t byte;
+};
+inline constexpr uint64_t kDirWrite = 1;
+
+// Sends `data` on `socket` with the event at cycle `c`; returns the cycle the target annotated
+// (its accept edge).
+template <class Socket, class T>
+Cycle transport(Socket& socket, tlm::tlm_generic_payload& gp, const CycleClock& clk, T& data,
+                Cycle c, tlm::tlm_command cmd = tlm::TLM_WRITE_COMMAND, uint64_t address = 0) {
+  gp.set_command(cmd);
+  gp.set_address(address);
+  gp.set_data_ptr(reinterpret_cast<unsigned char*>(&data));
+  gp.set_data_length(sizeof(T));
+  gp.set_streaming_width(sizeof(T));
+  gp.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+  sc_core::sc_time d = clk.delay_to(c);
+  socket->b_transport(gp, d);
+  if (gp.is_response_error()) throw std::runtime_error("twins: transaction error");
+  return clk.at(d);
+}
+
+template <class T>
+T& payload(tlm::tlm_generic_payload& gp) {
+  if (gp.get_data_length() != sizeof(T)) throw std::logic_error("twins: payload size mismatch");
+  return *reinterpret_cast<T*>(gp.get_data_ptr());
+}
+
+// The board's pins as an edge list (signal numbers of simboard/edges.h). Twins add edges out of
+// time order (a move's steps are computed when it is accepted); sorted() orders them by
+// (cycle, signal) as the RTL recorder sees them.
+class PinRecorder {
+ public:
+  bool record_tx = false;
+  void add(Cycle c, uint8_t signal, uint8_t value) {
+    if (signal == simboard::kTx && !record_tx) return;
+    edges_.push_back(Edge{static_cast<uint64_t>(c), signal, value});
+  }
+  std::vector<Edge> sorted() const;
+  size_t size() const { return edges_.size(); }
+  void clear() { edges_.clear(); }
+  void reserve(size_t n) { edges_.reserve(n); }
+
+ private:
+  std::vector<Edge> edges_;
+};
+
+}  // namespace fpgacnc::twins
