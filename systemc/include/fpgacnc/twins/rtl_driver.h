@@ -39,6 +39,7 @@ class RtlDriver {
         timer_(p.clk_hz, p.baud),
         host_(std::move(packets), sender_, timer_.tx_boundary(10)),
         mask_(record_tx ? 0x3ffu : 0x1ffu) {
+    prev_sig_ &= mask_;
     for (int i = 0; i <= 10; ++i) centre_[i] = ceil_div(static_cast<__int128>(2 * i + 1) * timer_.mod, 2 * timer_.inc);
   }
 
@@ -150,7 +151,7 @@ class RtlDriver {
   size_t next_frame_ = 0;
   std::optional<size_t> cur_;
   RunResult r_;
-  uint32_t prev_sig_ = 0;
+  uint32_t prev_sig_ = 1u << 9;  // tx idles high (masked off unless recorded)
   uint16_t prev_count_ = 0;
   bool prev_tx_ = true;
   std::optional<Cycle> tx_start_;

@@ -1,0 +1,276 @@
+// RTL/twin co-simulation (CTest label cosim; docs/systemc.md "Co-simulation").
+//
+// One SystemC elaboration holds the Verilated SystemC model of cnc_core (Vcnc_core_sc, built
+// with BAUD = 3 000 000 and WATCHDOG_CLKS = 20 000 to keep UART time short) clocked by an
+// sc_clock, and the virtual board made of the twins with the same parameters. Both run the same
+// list of jobs; each job is a stop-and-wait byte stream (host_schedule.h) with its own step
+// timing. After the run every job's results are compared event by event (compare.h): pin edges
+// with their cycles at system level, and per block the decoder's packet_done, the executor's
+// seg_start/seg_done, the ACK start edges on tx, counters and positions. The first difference
+// is printed with its cycle and the exit status is 1.
+//
+// Jobs: `--seeds` random jobs of `--segments` random segments each (random step timing per job,
+// random numerators, codes, steps, feeds, a watchdog timeout and mid-stream init packets), and
+// the first `--corpus-moves` moves of jsdc-laser.gcode and Circle_Diamond_Square_Calibration.gcode
+// packed by the host (feed override `--corpus-feed-override` percent).
+#include <fmt/format.h>
+
+#include <chrono>
+#include <random>
+#include <string>
+#include <systemc>
+
+#include "Vcnc_core_sc.h"
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/twins/compare.h"
+#include "fpgacnc/twins/rtl_driver.h"
+#include "fpgacnc/twins/virtual_board.h"
+
+using namespace fpgacnc::twins;
+
+namespace {
+
+struct Job {
+  std::string name;
+  std::vector<HostPacket> packets;
+  std::array<AxisTiming, kAxes> timing;
+  size_t segments = 0;
+};
+
+// The Verilated SystemC cnc_core and the thread that drives it clock by clock through an
+// RtlDriver: inputs change after a falling edge, outputs are sampled at the next falling edge
+// (they then show the rising edge between).
+SC_MODULE(RtlHarness) {
+  sc_core::sc_in<bool> clk;
+  sc_core::sc_signal<bool> rst, rx, tx, laser, cfg_wr, busy, running, seg_start, seg_done;
+  sc_core::sc_signal<uint32_t> step, dir, cfg_addr, cfg_wdata, last_code, last_feed,
+      packet_count, frame_errors, timeouts, overruns, violations, last_period, numerator_x,
+      numerator_y;
+  sc_core::sc_signal<sc_dt::sc_bv<128>> position;
+  Vcnc_core_sc dut;
+  const std::vector<Job>* jobs = nullptr;
+  CoreParams params;
+  std::vector<RunResult> results;
+
+  SC_CTOR(RtlHarness) : clk("clk"), dut("cnc_core") {
+    dut.clk(clk);
+    dut.rst(rst);
+    dut.rx(rx);
+    dut.tx(tx);
+    dut.step(step);
+    dut.dir(dir);
+    dut.laser(laser);
+    dut.cfg_wr(cfg_wr);
+    dut.cfg_addr(cfg_addr);
+    dut.cfg_wdata(cfg_wdata);
+    dut.busy(busy);
+    dut.running(running);
+    dut.seg_start(seg_start);
+    dut.seg_done(seg_done);
+    dut.last_code(last_code);
+    dut.last_feed(last_feed);
+    dut.packet_count(packet_count);
+    dut.frame_errors(frame_errors);
+    dut.timeouts(timeouts);
+    dut.overruns(overruns);
+    dut.violations(violations);
+    dut.last_period(last_period);
+    dut.numerator_x(numerator_x);
+    dut.numerator_y(numerator_y);
+    dut.position(position);
+    SC_THREAD(run);
+  }
+
+  void edge() { wait(clk.negedge_event()); }
+
+  void run() {
+    for (const Job& job : *jobs) {
+      const auto t0 = std::chrono::steady_clock::now();
+      CoreParams p = params;
+      p.timing = job.timing;
+      RtlDriver drv(p, job.packets, true);
+      rst.write(true);
+      rx.write(true);
+      cfg_wr.write(false);
+      for (int i = 0; i < kResetEdges; ++i) edge();
+      rst.write(false);
+      edge();
+      for (const CfgWrite& w : cfg_writes(p.timing)) {
+        cfg_wr.write(true);
+        cfg_addr.write(w.addr);
+        cfg_wdata.write(w.data);
+        edge();
+      }
+      cfg_wr.write(false);
+      for (int i = 0; i < kSettleEdges; ++i) edge();
+      Cycle c = 0;
+      while (!drv.finished()) {
+        ++c;
+        rx.write(drv.rx_for(c) != 0);
+        edge();
+        drv.after_edge(c, RtlDriver::Outputs{step.read(), dir.read(), laser.read(), tx.read(),
+                                             busy.read(), seg_start.read(), seg_done.read(),
+                                             static_cast<uint16_t>(packet_count.read())});
+        if ((c & 1023) == 0) drv.check_stall();
+      }
+      std::array<int64_t, kAxes> pos{};
+      const sc_dt::sc_bv<128> pv = position.read();
+      for (int a = 0; a < kAxes; ++a)
+        pos[a] = static_cast<int32_t>(pv.range(32 * a + 31, 32 * a).to_uint());
+      RunResult r = drv.take_result(pos, timeouts.read(), overruns.read(), frame_errors.read(),
+                                    violations.read());
+      r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      results.push_back(std::move(r));
+    }
+    sc_core::sc_stop();
+  }
+};
+
+uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
+  return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
+}
+
+AxisTiming random_timing(std::mt19937_64& g) {
+  const uint32_t r = std::array<uint32_t, 4>{4, 40, 300, 1000}[pick(g, 0, 3)];
+  auto v = [&](uint32_t lo) { return pick(g, 0, 19) == 0 ? 0u : pick(g, lo, r); };
+  return AxisTiming{v(1), v(1), v(0), v(0)};
+}
+
+Job random_job(uint64_t seed, size_t segments) {
+  using namespace fpgacnc::protocol::v1;
+  std::mt19937_64 g(seed);
+  Job j;
+  j.name = fmt::format("random seed {}", seed);
+  j.segments = segments;
+  if (pick(g, 0, 4) != 0)
+    for (auto& t : j.timing) t = random_timing(g);
+  auto init = [&] {
+    const auto b = pack_init(pick(g, 500, 400'000), pick(g, 500, 400'000));
+    return HostPacket{{b.begin(), b.end()}, false, 1};
+  };
+  j.packets.push_back(init());
+  auto steps = [&]() -> int32_t {
+    const uint32_t kind = pick(g, 0, 9);
+    int32_t m = kind == 0 ? 0 : kind < 5 ? static_cast<int32_t>(pick(g, 0, 12))
+                                         : static_cast<int32_t>(pick(g, 0, 300));
+    return pick(g, 0, 1) ? -m : m;
+  };
+  for (size_t i = 0; i < segments; ++i) {
+    const uint32_t what = pick(g, 0, 99);
+    if (what == 0) {  // a new init between moves
+      j.packets.push_back(init());
+    } else if (what == 1) {  // a truncated packet, then silence past the watchdog
+      std::vector<uint8_t> part;
+      for (uint32_t k = pick(g, 1, 10); k > 0; --k) part.push_back(static_cast<uint8_t>(pick(g, 0, 254)));
+      j.packets.push_back(HostPacket{part, false, pick(g, 1, 100)});
+      j.packets.push_back(HostPacket{{}, false, 0});
+      j.packets.back().gap = 0;
+    }
+    const int32_t sx = steps(), sy = steps();
+    uint16_t feed = static_cast<uint16_t>(pick(g, 1, 65535));
+    if (pick(g, 0, 29) == 0) feed = 0;
+    int32_t fx = sx, fy = sy;
+    if (feed == 0) {  // 62 500 clocks a step: keep it short
+      fx = sx % 3;
+      fy = sy % 3;
+    }
+    const auto b = pack_motion(static_cast<uint8_t>(pick(g, 0, 255)), fx, fy, feed);
+    int64_t gap = pick(g, 1, 40);
+    if (what == 1) gap += 20'000 + pick(g, 0, 500);  // past the watchdog
+    j.packets.push_back(HostPacket{{b.begin(), b.end()}, true, gap});
+  }
+  // Empty packets (used above as placeholders) carry no frames: drop them.
+  std::erase_if(j.packets, [](const HostPacket& p) { return p.bytes.empty(); });
+  return j;
+}
+
+Job corpus_job(const std::string& path, size_t max_moves, double feed_override) {
+  fpgacnc::config::MachineConfig cfg;
+  const auto plan = fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
+  const auto packed = fpgacnc::protocol::v1::pack_job(plan);
+  Job j;
+  j.name = fmt::format("{} (first {} moves, feed override {}%)", path, max_moves, feed_override);
+  j.packets = job_packets(packed, 50'000'000, max_moves);
+  j.segments = j.packets.size() - 1;
+  return j;
+}
+
+}  // namespace
+
+int sc_main(int argc, char* argv[]) {
+  uint64_t seed = 1, seeds = 20;
+  size_t segments = 100, corpus_moves = 12;
+  double corpus_override = 1000.0;
+  std::string corpus_dir = FPGACNC_CORPUS_DIR, examples_dir = FPGACNC_EXAMPLES_DIR;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--seed") seed = std::stoull(v);
+    else if (k == "--seeds") seeds = std::stoull(v);
+    else if (k == "--segments") segments = std::stoull(v);
+    else if (k == "--corpus-moves") corpus_moves = std::stoull(v);
+    else if (k == "--corpus-feed-override") corpus_override = std::stod(v);
+    else {
+      fmt::print(stderr, "cosim: unknown option {}\n", k);
+      return 2;
+    }
+  }
+  if (const char* env = std::getenv("FPGACNC_SEED")) seed = std::strtoull(env, nullptr, 0);
+  fmt::print("[seed] cosim: {} (+0..{}; set FPGACNC_SEED to reproduce)\n", seed, seeds - 1);
+
+  std::vector<Job> jobs;
+  for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
+  if (corpus_moves > 0) {
+    jobs.push_back(corpus_job(examples_dir + "/jsdc-laser.gcode", corpus_moves, corpus_override));
+    jobs.push_back(corpus_job(corpus_dir + "/Circle_Diamond_Square_Calibration.gcode",
+                              corpus_moves, corpus_override));
+  }
+
+  CoreParams p;
+  p.baud = 3'000'000;
+  p.watchdog_clks = 20'000;
+  sc_core::sc_clock clk("clk", sc_core::sc_time(20, sc_core::SC_NS));
+  RtlHarness rtl("rtl");
+  rtl.clk(clk);
+  rtl.jobs = &jobs;
+  rtl.params = p;
+  VirtualBoard twins("twins", p, true);
+  std::vector<RunResult> twin_results;
+  for (const Job& j : jobs)
+    twins.add_job(TwinJob{j.packets, j.timing,
+                          [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
+  const auto t0 = std::chrono::steady_clock::now();
+  sc_core::sc_start();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  int bad = 0;
+  uint64_t total_segments = 0, total_edges = 0, total_cycles = 0;
+  double rtl_wall = 0, twin_wall = 0;
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    if (i >= rtl.results.size() || i >= twin_results.size()) {
+      fmt::print("FAIL {}: not run\n", jobs[i].name);
+      ++bad;
+      continue;
+    }
+    const RunResult& a = rtl.results[i];
+    const RunResult& b = twin_results[i];
+    const std::string diff = compare_runs(a, b);
+    total_segments += jobs[i].segments;
+    total_edges += a.edges.size();
+    total_cycles += static_cast<uint64_t>(a.end_cycle);
+    rtl_wall += a.wall_s;
+    twin_wall += b.wall_s;
+    if (!diff.empty()) ++bad;
+    fmt::print("{} {}: {} moves acked, {} edges, {} clocks, {} timeouts{}{}\n",
+               diff.empty() ? "ok  " : "FAIL", jobs[i].name, a.acks.size(), a.edges.size(),
+               a.end_cycle, a.timeouts, diff.empty() ? "" : ": first difference: ", diff);
+  }
+  fmt::print(
+      "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "
+      "clocks/s), twins {:.3f} s; wall {:.2f} s; {}\n",
+      jobs.size(), total_segments, total_edges, total_cycles, rtl_wall,
+      static_cast<double>(total_cycles) / rtl_wall / 1e6, twin_wall, wall,
+      bad ? fmt::format("{} jobs DIFFER", bad) : std::string("all identical"));
+  return bad ? 1 : 0;
+}
