@@ -50,4 +50,8 @@ void register_stream(CLI::App& app, StreamHooks hooks);
 // fpgacnc board [--config F] [--fst F] [--edges F.csv]: the simulated board alone on a pty.
 void register_board(CLI::App& app);
 
+// fpgacnc sim FILE [--model tlm|rtl|both]: a whole job on the twins or the Verilated RTL
+// (host/cli/sim_cmd.cpp, built with systemc/).
+void register_sim(CLI::App& app);
+
 }  // namespace fpgacnc::cli

@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
   // Without --port, `stream` runs the simulated board in-process (board_cmd.cpp).
   fpgacnc::cli::register_stream(app, fpgacnc::cli::simboard_stream_hooks());
   fpgacnc::cli::register_board(app);
-  // Future: register_sim(app);
+  fpgacnc::cli::register_sim(app);
 
   try {
     app.parse(argc, argv);

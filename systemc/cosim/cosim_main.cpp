@@ -133,7 +133,7 @@ uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
 }
 
 AxisTiming random_timing(std::mt19937_64& g) {
-  const uint32_t r = std::array<uint32_t, 4>{4, 40, 300, 1000}[pick(g, 0, 3)];
+  const uint32_t r = std::array<uint32_t, 4>{4, 40, 200, 600}[pick(g, 0, 3)];
   auto v = [&](uint32_t lo) { return pick(g, 0, 19) == 0 ? 0u : pick(g, lo, r); };
   return AxisTiming{v(1), v(1), v(0), v(0)};
 }
@@ -154,7 +154,7 @@ Job random_job(uint64_t seed, size_t segments) {
   auto steps = [&]() -> int32_t {
     const uint32_t kind = pick(g, 0, 9);
     int32_t m = kind == 0 ? 0 : kind < 5 ? static_cast<int32_t>(pick(g, 0, 12))
-                                         : static_cast<int32_t>(pick(g, 0, 300));
+                                         : static_cast<int32_t>(pick(g, 0, 100));
     return pick(g, 0, 1) ? -m : m;
   };
   for (size_t i = 0; i < segments; ++i) {
@@ -176,7 +176,8 @@ Job random_job(uint64_t seed, size_t segments) {
       fx = sx % 3;
       fy = sy % 3;
     }
-    const auto b = pack_motion(static_cast<uint8_t>(pick(g, 0, 255)), fx, fy, feed);
+    // (a first byte of 0xFF would start an init packet: the code byte stays below it)
+    const auto b = pack_motion(static_cast<uint8_t>(pick(g, 0, 254)), fx, fy, feed);
     int64_t gap = pick(g, 1, 40);
     if (what == 1) gap += 20'000 + pick(g, 0, 500);  // past the watchdog
     j.packets.push_back(HostPacket{{b.begin(), b.end()}, true, gap});
@@ -188,10 +189,12 @@ Job random_job(uint64_t seed, size_t segments) {
 
 Job corpus_job(const std::string& path, size_t max_moves, double feed_override) {
   fpgacnc::config::MachineConfig cfg;
+  cfg.rapid_feed_mm_min = 12'000.0;  // the axes' max feed: short rapids, less RTL time
   const auto plan = fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
   const auto packed = fpgacnc::protocol::v1::pack_job(plan);
   Job j;
-  j.name = fmt::format("{} (first {} moves, feed override {}%)", path, max_moves, feed_override);
+  j.name = fmt::format("{} (first {} moves, feed override {}%, rapids 12000 mm/min)", path,
+                       max_moves, feed_override);
   j.packets = job_packets(packed, 50'000'000, max_moves);
   j.segments = j.packets.size() - 1;
   return j;

@@ -28,7 +28,7 @@ std::string compare_cycles(const char* what, const std::vector<Cycle>& rtl,
 }  // namespace
 
 std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
-  if (!rtl.error.empty() || !twin.error.empty())
+  if (rtl.error != twin.error)
     return fmt::format("host error: rtl '{}', twin '{}'", rtl.error, twin.error);
   const size_t n = std::min(rtl.edges.size(), twin.edges.size());
   for (size_t i = 0; i < n; ++i) {
@@ -59,7 +59,7 @@ std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
         "{}",
         rtl.timeouts, rtl.overruns, rtl.frame_errors, rtl.violations, twin.timeouts,
         twin.overruns, twin.frame_errors, twin.violations);
-  if (rtl.end_cycle != twin.end_cycle)
+  if (rtl.error.empty() && rtl.end_cycle != twin.end_cycle)
     return fmt::format("job duration: rtl {} clocks, twin {}", rtl.end_cycle, twin.end_cycle);
   return "";
 }

@@ -78,8 +78,7 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   RunResult r;
   while (!host.done()) {
     if (host.waiting()) {
-      r.error = "no ACK for packet " + std::to_string(host.packets_sent()) + " (of " +
-                std::to_string(job.packets.size()) + ")";
+      r.error = "no ACK for packet " + std::to_string(host.packets_sent());
       break;
     }
     for (const HostFrame& f : host.next_packet()) {
