@@ -22,6 +22,14 @@ build: configure
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 1200
 
+# RTL/twin co-simulation soak: many more random seeds and longer corpus prefixes at real feeds
+# (SOAK_SEEDS, SOAK_SEED, SOAK_MOVES; about 2 minutes per 20 seeds of 100 segments).
+SOAK_SEEDS ?= 200
+SOAK_SEED ?= 1000
+SOAK_MOVES ?= 60
+soak: build
+	$(BUILD)/systemc/cosim --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100 --corpus-moves $(SOAK_MOVES) --corpus-feed-override 100
+
 lint: deps
 	./scripts/lint.sh
 

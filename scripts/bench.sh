@@ -37,4 +37,29 @@ if [ -x "$fpgacnc" ]; then
   awk -v p="$t0" -v q="$t1" -v r="$t2" -v s="$sim" 'BEGIN {
     printf "bench: demo job host planning %.3f s, stream wall %.2f s, of which board simulation %.2f s, host and link %.2f s\n", q - p, r - q, s, (r - q) - s }'
 fi
+# Virtual platform (SystemC twins, systemc/) against the Verilated RTL on the same job: the first
+# $VP_MOVES moves of the demo job with the same host schedule, simulated clocks per wall second
+# of each and their ratio (the run also checks that both give identical edges); then the wall
+# time of the two large corpus jobs, whole, at their real feeds, on the virtual platform.
+if [ -x "$fpgacnc" ]; then
+  VP_MOVES=${VP_MOVES:-20}
+  job="$root/examples/jsdc-laser.gcode"
+  echo "== virtual platform vs RTL: $job, first $VP_MOVES moves"
+  out=$("$fpgacnc" sim "$job" --model both --max-moves "$VP_MOVES" 2>&1) || status=1
+  echo "$out" | grep -E "^(simulated board|rtl vs tlm)"
+  rtl=$(echo "$out" | sed -n 's/^simulated board (rtl): \([0-9]*\) cycles.* \([0-9.]*\) M clocks\/s.*/\1 \2/p')
+  tlm=$(echo "$out" | sed -n 's/^simulated board (tlm): \([0-9]*\) cycles.* \([0-9.]*\) M clocks\/s.*/\1 \2/p')
+  echo "$rtl $tlm" | awk '{ if ($2 > 0) printf "bench: virtual platform %.0f M clocks/s, Verilated RTL %.2f M clocks/s on the same %d clocks: %.0fx\n", $4, $2, $1, $4 / $2 }'
+  for f in octocat part; do
+    g="$root/../shared/gcode-corpus/$f.gcode"
+    [ -f "$g" ] || continue
+    t0=$(date +%s.%N)
+    out=$("$fpgacnc" sim "$g" --model tlm 2>&1) || status=1
+    t1=$(date +%s.%N)
+    line=$(echo "$out" | grep "^simulated board (tlm)")
+    echo "$line"
+    echo "$line" | awk -v p="$t0" -v q="$t1" -v f="$f.gcode" '{
+      printf "bench: %s on the virtual platform: %s clocks (%s s of machine time), %.2f s wall including planning\n", f, $4, substr($6, 2), q - p }'
+  done
+fi
 exit $status

@@ -5,12 +5,11 @@
 
 namespace fpgacnc::twins {
 
-std::vector<Edge> PinRecorder::sorted() const {
-  std::vector<Edge> e = edges_;
-  std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
+std::vector<Edge> PinRecorder::take_sorted() {
+  std::sort(edges_.begin(), edges_.end(), [](const Edge& a, const Edge& b) {
     return a.cycle != b.cycle ? a.cycle < b.cycle : a.signal < b.signal;
   });
-  return e;
+  return std::move(edges_);
 }
 
 VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bool record_tx)
@@ -90,7 +89,8 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   }
   qk.sync();
   host_ = nullptr;
-  r.edges = pins_.sorted();
+  r.edges = pins_.take_sorted();
+  pins_.clear();
   r.acks = host.acks;
   r.packet_done = dec_.packet_done_cycles;
   r.seg_start = exec_.seg_start_cycles;

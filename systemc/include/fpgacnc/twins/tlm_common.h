@@ -121,7 +121,7 @@ T& payload(tlm::tlm_generic_payload& gp) {
 }
 
 // The board's pins as an edge list (signal numbers of simboard/edges.h). Twins add edges out of
-// time order (a move's steps are computed when it is accepted); sorted() orders them by
+// time order (a move's steps are computed when it is accepted); take_sorted() orders them by
 // (cycle, signal) as the RTL recorder sees them.
 class PinRecorder {
  public:
@@ -130,7 +130,8 @@ class PinRecorder {
     if (signal == simboard::kTx && !record_tx) return;
     edges_.push_back(Edge{static_cast<uint64_t>(c), signal, value});
   }
-  std::vector<Edge> sorted() const;
+  // Sorts in place and hands the list over (the recorder is empty afterwards).
+  std::vector<Edge> take_sorted();
   size_t size() const { return edges_.size(); }
   void clear() { edges_.clear(); }
   void reserve(size_t n) { edges_.reserve(n); }
