@@ -1,0 +1,94 @@
+// RTL side of the segment_executor block co-simulation: the Verilated C++ model `vexec`
+// clocked by this loop (see cosim_executor.cpp).
+#include <memory>
+
+#include "Vsegment_executor.h"
+#include "executor_job.h"
+#include "fpgacnc/simboard/edges.h"
+#include "verilated.h"
+
+namespace fpgacnc::twins {
+namespace {
+
+void clock_once(Vsegment_executor& m) {
+  m.clk = 1;
+  m.eval();
+  m.clk = 0;
+  m.eval();
+}
+
+uint64_t pack16(const std::array<AxisTiming, kAxes>& t, uint32_t AxisTiming::*f) {
+  uint64_t v = 0;
+  for (int a = 0; a < kAxes; ++a) v |= static_cast<uint64_t>(t[a].*f & 0xffff) << (16 * a);
+  return v;
+}
+
+}  // namespace
+
+RunResult run_executor_rtl(const ExecJob& j) {
+  auto ctx = std::make_unique<VerilatedContext>();
+  auto m = std::make_unique<Vsegment_executor>(ctx.get(), "segment_executor");
+  m->cfg_step_high = pack16(j.timing, &AxisTiming::high);
+  m->cfg_step_low = pack16(j.timing, &AxisTiming::low);
+  m->cfg_dir_setup = pack16(j.timing, &AxisTiming::setup);
+  m->cfg_dir_hold = pack16(j.timing, &AxisTiming::hold);
+  m->s_axis_tvalid = 0;
+  m->rst = 1;
+  m->clk = 0;
+  m->eval();
+  for (int i = 0; i < 8; ++i) clock_once(*m);
+  m->rst = 0;
+  for (int i = 0; i < 21; ++i) clock_once(*m);  // cycles -20..0, as in the system harness
+  RunResult r;
+  uint32_t prev = 0;
+  Cycle c = 0, valid_from = j.offers.empty() ? -1 : j.offers[0].gap;
+  size_t next = 0;
+  Cycle quiet = 0;
+  while (true) {
+    // Inputs for edge c + 1: the next offer is valid once edge valid_from has passed.
+    const bool offering = next < j.offers.size() && c >= valid_from;
+    if (offering) {
+      const ExecSegment& s = j.offers[next].seg;
+      m->s_axis_code = s.code;
+      uint8_t d = 0;
+      for (int a = 0; a < kAxes; ++a) {
+        d |= static_cast<uint8_t>(s.dir[a] ? 1u << a : 0u);
+        m->s_axis_steps[a] = s.steps[a];
+        m->s_axis_tmn[2 * a] = static_cast<uint32_t>(s.tmn[a]);
+        m->s_axis_tmn[2 * a + 1] = static_cast<uint32_t>(s.tmn[a] >> 32);
+      }
+      m->s_axis_dir = d;
+      m->s_axis_total = s.total;
+    }
+    m->s_axis_tvalid = offering ? 1 : 0;
+    const bool accepted = offering && m->s_axis_tready;
+    ++c;
+    clock_once(*m);
+    if (accepted) {
+      ++next;
+      if (next < j.offers.size()) valid_from = c + j.offers[next].gap;
+    }
+    const uint32_t sig = (m->step | (m->dir << 4) | (m->laser ? 1u << 8 : 0u));
+    if (sig != prev) {
+      for (uint8_t s = 0; s < 9; ++s)
+        if ((sig ^ prev) >> s & 1u)
+          r.edges.push_back(fpgacnc::simboard::Edge{static_cast<uint64_t>(c), s,
+                                                    static_cast<uint8_t>(sig >> s & 1u)});
+      prev = sig;
+    }
+    if (m->seg_start) r.seg_start.push_back(c);
+    if (m->seg_done) r.seg_done.push_back(c);
+    if (next >= j.offers.size() && m->idle && !m->step) {
+      if (++quiet > 2) break;
+    } else {
+      quiet = 0;
+    }
+  }
+  for (int a = 0; a < kAxes; ++a) r.position[a] = static_cast<int32_t>(m->position[a]);
+  r.violations = 0;
+  r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
+  m->final();
+  return r;
+}
+
+}  // namespace fpgacnc::twins

@@ -1,0 +1,32 @@
+// Jobs of the segment_executor block co-simulation (cosim_executor.cpp), shared by its RTL side
+// (cosim_executor_rtl.cpp, Verilated C++ model, no SystemC headers) and its twin side.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "fpgacnc/twins/run_result.h"
+#include "fpgacnc/twins/timing.h"
+
+namespace fpgacnc::twins {
+
+struct ExecSegment {
+  uint8_t code;
+  std::array<bool, kAxes> dir;
+  std::array<uint32_t, kAxes> steps;
+  std::array<uint64_t, kAxes> tmn;
+  uint64_t total;
+  uint32_t period;
+};
+struct ExecOffer {
+  ExecSegment seg;
+  int64_t gap;  // valid from `gap` edges after the previous accept (first: after cycle 0)
+};
+struct ExecJob {
+  std::array<AxisTiming, kAxes> timing;
+  std::vector<ExecOffer> offers;
+};
+
+RunResult run_executor_rtl(const ExecJob& j);
+
+}  // namespace fpgacnc::twins
