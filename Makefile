@@ -29,6 +29,8 @@ SOAK_SEED ?= 1000
 SOAK_MOVES ?= 60
 soak: build
 	$(BUILD)/systemc/cosim --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100 --corpus-moves $(SOAK_MOVES) --corpus-feed-override 100
+	$(BUILD)/systemc/cosim_executor --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100
+	$(BUILD)/systemc/cosim_blocks --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS)
 
 lint: deps
 	./scripts/lint.sh

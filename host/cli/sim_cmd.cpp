@@ -18,7 +18,9 @@
 
 // libsystemc's own main() calls sc_main(); fpgacnc has its own main() and calls sc_start()
 // directly, so this one only satisfies the link.
-int sc_main(int, char*[]) { return 1; }
+int sc_main(int, char*[]) {
+  return 1;
+}
 
 namespace fpgacnc::cli {
 namespace {
@@ -93,10 +95,10 @@ void run_sim(const SimArgs& a) {
     const std::string d = twins::compare_runs(*rtl, *tlm);
     const double speed = (static_cast<double>(tlm->end_cycle) / tlm->wall_s) /
                          (static_cast<double>(rtl->end_cycle) / rtl->wall_s);
-    fmt::print("rtl vs tlm: {}; virtual platform {:.0f}x the Verilated RTL's clocks/s\n",
-               d.empty() ? "identical (edges, ACKs, block events, positions, duration)"
-                         : "DIFFER: " + d,
-               speed);
+    fmt::print(
+        "rtl vs tlm: {}; virtual platform {:.0f}x the Verilated RTL's clocks/s\n",
+        d.empty() ? "identical (edges, ACKs, block events, positions, duration)" : "DIFFER: " + d,
+        speed);
     if (!d.empty()) throw std::runtime_error("rtl and tlm runs differ");
   }
   const twins::RunResult& r = tlm ? *tlm : *rtl;

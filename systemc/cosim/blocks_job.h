@@ -20,7 +20,7 @@ struct BlockEvent {
 };
 struct BlockRun {
   std::vector<BlockEvent> events;
-  std::vector<simboard::Edge> edges;  // uart_tx: tx edges
+  std::vector<simboard::Edge> edges;   // uart_tx: tx edges
   std::array<uint64_t, 2> counters{};  // decoder: timeouts, overruns; prep: numerators x, y
 };
 

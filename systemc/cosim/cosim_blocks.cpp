@@ -40,8 +40,8 @@ SC_MODULE(BlockBench) {
   PacketDecoderTwin dec;
   SegmentPrepTwin prep;
   tlm_utils::simple_initiator_socket<BlockBench> to_rx115, to_rx3m, to_tx, to_dec, to_prep;
-  tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_dec,
-      from_prep, prep_status;
+  tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_dec, from_prep,
+      prep_status;
   tlm::tlm_generic_payload gp;
   BlockRun* out = nullptr;
   const std::vector<int64_t>* delays = nullptr;
@@ -95,10 +95,9 @@ SC_MODULE(BlockBench) {
   void on_command(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
     const Command& c = payload<Command>(g);
     const Cycle v = clk.at(d);
-    out->events.push_back(BlockEvent{
-        v,
-        {c.code | static_cast<uint64_t>(c.init) << 8, c.a,
-         c.b | static_cast<uint64_t>(c.feed) << 32, 0}});
+    out->events.push_back(BlockEvent{v,
+                                     {c.code | static_cast<uint64_t>(c.init) << 8, c.a,
+                                      c.b | static_cast<uint64_t>(c.feed) << 32, 0}});
     d = clk.delay_to(v + 1 + next_delay());
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
@@ -107,10 +106,10 @@ SC_MODULE(BlockBench) {
     const Cycle v = clk.at(d);
     uint64_t dir = 0;
     for (int a = 0; a < kAxes; ++a) dir |= s.dir[a] ? 1u << a : 0u;
-    out->events.push_back(BlockEvent{
-        v,
-        {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40, s.total,
-         s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32, s.tmn[0]}});
+    out->events.push_back(
+        BlockEvent{v,
+                   {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40, s.total,
+                    s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32, s.tmn[0]}});
     d = clk.delay_to(v + 1 + next_delay());
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
@@ -118,7 +117,9 @@ SC_MODULE(BlockBench) {
     payload<ExecIdle>(g).edge = -1;  // exec_idle high
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
-  void run() { body(); }
+  void run() {
+    body();
+  }
 };
 
 // Events of a twin run come in call order; accepts and outputs of the prep interleave in time,
@@ -135,11 +136,12 @@ std::string compare(BlockRun a, BlockRun b) {
   const size_t n = std::min(a.events.size(), b.events.size());
   for (size_t i = 0; i < n; ++i)
     if (!(a.events[i] == b.events[i]))
-      return fmt::format("event #{}: rtl cycle {} ({:x} {:x} {:x} {:x}), twin cycle {} ({:x} {:x} "
-                         "{:x} {:x})",
-                         i, a.events[i].cycle, a.events[i].v[0], a.events[i].v[1],
-                         a.events[i].v[2], a.events[i].v[3], b.events[i].cycle, b.events[i].v[0],
-                         b.events[i].v[1], b.events[i].v[2], b.events[i].v[3]);
+      return fmt::format(
+          "event #{}: rtl cycle {} ({:x} {:x} {:x} {:x}), twin cycle {} ({:x} {:x} "
+          "{:x} {:x})",
+          i, a.events[i].cycle, a.events[i].v[0], a.events[i].v[1], a.events[i].v[2],
+          a.events[i].v[3], b.events[i].cycle, b.events[i].v[0], b.events[i].v[1], b.events[i].v[2],
+          b.events[i].v[3]);
   if (a.events.size() != b.events.size())
     return fmt::format("events: rtl {}, twin {}; first extra at cycle {}", a.events.size(),
                        b.events.size(),
@@ -171,8 +173,8 @@ UartRxJob rx_job(std::mt19937_64& g, uint64_t baud, size_t n) {
 UartTxJob tx_job(std::mt19937_64& g, size_t n) {
   UartTxJob j;
   for (size_t i = 0; i < n; ++i)
-    j.offers.push_back({static_cast<uint8_t>(pick(g, 0, 255)), pick(g, 0, 2) ? pick(g, 1, 200)
-                                                                              : pick(g, 1, 400)});
+    j.offers.push_back(
+        {static_cast<uint8_t>(pick(g, 0, 255)), pick(g, 0, 2) ? pick(g, 1, 200) : pick(g, 1, 400)});
   return j;
 }
 
@@ -188,7 +190,7 @@ DecoderJob decoder_job(std::mt19937_64& g, size_t packets) {
       if (k == 0) b = init ? 0xFF : static_cast<uint8_t>(pick(g, 0, 254));
       j.bytes.push_back({t, b});
       const uint32_t kind = pick(g, 0, 999);
-      t += kind < 800 ? pick(g, 1, 40)
+      t += kind < 800   ? pick(g, 1, 40)
            : kind < 998 ? pick(g, 40, 2000)
                         : pick(g, 4'999'990, 5'000'010);  // at the watchdog limit
     }
@@ -227,8 +229,10 @@ int sc_main(int argc, char* argv[]) {
   uint64_t seed = 11, seeds = 10;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seed") seed = std::stoull(v);
-    else if (k == "--seeds") seeds = std::stoull(v);
+    if (k == "--seed")
+      seed = std::stoull(v);
+    else if (k == "--seeds")
+      seeds = std::stoull(v);
   }
   if (const char* env = std::getenv("FPGACNC_SEED")) seed = std::strtoull(env, nullptr, 0);
   fmt::print("[seed] cosim_blocks: {} (+0..{}; set FPGACNC_SEED to reproduce)\n", seed, seeds - 1);
@@ -244,11 +248,31 @@ int sc_main(int argc, char* argv[]) {
   std::vector<Case> cases;
   for (uint64_t s = 0; s < seeds; ++s) {
     std::mt19937_64 g(seed + s);
-    cases.push_back(Case{fmt::format("uart_rx 115200 seed {}", seed + s), rx_job(g, 115'200, 60), {}, {}, {}, 0, {}});
-    cases.push_back(Case{fmt::format("uart_rx 3000000 seed {}", seed + s), rx_job(g, 3'000'000, 300), {}, {}, {}, 0, {}});
-    cases.push_back(Case{fmt::format("uart_tx 3000000 seed {}", seed + s), {}, tx_job(g, 300), {}, {}, 1, {}});
-    cases.push_back(Case{fmt::format("packet_decoder_v1 seed {}", seed + s), {}, {}, decoder_job(g, 150), {}, 2, {}});
-    cases.push_back(Case{fmt::format("segment_prep seed {}", seed + s), {}, {}, {}, prep_job(g, 150), 3, {}});
+    cases.push_back(Case{fmt::format("uart_rx 115200 seed {}", seed + s),
+                         rx_job(g, 115'200, 60),
+                         {},
+                         {},
+                         {},
+                         0,
+                         {}});
+    cases.push_back(Case{fmt::format("uart_rx 3000000 seed {}", seed + s),
+                         rx_job(g, 3'000'000, 300),
+                         {},
+                         {},
+                         {},
+                         0,
+                         {}});
+    cases.push_back(
+        Case{fmt::format("uart_tx 3000000 seed {}", seed + s), {}, tx_job(g, 300), {}, {}, 1, {}});
+    cases.push_back(Case{fmt::format("packet_decoder_v1 seed {}", seed + s),
+                         {},
+                         {},
+                         decoder_job(g, 150),
+                         {},
+                         2,
+                         {}});
+    cases.push_back(
+        Case{fmt::format("segment_prep seed {}", seed + s), {}, {}, {}, prep_job(g, 150), 3, {}});
   }
   BlockBench b("bench");
   b.body = [&] {
@@ -315,7 +339,7 @@ int sc_main(int argc, char* argv[]) {
   int bad = 0;
   size_t events = 0;
   for (Case& c : cases) {
-    BlockRun r = c.kind == 0 ? rtl_uart_rx(c.rx)
+    BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
                  : c.kind == 1 ? rtl_uart_tx(c.tx)
                  : c.kind == 2 ? rtl_decoder(c.dec)
                                : rtl_prep(c.prep);

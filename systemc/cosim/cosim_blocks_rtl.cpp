@@ -120,8 +120,8 @@ BlockRun rtl_decoder(const DecoderJob& j) {
       const uint64_t b = (d[0] >> 16) | (static_cast<uint64_t>(d[1] & 0xffff) << 16);
       const uint64_t a = (d[1] >> 16) | (static_cast<uint64_t>(d[2] & 0xffff) << 16);
       const uint64_t code = (d[2] >> 16) & 3;
-      r.events.push_back(BlockEvent{c, {code | static_cast<uint64_t>(m->m_axis_tuser) << 8, a,
-                                        b | feed << 32, 0}});
+      r.events.push_back(BlockEvent{
+          c, {code | static_cast<uint64_t>(m->m_axis_tuser) << 8, a, b | feed << 32, 0}});
       accept_at = c + 1 + (k < j.accept_delay.size() ? j.accept_delay[k] : 0);
       ++k;
     }

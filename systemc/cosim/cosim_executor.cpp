@@ -77,7 +77,8 @@ SC_MODULE(ExecBench) {
   std::vector<Cycle> seg_done;
   tlm::tlm_generic_payload gp;
 
-  SC_CTOR(ExecBench) : exec("segment_executor", clk, p, pins), seg("seg"), done("done"), status("status") {
+  SC_CTOR(ExecBench)
+      : exec("segment_executor", clk, p, pins), seg("seg"), done("done"), status("status") {
     seg.bind(exec.segments);
     status.bind(exec.status);
     exec.done.bind(done);
@@ -134,9 +135,12 @@ int sc_main(int argc, char* argv[]) {
   size_t segments = 40;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seed") seed = std::stoull(v);
-    else if (k == "--seeds") seeds = std::stoull(v);
-    else if (k == "--segments") segments = std::stoull(v);
+    if (k == "--seed")
+      seed = std::stoull(v);
+    else if (k == "--seeds")
+      seeds = std::stoull(v);
+    else if (k == "--segments")
+      segments = std::stoull(v);
   }
   if (const char* env = std::getenv("FPGACNC_SEED")) seed = std::strtoull(env, nullptr, 0);
   fmt::print("[seed] cosim_executor: {} (+0..{}; set FPGACNC_SEED to reproduce)\n", seed,
@@ -150,7 +154,8 @@ int sc_main(int argc, char* argv[]) {
   uint64_t edges = 0;
   for (size_t i = 0; i < jobs.size(); ++i) {
     const RunResult rtl = run_executor_rtl(jobs[i]);
-    const std::string d = i < bench.results.size() ? compare_runs(rtl, bench.results[i]) : "not run";
+    const std::string d =
+        i < bench.results.size() ? compare_runs(rtl, bench.results[i]) : "not run";
     edges += rtl.edges.size();
     if (!d.empty()) {
       ++bad;

@@ -45,9 +45,8 @@ struct Job {
 SC_MODULE(RtlHarness) {
   sc_core::sc_in<bool> clk;
   sc_core::sc_signal<bool> rst, rx, tx, laser, cfg_wr, busy, running, seg_start, seg_done;
-  sc_core::sc_signal<uint32_t> step, dir, cfg_addr, cfg_wdata, last_code, last_feed,
-      packet_count, frame_errors, timeouts, overruns, violations, last_period, numerator_x,
-      numerator_y;
+  sc_core::sc_signal<uint32_t> step, dir, cfg_addr, cfg_wdata, last_code, last_feed, packet_count,
+      frame_errors, timeouts, overruns, violations, last_period, numerator_x, numerator_y;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -83,7 +82,9 @@ SC_MODULE(RtlHarness) {
     SC_THREAD(run);
   }
 
-  void edge() { wait(clk.negedge_event()); }
+  void edge() {
+    wait(clk.negedge_event());
+  }
 
   void run() {
     for (const Job& job : *jobs) {
@@ -153,8 +154,9 @@ Job random_job(uint64_t seed, size_t segments) {
   j.packets.push_back(init());
   auto steps = [&]() -> int32_t {
     const uint32_t kind = pick(g, 0, 9);
-    int32_t m = kind == 0 ? 0 : kind < 5 ? static_cast<int32_t>(pick(g, 0, 12))
-                                         : static_cast<int32_t>(pick(g, 0, 100));
+    int32_t m = kind == 0  ? 0
+                : kind < 5 ? static_cast<int32_t>(pick(g, 0, 12))
+                           : static_cast<int32_t>(pick(g, 0, 100));
     return pick(g, 0, 1) ? -m : m;
   };
   for (size_t i = 0; i < segments; ++i) {
@@ -163,7 +165,8 @@ Job random_job(uint64_t seed, size_t segments) {
       j.packets.push_back(init());
     } else if (what == 1) {  // a truncated packet, then silence past the watchdog
       std::vector<uint8_t> part;
-      for (uint32_t k = pick(g, 1, 10); k > 0; --k) part.push_back(static_cast<uint8_t>(pick(g, 0, 254)));
+      for (uint32_t k = pick(g, 1, 10); k > 0; --k)
+        part.push_back(static_cast<uint8_t>(pick(g, 0, 254)));
       j.packets.push_back(HostPacket{part, false, pick(g, 1, 100)});
       j.packets.push_back(HostPacket{{}, false, 0});
       j.packets.back().gap = 0;
@@ -209,11 +212,16 @@ int sc_main(int argc, char* argv[]) {
   std::string corpus_dir = FPGACNC_CORPUS_DIR, examples_dir = FPGACNC_EXAMPLES_DIR;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seed") seed = std::stoull(v);
-    else if (k == "--seeds") seeds = std::stoull(v);
-    else if (k == "--segments") segments = std::stoull(v);
-    else if (k == "--corpus-moves") corpus_moves = std::stoull(v);
-    else if (k == "--corpus-feed-override") corpus_override = std::stod(v);
+    if (k == "--seed")
+      seed = std::stoull(v);
+    else if (k == "--seeds")
+      seeds = std::stoull(v);
+    else if (k == "--segments")
+      segments = std::stoull(v);
+    else if (k == "--corpus-moves")
+      corpus_moves = std::stoull(v);
+    else if (k == "--corpus-feed-override")
+      corpus_override = std::stod(v);
     else {
       fmt::print(stderr, "cosim: unknown option {}\n", k);
       return 2;
@@ -226,8 +234,8 @@ int sc_main(int argc, char* argv[]) {
   for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
   if (corpus_moves > 0) {
     jobs.push_back(corpus_job(examples_dir + "/jsdc-laser.gcode", corpus_moves, corpus_override));
-    jobs.push_back(corpus_job(corpus_dir + "/Circle_Diamond_Square_Calibration.gcode",
-                              corpus_moves, corpus_override));
+    jobs.push_back(corpus_job(corpus_dir + "/Circle_Diamond_Square_Calibration.gcode", corpus_moves,
+                              corpus_override));
   }
 
   CoreParams p;
@@ -241,8 +249,8 @@ int sc_main(int argc, char* argv[]) {
   VirtualBoard twins("twins", p, true);
   std::vector<RunResult> twin_results;
   for (const Job& j : jobs)
-    twins.add_job(TwinJob{j.packets, j.timing,
-                          [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
+    twins.add_job(
+        TwinJob{j.packets, j.timing, [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
   const auto t0 = std::chrono::steady_clock::now();
   sc_core::sc_start();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

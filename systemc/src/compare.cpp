@@ -50,15 +50,15 @@ std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
     if (!s.empty()) return s;
   }
   if (rtl.position != twin.position)
-    return fmt::format("position: rtl X {} Y {}, twin X {} Y {}", rtl.position[0],
-                       rtl.position[1], twin.position[0], twin.position[1]);
+    return fmt::format("position: rtl X {} Y {}, twin X {} Y {}", rtl.position[0], rtl.position[1],
+                       twin.position[0], twin.position[1]);
   if (rtl.timeouts != twin.timeouts || rtl.overruns != twin.overruns ||
       rtl.frame_errors != twin.frame_errors || rtl.violations != twin.violations)
     return fmt::format(
         "counters (timeouts, overruns, frame errors, violations): rtl {} {} {} {}, twin {} {} {} "
         "{}",
-        rtl.timeouts, rtl.overruns, rtl.frame_errors, rtl.violations, twin.timeouts,
-        twin.overruns, twin.frame_errors, twin.violations);
+        rtl.timeouts, rtl.overruns, rtl.frame_errors, rtl.violations, twin.timeouts, twin.overruns,
+        twin.frame_errors, twin.violations);
   if (rtl.error.empty() && rtl.end_cycle != twin.end_cycle)
     return fmt::format("job duration: rtl {} clocks, twin {}", rtl.end_cycle, twin.end_cycle);
   return "";

@@ -52,9 +52,8 @@ RunResult run_on_rtl(const CoreParams& p, std::vector<HostPacket> packets, bool 
     ++c;
     m->rx = static_cast<uint8_t>(drv.rx_for(c));
     clock_once(*m);
-    drv.after_edge(c, RtlDriver::Outputs{m->step, m->dir, m->laser != 0, m->tx != 0,
-                                         m->busy != 0, m->seg_start != 0, m->seg_done != 0,
-                                         m->packet_count});
+    drv.after_edge(c, RtlDriver::Outputs{m->step, m->dir, m->laser != 0, m->tx != 0, m->busy != 0,
+                                         m->seg_start != 0, m->seg_done != 0, m->packet_count});
     if ((c & 1023) == 0) drv.check_stall();
   }
   std::array<int64_t, kAxes> pos{};

@@ -120,7 +120,8 @@ int sc_main(int, char*[]) {
   const auto zero = fpgacnc::protocol::v1::pack_motion(0, 0, 0, 100);
   board.add_job(TwinJob{{HostPacket{{0x01, 0x00, 0x00}, false, 1},
                          HostPacket{{zero.begin(), zero.end()}, true, 6'000'000}},
-                        p.timing, keep});
+                        p.timing,
+                        keep});
   sc_core::sc_start();
   if (results.size() == 2) {
     worked_example(results[0]);

@@ -18,8 +18,8 @@ namespace fpgacnc::twins {
 
 struct HostPacket {
   std::vector<uint8_t> bytes;
-  bool ack = true;   // the host waits for an ACK after it
-  int64_t gap = 1;   // clocks from "ready" to the first start edge
+  bool ack = true;  // the host waits for an ACK after it
+  int64_t gap = 1;  // clocks from "ready" to the first start edge
 };
 
 struct HostFrame {

@@ -40,7 +40,8 @@ class RtlDriver {
         host_(std::move(packets), sender_, timer_.tx_boundary(10)),
         mask_(record_tx ? 0x3ffu : 0x1ffu) {
     prev_sig_ &= mask_;
-    for (int i = 0; i <= 10; ++i) centre_[i] = ceil_div(static_cast<__int128>(2 * i + 1) * timer_.mod, 2 * timer_.inc);
+    for (int i = 0; i <= 10; ++i)
+      centre_[i] = ceil_div(static_cast<__int128>(2 * i + 1) * timer_.mod, 2 * timer_.inc);
   }
 
   // rx level for edge c (c >= 1).
@@ -62,13 +63,14 @@ class RtlDriver {
   };
   // Outputs seen after edge c.
   void after_edge(Cycle c, const Outputs& o) {
-    const uint32_t sig = (o.step | (o.dir << 4) | (o.laser ? 1u << 8 : 0u) |
-                          (o.tx ? 1u << 9 : 0u)) & mask_;
+    const uint32_t sig =
+        (o.step | (o.dir << 4) | (o.laser ? 1u << 8 : 0u) | (o.tx ? 1u << 9 : 0u)) & mask_;
     if (sig != prev_sig_) {
       const uint32_t ch = sig ^ prev_sig_;
       for (uint8_t s = 0; s < 10; ++s)
-        if (ch >> s & 1u) r_.edges.push_back(simboard::Edge{static_cast<uint64_t>(c), s,
-                                                            static_cast<uint8_t>(sig >> s & 1u)});
+        if (ch >> s & 1u)
+          r_.edges.push_back(
+              simboard::Edge{static_cast<uint64_t>(c), s, static_cast<uint8_t>(sig >> s & 1u)});
       prev_sig_ = sig;
     }
     if (o.packet_count != prev_count_) {
@@ -87,7 +89,8 @@ class RtlDriver {
       const int64_t off = c - *tx_start_;
       for (int i = 1; i <= 9; ++i) {
         if (off != centre_[i]) continue;
-        if (i <= 8) tx_byte_ |= static_cast<uint8_t>((o.tx ? 1 : 0) << (i - 1));
+        if (i <= 8)
+          tx_byte_ |= static_cast<uint8_t>((o.tx ? 1 : 0) << (i - 1));
         else {
           host_.on_tx_byte(*tx_start_, tx_byte_);
           tx_start_.reset();

@@ -27,8 +27,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   tlm_utils::simple_target_socket<SegmentExecutorTwin> status;
   tlm_utils::simple_initiator_socket<SegmentExecutorTwin> done;
   // One DDA load socket and one step_pulse socket (DIR write, state read) per axis.
-  std::array<std::unique_ptr<tlm_utils::simple_initiator_socket<SegmentExecutorTwin>>, kAxes>
-      dda, pulse;
+  std::array<std::unique_ptr<tlm_utils::simple_initiator_socket<SegmentExecutorTwin>>, kAxes> dda,
+      pulse;
 
   SegmentExecutorTwin(sc_core::sc_module_name name, const CycleClock& clk, const CoreParams& p,
                       PinRecorder& pins)

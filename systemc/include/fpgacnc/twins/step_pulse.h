@@ -24,8 +24,8 @@ class StepPulseTwin : public sc_core::sc_module {
   tlm_utils::simple_target_socket<StepPulseTwin> req;
   tlm_utils::simple_target_socket<StepPulseTwin> ctl;
 
-  StepPulseTwin(sc_core::sc_module_name name, const CycleClock& clk, const AxisTiming& t,
-                int axis, PinRecorder& pins)
+  StepPulseTwin(sc_core::sc_module_name name, const CycleClock& clk, const AxisTiming& t, int axis,
+                PinRecorder& pins)
       : sc_module(name), req("req"), ctl("ctl"), clk_(clk), t_(t), axis_(axis), pins_(pins) {
     req.register_b_transport(this, &StepPulseTwin::b_transport);
     ctl.register_b_transport(this, &StepPulseTwin::b_transport);

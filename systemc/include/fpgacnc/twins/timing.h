@@ -91,9 +91,8 @@ struct PreparedTiming {
   uint32_t period;  // P
   uint64_t total;   // T = P * N
 };
-inline PreparedTiming prepare_timing(uint32_t abs_x, uint32_t abs_y, uint32_t num_x,
-                                     uint32_t num_y, uint16_t feed, uint32_t feed0_period,
-                                     uint32_t min_period) {
+inline PreparedTiming prepare_timing(uint32_t abs_x, uint32_t abs_y, uint32_t num_x, uint32_t num_y,
+                                     uint16_t feed, uint32_t feed0_period, uint32_t min_period) {
   PreparedTiming r{};
   r.x_dominant = abs_x >= abs_y;
   const uint32_t num = r.x_dominant ? num_x : num_y;

@@ -9,10 +9,10 @@
 // synchronizes through a quantum keeper, so a whole move runs in one call chain.
 #pragma once
 
-#include <systemc>
-#include <tlm>
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/simple_target_socket.h>
+#include <systemc>
+#include <tlm>
 
 #include <array>
 #include <cstdint>

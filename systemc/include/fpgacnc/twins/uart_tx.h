@@ -19,7 +19,11 @@ class UartTxTwin : public sc_core::sc_module {
 
   UartTxTwin(sc_core::sc_module_name name, const CycleClock& clk, const CoreParams& p,
              PinRecorder& pins)
-      : sc_module(name), bytes("bytes"), line("line"), clk_(clk), timer_(p.clk_hz, p.baud),
+      : sc_module(name),
+        bytes("bytes"),
+        line("line"),
+        clk_(clk),
+        timer_(p.clk_hz, p.baud),
         pins_(pins) {
     bytes.register_b_transport(this, &UartTxTwin::b_transport);
   }
