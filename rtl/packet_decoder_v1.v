@@ -123,6 +123,69 @@ module packet_decoder_v1 #(
   assign overrun       = overrun_reg;
   assign packet_done   = done_reg;
 
+`ifdef FORMAL
+  // Formal properties (scripts/formal.sh, k-induction with a small WATCHDOG_CLKS override).
+  // An independent monitor counts the bytes since the last packet boundary the decoder reported
+  // (packet_done, overrun or timeout) and the idle clocks since the last byte.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+
+  localparam integer F_W = WD_W + 1;
+  localparam [F_W-1:0] F_WD = WATCHDOG_CLKS;
+
+  reg  [    3:0] f_n;     // bytes of the current packet, including those of a packet just ended
+  reg            f_init;  // the current packet's first byte was 0xFF
+  reg  [F_W-1:0] f_idle;  // clocks without a byte since the last byte, saturating at WATCHDOG+1
+  wire           f_boundary = done_reg || overrun_reg || timeout_reg;
+  wire [    3:0] f_n_eff = f_boundary ? 4'd0 : f_n;  // bytes of the packet still open
+  wire [    3:0] f_len = f_init ? 4'd9 : 4'd11;
+
+  always @(posedge clk) begin
+    if (take) begin
+      f_n    <= f_n_eff + 4'd1;
+      f_idle <= {F_W{1'b0}};
+      if (f_n_eff == 4'd0) f_init <= (s_axis_tdata == 8'hFF);
+    end else begin
+      f_n <= f_n_eff;
+      if (f_idle <= F_WD) f_idle <= f_idle + {{(F_W - 1) {1'b0}}, 1'b1};
+    end
+    if (rst) begin
+      f_n    <= 4'd0;
+      f_init <= 1'b0;
+      f_idle <= {F_W{1'b0}};
+    end
+  end
+
+  always @(*)
+    if (f_past_valid) begin
+      // A command (packet_done, or overrun for a dropped complete packet) only after exactly the
+      // packet's length in bytes: 9 for init (first byte 0xFF), 11 for motion.
+      if (done_reg || overrun_reg) assert (f_n == f_len);
+      assert (!(done_reg && overrun_reg) && !(timeout_reg && (done_reg || overrun_reg)));
+      // Never more bytes than the packet's length.
+      assert (f_n <= f_len);
+      // The watchdog drops only a partial packet, and only after exactly WATCHDOG_CLKS clocks
+      // without a byte ...
+      if (timeout_reg) assert (f_n != 4'd0 && f_n < f_len && f_idle == F_WD);
+      // ... and always then.
+      if (f_n != 4'd0 && !done_reg && !overrun_reg && f_idle == F_WD) assert (timeout_reg);
+      if (f_n_eff != 4'd0) assert (f_idle < F_WD);
+      // Induction invariants: the decoder's counters match the monitor.
+      assert (count_reg == f_n_eff);
+      if (count_reg != 4'd0) assert (is_init_reg == f_init && idle_reg == f_idle[WD_W-1:0]);
+      else assert (idle_reg == {WD_W{1'b0}});
+      assert (f_idle <= F_WD + 1);
+    end
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst)) begin
+      // m_axis_tvalid rises only with packet_done, and a held command is never replaced.
+      if (!$past(out_valid_reg) && out_valid_reg) assert (done_reg);
+      if ($past(out_valid_reg) && !$past(m_axis_tready)) assert (out_valid_reg);
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

@@ -186,6 +186,21 @@ module segment_executor #(
   assign position      = pos_reg;
   assign violation     = |pulse_violation;
 
+`ifdef FORMAL
+  // Formal properties (scripts/formal.sh, k-induction). Assumes only reset in the first clock.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+
+  always @(*)
+    if (f_past_valid) begin
+      // Laser is low while the executor is idle (or waiting for DIR hold/setup), and during a
+      // rapid (code 0) segment: it can only be high while RUN executes a segment of code 1..3.
+      if (state_reg != S_RUN) assert (!laser);
+      if (code_reg == 2'd0) assert (!laser);
+    end
+`endif
+
 endmodule
 
 `default_nettype wire
