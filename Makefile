@@ -5,7 +5,7 @@ CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 DEMO_JOB ?= examples/jsdc-laser.gcode
 DEMO_ARGS ?= --config examples/demo-machine.toml --plot $(BUILD)/demo-path.svg
 
-.PHONY: all deps configure build test lint bench demo synth quartus format clean
+.PHONY: all deps configure build test lint bench demo synth quartus formal format clean
 
 all: build
 
@@ -46,6 +46,11 @@ synth: deps
 	./scripts/synth_smoke.sh $(BUILD)/synth
 	./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth
+
+# Formal proofs of the `ifdef FORMAL` properties (Yosys + yosys-smtbmc + Z3); prints a table.
+# A separate step from `make test` (about 2-3 minutes on 2 cores).
+formal: deps
+	./scripts/formal.sh $(BUILD)/formal
 
 # Quartus compile and timing report (needs quartus_sh on the PATH; says what is missing otherwise).
 quartus:

@@ -5,7 +5,7 @@
 // dir_wr (1-clock strobe) loads DIR from dir_in on the next edge. The caller (segment_executor)
 // only writes DIR when hold_ok is high and waits DIR setup clocks before the next step_req, so this
 // block only measures: hold_ok = at least cfg_hold clocks have passed since the last STEP rising
-// edge (1 after reset). idle = STEP is low, its low time has elapsed and no step is pending: a
+// edge (before the first step: since reset was released). idle = STEP is low, its low time has elapsed and no step is pending: a
 // step_req now rises at once.
 // A step_req while not idle is a timing violation: it is not lost, it is issued as soon as the
 // low time allows, and violation strobes (the executor's period clamp makes this unreachable;

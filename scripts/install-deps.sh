@@ -7,7 +7,7 @@ PKGS=(
   verilator zlib1g-dev
   libsystemc-dev
   libgtest-dev googletest
-  yosys iverilog nextpnr-ice40
+  yosys iverilog nextpnr-ice40 z3
   libserialport-dev libcli11-dev libfmt-dev libtoml11-dev
   python3 python3-serial librsvg2-bin
 )
