@@ -41,8 +41,9 @@ struct DecoderJob {
   std::vector<int64_t> accept_delay;
 };
 // segment_prep: command k valid from (previous accept, or 0) + gap; segment j taken
-// `accept_delay[j]` edges late; exec_idle high. Events: accepts (edge, k, 0, 0) and segments
-// (valid edge, period | code << 32 | dir << 40, total, steps_x | steps_y << 32).
+// `accept_delay[j]` edges late; exec_idle low from its accept edge A_j until after edge
+// A_j + busy[j] (the executor running it), so an init waits. Events: accepts (edge, k, 0, 0) and
+// segments (valid edge, period | code << 32 | dir << 40, total, steps_x | steps_y << 32).
 struct PrepCommand {
   bool init;
   uint8_t code;
@@ -54,6 +55,7 @@ struct PrepJob {
   uint32_t min_half;  // min_period = 2 * min_half via STEP high = low = min_half on X
   std::vector<PrepCommand> commands;
   std::vector<int64_t> accept_delay;
+  std::vector<int64_t> busy;
 };
 
 BlockRun rtl_uart_rx(const UartRxJob& j);

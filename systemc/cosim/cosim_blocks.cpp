@@ -1,7 +1,8 @@
 // Block-level co-simulation of uart_rx (115 200 and 3 000 000 baud), uart_tx (3 Mbaud),
 // packet_decoder_v1 and segment_prep against their twins (CTest label cosim). Each block is
 // driven alone with random seeded stimulus (random gaps, back-to-back frames and offers, random
-// downstream stalls, watchdog pauses, random numerators, steps, feeds and minimum periods); the
+// downstream stalls, watchdog pauses, random numerators, steps, feeds and minimum periods, an
+// executor busy for a while after each segment so that init commands wait); the
 // RTL side is the Verilated C++ block models of tb/ (cosim_blocks_rtl.cpp), the twins run here
 // in SystemC with the bench as their neighbours. Every output event (edge and values) and the
 // tx edges must be identical; the first difference is printed with its cycle.
@@ -45,7 +46,9 @@ SC_MODULE(BlockBench) {
   tlm::tlm_generic_payload gp;
   BlockRun* out = nullptr;
   const std::vector<int64_t>* delays = nullptr;
+  const std::vector<int64_t>* busy = nullptr;
   size_t delay_index = 0;
+  Cycle exec_idle_after = -1;
   std::function<void()> body;
 
   SC_CTOR(BlockBench)
@@ -81,6 +84,7 @@ SC_MODULE(BlockBench) {
     clk.set_base(sc_core::sc_time::from_value((now + per - 1) / per * per));
     pins.clear();
     delay_index = 0;
+    exec_idle_after = -1;
   }
   int64_t next_delay() {
     return delays && delay_index < delays->size() ? (*delays)[delay_index++] : 0;
@@ -110,11 +114,15 @@ SC_MODULE(BlockBench) {
         BlockEvent{v,
                    {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40, s.total,
                     s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32, s.tmn[0]}});
-    d = clk.delay_to(v + 1 + next_delay());
+    // The executor takes it `accept_delay` edges late and is busy `busy` edges after that.
+    const size_t j = delay_index;
+    const Cycle accept = v + 1 + next_delay();
+    exec_idle_after = accept + (busy && j < busy->size() ? (*busy)[j] : 0);
+    d = clk.delay_to(accept);
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_status(tlm::tlm_generic_payload & g, sc_core::sc_time&) {
-    payload<ExecIdle>(g).edge = -1;  // exec_idle high
+    payload<ExecIdle>(g).edge = exec_idle_after;
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void run() {
@@ -220,6 +228,7 @@ PrepJob prep_job(std::mt19937_64& g, size_t n) {
     j.commands.push_back(c);
   }
   for (size_t i = 0; i < n; ++i) j.accept_delay.push_back(pick(g, 0, 1) ? 0 : pick(g, 0, 300));
+  for (size_t i = 0; i < n; ++i) j.busy.push_back(pick(g, 0, 1) ? 0 : pick(g, 0, 3000));
   return j;
 }
 
@@ -316,6 +325,7 @@ int sc_main(int argc, char* argv[]) {
           for (int a = 1; a < kAxes; ++a) b.pprep.timing[a] = AxisTiming{1, 1, 0, 0};
           b.prep.reset();
           b.delays = &c.prep.accept_delay;
+          b.busy = &c.prep.busy;
           Cycle accept = 0;
           for (size_t k = 0; k < c.prep.commands.size(); ++k) {
             const PrepCommand& p = c.prep.commands[k];
@@ -328,6 +338,7 @@ int sc_main(int argc, char* argv[]) {
         }
       }
       b.delays = nullptr;
+      b.busy = nullptr;
       // Past this job's last event before the next starts.
       Cycle last = 0;
       for (const auto& e : c.twin.events) last = std::max(last, e.cycle);
@@ -345,6 +356,17 @@ int sc_main(int argc, char* argv[]) {
                                : rtl_prep(c.prep);
     events += r.events.size() + r.edges.size();
     const std::string d = compare(r, c.twin);
+    if (!d.empty() && std::getenv("COSIM_DEBUG")) {
+      sort_events(r);
+      sort_events(c.twin);
+      for (size_t i = 0; i < std::max(r.events.size(), c.twin.events.size()) && i < 12; ++i) {
+        auto pr = [](const std::vector<BlockEvent>& v, size_t i) {
+          return i < v.size() ? fmt::format("{} {:x} {:x}", v[i].cycle, v[i].v[0], v[i].v[1])
+                              : std::string("-");
+        };
+        fmt::print("  {:40} | {}\n", pr(r.events, i), pr(c.twin.events, i));
+      }
+    }
     if (!d.empty()) {
       ++bad;
       fmt::print("FAIL {}: first difference: {}\n", c.name, d);

@@ -143,7 +143,9 @@ BlockRun rtl_prep(const PrepJob& j) {
   Cycle valid_from = j.commands.empty() ? 0 : j.commands[0].gap;
   Cycle accept_at = -1;
   Cycle quiet = 0;
+  Cycle idle_after = -1;  // exec_idle high from the clock after this edge
   for (Cycle c = 1;; ++c) {
+    m->exec_idle = c > idle_after ? 1 : 0;
     const bool offering = k < j.commands.size() && c > valid_from;
     if (offering) {
       const PrepCommand& p = j.commands[k];
@@ -153,14 +155,18 @@ BlockRun rtl_prep(const PrepJob& j) {
       m->s_axis_tdata[2] = (p.a >> 16) | (static_cast<uint32_t>(p.code & 3) << 16);
     }
     m->s_axis_tvalid = offering ? 1 : 0;
-    const bool take = offering && m->s_axis_tready;
     m->m_axis_tready = (accept_at == c) ? 1 : 0;
+    m->eval();  // s_axis_tready depends on s_axis_tuser and exec_idle
+    const bool take = offering && m->s_axis_tready;
     clock_once(*m);
     if (take) {
       r.events.push_back(BlockEvent{c, {k, 0, 0, 0}});
       if (++k < j.commands.size()) valid_from = c + j.commands[k].gap;
     }
-    if (accept_at == c) accept_at = -1;
+    if (accept_at == c) {
+      accept_at = -1;
+      idle_after = c + (seg - 1 < j.busy.size() ? j.busy[seg - 1] : 0);
+    }
     if (m->m_axis_tvalid && accept_at < 0) {
       r.events.push_back(BlockEvent{
           c,
@@ -171,7 +177,7 @@ BlockRun rtl_prep(const PrepJob& j) {
       accept_at = c + 1 + (seg < j.accept_delay.size() ? j.accept_delay[seg] : 0);
       ++seg;
     }
-    if (k >= j.commands.size() && !m->busy && accept_at < 0) {
+    if (k >= j.commands.size() && !m->busy && accept_at < 0 && c > idle_after) {
       if (++quiet > 2) break;
     }
   }
