@@ -27,6 +27,7 @@ test: build
 SOAK_SEEDS ?= 200
 SOAK_SEED ?= 1000
 SOAK_MOVES ?= 60
+.PHONY: soak
 soak: build
 	$(BUILD)/systemc/cosim --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100 --corpus-moves $(SOAK_MOVES) --corpus-feed-override 100
 	$(BUILD)/systemc/cosim_executor --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100
