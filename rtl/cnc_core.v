@@ -110,7 +110,7 @@ module cnc_core #(
   wire prep_busy;
   wire quiet = exec_idle && !prep_busy;
 
-  // min_period = max over axes of (STEP high + STEP low), at least 2: the fastest dominant period
+  // min_period = max over axes of (STEP high + STEP low), each at least 1, so at least 2: the fastest dominant period
   // the pulse generators can follow. Computed by a scanner, one axis per clock (no comparator
   // chain across axes): a change of the active settings reaches min_period_reg within
   // 2 * N_AXES + 2 clocks, long before segment_prep uses it (34 clocks after it accepts a move,
@@ -120,6 +120,11 @@ module cnc_core #(
   localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
   reg [AXW-1:0] pm_idx_reg, pm_idx_d_reg;
   reg [16:0] pm_sum_reg, pm_run_reg;
+  // step_pulse treats a setting of 0 as 1 clock: count it so here too.
+  wire [15:0] pm_high_raw = cfg_high_reg[16*pm_idx_reg+:16];
+  wire [15:0] pm_low_raw = cfg_low_reg[16*pm_idx_reg+:16];
+  wire [15:0] pm_high = (pm_high_raw == 16'd0) ? 16'd1 : pm_high_raw;
+  wire [15:0] pm_low = (pm_low_raw == 16'd0) ? 16'd1 : pm_low_raw;
   wire [16:0] pm_cand = (pm_idx_d_reg == {AXW{1'b0}} || pm_sum_reg > pm_run_reg) ? pm_sum_reg
                                                                                  : pm_run_reg;
 
@@ -140,7 +145,7 @@ module cnc_core #(
     end
     pm_idx_reg   <= (pm_idx_reg == AX_LAST) ? {AXW{1'b0}} : pm_idx_reg + 1'b1;
     pm_idx_d_reg <= pm_idx_reg;
-    pm_sum_reg   <= {1'b0, cfg_high_reg[16*pm_idx_reg+:16]} + {1'b0, cfg_low_reg[16*pm_idx_reg+:16]};
+    pm_sum_reg   <= {1'b0, pm_high} + {1'b0, pm_low};
     pm_run_reg   <= pm_cand;
     // STEP high and low are each at least one clock, so a period of at least 2.
     if (pm_idx_d_reg == AX_LAST) min_period_reg <= (pm_cand < 17'd2) ? 32'd2 : {15'd0, pm_cand};

@@ -34,11 +34,13 @@ struct CoreParams {
   uint32_t default_numerator = 18'750'000;
   std::array<AxisTiming, kAxes> timing{};
 
-  // The executor's minimum period: max over axes of STEP high + STEP low (as written, 0 counts
-  // as 0 here), at least 2 (docs/timing.md "Segment length").
+  // The executor's minimum period: max over axes of STEP high + STEP low, a setting of 0 counting
+  // as 1 clock as in the pulse generator (docs/timing.md "Segment length").
   uint32_t min_period() const {
     uint32_t m = 0;
-    for (const auto& t : timing) m = std::max(m, (t.high & 0xffffu) + (t.low & 0xffffu));
+    for (const auto& t : timing)
+      m = std::max(
+          m, std::max<uint32_t>(t.high & 0xffffu, 1) + std::max<uint32_t>(t.low & 0xffffu, 1));
     return std::max<uint32_t>(m, 2);
   }
 };
