@@ -12,6 +12,8 @@
 #include <random>
 #include <systemc>
 
+#include "cosim_args.h"
+
 #include "blocks_job.h"
 #include "fpgacnc/twins/packet_decoder_v1.h"
 #include "fpgacnc/twins/segment_prep.h"
@@ -236,15 +238,10 @@ PrepJob prep_job(std::mt19937_64& g, size_t n) {
 
 int sc_main(int argc, char* argv[]) {
   uint64_t seed = 11, seeds = 10;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seed")
-      seed = std::stoull(v);
-    else if (k == "--seeds")
-      seeds = std::stoull(v);
-  }
-  if (const char* env = std::getenv("FPGACNC_SEED")) seed = std::strtoull(env, nullptr, 0);
-  fmt::print("[seed] cosim_blocks: {} (+0..{}; set FPGACNC_SEED to reproduce)\n", seed, seeds - 1);
+  fpgacnc::cosim::Options opts("cosim_blocks");
+  opts.u64("--seed", &seed).u64("--seeds", &seeds);
+  if (!opts.parse(argc, argv)) return 2;
+  seed = opts.seed(seed, seeds);
   struct Case {
     std::string name;
     UartRxJob rx;

@@ -13,6 +13,8 @@
 #include <random>
 #include <systemc>
 
+#include "cosim_args.h"
+
 #include "executor_job.h"
 #include "fpgacnc/twins/compare.h"
 #include "fpgacnc/twins/segment_executor.h"
@@ -143,20 +145,11 @@ SC_MODULE(ExecBench) {
 int sc_main(int argc, char* argv[]) {
   uint64_t seed = 7, seeds = 12;
   size_t segments = 40;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--zero-pulse")
-      g_zero_pulse = v != "0";
-    else if (k == "--seed")
-      seed = std::stoull(v);
-    else if (k == "--seeds")
-      seeds = std::stoull(v);
-    else if (k == "--segments")
-      segments = std::stoull(v);
-  }
-  if (const char* env = std::getenv("FPGACNC_SEED")) seed = std::strtoull(env, nullptr, 0);
-  fmt::print("[seed] cosim_executor: {} (+0..{}; set FPGACNC_SEED to reproduce)\n", seed,
-             seeds - 1);
+  fpgacnc::cosim::Options opts("cosim_executor");
+  opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
+  opts.size("--segments", &segments);
+  if (!opts.parse(argc, argv)) return 2;
+  seed = opts.seed(seed, seeds);
   std::vector<Job> jobs;
   for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
   ExecBench bench("bench");

@@ -20,6 +20,8 @@
 #include <string>
 #include <systemc>
 
+#include "cosim_args.h"
+
 #include "Vcnc_core_sc.h"
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/plan/planner.h"
@@ -220,27 +222,12 @@ int sc_main(int argc, char* argv[]) {
   size_t segments = 100, corpus_moves = 12;
   double corpus_override = 1000.0;
   std::string corpus_dir = FPGACNC_CORPUS_DIR, examples_dir = FPGACNC_EXAMPLES_DIR;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--zero-pulse")
-      g_zero_pulse = v != "0";
-    else if (k == "--seed")
-      seed = std::stoull(v);
-    else if (k == "--seeds")
-      seeds = std::stoull(v);
-    else if (k == "--segments")
-      segments = std::stoull(v);
-    else if (k == "--corpus-moves")
-      corpus_moves = std::stoull(v);
-    else if (k == "--corpus-feed-override")
-      corpus_override = std::stod(v);
-    else {
-      fmt::print(stderr, "cosim: unknown option {}\n", k);
-      return 2;
-    }
-  }
-  if (const char* env = std::getenv("FPGACNC_SEED")) seed = std::strtoull(env, nullptr, 0);
-  fmt::print("[seed] cosim: {} (+0..{}; set FPGACNC_SEED to reproduce)\n", seed, seeds - 1);
+  fpgacnc::cosim::Options opts("cosim");
+  opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
+  opts.size("--segments", &segments).size("--corpus-moves", &corpus_moves);
+  opts.real("--corpus-feed-override", &corpus_override);
+  if (!opts.parse(argc, argv)) return 2;
+  seed = opts.seed(seed, seeds);
 
   std::vector<Job> jobs;
   for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
