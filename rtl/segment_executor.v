@@ -81,6 +81,7 @@ module segment_executor #(
   reg [N_AXES-1:0] dir_tgt_reg;  // DIR level written or pending per axis
   reg [N_AXES-1:0] pend_reg;  // DIR write pending
   reg [15:0] setup_cnt_reg;
+  reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
   reg [63:0] left_reg;  // ticks left including the current one
   reg last_reg;  // the current tick is the last (left_reg == 1)
   reg laser_reg;
@@ -105,19 +106,16 @@ module segment_executor #(
   wire [N_AXES-1:0] dir_wr = (state_reg == S_HOLD) ? (pend_reg & {N_AXES{hold_clear}})
                                                    : (pend_reg & pulse_hold_ok);
 
-  // Largest DIR setup among the axes written on leaving HOLD.
-  reg [15:0] setup_max;
-  integer j;
-  always @(*) begin
-    setup_max = 16'd0;
-    for (j = 0; j < N_AXES; j = j + 1)
-      if (pend_reg[j] && cfg_dir_setup[16*j+:16] > setup_max) setup_max = cfg_dir_setup[16*j+:16];
-  end
+  // SETUP ends when the clocks since the DIR write (setup_cnt_reg, 1 in the first SETUP clock)
+  // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
+  // (the run starts on edge D + max(largest setup, 1)).
+  wire [N_AXES-1:0] setup_ok;
 
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
+      assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
       dda_linear u_dda (
           .clk  (clk),
@@ -191,17 +189,18 @@ module segment_executor #(
       end
       S_HOLD: begin
         if (hold_clear) begin
-          setup_cnt_reg <= setup_max;
-          state_reg     <= S_SETUP;
+          setup_cnt_reg  <= 16'd1;
+          setup_axes_reg <= pend_reg;
+          state_reg      <= S_SETUP;
         end
       end
       S_SETUP: begin
-        if (setup_cnt_reg <= 16'd1) begin
+        if (&setup_ok) begin
           state_reg     <= S_RUN;
           seg_start_reg <= 1'b1;
           laser_reg     <= (code_reg != 2'd0) && (power_reg != 8'd0);
         end else begin
-          setup_cnt_reg <= setup_cnt_reg - 16'd1;
+          setup_cnt_reg <= setup_cnt_reg + 16'd1;
         end
       end
       S_RUN: begin
@@ -239,6 +238,7 @@ module segment_executor #(
       dir_tgt_reg     <= {N_AXES{1'b0}};
       pend_reg        <= {N_AXES{1'b0}};
       setup_cnt_reg   <= 16'd0;
+      setup_axes_reg  <= {N_AXES{1'b0}};
       left_reg        <= 64'd0;
       last_reg        <= 1'b0;
       laser_reg       <= 1'b0;
