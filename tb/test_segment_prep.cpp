@@ -19,7 +19,7 @@ namespace {
 
 constexpr int kAxes = 4;
 constexpr uint64_t kLatencyV1 = 68;
-constexpr uint64_t kLatencyV2 = 68 + kAxes;
+constexpr uint64_t kLatencyV2 = 67 + kAxes;
 
 enum Kind { kMotion = 0, kNumerators = 1, kDwell = 2, kKind3 = 3 };
 
