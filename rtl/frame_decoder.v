@@ -440,6 +440,85 @@ module frame_decoder #(
   assign v1_packet     = v1_packet_reg;
   assign v1_overrun    = v1_overrun_reg;
 
+`ifdef FORMAL
+  // Formal properties of the v1 path (scripts/formal.sh, k-induction with a small WATCHDOG_CLKS
+  // override). The input never carries 0xA5 (assumed), so the decoder stays in auto mode and
+  // only v1 packets and noise occur. An independent monitor counts the bytes since the last
+  // packet boundary the decoder reported (CHECK of a v1 packet, or timeout) and the idle clocks
+  // since the last byte.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+  always @(*) if (s_axis_tvalid) assume (s_axis_tdata != 8'hA5);
+
+  localparam integer F_W = WD_W + 1;
+  localparam [F_W-1:0] F_WD = WATCHDOG_CLKS;
+
+  reg  [    3:0] f_n;     // bytes of the current packet, including those of a packet just ended
+  reg            f_init;  // the current packet's first byte was 0xFF
+  reg  [F_W-1:0] f_idle;  // clocks without a byte since the last byte, saturating at WATCHDOG+1
+  wire           f_boundary = chk_reg || timeout_reg;
+  wire [    3:0] f_n_eff = f_boundary ? 4'd0 : f_n;  // bytes of the packet still open
+  wire [    3:0] f_len = f_init ? 4'd9 : 4'd11;
+  wire           f_v1_start = (s_axis_tdata == 8'hFF) || (s_axis_tdata[7:2] == 6'd0);
+
+  always @(posedge clk) begin
+    if (take) begin
+      f_idle <= {F_W{1'b0}};
+      if (f_n_eff == 4'd0) begin
+        f_n    <= f_v1_start ? 4'd1 : 4'd0;  // anything else is noise
+        f_init <= (s_axis_tdata == 8'hFF);
+      end else begin
+        f_n <= f_n_eff + 4'd1;
+      end
+    end else begin
+      f_n <= f_n_eff;
+      if (f_idle <= F_WD) f_idle <= f_idle + {{(F_W - 1) {1'b0}}, 1'b1};
+    end
+    if (rst) begin
+      f_n    <= 4'd0;
+      f_init <= 1'b0;
+      f_idle <= {F_W{1'b0}};
+    end
+  end
+
+  always @(*)
+    if (f_past_valid && !rst) begin
+      // Only v1: no frame state, auto mode, every CHECK is a v1 packet's.
+      assert (st_reg == ST_HUNT || st_reg == ST_V1);
+      assert (!v2_mode_reg);
+      if (chk_reg) assert (chk_v1_reg);
+      // An entry (FIFO write, or the overrun drop of a complete packet) only after exactly the
+      // packet's length in bytes: 9 for init (first byte 0xFF), 11 for motion.
+      if (chk_reg) assert (f_n == f_len);
+      assert (m_axis_tvalid == (chk_reg && m_axis_tready));
+      assert (!(chk_reg && timeout_reg));
+      assert (!(v1_packet_reg && v1_overrun_reg));
+      // Never more bytes than the packet's length.
+      assert (f_n <= f_len);
+      // The watchdog drops only a partial packet, and only after exactly WATCHDOG_CLKS clocks
+      // without a byte ...
+      if (timeout_reg) assert (f_n != 4'd0 && f_n < f_len && f_idle == F_WD);
+      // ... and always then.
+      if (f_n != 4'd0 && !chk_reg && f_idle == F_WD) assert (timeout_reg);
+      if (f_n_eff != 4'd0) assert (f_idle < F_WD);
+      // Induction invariants: the decoder's counters match the monitor.
+      assert ((st_reg == ST_V1) == (f_n_eff != 4'd0));
+      if (st_reg == ST_V1)
+        assert (cnt_reg == {3'd0, f_n_eff - 4'd1} && is_init_reg == f_init &&
+                idle_reg == f_idle[WD_W-1:0]);
+      else assert (idle_reg == {WD_W{1'b0}});
+      assert (f_idle <= F_WD + 1);
+    end
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst) && !rst) begin
+      // The strobes of a v1 packet follow its CHECK clock, as the FIFO's tready then said.
+      assert (v1_packet_reg == ($past(chk_reg) && $past(m_axis_tready)));
+      assert (v1_overrun_reg == ($past(chk_reg) && !$past(m_axis_tready)));
+    end
+`endif
+
 endmodule
 
 `default_nettype wire
