@@ -148,11 +148,12 @@ int run_board_command(const BoardCommandArgs& args) {
 }
 
 std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
-                                              const SimOutputs& outputs) {
+                                              const SimOutputs& outputs,
+                                              const LineFaults& line_faults) {
   if (!outputs.plot_path.empty()) check_plot_path(outputs.plot_path);
   BoardOptions o = SimBoard::options_from_config(cfg);
   o.fst_path = outputs.fst_path;
-  o.line_faults = outputs.line_faults;
+  o.line_faults = line_faults;
   auto lk = std::make_unique<BoardLink>(o);
   fmt::print("simulated board on {} ({} baud)\n", lk->board().path(), o.baud);
   if (o.line_faults.any()) fmt::print("line faults: {}\n", o.line_faults.describe());

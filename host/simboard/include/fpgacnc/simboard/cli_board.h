@@ -51,17 +51,18 @@ int run_board_command(const BoardCommandArgs& args);
 
 // Outputs of a stream to the in-process board.
 struct SimOutputs {
-  std::string plot_path;   // executed vs commanded path, .svg (or .png with rsvg-convert)
-  std::string fst_path;    // FST waveform
-  std::string edges_csv;   // edge list
-  LineFaults line_faults;  // serial line fault injection (default none)
+  std::string plot_path;  // executed vs commanded path, .svg (or .png with rsvg-convert)
+  std::string fst_path;   // FST waveform
+  std::string edges_csv;  // edge list
 };
 
 // `fpgacnc stream` without --port: starts the simulated board in-process and returns a Link
 // (a SerialLink on the board's pty, owning the board). Throws BoardError for a configuration
-// the board cannot model (clock other than 50 MHz, baud other than 115200).
+// the board cannot model (clock other than 50 MHz, baud other than 115200). `line_faults`:
+// fault injection on the simulated line (parse_line_fault_option), none by default.
 std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
-                                              const SimOutputs& outputs);
+                                              const SimOutputs& outputs,
+                                              const LineFaults& line_faults = {});
 
 // After a stream over a link made by make_default_link: stops the board, prints its figures
 // (cycles, clocks/s, edges, injected line faults, net steps per axis from the edges vs the plan's
