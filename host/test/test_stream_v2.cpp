@@ -272,6 +272,19 @@ TEST(StreamV2, RefusesAJobWithMoreAxesThanTheDevice) {
   EXPECT_EQ(dev.configs().size(), 2u) << "CONFIG_AXIS only for the device's axes";
 }
 
+TEST(StreamV2, RefusesAJobPlannedForAnotherClock) {
+  auto cfg = test_cfg();
+  cfg.clk_hz = 100'000'000;
+  FakeV2Device dev(FakeV2Device::Options{});
+  try {
+    lk::stream_v2(dev, plan_of("G1 X1 F600\n", cfg), cfg, fast_options());
+    FAIL() << "a job planned for 100 MHz was sent to a 50 MHz device";
+  } catch (const lk::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("50000000 Hz"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(dev.next_seq(), 0) << "a sequenced frame was sent";
+}
+
 TEST(StreamV2, DeviceThatNeverAnswersIsAnError) {
   FakeV2Device::Options o;
   o.answer_hello = false;

@@ -245,6 +245,12 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     throw Error(fmt::format("{}: the job moves {} axes, the device has {} (N_AXES)", name,
                             job.max_axes, ident->n_axes));
   }
+  if (job.clk_hz && ident->clk_hz && job.clk_hz != ident->clk_hz) {
+    throw Error(fmt::format(
+        "{}: the device runs at {} Hz, the job was planned for clk_hz = {} Hz (segment times "
+        "would be wrong: fix clk_hz in the machine configuration)",
+        name, ident->clk_hz, job.clk_hz));
+  }
   size_t max_payload = 0;
   for (const auto& jf : job.frames) max_payload = std::max(max_payload, jf.frame.payload.size());
   if (max_payload > ident->max_payload) {
