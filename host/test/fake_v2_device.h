@@ -62,6 +62,7 @@ class FakeV2Device : public link::Link {
     uint8_t initial_next_seq = 0;
     uint32_t initial_done = 0;
     bool answer_hello = true;  // false: a v2 device that never answers (or a dead line)
+    bool send_done = true;     // false: DONE frames are never sent (ACK and STATUS still are)
     FakeFaults faults;
   };
 
@@ -187,7 +188,7 @@ class FakeV2Device : public link::Link {
       for (size_t a = 0; a < l.steps.size(); ++a) position_[a] += l.steps[a];
     }
     ++done_;
-    pend_done_ = true;
+    pend_done_ = o_.send_done;
   }
 
   // Decoder: one byte.

@@ -2,6 +2,7 @@
 // CRC check value, the resyncing parser, and decoders rejecting wrong types and lengths.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <random>
 #include <string>
@@ -341,4 +342,162 @@ TEST(V2Codec, HostFrameChecksFollowTheDeviceRules) {
   EXPECT_FALSE(v2::is_fifo(0x04) || v2::is_fifo(0x06) || v2::is_fifo(0x01));
   EXPECT_TRUE(v2::is_sequenced(0x03) && v2::is_sequenced(0x06) && v2::is_sequenced(0x04));
   EXPECT_FALSE(v2::is_sequenced(0x01) || v2::is_sequenced(0x02));
+}
+
+// ---- Packer: plan -> v2 frames ----
+
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/plan/stepfile.h"
+#include "fpgacnc/protocol/v2_job.h"
+
+namespace {
+
+fpgacnc::plan::Plan plan_str(const std::string& g, const fpgacnc::config::MachineConfig& cfg) {
+  return fpgacnc::plan::plan_program(fpgacnc::gcode::parse_string(g, "p.gcode"), cfg, {});
+}
+
+std::vector<v2::Line> lines_of(const v2::Job& job) {
+  std::vector<v2::Line> out;
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type == static_cast<uint8_t>(v2::Type::Line))
+      out.push_back(v2::decode_line(jf.frame));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(V2Packer, WorkedExampleMoveIsTheDocsLineFrame) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  // 2 mm x -1 mm at 600 * sqrt(5) mm/min: 0.1 s = 5 000 000 clocks.
+  const auto plan = plan_str("G1 X2 Y-1 F1341.6407865\n", cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  ASSERT_EQ(job.frames.size(), 2u);
+  EXPECT_EQ(job.frames[0].frame, v2::numerators(0, 18'750'000, 18'750'000));
+  v2::Frame f = job.frames[1].frame;
+  f.seq = 7;
+  EXPECT_EQ(v2::encode(f), from_hex("A5 0A 07 10 81 FF 00 4C 4B 40 01 40 FF 60 C0 B7"));
+  EXPECT_EQ(job.total_t, 5'000'000u);
+  EXPECT_EQ(job.lines, 1u);
+  EXPECT_EQ(job.short_lines, 1u);
+  EXPECT_EQ(job.max_axes, 2u);
+  ASSERT_EQ(job.config.size(), 4u);
+  v2::Frame c = job.config[0];
+  c.seq = 1;
+  EXPECT_EQ(v2::encode(c), from_hex("A5 09 01 04 00 00 64 00 64 00 C8 00 C8 DC 4C"));
+  EXPECT_EQ(job.wire_bytes, 4 * 15u + 14u + 16u);
+}
+
+TEST(V2Packer, AxesPowerAndRapids) {
+  fpgacnc::config::MachineConfig cfg;  // laser_requires_m3 = true, laser_s_max = 1000
+  const auto plan =
+      plan_str("G0 X1\nM3 S500\nG1 X2 F600\nG1 Z1\nG1 E5\nS1\nG1 X300\nM5\nG1 X0\n", cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  const auto l = lines_of(job);
+  ASSERT_EQ(l.size(), 6u);
+  // G0: code 0, power 0, at the rapid feed: 1 mm at 3000 mm/min = 0.02 s.
+  EXPECT_EQ(l[0], (v2::Line{0, 0, 1'000'000, true, {160, 0}}));
+  // S500 of 1000 -> round(127.5) = 128; 1 mm at 600 mm/min = 0.1 s.
+  EXPECT_EQ(l[1], (v2::Line{1, 128, 5'000'000, true, {160, 0}}));
+  // Z: k = 3; 1 mm at 600 mm/min (Z max feed 600).
+  EXPECT_EQ(l[2], (v2::Line{1, 128, 5'000'000, true, {0, 0, 400}}));
+  // E alone: k = 4, its own length 5 mm at 600 mm/min = 0.5 s.
+  EXPECT_EQ(l[3], (v2::Line{1, 128, 25'000'000, true, {0, 0, 0, 500}}));
+  // S1 -> 0.255 rounds to 0, raised to 1 (S > 0 is never off); 298 mm = 47680 steps: int32.
+  EXPECT_EQ(l[4], (v2::Line{1, 1, 1'490'000'000, false, {47'680, 0}}));
+  // After M5: laser off, code 0, power 0, still at the programmed feed.
+  EXPECT_EQ(l[5].code, 0);
+  EXPECT_EQ(l[5].power, 0);
+  EXPECT_EQ(l[5].t, 1'500'000'000u);  // 300 mm at 600 mm/min
+  EXPECT_EQ(job.max_axes, 4u);
+  EXPECT_EQ(job.target, plan.final_steps);
+}
+
+TEST(V2Packer, TooFastIsRaisedToTheStepRate) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  cfg.max_feed_mm_min = {1e7, 1e7, 1e7, 1e7};
+  // 100 mm at 1e6 mm/min: 300 000 clocks for 16 000 steps: below 16 000 * 200.
+  const auto job = v2::pack_job(plan_str("G1 X100 F1000000\n", cfg), cfg);
+  const auto l = lines_of(job);
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_EQ(l[0].t, 16'000u * 200u);
+  EXPECT_EQ(job.t_raised, 1u);
+  cfg.step_timing.step_high = 0;  // counts as 1 clock
+  cfg.step_timing.step_low = 3;
+  EXPECT_EQ(v2::min_period(cfg.step_timing), 4u);
+}
+
+TEST(V2Packer, LongMovesAndDwellsAreSplitExactly) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  // 100 mm at 1 mm/min: 6000 s = 3e11 clocks -> 70 LINE frames of at most UINT32_MAX.
+  const auto plan = plan_str("G1 X100 Y-33.3 F1\nG4 P100\nG4 P0\nG4 P1.5\n", cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  const auto l = lines_of(job);
+  const double len = std::hypot(100.0, 5328.0 / 160.0);  // Y: -5328 steps
+  const uint64_t want_t = static_cast<uint64_t>(std::llround(len / 1.0 * 60.0 * 50e6));
+  ASSERT_EQ(l.size(), static_cast<size_t>((want_t + 0xFFFFFFFFull - 1) / 0xFFFFFFFFull));
+  uint64_t t = 0;
+  int64_t x = 0, y = 0;
+  for (const auto& s : l) {
+    t += s.t;
+    x += s.steps[0];
+    y += s.steps[1];
+    EXPECT_LE(s.t, 0xFFFFFFFFull);
+  }
+  EXPECT_EQ(t, want_t);
+  EXPECT_EQ(x, 16'000);
+  EXPECT_EQ(y, -5'328);
+  EXPECT_EQ(job.split_moves, 1u);
+  // Dwells: 100 s = 5e9 clocks -> 2 frames; 0 s -> none; 1.5 s -> 75e6.
+  std::vector<uint32_t> d;
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type == static_cast<uint8_t>(v2::Type::Dwell))
+      d.push_back(v2::decode_dwell(jf.frame));
+  }
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_EQ(uint64_t{d[0]} + d[1], 5'000'000'000u);
+  EXPECT_EQ(d[2], 75'000'000u);
+  EXPECT_EQ(job.total_t, want_t + 5'000'000'000u + 75'000'000u);
+}
+
+TEST(V2Packer, StepFileSegmentsKeepV1Timing) {
+  // The v1 worked example as a step file: feed 1200 -> P = 15 625, T = 5 000 000.
+  fpgacnc::config::MachineConfig cfg;
+  fpgacnc::plan::Plan p;
+  p.numerator = {18'750'000, 18'750'000};
+  fpgacnc::plan::Segment s;
+  s.code = 1;
+  s.steps = {320, -160, 0, 0};
+  s.feed_v1 = 1200;
+  p.items.emplace_back(s);
+  const auto l = lines_of(v2::pack_job(p, cfg));
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_EQ(l[0], (v2::Line{1, 255, 5'000'000, true, {320, -160}}));
+}
+
+TEST(V2Packer, RejectsWhatV2CannotCarry) {
+  fpgacnc::config::MachineConfig cfg;
+  fpgacnc::plan::Plan p;
+  fpgacnc::plan::Segment s;
+  s.code = 4;
+  s.steps = {1, 0, 0, 0};
+  p.items.emplace_back(s);
+  EXPECT_THROW(v2::pack_job(p, cfg), std::invalid_argument);
+  cfg.step_timing.dir_setup = 70'000;
+  EXPECT_THROW(v2::pack_job(fpgacnc::plan::Plan{}, cfg), std::invalid_argument);
+}
+
+TEST(V2Packer, SessionFramesCarryConsecutiveSequenceNumbers) {
+  fpgacnc::config::MachineConfig cfg;
+  const auto job = v2::pack_job(plan_str("G1 X1 F600\nG1 Y1\n", cfg), cfg);
+  const auto frames = v2::session_frames(job, 254, 2);
+  ASSERT_EQ(frames.size(), 2u + job.frames.size() + 1u);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i][2], static_cast<uint8_t>(254 + i)) << "frame " << i;
+  }
+  EXPECT_EQ(frames.back()[3], static_cast<uint8_t>(v2::Type::Release));
 }

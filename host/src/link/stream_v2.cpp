@@ -245,6 +245,12 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     throw Error(fmt::format("{}: the job moves {} axes, the device has {} (N_AXES)", name,
                             job.max_axes, ident->n_axes));
   }
+  if (job.clk_hz && ident->clk_hz && job.clk_hz != ident->clk_hz) {
+    throw Error(fmt::format(
+        "{}: the device runs at {} Hz, the job was planned for clk_hz = {} Hz (segment times "
+        "would be wrong: fix clk_hz in the machine configuration)",
+        name, ident->clk_hz, job.clk_hz));
+  }
   size_t max_payload = 0;
   for (const auto& jf : job.frames) max_payload = std::max(max_payload, jf.frame.payload.size());
   if (max_payload > ident->max_payload) {
@@ -304,6 +310,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   size_t fatal_nak_count = 0;
   auto last_progress = clock_type::now();
   auto last_poll = clock_type::now();
+  milliseconds rto = opt.retransmit_timeout;
 
   auto update = [&](uint8_t next_seq, uint16_t free, std::optional<uint32_t> done) -> bool {
     const size_t delta = static_cast<uint8_t>(next_seq - seq_of(acked));
@@ -315,6 +322,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       acked += delta;
       if (sent < acked) sent = acked;  // acknowledged beyond a go-back point
       last_progress = clock_type::now();
+      rto = opt.retransmit_timeout;
       goback_same = 0;
       fatal_nak_count = 0;
       if (goback_at && acked > *goback_at) goback_at.reset();
@@ -347,56 +355,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     last_progress = clock_type::now();
   };
 
-  std::vector<uint8_t> batch;
-  for (;;) {
-    // Complete?
-    if (acked == n && done_count == total_fifo) break;
-
-    // Send what the window and the credit allow.
-    batch.clear();
-    size_t batch_frames = 0;
-    while (sent < n && sent - acked < opt.max_unacked) {
-      if (items[sent].fifo) {
-        const size_t in_flight = fifo_before[sent] - fifo_before[acked];
-        if (!have_credit || free_slots <= in_flight) break;
-      }
-      v2::Frame f = items[sent].frame;
-      f.seq = seq_of(sent);
-      v2::encode_to(f, batch);
-      ++batch_frames;
-      if (sent < high) ++rep.retransmissions;
-      ++sent;
-      high = std::max(high, sent);
-      if (batch.size() >= 256) break;  // keep reading answers while a long window goes out
-    }
-    s.send_batch(batch, batch_frames);
-
-    // Timers.
-    const auto now = clock_type::now();
-    if (now - s.last_rx() > opt.answer_timeout) {
-      const std::string last = acked == 0 ? std::string("none")
-                                          : frame_name(items[acked - 1].frame, items[acked - 1].jf);
-      throw Error(fmt::format(
-          "{}: no answer from the device for {:.3g} s ({} of {} frames acknowledged, {} of {} "
-          "FIFO frames done; last acknowledged: {})",
-          name, static_cast<double>(opt.answer_timeout.count()) / 1000.0, acked, n, done_count,
-          total_fifo, last));
-    }
-    if (sent > acked && now - last_progress > opt.retransmit_timeout) {
-      ++rep.timeouts;
-      go_back();
-      continue;
-    }
-    if (sent == acked && now - s.last_rx() > opt.idle_poll && now - last_poll > opt.idle_poll) {
-      s.send(v2::status_query());
-      ++rep.status_polls;
-      last_poll = now;
-    }
-
-    // Answers.
-    milliseconds wait = batch_frames ? milliseconds(0) : milliseconds(20);
-    const auto f = s.receive(wait);
-    if (!f) continue;
+  auto handle = [&](const v2::Frame& frame) {
+    const v2::Frame* f = &frame;
     try {
       switch (static_cast<v2::Type>(f->type)) {
         case v2::Type::Ack:
@@ -436,6 +396,62 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     } catch (const v2::ProtocolError&) {
       ++rep.bad_device_frames;
     }
+  };
+
+  std::vector<uint8_t> batch;
+  for (;;) {
+    // Complete?
+    if (acked == n && done_count == total_fifo) break;
+
+    // Send what the window and the credit allow.
+    batch.clear();
+    size_t batch_frames = 0;
+    while (sent < n && sent - acked < opt.max_unacked) {
+      if (items[sent].fifo) {
+        const size_t in_flight = fifo_before[sent] - fifo_before[acked];
+        if (!have_credit || free_slots <= in_flight) break;
+      }
+      v2::Frame f = items[sent].frame;
+      f.seq = seq_of(sent);
+      v2::encode_to(f, batch);
+      ++batch_frames;
+      if (sent < high) ++rep.retransmissions;
+      ++sent;
+      high = std::max(high, sent);
+      if (batch.size() >= 256) break;  // keep reading answers while a long window goes out
+    }
+    s.send_batch(batch, batch_frames);
+
+    // Answers already there (read before any timer: a host that was not scheduled for a while
+    // must not take answers waiting in its input for a silence).
+    while (const auto f = s.receive(milliseconds(0))) handle(*f);
+    if (acked == n && done_count == total_fifo) break;
+
+    // Timers.
+    const auto now = clock_type::now();
+    if (now - s.last_rx() > opt.answer_timeout) {
+      const std::string last = acked == 0 ? std::string("none")
+                                          : frame_name(items[acked - 1].frame, items[acked - 1].jf);
+      throw Error(fmt::format(
+          "{}: no answer from the device for {:.3g} s ({} of {} frames acknowledged, {} of {} "
+          "FIFO frames done; last acknowledged: {})",
+          name, static_cast<double>(opt.answer_timeout.count()) / 1000.0, acked, n, done_count,
+          total_fifo, last));
+    }
+    if (sent > acked && now - last_progress > rto) {
+      ++rep.timeouts;
+      go_back();
+      // Back off while nothing comes back (a slow or stalled line), up to 8x.
+      rto = std::min(rto * 2, opt.retransmit_timeout * 8);
+      continue;
+    }
+    if (sent == acked && now - s.last_rx() > opt.idle_poll && now - last_poll > opt.idle_poll) {
+      s.send(v2::status_query());
+      ++rep.status_polls;
+      last_poll = now;
+    }
+    if (batch_frames) continue;
+    if (const auto f = s.receive(milliseconds(20))) handle(*f);
   }
 
   // 4. Final status and release.

@@ -78,6 +78,7 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
   for (const auto& f : job.config) job.wire_bytes += kOverhead + f.payload.size();
   job.min_period = min_period(st);
   job.numerator = plan.numerator;
+  job.clk_hz = cfg.clk_hz;
 
   auto push = [&job](JobFrame jf) {
     job.wire_bytes += kOverhead + jf.frame.payload.size();

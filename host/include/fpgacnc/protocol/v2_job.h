@@ -53,6 +53,7 @@ struct Job {
   uint64_t wire_bytes = 0;    // bytes of config + FIFO frames
   plan::Steps4 target{};      // sum of the LINE steps per axis
   std::array<uint32_t, 2> numerator{};
+  uint64_t clk_hz = 0;  // clock the T values are counted in (the device must run at it)
 };
 
 // Throws std::invalid_argument naming the segment (and line) for something v2 cannot carry
