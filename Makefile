@@ -50,6 +50,7 @@ lint: deps
 	./scripts/lint.sh
 
 bench: build
+	cmake --build $(BUILD) -j $(JOBS) --target bench_protocol
 	./scripts/bench.sh $(BUILD)
 
 demo: build

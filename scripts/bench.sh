@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints their figures: ./scripts/bench.sh BUILD_DIR
 #   BUILD_DIR/tb/bench_core          step timing accuracy, Verilator speed, maximum step rate
+#   BUILD_DIR/tb/bench_protocol      v1 against v2 through the pins: segments/s, bytes, line use
 #   BUILD_DIR/host/host_plan_bench   host planner throughput on the corpus part (if built)
 #   the make demo job (jsdc-laser, demo-machine.toml) split into host planning time and board
 #   simulation time (the stream report's figures)
@@ -15,6 +16,13 @@ if [ -x "$build/tb/bench_core" ]; then
 else
   echo "bench.sh: $build/tb/bench_core not built" >&2
   status=1
+fi
+
+# Protocol v1 against v2 through the pins (built by `make bench`): segments per second at 115 200
+# and 1 000 000 baud, bytes per segment, v2 line utilisation.
+if [ -x "$build/tb/bench_protocol" ]; then
+  echo "== bench_protocol"
+  "$build/tb/bench_protocol" "${PROTOCOL_MOVES:-1000}" || status=1
 fi
 
 part="$root/../shared/gcode-corpus/part.gcode"
