@@ -36,7 +36,7 @@ struct SimBoard::Model {
   // frame only at the end of that stop bit, so the rest of it counts as activity.
   uint64_t tx_stop_end = 0;
   uint64_t stop_tail = 0;  // clocks from the stop-bit sample to the end of the stop bit (+1)
-  uint32_t prev_sig = 0;     // step | dir << 4 | laser << 8 | tx << 9
+  uint32_t prev_sig = 0;   // step | dir << 4 | laser << 8 | tx << 9
   uint32_t sig_mask = 0x1ff;
   bool never_active = true;       // nothing happened since reset: quiet
   std::deque<uint8_t> inbox;      // read from the pty, not yet admitted to the rx driver

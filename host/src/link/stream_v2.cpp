@@ -324,6 +324,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
                     std::chrono::duration_cast<milliseconds>(have_rtt ? est : est.zero()));
   };
   milliseconds rto = opt.retransmit_timeout;
+  rep.max_rto_s = std::chrono::duration<double>(rto).count();
   // After a timeout only the oldest unacknowledged frame is sent again until something is
   // acknowledged: when the line was only slow or stalled, the cumulative ACK then covers the
   // frames still on their way and nothing else is resent; when they were lost, sending resumes
@@ -360,6 +361,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
         rep.srtt_s = srtt;
       }
       rto = base_rto();
+      rep.max_rto_s = std::max(rep.max_rto_s, std::chrono::duration<double>(rto).count());
       probing = false;
       for (size_t k = 0; k < delta; ++k) cwnd += cwnd < ssthresh ? 1.0 : 1.0 / cwnd;
       cwnd = std::min(cwnd, max_window);
