@@ -32,7 +32,11 @@ struct SimBoard::Model {
   EdgeRecorder rec;
   uint64_t cycle = 0;        // rising edges since reset release
   uint64_t last_active = 0;  // last cycle with something in flight
-  uint32_t prev_sig = 0;     // step | dir << 4 | laser << 8 | tx << 9
+  // A tx byte is decoded at the middle of its stop bit; the core may start the next byte of a
+  // frame only at the end of that stop bit, so the rest of it counts as activity.
+  uint64_t tx_stop_end = 0;
+  uint64_t stop_tail = 0;  // clocks from the stop-bit sample to the end of the stop bit (+1)
+  uint32_t prev_sig = 0;   // step | dir << 4 | laser << 8 | tx << 9
   uint32_t sig_mask = 0x1ff;
   bool never_active = true;       // nothing happened since reset: quiet
   std::deque<uint8_t> inbox;      // read from the pty, not yet admitted to the rx driver
@@ -46,7 +50,8 @@ struct SimBoard::Model {
         line(faults),
         driver(clk_hz, baud, &line),
         monitor(clk_hz, baud),
-        rec(reserve) {}
+        rec(reserve),
+        stop_tail(static_cast<uint64_t>(std::ceil(clk_hz / baud / 2.0)) + 1) {}
 };
 
 namespace {
@@ -111,9 +116,10 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
         s.line.to_host(byte->value, cyc, s.out);
         ++s.bytes_out;
         got_byte = true;
+        s.tx_stop_end = cyc + s.stop_tail;
       }
     }
-    if (m.busy || m.step || !drv_idle || tx == 0 || mon.busy()) {
+    if (m.busy || m.step || !drv_idle || tx == 0 || mon.busy() || cyc < s.tx_stop_end) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;
@@ -157,6 +163,7 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
                s.sig_mask;
   s.cycle = 0;
   s.last_active = 0;
+  s.tx_stop_end = 0;
 }
 
 template <class M>

@@ -102,6 +102,19 @@ std::vector<uint64_t> rises(const std::vector<sb::Edge>& e) {
 
 }  // namespace
 
+TEST(V2System, HelloGetsIdent) {
+  sb::BoardLink link(sb::BoardOptions{});
+  const auto id = lk::probe_v2(link, 2000ms);
+  ASSERT_TRUE(id.has_value()) << "no IDENT within 2 s of HELLO";
+  EXPECT_EQ(id->version, 2);
+  EXPECT_EQ(id->n_axes, 4);
+  EXPECT_EQ(id->fifo_depth, 64);
+  EXPECT_EQ(id->clk_hz, 50'000'000u);
+  EXPECT_EQ(id->baud, 115'200u);
+  EXPECT_EQ(id->max_payload, 64);
+  EXPECT_EQ(id->next_seq, 0);
+}
+
 // (a) Zero gap through the pins, and the same job with v1 stop-and-wait for comparison.
 TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
   const size_t n = env_size("FPGACNC_V2_SEGMENTS", 1000);

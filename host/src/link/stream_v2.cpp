@@ -310,7 +310,33 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   size_t fatal_nak_count = 0;
   auto last_progress = clock_type::now();
   auto last_poll = clock_type::now();
+  // Retransmission timeout: at least opt.retransmit_timeout, and above the measured time from
+  // sending a frame to its ACK (RFC 6298 estimator, Karn's rule: only frames sent once), so a
+  // line with many bytes queued (a slow simulated board, a long window) is not mistaken for a
+  // loss. Doubled on each timeout while nothing is acknowledged.
+  std::vector<clock_type::time_point> sent_at(n);
+  std::vector<uint16_t> sends(n, 0);
+  double srtt = 0.0, rttvar = 0.0;  // seconds
+  bool have_rtt = false;
+  auto base_rto = [&]() {
+    const auto est = std::chrono::duration<double>(srtt + 4.0 * rttvar);
+    return std::max(opt.retransmit_timeout,
+                    std::chrono::duration_cast<milliseconds>(have_rtt ? est : est.zero()));
+  };
   milliseconds rto = opt.retransmit_timeout;
+  rep.max_rto_s = std::chrono::duration<double>(rto).count();
+  // After a timeout only the oldest unacknowledged frame is sent again until something is
+  // acknowledged: when the line was only slow or stalled, the cumulative ACK then covers the
+  // frames still on their way and nothing else is resent; when they were lost, sending resumes
+  // from the device's next_seq.
+  bool probing = false;
+  // Window of unacknowledged frames (AIMD, as TCP congestion control): full (max_unacked) on a
+  // clean line; halved at each go-back, grown by one frame per window of acknowledged frames (by
+  // one per frame below ssthresh). On a noisy line go-back-N then resends a few frames per error
+  // instead of a whole FIFO's worth.
+  const double max_window = static_cast<double>(std::max<size_t>(opt.max_unacked, 1));
+  double cwnd = max_window;
+  double ssthresh = max_window;
 
   auto update = [&](uint8_t next_seq, uint16_t free, std::optional<uint32_t> done) -> bool {
     const size_t delta = static_cast<uint8_t>(next_seq - seq_of(acked));
@@ -322,7 +348,23 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       acked += delta;
       if (sent < acked) sent = acked;  // acknowledged beyond a go-back point
       last_progress = clock_type::now();
-      rto = opt.retransmit_timeout;
+      if (sends[acked - 1] == 1) {
+        const double r = std::chrono::duration<double>(last_progress - sent_at[acked - 1]).count();
+        if (!have_rtt) {
+          srtt = r;
+          rttvar = r / 2.0;
+          have_rtt = true;
+        } else {
+          rttvar = 0.75 * rttvar + 0.25 * std::fabs(srtt - r);
+          srtt = 0.875 * srtt + 0.125 * r;
+        }
+        rep.srtt_s = srtt;
+      }
+      rto = base_rto();
+      rep.max_rto_s = std::max(rep.max_rto_s, std::chrono::duration<double>(rto).count());
+      probing = false;
+      for (size_t k = 0; k < delta; ++k) cwnd += cwnd < ssthresh ? 1.0 : 1.0 / cwnd;
+      cwnd = std::min(cwnd, max_window);
       goback_same = 0;
       fatal_nak_count = 0;
       if (goback_at && acked > *goback_at) goback_at.reset();
@@ -352,6 +394,9 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     sent = acked;
     goback_at = acked;
     ++rep.go_backs;
+    ssthresh = std::max(2.0, cwnd / 2.0);
+    cwnd = ssthresh;
+    rep.min_window = std::min(rep.min_window, static_cast<size_t>(cwnd));
     last_progress = clock_type::now();
   };
 
@@ -369,8 +414,11 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           const v2::Nak k = v2::decode_nak(*f);
           ++rep.naks[static_cast<size_t>(k.reason)];
           if (!update(k.next_seq, k.free, std::nullopt)) break;
-          if (k.reason == v2::NakReason::OutOfOrder && goback_at && acked == *goback_at) {
-            ++rep.naks_ignored;  // an old copy sent before the go-back
+          if (goback_at && acked == *goback_at) {
+            // The device is still where we went back to: NAKs of the copies sent before the
+            // go-back (out of order, or corrupted on the way) until the new copies arrive. A
+            // lost new copy is recovered by the retransmission timeout.
+            ++rep.naks_ignored;
             break;
           }
           if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
@@ -379,7 +427,10 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
                                     frame_name(items[acked].frame, items[acked].jf), k.seq,
                                     v2::nak_reason_name(static_cast<uint8_t>(k.reason))));
           }
-          if (acked < n) go_back();
+          if (acked < n) {
+            go_back();
+            probing = false;
+          }
           break;
         }
         case v2::Type::Status: {
@@ -406,7 +457,9 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     // Send what the window and the credit allow.
     batch.clear();
     size_t batch_frames = 0;
-    while (sent < n && sent - acked < opt.max_unacked) {
+    const size_t limit = probing ? std::min(n, acked + 1) : n;
+    const size_t window = static_cast<size_t>(cwnd);
+    while (sent < limit && sent - acked < window) {
       if (items[sent].fifo) {
         const size_t in_flight = fifo_before[sent] - fifo_before[acked];
         if (!have_credit || free_slots <= in_flight) break;
@@ -416,6 +469,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       v2::encode_to(f, batch);
       ++batch_frames;
       if (sent < high) ++rep.retransmissions;
+      sent_at[sent] = clock_type::now();
+      if (sends[sent] < UINT16_MAX) ++sends[sent];
       ++sent;
       high = std::max(high, sent);
       if (batch.size() >= 256) break;  // keep reading answers while a long window goes out
@@ -441,8 +496,10 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     if (sent > acked && now - last_progress > rto) {
       ++rep.timeouts;
       go_back();
+      probing = true;
       // Back off while nothing comes back (a slow or stalled line), up to 8x.
-      rto = std::min(rto * 2, opt.retransmit_timeout * 8);
+      rto = std::min(rto * 2, base_rto() * 8);
+      rep.max_rto_s = std::max(rep.max_rto_s, std::chrono::duration<double>(rto).count());
       continue;
     }
     if (sent == acked && now - s.last_rx() > opt.idle_poll && now - last_poll > opt.idle_poll) {
@@ -507,7 +564,12 @@ std::string format_report(const StreamV2Report& r) {
     s += fmt::format(" {} {}", v2::nak_reason_name(k), r.naks[k]);
     total += r.naks[k];
   }
-  s += fmt::format(" (total {}, {} OUT_OF_ORDER of old copies ignored)\n", total, r.naks_ignored);
+  s += fmt::format(" (total {}, {} about copies sent before a go-back, ignored)\n", total,
+                   r.naks_ignored);
+  s += fmt::format(
+      "round trip frame -> ACK {:.1f} ms (smoothed), largest retransmission timeout {:.0f} ms, "
+      "smallest window {} frames\n",
+      r.srtt_s * 1000.0, r.max_rto_s * 1000.0, r.min_window);
   s += fmt::format(
       "device frames: {} duplicates, {} stale, {} undecodable; host parser: {} CRC errors, {} "
       "bad lengths, {} noise bytes, {} abandoned\n",

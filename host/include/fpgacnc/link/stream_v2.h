@@ -8,10 +8,14 @@
 //     credit = free - (FIFO frames sent, not yet acknowledged) > 0 and fewer than 127 frames are
 //     unacknowledged;
 //  3. go-back-N: on a NAK, or when nothing was acknowledged for the retransmission timeout, send
-//     again from the device's next_seq. NAK OUT_OF_ORDER of copies sent before the last go-back
-//     (next_seq still at the go-back point) is expected and ignored. Duplicate, lost and
-//     corrupted device frames are tolerated: ACK/DONE are cumulative, the parser resyncs, and
-//     with nothing unacknowledged a STATUS_QUERY polls the device when it stays silent;
+//     again from the device's next_seq. NAKs while the device is still at the last go-back point
+//     come from copies sent before it and are ignored. The timeout adapts to the measured
+//     frame -> ACK time (a queued line, a slow simulation) and backs off while nothing comes;
+//     after a timeout only the oldest frame is resent until something is acknowledged. The
+//     window of unacknowledged frames halves at each go-back and grows back (AIMD).
+//     Duplicate, lost and corrupted device frames are tolerated: ACK/DONE are cumulative, the
+//     parser resyncs, and with nothing unacknowledged a STATUS_QUERY polls the device when it stays
+//     silent;
 //  4. complete when `segments done` has counted every FIFO frame; then STATUS_QUERY (final
 //     position compared with the job's target) and RELEASE (back to auto mode).
 // Errors: link::Error when the device never answers (answer timeout), refuses a frame for a
@@ -58,11 +62,14 @@ struct StreamV2Report {
   size_t go_backs = 0;           // times the window went back (NAK or timeout)
   size_t timeouts = 0;           // retransmission timeouts
   std::array<size_t, 8> naks{};  // by reason code 1..7 (index 0: unused)
-  size_t naks_ignored = 0;       // OUT_OF_ORDER NAKs of copies sent before a go-back
+  size_t naks_ignored = 0;       // NAKs about copies sent before a go-back (device still there)
   size_t duplicates = 0;         // device frames identical to the previous one (same SEQ)
   size_t stale_answers = 0;      // ACK/NAK/DONE whose next_seq is outside the window
   size_t bad_device_frames = 0;  // good CRC but undecodable (ProtocolError)
   size_t status_polls = 0;       // STATUS_QUERY sent
+  double srtt_s = 0.0;           // smoothed time from sending a frame to its ACK
+  double max_rto_s = 0.0;        // largest retransmission timeout used (after backoff)
+  size_t min_window = protocol::v2::kMaxUnacked;  // smallest window of unacked frames used
   uint64_t bytes_written = 0;
   uint64_t bytes_read = 0;
   uint64_t rx_crc_errors = 0;  // device frames rejected by the host parser
