@@ -84,11 +84,13 @@ void run_sim(const SimArgs& a) {
 
   std::unique_ptr<twins::RunResult> rtl, tlm;
   if (a.model != "tlm") {
-    rtl = std::make_unique<twins::RunResult>(twins::run_on_rtl(params, packets));
+    rtl = std::make_unique<twins::RunResult>(
+        twins::run_on_rtl(params, twins::HostScript{packets, {}}));
     report("rtl", *rtl, p, cfg, static_cast<double>(cfg.clk_hz));
   }
   if (a.model != "rtl") {
-    tlm = std::make_unique<twins::RunResult>(twins::run_on_twins(params, packets));
+    tlm = std::make_unique<twins::RunResult>(
+        twins::run_on_twins(params, twins::HostScript{packets, {}}));
     report("tlm", *tlm, p, cfg, static_cast<double>(cfg.clk_hz));
   }
   if (rtl && tlm) {

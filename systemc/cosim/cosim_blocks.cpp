@@ -44,7 +44,7 @@ SC_MODULE(BlockBench) {
   SegmentPrepTwin prep;
   tlm_utils::simple_initiator_socket<BlockBench> to_rx115, to_rx3m, to_tx, to_dec, to_prep;
   tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_dec, from_prep,
-      prep_status;
+      prep_status, prep_applied;
   tlm::tlm_generic_payload gp;
   BlockRun* out = nullptr;
   const std::vector<int64_t>* delays = nullptr;
@@ -71,6 +71,8 @@ SC_MODULE(BlockBench) {
     dec.commands.bind(from_dec);
     prep.segments.bind(from_prep);
     prep.exec_status.bind(prep_status);
+    prep.applied.bind(prep_applied);
+    prep_applied.register_b_transport(this, &BlockBench::on_ok);
     from_rx115.register_b_transport(this, &BlockBench::on_byte);
     from_rx3m.register_b_transport(this, &BlockBench::on_byte);
     from_tx.register_b_transport(this, &BlockBench::on_ok);
@@ -326,7 +328,9 @@ int sc_main(int argc, char* argv[]) {
           Cycle accept = 0;
           for (size_t k = 0; k < c.prep.commands.size(); ++k) {
             const PrepCommand& p = c.prep.commands[k];
-            Command cmd{p.init, p.code, p.a, p.b, p.feed};
+            FifoEntry cmd{false,  p.init ? kEntryNumerators : kEntryMotion,
+                          p.code, 0xFF,
+                          p.feed, {p.a, p.b, 0, 0}};
             accept = transport(b.to_prep, b.gp, b.clk, cmd, accept + p.gap);
             c.twin.events.push_back(BlockEvent{accept, {k, 0, 0, 0}});
           }

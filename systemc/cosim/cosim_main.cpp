@@ -46,7 +46,7 @@ uint32_t pulse(uint32_t v) {
 
 struct Job {
   std::string name;
-  std::vector<HostPacket> packets;
+  HostScript script;
   std::array<AxisTiming, kAxes> timing;
   size_t segments = 0;
 };
@@ -103,7 +103,7 @@ SC_MODULE(RtlHarness) {
       const auto t0 = std::chrono::steady_clock::now();
       CoreParams p = params;
       p.timing = job.timing;
-      RtlDriver drv(p, job.packets, true);
+      RtlDriver drv(p, job.script, true);
       rst.write(true);
       rx.write(true);
       cfg_wr.write(false);
@@ -163,7 +163,7 @@ Job random_job(uint64_t seed, size_t segments) {
     const auto b = pack_init(pick(g, 500, 400'000), pick(g, 500, 400'000));
     return HostPacket{{b.begin(), b.end()}, false, 1};
   };
-  j.packets.push_back(init());
+  j.script.v1.push_back(init());
   auto steps = [&]() -> int32_t {
     const uint32_t kind = pick(g, 0, 9);
     int32_t m = kind == 0  ? 0
@@ -174,14 +174,14 @@ Job random_job(uint64_t seed, size_t segments) {
   for (size_t i = 0; i < segments; ++i) {
     const uint32_t what = pick(g, 0, 99);
     if (what == 0) {  // a new init between moves
-      j.packets.push_back(init());
+      j.script.v1.push_back(init());
     } else if (what == 1) {  // a truncated packet, then silence past the watchdog
       std::vector<uint8_t> part;
       for (uint32_t k = pick(g, 1, 10); k > 0; --k)
         part.push_back(static_cast<uint8_t>(pick(g, 0, 254)));
-      j.packets.push_back(HostPacket{part, false, pick(g, 1, 100)});
-      j.packets.push_back(HostPacket{{}, false, 0});
-      j.packets.back().gap = 0;
+      j.script.v1.push_back(HostPacket{part, false, pick(g, 1, 100)});
+      j.script.v1.push_back(HostPacket{{}, false, 0});
+      j.script.v1.back().gap = 0;
     }
     const int32_t sx = steps(), sy = steps();
     uint16_t feed = static_cast<uint16_t>(pick(g, 1, 65535));
@@ -195,10 +195,10 @@ Job random_job(uint64_t seed, size_t segments) {
     const auto b = pack_motion(static_cast<uint8_t>(pick(g, 0, 254)), fx, fy, feed);
     int64_t gap = pick(g, 1, 40);
     if (what == 1) gap += 20'000 + pick(g, 0, 500);  // past the watchdog
-    j.packets.push_back(HostPacket{{b.begin(), b.end()}, true, gap});
+    j.script.v1.push_back(HostPacket{{b.begin(), b.end()}, true, gap});
   }
   // Empty packets (used above as placeholders) carry no frames: drop them.
-  std::erase_if(j.packets, [](const HostPacket& p) { return p.bytes.empty(); });
+  std::erase_if(j.script.v1, [](const HostPacket& p) { return p.bytes.empty(); });
   return j;
 }
 
@@ -210,8 +210,8 @@ Job corpus_job(const std::string& path, size_t max_moves, double feed_override) 
   Job j;
   j.name = fmt::format("{} (first {} moves, feed override {}%, rapids 12000 mm/min)", path,
                        max_moves, feed_override);
-  j.packets = job_packets(packed, 50'000'000, max_moves);
-  j.segments = j.packets.size() - 1;
+  j.script.v1 = job_packets(packed, 50'000'000, max_moves);
+  j.segments = j.script.v1.size() - 1;
   return j;
 }
 
@@ -249,7 +249,7 @@ int sc_main(int argc, char* argv[]) {
   std::vector<RunResult> twin_results;
   for (const Job& j : jobs)
     twins.add_job(
-        TwinJob{j.packets, j.timing, [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
+        TwinJob{j.script, j.timing, [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
   const auto t0 = std::chrono::steady_clock::now();
   sc_core::sc_start();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

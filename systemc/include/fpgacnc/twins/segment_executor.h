@@ -1,15 +1,24 @@
-// Twin of rtl/segment_executor.v: DIR hold/setup sequencing, the run of a segment, the laser
-// (docs/timing.md "STEP/DIR per move").
+// Twin of rtl/segment_executor.v: DIR hold/setup sequencing, the run of a segment, queued
+// segments without idle clocks, the laser (docs/timing.md "STEP/DIR per move", "Queued segments").
 //
-// Target `segments`: a Segment valid from the delay's edge V; accepted on the first edge after
-// V on which the executor is idle (returned in the delay). Then, with A the accept edge:
-//   T = 0: done at once (seg_done after edge A).
-//   no moving axis changes direction: the run starts at R = A.
-//   otherwise: DIR is written at D = the first edge after A on which every reversing axis's
-//   DIR hold has elapsed since its last STEP rise (asked from its step_pulse), and the run
-//   starts at R = D + max(largest DIR setup of the reversing axes, 1).
-//   Laser high from edge R to edge R + T for codes 1..3. Each axis's dda_linear is loaded with
-//   (n, T) at R; seg_done after edge R + T, sent to initiator `done` (the status/ACK block).
+// Target `segments`: a Segment valid from the delay's edge V. With E the edge of the last tick
+// of the segment running (R + T), the segment is accepted on edge A (returned in the delay):
+//   zero gap: a segment with T > 0 runs, V < E (valid while the last tick is issued), the new
+//     segment has T > 0, and no moving axis reverses or the segment is dir_fast: A = R' = E.
+//     A reversing axis's DIR changes on the first edge >= E + kFastDirDelay on which its DIR
+//     hold since its last STEP rise has elapsed (its first step comes at least hold + setup
+//     after R', the prep's dir_fast guarantee).
+//   otherwise: A = the first edge after V on which the executor is idle (from E + 1, or A + 1
+//     after a segment of T = 0). T = 0: done at once (seg_done after edge A). No moving axis
+//     changes direction: the run starts at R = A. Otherwise DIR is written at D = the first
+//     edge after A on which every reversing axis's DIR hold has elapsed since its last STEP
+//     rise (asked from its step_pulse), and the run starts at R = D + max(largest DIR setup of
+//     the reversing axes, 1).
+//   Tick c of the run is edge R + c; each axis's dda_linear is loaded with (n, T) at R; a
+//   segment without steps (a dwell) just lasts T ticks. Laser high from edge R to edge R + T
+//   for codes 1..3 with power > 0 (back-to-back cutting segments keep it high: the recorder
+//   cancels a fall and a rise on the same edge). seg_done after edge R + T, sent to initiator
+//   `done` with the segment's v2 bit.
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
@@ -20,6 +29,8 @@
 #include "fpgacnc/twins/step_pulse.h"
 
 namespace fpgacnc::twins {
+
+inline constexpr Cycle kFastDirDelay = 1;  // earliest DIR change after a zero-gap accept edge
 
 class SegmentExecutorTwin : public sc_core::sc_module {
  public:
@@ -51,10 +62,14 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   void reset() {
     idle_after_ = -1;
+    run_end_ = -1;
+    running_ = false;
     segments_run = 0;
+    zero_gap = 0;
     seg_start_cycles.clear();
   }
   uint64_t segments_run = 0;
+  uint64_t zero_gap = 0;                // segments started on the previous one's last tick
   std::vector<Cycle> seg_start_cycles;  // edges after which seg_start is high
 
  private:
@@ -73,26 +88,43 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   void on_segment(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const Segment s = payload<Segment>(gp);
-    const Cycle accept = std::max(clk_.at(delay) + 1, idle_after_ + 1);
-    delay = clk_.delay_to(accept);
+    const Cycle valid = clk_.at(delay);
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
     ++segments_run;
-    Cycle end = accept;
-    if (s.total != 0) {
-      Cycle run = accept;
-      Cycle dir_edge = accept + 1;
-      uint32_t setup = 0;
-      bool change = false;
-      std::array<bool, kAxes> flip{};
+    // Which moving axes reverse (DIR as it will be: every earlier write is already recorded).
+    std::array<bool, kAxes> flip{};
+    std::array<PulseState, kAxes> st{};
+    bool change = false;
+    for (int a = 0; a < kAxes; ++a) {
+      if (s.steps[a] == 0 || s.total == 0) continue;
+      st[a] = pulse_state(a, valid);
+      if (st[a].dir == s.dir[a]) continue;
+      flip[a] = change = true;
+    }
+    const bool queued = running_ && s.total != 0 && valid < run_end_ && (!change || s.dir_fast);
+    Cycle accept, run;
+    if (queued) {
+      accept = run = run_end_;
+      ++zero_gap;
       for (int a = 0; a < kAxes; ++a) {
-        if (s.steps[a] == 0) continue;
-        const PulseState st = pulse_state(a, accept);
-        if (st.dir == s.dir[a]) continue;
-        flip[a] = change = true;
-        dir_edge = std::max(dir_edge, st.last_rise + p_.timing[a].hold);
-        setup = std::max(setup, p_.timing[a].setup);
+        if (!flip[a]) continue;
+        PulseCmd c{s.dir[a]};
+        const Cycle d =
+            std::max<Cycle>(run_end_ + kFastDirDelay, st[a].last_rise + p_.timing[a].hold);
+        transport(*pulse[a], gp_, clk_, c, d, tlm::TLM_WRITE_COMMAND, kDirWrite);
       }
+    } else {
+      accept = std::max(valid + 1, idle_after_ + 1);
+      run = accept;
       if (change) {
+        Cycle dir_edge = accept + 1;
+        uint32_t setup = 0;
+        for (int a = 0; a < kAxes; ++a) {
+          if (!flip[a]) continue;
+          const PulseState now = pulse_state(a, accept);
+          dir_edge = std::max(dir_edge, now.last_rise + p_.timing[a].hold);
+          setup = std::max(setup, p_.timing[a].setup);
+        }
         for (int a = 0; a < kAxes; ++a) {
           if (!flip[a]) continue;
           PulseCmd c{s.dir[a]};
@@ -100,8 +132,13 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         }
         run = dir_edge + std::max<uint32_t>(setup, 1);
       }
+    }
+    delay = clk_.delay_to(accept);
+    Cycle end = accept;
+    running_ = s.total != 0;
+    if (s.total != 0) {
       seg_start_cycles.push_back(run);
-      if (s.code != 0) {
+      if (s.code != 0 && s.power != 0) {
         pins_.add(run, simboard::kLaser, 1);
         pins_.add(run + static_cast<Cycle>(s.total), simboard::kLaser, 0);
       }
@@ -111,9 +148,10 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         transport(*dda[a], gp_, clk_, l, run);
       }
       end = run + static_cast<Cycle>(s.total);
+      run_end_ = end;
     }
     idle_after_ = end;
-    SegDone d{};
+    SegDone d{s.v2};
     transport(done, gp_, clk_, d, end);
   }
 
@@ -121,6 +159,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   const CoreParams& p_;
   PinRecorder& pins_;
   Cycle idle_after_ = -1;  // state IDLE after this edge
+  Cycle run_end_ = -1;     // edge of the last tick of the last segment with T > 0
+  bool running_ = false;   // the last segment accepted has T > 0
   tlm::tlm_generic_payload gp_;
 };
 
