@@ -32,6 +32,19 @@ soak: build
 	$(BUILD)/systemc/cosim --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100 --corpus-moves $(SOAK_MOVES) --corpus-feed-override 100
 	$(BUILD)/systemc/cosim_executor --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100
 	$(BUILD)/systemc/cosim_blocks --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS)
+	$(MAKE) fuzz-soak
+
+# libFuzzer targets (clang, ASan + UBSan; separate tree $(BUILD)/fuzz): `make fuzz` runs each
+# FUZZ_TIME seconds (the fuzz_smoke test of `make test` runs 30 s each), `make fuzz-soak`
+# FUZZ_SOAK_TIME seconds each, keeping the working corpus between runs.
+FUZZ_TIME ?= 30
+FUZZ_SOAK_TIME ?= 600
+FUZZ_SEED ?= 1
+.PHONY: fuzz fuzz-soak
+fuzz: deps
+	./scripts/fuzz.sh smoke --time $(FUZZ_TIME) --seed $(FUZZ_SEED) --build-dir $(BUILD)/fuzz
+fuzz-soak: deps
+	./scripts/fuzz.sh soak --time $(FUZZ_SOAK_TIME) --seed $(FUZZ_SEED) --build-dir $(BUILD)/fuzz
 
 lint: deps
 	./scripts/lint.sh

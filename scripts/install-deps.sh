@@ -4,6 +4,7 @@
 set -euo pipefail
 PKGS=(
   build-essential cmake pkg-config make git clang-format
+  clang libclang-rt-14-dev
   verilator zlib1g-dev
   libsystemc-dev
   libgtest-dev googletest

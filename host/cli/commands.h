@@ -5,6 +5,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/link/link.h"
@@ -23,12 +25,16 @@ config::MachineConfig load_config(const CommonOptions& opt);
 
 void register_plan(CLI::App& app);
 
-// Outputs of `stream` that only the simulated board can give (--plot, --fst, --edges).
+// Options of `stream` that only the simulated board can honour (--plot, --fst, --edges, and the
+// line fault options --line-*, kept as (name, value) and applied by the board hooks).
 struct SimOutputOptions {
   std::string plot_path;
   std::string fst_path;
   std::string edges_csv;
-  bool any() const { return !plot_path.empty() || !fst_path.empty() || !edges_csv.empty(); }
+  std::vector<std::pair<std::string, std::string>> line_faults;
+  bool any() const {
+    return !plot_path.empty() || !fst_path.empty() || !edges_csv.empty() || !line_faults.empty();
+  }
 };
 
 // Hook for `stream` without --port: returns the link to use (e.g. start the simulated board).
@@ -38,9 +44,12 @@ using OpenDefaultLink = std::function<std::unique_ptr<link::Link>(const config::
 // Called after a successful stream over the default link (board figures, plot).
 using AfterDefaultStream = std::function<void(
     link::Link&, const plan::Plan&, const config::MachineConfig&, const SimOutputOptions&)>;
+// Adds options of the default link to a subcommand (the simulated board's --line-* options).
+using AddSimOptions = std::function<void(CLI::App&, SimOutputOptions&)>;
 struct StreamHooks {
   OpenDefaultLink open_default_link;
   AfterDefaultStream after_default_stream;
+  AddSimOptions add_sim_options;
 };
 StreamHooks default_stream_hooks();
 // Hooks that run the simulated board in-process (host/simboard).

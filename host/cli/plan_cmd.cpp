@@ -1,13 +1,15 @@
-// fpgacnc plan FILE [--config F] [--csv OUT] [--hex OUT] [--feed-override PCT]
+// fpgacnc plan FILE [--config F] [--csv OUT] [--hex OUT] [--v2-hex OUT] [--feed-override PCT]
 #include <fmt/format.h>
 
 #include <fstream>
 #include <memory>
+#include <optional>
 
 #include "commands.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/plan/stepfile.h"
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
 
 namespace fpgacnc::cli {
 namespace {
@@ -16,6 +18,7 @@ struct PlanArgs {
   std::string input;
   std::string csv_out;
   std::string hex_out;
+  std::string v2_hex_out;
   bool quiet = false;
   CommonOptions common;
 };
@@ -24,7 +27,7 @@ void print_summary(const plan::Plan& p, const config::MachineConfig& cfg) {
   const auto& s = p.stats;
   fmt::print(
       "summary: {} segments ({} rapid, {} cutting, {} arc chords), {} dwells, {} heater "
-      "commands (recorded, not sent by v1)\n",
+      "commands (recorded, not sent by v1 or v2)\n",
       s.segments, s.rapid_segments, s.cutting_segments, s.arc_chords, s.dwells, s.heater_commands);
   fmt::print(
       "path length {:.3f} mm, estimated time {:.1f} s (no acceleration), feed override "
@@ -51,8 +54,10 @@ void run_plan(const PlanArgs& a) {
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
-  // Packing validates every segment for v1 before anything is written.
+  // Packing validates every segment for v1 (and v2 when asked) before anything is written.
   const auto bytes = protocol::v1::job_bytes(p);
+  std::optional<protocol::v2::Job> job2;
+  if (!a.v2_hex_out.empty()) job2 = protocol::v2::pack_job(p, cfg);
   if (!a.quiet) {
     size_t idx = 0;
     std::string out;
@@ -90,6 +95,22 @@ void run_plan(const PlanArgs& a) {
     while (pos < bytes.size()) line(protocol::v1::kMotionSize);
     if (!f) throw std::runtime_error(fmt::format("{}: error: write error", a.hex_out));
   }
+  if (job2) {
+    const auto& j = *job2;
+    fmt::print(
+        "v2: {} LINE frames ({} SHORT), {} DWELL frames, {} moves split, {} segments raised to "
+        "the STEP rate; {} wire bytes; job time without gaps {:.3f} s\n",
+        j.lines, j.short_lines, j.dwells, j.split_moves, j.t_raised, j.wire_bytes,
+        static_cast<double>(j.total_t) / static_cast<double>(cfg.clk_hz));
+    std::ofstream f(a.v2_hex_out);
+    if (!f) throw std::runtime_error(fmt::format("{}: error: cannot create file", a.v2_hex_out));
+    // One frame per line, as sent to a device whose next_seq is 0: CONFIG_AXIS x4, NUMERATORS,
+    // LINE/DWELL, RELEASE.
+    for (const auto& fr : protocol::v2::session_frames(j, 0, config::kAxes)) {
+      f << protocol::v2::hex(fr) << '\n';
+    }
+    if (!f) throw std::runtime_error(fmt::format("{}: error: write error", a.v2_hex_out));
+  }
 }
 
 }  // namespace
@@ -101,6 +122,9 @@ void register_plan(CLI::App& app) {
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
   sub->add_option("--csv", args->csv_out, "write the segments as a step-file CSV");
   sub->add_option("--hex", args->hex_out, "write the v1 byte stream as hex, one packet a line");
+  sub->add_option("--v2-hex", args->v2_hex_out,
+                  "write the v2 frames as hex, one frame a line (SEQ from 0: config, "
+                  "NUMERATORS, LINE/DWELL, RELEASE)");
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
   sub->add_flag("-q,--quiet", args->quiet, "print only the summary");

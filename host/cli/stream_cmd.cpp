@@ -1,20 +1,28 @@
-// fpgacnc stream FILE [--port DEV] [--config F] [--baud N] [--timeout S] [--feed-override PCT]
-//                     [--plot OUT.svg] [--fst OUT.fst] [--edges OUT.csv]
+// fpgacnc stream FILE [--port DEV] [--config F] [--protocol auto|v1|v2] [--baud N] [--timeout S]
+//                     [--retransmit-timeout S] [--feed-override PCT]
+//                     [--plot OUT.svg] [--fst OUT.fst] [--edges OUT.csv] [--line-* ...]
 //
+// Protocol: auto (default) sends HELLO and uses v2 when an IDENT comes back within 300 ms, else
+// waits 150 ms more (the device watchdog drops the HELLO bytes) and uses v1.
 // Hook: without --port, StreamHooks::open_default_link is called (main.cpp plugs in the
-// simulated board, see board_cmd.cpp); the plain default throws. --plot/--fst/--edges need the
-// simulated board.
+// simulated board, see board_cmd.cpp); the plain default throws. --plot/--fst/--edges and the
+// line fault options need the simulated board.
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 
 #include "commands.h"
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v1.h"
+#include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
 
 namespace fpgacnc::cli {
 namespace {
@@ -24,6 +32,8 @@ struct StreamArgs {
   std::string port;
   uint32_t baud = 0;        // 0: from config
   double timeout_s = -1.0;  // negative: from config
+  double retransmit_s = -1.0;
+  std::string protocol;  // "": from config
   CommonOptions common;
   SimOutputOptions sim;
 };
@@ -31,7 +41,8 @@ struct StreamArgs {
 // Progress bar on stderr (only when stderr is a terminal): moves done/total, rate, ETA.
 class ProgressBar {
  public:
-  ProgressBar() : enabled_(::isatty(STDERR_FILENO) == 1), t0_(clock::now()) {}
+  explicit ProgressBar(std::string unit = "moves")
+      : enabled_(::isatty(STDERR_FILENO) == 1), t0_(clock::now()), unit_(std::move(unit)) {}
   void update(size_t done, size_t total) {
     if (!enabled_) return;
     const auto now = clock::now();
@@ -42,8 +53,8 @@ class ProgressBar {
     const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0.0;
     constexpr int kWidth = 30;
     const int fill = total ? static_cast<int>(kWidth * done / total) : kWidth;
-    fmt::print(stderr, "\r[{:=<{}}{: <{}}] {}/{} moves  {:.1f} moves/s  ETA {:.0f} s ", "", fill,
-               "", kWidth - fill, done, total, rate, eta);
+    fmt::print(stderr, "\r[{:=<{}}{: <{}}] {}/{} {}  {:.1f} {}/s  ETA {:.0f} s ", "", fill, "",
+               kWidth - fill, done, total, unit_, rate, unit_, eta);
     if (done == total) fmt::print(stderr, "\n");
   }
 
@@ -52,23 +63,46 @@ class ProgressBar {
   bool enabled_;
   clock::time_point t0_;
   clock::time_point last_{};
+  std::string unit_;
 };
+
+void print_final(const plan::Plan& p) {
+  fmt::print("final position: steps X {} Y {} Z {} E {}; mm X {:.4f} Y {:.4f} Z {:.4f} E {:.4f}\n",
+             p.final_steps[0], p.final_steps[1], p.final_steps[2], p.final_steps[3], p.final_mm[0],
+             p.final_mm[1], p.final_mm[2], p.final_mm[3]);
+}
 
 void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   config::MachineConfig cfg = load_config(a.common);
   if (a.baud) cfg.baud = a.baud;
   if (a.timeout_s > 0) cfg.ack_timeout_s = a.timeout_s;
+  if (a.retransmit_s > 0) cfg.retransmit_timeout_s = a.retransmit_s;
+  if (!a.protocol.empty()) cfg.protocol = a.protocol;
+  config::validate(cfg, "command line");
   std::string port = a.port.empty() ? cfg.port : a.port;
   if (!port.empty() && a.sim.any()) {
     throw link::Error(
-        "--plot, --fst and --edges need the simulated board: give no --port (and no port in "
-        "the configuration)");
+        "--plot, --fst, --edges and --line-* need the simulated board: give no --port (and no "
+        "port in the configuration)");
   }
 
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
-  // Plan (and, inside stream_v1, pack) the whole job before opening anything.
+  // Plan and pack the whole job before opening anything: an error writes no byte.
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
+  std::optional<protocol::v2::Job> job2;
+  std::optional<protocol::v1::Job> job1;
+  std::string v1_error;
+  if (cfg.protocol != "v1") job2 = protocol::v2::pack_job(p, cfg);
+  if (cfg.protocol == "v1") {
+    job1 = protocol::v1::pack_job(p);
+  } else if (cfg.protocol == "auto") {
+    try {  // only an error if auto falls back to v1
+      job1 = protocol::v1::pack_job(p);
+    } catch (const std::invalid_argument& e) {
+      v1_error = e.what();
+    }
+  }
 
   std::unique_ptr<link::Link> lk;
   if (port.empty()) {
@@ -76,21 +110,54 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   } else {
     lk = std::make_unique<link::SerialLink>(port, cfg.baud);
   }
+  link::StreamV2Options o2 = link::stream_v2_options(cfg);
+  const link::ProtocolChoice choice = link::select_protocol(*lk, cfg.protocol, o2);
+  if (cfg.protocol == "auto") {
+    fmt::print("protocol: {} ({} after {:.0f} ms)\n", choice.protocol,
+               choice.ident ? "IDENT answered HELLO" : "no IDENT answer to HELLO",
+               choice.probe_time.count() * 1000.0);
+  }
+
+  if (choice.protocol == "v2") {
+    ProgressBar bar("frames");
+    o2.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
+    const link::StreamV2Report r = link::stream_v2_job(*lk, *job2, o2, choice.ident);
+    fmt::print(
+        "streamed {} over {} with protocol v2: {} segments as {} LINE and {} DWELL frames, {} "
+        "bytes in {:.2f} s\n",
+        a.input, lk->name(), job2->segments, r.lines, r.dwells, r.bytes_written, r.elapsed.count());
+    fmt::print("{}", link::format_report(r));
+    if (r.skipped_heater) {
+      fmt::print("{} heater commands not sent (v2 has no heater frames yet)\n", r.skipped_heater);
+    }
+    if (r.t_raised) {
+      fmt::print("{} segments faster than the STEP timing allows: slowed to it\n", r.t_raised);
+    }
+    print_final(p);
+    if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, a.sim);
+    if (!r.position_ok) {
+      throw link::Error(fmt::format(
+          "{}: the device position changed by other than the plan's target (see 'device "
+          "moved' above)",
+          lk->name()));
+    }
+    return;
+  }
+
+  if (!job1) throw std::invalid_argument(v1_error);
   ProgressBar bar;
   link::StreamOptions so;
   so.ack_timeout = std::chrono::milliseconds(std::llround(cfg.ack_timeout_s * 1000.0));
   so.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
   const link::StreamReport r = link::stream_v1(*lk, p, so);
   fmt::print(
-      "streamed {} over {}: {} moves, {} acks, {} warnings (unexpected bytes), {} dwells, "
-      "{} bytes in {:.2f} s\n",
+      "streamed {} over {} with protocol v1: {} moves, {} acks, {} warnings (unexpected bytes), "
+      "{} dwells, {} bytes in {:.2f} s\n",
       a.input, lk->name(), r.moves, r.acks, r.warnings, r.dwells, r.bytes_written,
       r.elapsed.count());
   if (r.skipped_heater) fmt::print("{} heater commands not sent (v1 has none)\n", r.skipped_heater);
   if (r.ze_only) fmt::print("{} Z/E-only moves not driven by v1 (sent as 0,0 steps)\n", r.ze_only);
-  fmt::print("final position: steps X {} Y {} Z {} E {}; mm X {:.4f} Y {:.4f} Z {:.4f} E {:.4f}\n",
-             r.final_steps[0], r.final_steps[1], r.final_steps[2], r.final_steps[3], r.final_mm[0],
-             r.final_mm[1], r.final_mm[2], r.final_mm[3]);
+  print_final(p);
   if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, a.sim);
 }
 
@@ -107,13 +174,23 @@ StreamHooks default_stream_hooks() {
 
 void register_stream(CLI::App& app, StreamHooks hooks) {
   auto args = std::make_shared<StreamArgs>();
-  auto* sub = app.add_subcommand("stream", "Stream a job to the controller with protocol v1");
+  auto* sub = app.add_subcommand(
+      "stream", "Stream a job to the controller (protocol v2 when it answers HELLO, else v1)");
   sub->add_option("FILE", args->input, "G-code file or step-file CSV")->required();
   sub->add_option("--port", args->port, "serial port (/dev/ttyUSB0, COM3, /dev/pts/N)");
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
   sub->add_option("--baud", args->baud, "baud rate (default from config: 115200)")
       ->check(CLI::Range(1u, 100'000'000u));
-  sub->add_option("--timeout", args->timeout_s, "ACK timeout in seconds (default 10)")
+  sub->add_option("--protocol", args->protocol,
+                  "auto (default from config: v2 if the device answers HELLO within 300 ms, "
+                  "else v1), v1 or v2")
+      ->check(CLI::IsMember({"auto", "v1", "v2"}));
+  sub->add_option("--timeout", args->timeout_s,
+                  "v1: ACK timeout per move; v2: no answer at all; seconds (default 10)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--retransmit-timeout", args->retransmit_s,
+                  "v2: resend from the device's next_seq when nothing is acknowledged this long, "
+                  "seconds (default 0.3)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
@@ -122,6 +199,7 @@ void register_stream(CLI::App& app, StreamHooks hooks) {
                   "rsvg-convert)");
   sub->add_option("--fst", args->sim.fst_path, "simulated board: FST waveform of the core");
   sub->add_option("--edges", args->sim.edges_csv, "simulated board: STEP/DIR/LASER edge list CSV");
+  if (hooks.add_sim_options) hooks.add_sim_options(*sub, args->sim);
   sub->callback([args, hooks = std::move(hooks)] { run_stream(*args, hooks); });
 }
 

@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "fpgacnc/config/machine.h"
@@ -35,6 +36,34 @@ TEST(Config, ExampleFileLoadsAndEqualsDefaults) {
   EXPECT_EQ(c.feed_override_pct, d.feed_override_pct);
   EXPECT_EQ(c.laser_requires_m3, d.laser_requires_m3);
   EXPECT_EQ(c.step_timing.dir_hold, d.step_timing.dir_hold);
+  EXPECT_EQ(c.protocol, d.protocol);
+  EXPECT_EQ(c.protocol, "auto");
+  EXPECT_EQ(c.retransmit_timeout_s, d.retransmit_timeout_s);
+  EXPECT_EQ(c.laser_s_max, d.laser_s_max);
+}
+
+TEST(Config, ProtocolAndV2Keys) {
+  for (const char* p : {"auto", "v1", "v2"}) {
+    const auto c =
+        fpgacnc::config::parse_machine_config(fmt::format("protocol = \"{}\"\n", p), "m.toml");
+    EXPECT_EQ(c.protocol, p);
+  }
+  const auto c = fpgacnc::config::parse_machine_config(
+      "retransmit_timeout_s = 0.05\nlaser_s_max = 255\n", "m.toml");
+  EXPECT_EQ(c.retransmit_timeout_s, 0.05);
+  EXPECT_EQ(c.laser_s_max, 255.0);
+  try {
+    fpgacnc::config::parse_machine_config("\nprotocol = \"v3\"\n", "m.toml");
+    FAIL();
+  } catch (const fpgacnc::config::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("m.toml:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("\"auto\", \"v1\" or \"v2\""), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("laser_s_max = 0\n", "m.toml"),
+               fpgacnc::config::Error);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("retransmit_timeout_s = -1\n", "m.toml"),
+               fpgacnc::config::Error);
 }
 
 TEST(Config, ParsesValues) {

@@ -4,7 +4,9 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <charconv>
 #include <cstdio>
+#include <stdexcept>
 
 #include "fpgacnc/simboard/plot.h"
 #include "fpgacnc/simboard/runner.h"
@@ -20,6 +22,10 @@ void print_figures(const SimBoard& b) {
       "simulating, {:.2f} s wall), {} bytes in, {} bytes out, {} edges, {} moves done\n",
       s.cycles, static_cast<double>(s.cycles) / b.options().clk_hz, s.clocks_per_s / 1e6,
       s.sim_wall_s, s.wall_s, s.bytes_in, s.bytes_out, s.edges, s.moves_done);
+  if (b.options().line_faults.any()) {
+    fmt::print("simulated board: line faults ({}): {}\n", b.options().line_faults.describe(),
+               describe(s.line));
+  }
   if (s.frame_errors || s.timeouts || s.violations) {
     fmt::print(
         "simulated board: {} framing errors, {} packet timeouts, {} step timing violations\n",
@@ -27,13 +33,91 @@ void print_figures(const SimBoard& b) {
   }
 }
 
+constexpr LineFaultOption kLineFaultOptions[] = {
+    {"--line-ber", "P[,Q]",
+     "bit error rate on the simulated line: P host->board (per UART bit), Q board->host (per "
+     "data bit); one value sets both"},
+    {"--line-drop", "P", "probability that a host->board byte is dropped"},
+    {"--line-dup", "P", "probability that a host->board byte is duplicated"},
+    {"--line-lose-frames", "P", "probability that a whole device frame (ACK, ...) is lost"},
+    {"--line-stall", "CYCLE:CLOCKS",
+     "hold the host->board line from simulated cycle CYCLE for CLOCKS clocks (bN:CLOCKS: before "
+     "the N-th byte on the line); repeatable"},
+    {"--line-seed", "N", "seed of the line fault generator (default 1)"},
+};
+
+[[noreturn]] void bad_value(std::string_view name, std::string_view value, std::string_view why) {
+  throw std::invalid_argument(fmt::format("--{}: invalid value '{}': {}", name, value, why));
+}
+
+uint64_t parse_u64(std::string_view name, std::string_view v) {
+  uint64_t x = 0;
+  const auto r = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (v.empty() || r.ec != std::errc() || r.ptr != v.data() + v.size()) {
+    bad_value(name, v, "expected a non-negative integer");
+  }
+  return x;
+}
+
+double parse_probability(std::string_view name, std::string_view v) {
+  double x = 0;
+  const auto r = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (v.empty() || r.ec != std::errc() || r.ptr != v.data() + v.size()) {
+    bad_value(name, v, "expected a number");
+  }
+  if (!(x >= 0.0 && x <= 1.0)) bad_value(name, v, "a probability must be in [0, 1]");
+  return x;
+}
+
 }  // namespace
+
+std::span<const LineFaultOption> line_fault_options() {
+  return kLineFaultOptions;
+}
+
+bool parse_line_fault_option(std::string_view name, std::string_view value, LineFaults& f) {
+  if (name.starts_with("--")) name.remove_prefix(2);
+  if (name == "line-ber") {
+    const size_t comma = value.find(',');
+    if (comma == std::string_view::npos) {
+      f.ber_to_board = f.ber_to_host = parse_probability(name, value);
+    } else {
+      f.ber_to_board = parse_probability(name, value.substr(0, comma));
+      f.ber_to_host = parse_probability(name, value.substr(comma + 1));
+    }
+  } else if (name == "line-drop") {
+    f.drop = parse_probability(name, value);
+  } else if (name == "line-dup") {
+    f.dup = parse_probability(name, value);
+  } else if (name == "line-lose-frames") {
+    f.lose_frames = parse_probability(name, value);
+  } else if (name == "line-seed") {
+    f.seed = parse_u64(name, value);
+  } else if (name == "line-stall") {
+    const size_t colon = value.find(':');
+    if (colon == std::string_view::npos) bad_value(name, value, "expected CYCLE:CLOCKS");
+    LineStall s;
+    std::string_view at = value.substr(0, colon);
+    if (at.starts_with('b')) {
+      s.trigger = LineStall::Trigger::kBytes;
+      at.remove_prefix(1);
+    }
+    s.at = parse_u64(name, at);
+    s.clocks = parse_u64(name, value.substr(colon + 1));
+    if (s.clocks == 0) bad_value(name, value, "a stall must last at least 1 clock");
+    f.stalls.push_back(s);
+  } else {
+    return false;
+  }
+  return true;
+}
 
 int run_board_command(const BoardCommandArgs& args) {
   config::MachineConfig cfg;
   if (!args.config_path.empty()) cfg = config::load_machine_config(args.config_path);
   BoardOptions o = SimBoard::options_from_config(cfg);
   o.fst_path = args.fst_path;
+  o.line_faults = args.line_faults;
   // SIGINT/SIGTERM are taken with sigwait() here; block them before the board thread starts so
   // that it inherits the mask and the signal always reaches this thread.
   sigset_t set;
@@ -45,6 +129,7 @@ int run_board_command(const BoardCommandArgs& args) {
   board.start();
   fmt::print("simulated board on {} ({} baud)\n", board.path(), o.baud);
   if (!o.fst_path.empty()) fmt::print("FST waveform: {}\n", o.fst_path);
+  if (o.line_faults.any()) fmt::print("line faults: {}\n", o.line_faults.describe());
   fmt::print("Ctrl-C (SIGINT) or SIGTERM stops it\n");
   std::fflush(stdout);
   int sig = 0;
@@ -63,12 +148,15 @@ int run_board_command(const BoardCommandArgs& args) {
 }
 
 std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
-                                              const SimOutputs& outputs) {
+                                              const SimOutputs& outputs,
+                                              const LineFaults& line_faults) {
   if (!outputs.plot_path.empty()) check_plot_path(outputs.plot_path);
   BoardOptions o = SimBoard::options_from_config(cfg);
   o.fst_path = outputs.fst_path;
+  o.line_faults = line_faults;
   auto lk = std::make_unique<BoardLink>(o);
   fmt::print("simulated board on {} ({} baud)\n", lk->board().path(), o.baud);
+  if (o.line_faults.any()) fmt::print("line faults: {}\n", o.line_faults.describe());
   std::fflush(stdout);
   return lk;
 }

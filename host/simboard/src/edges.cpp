@@ -14,6 +14,7 @@ std::string signal_name(uint8_t signal) {
   if (signal < 8) return fmt::format("dir_{}", kAxis[signal - 4]);
   if (signal == kLaser) return "laser";
   if (signal == kTx) return "tx";
+  if (signal == kRx) return "rx";
   return fmt::format("signal{}", signal);
 }
 

@@ -26,22 +26,25 @@ struct SimBoard::Model {
   std::unique_ptr<Vcnc_core> core;              // untraced (fast)
   std::unique_ptr<Vcnc_core_trace> core_trace;  // traced, when an FST path is given
   std::unique_ptr<VerilatedFstC> fst;
-  tb::UartDriver driver;
+  LineFaultInjector line;  // faults on the serial line (all off by default)
+  RxLine driver;           // host -> board bits on the rx pin
   tb::UartMonitor monitor;
   EdgeRecorder rec;
   uint64_t cycle = 0;        // rising edges since reset release
   uint64_t last_active = 0;  // last cycle with something in flight
   uint32_t prev_sig = 0;     // step | dir << 4 | laser << 8 | tx << 9
   uint32_t sig_mask = 0x1ff;
-  bool never_active = true;   // nothing happened since reset: quiet
-  std::deque<uint8_t> inbox;  // read from the pty, not yet admitted to the rx driver
-  std::vector<uint8_t> out;   // decoded tx bytes not yet written to the pty
+  bool never_active = true;       // nothing happened since reset: quiet
+  std::deque<uint8_t> inbox;      // read from the pty, not yet admitted to the rx driver
+  std::vector<uint8_t> out;       // decoded tx bytes not yet written to the pty
+  std::vector<LineFrame> frames;  // scratch: frames for one host byte
   uint64_t bytes_in = 0, bytes_out = 0;
   uint64_t trace_time = 0;
 
-  Model(double clk_hz, double baud, size_t reserve)
+  Model(double clk_hz, double baud, size_t reserve, const LineFaults& faults)
       : ctx(std::make_unique<VerilatedContext>()),
-        driver(clk_hz, baud),
+        line(faults),
+        driver(clk_hz, baud, &line),
         monitor(clk_hz, baud),
         rec(reserve) {}
 };
@@ -71,7 +74,7 @@ inline void clock_once(M& m, VerilatedFstC* fst, uint64_t& t) {
 template <class M>
 uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quiet_cycles) {
   VerilatedFstC* fst = s.fst.get();
-  tb::UartDriver& drv = s.driver;
+  RxLine& drv = s.driver;
   tb::UartMonitor& mon = s.monitor;
   bool drv_idle = drv.idle();
   uint64_t cyc = s.cycle;
@@ -82,15 +85,16 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
   bool got_byte = false;
   while (cyc < end) {
     if (!drv_idle) {
-      m.rx = static_cast<uint8_t>(drv.tick());
+      m.rx = static_cast<uint8_t>(drv.tick(cyc + 1));
       drv_idle = drv.idle();
     }
     clock_once(m, fst, s.trace_time);
     ++cyc;
     const uint32_t tx = m.tx;
-    const uint32_t sig = (static_cast<uint32_t>(m.step) | (static_cast<uint32_t>(m.dir) << 4) |
-                          (static_cast<uint32_t>(m.laser) << 8) | (tx << 9)) &
-                         mask;
+    const uint32_t sig =
+        (static_cast<uint32_t>(m.step) | (static_cast<uint32_t>(m.dir) << 4) |
+         (static_cast<uint32_t>(m.laser) << 8) | (tx << 9) | (static_cast<uint32_t>(m.rx) << 10)) &
+        mask;
     if (sig != prev) [[unlikely]] {
       uint32_t diff = sig ^ prev;
       while (diff) {
@@ -104,7 +108,7 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
       s.rec.add_move_done(cyc);
     if (tx == 0 || mon.busy()) {
       if (auto byte = mon.sample(static_cast<int>(tx), cyc)) {
-        s.out.push_back(byte->value);
+        s.line.to_host(byte->value, cyc, s.out);
         ++s.bytes_out;
         got_byte = true;
       }
@@ -148,7 +152,8 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
     for (int i = 0; i < 4; ++i) clock_once(m, s.fst.get(), s.trace_time);
   }
   s.prev_sig = (static_cast<uint32_t>(m.step) | (static_cast<uint32_t>(m.dir) << 4) |
-                (static_cast<uint32_t>(m.laser) << 8) | (static_cast<uint32_t>(m.tx) << 9)) &
+                (static_cast<uint32_t>(m.laser) << 8) | (static_cast<uint32_t>(m.tx) << 9) |
+                (static_cast<uint32_t>(m.rx) << 10)) &
                s.sig_mask;
   s.cycle = 0;
   s.last_active = 0;
@@ -205,11 +210,15 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
         "simulated board: poll interval {} clocks must be in [1, {}] (half a UART frame)",
         opt_.poll_interval_cycles, static_cast<uint64_t>(frame_clocks / 2)));
   }
-  model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges);
-  if (!opt_.record_tx)
-    model_->sig_mask = 0x1ff;
-  else
-    model_->sig_mask = 0x3ff;
+  try {
+    opt_.line_faults.validate();
+  } catch (const std::invalid_argument& e) {
+    throw BoardError(fmt::format("simulated board: {}", e.what()));
+  }
+  model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges, opt_.line_faults);
+  model_->sig_mask = 0x1ff;
+  if (opt_.record_tx) model_->sig_mask |= 1u << kTx;
+  if (opt_.record_rx) model_->sig_mask |= 1u << kRx;
   if (!opt_.fst_path.empty()) {
     model_->ctx->traceEverOn(true);
     model_->core_trace = std::make_unique<Vcnc_core_trace>(model_->ctx.get(), "cnc_core");
@@ -320,7 +329,11 @@ void SimBoard::admit_inbox() {
   if (s.inbox.empty()) return;
   const bool tail_done = s.never_active || s.cycle - s.last_active > kQuietCycles;
   if (!s.driver.idle() || tail_done || s.last_active == s.cycle) {
-    for (uint8_t b : s.inbox) s.driver.push(b);
+    for (uint8_t b : s.inbox) {
+      s.frames.clear();
+      s.line.to_board(b, s.frames);
+      for (const LineFrame& f : s.frames) s.driver.push(f);
+    }
     s.inbox.clear();
     s.never_active = false;
   }
@@ -456,6 +469,7 @@ BoardStats SimBoard::stats() const {
   st.bytes_out = s.bytes_out;
   st.edges = s.rec.edges().size();
   st.moves_done = s.rec.move_done_cycles().size();
+  st.line = s.line.stats();
   if (s.core)
     fill_stats(*s.core, st);
   else
@@ -478,6 +492,16 @@ std::vector<uint64_t> SimBoard::move_done_cycles() const {
   return model_->rec.move_done_cycles();
 }
 
+std::vector<RxFrameRecord> SimBoard::rx_line_log() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return model_->line.rx_log();
+}
+
+std::vector<TxByteRecord> SimBoard::tx_line_log() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return model_->line.tx_log();
+}
+
 std::array<int64_t, kBoardAxes> SimBoard::net_steps() const {
   std::lock_guard<std::mutex> l(mu_);
   return model_->rec.net_steps();
@@ -491,10 +515,11 @@ void SimBoard::write_edges_csv(const std::string& path) const {
 std::string SimBoard::stats_line() const {
   const BoardStats s = stats();
   return fmt::format(
-      "{} cycles ({:.3f} s simulated) in {:.2f} s of simulation ({:.2f} s wall): {:.2f} M "
-      "clocks/s; {} bytes in, {} bytes out, {} edges, {} moves done",
-      s.cycles, static_cast<double>(s.cycles) / opt_.clk_hz, s.sim_wall_s, s.wall_s,
-      s.clocks_per_s / 1e6, s.bytes_in, s.bytes_out, s.edges, s.moves_done);
+             "{} cycles ({:.3f} s simulated) in {:.2f} s of simulation ({:.2f} s wall): {:.2f} M "
+             "clocks/s; {} bytes in, {} bytes out, {} edges, {} moves done",
+             s.cycles, static_cast<double>(s.cycles) / opt_.clk_hz, s.sim_wall_s, s.wall_s,
+             s.clocks_per_s / 1e6, s.bytes_in, s.bytes_out, s.edges, s.moves_done) +
+         (opt_.line_faults.any() ? "; line faults: " + describe(s.line) : std::string());
 }
 
 }  // namespace fpgacnc::simboard

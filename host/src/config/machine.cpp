@@ -71,7 +71,7 @@ class Reader {
         c.port = string(v, k);
       } else if (k == "protocol") {
         c.protocol = string(v, k);
-        if (c.protocol != "v1") fail(v, k, "only \"v1\" is supported");
+        if (!valid_protocol_name(c.protocol)) fail(v, k, "expected \"auto\", \"v1\" or \"v2\"");
       } else if (k == "rapid_feed_mm_min") {
         c.rapid_feed_mm_min = positive(v, k);
       } else if (k == "default_feed_mm_min") {
@@ -80,6 +80,10 @@ class Reader {
         c.arc_tolerance_mm = positive(v, k);
       } else if (k == "ack_timeout_s") {
         c.ack_timeout_s = positive(v, k);
+      } else if (k == "retransmit_timeout_s") {
+        c.retransmit_timeout_s = positive(v, k);
+      } else if (k == "laser_s_max") {
+        c.laser_s_max = positive(v, k);
       } else if (k == "feed_override") {
         c.feed_override_pct = positive(v, k);
       } else if (k == "laser_requires_m3") {
@@ -132,6 +136,10 @@ MachineConfig parse_stream(std::istream& in, const std::string& name) {
 
 }  // namespace
 
+bool valid_protocol_name(const std::string& name) {
+  return name == "auto" || name == "v1" || name == "v2";
+}
+
 MachineConfig load_machine_config(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, 0, 0, "cannot open configuration file");
@@ -150,7 +158,11 @@ void validate(const MachineConfig& c, const std::string& name) {
                   fmt::format("steps_per_mm.{} must be > 0", kAxisNames[static_cast<size_t>(a)]));
     }
   }
-  if (c.protocol != "v1") throw Error(name, 0, 0, "protocol: only \"v1\" is supported");
+  if (!valid_protocol_name(c.protocol)) {
+    throw Error(name, 0, 0, "protocol: expected \"auto\", \"v1\" or \"v2\"");
+  }
+  if (!(c.laser_s_max > 0.0)) throw Error(name, 0, 0, "laser_s_max must be > 0");
+  if (!(c.retransmit_timeout_s > 0.0)) throw Error(name, 0, 0, "retransmit_timeout_s must be > 0");
   if (c.clk_hz == 0 || c.baud == 0) throw Error(name, 0, 0, "clk_hz and baud must be > 0");
   if (!(c.feed_override_pct > 0.0)) throw Error(name, 0, 0, "feed_override must be > 0");
 }

@@ -106,17 +106,18 @@ void Planner::add_move(const gcode::Move& m) {
   const uint8_t code = cutting ? static_cast<uint8_t>(m.motion) : 0;
   const bool rapid = m.motion == gcode::Motion::kRapid;
   const double feed = rapid ? cfg_.rapid_feed_mm_min : m.feed_mm_min;
+  const double s_word = m.spindle_s ? *m.spindle_s : -1.0;
   if (m.motion == gcode::Motion::kArcCw || m.motion == gcode::Motion::kArcCcw) {
     const auto pts = arc_chord_points(m, cfg_.arc_tolerance_mm);
     plan_.stats.arc_chords += pts.size();
-    for (const auto& p : pts) add_straight(p, code, feed, rapid, m.line);
+    for (const auto& p : pts) add_straight(p, code, feed, rapid, m.line, s_word);
   } else {
-    add_straight(m.end, code, feed, rapid, m.line);
+    add_straight(m.end, code, feed, rapid, m.line, s_word);
   }
 }
 
 void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double feed, bool rapid,
-                           int line) {
+                           int line, double spindle_s) {
   Steps4 target;
   Steps4 delta;
   int64_t maxabs = 0;
@@ -156,6 +157,8 @@ void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double fe
     s.code = code;
     s.source_line = line;
     s.feed_mm_min = feed;
+    s.exec_feed_mm_min = eff;
+    s.spindle_s = spindle_s;
     for (size_t a = 0; a < 4; ++a) {
       const auto part = static_cast<int64_t>(static_cast<__int128>(delta[a]) * k / parts);
       s.target[a] = origin[a] + part;

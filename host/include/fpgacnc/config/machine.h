@@ -27,13 +27,16 @@ struct MachineConfig {
   std::array<double, kAxes> max_feed_mm_min{12000.0, 12000.0, 600.0, 3000.0};
   uint64_t clk_hz = 50'000'000;
   uint32_t baud = 115200;
-  std::string port;             // "" = none given
-  std::string protocol = "v1";  // only "v1" for now
+  std::string port;  // "" = none given
+  // "auto" (v2 if the device answers HELLO with IDENT within 300 ms, else v1), "v1" or "v2".
+  std::string protocol = "auto";
   double rapid_feed_mm_min = 3000.0;
   double default_feed_mm_min = 1000.0;  // feed before the first F word
   double arc_tolerance_mm = 0.01;       // max chord sagitta
   StepTiming step_timing;
-  double ack_timeout_s = 10.0;
+  double ack_timeout_s = 10.0;        // v1: per move; v2: no answer at all from the device
+  double retransmit_timeout_s = 0.3;  // v2: go-back-N when nothing is acknowledged this long
+  double laser_s_max = 1000.0;        // v2: S word giving laser power 255 (GRBL's $30 default)
   double feed_override_pct = 100.0;
   // true: G1/G2/G3 cut only while M3/M4 is active with S>0 (or no S given);
   // false: original v1 semantics, every G1/G2/G3 is laser-on.
@@ -52,6 +55,8 @@ MachineConfig load_machine_config(const std::string& path);
 // Same from TOML text (name used in error messages).
 MachineConfig parse_machine_config(const std::string& text, const std::string& name);
 // Checks ranges (positive steps/mm, feeds, clk, baud, protocol name); throws Error naming `name`.
+// Protocol names: "auto", "v1", "v2".
+bool valid_protocol_name(const std::string& name);
 void validate(const MachineConfig& cfg, const std::string& name);
 
 }  // namespace fpgacnc::config

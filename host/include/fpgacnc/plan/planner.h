@@ -25,8 +25,12 @@ struct Segment {
   uint16_t feed_v1 = 1;      // dominant axis feed, mm/min, in [1, 65535]
   double length_mm = 0.0;    // XYZ path length of the segment
   double feed_mm_min = 0.0;  // commanded path feed (rapid feed for rapids)
-  int source_line = 0;       // G-code (or step file) line
-  Steps4 target{};           // absolute position in steps after the segment
+  // Path feed the move is executed at: after the feed override and the axis max feeds (0 for
+  // a step-file segment: v1 timing from feed_v1). Protocol v2 derives the segment time from it.
+  double exec_feed_mm_min = 0.0;
+  double spindle_s = -1.0;  // S word in force (laser power for v2), negative when none given
+  int source_line = 0;      // G-code (or step file) line
+  Steps4 target{};          // absolute position in steps after the segment
 };
 
 struct Dwell {
@@ -87,7 +91,8 @@ class Planner {
 
  private:
   void add_move(const gcode::Move& m);
-  void add_straight(const gcode::Vec4& target_mm, uint8_t code, double feed, bool rapid, int line);
+  void add_straight(const gcode::Vec4& target_mm, uint8_t code, double feed, bool rapid, int line,
+                    double spindle_s);
   config::MachineConfig cfg_;
   PlanOptions opt_;
   Plan plan_;

@@ -1,14 +1,18 @@
 // Command-line glue for the simulated board, called by the fpgacnc tool (host/cli):
 //   fpgacnc board [--config F] [--fst F] [--edges F.csv]
 //   fpgacnc stream FILE (no --port) [--plot out.svg|.png] [--fst out.fst] [--edges out.csv]
+// and, for both, the line fault options (parse_line_fault_option).
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
+#include <string_view>
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/link/link.h"
 #include "fpgacnc/plan/planner.h"
+#include "fpgacnc/simboard/line_faults.h"
 
 namespace fpgacnc::simboard {
 
@@ -16,7 +20,29 @@ struct BoardCommandArgs {
   std::string config_path;  // machine configuration (clock, baud, step timing)
   std::string fst_path;     // FST waveform ("" = none)
   std::string edges_csv;    // edge list written at the end ("" = none)
+  LineFaults line_faults;   // serial line fault injection (default none)
 };
+
+// Line fault options shared by `fpgacnc board` and `fpgacnc stream` (simulated board):
+//   --line-ber P[,Q]        bit error rate, P host->board (per UART bit) and Q board->host (per
+//                           data bit); one value sets both
+//   --line-drop P           probability a host byte is dropped
+//   --line-dup P            probability a host byte is duplicated
+//   --line-lose-frames P    probability a whole device frame is lost (lost ACKs)
+//   --line-stall CYCLE:CLOCKS  hold the host->board line from simulated cycle CYCLE for CLOCKS
+//                           clocks (50 MHz: 200 ms = 10000000); bN:CLOCKS holds it before the
+//                           N-th byte on the line (0-based); repeatable
+//   --line-seed N           seed of the fault generator (default 1)
+struct LineFaultOption {
+  const char* name;  // "--line-ber"
+  const char* value_name;
+  const char* help;
+};
+std::span<const LineFaultOption> line_fault_options();
+// Applies one option (`name` with or without the leading "--") to `faults`. Returns false when
+// `name` is not a line fault option; throws std::invalid_argument naming the option for a bad
+// value (not a number, probability outside [0, 1], stall of 0 clocks).
+bool parse_line_fault_option(std::string_view name, std::string_view value, LineFaults& faults);
 
 // `fpgacnc board`: starts the simulated board in its own thread, prints
 // "simulated board on /dev/pts/N (115200 baud)", serves any serial client until SIGINT or
@@ -32,13 +58,16 @@ struct SimOutputs {
 
 // `fpgacnc stream` without --port: starts the simulated board in-process and returns a Link
 // (a SerialLink on the board's pty, owning the board). Throws BoardError for a configuration
-// the board cannot model (clock other than 50 MHz, baud other than 115200).
+// the board cannot model (clock other than 50 MHz, baud other than 115200). `line_faults`:
+// fault injection on the simulated line (parse_line_fault_option), none by default.
 std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
-                                              const SimOutputs& outputs);
+                                              const SimOutputs& outputs,
+                                              const LineFaults& line_faults = {});
 
 // After a stream over a link made by make_default_link: stops the board, prints its figures
-// (cycles, clocks/s, edges, net steps per axis from the edges vs the plan's final target) and
-// writes the requested outputs. Returns false (and does nothing) for any other link.
+// (cycles, clocks/s, edges, injected line faults, net steps per axis from the edges vs the plan's
+// final target) and writes the requested outputs. Returns false (and does nothing) for any other
+// link.
 bool report_board_run(link::Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
                       const SimOutputs& outputs);
 

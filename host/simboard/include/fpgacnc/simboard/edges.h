@@ -1,5 +1,6 @@
 // Edge recorder of the simulated board: every change of STEP[n], DIR[n], LASER (and, when asked,
-// TX) with the clock cycle at which the Verilated core drove it.
+// TX, RX) with the clock cycle at which the Verilated core drove it (RX: at which the line drove
+// the core's rx pin).
 #pragma once
 
 #include <array>
@@ -12,13 +13,14 @@ namespace fpgacnc::simboard {
 
 inline constexpr int kBoardAxes = 4;  // cnc_core N_AXES (X, Y, Z, E); v1 drives X and Y
 
-// Signal numbers: STEP[n] = n, DIR[n] = 4 + n, LASER = 8, TX = 9.
+// Signal numbers: STEP[n] = n, DIR[n] = 4 + n, LASER = 8, TX = 9, RX = 10.
 enum Signal : uint8_t {
   kStep0 = 0,
   kDir0 = 4,
   kLaser = 8,
   kTx = 9,
-  kSignalCount = 10,
+  kRx = 10,
+  kSignalCount = 11,
 };
 inline constexpr uint8_t step_signal(int axis) {
   return static_cast<uint8_t>(kStep0 + axis);
@@ -26,7 +28,7 @@ inline constexpr uint8_t step_signal(int axis) {
 inline constexpr uint8_t dir_signal(int axis) {
   return static_cast<uint8_t>(kDir0 + axis);
 }
-// "step_x", "dir_y", "laser", "tx".
+// "step_x", "dir_y", "laser", "tx", "rx".
 std::string signal_name(uint8_t signal);
 
 // 16 bytes: (cycle, signal, new value). `cycle` counts rising clock edges since reset release.

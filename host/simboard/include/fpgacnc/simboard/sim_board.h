@@ -32,6 +32,12 @@
 // no bytes read or answered; the pty stays open) to model a board that stopped answering.
 // Accessors (stats(), edges(), ...) are safe while the thread runs (they lock between clock
 // chunks and copy).
+//
+// Line faults (BoardOptions::line_faults, line_faults.h; off by default): bytes read from the pty
+// pass the injector when they are admitted to the line (drops, duplicates, bit flips on the rx
+// pin), bytes decoded from tx pass it before they are queued for the pty (lost device frames, bit
+// flips). A stall holds the rx line idle while the board keeps running: the held line counts as
+// activity, so simulated time advances through it exactly as through a byte on the line.
 #pragma once
 
 #include <array>
@@ -48,6 +54,7 @@
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/simboard/line_faults.h"
 
 namespace fpgacnc::simboard {
 
@@ -67,8 +74,10 @@ struct BoardOptions {
   std::optional<std::array<config::StepTiming, kBoardAxes>> step_timing;
   std::string fst_path;    // "" = no waveform (untraced model, fastest)
   bool record_tx = false;  // also record TX pin edges
+  bool record_rx = false;  // also record RX pin edges (the line as the core sees it)
   size_t reserve_edges = size_t{1} << 20;
   uint32_t poll_interval_cycles = 1024;
+  LineFaults line_faults;  // serial line fault injection (default: none)
 };
 
 struct BoardStats {
@@ -84,6 +93,7 @@ struct BoardStats {
   uint16_t timeouts = 0;
   uint16_t violations = 0;
   std::array<int64_t, kBoardAxes> position{};  // core's position registers
+  LineFaultStats line;                         // injected line faults (all 0 when off)
 };
 
 class SimBoard {
@@ -125,6 +135,10 @@ class SimBoard {
   uint64_t cycle() const;
   std::vector<Edge> edges() const;                 // copy
   std::vector<uint64_t> move_done_cycles() const;  // copy
+  // Line logs (copies; empty unless line_faults.log): every frame put on the rx line, every
+  // byte decoded from tx with what was delivered.
+  std::vector<RxFrameRecord> rx_line_log() const;
+  std::vector<TxByteRecord> tx_line_log() const;
   std::array<int64_t, kBoardAxes> net_steps() const;
   void write_edges_csv(const std::string& path) const;
   // One-line summary of stats() for reports.

@@ -1,0 +1,120 @@
+// v2 streamer: the sliding window of docs/protocol.md ("Host streaming").
+//
+//  1. flush input, HELLO -> IDENT (version 2; a job needing more axes than N_AXES or a frame
+//     longer than MAX_PAYLOAD is refused before anything sequenced is sent), STATUS_QUERY ->
+//     STATUS (waits while the device is still busy; `segments done` and the position at the
+//     start; a latched fault is cleared with FAULT_CLEAR and reported);
+//  2. CONFIG_AXIS for each device axis, then the FIFO frames (NUMERATORS, LINE, DWELL) while
+//     credit = free - (FIFO frames sent, not yet acknowledged) > 0 and fewer than 127 frames are
+//     unacknowledged;
+//  3. go-back-N: on a NAK, or when nothing was acknowledged for the retransmission timeout, send
+//     again from the device's next_seq. NAK OUT_OF_ORDER of copies sent before the last go-back
+//     (next_seq still at the go-back point) is expected and ignored. Duplicate, lost and
+//     corrupted device frames are tolerated: ACK/DONE are cumulative, the parser resyncs, and
+//     with nothing unacknowledged a STATUS_QUERY polls the device when it stays silent;
+//  4. complete when `segments done` has counted every FIFO frame; then STATUS_QUERY (final
+//     position compared with the job's target) and RELEASE (back to auto mode).
+// Errors: link::Error when the device never answers (answer timeout), refuses a frame for a
+// reason a retransmission cannot fix, or cannot take the job (axes, payload, version).
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/link/link.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v2.h"
+#include "fpgacnc/protocol/v2_job.h"
+
+namespace fpgacnc::link {
+
+struct StreamV2Options {
+  std::chrono::milliseconds hello_timeout{300};       // IDENT after HELLO
+  int hello_attempts = 3;                             // explicit v2 (auto probes once)
+  std::chrono::milliseconds retransmit_timeout{300};  // go-back-N when nothing is acknowledged
+  std::chrono::milliseconds idle_poll{300};  // STATUS_QUERY when silent with nothing unacked
+  std::chrono::milliseconds answer_timeout{10'000};  // no good frame at all: link::Error
+  size_t max_unacked = protocol::v2::kMaxUnacked;
+  size_t max_goback_same = 200;  // go-backs to one frame without progress before giving up
+  bool release = true;           // send RELEASE at the end
+  // Called when `segments done` advances: (FIFO frames done, FIFO frames in the job).
+  std::function<void(size_t, size_t)> progress;
+};
+
+struct StreamV2Report {
+  protocol::v2::Ident ident;
+  size_t frames_sent = 0;       // every frame written, HELLO/STATUS_QUERY and resends included
+  size_t sequenced_frames = 0;  // distinct sequenced frames of the session (config + FIFO)
+  size_t fifo_frames = 0;       // NUMERATORS + LINE + DWELL
+  size_t lines = 0;
+  size_t dwells = 0;
+  size_t retransmissions = 0;    // sequenced frames written more than once (each resend)
+  size_t go_backs = 0;           // times the window went back (NAK or timeout)
+  size_t timeouts = 0;           // retransmission timeouts
+  std::array<size_t, 8> naks{};  // by reason code 1..7 (index 0: unused)
+  size_t naks_ignored = 0;       // OUT_OF_ORDER NAKs of copies sent before a go-back
+  size_t duplicates = 0;         // device frames identical to the previous one (same SEQ)
+  size_t stale_answers = 0;      // ACK/NAK/DONE whose next_seq is outside the window
+  size_t bad_device_frames = 0;  // good CRC but undecodable (ProtocolError)
+  size_t status_polls = 0;       // STATUS_QUERY sent
+  uint64_t bytes_written = 0;
+  uint64_t bytes_read = 0;
+  uint64_t rx_crc_errors = 0;  // device frames rejected by the host parser
+  uint64_t rx_bad_length = 0;
+  uint64_t rx_noise_bytes = 0;
+  uint64_t rx_abandoned = 0;
+  uint8_t faults_cleared = 0;  // fault bits latched before the job (cleared)
+  bool released = false;       // RELEASE acknowledged
+  size_t skipped_heater = 0;
+  size_t t_raised = 0;
+  uint64_t total_t = 0;  // sum of T of the job's frames (clocks)
+  std::chrono::duration<double> elapsed{0};
+  protocol::v2::Status status_start;
+  protocol::v2::Status status_end;
+  std::vector<int64_t> moved;  // device position change per device axis (end - start)
+  plan::Steps4 target{};       // the job's net steps per axis
+  bool position_ok = false;    // moved == target on every device axis
+  plan::Steps4 final_steps{};
+  std::array<double, 4> final_mm{};
+};
+
+// Streams a packed job. `ident`: the IDENT already received by select_protocol (skips HELLO).
+StreamV2Report stream_v2_job(Link& link, const protocol::v2::Job& job,
+                             const StreamV2Options& options,
+                             std::optional<protocol::v2::Ident> ident = std::nullopt);
+// Packs `plan` (throws std::invalid_argument before any byte) and streams it.
+StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
+                         const StreamV2Options& options,
+                         std::optional<protocol::v2::Ident> ident = std::nullopt);
+
+// Flushes input, sends HELLO and waits `timeout` for an IDENT (other frames and bytes ignored).
+std::optional<protocol::v2::Ident> probe_v2(Link& link, std::chrono::milliseconds timeout,
+                                            uint64_t* bytes_written = nullptr);
+
+struct ProtocolChoice {
+  std::string protocol;                      // "v1" or "v2"
+  std::optional<protocol::v2::Ident> ident;  // v2: the device's IDENT
+  std::chrono::duration<double> probe_time{0};
+};
+
+// mode "v1": no probe. "v2": HELLO (options.hello_attempts tries), Error when no IDENT. "auto":
+// one HELLO; IDENT within options.hello_timeout (300 ms) -> v2; otherwise wait `v1_settle`
+// (150 ms: the device's 100 ms watchdog drops the 6 HELLO bytes as a partial v1 packet), flush
+// input -> v1.
+ProtocolChoice select_protocol(
+    Link& link, const std::string& mode, const StreamV2Options& options,
+    std::chrono::milliseconds v1_settle = std::chrono::milliseconds(150));
+
+// Options from a machine configuration (retransmit and answer timeouts).
+StreamV2Options stream_v2_options(const config::MachineConfig& cfg);
+
+// Multi-line human summary of a report (frames, resends, NAKs by reason, device counters).
+std::string format_report(const StreamV2Report& r);
+
+}  // namespace fpgacnc::link

@@ -1,0 +1,234 @@
+// Protocol v2 codec (docs/protocol.md, "v2"): CRC-16/CCITT-FALSE, frame encoder, a resyncing
+// byte-stream parser, decoders of the device's answers and builders of the host's frames.
+// Byte-exact with the worked examples of docs/protocol.md (host/test/test_v2_codec.cpp).
+// Independent of the planner: the fuzz targets (fuzz/) link this file alone.
+//
+// Frame: A5 LEN SEQ TYPE payload[LEN] CRC_hi CRC_lo, CRC over LEN..payload, LEN <= 64.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace fpgacnc::protocol::v2 {
+
+constexpr uint8_t kSync = 0xA5;
+constexpr size_t kMaxPayload = 64;
+constexpr size_t kOverhead = 6;  // sync, LEN, SEQ, TYPE, CRC x2
+constexpr size_t kMaxFrame = kMaxPayload + kOverhead;
+constexpr uint8_t kVersion = 2;
+constexpr size_t kMaxUnacked = 127;  // host: never more sequenced frames unacknowledged
+constexpr size_t kCounters = 9;      // STATUS counters
+
+enum class Type : uint8_t {
+  Hello = 0x01,
+  StatusQuery = 0x02,
+  FaultClear = 0x03,
+  ConfigAxis = 0x04,
+  Numerators = 0x05,
+  Release = 0x06,
+  Line = 0x10,
+  Dwell = 0x11,
+  Ack = 0x80,
+  Nak = 0x81,
+  Done = 0x82,
+  Status = 0x83,
+  Ident = 0x84
+};
+
+enum class NakReason : uint8_t {
+  BadCrc = 1,
+  BadLength = 2,
+  UnknownType = 3,
+  Timeout = 4,
+  OutOfOrder = 5,
+  FifoFull = 6,
+  BadField = 7
+};
+
+// "HELLO", "ACK", ..., or "0x12" for a value not in the table.
+std::string type_name(uint8_t type);
+// "BAD_CRC", ..., or "reason 9".
+std::string nak_reason_name(uint8_t reason);
+// Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE, LINE, DWELL).
+bool is_sequenced(uint8_t type);
+// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL).
+bool is_fifo(uint8_t type);
+
+// A decoder was given a frame of the wrong type or length, or a field out of range.
+class ProtocolError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// CRC-16/CCITT-FALSE: poly 0x1021, init 0xFFFF, no reflection, no final XOR.
+uint16_t crc16(std::span<const uint8_t> data);
+
+struct Frame {
+  uint8_t seq = 0;
+  uint8_t type = 0;
+  std::vector<uint8_t> payload;
+  bool operator==(const Frame&) const = default;
+};
+
+// 6 + payload bytes. Throws std::invalid_argument if the payload is longer than kMaxPayload.
+std::vector<uint8_t> encode(const Frame& f);
+// Appends the encoded frame to `out` (same check).
+void encode_to(const Frame& f, std::vector<uint8_t>& out);
+
+// Byte stream -> frames. A frame starts at a 0xA5; a LEN > 64 or a CRC mismatch rejects that
+// 0xA5 only and the search for the next 0xA5 restarts at the byte after it (so a good frame
+// hidden behind a corrupted header is still found). Bytes outside frames are counted as noise.
+class FrameParser {
+ public:
+  void feed(std::span<const uint8_t> bytes);
+  void feed(uint8_t byte) { feed(std::span<const uint8_t>(&byte, 1)); }
+  // The next complete good frame, or nullopt when more bytes are needed.
+  std::optional<Frame> next();
+  // Gives up on a partial frame at the head of the buffer (e.g. after a read timeout: its LEN
+  // may have been corrupted upwards): drops its 0xA5 and rescans the rest. Counted in
+  // `abandoned`. Returns whether there was a partial frame.
+  bool abandon_partial();
+  // Bytes received but not yet returned or discarded.
+  size_t buffered() const { return buf_.size() - pos_; }
+  void reset();
+
+  uint64_t crc_errors() const { return crc_errors_; }
+  uint64_t bad_length() const { return bad_length_; }
+  uint64_t noise_bytes() const { return noise_bytes_; }
+  uint64_t frames() const { return frames_; }
+  uint64_t abandoned() const { return abandoned_; }
+
+ private:
+  void compact();
+  std::vector<uint8_t> buf_;
+  size_t pos_ = 0;
+  uint64_t crc_errors_ = 0;
+  uint64_t bad_length_ = 0;
+  uint64_t noise_bytes_ = 0;
+  uint64_t frames_ = 0;
+  uint64_t abandoned_ = 0;
+};
+
+// ---- Device -> host payloads ----
+
+struct Credit {  // ACK and DONE: 7 bytes
+  uint8_t next_seq = 0;
+  uint16_t free = 0;
+  uint32_t done = 0;
+  bool operator==(const Credit&) const = default;
+};
+
+struct Nak {  // 5 bytes
+  uint8_t seq = 0;
+  NakReason reason = NakReason::BadCrc;
+  uint8_t next_seq = 0;
+  uint16_t free = 0;
+  bool operator==(const Nak&) const = default;
+};
+
+struct Ident {  // 18 bytes
+  uint8_t version = kVersion, n_axes = 0;
+  uint16_t fifo_depth = 0;
+  uint32_t clk_hz = 0, baud = 0, build_id = 0;
+  uint8_t next_seq = 0, max_payload = kMaxPayload;
+  bool operator==(const Ident&) const = default;
+};
+
+// STATUS state bits.
+constexpr uint8_t kStateBusy = 0x01;
+constexpr uint8_t kStateV2 = 0x02;
+constexpr uint8_t kStateFault = 0x04;
+// STATUS fault bits.
+constexpr uint8_t kFaultStepTiming = 0x01;
+// STATUS counters, in order.
+enum Counter : size_t {
+  kFramesOk = 0,
+  kCrcErrors,
+  kLengthErrors,
+  kUnknownTypes,
+  kTimeouts,
+  kUartFramingErrors,
+  kOverruns,
+  kNoiseBytes,
+  kClamped
+};
+// "frames_ok", "crc_errors", ...
+std::string counter_name(size_t index);
+
+struct Status {  // 27 + 4 * n_axes bytes
+  uint8_t state = 0, faults = 0;
+  uint16_t fifo_level = 0;
+  uint8_t next_seq = 0;
+  uint32_t done = 0;
+  std::vector<int32_t> position;
+  std::array<uint16_t, kCounters> counters{};
+  bool operator==(const Status&) const = default;
+};
+
+size_t status_payload_size(size_t n_axes);
+
+// Decoders: throw ProtocolError naming the frame type and what is wrong (type, length, field).
+Credit decode_credit(const Frame& f);  // ACK or DONE
+Nak decode_nak(const Frame& f);        // reason must be 1..7
+Ident decode_ident(const Frame& f);
+Status decode_status(const Frame& f, size_t n_axes);
+
+// Device frame builders (fake devices, tests, fuzzers).
+Frame ack(uint8_t dev_seq, const Credit& c);
+Frame done(uint8_t dev_seq, const Credit& c);
+Frame nak(uint8_t dev_seq, const Nak& n);
+Frame ident(uint8_t dev_seq, const Ident& i);
+Frame status(uint8_t dev_seq, const Status& s);
+
+// ---- Host -> device ----
+
+// Builders. `line`: code 0..3, steps for axes 0..k-1 (k = steps.size(), 0..14); SHORT (int16)
+// when `short_if_fits` and every count fits int16, else int32. Throws std::invalid_argument for a
+// code > 3 or a payload over 64 bytes.
+Frame hello(uint8_t seq = 0);
+Frame status_query(uint8_t seq = 0);
+Frame fault_clear(uint8_t seq);
+Frame release(uint8_t seq);
+Frame config_axis(uint8_t seq, uint8_t axis, uint16_t step_high, uint16_t step_low,
+                  uint16_t dir_setup, uint16_t dir_hold);
+Frame numerators(uint8_t seq, uint32_t numerator_x, uint32_t numerator_y);
+Frame line(uint8_t seq, uint8_t code, uint8_t power, uint32_t t, std::span<const int32_t> steps,
+           bool short_if_fits = true);
+Frame dwell(uint8_t seq, uint32_t t);
+
+constexpr uint8_t kLineShort = 0x80;
+
+struct Line {
+  uint8_t code = 0;
+  uint8_t power = 0;
+  uint32_t t = 0;
+  bool short_steps = false;
+  std::vector<int32_t> steps;  // k axes
+  bool operator==(const Line&) const = default;
+};
+struct ConfigAxis {
+  uint8_t axis = 0;
+  uint16_t step_high = 0, step_low = 0, dir_setup = 0, dir_hold = 0;
+  bool operator==(const ConfigAxis&) const = default;
+};
+
+// Host frame decoders (the fake device and the fuzzers use them): length and field rules as the
+// device checks them (reserved flag bits -> "BAD_FIELD", LEN -> "BAD_LENGTH"; the message
+// names the rule). `n_axes` bounds k and the axis number (0: no bound beyond the payload).
+Line decode_line(const Frame& f, size_t n_axes = 0);
+uint32_t decode_dwell(const Frame& f);
+ConfigAxis decode_config_axis(const Frame& f, size_t n_axes = 0);
+std::array<uint32_t, 2> decode_numerators(const Frame& f);
+// The NAK reason the device gives a good-CRC host frame with these type/length/fields, or
+// nullopt when it is well formed (sequence and FIFO rules not included).
+std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes);
+
+// Hex dump "A5 0A 07 10 ..." (upper case, space separated).
+std::string hex(std::span<const uint8_t> bytes);
+
+}  // namespace fpgacnc::protocol::v2

@@ -1,0 +1,70 @@
+// Protocol v2 packer: a plan -> the frames of a v2 session (docs/protocol.md, "v2").
+//
+// - Every planned segment becomes a LINE frame: SHORT (int16 steps) when every count fits,
+//   else int32; k = axes up to the last moving one, at least 2 (X, Y); Z and E are driven.
+// - Laser power: 0 for code 0 (rapid / laser off); else the S word in force scaled by
+//   cfg.laser_s_max to 0..255 (S > 0 never rounds to 0; no S given: 255).
+// - T (clocks) = round(length / feed * 60 * clk_hz) at the executed feed (override and axis max
+//   feeds applied; rapids at the rapid feed), length over X, Y, Z from the step deltas (E alone:
+//   its own length and max feed). A step-file segment (no executed feed) keeps v1's timing:
+//   T = floor(NUMERATOR_dom / feed) * n_dom. T is raised to n_dom * min_period when smaller
+//   (min_period = STEP high + STEP low, 0 counting as 1: the device would clamp otherwise) and a
+//   move whose T exceeds UINT32_MAX (or whose steps exceed int32) is split into equal parts.
+// - G4 dwell -> DWELL frames (T = round(seconds * clk_hz), split above UINT32_MAX; 0 s: none).
+// - Heater commands are skipped (counted): v2 has no heater frames yet (issue 7).
+// The whole job is packed and validated before the first byte is sent.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v2.h"
+
+namespace fpgacnc::protocol::v2 {
+
+// One FIFO frame of a job (its SEQ is assigned when it is sent).
+struct JobFrame {
+  Frame frame;
+  size_t segment_index = 0;  // plan segment it comes from (NUMERATORS: 0; dwell: next segment)
+  int source_line = 0;
+  uint32_t t = 0;      // LINE / DWELL length in clocks
+  uint8_t axes = 0;    // LINE: k
+  bool split = false;  // part of a split move or dwell
+};
+
+struct Job {
+  // CONFIG_AXIS for axes 0..3 (the streamer sends those below the device's N_AXES).
+  std::vector<Frame> config;
+  // FIFO frames in order: NUMERATORS, then LINE / DWELL.
+  std::vector<JobFrame> frames;
+  size_t lines = 0;
+  size_t short_lines = 0;
+  size_t dwells = 0;          // DWELL frames
+  size_t segments = 0;        // plan segments packed
+  size_t split_moves = 0;     // segments sent as more than one LINE
+  size_t t_raised = 0;        // LINE frames whose T was raised to n_dom * min_period
+  size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
+  size_t max_axes = 0;        // largest k of any LINE (the device must have at least that many)
+  uint32_t min_period = 0;    // clocks
+  uint64_t total_t = 0;       // sum of T of every LINE and DWELL (job time without gaps)
+  uint64_t wire_bytes = 0;    // bytes of config + FIFO frames
+  plan::Steps4 target{};      // sum of the LINE steps per axis
+  std::array<uint32_t, 2> numerator{};
+};
+
+// Throws std::invalid_argument naming the segment (and line) for something v2 cannot carry
+// (step timing over 65535 clocks, motion code > 3, a segment that cannot be split).
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg);
+
+// STEP minimum period of the configuration: max(step_high, 1) + max(step_low, 1).
+uint32_t min_period(const config::StepTiming& t);
+
+// The frames a host sends for the job to a device starting at next_seq `first_seq` (after
+// HELLO): config (all 4 axes), FIFO frames, RELEASE, each encoded with its SEQ.
+std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq = 0,
+                                                 size_t device_axes = 4);
+
+}  // namespace fpgacnc::protocol::v2

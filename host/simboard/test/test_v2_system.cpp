@@ -1,0 +1,265 @@
+// Protocol v2 system tests (label system): the host's v2 streamer -> SerialLink -> pty -> the
+// simulated board (Verilated cnc_core with the v2 frame decoder, command FIFO and zero-gap
+// executor), measured at the pins (recorded STEP/DIR/LASER edges and seg_done cycles).
+//
+// Job: a square spiral of short segments, each 0.1 mm (16 steps) along X or Y at 3000 mm/min:
+// T = 0.1 / 3000 * 60 * 50e6 = 100 000 clocks (2 ms) per segment; sides of 1, 1, 2, 2, 3, 3, ...
+// segments (every corner turns 90 degrees; X and Y each reverse every other side), laser on
+// (M3 S1000: power 255). FPGACNC_V2_SEGMENTS sets the number of segments (default 1000: a run
+// of 10 000 = 20 s of machine time takes several minutes of simulation on this machine; see
+// host/README.md for the figures of the full run).
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <string>
+
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v2_job.h"
+#include "fpgacnc/simboard/runner.h"
+#include "fpgacnc/simboard/sim_board.h"
+
+namespace sb = fpgacnc::simboard;
+namespace lk = fpgacnc::link;
+namespace v2 = fpgacnc::protocol::v2;
+namespace cfgns = fpgacnc::config;
+namespace plan = fpgacnc::plan;
+using namespace std::chrono_literals;
+
+namespace {
+
+size_t env_size(const char* name, size_t dflt) {
+  const char* e = std::getenv(name);
+  return e ? static_cast<size_t>(std::strtoull(e, nullptr, 10)) : dflt;
+}
+
+// Square spiral of `n` segments of 0.1 mm at 3000 mm/min (see the file comment); every
+// `ze_every` segments (0: never) a Z and E move out and back.
+std::string spiral_gcode(size_t n, size_t ze_every = 0) {
+  std::string g = "G21 G90\nM3 S1000\nG1 F3000\n";
+  long x = 0, y = 0;  // in 0.1 mm
+  size_t side = 1, on_side = 0;
+  int dir = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (dir == 0) ++x;
+    if (dir == 1) ++y;
+    if (dir == 2) --x;
+    if (dir == 3) --y;
+    g += fmt::format("G1 X{:.1f} Y{:.1f}\n", x * 0.1, y * 0.1);
+    if (++on_side == side) {
+      on_side = 0;
+      if (dir == 1 || dir == 3) ++side;
+      dir = (dir + 1) % 4;
+    }
+    if (ze_every && i % ze_every == ze_every / 2) {
+      g += fmt::format("G1 Z0.5 E{:.2f}\nG1 Z0\n", 0.05 * static_cast<double>(i / ze_every + 1));
+    }
+  }
+  g += "M5\n";
+  return g;
+}
+
+plan::Plan plan_of(const std::string& g, const cfgns::MachineConfig& cfg) {
+  return plan::plan_program(fpgacnc::gcode::parse_string(g, "spiral.gcode"), cfg, {});
+}
+
+struct V2Run {
+  lk::StreamV2Report rep;
+  sb::BoardStats stats;
+  std::vector<sb::Edge> edges;
+  std::vector<uint64_t> move_done;
+  std::string protocol;
+};
+
+// Streams with protocol selection "auto" (it must pick v2 on this board) and collects the pins.
+V2Run run_v2(const plan::Plan& p, const cfgns::MachineConfig& cfg, const sb::BoardOptions& bo,
+             const lk::StreamV2Options& so) {
+  sb::BoardLink link(bo);
+  V2Run r;
+  const auto choice = lk::select_protocol(link, "auto", so);
+  r.protocol = choice.protocol;
+  if (choice.protocol != "v2") return r;
+  r.rep = lk::stream_v2(link, p, cfg, so, choice.ident);
+  link.board().wait_quiet(5000ms);
+  link.board().stop();
+  r.stats = link.board().stats();
+  r.edges = link.board().edges();
+  r.move_done = link.board().move_done_cycles();
+  return r;
+}
+
+std::vector<uint64_t> rises(const std::vector<sb::Edge>& e) {
+  std::vector<uint64_t> c;
+  for (const auto& x : e) {
+    if (x.signal < sb::kDir0 && x.value) c.push_back(x.cycle);
+  }
+  return c;
+}
+
+}  // namespace
+
+// (a) Zero gap through the pins, and the same job with v1 stop-and-wait for comparison.
+TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
+  const size_t n = env_size("FPGACNC_V2_SEGMENTS", 1000);
+  cfgns::MachineConfig cfg;
+  const plan::Plan p = plan_of(spiral_gcode(n), cfg);
+  const v2::Job job = v2::pack_job(p, cfg);
+  ASSERT_EQ(job.lines, n);
+  uint64_t sum_t = 0;
+  std::vector<uint64_t> t;
+  std::array<uint64_t, 4> pulses_want{};
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type != static_cast<uint8_t>(v2::Type::Line)) continue;
+    const auto l = v2::decode_line(jf.frame);
+    ASSERT_EQ(l.t, 100'000u) << "segment " << t.size() << ": 0.1 mm at 3000 mm/min";
+    t.push_back(l.t);
+    sum_t += l.t;
+    for (size_t a = 0; a < l.steps.size(); ++a) pulses_want[a] += std::abs(l.steps[a]);
+  }
+  // A clean line: a long retransmission timeout so that a slow simulation never resends.
+  lk::StreamV2Options so;
+  so.retransmit_timeout = 5000ms;
+  so.idle_poll = 1000ms;
+  so.answer_timeout = 60'000ms;
+  const auto w0 = std::chrono::steady_clock::now();
+  const V2Run r = run_v2(p, cfg, sb::SimBoard::options_from_config(cfg), so);
+  const double v2_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  ASSERT_EQ(r.protocol, "v2") << "the board did not answer HELLO with IDENT";
+  EXPECT_TRUE(r.rep.position_ok);
+  EXPECT_TRUE(r.rep.released);
+  EXPECT_EQ(r.rep.retransmissions, 0u);
+  EXPECT_EQ(r.rep.status_end.done - r.rep.status_start.done, job.frames.size());
+  EXPECT_EQ(r.rep.status_end.counters[v2::kClamped], 0u);
+
+  const auto steps = sb::step_pulses(r.edges);
+  const auto net = sb::net_steps(r.edges);
+  for (size_t a = 0; a < 4; ++a) {
+    EXPECT_EQ(steps[a], pulses_want[a]) << "STEP pulses, axis " << a;
+    EXPECT_EQ(net[a], p.final_steps[a]) << "net steps, axis " << a;
+  }
+  // Zero gap: consecutive seg_done strobes are exactly one segment length apart.
+  ASSERT_EQ(r.move_done.size(), n) << "seg_done strobes";
+  size_t gaps = 0;
+  for (size_t i = 1; i < n; ++i) {
+    if (r.move_done[i] - r.move_done[i - 1] != t[i]) {
+      if (++gaps <= 5) {
+        ADD_FAILURE() << "segment " << i << ": seg_done at cycle " << r.move_done[i]
+                      << ", previous at " << r.move_done[i - 1] << ": expected " << t[i]
+                      << " clocks apart, got " << (r.move_done[i] - r.move_done[i - 1]);
+      }
+    }
+  }
+  EXPECT_EQ(gaps, 0u);
+  // Job time through the pins: the first STEP rise is at R0 + ceil(T0 / 16) (16 steps per
+  // segment), the last at R_last + T_last; so last - first + ceil(T0 / 16) = sum of T.
+  const auto rv2 = rises(r.edges);
+  ASSERT_FALSE(rv2.empty());
+  const uint64_t first_offset = (t[0] + 15) / 16;
+  const uint64_t v2_clocks = rv2.back() - rv2.front() + first_offset;
+  EXPECT_EQ(v2_clocks, sum_t) << "job time at the pins (clocks) vs the sum of planned T";
+
+  // The same job with v1 stop-and-wait (same board model, fresh).
+  sb::BoardRunOptions ro;
+  ro.stream.ack_timeout = 60'000ms;
+  const auto w1 = std::chrono::steady_clock::now();
+  const sb::BoardRunResult r1 =
+      sb::run_plan_on_board(p, sb::SimBoard::options_from_config(cfg), ro);
+  const double v1_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - w1).count();
+  const auto rv1 = rises(r1.edges);
+  ASSERT_FALSE(rv1.empty());
+  const uint64_t v1_clocks = rv1.back() - rv1.front() + first_offset;
+  EXPECT_EQ(r1.net_steps[0], p.final_steps[0]);
+  EXPECT_EQ(r1.net_steps[1], p.final_steps[1]);
+  EXPECT_GT(v1_clocks, v2_clocks);
+  const double clk = 50e6;
+  fmt::print(
+      "square spiral, {} segments of 0.1 mm at 3000 mm/min (T = 100000 clocks each)\n"
+      "  planned sum of T : {} clocks ({:.4f} s)\n"
+      "  v2 at the pins   : {} clocks ({:.4f} s), gaps 0, {} frames, {} bytes, "
+      "simulated in {:.1f} s\n"
+      "  v1 at the pins   : {} clocks ({:.4f} s), simulated in {:.1f} s\n"
+      "  v1 overhead      : {} clocks ({:.4f} s, {:.1f} clocks = {:.1f} us per move), "
+      "v1/v2 = {:.3f}\n",
+      n, sum_t, sum_t / clk, v2_clocks, v2_clocks / clk, r.rep.frames_sent, r.rep.bytes_written,
+      v2_wall, v1_clocks, v1_clocks / clk, v1_wall, v1_clocks - v2_clocks,
+      (v1_clocks - v2_clocks) / clk, static_cast<double>(v1_clocks - v2_clocks) / (n - 1),
+      static_cast<double>(v1_clocks - v2_clocks) / (n - 1) / 50.0,
+      static_cast<double>(v1_clocks) / static_cast<double>(v2_clocks));
+}
+
+// (b) Line faults both ways: the job completes, no segment lost or run twice.
+TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
+  const size_t n = env_size("FPGACNC_V2_FAULT_SEGMENTS", 400);
+  const uint64_t seed = env_size("FPGACNC_SEED", 5);
+  std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
+  cfgns::MachineConfig cfg;
+  const plan::Plan p = plan_of(spiral_gcode(n, 50), cfg);
+  const v2::Job job = v2::pack_job(p, cfg);
+  std::array<uint64_t, 4> pulses_want{};
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type != static_cast<uint8_t>(v2::Type::Line)) continue;
+    const auto l = v2::decode_line(jf.frame);
+    for (size_t a = 0; a < l.steps.size(); ++a) pulses_want[a] += std::abs(l.steps[a]);
+  }
+  sb::BoardOptions bo = sb::SimBoard::options_from_config(cfg);
+  bo.line_faults.seed = seed;
+  bo.line_faults.ber_to_board = 1e-4;
+  bo.line_faults.ber_to_host = 1e-4;
+  bo.line_faults.drop = 5e-4;
+  bo.line_faults.dup = 5e-4;
+  bo.line_faults.lose_frames = 0.01;
+  // One 200 ms stall (10 000 000 clocks) before the 3000th byte on the line: mid-job.
+  bo.line_faults.stalls.push_back({sb::LineStall::Trigger::kBytes, 3000, 10'000'000});
+  lk::StreamV2Options so;  // defaults: 300 ms retransmission timeout
+  so.answer_timeout = 60'000ms;
+  const V2Run r = run_v2(p, cfg, bo, so);
+  ASSERT_EQ(r.protocol, "v2");
+  const auto& ls = r.stats.line;
+  fmt::print("injected: {}\n", sb::describe(ls));
+  fmt::print("{}", lk::format_report(r.rep));
+  EXPECT_EQ(ls.stalls, 1u);
+  EXPECT_GT(ls.frames_flipped_to_board + ls.bytes_dropped + ls.bytes_duplicated, 0u);
+  EXPECT_GT(ls.device_frames_lost + ls.bytes_flipped_to_host, 0u);
+  // Exactly once: the device counted every FIFO frame once, STEP pulses and net steps match
+  // the plan on every axis.
+  EXPECT_EQ(r.rep.status_end.done - r.rep.status_start.done, job.frames.size());
+  EXPECT_EQ(r.move_done.size(), job.lines);
+  EXPECT_TRUE(r.rep.position_ok);
+  const auto steps = sb::step_pulses(r.edges);
+  const auto net = sb::net_steps(r.edges);
+  for (size_t a = 0; a < 4; ++a) {
+    EXPECT_EQ(steps[a], pulses_want[a]) << "STEP pulses, axis " << a;
+    EXPECT_EQ(net[a], p.final_steps[a]) << "net steps, axis " << a;
+  }
+  EXPECT_GT(r.rep.retransmissions, 0u);
+}
+
+// RELEASE returns the board to auto mode: a v1 job runs after a v2 one on the same board.
+TEST(V2System, V1AfterV2OnTheSameBoard) {
+  cfgns::MachineConfig cfg;
+  const plan::Plan p = plan_of(spiral_gcode(12), cfg);
+  sb::BoardLink link(sb::SimBoard::options_from_config(cfg));
+  lk::StreamV2Options so;
+  so.answer_timeout = 30'000ms;
+  const auto c = lk::select_protocol(link, "auto", so);
+  ASSERT_EQ(c.protocol, "v2");
+  const auto r2 = lk::stream_v2(link, p, cfg, so, c.ident);
+  EXPECT_TRUE(r2.released);
+  EXPECT_TRUE(r2.position_ok);
+  lk::StreamOptions o1;
+  o1.ack_timeout = 30'000ms;
+  const auto r1 = lk::stream_v1(link, p, o1);
+  EXPECT_EQ(r1.acks, r1.moves);
+  EXPECT_EQ(r1.warnings, 0u);
+  link.board().wait_quiet(5000ms);
+  link.board().stop();
+  const auto net = link.board().net_steps();
+  EXPECT_EQ(net[0], 2 * p.final_steps[0]);
+  EXPECT_EQ(net[1], 2 * p.final_steps[1]);
+}

@@ -1,0 +1,530 @@
+#include "fpgacnc/link/stream_v2.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+namespace fpgacnc::link {
+namespace v2 = protocol::v2;
+using clock_type = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+namespace {
+
+// Silence after which a partial device frame at the head of the parser is given up (a LEN
+// corrupted upwards would otherwise hold back the frames behind it).
+constexpr milliseconds kPartialGiveUp{200};
+
+milliseconds until(clock_type::time_point deadline) {
+  const auto d = deadline - clock_type::now();
+  if (d <= clock_type::duration::zero()) return milliseconds(0);
+  return std::chrono::duration_cast<milliseconds>(d) + milliseconds(1);
+}
+
+// One v2 session over a link: reads device frames, writes host frames, keeps the counters.
+class Session {
+ public:
+  Session(Link& link, StreamV2Report& rep) : link_(link), rep_(rep) {}
+
+  void send(const v2::Frame& f) {
+    buf_.clear();
+    v2::encode_to(f, buf_);
+    link_.write(buf_);
+    rep_.bytes_written += buf_.size();
+    ++rep_.frames_sent;
+  }
+  // Several frames in one write.
+  void send_batch(const std::vector<uint8_t>& bytes, size_t frames) {
+    if (bytes.empty()) return;
+    link_.write(bytes);
+    rep_.bytes_written += bytes.size();
+    rep_.frames_sent += frames;
+  }
+
+  // Next good device frame within `timeout` (nullopt on timeout). Duplicates are counted.
+  std::optional<v2::Frame> receive(milliseconds timeout) {
+    const auto deadline = clock_type::now() + timeout;
+    for (;;) {
+      if (auto f = parser_.next()) {
+        last_rx_ = clock_type::now();
+        if (have_last_ && *f == last_frame_) {
+          ++rep_.duplicates;
+        }
+        last_frame_ = *f;
+        have_last_ = true;
+        return f;
+      }
+      // Drain what is there without blocking, then block until the deadline.
+      auto b = link_.read_byte(milliseconds(0));
+      if (!b) {
+        const auto left = until(deadline);
+        if (left.count() == 0) {
+          // Silence: a header whose LEN was corrupted upwards would wait forever.
+          if (clock_type::now() - last_byte_ > kPartialGiveUp) parser_.abandon_partial();
+          return std::nullopt;
+        }
+        b = link_.read_byte(std::min(left, milliseconds(20)));
+        if (!b) {
+          if (clock_type::now() - last_byte_ > kPartialGiveUp && parser_.abandon_partial()) {
+            continue;
+          }
+          if (clock_type::now() >= deadline) return std::nullopt;
+          continue;
+        }
+      }
+      ++rep_.bytes_read;
+      last_byte_ = clock_type::now();
+      parser_.feed(*b);
+    }
+  }
+
+  void finish_counters() {
+    rep_.rx_crc_errors = parser_.crc_errors();
+    rep_.rx_bad_length = parser_.bad_length();
+    rep_.rx_noise_bytes = parser_.noise_bytes();
+    rep_.rx_abandoned = parser_.abandoned();
+  }
+
+  clock_type::time_point last_rx() const { return last_rx_; }
+  void reset_parser() { parser_.reset(); }
+
+ private:
+  Link& link_;
+  StreamV2Report& rep_;
+  v2::FrameParser parser_;
+  std::vector<uint8_t> buf_;
+  v2::Frame last_frame_;
+  bool have_last_ = false;
+  clock_type::time_point last_rx_ = clock_type::now();
+  clock_type::time_point last_byte_ = clock_type::now();
+};
+
+// Waits for a frame of `type` (others ignored, undecodable ones counted); nullopt on timeout.
+std::optional<v2::Frame> await_type(Session& s, StreamV2Report& rep, v2::Type type,
+                                    milliseconds timeout) {
+  const auto deadline = clock_type::now() + timeout;
+  for (;;) {
+    const auto f = s.receive(until(deadline));
+    if (!f) return std::nullopt;
+    if (f->type == static_cast<uint8_t>(type)) return f;
+    (void)rep;
+  }
+}
+
+v2::Status query_status(Session& s, StreamV2Report& rep, size_t n_axes, const StreamV2Options& opt,
+                        const std::string& name, const char* when) {
+  const auto give_up = clock_type::now() + opt.answer_timeout;
+  while (clock_type::now() < give_up) {
+    s.send(v2::status_query());
+    ++rep.status_polls;
+    const auto f = await_type(s, rep, v2::Type::Status, opt.retransmit_timeout);
+    if (!f) continue;
+    try {
+      return v2::decode_status(*f, n_axes);
+    } catch (const v2::ProtocolError&) {
+      ++rep.bad_device_frames;
+    }
+  }
+  throw Error(fmt::format("{}: no STATUS {} within {:.3g} s", name, when,
+                          static_cast<double>(opt.answer_timeout.count()) / 1000.0));
+}
+
+std::string frame_name(const v2::Frame& f, const v2::JobFrame* jf) {
+  if (!jf) return v2::type_name(f.type);
+  return fmt::format("{} of segment {} (line {})", v2::type_name(f.type), jf->segment_index,
+                     jf->source_line);
+}
+
+}  // namespace
+
+std::optional<v2::Ident> probe_v2(Link& link, milliseconds timeout, uint64_t* bytes_written) {
+  StreamV2Report rep;
+  Session s(link, rep);
+  link.flush_input();
+  s.send(v2::hello());
+  if (bytes_written) *bytes_written += rep.bytes_written;
+  const auto deadline = clock_type::now() + timeout;
+  for (;;) {
+    const auto f = await_type(s, rep, v2::Type::Ident, until(deadline));
+    if (!f) return std::nullopt;
+    try {
+      return v2::decode_ident(*f);
+    } catch (const v2::ProtocolError&) {
+    }
+  }
+}
+
+ProtocolChoice select_protocol(Link& link, const std::string& mode, const StreamV2Options& options,
+                               milliseconds v1_settle) {
+  ProtocolChoice c;
+  const auto t0 = clock_type::now();
+  if (mode == "v1") {
+    c.protocol = "v1";
+    return c;
+  }
+  if (mode == "v2") {
+    for (int i = 0; i < std::max(options.hello_attempts, 1) && !c.ident; ++i) {
+      c.ident = probe_v2(link, options.hello_timeout);
+    }
+    if (!c.ident) {
+      throw Error(fmt::format(
+          "{}: no IDENT answer to {} HELLO frames ({} ms each): the device does not speak "
+          "protocol v2 (try --protocol v1 or auto)",
+          link.name(), std::max(options.hello_attempts, 1), options.hello_timeout.count()));
+    }
+    c.protocol = "v2";
+  } else if (mode == "auto") {
+    c.ident = probe_v2(link, options.hello_timeout);
+    if (c.ident) {
+      c.protocol = "v2";
+    } else {
+      // The 6 HELLO bytes are a partial v1 packet for a v1-only device: its 100 ms watchdog
+      // drops them. Wait past it, then start v1 from a clean line.
+      std::this_thread::sleep_for(v1_settle);
+      link.flush_input();
+      c.protocol = "v1";
+    }
+  } else {
+    throw Error(fmt::format("unknown protocol '{}' (expected auto, v1 or v2)", mode));
+  }
+  c.probe_time = clock_type::now() - t0;
+  return c;
+}
+
+StreamV2Options stream_v2_options(const config::MachineConfig& cfg) {
+  StreamV2Options o;
+  o.retransmit_timeout =
+      milliseconds(std::max<long long>(1, std::llround(cfg.retransmit_timeout_s * 1000.0)));
+  o.idle_poll = o.retransmit_timeout;
+  o.answer_timeout = milliseconds(std::max<long long>(1, std::llround(cfg.ack_timeout_s * 1000.0)));
+  return o;
+}
+
+StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
+                         const StreamV2Options& options, std::optional<v2::Ident> ident) {
+  const v2::Job job = v2::pack_job(plan, cfg);  // throws before any byte
+  StreamV2Report r = stream_v2_job(link, job, options, ident);
+  r.final_steps = plan.final_steps;
+  r.final_mm = plan.final_mm;
+  return r;
+}
+
+StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Options& opt,
+                             std::optional<v2::Ident> ident) {
+  StreamV2Report rep;
+  rep.skipped_heater = job.skipped_heater;
+  rep.t_raised = job.t_raised;
+  rep.total_t = job.total_t;
+  rep.target = job.target;
+  rep.lines = job.lines;
+  rep.dwells = job.dwells;
+  rep.fifo_frames = job.frames.size();
+  const auto t0 = clock_type::now();
+  Session s(link, rep);
+  const std::string name = link.name();
+
+  // 1. Handshake.
+  if (!ident) {
+    for (int i = 0; i < std::max(opt.hello_attempts, 1) && !ident; ++i) {
+      ident = probe_v2(link, opt.hello_timeout, &rep.bytes_written);
+      ++rep.frames_sent;
+    }
+    if (!ident) {
+      throw Error(
+          fmt::format("{}: no IDENT answer to HELLO: the device does not speak protocol v2", name));
+    }
+  }
+  rep.ident = *ident;
+  if (ident->version != v2::kVersion) {
+    throw Error(fmt::format("{}: device speaks protocol version {}, this host speaks {}", name,
+                            ident->version, v2::kVersion));
+  }
+  if (job.max_axes > ident->n_axes) {
+    throw Error(fmt::format("{}: the job moves {} axes, the device has {} (N_AXES)", name,
+                            job.max_axes, ident->n_axes));
+  }
+  size_t max_payload = 0;
+  for (const auto& jf : job.frames) max_payload = std::max(max_payload, jf.frame.payload.size());
+  if (max_payload > ident->max_payload) {
+    throw Error(fmt::format("{}: the job needs frames of {} payload bytes, the device takes {}",
+                            name, max_payload, ident->max_payload));
+  }
+  if (ident->fifo_depth == 0)
+    throw Error(fmt::format("{}: device reports a FIFO depth of 0", name));
+  const size_t n_axes = ident->n_axes;
+
+  // Wait until a previous job has drained (its DONEs would count into ours).
+  v2::Status st = query_status(s, rep, n_axes, opt, name, "at the start");
+  const auto busy_limit = clock_type::now() + opt.answer_timeout;
+  while (st.state & v2::kStateBusy) {
+    if (clock_type::now() > busy_limit) {
+      throw Error(fmt::format("{}: device still busy (FIFO level {}) after {:.3g} s", name,
+                              st.fifo_level,
+                              static_cast<double>(opt.answer_timeout.count()) / 1000.0));
+    }
+    std::this_thread::sleep_for(milliseconds(20));
+    st = query_status(s, rep, n_axes, opt, name, "at the start");
+  }
+  rep.status_start = st;
+
+  // 2. The sequenced frames of the session.
+  struct Item {
+    v2::Frame frame;
+    bool fifo;
+    const v2::JobFrame* jf;
+  };
+  std::vector<Item> items;
+  if (st.faults) {
+    items.push_back({v2::fault_clear(0), false, nullptr});
+    rep.faults_cleared = st.faults;
+  }
+  for (size_t a = 0; a < job.config.size() && a < n_axes; ++a) {
+    items.push_back({job.config[a], false, nullptr});
+  }
+  for (const auto& jf : job.frames) items.push_back({jf.frame, true, &jf});
+  const size_t n = items.size();
+  rep.sequenced_frames = n;
+  std::vector<size_t> fifo_before(n + 1, 0);  // FIFO frames in [0, i)
+  for (size_t i = 0; i < n; ++i) fifo_before[i + 1] = fifo_before[i] + (items[i].fifo ? 1 : 0);
+  const size_t total_fifo = fifo_before[n];
+
+  const uint8_t seq0 = st.next_seq;
+  const uint32_t done0 = st.done;
+  auto seq_of = [seq0](size_t i) { return static_cast<uint8_t>(seq0 + i); };
+  size_t acked = 0;  // frames [0, acked) acknowledged
+  size_t sent = 0;   // next frame to send
+  size_t high = 0;   // frames [0, high) sent at least once
+  size_t free_slots = st.fifo_level >= ident->fifo_depth ? 0 : ident->fifo_depth - st.fifo_level;
+  size_t done_count = 0;  // FIFO frames completed (this job)
+  bool have_credit = true;
+  std::optional<size_t> goback_at;  // index of the last go-back, while its old copies drain
+  size_t goback_same = 0;
+  size_t fatal_nak_count = 0;
+  auto last_progress = clock_type::now();
+  auto last_poll = clock_type::now();
+  milliseconds rto = opt.retransmit_timeout;
+
+  auto update = [&](uint8_t next_seq, uint16_t free, std::optional<uint32_t> done) -> bool {
+    const size_t delta = static_cast<uint8_t>(next_seq - seq_of(acked));
+    if (delta > high - acked) {  // behind us, or ahead of anything ever sent
+      ++rep.stale_answers;
+      return false;
+    }
+    if (delta > 0) {
+      acked += delta;
+      if (sent < acked) sent = acked;  // acknowledged beyond a go-back point
+      last_progress = clock_type::now();
+      rto = opt.retransmit_timeout;
+      goback_same = 0;
+      fatal_nak_count = 0;
+      if (goback_at && acked > *goback_at) goback_at.reset();
+    }
+    free_slots = free;
+    have_credit = true;
+    if (done) {
+      const size_t d = static_cast<uint32_t>(*done - done0);
+      if (d > done_count && d <= total_fifo) {
+        done_count = d;
+        if (opt.progress) opt.progress(done_count, total_fifo);
+      }
+    }
+    return true;
+  };
+  auto go_back = [&]() {
+    if (acked == (goback_at ? *goback_at : SIZE_MAX)) {
+      if (++goback_same > opt.max_goback_same) {
+        const auto* jf = items[acked].jf;
+        throw Error(
+            fmt::format("{}: {} (seq {}) refused {} times without progress (NAKs: {} BAD_CRC, {} "
+                        "BAD_LENGTH, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL)",
+                        name, frame_name(items[acked].frame, jf), seq_of(acked), goback_same,
+                        rep.naks[1], rep.naks[2], rep.naks[4], rep.naks[5], rep.naks[6]));
+      }
+    }
+    sent = acked;
+    goback_at = acked;
+    ++rep.go_backs;
+    last_progress = clock_type::now();
+  };
+
+  auto handle = [&](const v2::Frame& frame) {
+    const v2::Frame* f = &frame;
+    try {
+      switch (static_cast<v2::Type>(f->type)) {
+        case v2::Type::Ack:
+        case v2::Type::Done: {
+          const v2::Credit c = v2::decode_credit(*f);
+          update(c.next_seq, c.free, c.done);
+          break;
+        }
+        case v2::Type::Nak: {
+          const v2::Nak k = v2::decode_nak(*f);
+          ++rep.naks[static_cast<size_t>(k.reason)];
+          if (!update(k.next_seq, k.free, std::nullopt)) break;
+          if (k.reason == v2::NakReason::OutOfOrder && goback_at && acked == *goback_at) {
+            ++rep.naks_ignored;  // an old copy sent before the go-back
+            break;
+          }
+          if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
+              acked < n && k.seq == seq_of(acked) && ++fatal_nak_count >= 3) {
+            throw Error(fmt::format("{}: device refuses {} (seq {}): NAK {}", name,
+                                    frame_name(items[acked].frame, items[acked].jf), k.seq,
+                                    v2::nak_reason_name(static_cast<uint8_t>(k.reason))));
+          }
+          if (acked < n) go_back();
+          break;
+        }
+        case v2::Type::Status: {
+          const v2::Status stt = v2::decode_status(*f, n_axes);
+          const size_t depth = ident->fifo_depth;
+          const uint16_t fr =
+              static_cast<uint16_t>(stt.fifo_level >= depth ? 0 : depth - stt.fifo_level);
+          update(stt.next_seq, fr, stt.done);
+          break;
+        }
+        default:
+          break;  // IDENT (late), anything else: ignored
+      }
+    } catch (const v2::ProtocolError&) {
+      ++rep.bad_device_frames;
+    }
+  };
+
+  std::vector<uint8_t> batch;
+  for (;;) {
+    // Complete?
+    if (acked == n && done_count == total_fifo) break;
+
+    // Send what the window and the credit allow.
+    batch.clear();
+    size_t batch_frames = 0;
+    while (sent < n && sent - acked < opt.max_unacked) {
+      if (items[sent].fifo) {
+        const size_t in_flight = fifo_before[sent] - fifo_before[acked];
+        if (!have_credit || free_slots <= in_flight) break;
+      }
+      v2::Frame f = items[sent].frame;
+      f.seq = seq_of(sent);
+      v2::encode_to(f, batch);
+      ++batch_frames;
+      if (sent < high) ++rep.retransmissions;
+      ++sent;
+      high = std::max(high, sent);
+      if (batch.size() >= 256) break;  // keep reading answers while a long window goes out
+    }
+    s.send_batch(batch, batch_frames);
+
+    // Answers already there (read before any timer: a host that was not scheduled for a while
+    // must not take answers waiting in its input for a silence).
+    while (const auto f = s.receive(milliseconds(0))) handle(*f);
+    if (acked == n && done_count == total_fifo) break;
+
+    // Timers.
+    const auto now = clock_type::now();
+    if (now - s.last_rx() > opt.answer_timeout) {
+      const std::string last = acked == 0 ? std::string("none")
+                                          : frame_name(items[acked - 1].frame, items[acked - 1].jf);
+      throw Error(fmt::format(
+          "{}: no answer from the device for {:.3g} s ({} of {} frames acknowledged, {} of {} "
+          "FIFO frames done; last acknowledged: {})",
+          name, static_cast<double>(opt.answer_timeout.count()) / 1000.0, acked, n, done_count,
+          total_fifo, last));
+    }
+    if (sent > acked && now - last_progress > rto) {
+      ++rep.timeouts;
+      go_back();
+      // Back off while nothing comes back (a slow or stalled line), up to 8x.
+      rto = std::min(rto * 2, opt.retransmit_timeout * 8);
+      continue;
+    }
+    if (sent == acked && now - s.last_rx() > opt.idle_poll && now - last_poll > opt.idle_poll) {
+      s.send(v2::status_query());
+      ++rep.status_polls;
+      last_poll = now;
+    }
+    if (batch_frames) continue;
+    if (const auto f = s.receive(milliseconds(20))) handle(*f);
+  }
+
+  // 4. Final status and release.
+  rep.status_end = query_status(s, rep, n_axes, opt, name, "at the end");
+  rep.moved.resize(n_axes);
+  rep.position_ok = true;
+  for (size_t a = 0; a < n_axes; ++a) {
+    const int32_t d = static_cast<int32_t>(static_cast<uint32_t>(rep.status_end.position[a]) -
+                                           static_cast<uint32_t>(rep.status_start.position[a]));
+    rep.moved[a] = d;
+    const int64_t want = a < 4 ? job.target[a] : 0;
+    if (static_cast<int32_t>(static_cast<uint32_t>(want)) != d) rep.position_ok = false;
+  }
+  if (opt.release) {
+    const uint8_t rseq = seq_of(n);
+    const auto give_up = clock_type::now() + opt.answer_timeout;
+    while (!rep.released && clock_type::now() < give_up) {
+      s.send(v2::release(rseq));
+      const auto deadline = clock_type::now() + opt.retransmit_timeout;
+      while (!rep.released) {
+        const auto f = s.receive(until(deadline));
+        if (!f) break;
+        try {
+          if (f->type == static_cast<uint8_t>(v2::Type::Ack)) {
+            if (v2::decode_credit(*f).next_seq == static_cast<uint8_t>(rseq + 1)) {
+              rep.released = true;
+            }
+          }
+        } catch (const v2::ProtocolError&) {
+          ++rep.bad_device_frames;
+        }
+      }
+    }
+  }
+  s.finish_counters();
+  rep.elapsed = clock_type::now() - t0;
+  return rep;
+}
+
+std::string format_report(const StreamV2Report& r) {
+  std::string s;
+  s += fmt::format("v2 device: N_AXES {}, FIFO {}, clk {} Hz, baud {}, build 0x{:08X}\n",
+                   r.ident.n_axes, r.ident.fifo_depth, r.ident.clk_hz, r.ident.baud,
+                   r.ident.build_id);
+  s += fmt::format(
+      "frames: {} sequenced ({} FIFO: {} LINE, {} DWELL), {} written in all, {} "
+      "retransmitted, {} go-backs, {} retransmission timeouts, {} status polls\n",
+      r.sequenced_frames, r.fifo_frames, r.lines, r.dwells, r.frames_sent, r.retransmissions,
+      r.go_backs, r.timeouts, r.status_polls);
+  s += "NAKs:";
+  size_t total = 0;
+  for (uint8_t k = 1; k <= 7; ++k) {
+    s += fmt::format(" {} {}", v2::nak_reason_name(k), r.naks[k]);
+    total += r.naks[k];
+  }
+  s += fmt::format(" (total {}, {} OUT_OF_ORDER of old copies ignored)\n", total, r.naks_ignored);
+  s += fmt::format(
+      "device frames: {} duplicates, {} stale, {} undecodable; host parser: {} CRC errors, {} "
+      "bad lengths, {} noise bytes, {} abandoned\n",
+      r.duplicates, r.stale_answers, r.bad_device_frames, r.rx_crc_errors, r.rx_bad_length,
+      r.rx_noise_bytes, r.rx_abandoned);
+  s += fmt::format("bytes: {} written, {} read; {:.2f} s; job time without gaps {:.3f} s\n",
+                   r.bytes_written, r.bytes_read, r.elapsed.count(),
+                   static_cast<double>(r.total_t) / std::max<uint32_t>(r.ident.clk_hz, 1));
+  s += "device counters:";
+  for (size_t i = 0; i < v2::kCounters; ++i) {
+    s += fmt::format(" {} {}", v2::counter_name(i), r.status_end.counters[i]);
+  }
+  s += fmt::format("; faults 0x{:02X}", r.status_end.faults);
+  if (r.faults_cleared)
+    s += fmt::format(" (0x{:02X} latched before the job, cleared)", r.faults_cleared);
+  s += "\n";
+  s += "device moved:";
+  for (size_t a = 0; a < r.moved.size(); ++a) {
+    s += fmt::format(" {} {}", a < 4 ? config::kAxisNames[a] : '?', r.moved[a]);
+  }
+  s += fmt::format(" steps: {}\n", r.position_ok ? "matches the plan" : "DOES NOT match the plan");
+  if (!r.released) s += "warning: RELEASE not acknowledged (the device stays in v2 mode)\n";
+  return s;
+}
+
+}  // namespace fpgacnc::link

@@ -1,0 +1,501 @@
+#include "fpgacnc/protocol/v2.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <limits>
+
+namespace fpgacnc::protocol::v2 {
+namespace {
+
+void put16(std::vector<uint8_t>& v, uint16_t x) {
+  v.push_back(static_cast<uint8_t>(x >> 8));
+  v.push_back(static_cast<uint8_t>(x));
+}
+void put32(std::vector<uint8_t>& v, uint32_t x) {
+  v.push_back(static_cast<uint8_t>(x >> 24));
+  v.push_back(static_cast<uint8_t>(x >> 16));
+  v.push_back(static_cast<uint8_t>(x >> 8));
+  v.push_back(static_cast<uint8_t>(x));
+}
+uint16_t get16(const std::vector<uint8_t>& v, size_t i) {
+  return static_cast<uint16_t>((v[i] << 8) | v[i + 1]);
+}
+uint32_t get32(const std::vector<uint8_t>& v, size_t i) {
+  return (uint32_t{v[i]} << 24) | (uint32_t{v[i + 1]} << 16) | (uint32_t{v[i + 2]} << 8) |
+         uint32_t{v[i + 3]};
+}
+
+// Precomputed table for the MSB-first CRC (one lookup per byte).
+struct CrcTable {
+  std::array<uint16_t, 256> t{};
+  constexpr CrcTable() {
+    for (unsigned i = 0; i < 256; ++i) {
+      uint16_t c = static_cast<uint16_t>(i << 8);
+      for (int b = 0; b < 8; ++b) {
+        c = (c & 0x8000) ? static_cast<uint16_t>((c << 1) ^ 0x1021) : static_cast<uint16_t>(c << 1);
+      }
+      t[i] = c;
+    }
+  }
+};
+constexpr CrcTable kCrcTable;
+
+void expect(const Frame& f, Type type, size_t len) {
+  if (f.type != static_cast<uint8_t>(type)) {
+    throw ProtocolError(fmt::format("expected a {} frame, got {}",
+                                    type_name(static_cast<uint8_t>(type)), type_name(f.type)));
+  }
+  if (f.payload.size() != len) {
+    throw ProtocolError(fmt::format("{}: payload of {} bytes, expected {}", type_name(f.type),
+                                    f.payload.size(), len));
+  }
+}
+
+Frame make(uint8_t seq, Type type, std::vector<uint8_t> payload = {}) {
+  return Frame{seq, static_cast<uint8_t>(type), std::move(payload)};
+}
+
+Frame credit_frame(uint8_t dev_seq, Type type, const Credit& c) {
+  std::vector<uint8_t> p;
+  p.reserve(7);
+  p.push_back(c.next_seq);
+  put16(p, c.free);
+  put32(p, c.done);
+  return make(dev_seq, type, std::move(p));
+}
+
+Credit credit_from(const Frame& f) {
+  return Credit{f.payload[0], get16(f.payload, 1), get32(f.payload, 3)};
+}
+
+}  // namespace
+
+std::string type_name(uint8_t type) {
+  switch (static_cast<Type>(type)) {
+    case Type::Hello:
+      return "HELLO";
+    case Type::StatusQuery:
+      return "STATUS_QUERY";
+    case Type::FaultClear:
+      return "FAULT_CLEAR";
+    case Type::ConfigAxis:
+      return "CONFIG_AXIS";
+    case Type::Numerators:
+      return "NUMERATORS";
+    case Type::Release:
+      return "RELEASE";
+    case Type::Line:
+      return "LINE";
+    case Type::Dwell:
+      return "DWELL";
+    case Type::Ack:
+      return "ACK";
+    case Type::Nak:
+      return "NAK";
+    case Type::Done:
+      return "DONE";
+    case Type::Status:
+      return "STATUS";
+    case Type::Ident:
+      return "IDENT";
+  }
+  return fmt::format("type 0x{:02X}", type);
+}
+
+std::string nak_reason_name(uint8_t reason) {
+  switch (static_cast<NakReason>(reason)) {
+    case NakReason::BadCrc:
+      return "BAD_CRC";
+    case NakReason::BadLength:
+      return "BAD_LENGTH";
+    case NakReason::UnknownType:
+      return "UNKNOWN_TYPE";
+    case NakReason::Timeout:
+      return "TIMEOUT";
+    case NakReason::OutOfOrder:
+      return "OUT_OF_ORDER";
+    case NakReason::FifoFull:
+      return "FIFO_FULL";
+    case NakReason::BadField:
+      return "BAD_FIELD";
+  }
+  return fmt::format("reason {}", reason);
+}
+
+std::string counter_name(size_t index) {
+  static constexpr std::array<const char*, kCounters> kNames{
+      "frames_ok",           "crc_errors", "length_errors", "unknown_types", "timeouts",
+      "uart_framing_errors", "overruns",   "noise_bytes",   "clamped"};
+  return index < kCounters ? kNames[index] : fmt::format("counter {}", index);
+}
+
+bool is_sequenced(uint8_t type) {
+  switch (static_cast<Type>(type)) {
+    case Type::FaultClear:
+    case Type::ConfigAxis:
+    case Type::Numerators:
+    case Type::Release:
+    case Type::Line:
+    case Type::Dwell:
+      return true;
+    default:
+      return false;
+  }
+}
+
+bool is_fifo(uint8_t type) {
+  return type == static_cast<uint8_t>(Type::Numerators) ||
+         type == static_cast<uint8_t>(Type::Line) || type == static_cast<uint8_t>(Type::Dwell);
+}
+
+uint16_t crc16(std::span<const uint8_t> data) {
+  uint16_t c = 0xFFFF;
+  for (const uint8_t b : data) {
+    c = static_cast<uint16_t>((c << 8) ^ kCrcTable.t[((c >> 8) ^ b) & 0xFF]);
+  }
+  return c;
+}
+
+void encode_to(const Frame& f, std::vector<uint8_t>& out) {
+  if (f.payload.size() > kMaxPayload) {
+    throw std::invalid_argument(fmt::format("{} frame: payload of {} bytes exceeds {}",
+                                            type_name(f.type), f.payload.size(), kMaxPayload));
+  }
+  const size_t start = out.size();
+  out.push_back(kSync);
+  out.push_back(static_cast<uint8_t>(f.payload.size()));
+  out.push_back(f.seq);
+  out.push_back(f.type);
+  out.insert(out.end(), f.payload.begin(), f.payload.end());
+  const uint16_t c =
+      crc16(std::span<const uint8_t>(out.data() + start + 1, out.size() - start - 1));
+  put16(out, c);
+}
+
+std::vector<uint8_t> encode(const Frame& f) {
+  std::vector<uint8_t> out;
+  out.reserve(kOverhead + f.payload.size());
+  encode_to(f, out);
+  return out;
+}
+
+// ---- FrameParser ----
+
+void FrameParser::feed(std::span<const uint8_t> bytes) {
+  compact();
+  buf_.insert(buf_.end(), bytes.begin(), bytes.end());
+}
+
+void FrameParser::compact() {
+  if (pos_ > 4096 || (pos_ > 0 && pos_ == buf_.size())) {
+    buf_.erase(buf_.begin(), buf_.begin() + static_cast<std::ptrdiff_t>(pos_));
+    pos_ = 0;
+  }
+}
+
+std::optional<Frame> FrameParser::next() {
+  for (;;) {
+    // Hunt for a sync byte.
+    while (pos_ < buf_.size() && buf_[pos_] != kSync) {
+      ++noise_bytes_;
+      ++pos_;
+    }
+    if (buf_.size() - pos_ < 2) return std::nullopt;
+    const size_t len = buf_[pos_ + 1];
+    if (len > kMaxPayload) {
+      ++bad_length_;
+      ++pos_;  // reject this sync byte only
+      continue;
+    }
+    if (buf_.size() - pos_ < kOverhead + len) return std::nullopt;
+    const uint8_t* p = buf_.data() + pos_;
+    const uint16_t want = crc16(std::span<const uint8_t>(p + 1, 3 + len));
+    const uint16_t got = static_cast<uint16_t>((p[4 + len] << 8) | p[5 + len]);
+    if (want != got) {
+      ++crc_errors_;
+      ++pos_;
+      continue;
+    }
+    Frame f;
+    f.seq = p[2];
+    f.type = p[3];
+    f.payload.assign(p + 4, p + 4 + len);
+    pos_ += kOverhead + len;
+    ++frames_;
+    compact();
+    return f;
+  }
+}
+
+bool FrameParser::abandon_partial() {
+  // next() leaves the buffer at a sync byte (or empty) whenever it returns nullopt.
+  if (pos_ >= buf_.size() || buf_[pos_] != kSync) return false;
+  ++abandoned_;
+  ++pos_;
+  return true;
+}
+
+void FrameParser::reset() {
+  buf_.clear();
+  pos_ = 0;
+}
+
+// ---- Device -> host ----
+
+size_t status_payload_size(size_t n_axes) {
+  return 27 + 4 * n_axes;
+}
+
+Credit decode_credit(const Frame& f) {
+  if (f.type != static_cast<uint8_t>(Type::Ack) && f.type != static_cast<uint8_t>(Type::Done)) {
+    throw ProtocolError(fmt::format("expected an ACK or DONE frame, got {}", type_name(f.type)));
+  }
+  if (f.payload.size() != 7) {
+    throw ProtocolError(
+        fmt::format("{}: payload of {} bytes, expected 7", type_name(f.type), f.payload.size()));
+  }
+  return credit_from(f);
+}
+
+Nak decode_nak(const Frame& f) {
+  expect(f, Type::Nak, 5);
+  const uint8_t r = f.payload[1];
+  if (r < 1 || r > 7) throw ProtocolError(fmt::format("NAK: unknown reason {}", r));
+  return Nak{f.payload[0], static_cast<NakReason>(r), f.payload[2], get16(f.payload, 3)};
+}
+
+Ident decode_ident(const Frame& f) {
+  expect(f, Type::Ident, 18);
+  const auto& p = f.payload;
+  Ident i;
+  i.version = p[0];
+  i.n_axes = p[1];
+  i.fifo_depth = get16(p, 2);
+  i.clk_hz = get32(p, 4);
+  i.baud = get32(p, 8);
+  i.build_id = get32(p, 12);
+  i.next_seq = p[16];
+  i.max_payload = p[17];
+  return i;
+}
+
+Status decode_status(const Frame& f, size_t n_axes) {
+  if (n_axes > (kMaxPayload - 27) / 4) {
+    throw ProtocolError(fmt::format("STATUS: {} axes cannot fit a frame", n_axes));
+  }
+  expect(f, Type::Status, status_payload_size(n_axes));
+  const auto& p = f.payload;
+  Status s;
+  s.state = p[0];
+  s.faults = p[1];
+  s.fifo_level = get16(p, 2);
+  s.next_seq = p[4];
+  s.done = get32(p, 5);
+  size_t i = 9;
+  s.position.resize(n_axes);
+  for (auto& x : s.position) {
+    x = static_cast<int32_t>(get32(p, i));
+    i += 4;
+  }
+  for (auto& c : s.counters) {
+    c = get16(p, i);
+    i += 2;
+  }
+  return s;
+}
+
+Frame ack(uint8_t dev_seq, const Credit& c) {
+  return credit_frame(dev_seq, Type::Ack, c);
+}
+Frame done(uint8_t dev_seq, const Credit& c) {
+  return credit_frame(dev_seq, Type::Done, c);
+}
+
+Frame nak(uint8_t dev_seq, const Nak& n) {
+  std::vector<uint8_t> p{n.seq, static_cast<uint8_t>(n.reason), n.next_seq};
+  put16(p, n.free);
+  return make(dev_seq, Type::Nak, std::move(p));
+}
+
+Frame ident(uint8_t dev_seq, const Ident& i) {
+  std::vector<uint8_t> p{i.version, i.n_axes};
+  put16(p, i.fifo_depth);
+  put32(p, i.clk_hz);
+  put32(p, i.baud);
+  put32(p, i.build_id);
+  p.push_back(i.next_seq);
+  p.push_back(i.max_payload);
+  return make(dev_seq, Type::Ident, std::move(p));
+}
+
+Frame status(uint8_t dev_seq, const Status& s) {
+  std::vector<uint8_t> p{s.state, s.faults};
+  put16(p, s.fifo_level);
+  p.push_back(s.next_seq);
+  put32(p, s.done);
+  for (const int32_t x : s.position) put32(p, static_cast<uint32_t>(x));
+  for (const uint16_t c : s.counters) put16(p, c);
+  if (p.size() > kMaxPayload) {
+    throw std::invalid_argument(
+        fmt::format("STATUS frame: {} axes do not fit a frame", s.position.size()));
+  }
+  return make(dev_seq, Type::Status, std::move(p));
+}
+
+// ---- Host -> device ----
+
+Frame hello(uint8_t seq) {
+  return make(seq, Type::Hello);
+}
+Frame status_query(uint8_t seq) {
+  return make(seq, Type::StatusQuery);
+}
+Frame fault_clear(uint8_t seq) {
+  return make(seq, Type::FaultClear);
+}
+Frame release(uint8_t seq) {
+  return make(seq, Type::Release);
+}
+
+Frame config_axis(uint8_t seq, uint8_t axis, uint16_t step_high, uint16_t step_low,
+                  uint16_t dir_setup, uint16_t dir_hold) {
+  std::vector<uint8_t> p{axis};
+  put16(p, step_high);
+  put16(p, step_low);
+  put16(p, dir_setup);
+  put16(p, dir_hold);
+  return make(seq, Type::ConfigAxis, std::move(p));
+}
+
+Frame numerators(uint8_t seq, uint32_t numerator_x, uint32_t numerator_y) {
+  std::vector<uint8_t> p;
+  put32(p, numerator_x);
+  put32(p, numerator_y);
+  return make(seq, Type::Numerators, std::move(p));
+}
+
+Frame line(uint8_t seq, uint8_t code, uint8_t power, uint32_t t, std::span<const int32_t> steps,
+           bool short_if_fits) {
+  if (code > 3) throw std::invalid_argument(fmt::format("LINE frame: motion code {} > 3", code));
+  bool fits16 = short_if_fits;
+  for (const int32_t s : steps) {
+    if (s < std::numeric_limits<int16_t>::min() || s > std::numeric_limits<int16_t>::max()) {
+      fits16 = false;
+    }
+  }
+  const size_t w = fits16 ? 2 : 4;
+  if (6 + w * steps.size() > kMaxPayload) {
+    throw std::invalid_argument(
+        fmt::format("LINE frame: {} axes of {} bytes exceed {} bytes of payload", steps.size(), w,
+                    kMaxPayload));
+  }
+  std::vector<uint8_t> p;
+  p.reserve(6 + w * steps.size());
+  p.push_back(static_cast<uint8_t>(code | (fits16 ? kLineShort : 0)));
+  p.push_back(power);
+  put32(p, t);
+  for (const int32_t s : steps) {
+    if (fits16) {
+      put16(p, static_cast<uint16_t>(static_cast<int16_t>(s)));
+    } else {
+      put32(p, static_cast<uint32_t>(s));
+    }
+  }
+  return make(seq, Type::Line, std::move(p));
+}
+
+Frame dwell(uint8_t seq, uint32_t t) {
+  std::vector<uint8_t> p;
+  put32(p, t);
+  return make(seq, Type::Dwell, std::move(p));
+}
+
+std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
+  const size_t n = f.payload.size();
+  switch (static_cast<Type>(f.type)) {
+    case Type::Hello:
+    case Type::StatusQuery:
+    case Type::FaultClear:
+    case Type::Release:
+      if (n != 0) return NakReason::BadLength;
+      return std::nullopt;
+    case Type::ConfigAxis:
+      if (n != 9) return NakReason::BadLength;
+      if (n_axes && f.payload[0] >= n_axes) return NakReason::BadField;
+      return std::nullopt;
+    case Type::Numerators:
+      if (n != 8) return NakReason::BadLength;
+      return std::nullopt;
+    case Type::Dwell:
+      if (n != 4) return NakReason::BadLength;
+      return std::nullopt;
+    case Type::Line: {
+      if (n < 6) return NakReason::BadLength;
+      const size_t w = (f.payload[0] & kLineShort) ? 2 : 4;
+      if ((n - 6) % w != 0) return NakReason::BadLength;
+      if (n_axes && (n - 6) / w > n_axes) return NakReason::BadLength;
+      if (f.payload[0] & 0x7C) return NakReason::BadField;
+      return std::nullopt;
+    }
+    default:
+      return NakReason::UnknownType;
+  }
+}
+
+namespace {
+void check_or_throw(const Frame& f, Type type, size_t n_axes) {
+  if (f.type != static_cast<uint8_t>(type)) {
+    throw ProtocolError(fmt::format("expected a {} frame, got {}",
+                                    type_name(static_cast<uint8_t>(type)), type_name(f.type)));
+  }
+  if (const auto r = check_host_frame(f, n_axes)) {
+    throw ProtocolError(fmt::format("{}: {} (payload of {} bytes)", type_name(f.type),
+                                    nak_reason_name(static_cast<uint8_t>(*r)), f.payload.size()));
+  }
+}
+}  // namespace
+
+Line decode_line(const Frame& f, size_t n_axes) {
+  check_or_throw(f, Type::Line, n_axes);
+  const auto& p = f.payload;
+  Line l;
+  l.code = p[0] & 0x03;
+  l.short_steps = (p[0] & kLineShort) != 0;
+  l.power = p[1];
+  l.t = get32(p, 2);
+  const size_t w = l.short_steps ? 2 : 4;
+  for (size_t i = 6; i + w <= p.size(); i += w) {
+    l.steps.push_back(w == 2 ? static_cast<int32_t>(static_cast<int16_t>(get16(p, i)))
+                             : static_cast<int32_t>(get32(p, i)));
+  }
+  return l;
+}
+
+uint32_t decode_dwell(const Frame& f) {
+  check_or_throw(f, Type::Dwell, 0);
+  return get32(f.payload, 0);
+}
+
+ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {
+  check_or_throw(f, Type::ConfigAxis, n_axes);
+  const auto& p = f.payload;
+  return ConfigAxis{p[0], get16(p, 1), get16(p, 3), get16(p, 5), get16(p, 7)};
+}
+
+std::array<uint32_t, 2> decode_numerators(const Frame& f) {
+  check_or_throw(f, Type::Numerators, 0);
+  return {get32(f.payload, 0), get32(f.payload, 4)};
+}
+
+std::string hex(std::span<const uint8_t> bytes) {
+  std::string s;
+  s.reserve(bytes.size() * 3);
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    if (i) s += ' ';
+    s += fmt::format("{:02X}", bytes[i]);
+  }
+  return s;
+}
+
+}  // namespace fpgacnc::protocol::v2

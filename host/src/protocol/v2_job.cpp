@@ -1,0 +1,216 @@
+#include "fpgacnc/protocol/v2_job.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace fpgacnc::protocol::v2 {
+namespace {
+
+constexpr uint64_t kMaxT = std::numeric_limits<uint32_t>::max();
+constexpr int64_t kMaxSteps = std::numeric_limits<int32_t>::max();
+
+int64_t iabs(int64_t v) {
+  return v < 0 ? -v : v;
+}
+
+uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
+  if (s.code == 0) return 0;
+  if (s.spindle_s < 0.0) return 255;
+  const double scaled = s.spindle_s / cfg.laser_s_max * 255.0;
+  long long p = std::llround(std::clamp(scaled, 0.0, 255.0));
+  if (p == 0 && s.spindle_s > 0.0) p = 1;
+  return static_cast<uint8_t>(p);
+}
+
+// Segment time in clocks before the min-period raise (may exceed 32 bits).
+double segment_clocks(const plan::Segment& s, const plan::Plan& plan,
+                      const config::MachineConfig& cfg) {
+  const double clk = static_cast<double>(cfg.clk_hz);
+  if (s.exec_feed_mm_min > 0.0) {
+    double len2 = 0.0;
+    for (size_t a = 0; a < 3; ++a) {
+      const double d = static_cast<double>(s.steps[a]) / cfg.steps_per_mm[a];
+      len2 += d * d;
+    }
+    double len = std::sqrt(len2);
+    double feed = s.exec_feed_mm_min;
+    if (len == 0.0) {  // E alone
+      len = std::fabs(static_cast<double>(s.steps[3]) / cfg.steps_per_mm[3]);
+      feed = std::min(feed, cfg.max_feed_mm_min[3]);
+    }
+    return std::round(len / feed * 60.0 * clk);
+  }
+  // Step-file segment: v1 timing of the dominant of X, Y (X on a tie).
+  const bool x_dom = iabs(s.steps[0]) >= iabs(s.steps[1]);
+  const int64_t n = std::max(iabs(s.steps[0]), iabs(s.steps[1]));
+  const uint32_t num = plan.numerator[x_dom ? 0 : 1];
+  const uint64_t p = num / std::max<uint16_t>(s.feed_v1, 1);
+  return static_cast<double>(p) * static_cast<double>(n);
+}
+
+uint16_t u16_timing(uint32_t v, const char* what) {
+  if (v > 0xFFFF) {
+    throw std::invalid_argument(fmt::format(
+        "step_timing.{} = {} clocks does not fit a CONFIG_AXIS frame (max 65535)", what, v));
+  }
+  return static_cast<uint16_t>(v);
+}
+
+}  // namespace
+
+uint32_t min_period(const config::StepTiming& t) {
+  return std::max<uint32_t>(t.step_high, 1) + std::max<uint32_t>(t.step_low, 1);
+}
+
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
+  Job job;
+  const auto& st = cfg.step_timing;
+  const uint16_t sh = u16_timing(st.step_high, "step_high");
+  const uint16_t sl = u16_timing(st.step_low, "step_low");
+  const uint16_t ds = u16_timing(st.dir_setup, "dir_setup");
+  const uint16_t dh = u16_timing(st.dir_hold, "dir_hold");
+  for (uint8_t a = 0; a < config::kAxes; ++a)
+    job.config.push_back(config_axis(0, a, sh, sl, ds, dh));
+  for (const auto& f : job.config) job.wire_bytes += kOverhead + f.payload.size();
+  job.min_period = min_period(st);
+  job.numerator = plan.numerator;
+
+  auto push = [&job](JobFrame jf) {
+    job.wire_bytes += kOverhead + jf.frame.payload.size();
+    job.frames.push_back(std::move(jf));
+  };
+  {
+    JobFrame jf;
+    jf.frame = numerators(0, plan.numerator[0], plan.numerator[1]);
+    push(std::move(jf));
+  }
+
+  size_t seg_index = 0;
+  for (const auto& item : plan.items) {
+    if (const auto* s = std::get_if<plan::Segment>(&item)) {
+      if (s->code > 3) {
+        throw std::invalid_argument(fmt::format("segment {} (line {}): motion code {} not valid",
+                                                seg_index, s->source_line, s->code));
+      }
+      int64_t n_dom = 0;
+      size_t k = 2;
+      for (size_t a = 0; a < 4; ++a) {
+        n_dom = std::max(n_dom, iabs(s->steps[a]));
+        if (s->steps[a] != 0) k = std::max(k, a + 1);
+      }
+      const double t_feed = segment_clocks(*s, plan, cfg);
+      if (!std::isfinite(t_feed) || t_feed < 0.0 || t_feed > 1e18) {
+        throw std::invalid_argument(
+            fmt::format("segment {} (line {}): duration of {} clocks out of range", seg_index,
+                        s->source_line, t_feed));
+      }
+      const uint64_t t_min = static_cast<uint64_t>(n_dom) * job.min_period;
+      uint64_t t_total = static_cast<uint64_t>(t_feed);
+      if (t_total < t_min) {  // the feed asks for more than the step rate allows
+        t_total = t_min;
+        ++job.t_raised;
+      }
+      const uint8_t power = laser_power(*s, cfg);
+
+      // Smallest number of equal parts whose T and steps all fit.
+      uint64_t parts =
+          std::max<uint64_t>({1, (t_total + kMaxT - 1) / kMaxT,
+                              static_cast<uint64_t>((n_dom + kMaxSteps - 1) / kMaxSteps)});
+      std::vector<std::pair<uint64_t, std::array<int64_t, 4>>> pieces;
+      for (;; ++parts) {
+        if (parts > 1'000'000) {
+          throw std::invalid_argument(fmt::format(
+              "segment {} (line {}): cannot be split into LINE frames", seg_index, s->source_line));
+        }
+        pieces.clear();
+        bool ok = true;
+        for (uint64_t p = 1; p <= parts && ok; ++p) {
+          std::array<int64_t, 4> steps{};
+          int64_t nd = 0;
+          for (size_t a = 0; a < 4; ++a) {
+            const __int128 d = s->steps[a];
+            steps[a] = static_cast<int64_t>(d * p / parts - d * (p - 1) / parts);
+            nd = std::max(nd, iabs(steps[a]));
+          }
+          const __int128 tt = t_total;
+          uint64_t t = static_cast<uint64_t>(tt * p / parts - tt * (p - 1) / parts);
+          t = std::max<uint64_t>(t, static_cast<uint64_t>(nd) * job.min_period);
+          if (t > kMaxT || nd > kMaxSteps) ok = false;
+          pieces.emplace_back(t, steps);
+        }
+        if (ok) break;
+      }
+      if (pieces.size() > 1) ++job.split_moves;
+      for (const auto& [t, steps] : pieces) {
+        std::array<int32_t, 4> s32{};
+        for (size_t a = 0; a < 4; ++a) {
+          s32[a] = static_cast<int32_t>(steps[a]);
+          job.target[a] += steps[a];
+        }
+        JobFrame jf;
+        jf.frame = line(0, s->code, power, static_cast<uint32_t>(t),
+                        std::span<const int32_t>(s32.data(), k));
+        jf.segment_index = seg_index;
+        jf.source_line = s->source_line;
+        jf.t = static_cast<uint32_t>(t);
+        jf.axes = static_cast<uint8_t>(k);
+        jf.split = pieces.size() > 1;
+        if (jf.frame.payload[0] & kLineShort) ++job.short_lines;
+        job.total_t += t;
+        ++job.lines;
+        job.max_axes = std::max(job.max_axes, k);
+        push(std::move(jf));
+      }
+      ++job.segments;
+      ++seg_index;
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      const double clocks = std::round(d->seconds * static_cast<double>(cfg.clk_hz));
+      if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
+        throw std::invalid_argument(
+            fmt::format("dwell (line {}): {} s out of range", d->source_line, d->seconds));
+      }
+      uint64_t left = static_cast<uint64_t>(clocks);
+      const bool split = left > kMaxT;
+      while (left > 0) {
+        const uint64_t t = std::min(left, kMaxT);
+        JobFrame jf;
+        jf.frame = dwell(0, static_cast<uint32_t>(t));
+        jf.segment_index = seg_index;
+        jf.source_line = d->source_line;
+        jf.t = static_cast<uint32_t>(t);
+        jf.split = split;
+        job.total_t += t;
+        ++job.dwells;
+        push(std::move(jf));
+        left -= t;
+      }
+    } else {
+      ++job.skipped_heater;
+    }
+  }
+  return job;
+}
+
+std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq,
+                                                 size_t device_axes) {
+  std::vector<std::vector<uint8_t>> out;
+  uint8_t seq = first_seq;
+  for (size_t a = 0; a < job.config.size() && a < device_axes; ++a) {
+    Frame f = job.config[a];
+    f.seq = seq++;
+    out.push_back(encode(f));
+  }
+  for (const auto& jf : job.frames) {
+    Frame f = jf.frame;
+    f.seq = seq++;
+    out.push_back(encode(f));
+  }
+  out.push_back(encode(release(seq)));
+  return out;
+}
+
+}  // namespace fpgacnc::protocol::v2

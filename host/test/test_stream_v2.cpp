@@ -1,0 +1,390 @@
+// v2 streamer against the in-process fake device (fake_v2_device.h): clean jobs, credit, fault
+// injection (corrupted / dropped / duplicated host bytes, lost / corrupted / duplicated answers,
+// a line stall), sequence and done-counter wraparound, axis refusal, protocol selection (auto
+// falls back to v1 on a device that does not answer HELLO).
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <deque>
+#include <string>
+
+#include "fake_v2_device.h"
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/link/stream_v1.h"
+#include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
+
+namespace lk = fpgacnc::link;
+namespace v2 = fpgacnc::protocol::v2;
+using fpgacnc::test::FakeV2Device;
+using std::chrono::milliseconds;
+
+namespace {
+
+uint64_t seed_from_env(uint64_t dflt) {
+  const char* e = std::getenv("FPGACNC_SEED");
+  return e ? std::strtoull(e, nullptr, 10) : dflt;
+}
+
+// A square spiral of `n` segments in 0.1 mm steps growing by 0.1 mm per side, with a few Z and
+// E moves, a dwell and laser power changes.
+std::string spiral_gcode(int n, bool with_ze = true) {
+  std::string g = "G21 G90\nM3 S600\nF3000\n";
+  double x = 0, y = 0;
+  int len = 1;
+  int dir = 0;
+  for (int i = 0; i < n; ++i) {
+    const double d = 0.1 * len;
+    if (dir == 0) x += d;
+    if (dir == 1) y += d;
+    if (dir == 2) x -= d;
+    if (dir == 3) y -= d;
+    g += fmt::format("G1 X{:.3f} Y{:.3f}\n", x, y);
+    if (dir == 1 || dir == 3) ++len;
+    dir = (dir + 1) % 4;
+    if (with_ze && i % 50 == 25) g += "G1 Z0.5 E0.2\nG1 Z0\n";
+    if (i == n / 2) g += "G4 P0.01\nS1000\n";
+  }
+  g += "M5\nG0 X1 Y-2\n";
+  return g;
+}
+
+fpgacnc::config::MachineConfig test_cfg() {
+  fpgacnc::config::MachineConfig c;
+  return c;
+}
+
+fpgacnc::plan::Plan plan_of(const std::string& gcode, const fpgacnc::config::MachineConfig& cfg) {
+  return fpgacnc::plan::plan_program(fpgacnc::gcode::parse_string(gcode, "job.gcode"), cfg, {});
+}
+
+// Clean-line tests: a retransmission timeout long enough that a busy machine never fires it.
+lk::StreamV2Options clean_options() {
+  lk::StreamV2Options o;
+  o.retransmit_timeout = milliseconds(1000);
+  o.idle_poll = milliseconds(20);
+  o.answer_timeout = milliseconds(5000);
+  return o;
+}
+
+lk::StreamV2Options fast_options() {
+  lk::StreamV2Options o;
+  o.retransmit_timeout = milliseconds(60);
+  o.idle_poll = milliseconds(60);
+  o.answer_timeout = milliseconds(3000);
+  return o;
+}
+
+// Every FIFO frame of the job executed exactly once, in order (type and payload).
+void expect_executed_in_order(const FakeV2Device& dev, const v2::Job& job) {
+  const auto& ex = dev.executed();
+  ASSERT_EQ(ex.size(), job.frames.size())
+      << "device executed " << ex.size() << " FIFO frames, job has " << job.frames.size();
+  for (size_t i = 0; i < ex.size(); ++i) {
+    ASSERT_EQ(ex[i].type, job.frames[i].frame.type) << "FIFO frame " << i;
+    ASSERT_EQ(ex[i].payload, job.frames[i].frame.payload)
+        << "FIFO frame " << i << " (segment " << job.frames[i].segment_index << ", line "
+        << job.frames[i].source_line << "): expected " << v2::hex(job.frames[i].frame.payload)
+        << ", got " << v2::hex(ex[i].payload);
+  }
+}
+
+}  // namespace
+
+TEST(StreamV2, CleanJobRunsEveryFrameOnceInOrder) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(300), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  FakeV2Device dev(o);
+  std::vector<std::pair<size_t, size_t>> progress;
+  auto so = clean_options();
+  so.progress = [&](size_t d, size_t t) { progress.emplace_back(d, t); };
+  const auto r = lk::stream_v2(dev, plan, cfg, so);
+  expect_executed_in_order(dev, job);
+  ASSERT_EQ(dev.configs().size(), 4u);
+  for (uint8_t a = 0; a < 4; ++a) {
+    EXPECT_EQ(dev.configs()[a], (v2::ConfigAxis{a, 100, 100, 200, 200}));
+  }
+  EXPECT_EQ(r.retransmissions, 0u);
+  EXPECT_EQ(r.go_backs, 0u);
+  for (size_t k = 1; k < 8; ++k)
+    EXPECT_EQ(r.naks[k], 0u) << v2::nak_reason_name(static_cast<uint8_t>(k));
+  EXPECT_EQ(r.sequenced_frames, 4 + job.frames.size());
+  EXPECT_EQ(r.fifo_frames, job.frames.size());
+  EXPECT_TRUE(r.position_ok);
+  for (size_t a = 0; a < 4; ++a) {
+    EXPECT_EQ(r.moved[a], plan.final_steps[a]) << "axis " << a;
+    EXPECT_EQ(dev.position()[a], plan.final_steps[a]) << "axis " << a;
+  }
+  EXPECT_TRUE(r.released);
+  EXPECT_FALSE(dev.v2_mode());
+  EXPECT_EQ(dev.stats().releases, 1u);
+  ASSERT_FALSE(progress.empty());
+  EXPECT_EQ(progress.back(), (std::pair<size_t, size_t>{job.frames.size(), job.frames.size()}));
+  // Credit: the device FIFO never overflowed and never refused a frame.
+  EXPECT_EQ(dev.stats().fifo_full, 0u);
+  EXPECT_LE(dev.stats().max_fifo_level, 16u);
+  EXPECT_GE(dev.stats().max_fifo_level, 8u) << "the window should keep the FIFO well filled";
+  EXPECT_EQ(r.bytes_written, dev.written().size());
+  std::printf("%s", lk::format_report(r).c_str());
+}
+
+TEST(StreamV2, TinyFifoAndSlowDeviceNeverOverflow) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(60, false), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 2;
+  o.exec_period = std::chrono::microseconds(2000);
+  FakeV2Device dev(o);
+  const auto r = lk::stream_v2(dev, plan, cfg, clean_options());
+  expect_executed_in_order(dev, job);
+  EXPECT_EQ(dev.stats().fifo_full, 0u);
+  EXPECT_EQ(dev.stats().max_fifo_level, 2u);
+  EXPECT_EQ(r.retransmissions, 0u);
+  EXPECT_TRUE(r.position_ok);
+}
+
+TEST(StreamV2, SequenceAndDoneCountersWrapAround) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(400, false), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.initial_next_seq = 250;
+  o.initial_done = 0xFFFFFFF0u;
+  FakeV2Device dev(o);
+  const auto r = lk::stream_v2(dev, plan, cfg, clean_options());
+  expect_executed_in_order(dev, job);
+  EXPECT_EQ(dev.done(), static_cast<uint32_t>(0xFFFFFFF0u + job.frames.size()));
+  EXPECT_EQ(dev.next_seq(), static_cast<uint8_t>(250 + 4 + job.frames.size() + 1));
+  EXPECT_TRUE(r.position_ok);
+  EXPECT_EQ(r.retransmissions, 0u);
+}
+
+// Faults of every kind at once; the seed (FPGACNC_SEED) is printed.
+class StreamV2Faults : public ::testing::TestWithParam<uint64_t> {};
+
+TEST_P(StreamV2Faults, JobCompletesEverySegmentExactlyOnce) {
+  const uint64_t seed = seed_from_env(GetParam());
+  std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(600), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 32;
+  o.exec_period = std::chrono::microseconds(100);
+  o.faults.seed = seed;
+  o.faults.host_bit_flip = 2e-4;
+  o.faults.host_drop = 2e-4;
+  o.faults.host_dup = 2e-4;
+  o.faults.answer_lose = 0.03;
+  o.faults.answer_corrupt = 0.03;
+  o.faults.answer_dup = 0.03;
+  o.faults.stall_after_bytes = 3000;
+  o.faults.stall = milliseconds(200);
+  FakeV2Device dev(o);
+  const auto r = lk::stream_v2(dev, plan, cfg, fast_options());
+  expect_executed_in_order(dev, job);
+  EXPECT_TRUE(r.position_ok);
+  const auto& st = dev.stats();
+  std::printf(
+      "injected: %llu bit flips, %llu dropped, %llu duplicated host bytes; %llu lost, %llu "
+      "corrupted, %llu duplicated answers; %llu stall(s)\n",
+      (unsigned long long)st.flipped, (unsigned long long)st.dropped,
+      (unsigned long long)st.duplicated, (unsigned long long)st.answers_lost,
+      (unsigned long long)st.answers_corrupted, (unsigned long long)st.answers_duplicated,
+      (unsigned long long)st.stalls);
+  std::printf(
+      "device: %llu CRC errors, %llu length errors, %llu timeouts, %llu duplicates "
+      "re-ACKed, %llu out of order\n",
+      (unsigned long long)st.crc_errors, (unsigned long long)st.length_errors,
+      (unsigned long long)st.timeouts, (unsigned long long)st.duplicates_acked,
+      (unsigned long long)st.out_of_order);
+  std::printf("%s", lk::format_report(r).c_str());
+  EXPECT_EQ(st.stalls, 1u);
+  EXPECT_GT(st.answers_lost + st.answers_corrupted, 0u);
+  // Something was lost or corrupted on the way in, so something was sent again.
+  if (st.flipped + st.dropped > 0) {
+    EXPECT_GT(r.retransmissions, 0u);
+  }
+  EXPECT_GT(r.rx_crc_errors + r.rx_bad_length, 0u) << "corrupted answers seen by the host parser";
+  EXPECT_GT(r.duplicates, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, StreamV2Faults, ::testing::Values(1u, 2u, 3u));
+
+TEST(StreamV2, StallLongerThanTheRetransmitTimeoutResends) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.faults.stall_after_bytes = 500;
+  o.faults.stall = milliseconds(200);
+  FakeV2Device dev(o);
+  const auto r = lk::stream_v2(dev, plan, cfg, fast_options());  // 60 ms timeout
+  expect_executed_in_order(dev, job);
+  EXPECT_GE(r.timeouts, 1u);
+  EXPECT_GT(r.retransmissions, 0u);
+  EXPECT_GT(dev.stats().duplicates_acked, 0u) << "the held frames arrive twice";
+  EXPECT_TRUE(r.position_ok);
+}
+
+TEST(StreamV2, WithoutDoneFramesStatusPollsCompleteTheJob) {
+  // A device whose DONE frames are all lost: credit and completion come from ACKs (sent when a
+  // frame arrives, before it runs) and, once the host has nothing left to send, from STATUS.
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(60, false), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.send_done = false;
+  o.fifo_depth = 8;
+  o.exec_period = std::chrono::microseconds(1000);
+  FakeV2Device dev(o);
+  const auto r = lk::stream_v2(dev, plan, cfg, clean_options());
+  expect_executed_in_order(dev, job);
+  EXPECT_GT(r.status_polls, 2u) << "2 are the start and end queries";
+  EXPECT_TRUE(r.position_ok);
+}
+
+TEST(StreamV2, RefusesAJobWithMoreAxesThanTheDevice) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of("G1 X1 Y1 Z1 F600\n", cfg);
+  FakeV2Device::Options o;
+  o.n_axes = 2;
+  FakeV2Device dev(o);
+  try {
+    lk::stream_v2(dev, plan, cfg, fast_options());
+    FAIL() << "a 3-axis job was accepted by a 2-axis device";
+  } catch (const lk::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("3 axes"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(dev.next_seq(), 0) << "a sequenced frame was sent";
+  EXPECT_TRUE(dev.executed().empty());
+  // The same job in 2 axes is fine.
+  const auto plan2 = plan_of("G1 X1 Y1 F600\nG1 X0\n", cfg);
+  const auto r = lk::stream_v2(dev, plan2, cfg, fast_options());
+  EXPECT_TRUE(r.position_ok);
+  EXPECT_EQ(dev.configs().size(), 2u) << "CONFIG_AXIS only for the device's axes";
+}
+
+TEST(StreamV2, DeviceThatNeverAnswersIsAnError) {
+  FakeV2Device::Options o;
+  o.answer_hello = false;
+  FakeV2Device dev(o);
+  auto so = fast_options();
+  so.hello_timeout = milliseconds(50);
+  EXPECT_THROW(lk::select_protocol(dev, "v2", so), lk::Error);
+  EXPECT_EQ(dev.stats().hellos, 3u);
+  const auto cfg = test_cfg();
+  EXPECT_THROW(lk::stream_v2(dev, plan_of("G1 X1 F600\n", cfg), cfg, so), lk::Error);
+}
+
+TEST(SelectProtocol, AutoPicksV2WhenIdentComes) {
+  FakeV2Device dev(FakeV2Device::Options{});
+  const auto c = lk::select_protocol(dev, "auto", fast_options());
+  EXPECT_EQ(c.protocol, "v2");
+  ASSERT_TRUE(c.ident.has_value());
+  EXPECT_EQ(c.ident->n_axes, 4);
+  EXPECT_EQ(c.ident->fifo_depth, 16);
+  EXPECT_LT(c.probe_time.count(), 0.3);
+  EXPECT_EQ(lk::select_protocol(dev, "v1", fast_options()).protocol, "v1");
+  EXPECT_EQ(dev.stats().hellos, 1u) << "v1 must not probe";
+}
+
+namespace {
+
+// A v1-only device as the original: any first byte other than 0xFF starts an 11-byte motion
+// packet (only bits [1:0] used), 0xFF a 9-byte init; a packet whose bytes stop for 100 ms is
+// dropped (watchdog, wall time). 0xAA per motion packet.
+class FakeV1Device : public lk::Link {
+ public:
+  void write(std::span<const uint8_t> bytes) override {
+    for (const uint8_t b : bytes) {
+      const auto now = clock::now();
+      if (!pkt_.empty() && now - last_ > milliseconds(100)) {
+        ++dropped_;
+        pkt_.clear();
+      }
+      last_ = now;
+      pkt_.push_back(b);
+      const size_t want = pkt_[0] == 0xFF ? 9 : 11;
+      if (pkt_.size() == want) {
+        if (want == 9) {
+          ++inits_;
+        } else {
+          moves_.push_back(pkt_);
+          out_.push_back(0xAA);
+        }
+        pkt_.clear();
+      }
+    }
+  }
+  std::optional<uint8_t> read_byte(milliseconds timeout) override {
+    if (out_.empty()) {
+      std::this_thread::sleep_for(timeout);
+      return std::nullopt;
+    }
+    const uint8_t b = out_.front();
+    out_.pop_front();
+    return b;
+  }
+  void flush_input() override { out_.clear(); }
+  std::string name() const override { return "fake-v1"; }
+  std::vector<std::vector<uint8_t>> moves_;
+  size_t inits_ = 0;
+  size_t dropped_ = 0;
+
+ private:
+  using clock = std::chrono::steady_clock;
+  std::vector<uint8_t> pkt_;
+  std::deque<uint8_t> out_;
+  clock::time_point last_ = clock::now();
+};
+
+}  // namespace
+
+TEST(SelectProtocol, AutoFallsBackToV1Cleanly) {
+  FakeV1Device dev;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto c = lk::select_protocol(dev, "auto", lk::StreamV2Options{});
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(c.protocol, "v1");
+  EXPECT_FALSE(c.ident.has_value());
+  EXPECT_GE(waited, 0.45) << "300 ms for IDENT + 150 ms for the device watchdog";
+  EXPECT_LT(waited, 1.5);
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  const auto plan = plan_of("G1 X1 Y2 F600\nG1 X0 Y0\n", cfg);
+  lk::StreamOptions so;
+  so.ack_timeout = milliseconds(1000);
+  const auto r = lk::stream_v1(dev, plan, so);
+  EXPECT_EQ(r.moves, 2u);
+  EXPECT_EQ(dev.dropped_, 1u) << "the HELLO bytes are dropped by the watchdog";
+  EXPECT_EQ(dev.inits_, 1u);
+  ASSERT_EQ(dev.moves_.size(), 2u) << "no move made of HELLO bytes";
+  const auto job = fpgacnc::protocol::v1::pack_job(plan);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_TRUE(std::equal(dev.moves_[i].begin(), dev.moves_[i].end(), job.steps[i].packet.begin()))
+        << "move " << i;
+  }
+}
+
+TEST(SelectProtocol, ExplicitV2OnAV1DeviceIsAnError) {
+  FakeV1Device dev;
+  lk::StreamV2Options so;
+  so.hello_attempts = 1;
+  try {
+    lk::select_protocol(dev, "v2", so);
+    FAIL();
+  } catch (const lk::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not speak protocol v2"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(lk::select_protocol(dev, "v3", so), lk::Error);
+}

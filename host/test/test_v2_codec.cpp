@@ -1,0 +1,503 @@
+// Protocol v2 codec: every worked example of docs/protocol.md byte-exact (encode and decode), the
+// CRC check value, the resyncing parser, and decoders rejecting wrong types and lengths.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <string>
+
+#include "fpgacnc/protocol/v2.h"
+
+namespace v2 = fpgacnc::protocol::v2;
+using Bytes = std::vector<uint8_t>;
+
+namespace {
+
+// "A5 0A 07" -> bytes (the docs' notation).
+Bytes from_hex(const std::string& s) {
+  Bytes b;
+  size_t i = 0;
+  while (i < s.size()) {
+    if (s[i] == ' ') {
+      ++i;
+      continue;
+    }
+    b.push_back(static_cast<uint8_t>(std::stoul(s.substr(i, 2), nullptr, 16)));
+    i += 2;
+  }
+  return b;
+}
+
+v2::Frame parse_one(const Bytes& b) {
+  v2::FrameParser p;
+  p.feed(b);
+  auto f = p.next();
+  EXPECT_TRUE(f.has_value()) << v2::hex(b);
+  EXPECT_FALSE(p.next().has_value());
+  EXPECT_EQ(p.crc_errors(), 0u);
+  EXPECT_EQ(p.noise_bytes(), 0u);
+  return f.value_or(v2::Frame{});
+}
+
+uint32_t seed_from_env() {
+  const char* e = std::getenv("FPGACNC_SEED");
+  return e ? static_cast<uint32_t>(std::strtoul(e, nullptr, 10)) : 20260005u;
+}
+
+}  // namespace
+
+TEST(V2Codec, CrcCheckValue) {
+  const std::string s = "123456789";
+  const Bytes b(s.begin(), s.end());
+  EXPECT_EQ(v2::crc16(b), 0x29B1);
+  EXPECT_EQ(v2::crc16({}), 0xFFFF);
+}
+
+TEST(V2Codec, CrcMatchesBitwiseReference) {
+  const uint32_t seed = seed_from_env();
+  std::printf("seed %u (FPGACNC_SEED)\n", seed);
+  std::mt19937 rng(seed);
+  for (int n = 0; n < 200; ++n) {
+    Bytes b(rng() % 80);
+    for (auto& x : b) x = static_cast<uint8_t>(rng());
+    uint16_t c = 0xFFFF;
+    for (const uint8_t x : b) {
+      c ^= static_cast<uint16_t>(x << 8);
+      for (int k = 0; k < 8; ++k) {
+        c = (c & 0x8000) ? static_cast<uint16_t>((c << 1) ^ 0x1021) : static_cast<uint16_t>(c << 1);
+      }
+    }
+    ASSERT_EQ(v2::crc16(b), c) << "bytes " << v2::hex(b);
+  }
+}
+
+TEST(V2Codec, WorkedExamplesEncode) {
+  EXPECT_EQ(v2::encode(v2::hello()), from_hex("A5 00 00 01 DC BD"));
+  EXPECT_EQ(v2::encode(v2::status_query()), from_hex("A5 00 00 02 EC DE"));
+  EXPECT_EQ(v2::encode(v2::config_axis(1, 0, 100, 100, 200, 200)),
+            from_hex("A5 09 01 04 00 00 64 00 64 00 C8 00 C8 DC 4C"));
+  const std::array<int32_t, 2> xy{320, -160};
+  EXPECT_EQ(v2::encode(v2::line(7, 1, 255, 5'000'000, xy)),
+            from_hex("A5 0A 07 10 81 FF 00 4C 4B 40 01 40 FF 60 C0 B7"));
+  const std::array<int32_t, 4> xyze{320, -160, 0, 0};
+  EXPECT_EQ(v2::encode(v2::line(8, 1, 255, 5'000'000, xyze, false)),
+            from_hex("A5 16 08 10 01 FF 00 4C 4B 40 00 00 01 40 FF FF FF 60 00 00 00 00 00 00 "
+                     "00 00 D6 AB"));
+  EXPECT_EQ(v2::encode(v2::dwell(9, 50'000'000)), from_hex("A5 04 09 11 02 FA F0 80 9D 53"));
+  EXPECT_EQ(v2::encode(v2::ack(0, {8, 63, 5})), from_hex("A5 07 00 80 08 00 3F 00 00 00 05 AA 5D"));
+  EXPECT_EQ(v2::encode(v2::nak(1, {9, v2::NakReason::BadCrc, 8, 63})),
+            from_hex("A5 05 01 81 09 01 08 00 3F E0 B4"));
+}
+
+TEST(V2Codec, WorkedExamplesDecode) {
+  auto f = parse_one(from_hex("A5 00 00 01 DC BD"));
+  EXPECT_EQ(f.type, static_cast<uint8_t>(v2::Type::Hello));
+  EXPECT_TRUE(f.payload.empty());
+  EXPECT_EQ(parse_one(from_hex("A5 00 00 02 EC DE")).type,
+            static_cast<uint8_t>(v2::Type::StatusQuery));
+
+  f = parse_one(from_hex("A5 09 01 04 00 00 64 00 64 00 C8 00 C8 DC 4C"));
+  EXPECT_EQ(f.seq, 1);
+  EXPECT_EQ(v2::decode_config_axis(f), (v2::ConfigAxis{0, 100, 100, 200, 200}));
+
+  f = parse_one(from_hex("A5 0A 07 10 81 FF 00 4C 4B 40 01 40 FF 60 C0 B7"));
+  EXPECT_EQ(f.seq, 7);
+  auto l = v2::decode_line(f, 4);
+  EXPECT_EQ(l, (v2::Line{1, 255, 5'000'000, true, {320, -160}}));
+
+  f = parse_one(from_hex(
+      "A5 16 08 10 01 FF 00 4C 4B 40 00 00 01 40 FF FF FF 60 00 00 00 00 00 00 00 00 D6 AB"));
+  EXPECT_EQ(f.seq, 8);
+  l = v2::decode_line(f, 4);
+  EXPECT_EQ(l, (v2::Line{1, 255, 5'000'000, false, {320, -160, 0, 0}}));
+
+  f = parse_one(from_hex("A5 04 09 11 02 FA F0 80 9D 53"));
+  EXPECT_EQ(f.seq, 9);
+  EXPECT_EQ(v2::decode_dwell(f), 50'000'000u);
+
+  f = parse_one(from_hex("A5 07 00 80 08 00 3F 00 00 00 05 AA 5D"));
+  EXPECT_EQ(f.type, static_cast<uint8_t>(v2::Type::Ack));
+  EXPECT_EQ(v2::decode_credit(f), (v2::Credit{8, 63, 5}));
+
+  f = parse_one(from_hex("A5 05 01 81 09 01 08 00 3F E0 B4"));
+  EXPECT_EQ(f.seq, 1);
+  EXPECT_EQ(v2::decode_nak(f), (v2::Nak{9, v2::NakReason::BadCrc, 8, 63}));
+}
+
+TEST(V2Codec, DeviceFramesRoundTrip) {
+  const v2::Ident id{2, 4, 64, 50'000'000, 115200, 0x20260005, 17, 64};
+  EXPECT_EQ(v2::decode_ident(parse_one(v2::encode(v2::ident(3, id)))), id);
+  EXPECT_EQ(v2::encode(v2::ident(3, id)).size(), 6u + 18u);
+  v2::Status st;
+  st.state = v2::kStateBusy | v2::kStateV2;
+  st.faults = 1;
+  st.fifo_level = 63;
+  st.next_seq = 200;
+  st.done = 0xDEADBEEF;
+  st.position = {-5, 7, 1 << 30, -(1 << 30)};
+  for (size_t i = 0; i < v2::kCounters; ++i) st.counters[i] = static_cast<uint16_t>(1000 * i + 1);
+  const auto sb = v2::encode(v2::status(4, st));
+  EXPECT_EQ(sb.size(), 6u + 43u);
+  EXPECT_EQ(v2::decode_status(parse_one(sb), 4), st);
+  const auto d = v2::decode_credit(parse_one(v2::encode(v2::done(9, {1, 2, 3}))));
+  EXPECT_EQ(d, (v2::Credit{1, 2, 3}));
+  const v2::Frame numf = v2::numerators(5, 18'750'000, 7'500'000);
+  EXPECT_EQ(v2::encode(numf).size(), 14u);
+  EXPECT_EQ(v2::decode_numerators(parse_one(v2::encode(numf))),
+            (std::array<uint32_t, 2>{18'750'000, 7'500'000}));
+}
+
+TEST(V2Codec, LineChoosesShortOnlyWhenEveryCountFits) {
+  const std::array<int32_t, 2> fits{32767, -32768};
+  auto f = v2::line(0, 2, 10, 1000, fits);
+  EXPECT_EQ(f.payload.size(), 10u);
+  EXPECT_EQ(f.payload[0], 0x82);
+  EXPECT_EQ(v2::decode_line(f).steps, (std::vector<int32_t>{32767, -32768}));
+  const std::array<int32_t, 2> big{32768, 0};
+  f = v2::line(0, 3, 10, 1000, big);
+  EXPECT_EQ(f.payload.size(), 14u);
+  EXPECT_EQ(f.payload[0], 0x03);
+  EXPECT_EQ(v2::decode_line(f).steps, (std::vector<int32_t>{32768, 0}));
+  const std::array<int32_t, 14> many{};
+  EXPECT_EQ(v2::line(0, 0, 0, 0, many, false).payload.size(), 62u);
+  const std::array<int32_t, 15> too_many{};
+  EXPECT_THROW(v2::line(0, 0, 0, 0, too_many, false), std::invalid_argument);
+  EXPECT_THROW(v2::line(0, 4, 0, 0, fits), std::invalid_argument);
+}
+
+TEST(V2Codec, EncodeRejectsOversizedPayload) {
+  v2::Frame f;
+  f.type = 0x10;
+  f.payload.assign(64, 0);
+  EXPECT_EQ(v2::encode(f).size(), 70u);
+  f.payload.push_back(0);
+  EXPECT_THROW(v2::encode(f), std::invalid_argument);
+}
+
+TEST(V2Codec, ParserResyncsAfterGarbage) {
+  const Bytes ackb = v2::encode(v2::ack(0, {8, 63, 5}));
+  const Bytes nakb = v2::encode(v2::nak(1, {9, v2::NakReason::BadCrc, 8, 63}));
+  Bytes stream{0x00, 0x13, 0xFF, 0xAA};  // 4 noise bytes
+  stream.insert(stream.end(), ackb.begin(), ackb.end());
+  stream.push_back(0x42);  // 1 noise byte
+  stream.insert(stream.end(), nakb.begin(), nakb.end());
+  v2::FrameParser p;
+  // Byte by byte: frames come out exactly when their last byte arrives.
+  size_t got = 0;
+  for (size_t i = 0; i < stream.size(); ++i) {
+    p.feed(stream[i]);
+    while (auto f = p.next()) {
+      ++got;
+      if (got == 1) {
+        EXPECT_EQ(i, 4 + ackb.size() - 1);
+        EXPECT_EQ(v2::decode_credit(*f), (v2::Credit{8, 63, 5}));
+      } else {
+        EXPECT_EQ(i, stream.size() - 1);
+        EXPECT_EQ(v2::decode_nak(*f).seq, 9);
+      }
+    }
+  }
+  EXPECT_EQ(got, 2u);
+  EXPECT_EQ(p.noise_bytes(), 5u);
+  EXPECT_EQ(p.crc_errors(), 0u);
+}
+
+TEST(V2Codec, ParserDropsCorruptedFrameAndFindsTheNextOne) {
+  const Bytes ackb = v2::encode(v2::ack(0, {8, 63, 5}));
+  const Bytes done_b = v2::encode(v2::done(1, {9, 62, 6}));
+  for (size_t pos = 1; pos < ackb.size(); ++pos) {
+    for (int bit = 0; bit < 8; ++bit) {
+      Bytes bad = ackb;
+      bad[pos] ^= static_cast<uint8_t>(1u << bit);
+      Bytes stream = bad;
+      stream.insert(stream.end(), done_b.begin(), done_b.end());
+      // More good frames so a LEN corrupted upwards (up to 64) still completes.
+      for (int k = 0; k < 8; ++k) stream.insert(stream.end(), done_b.begin(), done_b.end());
+      v2::FrameParser p;
+      p.feed(stream);
+      auto f = p.next();
+      ASSERT_TRUE(f.has_value()) << "pos " << pos << " bit " << bit;
+      EXPECT_EQ(f->type, static_cast<uint8_t>(v2::Type::Done)) << "pos " << pos << " bit " << bit;
+      EXPECT_EQ(v2::decode_credit(*f), (v2::Credit{9, 62, 6}));
+      EXPECT_EQ(p.crc_errors() + p.bad_length(), 1u) << "pos " << pos << " bit " << bit;
+      size_t more = 0;
+      while (p.next()) ++more;
+      EXPECT_EQ(more, 8u) << "pos " << pos << " bit " << bit;
+    }
+  }
+}
+
+TEST(V2Codec, ParserCountsBadLengthAndAbandonsPartial) {
+  v2::FrameParser p;
+  p.feed(Bytes{0xA5, 0x41});  // LEN 65 > 64
+  EXPECT_FALSE(p.next().has_value());
+  EXPECT_EQ(p.bad_length(), 1u);
+  // A header whose LEN was corrupted upwards waits for bytes; abandon_partial() gives it up.
+  const Bytes ackb = v2::encode(v2::ack(0, {8, 63, 5}));
+  Bytes bad = ackb;
+  bad[1] = 40;
+  p.feed(bad);
+  p.feed(ackb);
+  EXPECT_FALSE(p.next().has_value());
+  EXPECT_GT(p.buffered(), 0u);
+  EXPECT_TRUE(p.abandon_partial());
+  auto f = p.next();
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(v2::decode_credit(*f), (v2::Credit{8, 63, 5}));
+  EXPECT_EQ(p.abandoned(), 1u);
+  EXPECT_FALSE(p.abandon_partial());
+}
+
+TEST(V2Codec, ParserRandomStreamRecoversEveryUntouchedFrame) {
+  const uint32_t seed = seed_from_env();
+  std::printf("seed %u (FPGACNC_SEED)\n", seed);
+  std::mt19937 rng(seed);
+  // Frames separated by random noise without 0xA5 (so no false sync): all found, in order.
+  std::vector<v2::Frame> sent;
+  Bytes stream;
+  for (int i = 0; i < 2000; ++i) {
+    v2::Frame f;
+    f.seq = static_cast<uint8_t>(rng());
+    f.type = static_cast<uint8_t>(rng());
+    f.payload.resize(rng() % 65);
+    for (auto& b : f.payload) b = static_cast<uint8_t>(rng());
+    sent.push_back(f);
+    v2::encode_to(f, stream);
+    const size_t noise = rng() % 4;
+    for (size_t k = 0; k < noise; ++k) {
+      uint8_t b = static_cast<uint8_t>(rng());
+      if (b == v2::kSync) b = 0;
+      stream.push_back(b);
+    }
+  }
+  v2::FrameParser p;
+  std::vector<v2::Frame> got;
+  size_t i = 0;
+  while (i < stream.size()) {
+    const size_t n = std::min<size_t>(1 + rng() % 50, stream.size() - i);
+    p.feed(std::span<const uint8_t>(stream.data() + i, n));
+    i += n;
+    while (auto f = p.next()) got.push_back(*f);
+  }
+  ASSERT_EQ(got.size(), sent.size());
+  for (size_t k = 0; k < sent.size(); ++k) ASSERT_EQ(got[k], sent[k]) << "frame " << k;
+  EXPECT_EQ(p.crc_errors(), 0u);
+}
+
+TEST(V2Codec, DecodersRejectWrongTypeAndLength) {
+  v2::Frame f = v2::ack(0, {1, 2, 3});
+  EXPECT_THROW(v2::decode_nak(f), v2::ProtocolError);
+  EXPECT_THROW(v2::decode_ident(f), v2::ProtocolError);
+  EXPECT_THROW(v2::decode_status(f, 4), v2::ProtocolError);
+  f.payload.pop_back();
+  try {
+    v2::decode_credit(f);
+    FAIL() << "6-byte ACK accepted";
+  } catch (const v2::ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("ACK"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("6 bytes"), std::string::npos) << e.what();
+  }
+  v2::Frame n = v2::nak(0, {1, v2::NakReason::FifoFull, 2, 3});
+  EXPECT_NO_THROW(v2::decode_nak(n));
+  n.payload[1] = 0;
+  EXPECT_THROW(v2::decode_nak(n), v2::ProtocolError);
+  n.payload[1] = 8;
+  EXPECT_THROW(v2::decode_nak(n), v2::ProtocolError);
+  n.payload.push_back(0);
+  EXPECT_THROW(v2::decode_nak(n), v2::ProtocolError);
+  v2::Frame id = v2::ident(0, v2::Ident{});
+  id.payload.resize(17);
+  EXPECT_THROW(v2::decode_ident(id), v2::ProtocolError);
+  v2::Status st;
+  st.position.resize(2);
+  const v2::Frame s2 = v2::status(0, st);
+  EXPECT_NO_THROW(v2::decode_status(s2, 2));
+  EXPECT_THROW(v2::decode_status(s2, 4), v2::ProtocolError);
+  EXPECT_THROW(v2::decode_credit(v2::hello()), v2::ProtocolError);
+}
+
+TEST(V2Codec, HostFrameChecksFollowTheDeviceRules) {
+  using R = v2::NakReason;
+  EXPECT_EQ(v2::check_host_frame(v2::hello(), 4), std::nullopt);
+  v2::Frame f = v2::hello();
+  f.payload.push_back(0);
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadLength);
+  EXPECT_EQ(v2::check_host_frame(v2::config_axis(0, 3, 1, 1, 1, 1), 4), std::nullopt);
+  EXPECT_EQ(v2::check_host_frame(v2::config_axis(0, 4, 1, 1, 1, 1), 4), R::BadField);
+  const std::array<int32_t, 3> xyz{1, 2, 3};
+  EXPECT_EQ(v2::check_host_frame(v2::line(0, 1, 1, 1, xyz), 4), std::nullopt);
+  EXPECT_EQ(v2::check_host_frame(v2::line(0, 1, 1, 1, xyz), 2), R::BadLength);
+  f = v2::line(0, 1, 1, 1, xyz);
+  f.payload[0] |= 0x04;
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadField);
+  EXPECT_THROW(v2::decode_line(f), v2::ProtocolError);
+  f = v2::line(0, 1, 1, 1, xyz);
+  f.payload.pop_back();  // 6 + 5 bytes: not a whole number of int16
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadLength);
+  f.type = 0x12;  // LINE_PROFILE: reserved
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::UnknownType);
+  EXPECT_EQ(v2::check_host_frame(v2::dwell(0, 1), 4), std::nullopt);
+  EXPECT_TRUE(v2::is_fifo(0x10) && v2::is_fifo(0x11) && v2::is_fifo(0x05));
+  EXPECT_FALSE(v2::is_fifo(0x04) || v2::is_fifo(0x06) || v2::is_fifo(0x01));
+  EXPECT_TRUE(v2::is_sequenced(0x03) && v2::is_sequenced(0x06) && v2::is_sequenced(0x04));
+  EXPECT_FALSE(v2::is_sequenced(0x01) || v2::is_sequenced(0x02));
+}
+
+// ---- Packer: plan -> v2 frames ----
+
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/plan/stepfile.h"
+#include "fpgacnc/protocol/v2_job.h"
+
+namespace {
+
+fpgacnc::plan::Plan plan_str(const std::string& g, const fpgacnc::config::MachineConfig& cfg) {
+  return fpgacnc::plan::plan_program(fpgacnc::gcode::parse_string(g, "p.gcode"), cfg, {});
+}
+
+std::vector<v2::Line> lines_of(const v2::Job& job) {
+  std::vector<v2::Line> out;
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type == static_cast<uint8_t>(v2::Type::Line))
+      out.push_back(v2::decode_line(jf.frame));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(V2Packer, WorkedExampleMoveIsTheDocsLineFrame) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  // 2 mm x -1 mm at 600 * sqrt(5) mm/min: 0.1 s = 5 000 000 clocks.
+  const auto plan = plan_str("G1 X2 Y-1 F1341.6407865\n", cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  ASSERT_EQ(job.frames.size(), 2u);
+  EXPECT_EQ(job.frames[0].frame, v2::numerators(0, 18'750'000, 18'750'000));
+  v2::Frame f = job.frames[1].frame;
+  f.seq = 7;
+  EXPECT_EQ(v2::encode(f), from_hex("A5 0A 07 10 81 FF 00 4C 4B 40 01 40 FF 60 C0 B7"));
+  EXPECT_EQ(job.total_t, 5'000'000u);
+  EXPECT_EQ(job.lines, 1u);
+  EXPECT_EQ(job.short_lines, 1u);
+  EXPECT_EQ(job.max_axes, 2u);
+  ASSERT_EQ(job.config.size(), 4u);
+  v2::Frame c = job.config[0];
+  c.seq = 1;
+  EXPECT_EQ(v2::encode(c), from_hex("A5 09 01 04 00 00 64 00 64 00 C8 00 C8 DC 4C"));
+  EXPECT_EQ(job.wire_bytes, 4 * 15u + 14u + 16u);
+}
+
+TEST(V2Packer, AxesPowerAndRapids) {
+  fpgacnc::config::MachineConfig cfg;  // laser_requires_m3 = true, laser_s_max = 1000
+  const auto plan =
+      plan_str("G0 X1\nM3 S500\nG1 X2 F600\nG1 Z1\nG1 E5\nS1\nG1 X300\nM5\nG1 X0\n", cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  const auto l = lines_of(job);
+  ASSERT_EQ(l.size(), 6u);
+  // G0: code 0, power 0, at the rapid feed: 1 mm at 3000 mm/min = 0.02 s.
+  EXPECT_EQ(l[0], (v2::Line{0, 0, 1'000'000, true, {160, 0}}));
+  // S500 of 1000 -> round(127.5) = 128; 1 mm at 600 mm/min = 0.1 s.
+  EXPECT_EQ(l[1], (v2::Line{1, 128, 5'000'000, true, {160, 0}}));
+  // Z: k = 3; 1 mm at 600 mm/min (Z max feed 600).
+  EXPECT_EQ(l[2], (v2::Line{1, 128, 5'000'000, true, {0, 0, 400}}));
+  // E alone: k = 4, its own length 5 mm at 600 mm/min = 0.5 s.
+  EXPECT_EQ(l[3], (v2::Line{1, 128, 25'000'000, true, {0, 0, 0, 500}}));
+  // S1 -> 0.255 rounds to 0, raised to 1 (S > 0 is never off); 298 mm = 47680 steps: int32.
+  EXPECT_EQ(l[4], (v2::Line{1, 1, 1'490'000'000, false, {47'680, 0}}));
+  // After M5: laser off, code 0, power 0, still at the programmed feed.
+  EXPECT_EQ(l[5].code, 0);
+  EXPECT_EQ(l[5].power, 0);
+  EXPECT_EQ(l[5].t, 1'500'000'000u);  // 300 mm at 600 mm/min
+  EXPECT_EQ(job.max_axes, 4u);
+  EXPECT_EQ(job.target, plan.final_steps);
+}
+
+TEST(V2Packer, TooFastIsRaisedToTheStepRate) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  cfg.max_feed_mm_min = {1e7, 1e7, 1e7, 1e7};
+  // 100 mm at 1e6 mm/min: 300 000 clocks for 16 000 steps: below 16 000 * 200.
+  const auto job = v2::pack_job(plan_str("G1 X100 F1000000\n", cfg), cfg);
+  const auto l = lines_of(job);
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_EQ(l[0].t, 16'000u * 200u);
+  EXPECT_EQ(job.t_raised, 1u);
+  cfg.step_timing.step_high = 0;  // counts as 1 clock
+  cfg.step_timing.step_low = 3;
+  EXPECT_EQ(v2::min_period(cfg.step_timing), 4u);
+}
+
+TEST(V2Packer, LongMovesAndDwellsAreSplitExactly) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.laser_requires_m3 = false;
+  // 100 mm at 1 mm/min: 6000 s = 3e11 clocks -> 70 LINE frames of at most UINT32_MAX.
+  const auto plan = plan_str("G1 X100 Y-33.3 F1\nG4 P100\nG4 P0\nG4 P1.5\n", cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  const auto l = lines_of(job);
+  const double len = std::hypot(100.0, 5328.0 / 160.0);  // Y: -5328 steps
+  const uint64_t want_t = static_cast<uint64_t>(std::llround(len / 1.0 * 60.0 * 50e6));
+  ASSERT_EQ(l.size(), static_cast<size_t>((want_t + 0xFFFFFFFFull - 1) / 0xFFFFFFFFull));
+  uint64_t t = 0;
+  int64_t x = 0, y = 0;
+  for (const auto& s : l) {
+    t += s.t;
+    x += s.steps[0];
+    y += s.steps[1];
+    EXPECT_LE(s.t, 0xFFFFFFFFull);
+  }
+  EXPECT_EQ(t, want_t);
+  EXPECT_EQ(x, 16'000);
+  EXPECT_EQ(y, -5'328);
+  EXPECT_EQ(job.split_moves, 1u);
+  // Dwells: 100 s = 5e9 clocks -> 2 frames; 0 s -> none; 1.5 s -> 75e6.
+  std::vector<uint32_t> d;
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type == static_cast<uint8_t>(v2::Type::Dwell))
+      d.push_back(v2::decode_dwell(jf.frame));
+  }
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_EQ(uint64_t{d[0]} + d[1], 5'000'000'000u);
+  EXPECT_EQ(d[2], 75'000'000u);
+  EXPECT_EQ(job.total_t, want_t + 5'000'000'000u + 75'000'000u);
+}
+
+TEST(V2Packer, StepFileSegmentsKeepV1Timing) {
+  // The v1 worked example as a step file: feed 1200 -> P = 15 625, T = 5 000 000.
+  fpgacnc::config::MachineConfig cfg;
+  fpgacnc::plan::Plan p;
+  p.numerator = {18'750'000, 18'750'000};
+  fpgacnc::plan::Segment s;
+  s.code = 1;
+  s.steps = {320, -160, 0, 0};
+  s.feed_v1 = 1200;
+  p.items.emplace_back(s);
+  const auto l = lines_of(v2::pack_job(p, cfg));
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_EQ(l[0], (v2::Line{1, 255, 5'000'000, true, {320, -160}}));
+}
+
+TEST(V2Packer, RejectsWhatV2CannotCarry) {
+  fpgacnc::config::MachineConfig cfg;
+  fpgacnc::plan::Plan p;
+  fpgacnc::plan::Segment s;
+  s.code = 4;
+  s.steps = {1, 0, 0, 0};
+  p.items.emplace_back(s);
+  EXPECT_THROW(v2::pack_job(p, cfg), std::invalid_argument);
+  cfg.step_timing.dir_setup = 70'000;
+  EXPECT_THROW(v2::pack_job(fpgacnc::plan::Plan{}, cfg), std::invalid_argument);
+}
+
+TEST(V2Packer, SessionFramesCarryConsecutiveSequenceNumbers) {
+  fpgacnc::config::MachineConfig cfg;
+  const auto job = v2::pack_job(plan_str("G1 X1 F600\nG1 Y1\n", cfg), cfg);
+  const auto frames = v2::session_frames(job, 254, 2);
+  ASSERT_EQ(frames.size(), 2u + job.frames.size() + 1u);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i][2], static_cast<uint8_t>(254 + i)) << "frame " << i;
+  }
+  EXPECT_EQ(frames.back()[3], static_cast<uint8_t>(v2::Type::Release));
+}
