@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/twins/timing.h"
 #include "fpgacnc/twins/v2_frames.h"
 
@@ -286,6 +287,20 @@ class V2StreamHost : public Host {
   uint64_t bad_seen_ = 0;
   std::optional<Cycle> frame_start_;
 };
+
+// A job packed by the host's v2 packer as a session: CONFIG_AXIS for every axis, then its FIFO
+// frames (NUMERATORS, LINE, DWELL; at most `max_frames` LINE/DWELL), back to back.
+inline V2Script job_script(const protocol::v2::Job& job, size_t max_frames = SIZE_MAX) {
+  V2Script s;
+  for (const auto& f : job.config) s.items.push_back(V2Item{f.type, f.payload, 1, false});
+  size_t motion = 0;
+  for (const auto& jf : job.frames) {
+    const bool numerators = jf.frame.type == v2::kNumerators;
+    if (!numerators && motion++ >= max_frames) break;
+    s.items.push_back(V2Item{jf.frame.type, jf.frame.payload, 1, false});
+  }
+  return s;
+}
 
 // How a job is driven: v1 stop-and-wait packets or a v2 session.
 struct HostScript {

@@ -8,12 +8,14 @@
 //     A reversing axis's DIR changes on the first edge >= E + kFastDirDelay on which its DIR
 //     hold since its last STEP rise has elapsed (its first step comes at least hold + setup
 //     after R', the prep's dir_fast guarantee).
-//   otherwise: A = the first edge after V on which the executor is idle (from E + 1, or A + 1
-//     after a segment of T = 0). T = 0: done at once (seg_done after edge A). No moving axis
-//     changes direction: the run starts at R = A. Otherwise DIR is written at D = the first
-//     edge after A on which every reversing axis's DIR hold has elapsed since its last STEP
-//     rise (asked from its step_pulse), and the run starts at R = D + max(largest DIR setup of
-//     the reversing axes, 1).
+//   otherwise: A = E when V < E (the executor takes a segment during the last tick), else the
+//     first edge after V on which the executor is idle (from E + 1, or A + 1 after a segment of
+//     T = 0, A + 2 after one taken on a last tick). T = 0: done at once (seg_done after edge
+//     A, or A + 1 when taken on a last tick: one clock in ZERO). No moving axis changes
+//     direction: the run starts at R = A. Otherwise DIR is written at D = the first edge after
+//     A on which every reversing axis's DIR hold has elapsed since its last STEP rise (asked
+//     from its step_pulse), and the run starts at R = D + max(largest DIR setup of the
+//     reversing axes, 1).
 //   Tick c of the run is edge R + c; each axis's dda_linear is loaded with (n, T) at R; a
 //   segment without steps (a dwell) just lasts T ticks. Laser high from edge R to edge R + T
 //   for codes 1..3 with power > 0 (back-to-back cutting segments keep it high: the recorder
@@ -101,7 +103,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (st[a].dir == s.dir[a]) continue;
       flip[a] = change = true;
     }
-    const bool queued = running_ && s.total != 0 && valid < run_end_ && (!change || s.dir_fast);
+    // Offered while the last tick of a running segment is issued: accepted on its last edge.
+    const bool on_last_tick = running_ && valid < run_end_;
+    const bool queued = on_last_tick && s.total != 0 && (!change || s.dir_fast);
     Cycle accept, run;
     if (queued) {
       accept = run = run_end_;
@@ -114,7 +118,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         transport(*pulse[a], gp_, clk_, c, d, tlm::TLM_WRITE_COMMAND, kDirWrite);
       }
     } else {
-      accept = std::max(valid + 1, idle_after_ + 1);
+      accept = on_last_tick ? run_end_ : std::max(valid + 1, idle_after_ + 1);
       run = accept;
       if (change) {
         Cycle dir_edge = accept + 1;
@@ -134,7 +138,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
     }
     delay = clk_.delay_to(accept);
-    Cycle end = accept;
+    // T = 0 completes at once; accepted on a last tick it passes one clock in ZERO.
+    Cycle end = on_last_tick ? accept + 1 : accept;
     running_ = s.total != 0;
     if (s.total != 0) {
       seg_start_cycles.push_back(run);

@@ -24,10 +24,12 @@
 
 namespace fpgacnc::twins {
 
-inline constexpr Cycle kPrepLatency = 68;       // v1 motion
-inline constexpr Cycle kPrepLatencyV2 = 68;     // v2 motion (divider T / n_dom)
-inline constexpr Cycle kPrepClampExtra = 0;     // v2 motion raised to n_dom * min_period
-inline constexpr Cycle kPrepLatencyDwell = 68;  // dwell, and v2 motion without steps
+// PREP_LATENCY: v1 motion 68 (divider, clamp, multiplier, subtract); v2 entries (LINE, DWELL)
+// first scan the axes for n_dom, one per clock: 68 + N_AXES, clamped or not.
+inline constexpr Cycle kPrepLatency = 68;
+inline constexpr Cycle kPrepLatencyV2 = 68 + kAxes;
+inline constexpr Cycle kPrepClampExtra = 0;
+inline constexpr Cycle kPrepLatencyDwell = 68 + kAxes;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
   Cycle edge;
