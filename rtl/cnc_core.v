@@ -167,7 +167,24 @@ module cnc_core #(
   end
 
   // ---------------------------------------------------------------- preparation
+  // Stopgap until the v2 decoder and command FIFO: the v1 decoder's command as a FIFO entry
+  // { v2, kind, code, power, t, steps } (kind 0 motion, 1 init; v1: t = feed, power 0xFF).
+  localparam ENTRY_W = 45 + 32 * N_AXES;
+  wire [ENTRY_W-1:0] cmd_entry;
+  generate
+    if (N_AXES > 2) begin : g_entry_wide
+      assign cmd_entry = {1'b0, cmd_tuser ? 2'd1 : 2'd0, cmd_tdata[81:80], 8'hFF, 16'd0,
+                          cmd_tdata[15:0], {(32 * (N_AXES - 2)) {1'b0}}, cmd_tdata[47:16],
+                          cmd_tdata[79:48]};
+    end else begin : g_entry_narrow
+      assign cmd_entry = {1'b0, cmd_tuser ? 2'd1 : 2'd0, cmd_tdata[81:80], 8'hFF, 16'd0,
+                          cmd_tdata[15:0], cmd_tdata[47:16], cmd_tdata[79:48]};
+    end
+  endgenerate
+
   wire [1:0] seg_code;
+  wire [7:0] seg_power;
+  wire seg_v2, seg_dir_fast;
   wire [N_AXES-1:0] seg_dir;
   wire [32*N_AXES-1:0] seg_steps;
   wire [64*N_AXES-1:0] seg_tmn;
@@ -175,33 +192,42 @@ module cnc_core #(
   wire [15:0] seg_feed;
   wire [31:0] seg_period;
   wire seg_tvalid, seg_tready;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire init_v2, prep_clamped, seg_done_v2;  // v2 status, not used by the v1 core
+  /* verilator lint_on UNUSEDSIGNAL */
 
   segment_prep #(
       .N_AXES           (N_AXES),
       .FEED0_PERIOD     (FEED0_PERIOD),
       .DEFAULT_NUMERATOR(DEFAULT_NUMERATOR)
   ) u_prep (
-      .clk          (clk),
-      .rst          (rst),
-      .s_axis_tdata (cmd_tdata),
-      .s_axis_tuser (cmd_tuser),
-      .s_axis_tvalid(cmd_tvalid),
-      .s_axis_tready(cmd_tready),
-      .exec_idle    (exec_idle),
-      .min_period   (min_period_reg),
-      .m_axis_code  (seg_code),
-      .m_axis_dir   (seg_dir),
-      .m_axis_steps (seg_steps),
-      .m_axis_tmn   (seg_tmn),
-      .m_axis_total (seg_total),
-      .m_axis_period(seg_period),
-      .m_axis_feed  (seg_feed),
-      .m_axis_tvalid(seg_tvalid),
-      .m_axis_tready(seg_tready),
-      .numerator_x  (numerator_x),
-      .numerator_y  (numerator_y),
-      .init_applied (init_applied),
-      .busy         (prep_busy)
+      .clk            (clk),
+      .rst            (rst),
+      .s_axis_tdata   (cmd_entry),
+      .s_axis_tvalid  (cmd_tvalid),
+      .s_axis_tready  (cmd_tready),
+      .exec_idle      (exec_idle),
+      .min_period     (min_period_reg),
+      .cfg_dir_setup  (cfg_setup_reg),
+      .cfg_dir_hold   (cfg_hold_reg),
+      .m_axis_code    (seg_code),
+      .m_axis_power   (seg_power),
+      .m_axis_v2      (seg_v2),
+      .m_axis_dir_fast(seg_dir_fast),
+      .m_axis_dir     (seg_dir),
+      .m_axis_steps   (seg_steps),
+      .m_axis_tmn     (seg_tmn),
+      .m_axis_total   (seg_total),
+      .m_axis_period  (seg_period),
+      .m_axis_feed    (seg_feed),
+      .m_axis_tvalid  (seg_tvalid),
+      .m_axis_tready  (seg_tready),
+      .numerator_x    (numerator_x),
+      .numerator_y    (numerator_y),
+      .init_applied   (init_applied),
+      .init_v2        (init_v2),
+      .clamped        (prep_clamped),
+      .busy           (prep_busy)
   );
 
   // ---------------------------------------------------------------- execution
@@ -210,29 +236,33 @@ module cnc_core #(
   segment_executor #(
       .N_AXES(N_AXES)
   ) u_exec (
-      .clk          (clk),
-      .rst          (rst),
-      .s_axis_code  (seg_code),
-      .s_axis_dir   (seg_dir),
-      .s_axis_steps (seg_steps),
-      .s_axis_tmn   (seg_tmn),
-      .s_axis_total (seg_total),
-      .s_axis_tvalid(seg_tvalid),
-      .s_axis_tready(seg_tready),
-      .cfg_step_high(cfg_high_reg),
-      .cfg_step_low (cfg_low_reg),
-      .cfg_dir_setup(cfg_setup_reg),
-      .cfg_dir_hold (cfg_hold_reg),
-      .step         (step),
-      .dir          (dir),
-      .laser        (laser),
-      .busy         (exec_busy),
-      .idle         (exec_idle),
-      .running      (running),
-      .seg_start    (seg_start),
-      .seg_done     (seg_done),
-      .position     (position),
-      .violation    (exec_violation)
+      .clk            (clk),
+      .rst            (rst),
+      .s_axis_code    (seg_code),
+      .s_axis_power   (seg_power),
+      .s_axis_v2      (seg_v2),
+      .s_axis_dir_fast(seg_dir_fast),
+      .s_axis_dir     (seg_dir),
+      .s_axis_steps   (seg_steps),
+      .s_axis_tmn     (seg_tmn),
+      .s_axis_total   (seg_total),
+      .s_axis_tvalid  (seg_tvalid),
+      .s_axis_tready  (seg_tready),
+      .cfg_step_high  (cfg_high_reg),
+      .cfg_step_low   (cfg_low_reg),
+      .cfg_dir_setup  (cfg_setup_reg),
+      .cfg_dir_hold   (cfg_hold_reg),
+      .step           (step),
+      .dir            (dir),
+      .laser          (laser),
+      .busy           (exec_busy),
+      .idle           (exec_idle),
+      .running        (running),
+      .seg_start      (seg_start),
+      .seg_done       (seg_done),
+      .seg_done_v2    (seg_done_v2),
+      .position       (position),
+      .violation      (exec_violation)
   );
 
   // ---------------------------------------------------------------- ACK and status

@@ -9,7 +9,11 @@
 // compare is the borrow of the first one: one 64-bit add deep.
 // The executor gives one tick per clock for constant-rate segments; a rate generator can gate
 // `tick` to follow a speed profile, the arithmetic stays exact (the oversampled DDA of system.md).
-// load: takes steps (n) and tmn = T - n. step is combinational from the registers and tick.
+// load: takes steps (n) and tmn = T - n (load wins over a tick on the same edge: the executor loads
+// the next segment on the edge that ends the last tick of the current one; that tick's step is
+// still issued, being combinational). step is combinational from the registers and tick.
+// The end of a segment is counted by the executor (a tick counter), not derived from `step`, so no
+// logic follows the 64-bit compare into a register enable.
 `default_nettype none
 
 module dda_linear (
@@ -21,8 +25,7 @@ module dda_linear (
     input wire [63:0] tmn,
     input wire        tick,
 
-    output wire step,       // this tick emits a step
-    output wire done_next   // no steps remain after this clock's tick (or none remained)
+    output wire step  // this tick emits a step
 );
 
   reg [63:0] rem_reg;
@@ -56,8 +59,7 @@ module dda_linear (
     end
   end
 
-  assign step      = active && wrap;
-  assign done_next = (left_reg == 32'd0) || ((left_reg == 32'd1) && step);
+  assign step = active && wrap;
 
 endmodule
 

@@ -1,19 +1,38 @@
-// segment_executor: runs prepared linear segments on N_AXES axes at a constant rate.
+// segment_executor: runs prepared linear segments on N_AXES axes at a constant rate, back to back.
 //
-// Input (s_axis_*): one segment from segment_prep: code, per-axis direction and |steps|, the
-// per-axis DDA constant T - |steps| and the length T in clocks. Accepted only when idle
-// (s_axis_tready = idle state).
-// Sequence for a segment, in clocks:
-//   accept edge A. T = 0 (no steps): done at once, seg_done strobes in the next clock.
-//   If an axis that moves must change DIR: wait until that axis's DIR hold has elapsed since its
-//   last STEP rising edge (HOLD), write DIR (edge D), wait the largest DIR setup of the changed
-//   axes (run starts at edge R = D + max(setup, 1)). Otherwise run starts at R = A.
-//   RUN: clock c = 1..T after R is tick c of every axis's dda_linear; a step on tick c raises STEP
-//   at edge R + c (step_pulse adds one register). seg_start is high during tick 1, laser is high
-//   from edge R to edge R + T for codes 1..3 (G1/G2/G3), never for code 0 (G0). After tick T the
-//   executor is idle again and seg_done strobes for one clock.
-// So the k-th STEP rising edge of an axis with n steps is at R + ceil(k*T/n): all axes start at R,
-// every axis's last step is at R + T, and each step is within one clock of R + k*T/n.
+// Input (s_axis_*): one segment from segment_prep: code, laser power, v2 bit, dir_fast, per-axis
+// direction and |steps|, the per-axis DDA constant T - |steps| and the length T in clocks.
+// s_axis_tready = idle, or RUN during the last tick (tick T) of the running segment; it depends on
+// registers only. Edge numbers below are rising clock edges; "after edge e" = the clock e..e+1.
+//
+// Run of a segment with T > 0 starting at edge R: tick c (c = 1..T) is the clock after edge
+// R + c - 1; a step on tick c raises STEP at edge R + c (step_pulse adds one register), so the
+// k-th STEP rise of an axis with n steps is at R + ceil(k*T/n) and every axis's last one at R + T.
+// A 64-bit tick counter (exact for dwells: a segment with T > 0 and no steps runs T ticks) marks
+// the last tick; the segment ends on edge R + T.
+//
+// Accept edge A (s_axis_tvalid && s_axis_tready). A moving axis "reverses" when its direction
+// differs from the DIR level the executor has written or will write (dir_tgt_reg).
+//   - T = 0: completes at once. From idle: seg_done high after A, idle again (a next segment can
+//     be accepted on A + 1). Accepted during a last tick (A = R + T of the running one, whose
+//     seg_done is high after A): state ZERO for one clock, its seg_done high after A + 1, idle
+//     from A + 1 (next accept on A + 2 at the earliest).
+//   - Accepted during the last tick of a running segment (A = R + T), no reversing axis, or
+//     reversing axes and s_axis_dir_fast: runs with no gap, R' = A (its tick 1 right after A).
+//     Each reversing axis gets a "DIR write pending": its DIR pin changes on the first edge
+//     >= A + 1 at which its DIR hold has elapsed since its last STEP rise (step_pulse hold_ok).
+//     segment_prep's dir_fast guarantees that this comes at least DIR setup before the axis's
+//     first step of the new segment (first step >= R' + floor(T'/n_dom) >= R' + hold + setup).
+//   - Otherwise with a reversing axis (from idle, or during the last tick without dir_fast):
+//     HOLD until every reversing axis's DIR hold has elapsed since its last STEP rise, write DIR
+//     (edge D >= A + 1), SETUP, run from R = D + max(largest DIR setup of those axes, 1).
+//   - Otherwise (from idle): R = A.
+// seg_start is high after edge R (during tick 1); seg_done is high for one clock after the edge on
+// which a segment ends (R + T; see T = 0 above), with seg_done_v2 = that segment's v2 bit. When a
+// segment is accepted on the last tick of the previous one, the previous one's seg_done and the
+// new one's seg_start are high in the same clock.
+// Laser: high after edge R until edge R + T for a segment with code != 0 and power != 0; between
+// two such segments run back to back it stays high; low in HOLD, SETUP, ZERO and idle.
 // position: signed step count per axis, updated on the edge STEP rises.
 `default_nettype none
 
@@ -23,13 +42,16 @@ module segment_executor #(
     input wire clk,
     input wire rst,
 
-    input  wire [         1:0] s_axis_code,
-    input  wire [  N_AXES-1:0] s_axis_dir,
-    input  wire [32*N_AXES-1:0] s_axis_steps,
-    input  wire [64*N_AXES-1:0] s_axis_tmn,
-    input  wire [        63:0] s_axis_total,
-    input  wire                s_axis_tvalid,
-    output wire                s_axis_tready,
+    input  wire [           1:0] s_axis_code,
+    input  wire [           7:0] s_axis_power,
+    input  wire                  s_axis_v2,
+    input  wire                  s_axis_dir_fast,
+    input  wire [    N_AXES-1:0] s_axis_dir,
+    input  wire [ 32*N_AXES-1:0] s_axis_steps,
+    input  wire [ 64*N_AXES-1:0] s_axis_tmn,
+    input  wire [          63:0] s_axis_total,
+    input  wire                  s_axis_tvalid,
+    output wire                  s_axis_tready,
 
     input wire [16*N_AXES-1:0] cfg_step_high,
     input wire [16*N_AXES-1:0] cfg_step_low,
@@ -40,59 +62,69 @@ module segment_executor #(
     output wire [N_AXES-1:0] dir,
     output wire              laser,
 
-    output wire                 busy,       // a segment is in progress (HOLD, SETUP or RUN)
-    output wire                 idle,       // not busy and every STEP pulse finished
-    output wire                 running,    // RUN: ticks are being issued
-    output wire                 seg_start,  // high during tick 1 of a segment
-    output wire                 seg_done,   // 1-clock strobe after a segment's last tick
+    output wire                 busy,         // a segment is in progress (HOLD, SETUP, RUN, ZERO)
+    output wire                 idle,         // not busy and every STEP pulse finished
+    output wire                 running,      // RUN: ticks are being issued
+    output wire                 seg_start,    // high during tick 1 of a segment
+    output wire                 seg_done,     // 1-clock strobe after a segment's end
+    output wire                 seg_done_v2,  // valid with seg_done: that segment's v2 bit
     output wire [32*N_AXES-1:0] position,
-    output wire                 violation   // 1-clock strobe: a step came before STEP low time
+    output wire                 violation     // 1-clock strobe: a step came before STEP low time
 );
 
-  localparam [1:0] S_IDLE = 2'd0, S_HOLD = 2'd1, S_SETUP = 2'd2, S_RUN = 2'd3;
+  localparam [2:0] S_IDLE = 3'd0, S_HOLD = 3'd1, S_SETUP = 3'd2, S_RUN = 3'd3, S_ZERO = 3'd4;
 
-  reg [1:0] state_reg;
+  reg [2:0] state_reg;
   reg [1:0] code_reg;
-  reg [N_AXES-1:0] dir_new_reg;
-  reg [N_AXES-1:0] change_reg;
+  reg [7:0] power_reg;
+  reg v2_reg;
+  reg [N_AXES-1:0] dir_tgt_reg;  // DIR level written or pending per axis
+  reg [N_AXES-1:0] pend_reg;  // DIR write pending
   reg [15:0] setup_cnt_reg;
+  reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
+  reg [63:0] left_reg;  // ticks left including the current one
+  reg last_reg;  // the current tick is the last (left_reg == 1)
   reg laser_reg;
   reg seg_start_reg;
   reg seg_done_reg;
+  reg seg_done_v2_reg;
   reg [32*N_AXES-1:0] pos_reg;
 
-  wire [N_AXES-1:0] dda_step, dda_done_next, pulse_idle, pulse_hold_ok, pulse_violation;
+  wire [N_AXES-1:0] dda_step, pulse_idle, pulse_hold_ok, pulse_violation;
   wire [N_AXES-1:0] moving;
 
-  wire accept = (state_reg == S_IDLE) && s_axis_tvalid;
+  wire run_last = (state_reg == S_RUN) && last_reg;
+  wire ready = (state_reg == S_IDLE) || run_last;
+  wire accept = ready && s_axis_tvalid;
   wire tick = (state_reg == S_RUN);
-  wire all_done_next = &dda_done_next;
-  wire hold_clear = ((change_reg & ~pulse_hold_ok) == {N_AXES{1'b0}});
-  wire dir_wr = (state_reg == S_HOLD) && hold_clear;
+  wire [N_AXES-1:0] rev = (s_axis_dir ^ dir_tgt_reg) & moving;
+  wire zero_len = (s_axis_total == 64'd0);
+  wire cutting = (s_axis_code != 2'd0) && (s_axis_power != 8'd0);
+  wire hold_clear = ((pend_reg & ~pulse_hold_ok) == {N_AXES{1'b0}});
+  // DIR writes: in HOLD all pending axes together once every hold has elapsed; otherwise (a write
+  // pending during RUN) each axis as soon as its own hold has elapsed.
+  wire [N_AXES-1:0] dir_wr = (state_reg == S_HOLD) ? (pend_reg & {N_AXES{hold_clear}})
+                                                   : (pend_reg & pulse_hold_ok);
 
-  // Largest DIR setup among the axes that change direction.
-  reg [15:0] setup_max;
-  integer j;
-  always @(*) begin
-    setup_max = 16'd0;
-    for (j = 0; j < N_AXES; j = j + 1)
-      if (change_reg[j] && cfg_dir_setup[16*j+:16] > setup_max) setup_max = cfg_dir_setup[16*j+:16];
-  end
+  // SETUP ends when the clocks since the DIR write (setup_cnt_reg, 1 in the first SETUP clock)
+  // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
+  // (the run starts on edge D + max(largest setup, 1)).
+  wire [N_AXES-1:0] setup_ok;
 
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
+      assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
       dda_linear u_dda (
-          .clk      (clk),
-          .rst      (rst),
-          .load     (accept),
-          .steps    (s_axis_steps[32*a+:32]),
-          .tmn      (s_axis_tmn[64*a+:64]),
-          .tick     (tick),
-          .step     (dda_step[a]),
-          .done_next(dda_done_next[a])
+          .clk  (clk),
+          .rst  (rst),
+          .load (accept),
+          .steps(s_axis_steps[32*a+:32]),
+          .tmn  (s_axis_tmn[64*a+:64]),
+          .tick (tick),
+          .step (dda_step[a])
       );
 
       step_pulse u_pulse (
@@ -102,8 +134,8 @@ module segment_executor #(
           .cfg_low  (cfg_step_low[16*a+:16]),
           .cfg_hold (cfg_dir_hold[16*a+:16]),
           .step_req (dda_step[a]),
-          .dir_in   (dir_new_reg[a]),
-          .dir_wr   (dir_wr && change_reg[a]),
+          .dir_in   (dir_tgt_reg[a]),
+          .dir_wr   (dir_wr[a]),
           .step     (step[a]),
           .dir      (dir[a]),
           .idle     (pulse_idle[a]),
@@ -122,67 +154,108 @@ module segment_executor #(
   always @(posedge clk) begin
     seg_start_reg <= 1'b0;
     seg_done_reg  <= 1'b0;
+    pend_reg      <= (pend_reg & ~dir_wr) | (accept ? rev : {N_AXES{1'b0}});
+
+    // tick counter: loaded on accept, counts down during RUN
+    if (accept) begin
+      left_reg <= s_axis_total;
+      last_reg <= (s_axis_total == 64'd1);
+    end else if (tick) begin
+      left_reg <= left_reg - 64'd1;
+      last_reg <= (left_reg == 64'd2);
+    end
+
+    if (accept) begin
+      code_reg    <= s_axis_code;
+      power_reg   <= s_axis_power;
+      v2_reg      <= s_axis_v2;
+      dir_tgt_reg <= (dir_tgt_reg & ~moving) | (s_axis_dir & moving);
+    end
+
     case (state_reg)
       S_IDLE: begin
         if (accept) begin
-          code_reg    <= s_axis_code;
-          dir_new_reg <= s_axis_dir;
-          change_reg  <= (s_axis_dir ^ dir) & moving;
-          if (s_axis_total == 64'd0) begin
-            seg_done_reg <= 1'b1;
-          end else if (((s_axis_dir ^ dir) & moving) != {N_AXES{1'b0}}) begin
+          if (zero_len) begin
+            seg_done_reg    <= 1'b1;
+            seg_done_v2_reg <= s_axis_v2;
+          end else if ((rev | pend_reg) != {N_AXES{1'b0}}) begin
             state_reg <= S_HOLD;
           end else begin
             state_reg     <= S_RUN;
             seg_start_reg <= 1'b1;
-            laser_reg     <= (s_axis_code != 2'd0);
+            laser_reg     <= cutting;
           end
         end
       end
       S_HOLD: begin
         if (hold_clear) begin
-          setup_cnt_reg <= setup_max;
-          state_reg     <= S_SETUP;
+          setup_cnt_reg  <= 16'd1;
+          setup_axes_reg <= pend_reg;
+          state_reg      <= S_SETUP;
         end
       end
       S_SETUP: begin
-        if (setup_cnt_reg <= 16'd1) begin
+        if (&setup_ok) begin
           state_reg     <= S_RUN;
           seg_start_reg <= 1'b1;
-          laser_reg     <= (code_reg != 2'd0);
+          laser_reg     <= (code_reg != 2'd0) && (power_reg != 8'd0);
         end else begin
-          setup_cnt_reg <= setup_cnt_reg - 16'd1;
+          setup_cnt_reg <= setup_cnt_reg + 16'd1;
         end
       end
       S_RUN: begin
-        if (all_done_next) begin
-          state_reg    <= S_IDLE;
-          laser_reg    <= 1'b0;
-          seg_done_reg <= 1'b1;
+        if (last_reg) begin
+          seg_done_reg    <= 1'b1;
+          seg_done_v2_reg <= v2_reg;
+          if (!accept) begin
+            state_reg <= S_IDLE;
+            laser_reg <= 1'b0;
+          end else if (zero_len) begin
+            state_reg <= S_ZERO;
+            laser_reg <= 1'b0;
+          end else if (rev != {N_AXES{1'b0}} && !s_axis_dir_fast) begin
+            state_reg <= S_HOLD;
+            laser_reg <= 1'b0;
+          end else begin
+            seg_start_reg <= 1'b1;  // zero gap: R' = this edge
+            laser_reg     <= cutting;
+          end
         end
+      end
+      S_ZERO: begin
+        seg_done_reg    <= 1'b1;
+        seg_done_v2_reg <= v2_reg;
+        state_reg       <= S_IDLE;
       end
       default: state_reg <= S_IDLE;
     endcase
 
     if (rst) begin
-      state_reg     <= S_IDLE;
-      code_reg      <= 2'd0;
-      dir_new_reg   <= {N_AXES{1'b0}};
-      change_reg    <= {N_AXES{1'b0}};
-      setup_cnt_reg <= 16'd0;
-      laser_reg     <= 1'b0;
-      seg_start_reg <= 1'b0;
-      seg_done_reg  <= 1'b0;
+      state_reg       <= S_IDLE;
+      code_reg        <= 2'd0;
+      power_reg       <= 8'd0;
+      v2_reg          <= 1'b0;
+      dir_tgt_reg     <= {N_AXES{1'b0}};
+      pend_reg        <= {N_AXES{1'b0}};
+      setup_cnt_reg   <= 16'd0;
+      setup_axes_reg  <= {N_AXES{1'b0}};
+      left_reg        <= 64'd0;
+      last_reg        <= 1'b0;
+      laser_reg       <= 1'b0;
+      seg_start_reg   <= 1'b0;
+      seg_done_reg    <= 1'b0;
+      seg_done_v2_reg <= 1'b0;
     end
   end
 
-  assign s_axis_tready = (state_reg == S_IDLE);
+  assign s_axis_tready = ready;
   assign laser         = laser_reg;
   assign busy          = (state_reg != S_IDLE);
   assign idle          = (state_reg == S_IDLE) && (&pulse_idle);
   assign running       = (state_reg == S_RUN);
   assign seg_start     = seg_start_reg;
   assign seg_done      = seg_done_reg;
+  assign seg_done_v2   = seg_done_v2_reg;
   assign position      = pos_reg;
   assign violation     = |pulse_violation;
 
@@ -194,10 +267,12 @@ module segment_executor #(
 
   always @(*)
     if (f_past_valid) begin
-      // Laser is low while the executor is idle (or waiting for DIR hold/setup), and during a
-      // rapid (code 0) segment: it can only be high while RUN executes a segment of code 1..3.
+      // Laser is low while the executor is idle (or waiting for DIR hold/setup, or completing a
+      // zero-length segment), during a rapid (code 0) segment and at power 0: it can only be high
+      // while RUN executes a segment of code 1..3 with power > 0.
       if (state_reg != S_RUN) assert (!laser);
       if (code_reg == 2'd0) assert (!laser);
+      if (power_reg == 8'd0) assert (!laser);
     end
 `endif
 

@@ -1,19 +1,36 @@
-// segment_prep: turns decoded v1 commands into segments the executor can run without arithmetic.
+// segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
 //
-// Input (s_axis_*): commands from packet_decoder_v1, tdata = {code[1:0], a[31:0], b[31:0],
-// feed[15:0]}, tuser = 1 for init (a, b = NUMERATOR_X, NUMERATOR_Y).
-//   - An init command is accepted only while the executor is idle (exec_idle) and no prepared
-//     segment is waiting, so it never changes the timing of a move that is queued or running.
-//   - A motion command is prepared:
-//       dominant axis  = X if |steps_x| >= |steps_y| else Y
-//       period P       = NUMERATOR_dom / feed  (integer division), or FEED0_PERIOD when feed = 0,
-//                        then raised to min_period (the fastest rate the step pulse generators can
-//                        produce with the current STEP high + low settings)
-//       total T        = P * N, N = |steps_dom|: the segment lasts T clocks
-//       tmn[a]         = T - |steps_a| for every axis (the DDA's wrap constant)
-//     The divide and the multiply are sequential (one bit per clock): no divider or wide multiplier
-//     on a clocked path. Latency: m_axis_tvalid rises PREP_LATENCY = 68 clocks after the clock
-//     edge that accepts the command (DIV 33, CLAMP 1, MUL 33, SUB 1), whatever the values.
+// Input (s_axis_*): one FIFO entry, width ENTRY_W = 45 + 32*N_AXES,
+//   { v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0] }
+//   steps: axis a in [32*a+:32], signed.
+//   kind 0 MOTION, v2 = 0 (v1 move): t = {16'd0, feed}, steps[0] = X, steps[1] = Y (the other
+//          axes are ignored: v1 moves X and Y only), power 8'hFF.
+//   kind 0 MOTION, v2 = 1 (LINE): t = T, the segment length in clocks; steps per axis.
+//   kind 1 NUMERATORS: steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y (v1 init or v2 frame).
+//   kind 2 DWELL: t = T clocks with no steps, laser off (steps, code and power are ignored).
+//   kind 3 (never written by the decoder): a zero-length segment (T = 0, no steps, code 0) that
+//          completes at once, so a counted entry always produces one seg_done.
+// Arithmetic per entry (sequential divider and multiplier, one bit per clock; no `/`, `*`):
+//   n_dom = max |steps_a|.
+//   v1    : P = NUMERATOR_dom / feed (dominant X if |X| >= |Y| else Y), FEED0_PERIOD when
+//           feed = 0, raised to min_period when smaller; T = P * n_dom.
+//   v2    : n_dom = 0: P = 0, T as given (T = 0: zero-length). Otherwise P = floor(T / n_dom); if
+//           P < min_period then P = min_period, T = n_dom * min_period and `clamped` strobes.
+//   DWELL : T as given, P = 0, no steps, code 0, power 0.
+//   Every segment: tmn[a] = T - |steps_a| (the DDA's wrap constant).
+// NUMERATORS are applied only while the executor is idle (exec_idle) and no prepared segment waits,
+// so they never change the timing of a move that is queued or running; init_applied strobes for
+// one clock with init_v2 = the entry's v2 bit.
+// Direction tracking: prep keeps, per axis, the DIR level the executor will have when the segment
+// being prepared starts (after reset 0 = DIR low; updated for the moving axes of every prepared
+// segment). m_axis_dir_fast = 1 iff every moving axis that reverses has
+// P >= max(DIR hold, 1) + max(DIR setup, 1); the executor may then start the segment with no gap
+// and write the reversing DIR pins during the run (docs/timing.md "Queued segments").
+// Latency (fixed, whatever the values): m_axis_tvalid rises PREP_LATENCY clocks after the edge
+// that accepts the entry:
+//   v1 MOTION       : 68            (DIV 33, CLAMP 1, MUL 33, SUB 1)
+//   v2 LINE, DWELL, kind 3: 68 + N_AXES (MAX N_AXES, then as v1; the multiplier always runs)
+// The next entry is accepted on the edge after the executor takes the prepared segment.
 // Output (m_axis_*): one prepared segment, held until accepted.
 `default_nettype none
 
@@ -25,47 +42,74 @@ module segment_prep #(
     input wire clk,
     input wire rst,
 
-    input  wire [81:0] s_axis_tdata,
-    input  wire        s_axis_tuser,
-    input  wire        s_axis_tvalid,
-    output wire        s_axis_tready,
+    input  wire [45+32*N_AXES-1:0] s_axis_tdata,
+    input  wire                    s_axis_tvalid,
+    output wire                    s_axis_tready,
 
-    input wire        exec_idle,
-    input wire [31:0] min_period,
+    input wire                  exec_idle,
+    input wire [          31:0] min_period,
+    input wire [16*N_AXES-1:0] cfg_dir_setup,
+    input wire [16*N_AXES-1:0] cfg_dir_hold,
 
-    output wire [         1:0] m_axis_code,
-    output wire [  N_AXES-1:0] m_axis_dir,      // 1 = positive direction
-    output wire [32*N_AXES-1:0] m_axis_steps,   // |steps| per axis
-    output wire [64*N_AXES-1:0] m_axis_tmn,     // T - |steps| per axis
-    output wire [        63:0] m_axis_total,    // T, segment length in clocks
-    output wire [        31:0] m_axis_period,   // P, dominant step period in clocks
-    output wire [        15:0] m_axis_feed,     // feed as received (status only)
-    output wire                m_axis_tvalid,
-    input  wire                m_axis_tready,
+    output wire [           1:0] m_axis_code,
+    output wire [           7:0] m_axis_power,
+    output wire                  m_axis_v2,
+    output wire                  m_axis_dir_fast,  // reversals may run with no gap
+    output wire [    N_AXES-1:0] m_axis_dir,       // 1 = positive direction
+    output wire [ 32*N_AXES-1:0] m_axis_steps,     // |steps| per axis
+    output wire [ 64*N_AXES-1:0] m_axis_tmn,       // T - |steps| per axis
+    output wire [          63:0] m_axis_total,     // T, segment length in clocks
+    output wire [          31:0] m_axis_period,    // P, dominant step period in clocks (0: none)
+    output wire [          15:0] m_axis_feed,      // v1 feed as received (status only), 0 for v2
+    output wire                  m_axis_tvalid,
+    input  wire                  m_axis_tready,
 
     output wire [31:0] numerator_x,
     output wire [31:0] numerator_y,
-    output wire        init_applied,  // 1-clock strobe
-    output wire        busy           // a motion command is being prepared or waiting
+    output wire        init_applied,  // 1-clock strobe: NUMERATORS applied
+    output wire        init_v2,       // valid with init_applied: the entry's v2 bit
+    output wire        clamped,       // 1-clock strobe: a v2 T was raised to n_dom*min_period
+    output wire        busy           // a segment is being prepared or waiting
 );
 
-  localparam [2:0] S_IDLE = 3'd0, S_DIV = 3'd1, S_CLAMP = 3'd2, S_MUL = 3'd3, S_SUB = 3'd4,
-                   S_OUT = 3'd5;
+  localparam SW = 32 * N_AXES;
+  localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2;
+  localparam [2:0] S_IDLE = 3'd0, S_MAX = 3'd1, S_DIV = 3'd2, S_CLAMP = 3'd3, S_MUL = 3'd4,
+                   S_SUB = 3'd5, S_OUT = 3'd6;
+  localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
+  localparam integer AX_LAST_I = N_AXES - 1;
+  localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
+
+  // entry fields
+  wire [SW-1:0] in_steps = s_axis_tdata[SW-1:0];
+  wire [31:0] in_t = s_axis_tdata[SW+31:SW];
+  wire [7:0] in_power = s_axis_tdata[SW+39:SW+32];
+  wire [1:0] in_code = s_axis_tdata[SW+41:SW+40];
+  wire [1:0] in_kind = s_axis_tdata[SW+43:SW+42];
+  wire in_v2 = s_axis_tdata[SW+44];
+  wire in_v1_motion = (in_kind == K_MOTION) && !in_v2;
 
   reg [2:0] state_reg;
   reg [31:0] num_x_reg, num_y_reg;
-  reg        init_applied_reg;
+  reg init_applied_reg, init_v2_reg, clamped_reg;
 
+  reg path_v1_reg;  // v1 arithmetic (NUMERATOR / feed)
+  reg v2_reg;
   reg [1:0] code_reg;
-  reg [1:0] dir_xy_reg;
-  reg [31:0] abs_x_reg, abs_y_reg;
-  reg [15:0] feed_reg;
+  reg [7:0] power_reg;
+  reg [N_AXES-1:0] dir_reg;
+  reg [SW-1:0] abs_reg;
+  reg [31:0] t_reg;  // v2 T
+  reg [15:0] feed_reg;  // v1 feed, 0 otherwise
+  reg [31:0] n_dom_reg;
+  reg [AXW-1:0] scan_idx_reg;
 
   // restoring divider
   reg [31:0] dividend_reg;  // shifts left; its MSB enters the remainder
-  reg [15:0] rem_reg;  // remainder < feed
+  reg [31:0] divisor_reg;
+  reg [31:0] rem_reg;  // remainder < divisor
   reg [31:0] quot_reg;
-  reg [5:0]  iter_reg;
+  reg [5:0] iter_reg;
 
   // shift-add multiplier
   reg [31:0] mplier_reg;
@@ -74,94 +118,147 @@ module segment_prep #(
 
   reg [64*N_AXES-1:0] tmn_reg;
 
-  wire [31:0] steps_x_in = s_axis_tdata[79:48];
-  wire [31:0] steps_y_in = s_axis_tdata[47:16];
-  wire [31:0] abs_x_in = steps_x_in[31] ? (~steps_x_in + 32'd1) : steps_x_in;
-  wire [31:0] abs_y_in = steps_y_in[31] ? (~steps_y_in + 32'd1) : steps_y_in;
-  wire        x_dom = (abs_x_reg >= abs_y_reg);
-  wire [31:0] n_dom = x_dom ? abs_x_reg : abs_y_reg;
+  // direction tracking and dir_fast
+  reg [N_AXES-1:0] dir_track_reg;  // DIR when the segment being prepared starts
+  reg [N_AXES-1:0] rev_reg;  // moving axes that reverse
+  reg [N_AXES-1:0] fast_reg;  // P >= hold' + setup' per axis
+  reg [17*N_AXES-1:0] hs_reg;  // max(hold,1) + max(setup,1) per axis
+  reg dir_fast_reg;
 
-  wire [16:0] rem_shift = {rem_reg, dividend_reg[31]};
-  wire [15:0] rem_sub = rem_shift[15:0] - feed_reg;  // used only when rem_shift >= feed
-  wire        rem_ge = (rem_shift >= {1'b0, feed_reg});
-
-  wire accept_init = (state_reg == S_IDLE) && s_axis_tuser && exec_idle;
-  wire accept_motion = (state_reg == S_IDLE) && !s_axis_tuser;
-
-  // |steps| per axis as sent downstream (v1 drives X and Y only)
-  wire [32*N_AXES-1:0] steps_all;
+  // |steps| and direction of the entry, masked by kind (v1: X and Y only; DWELL/kind 3: none)
+  wire [SW-1:0] abs_in;
+  wire [N_AXES-1:0] dir_in;
+  wire [N_AXES-1:0] moving;
+  wire [17*N_AXES-1:0] hs_now;
   genvar a;
   generate
-    for (a = 0; a < N_AXES; a = a + 1) begin : g_steps
-      if (a == 0) begin : g_x
-        assign steps_all[32*a+:32] = abs_x_reg;
-      end else if (a == 1) begin : g_y
-        assign steps_all[32*a+:32] = abs_y_reg;
-      end else begin : g_other
-        assign steps_all[32*a+:32] = 32'd0;
-      end
+    for (a = 0; a < N_AXES; a = a + 1) begin : g_in
+      wire [31:0] s = in_steps[32*a+:32];
+      wire use_axis = (in_kind == K_MOTION) && (in_v2 || a < 2);
+      wire [31:0] mag = s[31] ? (~s + 32'd1) : s;
+      assign abs_in[32*a+:32] = use_axis ? mag : 32'd0;
+      assign dir_in[a] = !s[31];
+      assign moving[a] = (abs_reg[32*a+:32] != 32'd0);
+      wire [15:0] h = cfg_dir_hold[16*a+:16];
+      wire [15:0] su = cfg_dir_setup[16*a+:16];
+      assign hs_now[17*a+:17] = {1'b0, (h == 16'd0) ? 16'd1 : h} +
+                                {1'b0, (su == 16'd0) ? 16'd1 : su};
     end
   endgenerate
+
+  wire [31:0] abs_x = abs_reg[31:0];
+  wire [31:0] abs_y = (N_AXES > 1) ? abs_reg[32*(N_AXES>1?1:0)+:32] : 32'd0;
+  wire x_dom = (abs_x >= abs_y);
+  wire [31:0] scan_val = abs_reg[32*scan_idx_reg+:32];
+
+  wire [32:0] rem_shift = {rem_reg, dividend_reg[31]};
+  wire [32:0] rem_diff = rem_shift - {1'b0, divisor_reg};
+  wire rem_ge = !rem_diff[32];  // rem_shift >= divisor
+
+  wire idle_state = (state_reg == S_IDLE);
+  wire accept_init = idle_state && (in_kind == K_NUMERATORS) && exec_idle;
+  wire accept_seg = idle_state && (in_kind != K_NUMERATORS);
 
   integer i;
   always @(posedge clk) begin
     init_applied_reg <= 1'b0;
+    init_v2_reg      <= 1'b0;
+    clamped_reg      <= 1'b0;
     case (state_reg)
       S_IDLE: begin
         if (s_axis_tvalid && accept_init) begin
-          num_x_reg        <= s_axis_tdata[79:48];
-          num_y_reg        <= s_axis_tdata[47:16];
+          num_x_reg        <= in_steps[31:0];
+          num_y_reg        <= (N_AXES > 1) ? in_steps[32*(N_AXES>1?1:0)+:32] : 32'd0;
           init_applied_reg <= 1'b1;
-        end else if (s_axis_tvalid && accept_motion) begin
-          code_reg     <= s_axis_tdata[81:80];
-          dir_xy_reg   <= {~steps_y_in[31], ~steps_x_in[31]};
-          abs_x_reg    <= abs_x_in;
-          abs_y_reg    <= abs_y_in;
-          feed_reg     <= s_axis_tdata[15:0];
-          rem_reg      <= 16'd0;
+          init_v2_reg      <= in_v2;
+        end else if (s_axis_tvalid && accept_seg) begin
+          path_v1_reg  <= in_v1_motion;
+          v2_reg       <= in_v2;
+          code_reg     <= (in_kind == K_MOTION) ? in_code : 2'd0;
+          power_reg    <= (in_kind == K_MOTION) ? in_power : 8'd0;
+          dir_reg      <= dir_in;
+          abs_reg      <= abs_in;
+          t_reg        <= (in_kind == K_DWELL || (in_kind == K_MOTION && in_v2)) ? in_t : 32'd0;
+          feed_reg     <= in_v1_motion ? in_t[15:0] : 16'd0;
+          n_dom_reg    <= 32'd0;
+          scan_idx_reg <= {AXW{1'b0}};
+          rem_reg      <= 32'd0;
           quot_reg     <= 32'd0;
           iter_reg     <= 6'd0;
-          // dividend chosen one clock later, once the dominant axis is known
-          state_reg    <= S_DIV;
+          // v1: the dominant axis (X or Y) is chosen one clock later; v2: scan all axes first
+          state_reg    <= in_v1_motion ? S_DIV : S_MAX;
         end
+      end
+      S_MAX: begin
+        if (scan_val > n_dom_reg) n_dom_reg <= scan_val;
+        scan_idx_reg <= scan_idx_reg + 1'b1;
+        if (scan_idx_reg == AX_LAST) state_reg <= S_DIV;
       end
       S_DIV: begin
         if (iter_reg == 6'd0) begin
-          dividend_reg <= x_dom ? num_x_reg : num_y_reg;
-          iter_reg     <= 6'd1;
+          if (path_v1_reg) begin
+            dividend_reg <= x_dom ? num_x_reg : num_y_reg;
+            divisor_reg  <= {16'd0, feed_reg};
+            n_dom_reg    <= x_dom ? abs_x : abs_y;
+          end else begin
+            dividend_reg <= t_reg;
+            divisor_reg  <= n_dom_reg;
+          end
+          iter_reg <= 6'd1;
         end else begin
           dividend_reg <= {dividend_reg[30:0], 1'b0};
-          rem_reg      <= rem_ge ? rem_sub : rem_shift[15:0];
+          rem_reg      <= rem_ge ? rem_diff[31:0] : rem_shift[31:0];
           quot_reg     <= {quot_reg[30:0], rem_ge};
           iter_reg     <= iter_reg + 6'd1;
           if (iter_reg == 6'd32) state_reg <= S_CLAMP;
         end
       end
       S_CLAMP: begin
-        // feed 0: fixed period; the quotient of a divide by zero is discarded
-        if (feed_reg == 16'd0) quot_reg <= (FEED0_PERIOD < min_period) ? min_period : FEED0_PERIOD;
-        else if (quot_reg < min_period) quot_reg <= min_period;
-        mplier_reg <= n_dom;
-        total_reg  <= 64'd0;
-        state_reg  <= S_MUL;
-        iter_reg   <= 6'd0;
+        // The quotient of a divide by zero (feed 0, n_dom 0) is discarded.
+        if (path_v1_reg) begin
+          if (feed_reg == 16'd0)
+            quot_reg <= (FEED0_PERIOD < min_period) ? min_period : FEED0_PERIOD;
+          else if (quot_reg < min_period) quot_reg <= min_period;
+          total_reg  <= 64'd0;
+          mplier_reg <= n_dom_reg;
+        end else if (n_dom_reg == 32'd0) begin
+          quot_reg   <= 32'd0;
+          total_reg  <= {32'd0, t_reg};
+          mplier_reg <= 32'd0;
+        end else if (quot_reg < min_period) begin
+          quot_reg    <= min_period;
+          total_reg   <= 64'd0;
+          mplier_reg  <= n_dom_reg;
+          clamped_reg <= 1'b1;
+        end else begin
+          total_reg  <= {32'd0, t_reg};
+          mplier_reg <= 32'd0;  // T stays as given
+        end
+        state_reg <= S_MUL;
+        iter_reg  <= 6'd0;
       end
       S_MUL: begin
         if (iter_reg == 6'd0) begin
           mcand_reg <= {32'd0, quot_reg};
           iter_reg  <= 6'd1;
+          rev_reg   <= (dir_reg ^ dir_track_reg) & moving;
+          hs_reg    <= hs_now;
         end else begin
           if (mplier_reg[0]) total_reg <= total_reg + mcand_reg;
           mplier_reg <= {1'b0, mplier_reg[31:1]};
           mcand_reg  <= {mcand_reg[62:0], 1'b0};
           iter_reg   <= iter_reg + 6'd1;
+          for (i = 0; i < N_AXES; i = i + 1)
+            fast_reg[i] <= (quot_reg >= {15'd0, hs_reg[17*i+:17]});
           if (iter_reg == 6'd32) state_reg <= S_SUB;
         end
       end
       S_SUB: begin
         for (i = 0; i < N_AXES; i = i + 1)
-          tmn_reg[64*i+:64] <= total_reg - {32'd0, steps_all[32*i+:32]};
-        state_reg <= S_OUT;
+          tmn_reg[64*i+:64] <= total_reg - {32'd0, abs_reg[32*i+:32]};
+        dir_fast_reg  <= &(fast_reg | ~rev_reg);
+        dir_track_reg <= (dir_track_reg & ~moving) | (dir_reg & moving);
+        state_reg     <= S_OUT;
       end
       S_OUT: begin
         if (m_axis_tready) state_reg <= S_IDLE;
@@ -174,44 +271,53 @@ module segment_prep #(
       num_x_reg        <= DEFAULT_NUMERATOR;
       num_y_reg        <= DEFAULT_NUMERATOR;
       init_applied_reg <= 1'b0;
+      init_v2_reg      <= 1'b0;
+      clamped_reg      <= 1'b0;
+      path_v1_reg      <= 1'b0;
+      v2_reg           <= 1'b0;
       code_reg         <= 2'd0;
-      dir_xy_reg       <= 2'b00;
-      abs_x_reg        <= 32'd0;
-      abs_y_reg        <= 32'd0;
+      power_reg        <= 8'd0;
+      dir_reg          <= {N_AXES{1'b0}};
+      abs_reg          <= {SW{1'b0}};
+      t_reg            <= 32'd0;
       feed_reg         <= 16'd0;
+      n_dom_reg        <= 32'd0;
+      scan_idx_reg     <= {AXW{1'b0}};
       dividend_reg     <= 32'd0;
-      rem_reg          <= 16'd0;
+      divisor_reg      <= 32'd0;
+      rem_reg          <= 32'd0;
       quot_reg         <= 32'd0;
       iter_reg         <= 6'd0;
       mplier_reg       <= 32'd0;
       mcand_reg        <= 64'd0;
       total_reg        <= 64'd0;
       tmn_reg          <= {64 * N_AXES{1'b0}};
+      dir_track_reg    <= {N_AXES{1'b0}};
+      rev_reg          <= {N_AXES{1'b0}};
+      fast_reg         <= {N_AXES{1'b0}};
+      hs_reg           <= {17 * N_AXES{1'b0}};
+      dir_fast_reg     <= 1'b0;
     end
   end
 
-  wire [N_AXES-1:0] dir_all;
-  generate
-    if (N_AXES > 2) begin : g_dir_wide
-      assign dir_all = {{(N_AXES - 2) {1'b0}}, dir_xy_reg};
-    end else begin : g_dir_narrow
-      assign dir_all = dir_xy_reg[N_AXES-1:0];
-    end
-  endgenerate
-
-  assign s_axis_tready = accept_motion || accept_init;
-  assign m_axis_code   = code_reg;
-  assign m_axis_dir    = dir_all;
-  assign m_axis_steps  = steps_all;
-  assign m_axis_tmn    = tmn_reg;
-  assign m_axis_total  = total_reg;
-  assign m_axis_period = quot_reg;
-  assign m_axis_feed   = feed_reg;
-  assign m_axis_tvalid = (state_reg == S_OUT);
-  assign numerator_x   = num_x_reg;
-  assign numerator_y   = num_y_reg;
-  assign init_applied  = init_applied_reg;
-  assign busy          = (state_reg != S_IDLE);
+  assign s_axis_tready   = accept_seg || accept_init;
+  assign m_axis_code     = code_reg;
+  assign m_axis_power    = power_reg;
+  assign m_axis_v2       = v2_reg;
+  assign m_axis_dir_fast = dir_fast_reg;
+  assign m_axis_dir      = dir_reg;
+  assign m_axis_steps    = abs_reg;
+  assign m_axis_tmn      = tmn_reg;
+  assign m_axis_total    = total_reg;
+  assign m_axis_period   = quot_reg;
+  assign m_axis_feed     = feed_reg;
+  assign m_axis_tvalid   = (state_reg == S_OUT);
+  assign numerator_x     = num_x_reg;
+  assign numerator_y     = num_y_reg;
+  assign init_applied    = init_applied_reg;
+  assign init_v2         = init_v2_reg;
+  assign clamped         = clamped_reg;
+  assign busy            = !idle_state;
 
 endmodule
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "common/exec_harness.h"
@@ -222,6 +223,342 @@ TEST(SegmentExecutor, RandomSegmentsExactTiming) {
               static_cast<unsigned long long>(c.worst_jitter));
   EXPECT_LT(c.worst_error, 1.0);
   EXPECT_LE(c.worst_jitter, 1u);
+}
+
+// ---------------------------------------------------------------- queued segments
+// Reference model of the executor's schedule for segments offered back to back (always valid),
+// from docs/timing.md "Queued segments". It predicts every accept edge, run start R, DIR write,
+// seg_done, laser interval and STEP rise.
+struct Planned {
+  uint64_t accept = 0, R = 0, end = 0;  // R = 0: zero-length (no run); end = seg_done edge
+  bool zero_gap = false;  // R = the previous segment's end (accepted on its last tick)
+  bool reversal = false, fast = false;
+};
+
+class QueueModel {
+ public:
+  QueueModel(const std::vector<AxisTiming>& t, uint64_t first_accept, const uint64_t* last_rise,
+             const int* dir)
+      : t_(t), next_accept_(first_accept) {
+    for (int a = 0; a < kAxes; ++a) {
+      last_rise_[a] = last_rise[a];
+      dir_[a] = dir[a];
+    }
+  }
+
+  Planned add(const Segment& s, bool dir_fast) {
+    Planned p;
+    p.accept = next_accept_;
+    const bool from_run = from_run_;
+    const uint64_t T = s.total();
+    uint32_t rev = 0;
+    for (int a = 0; a < kAxes; ++a) {
+      if (s.steps[a] == 0) continue;
+      const int d = s.steps[a] > 0 ? 1 : 0;
+      if (d != dir_[a]) rev |= 1u << a;
+      dir_[a] = d;
+    }
+    p.reversal = rev != 0;
+    p.fast = dir_fast;
+    if (T == 0) {
+      p.end = from_run ? p.accept + 1 : p.accept;
+      next_accept_ = from_run ? p.accept + 2 : p.accept + 1;
+      from_run_ = false;
+      return p;
+    }
+    if (rev != 0 && !(from_run && dir_fast)) {
+      // HOLD: every reversing axis's hold since its last rise, DIR on D, then SETUP
+      uint64_t D = p.accept + 1;
+      uint64_t setup = 0;
+      for (int a = 0; a < kAxes; ++a)
+        if (rev & (1u << a)) {
+          D = std::max(D, last_rise_[a] + fpgacnc::tb::at_least_1(t_[a].hold));
+          setup = std::max<uint64_t>(setup, t_[a].setup);
+        }
+      for (int a = 0; a < kAxes; ++a)
+        if (rev & (1u << a)) dir_edges_[a].push_back(D);
+      p.R = D + std::max<uint64_t>(setup, 1);
+    } else {
+      p.R = p.accept;
+      p.zero_gap = from_run;
+      for (int a = 0; a < kAxes; ++a)
+        if (rev & (1u << a))
+          dir_edges_[a].push_back(
+              std::max(p.accept + 1, last_rise_[a] + fpgacnc::tb::at_least_1(t_[a].hold)));
+    }
+    p.end = p.R + T;
+    for (int a = 0; a < kAxes; ++a) {
+      const uint64_t n = mag(s.steps[a]);
+      for (uint64_t k = 1; k <= n; ++k)
+        rises_[a].push_back(fpgacnc::tb::scheduled_rise(p.R, k, T, n));
+      if (n > 0) last_rise_[a] = p.end;
+    }
+    if (s.code != 0 && s.power != 0) {
+      if (!laser_.empty() && laser_.back().second == p.R)
+        laser_.back().second = p.end;  // back to back: one interval
+      else
+        laser_.push_back({p.R, p.end});
+    }
+    next_accept_ = p.end;
+    from_run_ = true;
+    return p;
+  }
+
+  const std::vector<uint64_t>& rises(int a) const { return rises_[a]; }
+  const std::vector<uint64_t>& dir_edges(int a) const { return dir_edges_[a]; }
+  const std::vector<std::pair<uint64_t, uint64_t>>& laser() const { return laser_; }
+
+ private:
+  std::vector<AxisTiming> t_;
+  uint64_t next_accept_;
+  bool from_run_ = false;
+  uint64_t last_rise_[kAxes];
+  int dir_[kAxes];
+  std::vector<uint64_t> rises_[kAxes], dir_edges_[kAxes];
+  std::vector<std::pair<uint64_t, uint64_t>> laser_;
+};
+
+struct QueueStats {
+  uint64_t segments = 0, zero_gap = 0, fast_reversals = 0, hold_reversals = 0, zero_len = 0,
+           dwells = 0, idle_clocks = 0, run_clocks = 0;
+};
+
+// Runs `segs` back to back on a fresh harness after `settle` idle clocks and checks everything
+// against QueueModel: accept edges, seg_start at R, seg_done (edge and v2 bit), every STEP rise
+// (exact R + ceil(kT/n)) and its DIR level, every DIR edge, the laser intervals, the pulse rules
+// (STEP high/low, DIR setup/hold at every DIR change), positions, no violation.
+void check_queue(const std::vector<AxisTiming>& timing, const std::vector<Segment>& segs,
+                 QueueStats* st, const std::string& what) {
+  ExecBench b;
+  b.set_timing(timing);
+  b.idle(5);
+  // the harness's dir_fast reference, run ahead to know what each segment gets
+  std::vector<bool> fast(segs.size());
+  {
+    int track[kAxes] = {0, 0, 0, 0};
+    for (size_t i = 0; i < segs.size(); ++i) {
+      const bool f = fpgacnc::tb::dir_fast_ref(segs[i], timing, track);
+      fast[i] = segs[i].dir_fast >= 0 ? segs[i].dir_fast != 0 : f;
+    }
+  }
+  const uint64_t reset_rise[kAxes] = {ExecBench::kResetRiseEdge, ExecBench::kResetRiseEdge,
+                                      ExecBench::kResetRiseEdge, ExecBench::kResetRiseEdge};
+  const int dir0[kAxes] = {0, 0, 0, 0};
+  QueueModel model(timing, b.cycle() + 1, reset_rise, dir0);
+  std::vector<Planned> plan;
+  for (size_t i = 0; i < segs.size(); ++i) plan.push_back(model.add(segs[i], fast[i]));
+
+  const std::vector<uint64_t> accepts = b.run_queue(segs);
+  ASSERT_FALSE(b.stalled()) << what;
+  ASSERT_EQ(accepts.size(), segs.size()) << what;
+  std::vector<uint64_t> starts, dones;
+  std::vector<bool> done_v2;
+  int64_t pos[kAxes] = {0, 0, 0, 0};
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const Planned& p = plan[i];
+    ASSERT_EQ(accepts[i], p.accept) << what << ": segment " << i << " accept edge";
+    if (p.R) starts.push_back(p.R);
+    dones.push_back(p.end);
+    done_v2.push_back(segs[i].v2);
+    for (int a = 0; a < kAxes; ++a) pos[a] += segs[i].steps[a];
+    if (i > 0 && p.R && plan[i - 1].R && p.zero_gap) {
+      // the zero-gap rule: R' = R + T
+      ASSERT_EQ(p.R, plan[i - 1].R + segs[i - 1].total()) << what << ": segment " << i;
+    }
+    ++st->segments;
+    if (p.zero_gap) ++st->zero_gap;
+    if (p.R && p.reversal) (p.zero_gap ? st->fast_reversals : st->hold_reversals)++;
+    if (!p.R) ++st->zero_len;
+    if (p.R && segs[i].n_dom() == 0) ++st->dwells;
+    if (p.R) st->run_clocks += segs[i].total();
+  }
+  // seg_start / seg_done
+  ASSERT_EQ(b.starts().size(), starts.size()) << what << ": seg_start count";
+  for (size_t i = 0; i < starts.size(); ++i)
+    ASSERT_EQ(b.starts()[i], starts[i]) << what << ": run start " << i;
+  ASSERT_EQ(b.dones().size(), dones.size()) << what << ": seg_done count";
+  for (size_t i = 0; i < dones.size(); ++i) {
+    ASSERT_EQ(b.dones()[i].cycle, dones[i]) << what << ": seg_done of segment " << i;
+    ASSERT_EQ(b.dones()[i].v2, done_v2[i]) << what << ": seg_done_v2 of segment " << i;
+  }
+  // STEP rises, DIR at each rise, DIR edges
+  for (int a = 0; a < kAxes; ++a) {
+    const auto& tr = b.mon().axis(a);
+    const auto& want = model.rises(a);
+    ASSERT_EQ(tr.rises.size(), want.size()) << what << ": axis " << a << " step count";
+    for (size_t k = 0; k < want.size(); ++k)
+      ASSERT_EQ(tr.rises[k], want[k]) << what << ": axis " << a << " rise " << k;
+    const auto& wd = model.dir_edges(a);
+    ASSERT_EQ(tr.dir_edges.size(), wd.size()) << what << ": axis " << a << " DIR edge count";
+    for (size_t k = 0; k < wd.size(); ++k)
+      ASSERT_EQ(tr.dir_edges[k], wd[k]) << what << ": axis " << a << " DIR edge " << k;
+    for (auto& v : b.mon().check_pulses(a, timing[a])) ADD_FAILURE() << what << ": " << v;
+    EXPECT_EQ(b.position(a), static_cast<int32_t>(pos[a])) << what << ": axis " << a;
+    EXPECT_EQ(tr.position, pos[a]) << what << ": axis " << a;
+  }
+  // laser
+  const auto& lz = model.laser();
+  ASSERT_EQ(b.laser_rises().size(), lz.size()) << what << ": laser rises";
+  ASSERT_EQ(b.laser_falls().size(), lz.size()) << what << ": laser falls";
+  for (size_t k = 0; k < lz.size(); ++k) {
+    ASSERT_EQ(b.laser_rises()[k], lz[k].first) << what << ": laser rise " << k;
+    ASSERT_EQ(b.laser_falls()[k], lz[k].second) << what << ": laser fall " << k;
+  }
+  EXPECT_EQ(b.violations(), 0u) << what;
+  // total time: sum of T plus the documented gaps only (HOLD/SETUP waits, zero-length entries)
+  uint64_t gaps = 0, sum_t = 0;
+  for (size_t i = 0; i < segs.size(); ++i) {
+    if (i > 0) gaps += plan[i].accept - plan[i - 1].end;
+    gaps += plan[i].R ? plan[i].R - plan[i].accept : plan[i].end - plan[i].accept;
+    sum_t += segs[i].total();
+  }
+  ASSERT_EQ(b.dones().back().cycle - accepts[0], sum_t + gaps) << what << ": total time";
+  st->idle_clocks += gaps;
+}
+
+Segment line(std::initializer_list<int64_t> steps, uint64_t t, int code = 1, int power = 255) {
+  Segment s;
+  s.v2 = true;
+  s.t = static_cast<int64_t>(t);
+  s.code = code;
+  s.power = power;
+  int a = 0;
+  for (int64_t v : steps) s.steps[a++] = v;
+  return s;
+}
+
+// DIR is low after reset: the queues start with negative moves so that only the reversals the
+// tests intend happen.
+TEST(SegmentExecutorQueue, SameDirectionZeroGapAndLaserStaysHigh) {
+  const std::vector<AxisTiming> t(kAxes, AxisTiming{3, 2, 50, 70});
+  // cutting, cutting, cutting (merged laser interval), rapid, power 0, cutting
+  std::vector<Segment> q = {line({-10, -3}, 1000),     line({-7, -2}, 501),  line({-1}, 5),
+                            line({-4, 0, -2}, 333, 0), line({-4}, 40, 2, 0), line({0, -5}, 64, 3)};
+  QueueStats st;
+  check_queue(t, q, &st, "same direction");
+  EXPECT_EQ(st.zero_gap, 5u);
+  EXPECT_EQ(st.idle_clocks, 0u);
+  EXPECT_EQ(st.hold_reversals, 0u);
+}
+
+TEST(SegmentExecutorQueue, ReversalWithAndWithoutDirFast) {
+  const std::vector<AxisTiming> t(kAxes, AxisTiming{2, 2, 30, 40});
+  QueueStats st;
+  // P = 100, 100, 70 >= hold 40 + setup 30: dir_fast, zero gap, DIR written during the run (hold
+  // after the previous segment's last step, which is on the accept edge)
+  check_queue(t, {line({-10}, 1000), line({10}, 1000), line({-10, -10}, 700), line({7, 7}, 490)},
+              &st, "dir_fast reversals");
+  EXPECT_EQ(st.fast_reversals, 3u);
+  EXPECT_EQ(st.hold_reversals, 0u);
+  EXPECT_EQ(st.idle_clocks, 0u);
+  // P = 69 < 70: HOLD/SETUP gap
+  QueueStats st2;
+  check_queue(t, {line({-10}, 690), line({10}, 690)}, &st2, "slow reversal");
+  EXPECT_EQ(st2.fast_reversals, 0u);
+  EXPECT_EQ(st2.hold_reversals, 1u);
+  EXPECT_EQ(st2.idle_clocks, 40u + 30u) << "hold after the last step on the accept edge, setup";
+  // dir_fast forced low: the HOLD path even when fast would be allowed
+  QueueStats st3;
+  Segment back = line({10}, 1000);
+  back.dir_fast = 0;
+  check_queue(t, {line({-10}, 1000), back}, &st3, "dir_fast 0");
+  EXPECT_EQ(st3.hold_reversals, 1u);
+}
+
+TEST(SegmentExecutorQueue, DwellsAndZeroLength) {
+  const std::vector<AxisTiming> t(kAxes, AxisTiming{1, 1, 1, 1});
+  Segment dwell = line({}, 37, 0, 0);
+  Segment zero = line({}, 0);
+  Segment lit = line({}, 12, 1, 77);  // a timed LINE with no steps: laser on, no steps
+  Segment v1;
+  v1.steps[0] = 5;
+  v1.period = 3;
+  QueueStats st;
+  check_queue(t,
+              {line({3}, 9), dwell, line({-3}, 9), zero, zero, line({2}, 4), lit, v1, zero, dwell},
+              &st, "dwells and zero-length");
+  EXPECT_EQ(st.zero_len, 3u);
+  EXPECT_EQ(st.dwells, 3u);
+}
+
+// The main queued regression: random back-to-back streams with random settings.
+TEST(SegmentExecutorQueue, RandomQueues) {
+  const uint64_t seed = fpgacnc::tb::test_seed(20261205, "SegmentExecutorQueue.RandomQueues");
+  std::mt19937_64 rng(seed);
+  auto uni = [&](uint64_t lo, uint64_t hi) {
+    return std::uniform_int_distribution<uint64_t>(lo, hi)(rng);
+  };
+  QueueStats st;
+  int one_clock = 0;
+  for (int batch = 0; batch < 150; ++batch) {
+    std::vector<AxisTiming> t(kAxes);
+    const int kind = static_cast<int>(uni(0, 9));
+    for (auto& at : t) {
+      if (kind < 3)
+        at = AxisTiming{1, 1, 1, 1};
+      else if (kind < 8)
+        at = fpgacnc::tb::random_timing(uni, 12, 40);
+      else
+        at = AxisTiming{uint32_t(uni(1, 60)), uint32_t(uni(1, 60)), uint32_t(uni(0, 300)),
+                        uint32_t(uni(0, 300))};
+    }
+    if (kind < 3) ++one_clock;
+    const uint64_t pmin = fpgacnc::tb::min_period(t);
+    uint64_t hs_max = 0;
+    for (auto& at : t)
+      hs_max =
+          std::max(hs_max, fpgacnc::tb::at_least_1(at.hold) + fpgacnc::tb::at_least_1(at.setup));
+    std::vector<Segment> q;
+    const int len = static_cast<int>(uni(20, 60));
+    for (int i = 0; i < len; ++i) {
+      Segment s;
+      s.code = static_cast<int>(uni(0, 3));
+      s.power = uni(0, 5) == 0 ? 0 : static_cast<int>(uni(1, 255));
+      const int what = static_cast<int>(uni(0, 19));
+      if (what == 0) {  // zero-length
+        s.v2 = uni(0, 1);
+        s.t = 0;
+      } else if (what == 1) {  // dwell
+        s.v2 = true;
+        s.code = 0;
+        s.power = 0;
+        s.t = static_cast<int64_t>(uni(1, 300));
+      } else {
+        // few axes, often reversing; small counts so runs stay short
+        const int axes = static_cast<int>(uni(1, kAxes));
+        for (int a = 0; a < axes; ++a) {
+          const uint64_t n = uni(0, 4) == 0 ? 0 : uni(1, uni(0, 3) == 0 ? 400 : 20);
+          s.steps[a] = uni(0, 1) ? static_cast<int64_t>(n) : -static_cast<int64_t>(n);
+        }
+        const uint64_t nd = s.n_dom();
+        // P around hold + setup so that dir_fast goes both ways
+        const uint64_t p = std::max(pmin, uni(0, 1) ? uni(pmin, pmin + 3) : uni(1, hs_max * 2));
+        if (what < 8) {  // v1-style: T = P * n_dom
+          s.period = p;
+        } else {
+          s.v2 = true;
+          s.t = static_cast<int64_t>(nd * p + (nd ? uni(0, nd - 1) : uni(0, 50)));
+        }
+        if (uni(0, 15) == 0) s.dir_fast = 0;
+      }
+      q.push_back(s);
+    }
+    check_queue(t, q, &st, "batch " + std::to_string(batch) + " seed " + std::to_string(seed));
+    if (HasFatalFailure()) return;
+  }
+  std::printf(
+      "segments %llu: zero gap %llu, reversals dir_fast %llu / HOLD %llu, zero-length %llu, "
+      "timed no-step %llu, run clocks %llu, idle clocks %llu\n",
+      (unsigned long long)st.segments, (unsigned long long)st.zero_gap,
+      (unsigned long long)st.fast_reversals, (unsigned long long)st.hold_reversals,
+      (unsigned long long)st.zero_len, (unsigned long long)st.dwells,
+      (unsigned long long)st.run_clocks, (unsigned long long)st.idle_clocks);
+  EXPECT_GT(one_clock, 0);
+  EXPECT_GT(st.fast_reversals, 50u);
+  EXPECT_GT(st.hold_reversals, 50u);
+  EXPECT_GT(st.zero_len, 20u);
+  EXPECT_GT(st.dwells, 20u);
+  EXPECT_GT(st.zero_gap, st.segments / 2);
 }
 
 }  // namespace
