@@ -15,7 +15,7 @@ namespace fpgacnc::twins {
 // One output event of a block: its edge and up to four values (meaning per block).
 struct BlockEvent {
   Cycle cycle;
-  std::array<uint64_t, 4> v;
+  std::array<uint64_t, 6> v;
   bool operator==(const BlockEvent&) const = default;
 };
 struct BlockRun {
@@ -40,19 +40,22 @@ struct DecoderJob {
   std::vector<std::pair<Cycle, uint8_t>> bytes;
   std::vector<int64_t> accept_delay;
 };
-// segment_prep: command k valid from (previous accept, or 0) + gap; segment j taken
+// segment_prep: FIFO entry k valid from (previous accept, or 0) + gap; segment j taken
 // `accept_delay[j]` edges late; exec_idle low from its accept edge A_j until after edge
-// A_j + busy[j] (the executor running it), so an init waits. Events: accepts (edge, k, 0, 0) and
-// segments (valid edge, period | code << 32 | dir << 40, total, steps_x | steps_y << 32).
+// A_j + busy[j] (the executor running it), so a numerators entry waits. Events: accepts (edge,
+// k), segments (valid edge, period | code << 32 | dir << 40 | dir_fast << 44 | v2 << 45 |
+// power << 48, total, steps X | Y << 32, steps Z | E << 32, tmn X, tmn E), init_applied
+// (edge, 1 << 62 | init_v2) and clamped (edge, 1 << 63) strobes.
 struct PrepCommand {
-  bool init;
-  uint8_t code;
-  uint32_t a, b;
-  uint16_t feed;
+  bool v2;
+  uint8_t kind, code, power;
+  uint32_t t;
+  std::array<uint32_t, kAxes> steps;
   int64_t gap;
 };
 struct PrepJob {
   uint32_t min_half;  // min_period = 2 * min_half via STEP high = low = min_half on X
+  std::array<uint16_t, kAxes> setup{}, hold{};
   std::vector<PrepCommand> commands;
   std::vector<int64_t> accept_delay;
   std::vector<int64_t> busy;

@@ -59,6 +59,7 @@ SC_MODULE(BlockBench) {
         tx("uart_tx", clk, p3m, pins),
         dec("packet_decoder_v1", clk, p115),
         prep("segment_prep", clk, pprep) {
+    prep.report_applied = true;
     pins.record_tx = true;
     to_rx115.bind(rx115.pin);
     to_rx3m.bind(rx3m.pin);
@@ -72,7 +73,7 @@ SC_MODULE(BlockBench) {
     prep.segments.bind(from_prep);
     prep.exec_status.bind(prep_status);
     prep.applied.bind(prep_applied);
-    prep_applied.register_b_transport(this, &BlockBench::on_ok);
+    prep_applied.register_b_transport(this, &BlockBench::on_applied);
     from_rx115.register_b_transport(this, &BlockBench::on_byte);
     from_rx3m.register_b_transport(this, &BlockBench::on_byte);
     from_tx.register_b_transport(this, &BlockBench::on_ok);
@@ -116,13 +117,21 @@ SC_MODULE(BlockBench) {
     for (int a = 0; a < kAxes; ++a) dir |= s.dir[a] ? 1u << a : 0u;
     out->events.push_back(
         BlockEvent{v,
-                   {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40, s.total,
-                    s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32, s.tmn[0]}});
+                   {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40 |
+                        static_cast<uint64_t>(s.dir_fast) << 44 |
+                        static_cast<uint64_t>(s.v2) << 45 | static_cast<uint64_t>(s.power) << 48,
+                    s.total, s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32,
+                    s.steps[2] | static_cast<uint64_t>(s.steps[3]) << 32, s.tmn[0], s.tmn[3]}});
     // The executor takes it `accept_delay` edges late and is busy `busy` edges after that.
     const size_t j = delay_index;
     const Cycle accept = v + 1 + next_delay();
     exec_idle_after = accept + (busy && j < busy->size() ? (*busy)[j] : 0);
     d = clk.delay_to(accept);
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_applied(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    out->events.push_back(
+        BlockEvent{clk.at(d), {1ull << 62 | (payload<Applied>(g).v2 ? 1u : 0u), 0, 0, 0}});
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_status(tlm::tlm_generic_payload & g, sc_core::sc_time&) {
@@ -213,21 +222,42 @@ DecoderJob decoder_job(std::mt19937_64& g, size_t packets) {
   return j;
 }
 
+// Every kind of FIFO entry: v1 motion (steps up to 2^32 - 1, feed 0), v2 LINE (four signed axes,
+// T from 0 to long, clamped or not), numerators (v1 and v2), dwells (T = 0 too), kind 3; random
+// DIR setup/hold so that dir_fast goes both ways.
 PrepJob prep_job(std::mt19937_64& g, size_t n) {
   PrepJob j;
   j.min_half = pick(g, 0, 3) == 0 ? pick(g, 1, 5000) : pick(g, 1, 100);
+  for (int a = 0; a < kAxes; ++a) {
+    j.setup[a] = static_cast<uint16_t>(pick(g, 0, 3) == 0 ? 0 : pick(g, 0, 3000));
+    j.hold[a] = static_cast<uint16_t>(pick(g, 0, 3) == 0 ? 0 : pick(g, 0, 3000));
+  }
+  auto steps = [&]() -> uint32_t {
+    const uint32_t k = pick(g, 0, 9);
+    return k == 0 ? 0 : k < 8 ? pick(g, 0, 100'000) : pick(g, 0, 0xFFFF'FFFFu);
+  };
   for (size_t i = 0; i < n; ++i) {
     PrepCommand c{};
-    c.init = pick(g, 0, 7) == 0;
+    const uint32_t what = pick(g, 0, 15);
+    c.v2 = pick(g, 0, 1) == 1;
     c.code = static_cast<uint8_t>(pick(g, 0, 3));
-    auto steps = [&]() -> uint32_t {
-      const uint32_t k = pick(g, 0, 9);
-      const uint32_t m = k == 0 ? 0 : k < 8 ? pick(g, 0, 100'000) : pick(g, 0, 0xFFFF'FFFFu);
-      return m;
-    };
-    c.a = c.init ? pick(g, 0, 0xFFFF'FFFFu) : steps();
-    c.b = c.init ? pick(g, 0, 0xFFFF'FFFFu) : steps();
-    c.feed = static_cast<uint16_t>(pick(g, 0, 9) == 0 ? 0 : pick(g, 1, 65535));
+    c.power = static_cast<uint8_t>(pick(g, 0, 255));
+    c.kind = what == 0 ? kEntryNumerators : what == 1 ? kEntryDwell : what == 2 ? 3 : kEntryMotion;
+    if (c.kind == kEntryNumerators) {
+      c.steps = {pick(g, 0, 0xFFFF'FFFFu), pick(g, 0, 0xFFFF'FFFFu), 0, 0};
+    } else if (c.kind == kEntryMotion && !c.v2) {
+      c.power = 0xFF;
+      c.steps = {steps(), steps(), 0, 0};
+      c.t = static_cast<uint16_t>(pick(g, 0, 9) == 0 ? 0 : pick(g, 1, 65535));
+    } else {
+      if (c.kind != kEntryMotion) c.v2 = true;
+      for (auto& s : c.steps) {
+        const uint32_t m = pick(g, 0, 2) == 0 ? 0 : pick(g, 0, 9) == 0 ? steps() : pick(g, 0, 5000);
+        s = pick(g, 0, 1) ? 0u - (m & 0x7FFF'FFFFu) : (m & 0x7FFF'FFFFu);
+      }
+      const uint32_t tk = pick(g, 0, 7);
+      c.t = tk == 0 ? 0 : tk < 3 ? pick(g, 0, 10'000) : pick(g, 0, 0xFFFF'FFFFu);
+    }
     c.gap = pick(g, 0, 1) ? 0 : pick(g, 0, 200);
     j.commands.push_back(c);
   }
@@ -322,19 +352,23 @@ int sc_main(int argc, char* argv[]) {
         default: {
           b.pprep.timing[0].high = b.pprep.timing[0].low = c.prep.min_half;
           for (int a = 1; a < kAxes; ++a) b.pprep.timing[a] = AxisTiming{1, 1, 0, 0};
+          for (int a = 0; a < kAxes; ++a) {
+            b.pprep.timing[a].setup = c.prep.setup[a];
+            b.pprep.timing[a].hold = c.prep.hold[a];
+          }
           b.prep.reset();
           b.delays = &c.prep.accept_delay;
           b.busy = &c.prep.busy;
           Cycle accept = 0;
           for (size_t k = 0; k < c.prep.commands.size(); ++k) {
             const PrepCommand& p = c.prep.commands[k];
-            FifoEntry cmd{false,  p.init ? kEntryNumerators : kEntryMotion,
-                          p.code, 0xFF,
-                          p.feed, {p.a, p.b, 0, 0}};
+            FifoEntry cmd{p.v2, p.kind, p.code, p.power, p.t, p.steps};
             accept = transport(b.to_prep, b.gp, b.clk, cmd, accept + p.gap);
             c.twin.events.push_back(BlockEvent{accept, {k, 0, 0, 0}});
           }
           c.twin.counters = {b.prep.num_x, b.prep.num_y};
+          for (Cycle e : b.prep.clamp_cycles)
+            c.twin.events.push_back(BlockEvent{e, {1ull << 63, 0, 0, 0}});
           break;
         }
       }

@@ -144,25 +144,36 @@ BlockRun rtl_prep(const PrepJob& j) {
   Cycle accept_at = -1;
   Cycle quiet = 0;
   Cycle idle_after = -1;  // exec_idle high from the clock after this edge
+  uint64_t setup = 0, hold = 0;
+  for (int a = 0; a < kAxes; ++a) {
+    setup |= static_cast<uint64_t>(j.setup[a]) << (16 * a);
+    hold |= static_cast<uint64_t>(j.hold[a]) << (16 * a);
+  }
+  m->cfg_dir_setup = setup;
+  m->cfg_dir_hold = hold;
   for (Cycle c = 1;; ++c) {
     m->exec_idle = c > idle_after ? 1 : 0;
     const bool offering = k < j.commands.size() && c > valid_from;
     if (offering) {
+      // { v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[4 x 32] }: 173 bits
       const PrepCommand& p = j.commands[k];
-      m->s_axis_tuser = p.init ? 1 : 0;
-      m->s_axis_tdata[0] = p.feed | (p.b << 16);
-      m->s_axis_tdata[1] = (p.b >> 16) | (p.a << 16);
-      m->s_axis_tdata[2] = (p.a >> 16) | (static_cast<uint32_t>(p.code & 3) << 16);
+      for (int a = 0; a < kAxes; ++a) m->s_axis_tdata[a] = p.steps[a];
+      m->s_axis_tdata[4] = p.t;
+      m->s_axis_tdata[5] = p.power | static_cast<uint32_t>(p.code & 3) << 8 |
+                           static_cast<uint32_t>(p.kind & 3) << 10 | (p.v2 ? 1u << 12 : 0u);
     }
     m->s_axis_tvalid = offering ? 1 : 0;
     m->m_axis_tready = (accept_at == c) ? 1 : 0;
-    m->eval();  // s_axis_tready depends on s_axis_tuser and exec_idle
+    m->eval();  // s_axis_tready depends on the entry's kind and exec_idle
     const bool take = offering && m->s_axis_tready;
     clock_once(*m);
     if (take) {
       r.events.push_back(BlockEvent{c, {k, 0, 0, 0}});
       if (++k < j.commands.size()) valid_from = c + j.commands[k].gap;
     }
+    if (m->init_applied)
+      r.events.push_back(BlockEvent{c, {1ull << 62 | (m->init_v2 ? 1u : 0u), 0, 0, 0}});
+    if (m->clamped) r.events.push_back(BlockEvent{c, {1ull << 63, 0, 0, 0}});
     if (accept_at == c) {
       accept_at = -1;
       idle_after = c + (seg - 1 < j.busy.size() ? j.busy[seg - 1] : 0);
@@ -171,9 +182,14 @@ BlockRun rtl_prep(const PrepJob& j) {
       r.events.push_back(BlockEvent{
           c,
           {m->m_axis_period | static_cast<uint64_t>(m->m_axis_code) << 32 |
-               static_cast<uint64_t>(m->m_axis_dir) << 40,
+               static_cast<uint64_t>(m->m_axis_dir) << 40 |
+               static_cast<uint64_t>(m->m_axis_dir_fast) << 44 |
+               static_cast<uint64_t>(m->m_axis_v2) << 45 |
+               static_cast<uint64_t>(m->m_axis_power) << 48,
            m->m_axis_total, m->m_axis_steps[0] | static_cast<uint64_t>(m->m_axis_steps[1]) << 32,
-           m->m_axis_tmn[0] | static_cast<uint64_t>(m->m_axis_tmn[1]) << 32}});
+           m->m_axis_steps[2] | static_cast<uint64_t>(m->m_axis_steps[3]) << 32,
+           m->m_axis_tmn[0] | static_cast<uint64_t>(m->m_axis_tmn[1]) << 32,
+           m->m_axis_tmn[6] | static_cast<uint64_t>(m->m_axis_tmn[7]) << 32}});
       accept_at = c + 1 + (seg < j.accept_delay.size() ? j.accept_delay[seg] : 0);
       ++seg;
     }

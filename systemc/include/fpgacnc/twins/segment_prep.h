@@ -13,6 +13,8 @@
 //     n_dom * min_period (counted: clamped); T and no steps is a segment of T ticks without
 //     steps; valid kPrepLatencyV2 (+ kPrepClampExtra when clamped) edges after acceptance.
 //   dwell: T ticks, no steps, laser off; valid kPrepLatencyDwell edges after acceptance.
+//   kind 3 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+// DIR per axis is the sign of the entry's steps field (1 for 0) whatever the kind.
 // tmn[a] = T - |steps_a|. The prepared segment carries DIR per axis and dir_fast: the block
 // tracks the DIR each axis will have when the segment starts (all low after reset) and sets
 // dir_fast when every moving axis that reverses has floor(T / n_dom) >= its DIR hold + setup.
@@ -29,6 +31,7 @@ namespace fpgacnc::twins {
 inline constexpr Cycle kPrepLatency = 68;
 inline constexpr Cycle kPrepLatencyV2 = 68 + kAxes;
 inline constexpr Cycle kPrepClampExtra = 0;
+inline constexpr Cycle kPrepClampStrobe = kAxes + 34;  // `clamped` after the divider (33 + 1)
 inline constexpr Cycle kPrepLatencyDwell = 68 + kAxes;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
@@ -104,7 +107,6 @@ class SegmentPrepTwin : public sc_core::sc_module {
       if (c.kind == kEntryMotion && !c.v2) {  // v1
         const auto feed = static_cast<uint16_t>(c.t & 0xffffu);
         abs[2] = abs[3] = 0;
-        s.dir[2] = s.dir[3] = false;
         const PreparedTiming t =
             prepare_timing(abs[0], abs[1], num_x, num_y, feed, p_.feed0_period, p_.min_period());
         s.code = c.code;
@@ -124,12 +126,11 @@ class SegmentPrepTwin : public sc_core::sc_module {
         if (t.clamped) {
           latency += kPrepClampExtra;
           ++clamped;
-          clamp_cycles.push_back(accept + latency);
+          clamp_cycles.push_back(accept + kPrepClampStrobe);
         }
-      } else {  // dwell (kind 3 is not produced by the decoder; taken as a dwell)
+      } else {  // dwell; kind 3 (never written by the decoder): a zero-length segment
         abs = {};
-        s.dir = {true, true, true, true};
-        s.total = c.t;
+        s.total = c.kind == kEntryDwell ? c.t : 0;
         s.power = 0;
         s.v2 = true;
         latency = kPrepLatencyDwell;
