@@ -1,12 +1,12 @@
 // Block-level co-simulation of segment_executor (with its dda_linear and step_pulse) against
 // SegmentExecutorTwin + DdaLinearTwin + StepPulseTwin (CTest label cosim).
 //
-// The block is driven directly, on all four axes (v1 packets move only X and Y, so the system
-// co-simulation never moves Z and E) with random segments (up to 4 moving axes, random periods
-// at and above the pulse generators' minimum, moves with no steps) and random 0..600-clock step
-// timing per job. The RTL is the Verilated C++ model `vexec` (tb/core.cmake), clocked by the
+// The block is driven directly, on all four axes, with random QUEUED segment streams (see
+// random_job: back-to-back offers taken on the running segment's last tick, reversals with and
+// without dir_fast, dwells, zero-length entries, laser power 0..255) and random 1..600-clock
+// step timing per job. The RTL is the Verilated C++ model `vexec` (tb/core.cmake), clocked by the
 // harness; the twins run in SystemC. Each job compares STEP/DIR/LASER edges, seg_start,
-// seg_done and positions; the first difference is printed with its cycle.
+// seg_done, seg_done_v2 and positions; the first difference is printed with its cycle.
 #include <fmt/format.h>
 
 #include <memory>
@@ -124,6 +124,7 @@ SC_MODULE(ExecBench) {
   std::vector<Job>* jobs = nullptr;
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
+  std::array<uint64_t, 4> stats{};  // zero gap, fast reversals, zero-length / HOLD on a last tick
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
@@ -169,6 +170,10 @@ SC_MODULE(ExecBench) {
       r.seg_start = exec.seg_start_cycles;
       r.seg_done = seg_done;
       r.seg_done_v2 = seg_done_v2;
+      stats[0] += exec.zero_gap;
+      stats[1] += exec.fast_reversals;
+      stats[2] += exec.zero_len_on_last_tick;
+      stats[3] += exec.hold_on_last_tick;
       for (int a = 0; a < kAxes; ++a) r.position[a] = pulse[a]->position;
       r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
       results.push_back(std::move(r));
@@ -231,7 +236,11 @@ int sc_main(int argc, char* argv[]) {
       fmt::print("FAIL segment_executor seed {}: first difference: {}\n", seed + i, d);
     }
   }
-  fmt::print("cosim_executor: {} jobs, {} segments, {} edges: {}\n", jobs.size(),
-             jobs.size() * segments, edges, bad ? "DIFFER" : "all identical");
+  fmt::print(
+      "cosim_executor: {} jobs, {} segments ({} started with zero gap, {} of them reversing "
+      "with dir_fast; {} zero-length and {} HOLD-path segments taken on a last tick), {} edges: "
+      "{}\n",
+      jobs.size(), jobs.size() * segments, bench.stats[0], bench.stats[1], bench.stats[2],
+      bench.stats[3], edges, bad ? "DIFFER" : "all identical");
   return bad ? 1 : 0;
 }

@@ -301,13 +301,18 @@ void decoder_tests(DecoderBench& b) {
   b.send(Bytes(cut.begin(), cut.begin() + 5));
   const Cycle last_take = b.t - 10 + kDecoderTake;
   const size_t r0 = b.reqs.size();
-  b.dec.advance(last_take + 1001);
+  b.dec.advance(last_take + 1000);
   check_eq(b.reqs.size(), r0, "no timeout before the watchdog expires");
-  b.dec.advance(last_take + 1002);
+  b.dec.advance(last_take + 1001);
   check(b.reqs.size() == r0 + 1 && b.reqs.back().second.reason == kTimeout &&
-            b.reqs.back().first == last_take + 1001,
-        "NAK TIMEOUT on edge last + WATCHDOG_CLKS + 1");
+            b.reqs.back().second.seq == 6 && b.reqs.back().first == last_take + 1000,
+        "NAK TIMEOUT (SEQ as received) after edge last + WATCHDOG_CLKS");
   check_eq(b.dec.current().timeouts, 1u, "timeouts counted");
+  // A duplicate RELEASE also returns to auto mode (after a HELLO switched to v2 again).
+  b.run(frame(0, kHello));
+  std::tie(r, w) = b.run(frame(5, kRelease));
+  check(is_ack(r) && !b.dec.current().v2_mode, "duplicate RELEASE -> auto mode");
+  b.run(frame(0, kHello));
   // RELEASE: ACK, back to auto mode: v1 again.
   std::tie(r, w) = b.run(frame(6, kRelease));
   check(is_ack(r) && !b.dec.current().v2_mode, "RELEASE -> auto mode");
@@ -398,8 +403,8 @@ void encoder_tests(EncoderBench& b) {
   // DONE and ACK were both pending: one ACK (it stands for the DONE).
   check_bytes(got, {0xA5, 0x07, 0x00, 0x80, 0x08, 0x00, 0x3F, 0x00, 0x00, 0x00, 0x05, 0xAA, 0x5D},
               "ACK frame (docs test vector), a pending DONE folded into it");
-  check_eq(b.bytes.front().first, 104 + kRespStart,
-           "frame starts kRespStart after the last strobe");
+  check_eq(b.bytes.front().first, 104 + kRespStart + 1,
+           "first byte taken kRespStart + 1 after the last strobe");
   for (size_t i = 1; i < b.bytes.size(); ++i)
     check_eq(b.bytes[i].first, b.bytes[i - 1].first + 10, "bytes back to back");
   // Priority: IDENT, STATUS, NAK, ACK, DONE when all are pending on the same edge.
@@ -441,8 +446,8 @@ void encoder_tests(EncoderBench& b) {
   }
   check(b.bytes.size() == 2 && b.bytes[0].second == 0xAA && b.bytes[1].second == 0xAA, "two 0xAA");
   if (b.bytes.size() == 2) {
-    check_eq(b.bytes[0].first, 50'002, "0xAA offered on seg_done + 2");
-    check_eq(b.bytes[1].first, 50'012, "second 0xAA back to back");
+    check_eq(b.bytes[0].first, 50'000 + kRespStart + 1, "0xAA taken on seg_done + 3");
+    check_eq(b.bytes[1].first, 50'010 + kRespStart + 1, "second 0xAA back to back");
   }
   // Nothing before the limit: no frame decided.
   b.bytes.clear();
@@ -595,12 +600,12 @@ void worked_example(const RunResult& r) {
   const Cycle D = A + 1;    // X reverses (DIR 0 -> 1), hold long over
   const Cycle R = D + 200;  // DIR setup
   check_eq(r.packet_done.size(), 2u, "packets");
-  check_eq(r.packet_done.back(), take, "packet_done");
+  check_eq(r.packet_done.back(), take + kDecoderResp, "packet_done");
   check_eq(r.seg_start.at(0), R, "run start R");
   check_eq(r.position[0], 320, "X position");
   check_eq(r.position[1], -160, "Y position");
   check_eq(r.acks.size(), 1u, "one ACK");
-  check_eq(r.acks.at(0), R + 5'000'000 + 2, "ACK start edge = R + T + 2");
+  check_eq(r.acks.at(0), R + 5'000'000 + kRespStart + 1, "ACK start edge = R + T + 3");
   // Edges: DIR X at D; laser at R; first X step at R + 15625; last steps at R + T.
   std::vector<fpgacnc::simboard::Edge> x_steps, y_steps;
   bool dir_ok = false, laser_ok = false;
@@ -625,8 +630,8 @@ void zero_move_and_watchdog(const RunResult& r) {
   check_eq(r.timeouts, 1u, "one watchdog timeout");
   check_eq(r.acks.size(), 1u, "ACK of the zero move");
   check(r.edges.empty(), "a zero move makes no edges");
-  // The zero move completes on the executor's accept edge: ACK 2 edges later.
-  check_eq(r.acks.at(0), r.seg_done.at(0) + 2, "ACK 2 edges after seg_done");
+  // The zero move completes on the executor's accept edge: ACK 3 edges later.
+  check_eq(r.acks.at(0), r.seg_done.at(0) + kRespStart + 1, "ACK 3 edges after seg_done");
 }
 
 // A v2 session: CONFIG_AXIS, NUMERATORS, 40 short LINE frames (a square spiral on X/Y, reversals

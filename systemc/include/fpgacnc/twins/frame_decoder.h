@@ -5,9 +5,9 @@
 // t = b + kDecoderTake. Between packets (auto mode) 0xFF starts a v1 init, 0x00..0x03 a v1
 // motion, 0xA5 a v2 frame, anything else is noise (counted); in v2 mode only 0xA5 starts
 // anything. A started packet or frame whose next byte comes more than WATCHDOG_CLKS edges after
-// the previous one is dropped on edge previous + WATCHDOG_CLKS + 1 (v1: timeouts; v2: NAK
-// TIMEOUT). v1: a complete packet is written to the command FIFO on its last take edge (an
-// init as a numerators entry), or dropped when the FIFO is full (overruns).
+// the previous one is dropped on edge previous + WATCHDOG_CLKS (v1: timeouts; v2: also NAK
+// TIMEOUT, SEQ as received or 0). v1: a complete packet is written to the command FIFO (an init
+// as a numerators entry), or dropped when the FIFO is full (overruns).
 // v2 (edges relative to the take edge of the byte that ends the frame):
 //   LEN > MAX_PAYLOAD: NAK BAD_LENGTH at the LEN byte, the frame abandoned at once;
 //   CRC mismatch: NAK BAD_CRC; a good CRC switches to v2 mode;
@@ -17,7 +17,8 @@
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
 //   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS written to the FIFO,
-//   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR and RELEASE (back to auto mode) act.
+//   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR acts; RELEASE, accepted or a duplicate, returns to
+//   auto mode.
 // Initiators: `fifo` (FIFO write; level read before a write), `resp` (requests to the response
 // encoder: a strobe after the delay's edge), `cfg` (CONFIG_AXIS writes). state_after(t): the
 // DecoderState after edge t (next_seq, mode, counters), from a history: asked in time order
@@ -30,9 +31,14 @@
 
 namespace fpgacnc::twins {
 
-inline constexpr Cycle kDecoderTake = 1;   // byte valid edge -> the decoder takes it
-inline constexpr Cycle kDecoderWrite = 0;  // last byte's take edge -> FIFO write / config write
-inline constexpr Cycle kDecoderResp = 0;   // last byte's take edge -> response request strobe
+// Edges relative to the take edge L of the byte that ends a packet or frame: it is checked in the
+// clock after L ("CHECK"): the FIFO's room as it is after edge L, the entry written on L + 1,
+// next_seq and the mode change on L + 1, the request and counter strobes are high after L + 1
+// (the counters they feed change on L + 2). Noise and an oversized LEN strobe after their own
+// take edge; the watchdog fires on the edge WATCHDOG_CLKS after the last byte's.
+inline constexpr Cycle kDecoderTake = 1;   // byte valid after edge b -> taken on b + 1
+inline constexpr Cycle kDecoderWrite = 1;  // L -> FIFO write / config write edge
+inline constexpr Cycle kDecoderResp = 1;   // L -> request strobe (high after this edge)
 
 // Requests to the response encoder.
 inline constexpr uint8_t kReqIdent = 0, kReqStatus = 1, kReqNak = 2, kReqAck = 3,
@@ -87,7 +93,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
   // Fires the watchdog of a started packet if it expires before edge h (no byte can come
   // earlier than h: the caller knows the host's schedule).
   void advance(Cycle h) {
-    if (count_ > 0 && last_take_ + wd_ + 1 < h) expire();
+    if (count_ > 0 && last_take_ + wd_ < h) expire();
   }
   const DecoderState& current() const { return s_; }
   DecoderState state_after(Cycle t) {
@@ -104,26 +110,31 @@ class FrameDecoderTwin : public sc_core::sc_module {
  private:
   enum class Kind { None, V1Init, V1Motion, V2 };
 
-  void commit(Cycle c) {
+  // The state as it is after edge c (history in edge order).
+  void commit(Cycle c, const DecoderState& st) {
     if (history_.back().first == c)
-      history_.back().second = s_;
+      history_.back().second = st;
     else
-      history_.emplace_back(c, s_);
+      history_.emplace_back(c, st);
+  }
+  void commit(Cycle c) { commit(c, s_); }
+  // A CHECK on the clock after edge L: registers change on L + 1, counters on L + 2.
+  void commit_check(Cycle l) {
+    DecoderState regs = history_.back().second;
+    regs.next_seq = s_.next_seq;
+    regs.v2_mode = s_.v2_mode;
+    commit(l + 1, regs);
+    commit(l + 2);
   }
   void request(Cycle c, RespReq r) {
     if (r.kind == kReqNak) naks.emplace_back(c, r);
     transport(resp, gp_, clk_, r, c);
   }
-  void nak(Cycle c, uint8_t reason) {
-    request(c + kDecoderResp, RespReq{kReqNak, seq_, reason});
-    count_ = 0;
-    kind_ = Kind::None;
-  }
 
   void expire() {
-    const Cycle f = last_take_ + wd_ + 1;
+    const Cycle f = last_take_ + wd_;
     ++s_.timeouts;
-    commit(f);
+    commit(f + 1);
     if (kind_ == Kind::V2)
       request(f, RespReq{kReqNak, count_ > 2 ? seq_ : uint8_t{0}, v2::kTimeout});
     count_ = 0;
@@ -135,9 +146,10 @@ class FrameDecoderTwin : public sc_core::sc_module {
     transport(fifo, gp_, clk_, l, c, tlm::TLM_READ_COMMAND);
     return l.level;
   }
-  bool write_fifo(Cycle c, FifoEntry e) {
-    if (fifo_level(c) >= depth_) return false;
-    transport(fifo, gp_, clk_, e, c);
+  // Written on L + kDecoderWrite if the FIFO has room after edge L.
+  bool write_fifo(Cycle l, FifoEntry e) {
+    if (fifo_level(l) >= depth_) return false;
+    transport(fifo, gp_, clk_, e, l + kDecoderWrite);
     ++fifo_writes;
     return true;
   }
@@ -158,7 +170,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
         code_ = byte;
       } else {
         ++s_.noise;
-        commit(take);
+        commit(take + 1);
         return;
       }
       count_ = 1;
@@ -192,24 +204,25 @@ class FrameDecoderTwin : public sc_core::sc_module {
     e.steps[0] = be32(&buf_[0]);
     e.steps[1] = be32(&buf_[4]);
     e.t = init ? 0 : be16(&buf_[8]);
-    if (!write_fifo(take + kDecoderWrite, e)) {
+    if (!write_fifo(take, e)) {
       ++s_.overruns;
-      commit(take);
+      commit_check(take);
       return;
     }
     ++packets;
-    packet_done_cycles.push_back(take);
+    packet_done_cycles.push_back(take + kDecoderResp);
   }
 
   void v2_byte(Cycle take, uint8_t byte) {
     // count_ bytes so far: 1 SYNC, 2 LEN, 3 SEQ, 4 TYPE, then payload, then CRC.
     if (count_ == 1) {
       len_ = byte;
-      if (len_ > v2::kMaxPayload) {
-        seq_ = 0;
+      if (len_ > v2::kMaxPayload) {  // at once: strobes after this byte's edge
         ++s_.length_errors;
-        commit(take);
-        nak(take, v2::kBadLength);
+        commit(take + 1);
+        request(take, RespReq{kReqNak, 0, v2::kBadLength});
+        count_ = 0;
+        kind_ = Kind::None;
         return;
       }
     } else if (count_ == 2) {
@@ -231,9 +244,11 @@ class FrameDecoderTwin : public sc_core::sc_module {
     std::copy(payload_.begin(), payload_.begin() + len_, body + 3);
     const uint16_t crc = crc16_ccitt(body, 3 + static_cast<size_t>(len_));
     if (crc != static_cast<uint16_t>(crc_hi_ << 8 | byte)) {
+      count_ = 0;
+      kind_ = Kind::None;
       ++s_.crc_errors;
-      commit(take);
-      nak(take, v2::kBadCrc);
+      commit_check(take);
+      request(take + kDecoderResp, RespReq{kReqNak, seq_, v2::kBadCrc});
       return;
     }
     ++frames;
@@ -269,7 +284,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     const int want = expected_len(type_);
     if (want == -1) {
       ++s_.unknown_types;
-      commit(take);
+      commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kUnknownType});
       return;
     }
@@ -279,42 +294,42 @@ class FrameDecoderTwin : public sc_core::sc_module {
       const int rest = len_ - 6;
       if (rest < 0 || rest % width != 0 || rest / width > kAxes) {
         ++s_.length_errors;
-        commit(take);
+        commit_check(take);
         request(r, RespReq{kReqNak, seq_, v2::kBadLength});
         return;
       }
       axes = rest / width;
     } else if (want != len_) {
       ++s_.length_errors;
-      commit(take);
+      commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadLength});
       return;
     }
     if ((type_ == v2::kLine && (payload_[0] & 0x7C) != 0) ||
         (type_ == v2::kConfigAxis && payload_[0] >= kAxes)) {
-      commit(take);
+      commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;
     }
     if (type_ == v2::kHello || type_ == v2::kStatusQuery) {
       ++s_.frames_ok;
-      commit(take);
+      commit_check(take);
       request(r, RespReq{type_ == v2::kHello ? kReqIdent : kReqStatus});
       return;
     }
     const SeqClass sc = classify_seq(seq_, s_.next_seq);
     if (sc == SeqClass::Ahead) {
-      commit(take);
+      commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kOutOfOrder});
       return;
     }
     if (sc == SeqClass::Duplicate) {
       ++s_.frames_ok;
-      commit(take);
+      if (type_ == v2::kRelease) s_.v2_mode = false;
+      commit_check(take);
       request(r, RespReq{kReqAck});
       return;
     }
-    const Cycle w = take + kDecoderWrite;
     if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators) {
       FifoEntry e{};
       e.v2 = true;
@@ -338,8 +353,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
         e.steps[0] = be32(&payload_[0]);
         e.steps[1] = be32(&payload_[4]);
       }
-      if (!write_fifo(w, e)) {
-        commit(take);
+      if (!write_fifo(take, e)) {
+        commit_check(take);
         request(r, RespReq{kReqNak, seq_, v2::kFifoFull});
         return;
       }
@@ -347,7 +362,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
       CfgAxis c{payload_[0], AxisTiming{be16(&payload_[1]), be16(&payload_[3]), be16(&payload_[5]),
                                         be16(&payload_[7])}};
       ++cfg_writes;
-      transport(cfg, gp_, clk_, c, w);
+      transport(cfg, gp_, clk_, c, take + kDecoderWrite);
     } else if (type_ == v2::kFaultClear) {
       request(r, RespReq{kReqFaultClear});
     } else if (type_ == v2::kRelease) {
@@ -355,7 +370,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
     ++s_.frames_ok;
     ++s_.next_seq;
-    commit(take);
+    commit_check(take);
     request(r, RespReq{kReqAck});
   }
 

@@ -1,18 +1,20 @@
 // Twin of rtl/response_encoder.v: the device's answers on tx (docs/protocol.md "Device to host").
 //
-// Inputs are strobes after an edge e; each takes effect on edge e + 1 (a pending flag or a
-// counter), so a frame can start on edge e + kRespStart at the earliest:
+// Inputs are strobes after an edge e; each is sampled on edge e + 1 (a pending flag or a counter),
+// so a frame can be decided (its fields snapshotted) on edge e + kRespStart = e + 2 at the
+// earliest and its first byte taken by an idle uart_tx on the edge after:
 //   target `req` (frame_decoder): IDENT, STATUS, NAK (seq, reason; a newer NAK replaces a
 //     pending one), ACK requests, FAULT_CLEAR;
 //   target `done` (segment_executor seg_done): a v2 segment counts in `segments done` and sets
 //     DONE pending; a v1 motion owes one 0xAA byte;
 //   target `applied` (segment_prep): a v2 NUMERATORS entry applied counts like a v2 segment.
-// A frame starts on the first edge d on which the encoder is free (after the last byte of the
-// previous frame was taken by uart_tx) and something is pending: a v1 0xAA first (it only goes
-// out between frames), then IDENT, STATUS, NAK, ACK, DONE. Its fields are the live state before
-// edge d (initiator `state`: StatusSnapshot, read in time order), an ACK also clears a pending
-// DONE. The bytes go to uart_tx (initiator `tx`) back to back: byte 0 offered on d, byte k on
-// the edge after byte k-1 was taken. The device SEQ counts the frames sent.
+// A frame is decided on the first edge d on which the encoder is free (the edge after the last
+// byte of the previous frame was taken by uart_tx) and something is pending: a v1 0xAA first (it
+// only goes out between frames), then IDENT, STATUS, NAK, ACK, DONE. Its fields are the live
+// state as it is after edge d - 1 (initiator `state`: StatusSnapshot, read in time order); an
+// ACK also clears a pending DONE; a request sampled on d itself stays pending. The bytes go to
+// uart_tx (initiator `tx`) back to back: byte 0 offered for edge d + 1, byte k for the edge
+// after byte k-1 was taken. The device SEQ counts the frames sent.
 //
 // No wait(): the twin computes frames lazily, in time order, when the board calls step(limit)
 // with a limit before which every input is known (the host's next byte cannot act earlier).
@@ -26,7 +28,7 @@
 
 namespace fpgacnc::twins {
 
-inline constexpr Cycle kRespStart = 2;  // input strobe after edge e -> frame start on e + 2
+inline constexpr Cycle kRespStart = 2;  // input strobe after edge e -> decision on e + 2
 
 struct StatusSnapshot {  // the live state a frame is filled in from (cnc_core status)
   DecoderState dec;
@@ -245,7 +247,7 @@ class ResponseEncoderTwin : public sc_core::sc_module {
       put16(out, crc);
       frames.push_back(SentFrame{d, out});
     }
-    Cycle offer = d, taken = d;
+    Cycle offer = d + 1, taken = d;
     for (uint8_t b : out) {
       TxByte t{b};
       taken = transport(tx, gp_, clk_, t, offer);

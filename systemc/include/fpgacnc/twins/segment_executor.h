@@ -67,11 +67,14 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     run_end_ = -1;
     running_ = false;
     segments_run = 0;
-    zero_gap = 0;
+    zero_gap = fast_reversals = zero_len_on_last_tick = hold_on_last_tick = 0;
     seg_start_cycles.clear();
   }
   uint64_t segments_run = 0;
   uint64_t zero_gap = 0;                // segments started on the previous one's last tick
+  uint64_t fast_reversals = 0;          // of those, with a DIR write during the run (dir_fast)
+  uint64_t zero_len_on_last_tick = 0;   // T = 0 taken on a last tick (one clock in ZERO)
+  uint64_t hold_on_last_tick = 0;       // taken on a last tick, then HOLD / SETUP
   std::vector<Cycle> seg_start_cycles;  // edges after which seg_start is high
 
  private:
@@ -110,6 +113,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     if (queued) {
       accept = run = run_end_;
       ++zero_gap;
+      if (change) ++fast_reversals;
       for (int a = 0; a < kAxes; ++a) {
         if (!flip[a]) continue;
         PulseCmd c{s.dir[a]};
@@ -119,6 +123,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
     } else {
       accept = on_last_tick ? run_end_ : std::max(valid + 1, idle_after_ + 1);
+      if (on_last_tick && s.total == 0) ++zero_len_on_last_tick;
+      if (on_last_tick && s.total != 0) ++hold_on_last_tick;
       run = accept;
       if (change) {
         Cycle dir_edge = accept + 1;

@@ -16,8 +16,10 @@
 
 namespace fpgacnc::twins {
 
-inline constexpr Cycle kFifoWriteToValid = 2;  // write edge -> entry valid (RAM read + register)
-inline constexpr Cycle kFifoPopToValid = 2;    // pop edge -> the next entry valid
+// First-word-fall-through with a registered RAM read: an entry written on edge W is in the output
+// register after edge W + 1 (first pop on W + 2); a stream kept ready pops one entry per clock.
+inline constexpr Cycle kFifoWriteToValid = 2;  // write edge -> first edge it can be popped
+inline constexpr Cycle kFifoPopToValid = 1;    // pop edge -> first edge the next can be popped
 
 class SegmentFifoTwin : public sc_core::sc_module {
  public:
