@@ -1,16 +1,26 @@
-// cnc_core: the board-independent controller, protocol v1.
+// cnc_core: the board-independent controller, protocols v1 and v2 (docs/protocol.md).
 //
-//   rx -> uart_rx -> packet_decoder_v1 -> segment_prep -> segment_executor -> STEP/DIR/laser
-//   tx <- uart_tx <- ACK 0xAA per completed move
+//   rx -> uart_rx -> frame_decoder -> segment_fifo -> segment_prep -> segment_executor
+//                                                       -> STEP/DIR/laser
+//   tx <- uart_tx <- response_encoder (v2 ACK/NAK/DONE/STATUS/IDENT frames, v1 0xAA per move)
 //
-// Behaviour (protocol-v1.md): init packets set NUMERATOR_X/Y once the machine is idle; a motion
-// packet runs as one constant-rate segment; when it completes (the executor's last tick, or at
-// once for a move with no steps) one 0xAA byte is queued to uart_tx.
-// Runtime configuration port (cfg_wr/cfg_addr/cfg_wdata, one write per clock): per-axis step
-// timing in clocks, address = axis * 4 + field, field 0 STEP high, 1 STEP low, 2 DIR setup,
-// 3 DIR hold (16 bits each; defaults STEP_HIGH/STEP_LOW/DIR_SETUP/DIR_HOLD). Writes land in a
-// shadow set that becomes active only while nothing is prepared, queued or running, so a setting
-// never changes in the middle of a move.
+// Behaviour: frame_decoder accepts v1 packets and v2 frames; validated motion, dwell and
+// numerator entries go through the block-RAM command FIFO (FIFO_DEPTH entries) to segment_prep,
+// which prepares the next segment while the executor runs the current one, so queued segments
+// follow each other with no idle clock. A v1 move's completion (seg_done of a v1 segment) queues
+// one 0xAA; a v2 segment's completion (or an applied v2 NUMERATORS entry) counts in
+// segments_done and asks for a DONE frame. init/NUMERATORS entries are applied by segment_prep
+// once the executor is idle.
+// Runtime configuration (cfg_wr/cfg_addr/cfg_wdata, one write per clock, and CONFIG_AXIS
+// frames, all four fields of an axis in one clock): per-axis step timing in clocks, address =
+// axis * 4 + field, field 0 STEP high, 1 STEP low, 2 DIR setup, 3 DIR hold (16 bits each;
+// defaults STEP_HIGH/STEP_LOW/DIR_SETUP/DIR_HOLD). Writes land in a shadow set that becomes
+// active only while the FIFO is empty and nothing is prepared or running, so a setting never
+// changes in the middle of a move. The cfg port wins over a CONFIG_AXIS frame on the same clock
+// and field.
+// Faults: a STEP timing violation is latched (faults bit 0) until a FAULT_CLEAR frame.
+// Status outputs: the v1 ones, plus the v2 counters that STATUS reports (16 bits, wrapping).
+//   packet_count counts v1 packets queued and v2 frames that passed every check.
 // rst is synchronous, active high; the board top synchronizes its reset button.
 `default_nettype none
 
@@ -24,7 +34,9 @@ module cnc_core #(
     parameter STEP_HIGH         = 100,
     parameter STEP_LOW          = 100,
     parameter DIR_SETUP         = 200,
-    parameter DIR_HOLD          = 200
+    parameter DIR_HOLD          = 200,
+    parameter FIFO_DEPTH        = 64,                  // command FIFO entries (power of two)
+    parameter BUILD_ID          = 32'h2026_0005        // reported by IDENT
 ) (
     input wire clk,
     input wire rst,
@@ -40,7 +52,7 @@ module cnc_core #(
     input wire [ 7:0] cfg_addr,
     input wire [15:0] cfg_wdata,
 
-    output wire                 busy,        // a move is prepared, waiting or running
+    output wire                 busy,        // an entry is queued, or a move prepared or running
     output wire                 running,     // the DDA is ticking
     output wire                 seg_start,   // high during the first tick of a move
     output wire                 seg_done,    // 1-clock strobe when a move completes
@@ -54,14 +66,29 @@ module cnc_core #(
     output wire [        15:0] overruns,
     output wire [        15:0] violations,
     output wire [        31:0] numerator_x,
-    output wire [        31:0] numerator_y
+    output wire [        31:0] numerator_y,
+
+    output wire [        15:0] fifo_level,     // entries in the command FIFO
+    output wire [         7:0] next_seq,       // v2 sequence number expected next
+    output wire                v2_mode,        // the decoder accepts only v2 frames
+    output wire [        31:0] segments_done,  // completed v2 FIFO entries
+    output wire [         7:0] faults,         // latched faults (bit 0 STEP violation)
+    output wire [        15:0] frames_ok,
+    output wire [        15:0] crc_errors,
+    output wire [        15:0] length_errors,
+    output wire [        15:0] unknown_types,
+    output wire [        15:0] noise_bytes,
+    output wire [        15:0] clamped,        // v2 segments whose T was raised
+    output wire [        15:0] naks            // NAK frames requested
 );
+
+  localparam ENTRY_W = 45 + 32 * N_AXES;
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;
   wire rx_tvalid, rx_tready, rx_frame_error, rx_overrun;
   /* verilator lint_off UNUSEDSIGNAL */
-  wire rx_busy, tx_busy, init_applied;  // not needed by the v1 core
+  wire rx_busy, tx_busy, enc_frame_start, dec_release;  // not needed here
   /* verilator lint_on UNUSEDSIGNAL */
 
   uart_rx #(
@@ -80,25 +107,71 @@ module cnc_core #(
   );
 
   // ---------------------------------------------------------------- decoder
-  wire [81:0] cmd_tdata;
-  wire cmd_tuser, cmd_tvalid, cmd_tready;
-  wire dec_timeout, dec_overrun, dec_done;
+  wire [ENTRY_W-1:0] dec_tdata;
+  wire dec_tvalid, fifo_s_tready;
+  wire dec_cfg_wr;
+  wire [7:0] dec_cfg_axis;
+  wire [63:0] dec_cfg_data;
+  wire dec_fault_clear, dec_hello, dec_status, dec_ack, dec_nak;
+  wire [7:0] dec_nak_seq, dec_nak_reason, dec_next_seq;
+  wire dec_v2_mode, dec_frame_ok, dec_crc_error, dec_length_error, dec_unknown_type;
+  wire dec_timeout, dec_noise, dec_v1_packet, dec_v1_overrun;
 
-  packet_decoder_v1 #(
-      .WATCHDOG_CLKS(WATCHDOG_CLKS)
+  frame_decoder #(
+      .N_AXES       (N_AXES),
+      .WATCHDOG_CLKS(WATCHDOG_CLKS),
+      .MAX_PAYLOAD  (64)
   ) u_dec (
       .clk          (clk),
       .rst          (rst),
       .s_axis_tdata (rx_tdata),
       .s_axis_tvalid(rx_tvalid),
       .s_axis_tready(rx_tready),
+      .m_axis_tdata (dec_tdata),
+      .m_axis_tvalid(dec_tvalid),
+      .m_axis_tready(fifo_s_tready),
+      .cfg_wr       (dec_cfg_wr),
+      .cfg_axis     (dec_cfg_axis),
+      .cfg_data     (dec_cfg_data),
+      .fault_clear  (dec_fault_clear),
+      .release_req  (dec_release),
+      .hello        (dec_hello),
+      .status_req   (dec_status),
+      .ack_req      (dec_ack),
+      .nak          (dec_nak),
+      .nak_seq      (dec_nak_seq),
+      .nak_reason   (dec_nak_reason),
+      .next_seq     (dec_next_seq),
+      .v2_mode      (dec_v2_mode),
+      .frame_ok     (dec_frame_ok),
+      .crc_error    (dec_crc_error),
+      .length_error (dec_length_error),
+      .unknown_type (dec_unknown_type),
+      .timeout      (dec_timeout),
+      .noise        (dec_noise),
+      .v1_packet    (dec_v1_packet),
+      .v1_overrun   (dec_v1_overrun)
+  );
+
+  // ---------------------------------------------------------------- command FIFO
+  wire [ENTRY_W-1:0] cmd_tdata;
+  wire cmd_tvalid, cmd_tready;
+  wire [15:0] fifo_level_w, fifo_free_w;
+
+  segment_fifo #(
+      .WIDTH(ENTRY_W),
+      .DEPTH(FIFO_DEPTH)
+  ) u_fifo (
+      .clk          (clk),
+      .rst          (rst),
+      .s_axis_tdata (dec_tdata),
+      .s_axis_tvalid(dec_tvalid),
+      .s_axis_tready(fifo_s_tready),
       .m_axis_tdata (cmd_tdata),
-      .m_axis_tuser (cmd_tuser),
       .m_axis_tvalid(cmd_tvalid),
       .m_axis_tready(cmd_tready),
-      .timeout      (dec_timeout),
-      .overrun      (dec_overrun),
-      .packet_done  (dec_done)
+      .level        (fifo_level_w),
+      .free         (fifo_free_w)
   );
 
   // ---------------------------------------------------------------- configuration
@@ -108,7 +181,8 @@ module cnc_core #(
 
   wire exec_idle;
   wire prep_busy;
-  wire quiet = exec_idle && !prep_busy;
+  wire fifo_empty = (fifo_level_w == 16'd0);
+  wire quiet = exec_idle && !prep_busy && fifo_empty;
 
   // min_period = max over axes of (STEP high + STEP low), each at least 1, so at least 2: the fastest dominant period
   // the pulse generators can follow. Computed by a scanner, one axis per clock (no comparator
@@ -128,7 +202,17 @@ module cnc_core #(
   wire [16:0] pm_cand = (pm_idx_d_reg == {AXW{1'b0}} || pm_sum_reg > pm_run_reg) ? pm_sum_reg
                                                                                  : pm_run_reg;
 
+  localparam integer NAX_I = N_AXES;
+  localparam [7:0] NAX8 = NAX_I[7:0];
+  wire [AXW-1:0] dec_ax = dec_cfg_axis[AXW-1:0];
+
   always @(posedge clk) begin
+    if (dec_cfg_wr && dec_cfg_axis < NAX8) begin
+      shadow_high_reg[16*dec_ax+:16]  <= dec_cfg_data[63:48];
+      shadow_low_reg[16*dec_ax+:16]   <= dec_cfg_data[47:32];
+      shadow_setup_reg[16*dec_ax+:16] <= dec_cfg_data[31:16];
+      shadow_hold_reg[16*dec_ax+:16]  <= dec_cfg_data[15:0];
+    end
     if (cfg_wr && cfg_addr[7:2] < N_AXES) begin
       case (cfg_addr[1:0])
         2'd0: shadow_high_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
@@ -167,21 +251,6 @@ module cnc_core #(
   end
 
   // ---------------------------------------------------------------- preparation
-  // Stopgap until the v2 decoder and command FIFO: the v1 decoder's command as a FIFO entry
-  // { v2, kind, code, power, t, steps } (kind 0 motion, 1 init; v1: t = feed, power 0xFF).
-  localparam ENTRY_W = 45 + 32 * N_AXES;
-  wire [ENTRY_W-1:0] cmd_entry;
-  generate
-    if (N_AXES > 2) begin : g_entry_wide
-      assign cmd_entry = {1'b0, cmd_tuser ? 2'd1 : 2'd0, cmd_tdata[81:80], 8'hFF, 16'd0,
-                          cmd_tdata[15:0], {(32 * (N_AXES - 2)) {1'b0}}, cmd_tdata[47:16],
-                          cmd_tdata[79:48]};
-    end else begin : g_entry_narrow
-      assign cmd_entry = {1'b0, cmd_tuser ? 2'd1 : 2'd0, cmd_tdata[81:80], 8'hFF, 16'd0,
-                          cmd_tdata[15:0], cmd_tdata[47:16], cmd_tdata[79:48]};
-    end
-  endgenerate
-
   wire [1:0] seg_code;
   wire [7:0] seg_power;
   wire seg_v2, seg_dir_fast;
@@ -192,9 +261,7 @@ module cnc_core #(
   wire [15:0] seg_feed;
   wire [31:0] seg_period;
   wire seg_tvalid, seg_tready;
-  /* verilator lint_off UNUSEDSIGNAL */
-  wire init_v2, prep_clamped, seg_done_v2;  // v2 status, not used by the v1 core
-  /* verilator lint_on UNUSEDSIGNAL */
+  wire init_applied, init_v2, prep_clamped;
 
   segment_prep #(
       .N_AXES           (N_AXES),
@@ -203,7 +270,7 @@ module cnc_core #(
   ) u_prep (
       .clk            (clk),
       .rst            (rst),
-      .s_axis_tdata   (cmd_entry),
+      .s_axis_tdata   (cmd_tdata),
       .s_axis_tvalid  (cmd_tvalid),
       .s_axis_tready  (cmd_tready),
       .exec_idle      (exec_idle),
@@ -231,7 +298,7 @@ module cnc_core #(
   );
 
   // ---------------------------------------------------------------- execution
-  wire exec_busy, exec_violation;
+  wire exec_busy, exec_violation, seg_done_v2;
 
   segment_executor #(
       .N_AXES(N_AXES)
@@ -265,43 +332,102 @@ module cnc_core #(
       .violation      (exec_violation)
   );
 
-  // ---------------------------------------------------------------- ACK and status
-  reg [7:0] ack_pending_reg;
+  // ---------------------------------------------------------------- status
   reg [1:0] last_code_reg;
   reg [15:0] last_feed_reg;
   reg [31:0] last_period_reg;
   reg [15:0] packet_count_reg, frame_errors_reg, timeouts_reg, overruns_reg, violations_reg;
-  wire tx_tready;
-  wire ack_send = (ack_pending_reg != 8'd0) && tx_tready;
+  reg [15:0] frames_ok_reg, crc_errors_reg, length_errors_reg, unknown_types_reg;
+  reg [15:0] noise_bytes_reg, clamped_reg, naks_reg;
+  reg [31:0] segments_done_reg;
+  reg fault_step_reg;
+
+  wire v2_seg_done = seg_done && seg_done_v2;
+  wire v2_init_done = init_applied && init_v2;
+  wire v1_move_done = seg_done && !seg_done_v2;
 
   always @(posedge clk) begin
-    case ({seg_done, ack_send})
-      2'b10:   ack_pending_reg <= ack_pending_reg + 8'd1;
-      2'b01:   ack_pending_reg <= ack_pending_reg - 8'd1;
-      default: ack_pending_reg <= ack_pending_reg;
-    endcase
     if (seg_tvalid && seg_tready) begin
-      last_code_reg <= seg_code;
-      last_feed_reg <= seg_feed;
+      last_code_reg   <= seg_code;
+      last_feed_reg   <= seg_feed;
       last_period_reg <= seg_period;
     end
-    if (dec_done) packet_count_reg <= packet_count_reg + 16'd1;
+    if (dec_v1_packet || dec_frame_ok) packet_count_reg <= packet_count_reg + 16'd1;
     if (rx_frame_error) frame_errors_reg <= frame_errors_reg + 16'd1;
     if (dec_timeout) timeouts_reg <= timeouts_reg + 16'd1;
-    if (dec_overrun || rx_overrun) overruns_reg <= overruns_reg + 16'd1;
+    if (dec_v1_overrun || rx_overrun) overruns_reg <= overruns_reg + 16'd1;
     if (exec_violation) violations_reg <= violations_reg + 16'd1;
+    if (dec_frame_ok) frames_ok_reg <= frames_ok_reg + 16'd1;
+    if (dec_crc_error) crc_errors_reg <= crc_errors_reg + 16'd1;
+    if (dec_length_error) length_errors_reg <= length_errors_reg + 16'd1;
+    if (dec_unknown_type) unknown_types_reg <= unknown_types_reg + 16'd1;
+    if (dec_noise) noise_bytes_reg <= noise_bytes_reg + 16'd1;
+    if (prep_clamped) clamped_reg <= clamped_reg + 16'd1;
+    if (dec_nak) naks_reg <= naks_reg + 16'd1;
+    segments_done_reg <= segments_done_reg + {31'd0, v2_seg_done} + {31'd0, v2_init_done};
+    if (dec_fault_clear) fault_step_reg <= 1'b0;
+    if (exec_violation) fault_step_reg <= 1'b1;
     if (rst) begin
-      ack_pending_reg  <= 8'd0;
-      last_code_reg    <= 2'd0;
-      last_feed_reg    <= 16'd0;
-      last_period_reg  <= 32'd0;
-      packet_count_reg <= 16'd0;
-      frame_errors_reg <= 16'd0;
-      timeouts_reg     <= 16'd0;
-      overruns_reg     <= 16'd0;
-      violations_reg   <= 16'd0;
+      last_code_reg     <= 2'd0;
+      last_feed_reg     <= 16'd0;
+      last_period_reg   <= 32'd0;
+      packet_count_reg  <= 16'd0;
+      frame_errors_reg  <= 16'd0;
+      timeouts_reg      <= 16'd0;
+      overruns_reg      <= 16'd0;
+      violations_reg    <= 16'd0;
+      frames_ok_reg     <= 16'd0;
+      crc_errors_reg    <= 16'd0;
+      length_errors_reg <= 16'd0;
+      unknown_types_reg <= 16'd0;
+      noise_bytes_reg   <= 16'd0;
+      clamped_reg       <= 16'd0;
+      naks_reg          <= 16'd0;
+      segments_done_reg <= 32'd0;
+      fault_step_reg    <= 1'b0;
     end
   end
+
+  // ---------------------------------------------------------------- answers
+  wire [7:0] enc_tdata;
+  wire enc_tvalid, tx_tready;
+  wire [7:0] faults_w = {7'd0, fault_step_reg};
+  wire [7:0] state_w = {5'd0, fault_step_reg, dec_v2_mode, busy};
+  wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
+                                unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,
+                                noise_bytes_reg, clamped_reg};
+
+  response_encoder #(
+      .N_AXES     (N_AXES),
+      .FIFO_DEPTH (FIFO_DEPTH),
+      .CLK_HZ     (CLK_HZ),
+      .BAUD       (BAUD),
+      .BUILD_ID   (BUILD_ID),
+      .MAX_PAYLOAD(64)
+  ) u_enc (
+      .clk          (clk),
+      .rst          (rst),
+      .ident_req    (dec_hello),
+      .status_req   (dec_status),
+      .nak_req      (dec_nak),
+      .nak_seq      (dec_nak_seq),
+      .nak_reason   (dec_nak_reason),
+      .ack_req      (dec_ack),
+      .done_evt     (v2_seg_done || v2_init_done),
+      .v1_ack       (v1_move_done),
+      .next_seq     (dec_next_seq),
+      .fifo_free    (fifo_free_w),
+      .fifo_level   (fifo_level_w),
+      .segments_done(segments_done_reg),
+      .state        (state_w),
+      .faults       (faults_w),
+      .position     (position),
+      .counters     (counters_w),
+      .m_axis_tdata (enc_tdata),
+      .m_axis_tvalid(enc_tvalid),
+      .m_axis_tready(tx_tready),
+      .frame_start  (enc_frame_start)
+  );
 
   uart_tx #(
       .CLK_HZ(CLK_HZ),
@@ -309,22 +435,34 @@ module cnc_core #(
   ) u_tx (
       .clk          (clk),
       .rst          (rst),
-      .s_axis_tdata (8'hAA),
-      .s_axis_tvalid(ack_pending_reg != 8'd0),
+      .s_axis_tdata (enc_tdata),
+      .s_axis_tvalid(enc_tvalid),
       .s_axis_tready(tx_tready),
       .txd          (tx),
       .busy         (tx_busy)
   );
 
-  assign busy         = exec_busy || prep_busy || cmd_tvalid;
-  assign last_code    = last_code_reg;
-  assign last_feed    = last_feed_reg;
-  assign last_period  = last_period_reg;
-  assign packet_count = packet_count_reg;
-  assign frame_errors = frame_errors_reg;
-  assign timeouts     = timeouts_reg;
-  assign overruns     = overruns_reg;
-  assign violations   = violations_reg;
+  assign busy          = exec_busy || prep_busy || !fifo_empty;
+  assign last_code     = last_code_reg;
+  assign last_feed     = last_feed_reg;
+  assign last_period   = last_period_reg;
+  assign packet_count  = packet_count_reg;
+  assign frame_errors  = frame_errors_reg;
+  assign timeouts      = timeouts_reg;
+  assign overruns      = overruns_reg;
+  assign violations    = violations_reg;
+  assign fifo_level    = fifo_level_w;
+  assign next_seq      = dec_next_seq;
+  assign v2_mode       = dec_v2_mode;
+  assign segments_done = segments_done_reg;
+  assign faults        = faults_w;
+  assign frames_ok     = frames_ok_reg;
+  assign crc_errors    = crc_errors_reg;
+  assign length_errors = length_errors_reg;
+  assign unknown_types = unknown_types_reg;
+  assign noise_bytes   = noise_bytes_reg;
+  assign clamped       = clamped_reg;
+  assign naks          = naks_reg;
 
 endmodule
 

@@ -1,7 +1,8 @@
-// de1soc_top: Terasic DE1-SoC board top for protocol v1, with the original controller's pin
-// names (hardware.md): 50 MHz clk, KEY[0] as rst_n, USB-UART on GPIO_0[0..1], X/Y STEP/DIR and
-// the laser enable on GPIO_0[2..6].
-//   LEDR[0] busy, LEDR[1] laser, LEDR[2] dir_x, LEDR[3] dir_y, LEDR[7] heartbeat (1 Hz),
+// de1soc_top: Terasic DE1-SoC board top (protocols v1 and v2, N_AXES = 2), with the original
+// controller's pin names (hardware.md): 50 MHz clk, KEY[0] as rst_n, USB-UART on GPIO_0[0..1],
+// X/Y STEP/DIR and the laser enable on GPIO_0[2..6].
+//   LEDR[0] busy, LEDR[1] laser, LEDR[2] dir_x, LEDR[3] dir_y, LEDR[4] v2 mode, LEDR[5] a fault
+//   is latched (STEP timing violation, until FAULT_CLEAR), LEDR[7] heartbeat (1 Hz),
 //   LEDR[8] a framing error was seen, LEDR[9] a packet was dropped (watchdog or overrun).
 //   HEX5 last motion code, HEX4 'b' busy / '0' idle, HEX3-2 packet count (low byte),
 //   HEX1-0 last feed (low byte), as on the original.
@@ -43,6 +44,11 @@ module de1soc_top #(
   wire [1:0] last_code;
   wire [15:0] last_feed, packet_count, frame_errors, timeouts, overruns, violations;
   wire [31:0] last_period, numerator_x, numerator_y;
+  wire [15:0] fifo_level, frames_ok, crc_errors, length_errors, unknown_types, noise_bytes;
+  wire [15:0] clamped, naks;
+  wire [7:0] next_seq, faults;
+  wire v2_mode;
+  wire [31:0] segments_done;
 
   cnc_core #(
       .CLK_HZ(CLK_HZ),
@@ -73,14 +79,28 @@ module de1soc_top #(
       .overruns    (overruns),
       .violations  (violations),
       .numerator_x (numerator_x),
-      .numerator_y (numerator_y)
+      .numerator_y (numerator_y),
+      .fifo_level   (fifo_level),
+      .next_seq     (next_seq),
+      .v2_mode      (v2_mode),
+      .segments_done(segments_done),
+      .faults       (faults),
+      .frames_ok    (frames_ok),
+      .crc_errors   (crc_errors),
+      .length_errors(length_errors),
+      .unknown_types(unknown_types),
+      .noise_bytes  (noise_bytes),
+      .clamped      (clamped),
+      .naks         (naks)
   );
 
   // The status the board does not display.
   /* verilator lint_off UNUSEDSIGNAL */
   wire unused_status = &{running, seg_start, seg_done, position, last_period, numerator_x,
                          numerator_y, packet_count[15:8], frame_errors[15:1], timeouts[15:1],
-                         overruns[15:1], violations, last_feed[15:8]};
+                         overruns[15:1], violations, last_feed[15:8], fifo_level, next_seq,
+                         segments_done, faults[7:1], frames_ok, crc_errors, length_errors,
+                         unknown_types, noise_bytes, clamped, naks};
   /* verilator lint_on UNUSEDSIGNAL */
 
   reg [HB_W-1:0] hb_cnt_reg;
@@ -107,7 +127,8 @@ module de1soc_top #(
   assign dir_x  = dir[0];
   assign step_y = step[1];
   assign dir_y  = dir[1];
-  assign LEDR   = {drop_seen_reg, frame_seen_reg, hb_reg, 3'b000, dir[1], dir[0], laser, busy};
+  assign LEDR   = {drop_seen_reg, frame_seen_reg, hb_reg, 1'b0, faults[0], v2_mode, dir[1], dir[0],
+                   laser, busy};
 
   hex7seg u_hex0 (.digit(last_feed[3:0]),    .seg_n(HEX0));
   hex7seg u_hex1 (.digit(last_feed[7:4]),    .seg_n(HEX1));

@@ -5,7 +5,17 @@ fpgacnc_verilated(vexec TOP segment_executor
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
 fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
 fpgacnc_verilated(vdecoder TOP packet_decoder_v1 SOURCES ${FPGACNC_RTL_DIR}/packet_decoder_v1.v)
+fpgacnc_verilated(vframe TOP frame_decoder
+                  SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
+fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo.v
+                  ARGS -GWIDTH=40 -GDEPTH=16)
+fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
+fpgacnc_verilated(vencoder TOP response_encoder
+                  SOURCES ${FPGACNC_RTL_DIR}/response_encoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
 fpgacnc_verilated(vcore TOP cnc_core SOURCES ${FPGACNC_CORE_RTL})
+# cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
+fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m SOURCES ${FPGACNC_CORE_RTL}
+                  ARGS -GBAUD=3000000)
 fpgacnc_verilated(vcore_trace TRACE TOP cnc_core PREFIX Vcnc_core_trace SOURCES ${FPGACNC_CORE_RTL})
 fpgacnc_verilated(vde1soc TOP de1soc_top
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/hex7seg.v

@@ -13,6 +13,7 @@
 #include "common/seed.h"
 #include "common/step_monitor.h"
 #include "common/v1_packets.h"
+#include "common/v2_frames.h"
 
 namespace {
 
@@ -389,6 +390,46 @@ TEST(CncCore, CutPacketDroppedThenMoveRuns) {
   EXPECT_EQ(b.position(1), -10);
   EXPECT_EQ(b.tx_bytes().size(), 1u);
   EXPECT_EQ(b.dut().timeouts, 1u);
+}
+
+// Protocol v2 at the default 115 200 baud: HELLO -> IDENT, one LINE -> ACK then DONE, the steps.
+TEST(CncCore, V2HelloAndLineAt115200) {
+  namespace v2 = fpgacnc::tb::v2;
+  CoreBench b;
+  v2::DeviceParser parser;
+  std::vector<v2::DeviceMsg> msgs;
+  size_t seen = 0;
+  auto pump = [&](size_t want, uint64_t limit) {
+    for (uint64_t i = 0; i < limit && msgs.size() < want; ++i) {
+      b.tick();
+      for (; seen < b.tx_bytes().size(); ++seen)
+        if (auto m = parser.push(b.tx_bytes()[seen].value, b.tx_bytes()[seen].start_cycle))
+          msgs.push_back(*m);
+    }
+    return msgs.size() >= want;
+  };
+  b.send(v2::hello());
+  ASSERT_TRUE(pump(1, 30 * kByteClocks)) << "no IDENT";
+  ASSERT_EQ(msgs[0].type, v2::kIdent);
+  ASSERT_TRUE(msgs[0].crc_ok);
+  EXPECT_EQ(msgs[0].u32(8), 115'200u) << "BAUD";
+  EXPECT_EQ(msgs[0].u8(1), 4u) << "N_AXES";
+  // LINE seq 0: X +30, Y -10 over T = 60 000 clocks (P = 2000).
+  b.send(v2::line(0, 1, 255, 60'000, {30, -10}, true));
+  ASSERT_TRUE(pump(3, 60'000 + 40 * kByteClocks)) << "expected ACK and DONE";
+  EXPECT_EQ(msgs[1].type, v2::kAck);
+  EXPECT_EQ(msgs[1].u8(0), 1u) << "ACK next_seq";
+  EXPECT_EQ(msgs[2].type, v2::kDone);
+  EXPECT_EQ(msgs[2].u32(3), 1u) << "DONE segments done";
+  EXPECT_GT(msgs[2].cycle, b.mon().axis(0).rises.back()) << "DONE before the last step";
+  EXPECT_EQ(b.mon().axis(0).rises.size(), 30u);
+  EXPECT_EQ(b.mon().axis(1).rises.size(), 10u);
+  const auto& x = b.mon().axis(0);
+  for (size_t i = 1; i < x.rises.size(); ++i) EXPECT_EQ(x.rises[i] - x.rises[i - 1], 2000u);
+  EXPECT_EQ(b.position(0), 30);
+  EXPECT_EQ(b.position(1), -10);
+  EXPECT_EQ(b.dut().segments_done, 1u);
+  EXPECT_EQ(b.dut().v2_mode, 1);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "common/pin_harness.h"
 #include "common/step_monitor.h"
 #include "common/v1_packets.h"
+#include "common/v2_frames.h"
 
 namespace {
 
@@ -143,6 +144,34 @@ TEST(De1SocTop, SmokeMoveLedsHexHeartbeat) {
   }
   b.tick();
   EXPECT_EQ(b.dut().LEDR & 0x80u, 0x80u) << "heartbeat LEDR[7] not high at cycle " << toggle;
+}
+
+// v2 on the board: HELLO -> IDENT with N_AXES = 2, LEDR[4] shows v2 mode until RELEASE.
+TEST(De1SocTop, V2HelloIdentAndModeLed) {
+  namespace v2 = fpgacnc::tb::v2;
+  BoardBench b;
+  b.reset(10, 1);
+  b.idle(20);
+  EXPECT_EQ(b.dut().LEDR & 0x10u, 0u) << "v2 LED after reset";
+  b.send(v2::hello());
+  v2::DeviceParser parser;
+  std::vector<v2::DeviceMsg> msgs;
+  size_t seen = 0;
+  for (uint64_t i = 0; i < 30 * 4341 && msgs.empty(); ++i) {
+    b.tick();
+    for (; seen < b.tx_bytes().size(); ++seen)
+      if (auto m = parser.push(b.tx_bytes()[seen].value)) msgs.push_back(*m);
+  }
+  ASSERT_EQ(msgs.size(), 1u) << "no IDENT";
+  EXPECT_EQ(msgs[0].type, v2::kIdent);
+  EXPECT_TRUE(msgs[0].crc_ok);
+  EXPECT_EQ(msgs[0].u8(1), 2u) << "N_AXES";
+  EXPECT_EQ(msgs[0].u16(2), 64u) << "FIFO depth";
+  EXPECT_EQ(b.dut().LEDR & 0x10u, 0x10u) << "LEDR[4] v2 mode";
+  b.send(v2::release(0));
+  b.idle(30 * 4341);
+  EXPECT_EQ(b.dut().LEDR & 0x10u, 0u) << "LEDR[4] after RELEASE";
+  EXPECT_EQ(b.dut().LEDR & 0x20u, 0u) << "no fault";
 }
 
 }  // namespace

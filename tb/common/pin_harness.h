@@ -31,12 +31,12 @@ template <class Model>
 class PinHarness {
  public:
   // monitors = false: tick() only drives rx and the clock (no STEP/DIR/tx sampling, no observe()),
-  // for speed measurements.
-  PinHarness(int axes, const PinAccess<Model>& pins, bool monitors = true)
+  // for speed measurements. baud: the model's BAUD parameter (rx driver and tx monitor).
+  PinHarness(int axes, const PinAccess<Model>& pins, bool monitors = true, double baud = kBaud)
       : pins_(pins),
         ctx_(std::make_unique<VerilatedContext>()),
-        drv_(kClkHz, kBaud),
-        umon_(kClkHz, kBaud),
+        drv_(kClkHz, baud),
+        umon_(kClkHz, baud),
         mon_(axes),
         monitors_(monitors) {
     m_ = std::make_unique<Model>(ctx_.get());

@@ -1,0 +1,524 @@
+// frame_decoder: one decoder for protocol v1 packets and protocol v2 frames (docs/protocol.md).
+//
+// Input: a byte stream (s_axis_*) from uart_rx. s_axis_tready is always high: the decoder never
+// stalls the UART.
+// First byte of a packet/frame (state HUNT):
+//   auto mode: 0x00..0x03 v1 motion (11 bytes), 0xFF v1 init (9 bytes), 0xA5 v2 frame,
+//              anything else discarded (noise strobe).
+//   v2 mode:   0xA5 v2 frame, anything else discarded (noise strobe).
+// A v2 frame with a good CRC switches to v2 mode; an accepted or duplicate RELEASE returns to auto
+// mode (as does reset).
+// v2 frame: A5, LEN, SEQ, TYPE, payload (LEN bytes), CRC high, CRC low. LEN > MAX_PAYLOAD is
+// rejected at the LEN byte (NAK BAD_LENGTH, SEQ reported as 0) and the decoder hunts again from
+// the next byte. Otherwise the whole frame is read, the CRC is folded in over LEN..CRC low
+// (crc16_ccitt, residue 0 for a good frame) and the frame is checked on the clock after its last
+// byte (the CHECK clock), in this order: CRC (BAD_CRC), TYPE (UNKNOWN_TYPE), LEN for the TYPE
+// (BAD_LENGTH), fields (BAD_FIELD: LINE flag bits [6:2], CONFIG_AXIS axis >= N_AXES), then for
+// sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
+// duplicate: ACK only, nothing executed; = next_seq -> accepted (FIFO types need a free slot, else
+// FIFO_FULL), next_seq += 1, ACK.
+// Only the CHECK clock of a frame that passed every check writes anything: nothing of a rejected
+// or cut frame reaches the FIFO or the configuration.
+//
+// Outputs
+//   m_axis_*    FIFO write, entry {v2, kind[1:0], code[1:0], power[7:0], t[31:0],
+//               steps[32*N_AXES-1:0]} (axis a in [32*a+:32]):
+//                 v1 motion: kind 0, v2 0, t = {16'd0, feed}, steps[0] = x, steps[1] = y,
+//                            code = byte0[1:0], power = 8'hFF
+//                 v1 init:   kind 1, v2 0, steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y
+//                 LINE:      kind 0, v2 1, t = T, steps sign-extended (int16 when SHORT), code
+//                            = flags[1:0], power
+//                 NUMERATORS kind 1, v2 1; DWELL kind 2, v2 1, t = T, code 0, power 0.
+//               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
+//               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
+//               from its registers. A v1 packet completing while m_axis_tready is low is dropped
+//               (v1_overrun strobe); a v2 FIFO frame is answered NAK FIFO_FULL.
+//   The strobes below are registered: high for the clock after the CHECK edge (after the byte
+//   edge for noise, after the LEN edge for BAD_LENGTH at once, after the watchdog edge for
+//   timeout).
+//   cfg_wr + cfg_axis + cfg_data {STEP high, STEP low, DIR setup, DIR hold} (16 bits each): an
+//               accepted CONFIG_AXIS.
+//   fault_clear, release_req, hello (IDENT wanted), status_req (STATUS wanted), ack_req (ACK wanted),
+//   nak + nak_seq + nak_reason (NAK wanted), and counter strobes frame_ok (a v2 frame that
+//   passed every check, duplicates included), crc_error, length_error, unknown_type, timeout
+//   (v1 or v2, cut short by the watchdog), noise (a byte discarded in HUNT), v1_packet (a v1
+//   packet written to the FIFO), v1_overrun (a v1 packet dropped, FIFO full).
+//   next_seq, v2_mode: registers.
+// Latency: last byte's edge L -> CHECK clock (m_axis_tvalid) between L and L + 1, entry in the
+//   FIFO at edge L + 1, strobes high from L + 1 to L + 2.
+// Watchdog: a started packet or frame with no byte for WATCHDOG_CLKS clocks is dropped (timeout
+//   strobe; a v2 frame also gets NAK TIMEOUT, SEQ as received or 0 when the SEQ byte had not come)
+//   and the decoder hunts again; the strobe is high in the clock WATCHDOG_CLKS clocks after the
+//   last byte's clock.
+// Requires N_AXES >= 2 (v1 and NUMERATORS carry two axes), MAX_PAYLOAD <= 127.
+// rst is synchronous, active high (auto mode, next_seq = 0).
+`default_nettype none
+
+module frame_decoder #(
+    parameter N_AXES        = 4,
+    parameter WATCHDOG_CLKS = 5_000_000,  // 100 ms at 50 MHz
+    parameter MAX_PAYLOAD   = 64
+) (
+    input wire clk,
+    input wire rst,
+
+    input  wire [7:0] s_axis_tdata,
+    input  wire       s_axis_tvalid,
+    output wire       s_axis_tready,
+
+    output wire [45+32*N_AXES-1:0] m_axis_tdata,
+    output wire                    m_axis_tvalid,
+    input  wire                    m_axis_tready,
+
+    output wire        cfg_wr,
+    output wire [ 7:0] cfg_axis,
+    output wire [63:0] cfg_data,
+
+    output wire       fault_clear,
+    output wire       release_req,
+    output wire       hello,
+    output wire       status_req,
+    output wire       ack_req,
+    output wire       nak,
+    output wire [7:0] nak_seq,
+    output wire [7:0] nak_reason,
+
+    output wire [7:0] next_seq,
+    output wire       v2_mode,
+
+    output wire frame_ok,
+    output wire crc_error,
+    output wire length_error,
+    output wire unknown_type,
+    output wire timeout,
+    output wire noise,
+    output wire v1_packet,
+    output wire v1_overrun
+);
+
+  localparam ENTRY_W = 45 + 32 * N_AXES;
+  localparam integer PB_LINE = 6 + 4 * N_AXES;
+  localparam integer PB = (PB_LINE > 10) ? PB_LINE : 10;  // payload bytes kept (v1: 10)
+
+  localparam [2:0] ST_HUNT = 3'd0, ST_V1 = 3'd1, ST_LEN = 3'd2, ST_SEQ = 3'd3, ST_TYPE = 3'd4,
+                   ST_PAY = 3'd5, ST_CRC1 = 3'd6, ST_CRC2 = 3'd7;
+
+  localparam [7:0] T_HELLO = 8'h01, T_STATUS = 8'h02, T_FCLR = 8'h03, T_CFG = 8'h04,
+                   T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11;
+
+  localparam [7:0] R_BAD_CRC = 8'd1, R_BAD_LENGTH = 8'd2, R_UNKNOWN_TYPE = 8'd3, R_TIMEOUT = 8'd4,
+                   R_OUT_OF_ORDER = 8'd5, R_FIFO_FULL = 8'd6, R_BAD_FIELD = 8'd7;
+
+  localparam integer MAXP_I = MAX_PAYLOAD;
+  localparam [7:0] MAXP = MAXP_I[7:0];
+  localparam integer NAX_I = N_AXES;
+  localparam [7:0] NAX8 = NAX_I[7:0];
+
+  localparam WD_W = $clog2(WATCHDOG_CLKS + 1);
+  localparam integer WD_LAST_I = WATCHDOG_CLKS - 1;
+  localparam [WD_W-1:0] WD_LAST = WD_LAST_I[WD_W-1:0];
+
+  reg  [       2:0] st_reg;
+  reg  [       6:0] cnt_reg;  // payload bytes received (v1: bytes after the first)
+  reg               is_init_reg;
+  reg  [       1:0] code_reg;
+  reg  [       7:0] len_reg;
+  reg  [       7:0] seq_reg;
+  reg  [       7:0] type_reg;
+  reg  [    8*PB-1:0] pay_reg;  // payload byte i in [8*i+:8]
+  reg  [  WD_W-1:0] idle_reg;
+  reg               chk_reg;  // CHECK clock
+  reg               chk_v1_reg;  // ... of a v1 packet (else of a v2 frame)
+  reg               v2_mode_reg;
+  reg  [       7:0] next_seq_reg;
+
+  reg cfg_wr_reg, fault_clear_reg, release_reg, hello_reg, status_reg, ack_reg, nak_reg;
+  reg [7:0] nak_seq_reg, nak_reason_reg;
+  reg frame_ok_reg, crc_error_reg, length_error_reg, unknown_type_reg, timeout_reg, noise_reg;
+  reg v1_packet_reg, v1_overrun_reg;
+
+  wire        take = s_axis_tvalid;
+  wire [ 7:0] d = s_axis_tdata;
+  wire        in_frame = (st_reg >= ST_LEN);
+  wire [15:0] crc;
+
+  crc16_ccitt u_crc (
+      .clk (clk),
+      .rst (rst),
+      .init(st_reg == ST_LEN),
+      .en  (take && in_frame),
+      .data(d),
+      .crc (crc)
+  );
+
+  // ---------------------------------------------------------------- payload fields
+  function [7:0] pb;
+    input [8*PB-1:0] p;
+    input integer i;
+    begin
+      pb = p[8*i+:8];
+    end
+  endfunction
+
+  function [31:0] be32;
+    input [8*PB-1:0] p;
+    input integer i;
+    begin
+      be32 = {p[8*i+:8], p[8*(i+1)+:8], p[8*(i+2)+:8], p[8*(i+3)+:8]};
+    end
+  endfunction
+
+  wire [7:0] flags = pb(pay_reg, 0);
+  wire       short_steps = flags[7];
+  wire [7:0] len_m6 = len_reg - 8'd6;
+  wire       line_len_ok = (len_reg >= 8'd6) &&
+                           (short_steps ? (len_m6[0] == 1'b0 && {1'b0, len_m6[7:1]} <= NAX8)
+                                        : (len_m6[1:0] == 2'b00 && {2'b00, len_m6[7:2]} <= NAX8));
+
+  reg [32*N_AXES-1:0] line_steps;
+  integer a;
+  always @(*) begin
+    line_steps = {32 * N_AXES{1'b0}};
+    for (a = 0; a < N_AXES; a = a + 1) begin
+      if (short_steps) begin
+        if ({1'b0, len_reg} >= 9'd8 + 9'd2 * a[8:0])
+          line_steps[32*a+:32] = {{16{pay_reg[8*(6+2*a)+7]}}, pay_reg[8*(6+2*a)+:8],
+                                  pay_reg[8*(7+2*a)+:8]};
+      end else begin
+        if ({1'b0, len_reg} >= 9'd10 + 9'd4 * a[8:0]) line_steps[32*a+:32] = be32(pay_reg, 6 + 4 * a);
+      end
+    end
+  end
+
+  wire [32*N_AXES-1:0] two_steps = {{32 * (N_AXES - 2) {1'b0}}, be32(pay_reg, 4), be32(pay_reg, 0)};
+
+  // v1 packet
+  wire [ENTRY_W-1:0] e_v1_motion = {1'b0, 2'd0, code_reg, 8'hFF, 16'd0, pb(pay_reg, 8),
+                                    pb(pay_reg, 9), two_steps};
+  wire [ENTRY_W-1:0] e_v1_init = {1'b0, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
+  // v2 frames
+  wire [ENTRY_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(pay_reg, 1), be32(pay_reg, 2), line_steps};
+  wire [ENTRY_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(pay_reg, 0), {32 * N_AXES{1'b0}}};
+  wire [ENTRY_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
+
+  // ---------------------------------------------------------------- CHECK
+  wire t_hello = (type_reg == T_HELLO);
+  wire t_status = (type_reg == T_STATUS);
+  wire t_fclr = (type_reg == T_FCLR);
+  wire t_cfg = (type_reg == T_CFG);
+  wire t_num = (type_reg == T_NUM);
+  wire t_rel = (type_reg == T_REL);
+  wire t_line = (type_reg == T_LINE);
+  wire t_dwell = (type_reg == T_DWELL);
+  wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell;
+  wire len0 = (len_reg == 8'd0);
+  wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
+                (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
+                (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok);
+  wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8);
+  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell;
+  wire to_fifo = t_num || t_line || t_dwell;
+  wire [7:0] seq_diff = seq_reg - next_seq_reg;
+  wire seq_new = (seq_diff == 8'd0);
+  wire seq_dup = seq_diff[7];  // next_seq - 128 .. next_seq - 1
+
+  wire v2_chk = chk_reg && !chk_v1_reg;
+  wire v2_accept = v2_chk && (crc == 16'd0) && known && len_ok && field_ok && sequenced && seq_new &&
+                   (!to_fifo || m_axis_tready);
+  wire v1_write = chk_reg && chk_v1_reg && m_axis_tready;
+
+  reg [ENTRY_W-1:0] entry;
+  always @(*) begin
+    if (chk_v1_reg) entry = is_init_reg ? e_v1_init : e_v1_motion;
+    else if (t_line) entry = e_line;
+    else if (t_dwell) entry = e_dwell;
+    else entry = e_num;
+  end
+
+  // ---------------------------------------------------------------- byte handling and strobes
+  integer i;
+  always @(posedge clk) begin
+    cfg_wr_reg       <= 1'b0;
+    fault_clear_reg  <= 1'b0;
+    release_reg      <= 1'b0;
+    hello_reg        <= 1'b0;
+    status_reg       <= 1'b0;
+    ack_reg          <= 1'b0;
+    nak_reg          <= 1'b0;
+    frame_ok_reg     <= 1'b0;
+    crc_error_reg    <= 1'b0;
+    length_error_reg <= 1'b0;
+    unknown_type_reg <= 1'b0;
+    timeout_reg      <= 1'b0;
+    noise_reg        <= 1'b0;
+    v1_packet_reg    <= 1'b0;
+    v1_overrun_reg   <= 1'b0;
+    chk_reg          <= 1'b0;
+
+    // CHECK of the packet/frame completed on the previous edge.
+    if (chk_reg) begin
+      if (chk_v1_reg) begin
+        v1_packet_reg  <= m_axis_tready;
+        v1_overrun_reg <= !m_axis_tready;
+      end else if (crc != 16'd0) begin
+        nak_reg        <= 1'b1;
+        nak_reason_reg <= R_BAD_CRC;
+        nak_seq_reg    <= seq_reg;
+        crc_error_reg  <= 1'b1;
+      end else begin
+        v2_mode_reg <= 1'b1;
+        if (!known || !len_ok || !field_ok) begin
+          nak_reg          <= 1'b1;
+          nak_seq_reg      <= seq_reg;
+          nak_reason_reg   <= !known ? R_UNKNOWN_TYPE : !len_ok ? R_BAD_LENGTH : R_BAD_FIELD;
+          unknown_type_reg <= !known;
+          length_error_reg <= known && !len_ok;
+        end else if (!sequenced) begin
+          frame_ok_reg <= 1'b1;
+          hello_reg    <= t_hello;
+          status_reg   <= t_status;
+        end else if (!seq_new && !seq_dup) begin
+          nak_reg        <= 1'b1;
+          nak_seq_reg    <= seq_reg;
+          nak_reason_reg <= R_OUT_OF_ORDER;
+        end else if (seq_dup) begin
+          frame_ok_reg <= 1'b1;
+          ack_reg      <= 1'b1;
+          if (t_rel) v2_mode_reg <= 1'b0;
+        end else if (to_fifo && !m_axis_tready) begin
+          nak_reg        <= 1'b1;
+          nak_seq_reg    <= seq_reg;
+          nak_reason_reg <= R_FIFO_FULL;
+        end else begin
+          frame_ok_reg    <= 1'b1;
+          ack_reg         <= 1'b1;
+          next_seq_reg    <= next_seq_reg + 8'd1;
+          cfg_wr_reg      <= t_cfg;
+          fault_clear_reg <= t_fclr;
+          release_reg     <= t_rel;
+          if (t_rel) v2_mode_reg <= 1'b0;
+        end
+      end
+    end
+
+    if (take) begin
+      idle_reg <= {WD_W{1'b0}};
+      case (st_reg)
+        ST_HUNT: begin
+          cnt_reg     <= 7'd0;
+          is_init_reg <= (d == 8'hFF);
+          code_reg    <= d[1:0];
+          if (d == 8'hA5) st_reg <= ST_LEN;
+          else if (!v2_mode_reg && (d == 8'hFF || d[7:2] == 6'd0)) st_reg <= ST_V1;
+          else noise_reg <= 1'b1;
+        end
+        ST_V1: begin
+          for (i = 0; i < PB; i = i + 1) if (cnt_reg == i[6:0]) pay_reg[8*i+:8] <= d;
+          cnt_reg <= cnt_reg + 7'd1;
+          if (cnt_reg == (is_init_reg ? 7'd7 : 7'd9)) begin
+            st_reg     <= ST_HUNT;
+            chk_reg    <= 1'b1;
+            chk_v1_reg <= 1'b1;
+          end
+        end
+        ST_LEN: begin
+          len_reg <= d;
+          if (d > MAXP) begin
+            st_reg           <= ST_HUNT;
+            nak_reg          <= 1'b1;
+            nak_seq_reg      <= 8'd0;
+            nak_reason_reg   <= R_BAD_LENGTH;
+            length_error_reg <= 1'b1;
+          end else begin
+            st_reg <= ST_SEQ;
+          end
+        end
+        ST_SEQ: begin
+          seq_reg <= d;
+          st_reg  <= ST_TYPE;
+        end
+        ST_TYPE: begin
+          type_reg <= d;
+          cnt_reg  <= 7'd0;
+          st_reg   <= (len_reg == 8'd0) ? ST_CRC1 : ST_PAY;
+        end
+        ST_PAY: begin
+          for (i = 0; i < PB; i = i + 1) if (cnt_reg == i[6:0]) pay_reg[8*i+:8] <= d;
+          cnt_reg <= cnt_reg + 7'd1;
+          if ({1'b0, cnt_reg} == len_reg - 8'd1) st_reg <= ST_CRC1;
+        end
+        ST_CRC1: st_reg <= ST_CRC2;
+        default: begin  // ST_CRC2
+          st_reg     <= ST_HUNT;
+          chk_reg    <= 1'b1;
+          chk_v1_reg <= 1'b0;
+        end
+      endcase
+    end else if (st_reg != ST_HUNT) begin
+      if (idle_reg == WD_LAST) begin
+        st_reg      <= ST_HUNT;
+        idle_reg    <= {WD_W{1'b0}};
+        timeout_reg <= 1'b1;
+        if (in_frame) begin
+          nak_reg        <= 1'b1;
+          nak_seq_reg    <= (st_reg >= ST_TYPE) ? seq_reg : 8'd0;
+          nak_reason_reg <= R_TIMEOUT;
+        end
+      end else begin
+        idle_reg <= idle_reg + {{(WD_W - 1) {1'b0}}, 1'b1};
+      end
+    end
+
+    if (rst) begin
+      st_reg           <= ST_HUNT;
+      cnt_reg          <= 7'd0;
+      is_init_reg      <= 1'b0;
+      code_reg         <= 2'd0;
+      len_reg          <= 8'd0;
+      seq_reg          <= 8'd0;
+      type_reg         <= 8'd0;
+      pay_reg          <= {8 * PB{1'b0}};
+      idle_reg         <= {WD_W{1'b0}};
+      chk_reg          <= 1'b0;
+      chk_v1_reg       <= 1'b0;
+      v2_mode_reg      <= 1'b0;
+      next_seq_reg     <= 8'd0;
+      cfg_wr_reg       <= 1'b0;
+      fault_clear_reg  <= 1'b0;
+      release_reg      <= 1'b0;
+      hello_reg        <= 1'b0;
+      status_reg       <= 1'b0;
+      ack_reg          <= 1'b0;
+      nak_reg          <= 1'b0;
+      nak_seq_reg      <= 8'd0;
+      nak_reason_reg   <= 8'd0;
+      frame_ok_reg     <= 1'b0;
+      crc_error_reg    <= 1'b0;
+      length_error_reg <= 1'b0;
+      unknown_type_reg <= 1'b0;
+      timeout_reg      <= 1'b0;
+      noise_reg        <= 1'b0;
+      v1_packet_reg    <= 1'b0;
+      v1_overrun_reg   <= 1'b0;
+    end
+  end
+
+  // CONFIG_AXIS fields of the frame accepted on the last CHECK edge (payload registers are not
+  // written again before the next frame's fifth byte).
+  reg [7:0] cfg_axis_reg;
+  reg [63:0] cfg_data_reg;
+  always @(posedge clk) begin
+    if (v2_chk) begin
+      cfg_axis_reg <= pb(pay_reg, 0);
+      cfg_data_reg <= {pb(pay_reg, 1), pb(pay_reg, 2), pb(pay_reg, 3), pb(pay_reg, 4),
+                       pb(pay_reg, 5), pb(pay_reg, 6), pb(pay_reg, 7), pb(pay_reg, 8)};
+    end
+  end
+
+  assign s_axis_tready = 1'b1;
+  assign m_axis_tdata  = entry;
+  assign m_axis_tvalid = v1_write || (v2_accept && to_fifo);
+  assign cfg_wr        = cfg_wr_reg;
+  assign cfg_axis      = cfg_axis_reg;
+  assign cfg_data      = cfg_data_reg;
+  assign fault_clear   = fault_clear_reg;
+  assign release_req   = release_reg;
+  assign hello         = hello_reg;
+  assign status_req    = status_reg;
+  assign ack_req       = ack_reg;
+  assign nak           = nak_reg;
+  assign nak_seq       = nak_seq_reg;
+  assign nak_reason    = nak_reason_reg;
+  assign next_seq      = next_seq_reg;
+  assign v2_mode       = v2_mode_reg;
+  assign frame_ok      = frame_ok_reg;
+  assign crc_error     = crc_error_reg;
+  assign length_error  = length_error_reg;
+  assign unknown_type  = unknown_type_reg;
+  assign timeout       = timeout_reg;
+  assign noise         = noise_reg;
+  assign v1_packet     = v1_packet_reg;
+  assign v1_overrun    = v1_overrun_reg;
+
+`ifdef FORMAL
+  // Formal properties of the v1 path (scripts/formal.sh, k-induction with a small WATCHDOG_CLKS
+  // override). The input never carries 0xA5 (assumed), so the decoder stays in auto mode and
+  // only v1 packets and noise occur. An independent monitor counts the bytes since the last
+  // packet boundary the decoder reported (CHECK of a v1 packet, or timeout) and the idle clocks
+  // since the last byte.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+  always @(*) if (s_axis_tvalid) assume (s_axis_tdata != 8'hA5);
+
+  localparam integer F_W = WD_W + 1;
+  localparam [F_W-1:0] F_WD = WATCHDOG_CLKS;
+
+  reg  [    3:0] f_n;     // bytes of the current packet, including those of a packet just ended
+  reg            f_init;  // the current packet's first byte was 0xFF
+  reg  [F_W-1:0] f_idle;  // clocks without a byte since the last byte, saturating at WATCHDOG+1
+  wire           f_boundary = chk_reg || timeout_reg;
+  wire [    3:0] f_n_eff = f_boundary ? 4'd0 : f_n;  // bytes of the packet still open
+  wire [    3:0] f_len = f_init ? 4'd9 : 4'd11;
+  wire           f_v1_start = (s_axis_tdata == 8'hFF) || (s_axis_tdata[7:2] == 6'd0);
+
+  always @(posedge clk) begin
+    if (take) begin
+      f_idle <= {F_W{1'b0}};
+      if (f_n_eff == 4'd0) begin
+        f_n    <= f_v1_start ? 4'd1 : 4'd0;  // anything else is noise
+        f_init <= (s_axis_tdata == 8'hFF);
+      end else begin
+        f_n <= f_n_eff + 4'd1;
+      end
+    end else begin
+      f_n <= f_n_eff;
+      if (f_idle <= F_WD) f_idle <= f_idle + {{(F_W - 1) {1'b0}}, 1'b1};
+    end
+    if (rst) begin
+      f_n    <= 4'd0;
+      f_init <= 1'b0;
+      f_idle <= {F_W{1'b0}};
+    end
+  end
+
+  always @(*)
+    if (f_past_valid && !rst) begin
+      // Only v1: no frame state, auto mode, every CHECK is a v1 packet's.
+      assert (st_reg == ST_HUNT || st_reg == ST_V1);
+      assert (!v2_mode_reg);
+      if (chk_reg) assert (chk_v1_reg);
+      // An entry (FIFO write, or the overrun drop of a complete packet) only after exactly the
+      // packet's length in bytes: 9 for init (first byte 0xFF), 11 for motion.
+      if (chk_reg) assert (f_n == f_len);
+      assert (m_axis_tvalid == (chk_reg && m_axis_tready));
+      assert (!(chk_reg && timeout_reg));
+      assert (!(v1_packet_reg && v1_overrun_reg));
+      // Never more bytes than the packet's length.
+      assert (f_n <= f_len);
+      // The watchdog drops only a partial packet, and only after exactly WATCHDOG_CLKS clocks
+      // without a byte ...
+      if (timeout_reg) assert (f_n != 4'd0 && f_n < f_len && f_idle == F_WD);
+      // ... and always then.
+      if (f_n != 4'd0 && !chk_reg && f_idle == F_WD) assert (timeout_reg);
+      if (f_n_eff != 4'd0) assert (f_idle < F_WD);
+      // Induction invariants: the decoder's counters match the monitor.
+      assert ((st_reg == ST_V1) == (f_n_eff != 4'd0));
+      if (st_reg == ST_V1)
+        assert (cnt_reg == {3'd0, f_n_eff - 4'd1} && is_init_reg == f_init &&
+                idle_reg == f_idle[WD_W-1:0]);
+      else assert (idle_reg == {WD_W{1'b0}});
+      assert (f_idle <= F_WD + 1);
+    end
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst) && !rst) begin
+      // The strobes of a v1 packet follow its CHECK clock, as the FIFO's tready then said.
+      assert (v1_packet_reg == ($past(chk_reg) && $past(m_axis_tready)));
+      assert (v1_overrun_reg == ($past(chk_reg) && !$past(m_axis_tready)));
+    end
+`endif
+
+endmodule
+
+`default_nettype wire

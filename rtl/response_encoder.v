@@ -1,0 +1,246 @@
+// response_encoder: the device's answers (docs/protocol.md "Device to host") as a byte stream
+// for uart_tx: v2 frames ACK, NAK, DONE, STATUS, IDENT with their CRC, and protocol v1's 0xAA.
+//
+// Requests (1-clock strobes, any clock): ident_req, status_req, nak_req (+ nak_seq,
+// nak_reason), ack_req, done_evt (a v2 FIFO entry completed), v1_ack (a v1 move completed).
+// Each frame kind has one pending flag (no queue): a request while the flag is set is merged
+// with it (a NAK keeps the latest seq/reason). When no byte is being sent the encoder starts the
+// highest-priority pending kind: IDENT, STATUS, NAK, ACK, DONE. Starting an ACK also clears a
+// pending DONE (same fields). A request on the clock a frame of its kind starts stays pending
+// (sets win over clears), so nothing that happened after the snapshot is lost.
+// v1: each v1_ack adds one 0xAA to a counter (up to 255 outstanding); the 0xAA bytes go out only
+// between frames, before any pending frame.
+// Frame: A5, LEN, SEQ (the device's frame counter: 0 for the first frame after reset, +1 per
+// frame sent), TYPE, payload, CRC-16/CCITT-FALSE over LEN..payload, high byte first (computed
+// while the bytes go out, crc16_ccitt). All payload fields are snapshotted from the live inputs
+// in one clock, the clock before the frame's first byte (0xA5) is offered.
+// Payloads (big-endian):
+//   ACK 0x80 / DONE 0x82: next_seq u8, fifo_free u16, segments_done u32
+//   NAK 0x81: nak_seq u8, nak_reason u8, next_seq u8, fifo_free u16
+//   STATUS 0x83: state u8, faults u8, fifo_level u16, next_seq u8, segments_done u32,
+//                position int32 x N_AXES (axis 0 first), counters u16 x 9 (counters[143:128]
+//                first: frames ok, CRC errors, length errors, unknown types, timeouts, UART
+//                framing errors, overruns, noise bytes, clamped segments)
+//   IDENT 0x84: 2, N_AXES u8, FIFO_DEPTH u16, CLK_HZ u32, BAUD u32, BUILD_ID u32, next_seq u8,
+//                MAX_PAYLOAD u8
+// Output m_axis_* (to uart_tx): tdata/tvalid from registers only, held until taken.
+// Latency: request strobe sampled on edge E (pending from E) -> snapshot on edge E + 1 when
+//   nothing is being sent, 0xA5 offered from E + 1, taken by an idle uart_tx on edge E + 2.
+// rst is synchronous, active high (nothing pending, device SEQ 0).
+`default_nettype none
+
+module response_encoder #(
+    parameter N_AXES      = 4,
+    parameter FIFO_DEPTH  = 64,
+    parameter CLK_HZ      = 50_000_000,
+    parameter BAUD        = 115_200,
+    parameter BUILD_ID    = 32'h2026_0005,
+    parameter MAX_PAYLOAD = 64
+) (
+    input wire clk,
+    input wire rst,
+
+    input wire       ident_req,
+    input wire       status_req,
+    input wire       nak_req,
+    input wire [7:0] nak_seq,
+    input wire [7:0] nak_reason,
+    input wire       ack_req,
+    input wire       done_evt,
+    input wire       v1_ack,
+
+    input wire [         7:0] next_seq,
+    input wire [        15:0] fifo_free,
+    input wire [        15:0] fifo_level,
+    input wire [        31:0] segments_done,
+    input wire [         7:0] state,
+    input wire [         7:0] faults,
+    input wire [32*N_AXES-1:0] position,
+    input wire [   16*9-1:0] counters,
+
+    output wire [7:0] m_axis_tdata,
+    output wire       m_axis_tvalid,
+    input  wire       m_axis_tready,
+
+    output wire frame_start  // 1-clock strobe: a frame's fields were snapshotted
+);
+
+  localparam integer STATUS_LEN = 27 + 4 * N_AXES;
+  localparam integer MAX_LEN = (STATUS_LEN > 18) ? STATUS_LEN : 18;
+  localparam integer SHB = 3 + MAX_LEN;  // LEN, SEQ, TYPE, payload
+  localparam integer SHW = 8 * SHB;
+
+  localparam integer NAX_I = N_AXES;
+  localparam integer DEPTH_I = FIFO_DEPTH;
+  localparam integer CLK_I = CLK_HZ;
+  localparam integer BAUD_I = BAUD;
+  localparam integer MAXP_I = MAX_PAYLOAD;
+  localparam integer SLEN_I = STATUS_LEN;
+  localparam [7:0] NAX8 = NAX_I[7:0];
+  localparam [15:0] DEPTH16 = DEPTH_I[15:0];
+  localparam [31:0] CLK32 = CLK_I;
+  localparam [31:0] BAUD32 = BAUD_I;
+  localparam [31:0] BUILD32 = BUILD_ID;
+  localparam [7:0] MAXP8 = MAXP_I[7:0];
+  localparam [7:0] SLEN8 = SLEN_I[7:0];
+
+  localparam [2:0] E_IDLE = 3'd0, E_SYNC = 3'd1, E_BODY = 3'd2, E_CRCH = 3'd3, E_CRCL = 3'd4;
+
+  reg [2:0] st_reg;
+  reg [SHW-1:0] sh_reg;
+  reg [6:0] body_cnt_reg;  // body bytes (LEN, SEQ, TYPE, payload) still to send
+  reg [7:0] dseq_reg;
+  reg [7:0] aa_cnt_reg;
+  reg ident_p_reg, status_p_reg, nak_p_reg, ack_p_reg, done_p_reg;
+  reg [7:0] nak_seq_reg, nak_reason_reg;
+  reg [7:0] tdata_reg;
+  reg tvalid_reg;
+  reg start_reg;
+
+  wire [15:0] crc;
+  wire take = tvalid_reg && m_axis_tready;
+
+  // ---------------------------------------------------------------- frame images
+  reg [32*N_AXES-1:0] pos_be;  // axis 0 first (most significant)
+  integer a;
+  always @(*)
+    for (a = 0; a < N_AXES; a = a + 1) pos_be[32*(N_AXES-1-a)+:32] = position[32*a+:32];
+
+  wire [8*(3+STATUS_LEN)-1:0] img_status = {SLEN8, dseq_reg, 8'h83, state, faults, fifo_level,
+                                           next_seq, segments_done, pos_be, counters};
+  wire [8*21-1:0] img_ident = {8'd18, dseq_reg, 8'h84, 8'd2, NAX8, DEPTH16, CLK32, BAUD32,
+                               BUILD32, next_seq, MAXP8};
+  wire [8*8-1:0] img_nak = {8'd5, dseq_reg, 8'h81, nak_seq_reg, nak_reason_reg, next_seq,
+                            fifo_free};
+  wire [8*3-1:0] img_ack_hdr = {8'd7, dseq_reg, ack_p_reg ? 8'h80 : 8'h82};
+  wire [8*10-1:0] img_ack = {img_ack_hdr, next_seq, fifo_free, segments_done};
+
+  wire any_p = ident_p_reg || status_p_reg || nak_p_reg || ack_p_reg || done_p_reg;
+  wire start = (st_reg == E_IDLE) && !tvalid_reg && (aa_cnt_reg == 8'd0) && any_p;
+
+  reg [SHW-1:0] img;
+  reg [6:0] img_bytes;
+  always @(*) begin
+    img = {SHW{1'b0}};
+    if (ident_p_reg) begin
+      img[SHW-1-:8*21] = img_ident;
+      img_bytes = 7'd21;
+    end else if (status_p_reg) begin
+      img[SHW-1-:8*(3+STATUS_LEN)] = img_status;
+      img_bytes = 7'd3 + SLEN8[6:0];
+    end else if (nak_p_reg) begin
+      img[SHW-1-:8*8] = img_nak;
+      img_bytes = 7'd8;
+    end else begin
+      img[SHW-1-:8*10] = img_ack;
+      img_bytes = 7'd10;
+    end
+  end
+
+  crc16_ccitt u_crc (
+      .clk (clk),
+      .rst (rst),
+      .init(st_reg == E_SYNC),
+      .en  (take && st_reg == E_BODY),
+      .data(tdata_reg),
+      .crc (crc)
+  );
+
+  always @(posedge clk) begin
+    start_reg <= start;
+    // Pending flags: sets win over the clear of a frame starting on the same edge.
+    ident_p_reg  <= ident_req || (ident_p_reg && !(start && ident_p_reg));
+    status_p_reg <= status_req || (status_p_reg && !(start && !ident_p_reg));
+    nak_p_reg    <= nak_req || (nak_p_reg && !(start && !ident_p_reg && !status_p_reg));
+    ack_p_reg    <= ack_req ||
+                    (ack_p_reg && !(start && !ident_p_reg && !status_p_reg && !nak_p_reg));
+    done_p_reg   <= done_evt ||
+                    (done_p_reg && !(start && !ident_p_reg && !status_p_reg && !nak_p_reg));
+    if (nak_req) begin
+      nak_seq_reg    <= nak_seq;
+      nak_reason_reg <= nak_reason;
+    end
+    case ({v1_ack, st_reg == E_IDLE && take})
+      2'b10:   aa_cnt_reg <= aa_cnt_reg + 8'd1;
+      2'b01:   aa_cnt_reg <= aa_cnt_reg - 8'd1;
+      default: aa_cnt_reg <= aa_cnt_reg;
+    endcase
+
+    case (st_reg)
+      E_IDLE: begin
+        if (take) begin
+          tvalid_reg <= 1'b0;
+        end else if (!tvalid_reg && aa_cnt_reg != 8'd0) begin
+          tvalid_reg <= 1'b1;
+          tdata_reg  <= 8'hAA;
+        end else if (start) begin
+          sh_reg       <= img;
+          body_cnt_reg <= img_bytes;
+          st_reg       <= E_SYNC;
+          tvalid_reg   <= 1'b1;
+          tdata_reg    <= 8'hA5;
+        end
+      end
+      E_SYNC: begin
+        if (take) begin
+          st_reg    <= E_BODY;
+          tdata_reg <= sh_reg[SHW-1-:8];
+          sh_reg    <= {sh_reg[SHW-9:0], 8'h00};
+        end
+      end
+      E_BODY: begin
+        if (take) begin
+          body_cnt_reg <= body_cnt_reg - 7'd1;
+          if (body_cnt_reg == 7'd1) begin
+            st_reg    <= E_CRCH;
+            tvalid_reg <= 1'b0;  // the CRC of the last byte is ready on the next edge
+          end else begin
+            tdata_reg <= sh_reg[SHW-1-:8];
+            sh_reg    <= {sh_reg[SHW-9:0], 8'h00};
+          end
+        end
+      end
+      E_CRCH: begin
+        if (!tvalid_reg) begin
+          tvalid_reg <= 1'b1;
+          tdata_reg  <= crc[15:8];
+        end else if (take) begin
+          st_reg    <= E_CRCL;
+          tdata_reg <= crc[7:0];
+        end
+      end
+      default: begin  // E_CRCL
+        if (take) begin
+          st_reg     <= E_IDLE;
+          tvalid_reg <= 1'b0;
+          dseq_reg   <= dseq_reg + 8'd1;
+        end
+      end
+    endcase
+
+    if (rst) begin
+      st_reg         <= E_IDLE;
+      sh_reg         <= {SHW{1'b0}};
+      body_cnt_reg   <= 7'd0;
+      dseq_reg       <= 8'd0;
+      aa_cnt_reg     <= 8'd0;
+      ident_p_reg    <= 1'b0;
+      status_p_reg   <= 1'b0;
+      nak_p_reg      <= 1'b0;
+      ack_p_reg      <= 1'b0;
+      done_p_reg     <= 1'b0;
+      nak_seq_reg    <= 8'd0;
+      nak_reason_reg <= 8'd0;
+      tdata_reg      <= 8'd0;
+      tvalid_reg     <= 1'b0;
+      start_reg      <= 1'b0;
+    end
+  end
+
+  assign m_axis_tdata  = tdata_reg;
+  assign m_axis_tvalid = tvalid_reg;
+  assign frame_start   = start_reg;
+
+endmodule
+
+`default_nettype wire

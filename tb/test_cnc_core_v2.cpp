@@ -1,0 +1,365 @@
+// System bench for cnc_core speaking protocol v2 through its pins, at 3 Mbaud (BAUD=3000000
+// build of the same RTL): frames bit-banged onto rx (UartDriver), the device's frames decoded
+// from tx (UartMonitor + DeviceParser), STEP/DIR recorded every clock (StepMonitor). HELLO ->
+// IDENT, CONFIG_AXIS applied, a burst of LINE/DWELL frames running back to back with zero idle
+// clocks (R' = R + T) and exact step schedules, ACK/DONE credits and counts, STATUS fields, a bad
+// CRC answered by NAK with nothing moving, NUMERATORS, and v1 again after RELEASE.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "Vcnc_core_3m.h"
+#include "common/core_pins.h"
+#include "common/seed.h"
+#include "common/step_monitor.h"
+#include "common/v1_packets.h"
+#include "common/v2_frames.h"
+
+namespace {
+
+namespace v2 = fpgacnc::tb::v2;
+using fpgacnc::tb::AxisTiming;
+
+constexpr int kAxes = 4;
+constexpr double kBaud3M = 3'000'000;
+constexpr uint64_t kByteClocks = 167;  // 10 bits at 3 Mbaud
+
+uint64_t mag(int64_t v) {
+  return static_cast<uint64_t>(v < 0 ? -v : v);
+}
+
+struct Interval {
+  uint64_t from, to;
+};
+
+class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
+ public:
+  V2Bench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_3m>(), true, kBaud3M) {
+    fpgacnc::tb::reset_core(*this);
+  }
+
+  // Sends bytes and runs until they are all on the line.
+  void send_frame(const std::vector<uint8_t>& f) { send(f); }
+  // Runs until `n` more device messages arrived (false after `limit` clocks).
+  bool wait_msgs(size_t n, uint64_t limit) {
+    const size_t want = msgs_.size() + n;
+    for (uint64_t i = 0; i < limit && msgs_.size() < want; ++i) tick();
+    return msgs_.size() >= want;
+  }
+  // Runs until no message arrived for `quiet` clocks and the rx line is idle.
+  void settle(uint64_t quiet) {
+    uint64_t q = 0;
+    size_t n = msgs_.size();
+    while (q < quiet || !rx_idle()) {
+      tick();
+      if (msgs_.size() != n) {
+        n = msgs_.size();
+        q = 0;
+      } else {
+        ++q;
+      }
+    }
+  }
+  // The last frame of a type, or nullptr.
+  const v2::DeviceMsg* last(uint8_t type) const {
+    for (auto it = msgs_.rbegin(); it != msgs_.rend(); ++it)
+      if (!it->v1_ack && it->type == type) return &*it;
+    return nullptr;
+  }
+
+  const std::vector<v2::DeviceMsg>& msgs() const { return msgs_; }
+  const std::vector<uint64_t>& starts() const { return starts_; }
+  const std::vector<uint64_t>& dones() const { return dones_; }
+  const std::vector<Interval>& laser() const { return laser_; }
+  uint64_t not_running_between() const { return gaps_; }
+
+ protected:
+  void observe() override {
+    const Vcnc_core_3m& m = dut();
+    if (tx_bytes().size() != tx_seen_) {
+      const auto& b = tx_bytes().back();
+      tx_seen_ = tx_bytes().size();
+      EXPECT_TRUE(b.framing_ok) << "tx framing error at cycle " << b.start_cycle;
+      if (auto msg = parser_.push(b.value, b.start_cycle)) msgs_.push_back(*msg);
+    }
+    if (m.seg_start) starts_.push_back(cycle());
+    if (m.seg_done) dones_.push_back(cycle());
+    if (m.laser && !laser_prev_) laser_.push_back(Interval{cycle(), 0});
+    if (!m.laser && laser_prev_) laser_.back().to = cycle();
+    laser_prev_ = m.laser;
+  }
+
+ private:
+  size_t tx_seen_ = 0;
+  v2::DeviceParser parser_;
+  std::vector<v2::DeviceMsg> msgs_;
+  std::vector<uint64_t> starts_, dones_;
+  std::vector<Interval> laser_;
+  bool laser_prev_ = false;
+  uint64_t gaps_ = 0;
+};
+
+void hello(V2Bench& b) {
+  b.send_frame(v2::hello());
+  ASSERT_TRUE(b.wait_msgs(1, 20 * 30 * kByteClocks)) << "no answer to HELLO";
+  const auto& id = b.msgs().back();
+  ASSERT_FALSE(id.v1_ack);
+  ASSERT_TRUE(id.crc_ok);
+  ASSERT_EQ(id.type, v2::kIdent);
+}
+
+TEST(CncCoreV2, HelloIdent) {
+  V2Bench b;
+  EXPECT_EQ(b.dut().v2_mode, 0);
+  hello(b);
+  if (HasFatalFailure()) return;
+  const auto& id = b.msgs().back();
+  ASSERT_EQ(id.payload.size(), 18u);
+  EXPECT_EQ(id.seq, 0u) << "first device frame";
+  EXPECT_EQ(id.u8(0), 2u) << "version";
+  EXPECT_EQ(id.u8(1), 4u) << "N_AXES";
+  EXPECT_EQ(id.u16(2), 64u) << "FIFO depth";
+  EXPECT_EQ(id.u32(4), 50'000'000u) << "CLK_HZ";
+  EXPECT_EQ(id.u32(8), 3'000'000u) << "BAUD";
+  EXPECT_EQ(id.u32(12), 0x20260005u) << "BUILD_ID";
+  EXPECT_EQ(id.u8(16), 0u) << "next_seq";
+  EXPECT_EQ(id.u8(17), 64u) << "MAX_PAYLOAD";
+  EXPECT_EQ(b.dut().v2_mode, 1);
+  EXPECT_EQ(b.dut().frames_ok, 1u);
+}
+
+// CONFIG_AXIS sets an axis's STEP/DIR timing (applied while the machine is quiet).
+TEST(CncCoreV2, ConfigAxisApplied) {
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  b.send_frame(v2::config_axis(0, 1, 5, 7, 11, 13));
+  ASSERT_TRUE(b.wait_msgs(1, 40 * kByteClocks));
+  const auto& ack = b.msgs().back();
+  ASSERT_EQ(ack.type, v2::kAck);
+  EXPECT_EQ(ack.u8(0), 1u) << "next_seq after CONFIG_AXIS";
+  EXPECT_EQ(ack.u16(1), 64u) << "free slots";
+  // Axis 1 reverses (5 steps back, then 5 forward): its DIR setup/hold are 11/13 now.
+  b.send_frame(v2::line(1, 1, 255, 2000, {4, -5}, true));
+  b.send_frame(v2::line(2, 1, 255, 2000, {-4, 5}, true));
+  b.settle(20'000);
+  EXPECT_EQ(b.dut().segments_done, 2u);
+  const AxisTiming t1{5, 7, 11, 13};
+  for (auto& v : b.mon().check_pulses(1, t1)) ADD_FAILURE() << v;
+  for (auto& v : b.mon().check_pulses(0, AxisTiming{})) ADD_FAILURE() << v;
+  const auto& y = b.mon().axis(1);
+  ASSERT_EQ(y.rises.size(), 10u);
+  ASSERT_EQ(y.falls.size(), 10u);
+  for (size_t i = 0; i < y.rises.size(); ++i)
+    EXPECT_EQ(y.falls[i] - y.rises[i], 5u) << "axis 1 STEP high, step " << i;
+  EXPECT_EQ(b.mon().axis(0).falls[0] - b.mon().axis(0).rises[0], 100u) << "axis 0 unchanged";
+  EXPECT_EQ(b.dut().violations, 0u);
+}
+
+struct Seg {
+  bool dwell = false;
+  uint8_t code = 1, power = 255;
+  uint32_t t = 0;
+  std::vector<int32_t> steps;
+};
+
+// A burst of LINE (and DWELL) frames sent back to back: every segment starts on the edge the
+// previous one ends (R' = R + T, zero idle clocks), every step at R + ceil(k*T/n), the laser
+// exactly over the lit segments, ACK/DONE credits and counts, then STATUS.
+TEST(CncCoreV2, BurstZeroGapExactSchedule) {
+  const uint64_t seed = fpgacnc::tb::test_seed(20260520, "BurstZeroGapExactSchedule");
+  std::mt19937_64 rng(seed);
+  auto uni = [&](int64_t lo, int64_t hi) {
+    return std::uniform_int_distribution<int64_t>(lo, hi)(rng);
+  };
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  const int kSegs = 48;
+  std::vector<Seg> segs;
+  std::vector<uint8_t> bytes;
+  int64_t net[kAxes] = {0, 0, 0, 0};
+  for (int i = 0; i < kSegs; ++i) {
+    Seg s;
+    // T long enough for the next frame (<= 28 bytes) to arrive and be prepared; P = T / n_dom
+    // >= 500 >= DIR hold + setup, so reversals are dir_fast (zero gap) and nothing is clamped.
+    s.t = static_cast<uint32_t>(uni(5000, 12000));
+    if (i % 11 == 5) {
+      s.dwell = true;
+      s.code = 0;
+      s.power = 0;
+      bytes = v2::dwell(static_cast<uint8_t>(i), s.t);
+    } else {
+      s.code = static_cast<uint8_t>(uni(0, 3));
+      s.power = static_cast<uint8_t>(uni(0, 3) == 0 ? 0 : uni(1, 255));
+      const int k = static_cast<int>(uni(0, kAxes));
+      for (int a = 0; a < k; ++a) s.steps.push_back(static_cast<int32_t>(uni(-10, 10)));
+      const bool short_form = uni(0, 1) == 1;
+      bytes = v2::line(static_cast<uint8_t>(i), s.code, s.power, s.t, s.steps, short_form);
+    }
+    for (size_t a = 0; a < s.steps.size(); ++a) net[a] += s.steps[a];
+    segs.push_back(s);
+    b.queue(bytes);
+  }
+  // Run until every segment is done and reported.
+  uint64_t guard = 0;
+  while ((b.dut().segments_done < kSegs || !b.rx_idle()) && ++guard < 2'000'000) b.tick();
+  ASSERT_EQ(b.dut().segments_done, static_cast<uint32_t>(kSegs)) << "by cycle " << b.cycle();
+  b.settle(10 * 20 * kByteClocks);
+
+  // Zero gap: seg_start of segment i+1 exactly T_i after seg_start of segment i.
+  ASSERT_EQ(b.starts().size(), static_cast<size_t>(kSegs));
+  for (int i = 0; i + 1 < kSegs; ++i)
+    ASSERT_EQ(b.starts()[i + 1] - b.starts()[i], segs[i].t)
+        << "segment " << i + 1 << " start: idle clocks between segments " << i << " and " << i + 1
+        << " (R=" << b.starts()[i] << ") seed " << seed;
+  // Exact step schedule per axis, DIR at every step.
+  for (int a = 0; a < kAxes; ++a) {
+    std::vector<uint64_t> want;
+    std::vector<int> want_dir;
+    for (int i = 0; i < kSegs; ++i) {
+      const auto& s = segs[i];
+      if (static_cast<size_t>(a) >= s.steps.size()) continue;
+      const uint64_t n = mag(s.steps[a]);
+      for (uint64_t k = 1; k <= n; ++k) {
+        want.push_back(b.starts()[i] + (k * s.t + n - 1) / n);
+        want_dir.push_back(s.steps[a] > 0 ? 1 : 0);
+      }
+    }
+    const auto& tr = b.mon().axis(a);
+    ASSERT_EQ(tr.rises.size(), want.size()) << "axis " << a << " step count, seed " << seed;
+    for (size_t j = 0; j < want.size(); ++j) {
+      ASSERT_EQ(tr.rises[j], want[j]) << "axis " << a << " step " << j << " seed " << seed;
+      ASSERT_EQ(tr.rise_dir[j], want_dir[j]) << "axis " << a << " DIR at step " << j;
+    }
+    EXPECT_EQ(static_cast<int32_t>(b.dut().position[a]), net[a]) << "axis " << a;
+    for (auto& v : b.mon().check_pulses(a, AxisTiming{})) ADD_FAILURE() << v;
+  }
+  // Laser: high exactly over the segments with code != 0 and power != 0 (merged when adjacent).
+  std::vector<Interval> lit;
+  for (int i = 0; i < kSegs; ++i) {
+    const auto& s = segs[i];
+    if (s.dwell || s.code == 0 || s.power == 0) continue;
+    const uint64_t from = b.starts()[i], to = b.starts()[i] + s.t;
+    if (!lit.empty() && lit.back().to == from)
+      lit.back().to = to;
+    else
+      lit.push_back(Interval{from, to});
+  }
+  ASSERT_EQ(b.laser().size(), lit.size()) << "laser intervals, seed " << seed;
+  for (size_t j = 0; j < lit.size(); ++j) {
+    EXPECT_EQ(b.laser()[j].from, lit[j].from) << "laser interval " << j;
+    EXPECT_EQ(b.laser()[j].to, lit[j].to) << "laser interval " << j;
+  }
+  // Answers: every frame well formed; ACK next_seq never decreases and ends at kSegs; DONE
+  // counts rise to kSegs; free slots within the FIFO.
+  uint32_t last_seq = 0, last_done = 0;
+  size_t acks = 0, dones = 0;
+  uint8_t dev_seq = 0;
+  for (const auto& m : b.msgs()) {
+    ASSERT_FALSE(m.v1_ack) << "0xAA in a v2 session";
+    ASSERT_TRUE(m.crc_ok);
+    EXPECT_EQ(m.seq, dev_seq++) << "device SEQ";
+    if (m.type != v2::kAck && m.type != v2::kDone) continue;
+    (m.type == v2::kAck ? acks : dones)++;
+    EXPECT_GE(m.u8(0), last_seq) << "ACK next_seq went back";
+    EXPECT_LE(m.u16(1), 64u);
+    EXPECT_GE(m.u32(3), last_done) << "segments done went back";
+    last_seq = m.u8(0);
+    last_done = m.u32(3);
+  }
+  EXPECT_EQ(last_seq, static_cast<uint32_t>(kSegs));
+  EXPECT_EQ(last_done, static_cast<uint32_t>(kSegs));
+  EXPECT_GT(acks, 5u);
+  EXPECT_GT(dones, 0u);
+  EXPECT_EQ(b.dut().fifo_level, 0u);
+  EXPECT_EQ(b.dut().busy, 0);
+  EXPECT_EQ(b.dut().violations, 0u);
+  EXPECT_EQ(b.dut().clamped, 0u);
+
+  // STATUS.
+  b.send_frame(v2::status_query());
+  ASSERT_TRUE(b.wait_msgs(1, 80 * kByteClocks));
+  const auto& st = b.msgs().back();
+  ASSERT_EQ(st.type, v2::kStatus);
+  ASSERT_EQ(st.payload.size(), 43u);
+  EXPECT_EQ(st.u8(0), 0x02u) << "state: idle, v2 mode, no fault";
+  EXPECT_EQ(st.u8(1), 0u) << "faults";
+  EXPECT_EQ(st.u16(2), 0u) << "FIFO level";
+  EXPECT_EQ(st.u8(4), static_cast<uint32_t>(kSegs)) << "next_seq";
+  EXPECT_EQ(st.u32(5), static_cast<uint32_t>(kSegs)) << "segments done";
+  for (int a = 0; a < kAxes; ++a)
+    EXPECT_EQ(static_cast<int32_t>(st.u32(9 + 4 * a)), net[a]) << "position axis " << a;
+  EXPECT_EQ(st.u16(25), static_cast<uint32_t>(kSegs + 2)) << "frames ok (HELLO, frames, query)";
+  for (int c = 1; c < 9; ++c) EXPECT_EQ(st.u16(25 + 2 * c), 0u) << "counter " << c;
+  std::printf("burst: %d segments, %zu ACK, %zu DONE, %llu clocks\n", kSegs, acks, dones,
+              static_cast<unsigned long long>(b.cycle()));
+}
+
+// A LINE with a bad CRC is answered NAK BAD_CRC and nothing moves; the retransmission runs.
+TEST(CncCoreV2, BadCrcNakNothingMoves) {
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  auto f = v2::line(0, 1, 255, 4000, {20, -20}, true);
+  f.back() ^= 0x40;
+  b.send_frame(f);
+  ASSERT_TRUE(b.wait_msgs(1, 40 * kByteClocks));
+  const auto& nak = b.msgs().back();
+  ASSERT_EQ(nak.type, v2::kNak);
+  EXPECT_EQ(nak.u8(0), 0u) << "SEQ of the rejected frame";
+  EXPECT_EQ(nak.u8(1), v2::kBadCrc);
+  EXPECT_EQ(nak.u8(2), 0u) << "next_seq";
+  EXPECT_EQ(nak.u16(3), 64u) << "free";
+  b.idle(20'000);
+  EXPECT_EQ(b.mon().axis(0).rises.size(), 0u);
+  EXPECT_TRUE(b.starts().empty());
+  EXPECT_EQ(b.dut().crc_errors, 1u);
+  EXPECT_EQ(b.dut().naks, 1u);
+  EXPECT_EQ(b.dut().next_seq, 0u);
+  b.send_frame(v2::line(0, 1, 255, 4000, {20, -20}, true));
+  b.settle(10'000);
+  EXPECT_EQ(b.mon().axis(0).rises.size(), 20u);
+  EXPECT_EQ(b.mon().axis(1).rises.size(), 20u);
+  EXPECT_EQ(b.dut().segments_done, 1u);
+  EXPECT_EQ(b.dut().next_seq, 1u);
+}
+
+// NUMERATORS (a FIFO entry: DONE counts it), RELEASE, then v1 with the new numerators and 0xAA.
+TEST(CncCoreV2, NumeratorsReleaseThenV1) {
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  b.send_frame(v2::numerators(0, 9'375'000, 4'000'000));
+  b.settle(5'000);
+  EXPECT_EQ(b.dut().numerator_x, 9'375'000u);
+  EXPECT_EQ(b.dut().numerator_y, 4'000'000u);
+  EXPECT_EQ(b.dut().segments_done, 1u) << "an applied NUMERATORS entry counts as done";
+  const auto* done = b.last(v2::kDone);
+  const auto* ack = b.last(v2::kAck);
+  ASSERT_TRUE(ack != nullptr);
+  EXPECT_EQ(ack->u8(0), 1u);
+  const uint32_t reported = std::max(done ? done->u32(3) : 0u, ack->u32(3));
+  EXPECT_EQ(reported, 1u) << "segments done reported by ACK/DONE";
+  b.send_frame(v2::release(1));
+  b.settle(5'000);
+  EXPECT_EQ(b.dut().v2_mode, 0);
+  ASSERT_EQ(b.msgs().back().type, v2::kAck);
+  EXPECT_EQ(b.msgs().back().u8(0), 2u);
+  // v1: X dominant, 9 375 000 / 1200 = 7812 clocks.
+  const size_t n0 = b.msgs().size();
+  b.send(fpgacnc::tb::motion_packet(0, -20, 5, 1200));
+  ASSERT_TRUE(b.wait_msgs(1, 20 * 7812 + 100'000)) << "no 0xAA";
+  ASSERT_EQ(b.msgs().size(), n0 + 1);
+  EXPECT_TRUE(b.msgs().back().v1_ack);
+  const auto& x = b.mon().axis(0);
+  ASSERT_EQ(x.rises.size(), 20u);
+  for (size_t i = 1; i < x.rises.size(); ++i) EXPECT_EQ(x.rises[i] - x.rises[i - 1], 7812u);
+  EXPECT_GT(b.msgs().back().cycle, x.rises.back()) << "0xAA before the last step";
+  EXPECT_EQ(b.dut().segments_done, 1u) << "a v1 move is not a v2 segment";
+}
+
+}  // namespace
