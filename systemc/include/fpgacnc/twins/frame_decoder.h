@@ -104,7 +104,9 @@ class FrameDecoderTwin : public sc_core::sc_module {
   uint64_t packets = 0;  // v1 packets written to the FIFO
   uint64_t frames = 0;   // v2 frames with a good CRC
   uint64_t fifo_writes = 0, cfg_writes = 0;
-  std::vector<Cycle> packet_done_cycles;        // v1: edges where packet_done is high
+  // v1 packets queued and v2 frames that passed every check (cnc_core packet_count): the edge
+  // after which the strobe is high.
+  std::vector<Cycle> packet_done_cycles;
   std::vector<std::pair<Cycle, RespReq>> naks;  // every NAK request
 
  private:
@@ -313,6 +315,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
     if (type_ == v2::kHello || type_ == v2::kStatusQuery) {
       ++s_.frames_ok;
+      packet_done_cycles.push_back(r);
       commit_check(take);
       request(r, RespReq{type_ == v2::kHello ? kReqIdent : kReqStatus});
       return;
@@ -325,6 +328,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
     if (sc == SeqClass::Duplicate) {
       ++s_.frames_ok;
+      packet_done_cycles.push_back(r);
       if (type_ == v2::kRelease) s_.v2_mode = false;
       commit_check(take);
       request(r, RespReq{kReqAck});
@@ -369,6 +373,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
       s_.v2_mode = false;
     }
     ++s_.frames_ok;
+    packet_done_cycles.push_back(r);
     ++s_.next_seq;
     commit_check(take);
     request(r, RespReq{kReqAck});

@@ -125,7 +125,8 @@ inline std::vector<HostPacket> job_packets(const protocol::v1::Job& job, uint64_
 //   next_seq (go-back-N); ACK, DONE and NAK carry next_seq and free slots;
 //   when every frame is acknowledged and `segments done` counts every FIFO frame:
 //   STATUS_QUERY (wait for STATUS), then RELEASE (wait for its ACK).
-// A frame with `corrupt` is sent once with a wrong CRC (the device NAKs BAD_CRC).
+// A frame with `corrupt` is sent once with a wrong CRC (the device NAKs BAD_CRC); `pre` bytes go
+// out once before it.
 // Waiting for answers, the host acts on each complete device frame: it is ready again at the
 // end of that frame's last byte on tx. No retransmission timer: the models never lose bytes.
 struct V2Item {
@@ -133,12 +134,17 @@ struct V2Item {
   std::vector<uint8_t> payload;
   int64_t gap = 1;
   bool corrupt = false;
+  // Bytes sent once, as a packet of their own, before the frame's first transmission (line
+  // noise, a frame cut short), and the gap from their end to the frame.
+  std::vector<uint8_t> pre{};
+  int64_t pre_gap = 1;
   bool fifo() const { return type == v2::kLine || type == v2::kDwell || type == v2::kNumerators; }
 };
 struct V2Script {
   std::vector<V2Item> items;  // sequenced frames
   int64_t hello_gap = 1;
   bool status_at_end = true;
+  bool ignore_credit = false;  // send while fewer than 127 are unacknowledged (FIFO_FULL NAKs)
 };
 
 class V2StreamHost : public Host {
@@ -149,6 +155,7 @@ class V2StreamHost : public Host {
     s_.items.push_back(rel);
     for (const V2Item& i : s_.items) fifo_total_ += i.fifo() ? 1 : 0;
     corrupted_.assign(s_.items.size(), false);
+    pre_done_.assign(s_.items.size(), false);
   }
 
   bool done() const override { return phase_ == Phase::Done; }
@@ -214,7 +221,7 @@ class V2StreamHost : public Host {
     if (next_ >= s_.items.size()) return false;
     if (phase_ == Phase::Stream && next_ + 1 == s_.items.size()) return false;  // RELEASE last
     if (next_ - acked_ >= 127) return false;
-    if (!s_.items[next_].fifo()) return true;
+    if (!s_.items[next_].fifo() || s_.ignore_credit) return true;
     uint32_t in_flight = 0;
     for (size_t i = acked_; i < next_; ++i) in_flight += s_.items[i].fifo() ? 1 : 0;
     return free_ > in_flight;
@@ -233,6 +240,14 @@ class V2StreamHost : public Host {
   }
   std::vector<HostFrame> send_item() {
     const V2Item& it = s_.items[next_];
+    int64_t gap = it.gap;
+    if (!it.pre.empty() && !pre_done_[next_]) {
+      pre_done_[next_] = true;
+      after_pre_ = true;
+      return send(it.pre, gap, false);
+    }
+    if (after_pre_) gap = it.pre_gap;
+    after_pre_ = false;
     auto bytes = v2::frame(seq_of(next_), it.type, it.payload);
     if (it.corrupt && !corrupted_[next_]) {
       corrupted_[next_] = true;
@@ -241,7 +256,7 @@ class V2StreamHost : public Host {
     if (next_ < sent_hi_) ++retransmitted;
     ++next_;
     sent_hi_ = std::max(sent_hi_, next_);
-    return send(std::move(bytes), it.gap, false);
+    return send(std::move(bytes), gap, false);
   }
   // Cumulative acknowledgement: next_seq names the first frame not accepted.
   void credit(uint8_t next_seq, uint16_t free) {
@@ -282,7 +297,8 @@ class V2StreamHost : public Host {
   uint8_t base_seq_ = 0;
   size_t next_ = 0, acked_ = 0, sent_hi_ = 0;
   uint32_t free_ = 0, done_ = 0, fifo_total_ = 0;
-  std::vector<bool> corrupted_;
+  std::vector<bool> corrupted_, pre_done_;
+  bool after_pre_ = false;
   v2::FrameParser parser_;
   uint64_t bad_seen_ = 0;
   std::optional<Cycle> frame_start_;

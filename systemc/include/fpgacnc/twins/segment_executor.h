@@ -76,6 +76,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   uint64_t zero_len_on_last_tick = 0;   // T = 0 taken on a last tick (one clock in ZERO)
   uint64_t hold_on_last_tick = 0;       // taken on a last tick, then HOLD / SETUP
   std::vector<Cycle> seg_start_cycles;  // edges after which seg_start is high
+  // When set: the edge after which each segment stops keeping the executor busy (R + T; its
+  // accept edge for T = 0, + 1 when taken on a last tick), in order (cnc_core busy).
+  std::vector<Cycle>* entry_ends = nullptr;
 
  private:
   PulseState pulse_state(int a, Cycle now) {
@@ -162,6 +165,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       run_end_ = end;
     }
     idle_after_ = end;
+    if (entry_ends) entry_ends->push_back(end);
     SegDone d{s.v2};
     transport(done, gp_, clk_, d, end);
   }

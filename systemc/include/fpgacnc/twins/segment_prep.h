@@ -75,9 +75,10 @@ class SegmentPrepTwin : public sc_core::sc_module {
   uint16_t last_feed = 0;
   uint8_t last_code = 0;
   uint64_t clamped = 0;
-  std::vector<Cycle> clamp_cycles;    // edges of the `clamped` strobe
-  std::vector<Cycle> applied_cycles;  // edges of init_applied (v1 init and v2 NUMERATORS)
-  bool report_applied = false;        // `applied` is bound
+  std::vector<Cycle> clamp_cycles;           // edges of the `clamped` strobe
+  std::vector<Cycle> applied_cycles;         // edges of init_applied (v1 init and v2 NUMERATORS)
+  bool report_applied = false;               // `applied` is bound
+  std::vector<Cycle>* entry_ends = nullptr;  // numerators entries end on their accept edge
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
@@ -91,6 +92,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
       num_y = c.steps[1];
       free_from_ = accept + 1;
       applied_cycles.push_back(accept);
+      if (entry_ends) entry_ends->push_back(accept);
       if (report_applied) {
         Applied a{c.v2};
         transport(applied, gp_, clk_, a, accept);
