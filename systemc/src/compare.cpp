@@ -61,6 +61,9 @@ std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
         "{}",
         rtl.timeouts, rtl.overruns, rtl.frame_errors, rtl.violations, twin.timeouts, twin.overruns,
         twin.frame_errors, twin.violations);
+  if (rtl.zero_gap != twin.zero_gap)
+    return fmt::format("segments started with zero idle clocks: rtl {}, twin {}", rtl.zero_gap,
+                       twin.zero_gap);
   if (rtl.error.empty() && rtl.end_cycle != twin.end_cycle)
     return fmt::format("job duration: rtl {} clocks, twin {}", rtl.end_cycle, twin.end_cycle);
   return "";

@@ -79,6 +79,7 @@ class RtlDriver {
       prev_count_ = o.packet_count;
     }
     if (o.seg_start) r_.seg_start.push_back(c);
+    if (o.seg_start && o.seg_done) ++r_.zero_gap;  // started on the previous one's last tick
     if (o.seg_done) r_.seg_done.push_back(c);
     // tx monitor: start edge, then samples at the bit centres.
     if (!tx_start_) {

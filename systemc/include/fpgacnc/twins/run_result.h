@@ -26,7 +26,7 @@ struct RunResult {
   uint64_t packets_sent = 0;
   // v2: what the host saw (device frames, NAKs, retransmitted frames, `segments done` of the
   // last ACK/DONE) and the device side (v2 frames with a good CRC, clamped segments, segments
-  // started with zero idle clocks).
+  // started with zero idle clocks: seg_start in the clock of the previous seg_done).
   uint64_t device_frames = 0, naks = 0, retransmitted = 0, segments_done = 0;
   uint64_t frames_ok = 0, clamped = 0, zero_gap = 0;
   std::vector<std::vector<uint8_t>> statuses;  // payloads of the STATUS frames the host got
