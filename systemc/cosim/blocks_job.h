@@ -33,13 +33,26 @@ struct UartRxJob {
 struct UartTxJob {
   std::vector<std::pair<uint8_t, int64_t>> offers;
 };
-// packet_decoder_v1 (100 ms watchdog): bytes valid after their edge (one clock each); command
-// k is taken `accept_delay[k]` edges after the first edge it could be; events (valid edge,
-// code | init << 8, a, b | feed << 32).
-struct DecoderJob {
+// frame_decoder (100 ms watchdog): bytes valid after their edge (one clock each); the FIFO has
+// no room in the clocks after the edges of `full` ([first, last] intervals). Events: FIFO writes
+// (write edge, 1 << 60 | v2 << 12 | kind << 10 | code << 8 | power, t, steps X | Y << 32,
+// steps Z | E << 32), requests (strobe edge, 2 << 60 | kind | seq << 8 | reason << 16), CONFIG
+// writes (edge, 4 << 60 | axis, high | low << 16 | setup << 32 | hold << 48), v1 packets queued
+// (edge, 5 << 60) and the decoder state when it changes (edge after which it holds, 3 << 60 |
+// next_seq | v2 mode << 8, frames ok | CRC errors << 16 | length errors << 32 | unknown types
+// << 48, timeouts | overruns << 16 | noise << 32): the counters as cnc_core counts the strobes.
+struct FrameJob {
   std::vector<std::pair<Cycle, uint8_t>> bytes;
-  std::vector<int64_t> accept_delay;
+  std::vector<std::pair<Cycle, Cycle>> full;
+  bool full_at(Cycle c) const {
+    for (const auto& [a, b] : full)
+      if (c >= a && c <= b) return true;
+    return false;
+  }
 };
+inline constexpr uint64_t kEvWrite = 1ull << 60, kEvReq = 2ull << 60, kEvState = 3ull << 60,
+                          kEvCfg = 4ull << 60, kEvV1 = 5ull << 60;
+
 // segment_prep: FIFO entry k valid from (previous accept, or 0) + gap; segment j taken
 // `accept_delay[j]` edges late; exec_idle low from its accept edge A_j until after edge
 // A_j + busy[j] (the executor running it), so a numerators entry waits. Events: accepts (edge,
@@ -63,7 +76,7 @@ struct PrepJob {
 
 BlockRun rtl_uart_rx(const UartRxJob& j);
 BlockRun rtl_uart_tx(const UartTxJob& j);
-BlockRun rtl_decoder(const DecoderJob& j);
+BlockRun rtl_frame_decoder(const FrameJob& j);
 BlockRun rtl_prep(const PrepJob& j);
 
 }  // namespace fpgacnc::twins

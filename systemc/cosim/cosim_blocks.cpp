@@ -15,10 +15,12 @@
 #include "cosim_args.h"
 
 #include "blocks_job.h"
-#include "fpgacnc/twins/packet_decoder_v1.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/twins/frame_decoder.h"
 #include "fpgacnc/twins/segment_prep.h"
 #include "fpgacnc/twins/uart_rx.h"
 #include "fpgacnc/twins/uart_tx.h"
+#include "fpgacnc/twins/v2_frames.h"
 
 using namespace fpgacnc::twins;
 
@@ -40,11 +42,12 @@ SC_MODULE(BlockBench) {
   PinRecorder pins;
   UartRxTwin rx115, rx3m;
   UartTxTwin tx;
-  PacketDecoderTwin dec;
+  FrameDecoderTwin dec;
   SegmentPrepTwin prep;
   tlm_utils::simple_initiator_socket<BlockBench> to_rx115, to_rx3m, to_tx, to_dec, to_prep;
-  tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_dec, from_prep,
-      prep_status, prep_applied;
+  tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_prep,
+      prep_status, prep_applied, dec_fifo, dec_resp, dec_cfg;
+  const FrameJob* frame_job = nullptr;
   tlm::tlm_generic_payload gp;
   BlockRun* out = nullptr;
   const std::vector<int64_t>* delays = nullptr;
@@ -57,7 +60,7 @@ SC_MODULE(BlockBench) {
       : rx115("uart_rx_115200", clk, p115),
         rx3m("uart_rx_3000000", clk, p3m),
         tx("uart_tx", clk, p3m, pins),
-        dec("packet_decoder_v1", clk, p115),
+        dec("frame_decoder", clk, p115),
         prep("segment_prep", clk, pprep) {
     prep.report_applied = true;
     pins.record_tx = true;
@@ -69,7 +72,9 @@ SC_MODULE(BlockBench) {
     rx115.bytes.bind(from_rx115);
     rx3m.bytes.bind(from_rx3m);
     tx.line.bind(from_tx);
-    dec.commands.bind(from_dec);
+    dec.fifo.bind(dec_fifo);
+    dec.resp.bind(dec_resp);
+    dec.cfg.bind(dec_cfg);
     prep.segments.bind(from_prep);
     prep.exec_status.bind(prep_status);
     prep.applied.bind(prep_applied);
@@ -77,7 +82,9 @@ SC_MODULE(BlockBench) {
     from_rx115.register_b_transport(this, &BlockBench::on_byte);
     from_rx3m.register_b_transport(this, &BlockBench::on_byte);
     from_tx.register_b_transport(this, &BlockBench::on_ok);
-    from_dec.register_b_transport(this, &BlockBench::on_command);
+    dec_fifo.register_b_transport(this, &BlockBench::on_fifo);
+    dec_resp.register_b_transport(this, &BlockBench::on_resp);
+    dec_cfg.register_b_transport(this, &BlockBench::on_cfg);
     from_prep.register_b_transport(this, &BlockBench::on_segment);
     prep_status.register_b_transport(this, &BlockBench::on_status);
     SC_THREAD(run);
@@ -101,13 +108,37 @@ SC_MODULE(BlockBench) {
     out->events.push_back(BlockEvent{clk.at(d), {payload<RxByte>(g).byte, 0, 0, 0}});
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
-  void on_command(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
-    const Command& c = payload<Command>(g);
-    const Cycle v = clk.at(d);
-    out->events.push_back(BlockEvent{v,
-                                     {c.code | static_cast<uint64_t>(c.init) << 8, c.a,
-                                      c.b | static_cast<uint64_t>(c.feed) << 32, 0}});
-    d = clk.delay_to(v + 1 + next_delay());
+  void on_fifo(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const Cycle c = clk.at(d);
+    if (g.is_read()) {
+      payload<FifoLevel>(g).level = frame_job->full_at(c) ? v2::kFifoDepth : 0;
+    } else {
+      const FifoEntry& e = payload<FifoEntry>(g);
+      out->events.push_back(
+          BlockEvent{c,
+                     {kEvWrite | (e.v2 ? 1u << 12 : 0u) | static_cast<uint64_t>(e.kind) << 10 |
+                          static_cast<uint64_t>(e.code) << 8 | e.power,
+                      e.t, e.steps[0] | static_cast<uint64_t>(e.steps[1]) << 32,
+                      e.steps[2] | static_cast<uint64_t>(e.steps[3]) << 32, 0, 0}});
+    }
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_resp(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const RespReq& r = payload<RespReq>(g);
+    out->events.push_back(BlockEvent{clk.at(d),
+                                     {kEvReq | r.kind | static_cast<uint64_t>(r.seq) << 8 |
+                                          static_cast<uint64_t>(r.reason) << 16,
+                                      0, 0, 0, 0, 0}});
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_cfg(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const CfgAxis& a = payload<CfgAxis>(g);
+    out->events.push_back(BlockEvent{clk.at(d),
+                                     {kEvCfg | a.axis,
+                                      a.timing.high | static_cast<uint64_t>(a.timing.low) << 16 |
+                                          static_cast<uint64_t>(a.timing.setup) << 32 |
+                                          static_cast<uint64_t>(a.timing.hold) << 48,
+                                      0, 0, 0, 0}});
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_segment(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
@@ -199,26 +230,91 @@ UartTxJob tx_job(std::mt19937_64& g, size_t n) {
   return j;
 }
 
-DecoderJob decoder_job(std::mt19937_64& g, size_t packets) {
-  DecoderJob j;
+// A byte stream for frame_decoder: v1 packets (motion codes 0..3, inits), v2 frames of every
+// type (good ones, SEQ in order, duplicated and ahead; reserved types, wrong lengths, reserved
+// flag bits, axis >= N_AXES, a corrupted CRC, LEN > 64), noise, packets and frames cut short
+// followed by a pause at the watchdog limit (5 000 000 +- 10 clocks), bytes back to back or with
+// random gaps; the FIFO full in random intervals (v1 overruns, NAK FIFO_FULL).
+FrameJob frame_job(std::mt19937_64& g, size_t packets) {
+  using namespace fpgacnc::twins::v2;
+  FrameJob j;
   Cycle t = pick(g, 1, 20);
-  for (size_t i = 0; i < packets; ++i) {
-    const bool init = pick(g, 0, 5) == 0;
-    size_t len = init ? 9 : 11;
-    if (pick(g, 0, 40) == 0) len = pick(g, 1, static_cast<uint32_t>(len) - 1);  // truncated
+  uint8_t seq = 0;
+  auto put = [&](const std::vector<uint8_t>& b, bool cut) {
+    size_t len = b.size();
+    if (cut) len = pick(g, 1, static_cast<uint32_t>(len) - 1);
     for (size_t k = 0; k < len; ++k) {
-      uint8_t b = static_cast<uint8_t>(pick(g, 0, 255));
-      if (k == 0) b = init ? 0xFF : static_cast<uint8_t>(pick(g, 0, 254));
-      j.bytes.push_back({t, b});
+      j.bytes.push_back({t, b[k]});
       const uint32_t kind = pick(g, 0, 999);
-      t += kind < 800   ? pick(g, 1, 40)
-           : kind < 998 ? pick(g, 40, 2000)
-                        : pick(g, 4'999'990, 5'000'010);  // at the watchdog limit
+      t += kind < 900   ? pick(g, 1, 40)
+           : kind < 999 ? pick(g, 40, 2000)
+                        : pick(g, 4'999'990, 5'000'010);
     }
-    if (len < (init ? 9u : 11u)) t += 5'000'001;  // let the watchdog drop it
+    if (cut) t += 5'000'001;
+  };
+  for (size_t i = 0; i < packets; ++i) {
+    const uint32_t what = pick(g, 0, 39);
+    const bool cut = pick(g, 0, 60) == 0;
+    std::vector<uint8_t> b;
+    if (what < 4) {  // v1 (noise in v2 mode)
+      const auto init =
+          fpgacnc::protocol::v1::pack_init(pick(g, 0, 0xFFFF'FFFFu), pick(g, 0, 0xFFFF'FFFFu));
+      const auto mot = fpgacnc::protocol::v1::pack_motion(
+          static_cast<uint8_t>(pick(g, 0, 3)), static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)),
+          static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)), static_cast<uint16_t>(pick(g, 0, 65535)));
+      b = what == 0 ? std::vector<uint8_t>(init.begin(), init.end())
+                    : std::vector<uint8_t>(mot.begin(), mot.end());
+    } else if (what == 4) {  // noise
+      for (uint32_t k = pick(g, 1, 4); k > 0; --k)
+        b.push_back(static_cast<uint8_t>(pick(g, 0, 255)));
+    } else {
+      const uint32_t sk = pick(g, 0, 19);
+      const uint8_t s = sk < 15   ? seq
+                        : sk < 18 ? static_cast<uint8_t>(seq - pick(g, 1, 130))
+                                  : static_cast<uint8_t>(seq + pick(g, 1, 126));
+      const uint32_t ty = pick(g, 0, 29);
+      std::vector<uint8_t> p;
+      uint8_t type;
+      if (ty < 12) {
+        type = kLine;
+        const int k = static_cast<int>(pick(g, 0, 4));
+        std::vector<int32_t> st(static_cast<size_t>(k));
+        for (auto& x : st) x = static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)) >> pick(g, 0, 31);
+        bool fits = true;
+        for (int32_t x : st) fits = fits && x >= -32768 && x <= 32767;
+        p = line_payload(static_cast<uint8_t>(pick(g, 0, 3)), static_cast<uint8_t>(pick(g, 0, 255)),
+                         pick(g, 0, 0xFFFF'FFFFu), st, fits && pick(g, 0, 1));
+        if (pick(g, 0, 15) == 0) p[0] |= static_cast<uint8_t>(4u << pick(g, 0, 4));  // reserved bit
+      } else if (ty < 15) {
+        type = kDwell;
+        p = dwell_payload(pick(g, 0, 0xFFFF'FFFFu));
+      } else if (ty < 17) {
+        type = kNumerators;
+        p = numerators_payload(pick(g, 0, 0xFFFF'FFFFu), pick(g, 0, 0xFFFF'FFFFu));
+      } else if (ty < 19) {
+        type = kConfigAxis;
+        p = config_axis_payload(
+            static_cast<uint8_t>(pick(g, 0, 5)),
+            AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
+      } else {
+        const uint8_t types[] = {kHello, kStatusQuery, kFaultClear, kRelease, 0x12,
+                                 0x13,   0x20,         0x2F,        0x07,     0x83};
+        type = types[pick(g, 0, 9)];
+      }
+      if (pick(g, 0, 19) == 0) p.resize(pick(g, 0, 20));  // wrong length for the type
+      b = frame(s, type, p);
+      if (pick(g, 0, 24) == 0)
+        b[pick(g, 2, static_cast<uint32_t>(b.size()) - 1)] ^=
+            static_cast<uint8_t>(1u << pick(g, 0, 7));
+      if (pick(g, 0, 40) == 0) b = {kSync, static_cast<uint8_t>(pick(g, 65, 255))};  // LEN > 64
+      if (sk < 15) ++seq;  // (the decoder's next_seq may lag: rejected frames)
+    }
+    put(b, cut && b.size() > 1);
   }
-  for (size_t i = 0; i < packets; ++i)
-    j.accept_delay.push_back(pick(g, 0, 3) == 0 ? pick(g, 0, 600) : pick(g, 0, 3));
+  for (int k = 0; k < 6; ++k) {
+    const Cycle a = pick(g, 0, static_cast<uint32_t>(std::min<Cycle>(t, 0xFFFF'FFFF)));
+    j.full.push_back({a, a + pick(g, 0, 3000)});
+  }
   return j;
 }
 
@@ -278,7 +374,7 @@ int sc_main(int argc, char* argv[]) {
     std::string name;
     UartRxJob rx;
     UartTxJob tx;
-    DecoderJob dec;
+    FrameJob dec;
     PrepJob prep;
     int kind;
     BlockRun twin;
@@ -302,13 +398,8 @@ int sc_main(int argc, char* argv[]) {
                          {}});
     cases.push_back(
         Case{fmt::format("uart_tx 3000000 seed {}", seed + s), {}, tx_job(g, 300), {}, {}, 1, {}});
-    cases.push_back(Case{fmt::format("packet_decoder_v1 seed {}", seed + s),
-                         {},
-                         {},
-                         decoder_job(g, 150),
-                         {},
-                         2,
-                         {}});
+    cases.push_back(
+        Case{fmt::format("frame_decoder seed {}", seed + s), {}, {}, frame_job(g, 150), {}, 2, {}});
     cases.push_back(
         Case{fmt::format("segment_prep seed {}", seed + s), {}, {}, {}, prep_job(g, 150), 3, {}});
   }
@@ -341,12 +432,32 @@ int sc_main(int argc, char* argv[]) {
         }
         case 2: {
           b.dec.reset();
-          b.delays = &c.dec.accept_delay;
+          b.frame_job = &c.dec;
+          std::vector<std::pair<Cycle, DecoderState>> log;
+          b.dec.log = &log;
           for (const auto& [t, byte] : c.dec.bytes) {
             RxByte x{byte};
             transport(b.to_dec, b.gp, b.clk, x, t);
           }
-          c.twin.counters = {b.dec.timeouts, b.dec.overruns};
+          b.dec.log = nullptr;
+          // v1 packets queued, and the state whenever it changes (last value per edge).
+          for (Cycle p : b.dec.v1_packet_cycles)
+            c.twin.events.push_back(BlockEvent{p, {kEvV1, 0, 0, 0, 0, 0}});
+          uint64_t prev[3] = {0, 0, 0};
+          for (size_t k = 0; k < log.size(); ++k) {
+            if (k + 1 < log.size() && log[k + 1].first == log[k].first) continue;
+            const DecoderState& st = log[k].second;
+            const uint64_t v[3] = {st.next_seq | static_cast<uint64_t>(st.v2_mode) << 8,
+                                   st.frames_ok | static_cast<uint64_t>(st.crc_errors) << 16 |
+                                       static_cast<uint64_t>(st.length_errors) << 32 |
+                                       static_cast<uint64_t>(st.unknown_types) << 48,
+                                   st.timeouts | static_cast<uint64_t>(st.overruns) << 16 |
+                                       static_cast<uint64_t>(st.noise) << 32};
+            if (v[0] == prev[0] && v[1] == prev[1] && v[2] == prev[2]) continue;
+            c.twin.events.push_back(
+                BlockEvent{log[k].first, {kEvState | v[0], v[1], v[2], 0, 0, 0}});
+            for (int x = 0; x < 3; ++x) prev[x] = v[x];
+          }
           break;
         }
         default: {
@@ -387,7 +498,7 @@ int sc_main(int argc, char* argv[]) {
   for (Case& c : cases) {
     BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
                  : c.kind == 1 ? rtl_uart_tx(c.tx)
-                 : c.kind == 2 ? rtl_decoder(c.dec)
+                 : c.kind == 2 ? rtl_frame_decoder(c.dec)
                                : rtl_prep(c.prep);
     events += r.events.size() + r.edges.size();
     const std::string d = compare(r, c.twin);

@@ -3,7 +3,7 @@
 // edges and released on cycle -20, as in every harness; cycle 1 is the first stimulus edge.
 #include <memory>
 
-#include "Vpacket_decoder_v1.h"
+#include "Vframe_decoder.h"
 #include "Vsegment_prep.h"
 #include "Vuart_rx_115200.h"
 #include "Vuart_rx_3000000.h"
@@ -93,38 +93,69 @@ BlockRun rtl_uart_tx(const UartTxJob& j) {
   return r;
 }
 
-BlockRun rtl_decoder(const DecoderJob& j) {
+BlockRun rtl_frame_decoder(const FrameJob& j) {
   auto ctx = std::make_unique<VerilatedContext>();
-  auto m = std::make_unique<Vpacket_decoder_v1>(ctx.get(), "packet_decoder_v1");
+  auto m = std::make_unique<Vframe_decoder>(ctx.get(), "frame_decoder");
   m->s_axis_tvalid = 0;
-  m->m_axis_tready = 0;
+  m->m_axis_tready = 1;
   reset(*m);
   BlockRun r;
-  size_t next = 0, k = 0;
-  Cycle accept_at = -1;  // accept edge of the pending command (-1: none seen)
+  size_t next = 0;
   const Cycle end = j.bytes.empty() ? 0 : j.bytes.back().first + 200;
+  std::array<uint64_t, 3> state{0, 0, 0}, counters{0, 0, 0};
+  uint64_t pend[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // strobes seen after the previous edge
   for (Cycle c = 1; c <= end; ++c) {
     // A byte valid after edge b is on the input for edge b + 1.
     const bool byte = next < j.bytes.size() && j.bytes[next].first + 1 == c;
     m->s_axis_tvalid = byte ? 1 : 0;
     m->s_axis_tdata = byte ? j.bytes[next].second : 0;
     if (byte) ++next;
-    m->m_axis_tready = (accept_at == c) ? 1 : 0;
+    m->m_axis_tready = j.full_at(c - 1) ? 0 : 1;  // room after edge c - 1
+    m->eval();
+    const bool write = m->m_axis_tvalid && m->m_axis_tready;
+    std::array<uint32_t, 6> d{};
+    for (int w = 0; w < 6; ++w) d[w] = m->m_axis_tdata[w];
     clock_once(*m);
-    if (accept_at == c) accept_at = -1;
-    if (m->timeout) ++r.counters[0];
-    if (m->overrun) ++r.counters[1];
-    if (m->m_axis_tvalid && accept_at < 0) {
-      const auto& d = m->m_axis_tdata;  // {code[1:0], a[31:0], b[31:0], feed[15:0]}: 82 bits
-      const uint64_t feed = d[0] & 0xffff;
-      const uint64_t b = (d[0] >> 16) | (static_cast<uint64_t>(d[1] & 0xffff) << 16);
-      const uint64_t a = (d[1] >> 16) | (static_cast<uint64_t>(d[2] & 0xffff) << 16);
-      const uint64_t code = (d[2] >> 16) & 3;
-      r.events.push_back(BlockEvent{
-          c, {code | static_cast<uint64_t>(m->m_axis_tuser) << 8, a, b | feed << 32, 0}});
-      accept_at = c + 1 + (k < j.accept_delay.size() ? j.accept_delay[k] : 0);
-      ++k;
+    if (write) {
+      r.events.push_back(
+          BlockEvent{c,
+                     {kEvWrite | (d[5] & 0x1fffu), d[4], d[0] | static_cast<uint64_t>(d[1]) << 32,
+                      d[2] | static_cast<uint64_t>(d[3]) << 32, 0, 0}});
     }
+    // Counters count the strobes of the previous clock (cnc_core's registers).
+    counters[0] += pend[0] | pend[1] << 16 | pend[2] << 32 | pend[3] << 48;
+    counters[1] += pend[4] | pend[5] << 16 | pend[6] << 32;
+    for (auto& x : pend) x = 0;
+    const std::array<uint64_t, 3> now{m->next_seq | static_cast<uint64_t>(m->v2_mode) << 8,
+                                      counters[0], counters[1]};
+    if (now != state) {
+      r.events.push_back(BlockEvent{c, {kEvState | now[0], now[1], now[2], 0, 0, 0}});
+      state = now;
+    }
+    auto req = [&](uint64_t kind, uint64_t seq = 0, uint64_t reason = 0) {
+      r.events.push_back(BlockEvent{c, {kEvReq | kind | seq << 8 | reason << 16, 0, 0, 0, 0, 0}});
+    };
+    // Request kinds as the twin numbers them (frame_decoder.h kReq*).
+    if (m->hello) req(0);
+    if (m->status_req) req(1);
+    if (m->nak) req(2, m->nak_seq, m->nak_reason);
+    if (m->ack_req) req(3);
+    if (m->fault_clear) req(4);
+    if (m->cfg_wr)
+      r.events.push_back(
+          BlockEvent{c,
+                     {kEvCfg | m->cfg_axis,
+                      (m->cfg_data >> 48) | ((m->cfg_data >> 32) & 0xffff) << 16 |
+                          ((m->cfg_data >> 16) & 0xffff) << 32 | (m->cfg_data & 0xffff) << 48,
+                      0, 0, 0, 0}});
+    if (m->v1_packet) r.events.push_back(BlockEvent{c, {kEvV1, 0, 0, 0, 0, 0}});
+    pend[0] = m->frame_ok;
+    pend[1] = m->crc_error;
+    pend[2] = m->length_error;
+    pend[3] = m->unknown_type;
+    pend[4] = m->timeout;
+    pend[5] = m->v1_overrun;
+    pend[6] = m->noise;
   }
   m->final();
   return r;

@@ -18,7 +18,6 @@
 #include "executor_job.h"
 #include "fpgacnc/twins/compare.h"
 #include "fpgacnc/twins/segment_executor.h"
-#include "fpgacnc/twins/status_ack.h"
 
 using namespace fpgacnc::twins;
 

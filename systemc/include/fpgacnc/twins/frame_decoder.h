@@ -88,6 +88,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     history_.emplace_back(-1'000'000'000, s_);
     packets = frames = fifo_writes = cfg_writes = 0;
     packet_done_cycles.clear();
+    v1_packet_cycles.clear();
     naks.clear();
   }
   // Fires the watchdog of a started packet if it expires before edge h (no byte can come
@@ -107,13 +108,16 @@ class FrameDecoderTwin : public sc_core::sc_module {
   // v1 packets queued and v2 frames that passed every check (cnc_core packet_count): the edge
   // after which the strobe is high.
   std::vector<Cycle> packet_done_cycles;
-  std::vector<std::pair<Cycle, RespReq>> naks;  // every NAK request
+  std::vector<Cycle> v1_packet_cycles;                         // v1 packets only
+  std::vector<std::pair<Cycle, RespReq>> naks;                 // every NAK request
+  std::vector<std::pair<Cycle, DecoderState>>* log = nullptr;  // every state change, when set
 
  private:
   enum class Kind { None, V1Init, V1Motion, V2 };
 
   // The state as it is after edge c (history in edge order).
   void commit(Cycle c, const DecoderState& st) {
+    if (log) log->emplace_back(c, st);
     if (history_.back().first == c)
       history_.back().second = st;
     else
@@ -202,7 +206,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     e.v2 = false;
     e.kind = init ? kEntryNumerators : kEntryMotion;
     e.code = init ? 0 : code_;
-    e.power = 0xFF;
+    e.power = init ? 0 : 0xFF;
     e.steps[0] = be32(&buf_[0]);
     e.steps[1] = be32(&buf_[4]);
     e.t = init ? 0 : be16(&buf_[8]);
@@ -213,6 +217,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
     ++packets;
     packet_done_cycles.push_back(take + kDecoderResp);
+    v1_packet_cycles.push_back(take + kDecoderResp);
   }
 
   void v2_byte(Cycle take, uint8_t byte) {
