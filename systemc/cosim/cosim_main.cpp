@@ -236,7 +236,8 @@ Job corpus_job(const std::string& path, size_t max_moves, double feed_override) 
 // A random v2 session: CONFIG_AXIS for every axis (the cfg port's timing, or new timing applied
 // while the board is idle), NUMERATORS, then `segments` FIFO frames: LINEs on 1..4 axes (SHORT
 // and int32, codes 0..3, power 0..255, T at, above and below n_dom * min_period: clamped),
-// LINEs without steps, zero-length LINEs, DWELLs, NUMERATORS; mostly back to back (the FIFO
+// LINEs without steps, zero-length LINEs, DWELLs, NUMERATORS, CONFIG_AXIS with new timing
+// mid-stream (active once the board is quiet); mostly back to back (the FIFO
 // fills and the window closes), some gaps (the FIFO runs dry); a few frames corrupted once (NAK
 // BAD_CRC, go-back-N), line noise between frames, frames cut short followed by silence past the
 // watchdog (NAK TIMEOUT); some jobs ignore the credit (NAK FIFO_FULL, duplicates).
@@ -267,7 +268,10 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
     const uint32_t kind = pick(g, 0, 19);
     const auto code = static_cast<uint8_t>(pick(g, 0, 3));
     const auto power = static_cast<uint8_t>(pick(g, 0, 4) == 0 ? 0 : pick(g, 1, 255));
-    if (kind == 0) {
+    if (kind == 0 && pick(g, 0, 3) == 0) {  // new step timing for an axis, mid-stream
+      it = V2Item{kConfigAxis, config_axis_payload(static_cast<uint8_t>(pick(g, 0, kAxes - 1)),
+                                                   random_timing(g))};
+    } else if (kind == 0) {
       it = V2Item{kDwell, dwell_payload(pick(g, 0, 3) == 0 ? 0 : pick(g, 1, 20'000))};
     } else if (kind == 1) {
       it = numerators();

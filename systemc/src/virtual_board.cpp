@@ -70,6 +70,7 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   enc_.tx.bind(tx_.bytes);
   enc_.state.bind(state_);
   enc_.before_decide = [this](Cycle d) { dec_.advance(d); };
+  dec_.before_write = [this](Cycle w) { apply_cfg(w); };
   tx_.line.bind(host_line_);
   host_line_.register_b_transport(this, &VirtualBoard::on_line);
   cfg_.register_b_transport(this, &VirtualBoard::on_cfg);
@@ -92,6 +93,7 @@ void VirtualBoard::reset(const std::array<AxisTiming, kAxes>& timing) {
   tx_.reset();
   tx_bytes_.clear();
   entry_ends_.clear();
+  pending_cfg_.clear();
 }
 
 void VirtualBoard::on_line(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
@@ -99,12 +101,25 @@ void VirtualBoard::on_line(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay
   gp.set_response_status(tlm::TLM_OK_RESPONSE);
 }
 
-// CONFIG_AXIS: the twins read the step timing from p_ when they compute; a new setting acts on
-// what is computed after it (the host sends it while the board is idle).
-void VirtualBoard::on_cfg(tlm::tlm_generic_payload& gp, sc_core::sc_time&) {
-  const CfgAxis c = payload<CfgAxis>(gp);
-  p_.timing[c.axis] = c.timing;
+// CONFIG_AXIS (cnc_core "configuration"): the write strobe after edge c lands in the shadow
+// registers on c + 1; they become active on an edge e >= c + 2 at which the board was quiet
+// after e - 1 (FIFO empty, nothing prepared, executor and every STEP pulse idle), so a setting
+// never changes in the middle of a move. The twins read the step timing from p_ when they
+// compute, and compute everything an entry causes when it is written: a pending setting is
+// applied before the next FIFO write W if the board was quiet before it (e <= W).
+void VirtualBoard::on_cfg(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
+  pending_cfg_.emplace_back(clk_.at(delay), payload<CfgAxis>(gp));
   gp.set_response_status(tlm::TLM_OK_RESPONSE);
+}
+
+void VirtualBoard::apply_cfg(Cycle write) {
+  if (pending_cfg_.empty()) return;
+  Cycle quiet = exec_.idle_edge(write);
+  if (!fifo_.pops().empty()) quiet = std::max(quiet, fifo_.pops().back());
+  const Cycle active = std::max(pending_cfg_.back().first + 2, quiet + 1);
+  if (active > write) return;
+  for (const auto& [c, a] : pending_cfg_) p_.timing[a.axis] = a.timing;
+  pending_cfg_.clear();
 }
 
 // The live state a response frame starting on edge d is filled in from: registers as they are

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <deque>
+#include <functional>
 
 #include "fpgacnc/twins/tlm_common.h"
 
@@ -111,6 +112,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
   std::vector<Cycle> v1_packet_cycles;                         // v1 packets only
   std::vector<std::pair<Cycle, RespReq>> naks;                 // every NAK request
   std::vector<std::pair<Cycle, DecoderState>>* log = nullptr;  // every state change, when set
+  std::function<void(Cycle)> before_write;  // called with the edge of each FIFO write
 
  private:
   enum class Kind { None, V1Init, V1Motion, V2 };
@@ -155,6 +157,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
   // Written on L + kDecoderWrite if the FIFO has room after edge L.
   bool write_fifo(Cycle l, FifoEntry e) {
     if (fifo_level(l) >= depth_) return false;
+    if (before_write) before_write(l + kDecoderWrite);
     transport(fifo, gp_, clk_, e, l + kDecoderWrite);
     ++fifo_writes;
     return true;

@@ -88,12 +88,19 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   }
 
   void on_status(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
-    Cycle e = idle_after_;
-    for (int a = 0; a < kAxes; ++a) e = std::max(e, pulse_state(a, clk_.at(delay)).idle_from);
-    payload<ExecIdle>(gp).edge = e;
+    payload<ExecIdle>(gp).edge = idle_edge(clk_.at(delay));
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
   }
 
+ public:
+  // The edge after which the executor and every STEP pulse are idle (exec_idle), asked at `now`.
+  Cycle idle_edge(Cycle now) {
+    Cycle e = idle_after_;
+    for (int a = 0; a < kAxes; ++a) e = std::max(e, pulse_state(a, now).idle_from);
+    return e;
+  }
+
+ private:
   void on_segment(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const Segment s = payload<Segment>(gp);
     const Cycle valid = clk_.at(delay);
