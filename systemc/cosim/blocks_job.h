@@ -74,9 +74,42 @@ struct PrepJob {
   std::vector<int64_t> busy;
 };
 
+// response_encoder (N_AXES 4, 50 MHz, 115 200 baud): request strobes high after their edge (kind
+// 0 IDENT, 1 STATUS, 2 NAK with seq and reason, 3 ACK, 5 done (a v2 entry completed), 6 v1 move
+// done; segments_done counts the done strobes as cnc_core does, on the edge after); the live
+// inputs as they are after the listed edges; the transmitter takes a byte when ready and is busy
+// `busy[k]` edges after taking byte k. Events: (take edge, byte).
+struct EncoderJob {
+  struct Strobe {
+    Cycle edge;
+    uint8_t kind, seq, reason;
+  };
+  struct Live {
+    Cycle edge;
+    uint8_t next_seq, state;
+    uint16_t level;
+    std::array<int32_t, kAxes> position;
+    std::array<uint16_t, 9> counters;
+  };
+  std::vector<Strobe> strobes;  // by edge
+  std::vector<Live> live;       // by edge, the first at edge 0
+  std::vector<int64_t> busy;
+  const Live& live_after(Cycle c) const {
+    size_t k = 0;
+    while (k + 1 < live.size() && live[k + 1].edge <= c) ++k;
+    return live[k];
+  }
+  uint32_t done_after(Cycle c) const {  // segments_done register after edge c
+    uint32_t n = 0;
+    for (const auto& s : strobes) n += s.kind == 5 && s.edge + 1 <= c ? 1 : 0;
+    return n;
+  }
+};
+
 BlockRun rtl_uart_rx(const UartRxJob& j);
 BlockRun rtl_uart_tx(const UartTxJob& j);
 BlockRun rtl_frame_decoder(const FrameJob& j);
 BlockRun rtl_prep(const PrepJob& j);
+BlockRun rtl_encoder(const EncoderJob& j);
 
 }  // namespace fpgacnc::twins

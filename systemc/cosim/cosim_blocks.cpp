@@ -8,7 +8,9 @@
 // tx edges must be identical; the first difference is printed with its cycle.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <functional>
+#include <limits>
 #include <random>
 #include <systemc>
 
@@ -17,6 +19,7 @@
 #include "blocks_job.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/twins/frame_decoder.h"
+#include "fpgacnc/twins/response_encoder.h"
 #include "fpgacnc/twins/segment_prep.h"
 #include "fpgacnc/twins/uart_rx.h"
 #include "fpgacnc/twins/uart_tx.h"
@@ -43,6 +46,12 @@ SC_MODULE(BlockBench) {
   UartRxTwin rx115, rx3m;
   UartTxTwin tx;
   FrameDecoderTwin dec;
+  ResponseEncoderTwin enc;
+  tlm_utils::simple_initiator_socket<BlockBench> to_enc_req, to_enc_done, to_enc_applied;
+  tlm_utils::simple_target_socket<BlockBench> enc_tx, enc_state;
+  const EncoderJob* enc_job = nullptr;
+  Cycle enc_ready = 0;
+  size_t enc_k = 0;
   SegmentPrepTwin prep;
   tlm_utils::simple_initiator_socket<BlockBench> to_rx115, to_rx3m, to_tx, to_dec, to_prep;
   tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_prep,
@@ -61,6 +70,7 @@ SC_MODULE(BlockBench) {
         rx3m("uart_rx_3000000", clk, p3m),
         tx("uart_tx", clk, p3m, pins),
         dec("frame_decoder", clk, p115),
+        enc("response_encoder", clk, EncoderParams{}),
         prep("segment_prep", clk, pprep) {
     prep.report_applied = true;
     pins.record_tx = true;
@@ -73,6 +83,13 @@ SC_MODULE(BlockBench) {
     rx3m.bytes.bind(from_rx3m);
     tx.line.bind(from_tx);
     dec.fifo.bind(dec_fifo);
+    to_enc_req.bind(enc.req);
+    to_enc_done.bind(enc.done);
+    to_enc_applied.bind(enc.applied);
+    enc.tx.bind(enc_tx);
+    enc.state.bind(enc_state);
+    enc_tx.register_b_transport(this, &BlockBench::on_enc_tx);
+    enc_state.register_b_transport(this, &BlockBench::on_enc_state);
     dec.resp.bind(dec_resp);
     dec.cfg.bind(dec_cfg);
     prep.segments.bind(from_prep);
@@ -121,6 +138,38 @@ SC_MODULE(BlockBench) {
                       e.t, e.steps[0] | static_cast<uint64_t>(e.steps[1]) << 32,
                       e.steps[2] | static_cast<uint64_t>(e.steps[3]) << 32, 0, 0}});
     }
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  // The transmitter of an EncoderJob: takes a byte when ready, busy `busy[k]` edges after.
+  void on_enc_tx(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const Cycle a = std::max(clk.at(d), enc_ready);
+    out->events.push_back(BlockEvent{a, {payload<TxByte>(g).byte, 0, 0, 0, 0, 0}});
+    enc_ready = a + (enc_k < enc_job->busy.size() ? enc_job->busy[enc_k] : 1);
+    ++enc_k;
+    d = clk.delay_to(a);
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  // The live inputs as they are after edge d - 1 (the encoder snapshots on d).
+  void on_enc_state(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const auto& l = enc_job->live_after(clk.at(d) - 1);
+    StatusSnapshot s{};
+    s.dec.next_seq = l.next_seq;
+    s.dec.v2_mode = (l.state >> 1) & 1;
+    s.busy = l.state & 1;
+    s.fault = (l.state >> 2) & 1;
+    s.fifo_level = l.level;
+    s.position = l.position;
+    const auto& k = l.counters;
+    s.dec.frames_ok = k[0];
+    s.dec.crc_errors = k[1];
+    s.dec.length_errors = k[2];
+    s.dec.unknown_types = k[3];
+    s.dec.timeouts = k[4];
+    s.frame_errors = k[5];
+    s.dec.overruns = k[6];
+    s.dec.noise = k[7];
+    s.clamped = k[8];
+    payload<StatusSnapshot>(g) = s;
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_resp(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
@@ -318,6 +367,44 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
   return j;
 }
 
+// Request strobes in bursts (several kinds on one edge, on consecutive edges, while a frame is
+// going out) and alone; NAKs replacing pending NAKs; v1 0xAA among frames; live inputs changing
+// between and during frames; a transmitter ready again 1..40 edges after a byte.
+EncoderJob encoder_job(std::mt19937_64& g, size_t n) {
+  EncoderJob j;
+  auto live = [&](Cycle e) {
+    EncoderJob::Live l{};
+    l.edge = e;
+    l.next_seq = static_cast<uint8_t>(pick(g, 0, 255));
+    l.state = static_cast<uint8_t>(pick(g, 0, 7));
+    l.level = static_cast<uint16_t>(pick(g, 0, 64));
+    for (auto& p : l.position) p = static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu));
+    for (auto& k : l.counters) k = static_cast<uint16_t>(pick(g, 0, 65535));
+    return l;
+  };
+  j.live.push_back(live(0));
+  Cycle t = pick(g, 1, 50);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t burst = pick(g, 0, 3) == 0 ? pick(g, 2, 6) : 1;
+    for (uint32_t b = 0; b < burst; ++b) {
+      const uint32_t w = pick(g, 0, 19);
+      const uint8_t kind = w < 2 ? 0 : w < 4 ? 1 : w < 8 ? 2 : w < 12 ? 3 : w < 17 ? 5 : 6;
+      bool dup = false;
+      for (const auto& s : j.strobes) dup = dup || (s.edge == t && s.kind == kind);
+      if (!dup)
+        j.strobes.push_back(EncoderJob::Strobe{t, kind, static_cast<uint8_t>(pick(g, 0, 255)),
+                                               static_cast<uint8_t>(pick(g, 1, 7))});
+      if (pick(g, 0, 1)) ++t;
+    }
+    if (pick(g, 0, 2) == 0) j.live.push_back(live(t + pick(g, 0, 100)));
+    t += pick(g, 0, 3) == 0 ? pick(g, 1, 5) : pick(g, 1, 3000);
+    std::sort(j.live.begin(), j.live.end(),
+              [](const auto& a, const auto& b) { return a.edge < b.edge; });
+  }
+  for (size_t i = 0; i < 40 * n; ++i) j.busy.push_back(pick(g, 1, 40));
+  return j;
+}
+
 // Every kind of FIFO entry: v1 motion (steps up to 2^32 - 1, feed 0), v2 LINE (four signed axes,
 // T from 0 to long, clamped or not), numerators (v1 and v2), dwells (T = 0 too), kind 3; random
 // DIR setup/hold so that dir_fast goes both ways.
@@ -378,6 +465,7 @@ int sc_main(int argc, char* argv[]) {
     PrepJob prep;
     int kind;
     BlockRun twin;
+    EncoderJob enc{};
   };
   std::vector<Case> cases;
   for (uint64_t s = 0; s < seeds; ++s) {
@@ -402,6 +490,9 @@ int sc_main(int argc, char* argv[]) {
         Case{fmt::format("frame_decoder seed {}", seed + s), {}, {}, frame_job(g, 150), {}, 2, {}});
     cases.push_back(
         Case{fmt::format("segment_prep seed {}", seed + s), {}, {}, {}, prep_job(g, 150), 3, {}});
+    Case e{fmt::format("response_encoder seed {}", seed + s), {}, {}, {}, {}, 4, {}};
+    e.enc = encoder_job(g, 300);
+    cases.push_back(std::move(e));
   }
   BlockBench b("bench");
   b.body = [&] {
@@ -428,6 +519,24 @@ int sc_main(int argc, char* argv[]) {
             c.twin.events.push_back(BlockEvent{accept, {byte, 0, 0, 0}});
           }
           c.twin.edges = b.pins.take_sorted();
+          break;
+        }
+        case 4: {
+          b.enc.reset();
+          b.enc_job = &c.enc;
+          b.enc_ready = 0;
+          b.enc_k = 0;
+          for (const auto& st : c.enc.strobes) {
+            if (st.kind >= 5) {
+              SegDone d{st.kind == 5};
+              transport(b.to_enc_done, b.gp, b.clk, d, st.edge);
+            } else {
+              RespReq r{st.kind, st.seq, st.reason};
+              transport(b.to_enc_req, b.gp, b.clk, r, st.edge);
+            }
+          }
+          while (b.enc.step(std::numeric_limits<Cycle>::max())) {
+          }
           break;
         }
         case 2: {
@@ -499,13 +608,19 @@ int sc_main(int argc, char* argv[]) {
     BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
                  : c.kind == 1 ? rtl_uart_tx(c.tx)
                  : c.kind == 2 ? rtl_frame_decoder(c.dec)
+                 : c.kind == 4 ? rtl_encoder(c.enc)
                                : rtl_prep(c.prep);
     events += r.events.size() + r.edges.size();
     const std::string d = compare(r, c.twin);
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       sort_events(r);
       sort_events(c.twin);
-      for (size_t i = 0; i < std::max(r.events.size(), c.twin.events.size()) && i < 12; ++i) {
+      size_t first = 0;
+      while (first < r.events.size() && first < c.twin.events.size() &&
+             r.events[first] == c.twin.events[first])
+        ++first;
+      for (size_t i = first > 10 ? first - 10 : 0;
+           i < std::max(r.events.size(), c.twin.events.size()) && i < first + 4; ++i) {
         auto pr = [](const std::vector<BlockEvent>& v, size_t i) {
           return i < v.size() ? fmt::format("{} {:x} {:x}", v[i].cycle, v[i].v[0], v[i].v[1])
                               : std::string("-");

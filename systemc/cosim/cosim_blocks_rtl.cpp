@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "Vframe_decoder.h"
+#include "Vresponse_encoder.h"
 #include "Vsegment_prep.h"
 #include "Vuart_rx_115200.h"
 #include "Vuart_rx_3000000.h"
@@ -229,6 +230,66 @@ BlockRun rtl_prep(const PrepJob& j) {
     }
   }
   r.counters = {m->numerator_x, m->numerator_y};
+  m->final();
+  return r;
+}
+
+BlockRun rtl_encoder(const EncoderJob& j) {
+  auto ctx = std::make_unique<VerilatedContext>();
+  auto m = std::make_unique<Vresponse_encoder>(ctx.get(), "response_encoder");
+  m->m_axis_tready = 0;
+  reset(*m);
+  BlockRun r;
+  size_t next = 0, k = 0;
+  Cycle ready_from = 0, quiet = 0;
+  const Cycle last = j.strobes.empty() ? 0 : j.strobes.back().edge;
+  for (Cycle c = 1;; ++c) {
+    // Inputs for edge c: strobes high after edge c - 1, live values after edge c - 1.
+    m->ident_req = m->status_req = m->nak_req = m->ack_req = m->done_evt = m->v1_ack = 0;
+    while (next < j.strobes.size() && j.strobes[next].edge < c - 1) ++next;
+    for (size_t i = next; i < j.strobes.size() && j.strobes[i].edge == c - 1; ++i) {
+      const auto& s = j.strobes[i];
+      if (s.kind == 0) m->ident_req = 1;
+      if (s.kind == 1) m->status_req = 1;
+      if (s.kind == 2) {
+        m->nak_req = 1;
+        m->nak_seq = s.seq;
+        m->nak_reason = s.reason;
+      }
+      if (s.kind == 3) m->ack_req = 1;
+      if (s.kind == 5) m->done_evt = 1;
+      if (s.kind == 6) m->v1_ack = 1;
+    }
+    const auto& l = j.live_after(c - 1);
+    m->next_seq = l.next_seq;
+    m->fifo_level = l.level;
+    m->fifo_free = static_cast<uint16_t>(64 - l.level);
+    m->segments_done = j.done_after(c - 1);
+    m->state = l.state;
+    m->faults = (l.state >> 2) & 1;
+    for (int a = 0; a < kAxes; ++a) m->position[a] = static_cast<uint32_t>(l.position[a]);
+    // counters[143:128] is the first (frames ok): word 4 bits 31:16
+    for (int w = 0; w < 5; ++w) m->counters[w] = 0;
+    for (int i = 0; i < 9; ++i) {
+      const int bit = 16 * (8 - i);
+      m->counters[bit / 32] |= static_cast<uint32_t>(l.counters[i]) << (bit % 32);
+    }
+    m->m_axis_tready = c >= ready_from ? 1 : 0;
+    m->eval();
+    const bool take = m->m_axis_tvalid && m->m_axis_tready;
+    const uint8_t byte = m->m_axis_tdata;
+    clock_once(*m);
+    if (take) {
+      r.events.push_back(BlockEvent{c, {byte, 0, 0, 0, 0, 0}});
+      ready_from = c + (k < j.busy.size() ? j.busy[k] : 1);
+      ++k;
+    }
+    if (c > last + 2 && !m->m_axis_tvalid) {
+      if (++quiet > 200) break;
+    } else {
+      quiet = 0;
+    }
+  }
   m->final();
   return r;
 }

@@ -14,7 +14,8 @@
 // state as it is after edge d - 1 (initiator `state`: StatusSnapshot, read in time order); an
 // ACK also clears a pending DONE; a request sampled on d itself stays pending. The bytes go to
 // uart_tx (initiator `tx`) back to back: byte 0 offered for edge d + 1, byte k for the edge
-// after byte k-1 was taken. The device SEQ counts the frames sent.
+// after byte k-1 was taken, the CRC high byte for the second edge after the last payload byte
+// was taken (the CRC folds that byte first). The device SEQ counts the frames sent.
 //
 // No wait(): the twin computes frames lazily, in time order, when the board calls step(limit)
 // with a limit before which every input is known (the host's next byte cannot act earlier).
@@ -248,11 +249,12 @@ class ResponseEncoderTwin : public sc_core::sc_module {
       frames.push_back(SentFrame{d, out});
     }
     Cycle offer = d + 1, taken = d;
-    for (uint8_t b : out) {
-      TxByte t{b};
+    for (size_t i = 0; i < out.size(); ++i) {
+      TxByte t{out[i]};
       taken = transport(tx, gp_, clk_, t, offer);
       if (out.size() == 1) ack_cycles.push_back(taken);
-      offer = taken + 1;
+      // The CRC high byte is ready one clock after the last byte it covers was taken.
+      offer = taken + (out.size() > 1 && i + 3 == out.size() ? 2 : 1);
     }
     free_at_ = taken + 1;
   }

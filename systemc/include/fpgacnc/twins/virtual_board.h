@@ -85,7 +85,7 @@ class VirtualBoard : public sc_core::sc_module {
   std::vector<Cycle> entry_ends_;                   // per FIFO entry: busy until after this edge
   std::vector<std::pair<Cycle, CfgAxis>> pending_cfg_;  // CONFIG_AXIS in the shadow registers
   void apply_cfg(Cycle write);
-  int64_t tx_centre9_ = 0;                          // start -> stop-bit centre
+  int64_t tx_centre9_ = 0;  // start -> stop-bit centre
   sc_core::sc_time quantum_{1, sc_core::SC_MS};
 };
 
