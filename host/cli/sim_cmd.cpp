@@ -1,16 +1,20 @@
-// fpgacnc sim FILE [--model tlm|rtl|both] [--config F] [--feed-override PCT] [--plot OUT]
-//                  [--edges OUT.csv] [--max-moves N]
+// fpgacnc sim FILE [--model tlm|rtl|both] [--protocol v1|v2] [--config F] [--feed-override PCT]
+//                  [--plot OUT] [--edges OUT.csv] [--max-moves N]
 //
 // Runs a whole job without a port: on the virtual platform (`tlm`: the SystemC twins of
-// cnc_core, systemc/) or on the Verilated RTL (`rtl`), with the same stop-and-wait host
-// schedule, and prints the simulated board's report (cycles, clocks/s, edges, moves, net steps
-// against the plan) and plot. `both` runs the two and compares them event by event.
+// cnc_core, systemc/) or on the Verilated RTL (`rtl`), with the same host schedule (v1
+// stop-and-wait, or a v2 streaming session: HELLO, CONFIG_AXIS, NUMERATORS, LINE/DWELL under
+// the sliding window, STATUS_QUERY, RELEASE), and prints the simulated board's report (cycles,
+// clocks/s, edges, moves, net steps against the plan) and plot. `both` runs the two and compares
+// them event by event. The protocol defaults to the configuration's (`auto` means v2 here: the
+// simulated board speaks both).
 #include <fmt/format.h>
 
 #include <memory>
 
 #include "commands.h"
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/simboard/plot.h"
 #include "fpgacnc/twins/compare.h"
 #include "fpgacnc/twins/rtl_runner.h"
@@ -28,6 +32,7 @@ namespace {
 struct SimArgs {
   std::string input;
   std::string model = "tlm";
+  std::string protocol;
   CommonOptions common;
   std::string plot_path;
   std::string edges_csv;
@@ -47,6 +52,11 @@ void report(const std::string& model, const twins::RunResult& r, const plan::Pla
         "simulated board ({}): {} framing errors, {} packet timeouts, {} overruns, {} step timing "
         "violations\n",
         model, r.frame_errors, r.timeouts, r.overruns, r.violations);
+  if (r.device_frames)
+    fmt::print(
+        "v2 ({}): {} device frames, {} NAKs, {} frames retransmitted, {} segments done, {} "
+        "segments started with zero idle clocks, {} clamped\n",
+        model, r.device_frames, r.naks, r.retransmitted, r.segments_done, r.zero_gap, r.clamped);
   if (!r.error.empty()) fmt::print("simulated board ({}): host error: {}\n", model, r.error);
   const auto pulses = simboard::step_pulses(r.edges);
   fmt::print("step pulses ({}): X {} Y {} Z {} E {}\n", model, pulses[0], pulses[1], pulses[2],
@@ -69,7 +79,9 @@ void run_sim(const SimArgs& a) {
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
-  const protocol::v1::Job job = protocol::v1::pack_job(p);
+  std::string proto = a.protocol.empty() ? cfg.protocol : a.protocol;
+  if (proto == "auto") proto = "v2";
+  if (proto != "v1" && proto != "v2") throw std::invalid_argument("--protocol must be v1 or v2");
   twins::CoreParams params;
   params.clk_hz = cfg.clk_hz;
   params.baud = cfg.baud;
@@ -77,18 +89,32 @@ void run_sim(const SimArgs& a) {
   for (auto& t : params.timing)
     t = twins::AxisTiming{cfg.step_timing.step_high, cfg.step_timing.step_low,
                           cfg.step_timing.dir_setup, cfg.step_timing.dir_hold};
-  const auto packets = twins::job_packets(job, cfg.clk_hz, a.max_moves);
-  fmt::print("sim {}: {} motion packets{}, model {}\n", a.input, packets.size() - 1,
-             a.max_moves != SIZE_MAX ? fmt::format(" (first {})", a.max_moves) : "", a.model);
+  twins::HostScript script;
+  if (proto == "v1") {
+    const protocol::v1::Job job = protocol::v1::pack_job(p);
+    script.v1 = twins::job_packets(job, cfg.clk_hz, a.max_moves);
+    fmt::print("sim {}: {} motion packets{}, model {}, protocol v1\n", a.input,
+               script.v1.size() - 1,
+               a.max_moves != SIZE_MAX ? fmt::format(" (first {})", a.max_moves) : "", a.model);
+  } else {
+    const protocol::v2::Job job = protocol::v2::pack_job(p, cfg);
+    script.v2 = twins::job_script(job, a.max_moves);
+    fmt::print(
+        "sim {}: {} LINE/DWELL frames{} (sum of T {} clocks for the whole job), model {}, "
+        "protocol v2\n",
+        a.input, job.frames.size() - 1,
+        a.max_moves != SIZE_MAX ? fmt::format(" (first {})", a.max_moves) : "", job.total_t,
+        a.model);
+  }
   std::fflush(stdout);
 
   std::unique_ptr<twins::RunResult> rtl, tlm;
   if (a.model != "tlm") {
-    rtl = std::make_unique<twins::RunResult>(twins::run_on_rtl(params, packets));
+    rtl = std::make_unique<twins::RunResult>(twins::run_on_rtl(params, script));
     report("rtl", *rtl, p, cfg, static_cast<double>(cfg.clk_hz));
   }
   if (a.model != "rtl") {
-    tlm = std::make_unique<twins::RunResult>(twins::run_on_twins(params, packets));
+    tlm = std::make_unique<twins::RunResult>(twins::run_on_twins(params, script));
     report("tlm", *tlm, p, cfg, static_cast<double>(cfg.clk_hz));
   }
   if (rtl && tlm) {
@@ -125,6 +151,9 @@ void register_sim(CLI::App& app) {
   sub->add_option("FILE", args->input, "G-code file or step-file CSV")->required();
   sub->add_option("--model", args->model, "tlm (twins, fast), rtl (Verilated cnc_core) or both")
       ->check(CLI::IsMember({"tlm", "rtl", "both"}));
+  sub->add_option("--protocol", args->protocol,
+                  "v1 (stop-and-wait) or v2 (streaming; default, and what `auto` means here)")
+      ->check(CLI::IsMember({"v1", "v2", "auto"}));
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));

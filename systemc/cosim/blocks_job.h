@@ -15,7 +15,7 @@ namespace fpgacnc::twins {
 // One output event of a block: its edge and up to four values (meaning per block).
 struct BlockEvent {
   Cycle cycle;
-  std::array<uint64_t, 4> v;
+  std::array<uint64_t, 6> v;
   bool operator==(const BlockEvent&) const = default;
 };
 struct BlockRun {
@@ -33,34 +33,83 @@ struct UartRxJob {
 struct UartTxJob {
   std::vector<std::pair<uint8_t, int64_t>> offers;
 };
-// packet_decoder_v1 (100 ms watchdog): bytes valid after their edge (one clock each); command
-// k is taken `accept_delay[k]` edges after the first edge it could be; events (valid edge,
-// code | init << 8, a, b | feed << 32).
-struct DecoderJob {
+// frame_decoder (100 ms watchdog): bytes valid after their edge (one clock each); the FIFO has
+// no room in the clocks after the edges of `full` ([first, last] intervals). Events: FIFO writes
+// (write edge, 1 << 60 | v2 << 12 | kind << 10 | code << 8 | power, t, steps X | Y << 32,
+// steps Z | E << 32), requests (strobe edge, 2 << 60 | kind | seq << 8 | reason << 16), CONFIG
+// writes (edge, 4 << 60 | axis, high | low << 16 | setup << 32 | hold << 48), v1 packets queued
+// (edge, 5 << 60) and the decoder state when it changes (edge after which it holds, 3 << 60 |
+// next_seq | v2 mode << 8, frames ok | CRC errors << 16 | length errors << 32 | unknown types
+// << 48, timeouts | overruns << 16 | noise << 32): the counters as cnc_core counts the strobes.
+struct FrameJob {
   std::vector<std::pair<Cycle, uint8_t>> bytes;
-  std::vector<int64_t> accept_delay;
+  std::vector<std::pair<Cycle, Cycle>> full;
+  bool full_at(Cycle c) const {
+    for (const auto& [a, b] : full)
+      if (c >= a && c <= b) return true;
+    return false;
+  }
 };
-// segment_prep: command k valid from (previous accept, or 0) + gap; segment j taken
+inline constexpr uint64_t kEvWrite = 1ull << 60, kEvReq = 2ull << 60, kEvState = 3ull << 60,
+                          kEvCfg = 4ull << 60, kEvV1 = 5ull << 60;
+
+// segment_prep: FIFO entry k valid from (previous accept, or 0) + gap; segment j taken
 // `accept_delay[j]` edges late; exec_idle low from its accept edge A_j until after edge
-// A_j + busy[j] (the executor running it), so an init waits. Events: accepts (edge, k, 0, 0) and
-// segments (valid edge, period | code << 32 | dir << 40, total, steps_x | steps_y << 32).
+// A_j + busy[j] (the executor running it), so a numerators entry waits. Events: accepts (edge,
+// k), segments (valid edge, period | code << 32 | dir << 40 | dir_fast << 44 | v2 << 45 |
+// power << 48, total, steps X | Y << 32, steps Z | E << 32, tmn X, tmn E), init_applied
+// (edge, 1 << 62 | init_v2) and clamped (edge, 1 << 63) strobes.
 struct PrepCommand {
-  bool init;
-  uint8_t code;
-  uint32_t a, b;
-  uint16_t feed;
+  bool v2;
+  uint8_t kind, code, power;
+  uint32_t t;
+  std::array<uint32_t, kAxes> steps;
   int64_t gap;
 };
 struct PrepJob {
   uint32_t min_half;  // min_period = 2 * min_half via STEP high = low = min_half on X
+  std::array<uint16_t, kAxes> setup{}, hold{};
   std::vector<PrepCommand> commands;
   std::vector<int64_t> accept_delay;
   std::vector<int64_t> busy;
 };
 
+// response_encoder (N_AXES 4, 50 MHz, 115 200 baud): request strobes high after their edge (kind
+// 0 IDENT, 1 STATUS, 2 NAK with seq and reason, 3 ACK, 5 done (a v2 entry completed), 6 v1 move
+// done; segments_done counts the done strobes as cnc_core does, on the edge after); the live
+// inputs as they are after the listed edges; the transmitter takes a byte when ready and is busy
+// `busy[k]` edges after taking byte k. Events: (take edge, byte).
+struct EncoderJob {
+  struct Strobe {
+    Cycle edge;
+    uint8_t kind, seq, reason;
+  };
+  struct Live {
+    Cycle edge;
+    uint8_t next_seq, state;
+    uint16_t level;
+    std::array<int32_t, kAxes> position;
+    std::array<uint16_t, 9> counters;
+  };
+  std::vector<Strobe> strobes;  // by edge
+  std::vector<Live> live;       // by edge, the first at edge 0
+  std::vector<int64_t> busy;
+  const Live& live_after(Cycle c) const {
+    size_t k = 0;
+    while (k + 1 < live.size() && live[k + 1].edge <= c) ++k;
+    return live[k];
+  }
+  uint32_t done_after(Cycle c) const {  // segments_done register after edge c
+    uint32_t n = 0;
+    for (const auto& s : strobes) n += s.kind == 5 && s.edge + 1 <= c ? 1 : 0;
+    return n;
+  }
+};
+
 BlockRun rtl_uart_rx(const UartRxJob& j);
 BlockRun rtl_uart_tx(const UartTxJob& j);
-BlockRun rtl_decoder(const DecoderJob& j);
+BlockRun rtl_frame_decoder(const FrameJob& j);
 BlockRun rtl_prep(const PrepJob& j);
+BlockRun rtl_encoder(const EncoderJob& j);
 
 }  // namespace fpgacnc::twins

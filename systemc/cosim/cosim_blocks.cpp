@@ -8,17 +8,22 @@
 // tx edges must be identical; the first difference is printed with its cycle.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <functional>
+#include <limits>
 #include <random>
 #include <systemc>
 
 #include "cosim_args.h"
 
 #include "blocks_job.h"
-#include "fpgacnc/twins/packet_decoder_v1.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/twins/frame_decoder.h"
+#include "fpgacnc/twins/response_encoder.h"
 #include "fpgacnc/twins/segment_prep.h"
 #include "fpgacnc/twins/uart_rx.h"
 #include "fpgacnc/twins/uart_tx.h"
+#include "fpgacnc/twins/v2_frames.h"
 
 using namespace fpgacnc::twins;
 
@@ -40,11 +45,18 @@ SC_MODULE(BlockBench) {
   PinRecorder pins;
   UartRxTwin rx115, rx3m;
   UartTxTwin tx;
-  PacketDecoderTwin dec;
+  FrameDecoderTwin dec;
+  ResponseEncoderTwin enc;
+  tlm_utils::simple_initiator_socket<BlockBench> to_enc_req, to_enc_done, to_enc_applied;
+  tlm_utils::simple_target_socket<BlockBench> enc_tx, enc_state;
+  const EncoderJob* enc_job = nullptr;
+  Cycle enc_ready = 0;
+  size_t enc_k = 0;
   SegmentPrepTwin prep;
   tlm_utils::simple_initiator_socket<BlockBench> to_rx115, to_rx3m, to_tx, to_dec, to_prep;
-  tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_dec, from_prep,
-      prep_status;
+  tlm_utils::simple_target_socket<BlockBench> from_rx115, from_rx3m, from_tx, from_prep,
+      prep_status, prep_applied, dec_fifo, dec_resp, dec_cfg;
+  const FrameJob* frame_job = nullptr;
   tlm::tlm_generic_payload gp;
   BlockRun* out = nullptr;
   const std::vector<int64_t>* delays = nullptr;
@@ -57,8 +69,10 @@ SC_MODULE(BlockBench) {
       : rx115("uart_rx_115200", clk, p115),
         rx3m("uart_rx_3000000", clk, p3m),
         tx("uart_tx", clk, p3m, pins),
-        dec("packet_decoder_v1", clk, p115),
+        dec("frame_decoder", clk, p115),
+        enc("response_encoder", clk, EncoderParams{}),
         prep("segment_prep", clk, pprep) {
+    prep.report_applied = true;
     pins.record_tx = true;
     to_rx115.bind(rx115.pin);
     to_rx3m.bind(rx3m.pin);
@@ -68,13 +82,26 @@ SC_MODULE(BlockBench) {
     rx115.bytes.bind(from_rx115);
     rx3m.bytes.bind(from_rx3m);
     tx.line.bind(from_tx);
-    dec.commands.bind(from_dec);
+    dec.fifo.bind(dec_fifo);
+    to_enc_req.bind(enc.req);
+    to_enc_done.bind(enc.done);
+    to_enc_applied.bind(enc.applied);
+    enc.tx.bind(enc_tx);
+    enc.state.bind(enc_state);
+    enc_tx.register_b_transport(this, &BlockBench::on_enc_tx);
+    enc_state.register_b_transport(this, &BlockBench::on_enc_state);
+    dec.resp.bind(dec_resp);
+    dec.cfg.bind(dec_cfg);
     prep.segments.bind(from_prep);
     prep.exec_status.bind(prep_status);
+    prep.applied.bind(prep_applied);
+    prep_applied.register_b_transport(this, &BlockBench::on_applied);
     from_rx115.register_b_transport(this, &BlockBench::on_byte);
     from_rx3m.register_b_transport(this, &BlockBench::on_byte);
     from_tx.register_b_transport(this, &BlockBench::on_ok);
-    from_dec.register_b_transport(this, &BlockBench::on_command);
+    dec_fifo.register_b_transport(this, &BlockBench::on_fifo);
+    dec_resp.register_b_transport(this, &BlockBench::on_resp);
+    dec_cfg.register_b_transport(this, &BlockBench::on_cfg);
     from_prep.register_b_transport(this, &BlockBench::on_segment);
     prep_status.register_b_transport(this, &BlockBench::on_status);
     SC_THREAD(run);
@@ -98,13 +125,69 @@ SC_MODULE(BlockBench) {
     out->events.push_back(BlockEvent{clk.at(d), {payload<RxByte>(g).byte, 0, 0, 0}});
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
-  void on_command(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
-    const Command& c = payload<Command>(g);
-    const Cycle v = clk.at(d);
-    out->events.push_back(BlockEvent{v,
-                                     {c.code | static_cast<uint64_t>(c.init) << 8, c.a,
-                                      c.b | static_cast<uint64_t>(c.feed) << 32, 0}});
-    d = clk.delay_to(v + 1 + next_delay());
+  void on_fifo(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const Cycle c = clk.at(d);
+    if (g.is_read()) {
+      payload<FifoLevel>(g).level = frame_job->full_at(c) ? v2::kFifoDepth : 0;
+    } else {
+      const FifoEntry& e = payload<FifoEntry>(g);
+      out->events.push_back(
+          BlockEvent{c,
+                     {kEvWrite | (e.v2 ? 1u << 12 : 0u) | static_cast<uint64_t>(e.kind) << 10 |
+                          static_cast<uint64_t>(e.code) << 8 | e.power,
+                      e.t, e.steps[0] | static_cast<uint64_t>(e.steps[1]) << 32,
+                      e.steps[2] | static_cast<uint64_t>(e.steps[3]) << 32, 0, 0}});
+    }
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  // The transmitter of an EncoderJob: takes a byte when ready, busy `busy[k]` edges after.
+  void on_enc_tx(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const Cycle a = std::max(clk.at(d), enc_ready);
+    out->events.push_back(BlockEvent{a, {payload<TxByte>(g).byte, 0, 0, 0, 0, 0}});
+    enc_ready = a + (enc_k < enc_job->busy.size() ? enc_job->busy[enc_k] : 1);
+    ++enc_k;
+    d = clk.delay_to(a);
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  // The live inputs as they are after edge d - 1 (the encoder snapshots on d).
+  void on_enc_state(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const auto& l = enc_job->live_after(clk.at(d) - 1);
+    StatusSnapshot s{};
+    s.dec.next_seq = l.next_seq;
+    s.dec.v2_mode = (l.state >> 1) & 1;
+    s.busy = l.state & 1;
+    s.fault = (l.state >> 2) & 1;
+    s.fifo_level = l.level;
+    s.position = l.position;
+    const auto& k = l.counters;
+    s.dec.frames_ok = k[0];
+    s.dec.crc_errors = k[1];
+    s.dec.length_errors = k[2];
+    s.dec.unknown_types = k[3];
+    s.dec.timeouts = k[4];
+    s.frame_errors = k[5];
+    s.dec.overruns = k[6];
+    s.dec.noise = k[7];
+    s.clamped = k[8];
+    payload<StatusSnapshot>(g) = s;
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_resp(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const RespReq& r = payload<RespReq>(g);
+    out->events.push_back(BlockEvent{clk.at(d),
+                                     {kEvReq | r.kind | static_cast<uint64_t>(r.seq) << 8 |
+                                          static_cast<uint64_t>(r.reason) << 16,
+                                      0, 0, 0, 0, 0}});
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_cfg(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const CfgAxis& a = payload<CfgAxis>(g);
+    out->events.push_back(BlockEvent{clk.at(d),
+                                     {kEvCfg | a.axis,
+                                      a.timing.high | static_cast<uint64_t>(a.timing.low) << 16 |
+                                          static_cast<uint64_t>(a.timing.setup) << 32 |
+                                          static_cast<uint64_t>(a.timing.hold) << 48,
+                                      0, 0, 0, 0}});
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_segment(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
@@ -114,13 +197,21 @@ SC_MODULE(BlockBench) {
     for (int a = 0; a < kAxes; ++a) dir |= s.dir[a] ? 1u << a : 0u;
     out->events.push_back(
         BlockEvent{v,
-                   {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40, s.total,
-                    s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32, s.tmn[0]}});
+                   {s.period | static_cast<uint64_t>(s.code) << 32 | dir << 40 |
+                        static_cast<uint64_t>(s.dir_fast) << 44 |
+                        static_cast<uint64_t>(s.v2) << 45 | static_cast<uint64_t>(s.power) << 48,
+                    s.total, s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32,
+                    s.steps[2] | static_cast<uint64_t>(s.steps[3]) << 32, s.tmn[0], s.tmn[3]}});
     // The executor takes it `accept_delay` edges late and is busy `busy` edges after that.
     const size_t j = delay_index;
     const Cycle accept = v + 1 + next_delay();
     exec_idle_after = accept + (busy && j < busy->size() ? (*busy)[j] : 0);
     d = clk.delay_to(accept);
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_applied(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    out->events.push_back(
+        BlockEvent{clk.at(d), {1ull << 62 | (payload<Applied>(g).v2 ? 1u : 0u), 0, 0, 0}});
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_status(tlm::tlm_generic_payload & g, sc_core::sc_time&) {
@@ -188,44 +279,168 @@ UartTxJob tx_job(std::mt19937_64& g, size_t n) {
   return j;
 }
 
-DecoderJob decoder_job(std::mt19937_64& g, size_t packets) {
-  DecoderJob j;
+// A byte stream for frame_decoder: v1 packets (motion codes 0..3, inits), v2 frames of every
+// type (good ones, SEQ in order, duplicated and ahead; reserved types, wrong lengths, reserved
+// flag bits, axis >= N_AXES, a corrupted CRC, LEN > 64), noise, packets and frames cut short
+// followed by a pause at the watchdog limit (5 000 000 +- 10 clocks), bytes back to back or with
+// random gaps; the FIFO full in random intervals (v1 overruns, NAK FIFO_FULL).
+FrameJob frame_job(std::mt19937_64& g, size_t packets) {
+  using namespace fpgacnc::twins::v2;
+  FrameJob j;
   Cycle t = pick(g, 1, 20);
-  for (size_t i = 0; i < packets; ++i) {
-    const bool init = pick(g, 0, 5) == 0;
-    size_t len = init ? 9 : 11;
-    if (pick(g, 0, 40) == 0) len = pick(g, 1, static_cast<uint32_t>(len) - 1);  // truncated
+  uint8_t seq = 0;
+  auto put = [&](const std::vector<uint8_t>& b, bool cut) {
+    size_t len = b.size();
+    if (cut) len = pick(g, 1, static_cast<uint32_t>(len) - 1);
     for (size_t k = 0; k < len; ++k) {
-      uint8_t b = static_cast<uint8_t>(pick(g, 0, 255));
-      if (k == 0) b = init ? 0xFF : static_cast<uint8_t>(pick(g, 0, 254));
-      j.bytes.push_back({t, b});
+      j.bytes.push_back({t, b[k]});
       const uint32_t kind = pick(g, 0, 999);
-      t += kind < 800   ? pick(g, 1, 40)
-           : kind < 998 ? pick(g, 40, 2000)
-                        : pick(g, 4'999'990, 5'000'010);  // at the watchdog limit
+      t += kind < 900   ? pick(g, 1, 40)
+           : kind < 999 ? pick(g, 40, 2000)
+                        : pick(g, 4'999'990, 5'000'010);
     }
-    if (len < (init ? 9u : 11u)) t += 5'000'001;  // let the watchdog drop it
+    if (cut) t += 5'000'001;
+  };
+  for (size_t i = 0; i < packets; ++i) {
+    const uint32_t what = pick(g, 0, 39);
+    const bool cut = pick(g, 0, 60) == 0;
+    std::vector<uint8_t> b;
+    if (what < 4) {  // v1 (noise in v2 mode)
+      const auto init =
+          fpgacnc::protocol::v1::pack_init(pick(g, 0, 0xFFFF'FFFFu), pick(g, 0, 0xFFFF'FFFFu));
+      const auto mot = fpgacnc::protocol::v1::pack_motion(
+          static_cast<uint8_t>(pick(g, 0, 3)), static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)),
+          static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)), static_cast<uint16_t>(pick(g, 0, 65535)));
+      b = what == 0 ? std::vector<uint8_t>(init.begin(), init.end())
+                    : std::vector<uint8_t>(mot.begin(), mot.end());
+    } else if (what == 4) {  // noise
+      for (uint32_t k = pick(g, 1, 4); k > 0; --k)
+        b.push_back(static_cast<uint8_t>(pick(g, 0, 255)));
+    } else {
+      const uint32_t sk = pick(g, 0, 19);
+      const uint8_t s = sk < 15   ? seq
+                        : sk < 18 ? static_cast<uint8_t>(seq - pick(g, 1, 130))
+                                  : static_cast<uint8_t>(seq + pick(g, 1, 126));
+      const uint32_t ty = pick(g, 0, 29);
+      std::vector<uint8_t> p;
+      uint8_t type;
+      if (ty < 12) {
+        type = kLine;
+        const int k = static_cast<int>(pick(g, 0, 4));
+        std::vector<int32_t> st(static_cast<size_t>(k));
+        for (auto& x : st) x = static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)) >> pick(g, 0, 31);
+        bool fits = true;
+        for (int32_t x : st) fits = fits && x >= -32768 && x <= 32767;
+        p = line_payload(static_cast<uint8_t>(pick(g, 0, 3)), static_cast<uint8_t>(pick(g, 0, 255)),
+                         pick(g, 0, 0xFFFF'FFFFu), st, fits && pick(g, 0, 1));
+        if (pick(g, 0, 15) == 0) p[0] |= static_cast<uint8_t>(4u << pick(g, 0, 4));  // reserved bit
+      } else if (ty < 15) {
+        type = kDwell;
+        p = dwell_payload(pick(g, 0, 0xFFFF'FFFFu));
+      } else if (ty < 17) {
+        type = kNumerators;
+        p = numerators_payload(pick(g, 0, 0xFFFF'FFFFu), pick(g, 0, 0xFFFF'FFFFu));
+      } else if (ty < 19) {
+        type = kConfigAxis;
+        p = config_axis_payload(
+            static_cast<uint8_t>(pick(g, 0, 5)),
+            AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
+      } else {
+        const uint8_t types[] = {kHello, kStatusQuery, kFaultClear, kRelease, 0x12,
+                                 0x13,   0x20,         0x2F,        0x07,     0x83};
+        type = types[pick(g, 0, 9)];
+      }
+      if (pick(g, 0, 19) == 0) p.resize(pick(g, 0, 20));  // wrong length for the type
+      b = frame(s, type, p);
+      if (pick(g, 0, 24) == 0)
+        b[pick(g, 2, static_cast<uint32_t>(b.size()) - 1)] ^=
+            static_cast<uint8_t>(1u << pick(g, 0, 7));
+      if (pick(g, 0, 40) == 0) b = {kSync, static_cast<uint8_t>(pick(g, 65, 255))};  // LEN > 64
+      if (sk < 15) ++seq;  // (the decoder's next_seq may lag: rejected frames)
+    }
+    put(b, cut && b.size() > 1);
   }
-  for (size_t i = 0; i < packets; ++i)
-    j.accept_delay.push_back(pick(g, 0, 3) == 0 ? pick(g, 0, 600) : pick(g, 0, 3));
+  for (int k = 0; k < 6; ++k) {
+    const Cycle a = pick(g, 0, static_cast<uint32_t>(std::min<Cycle>(t, 0xFFFF'FFFF)));
+    j.full.push_back({a, a + pick(g, 0, 3000)});
+  }
   return j;
 }
 
+// Request strobes in bursts (several kinds on one edge, on consecutive edges, while a frame is
+// going out) and alone; NAKs replacing pending NAKs; v1 0xAA among frames; live inputs changing
+// between and during frames; a transmitter ready again 1..40 edges after a byte.
+EncoderJob encoder_job(std::mt19937_64& g, size_t n) {
+  EncoderJob j;
+  auto live = [&](Cycle e) {
+    EncoderJob::Live l{};
+    l.edge = e;
+    l.next_seq = static_cast<uint8_t>(pick(g, 0, 255));
+    l.state = static_cast<uint8_t>(pick(g, 0, 7));
+    l.level = static_cast<uint16_t>(pick(g, 0, 64));
+    for (auto& p : l.position) p = static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu));
+    for (auto& k : l.counters) k = static_cast<uint16_t>(pick(g, 0, 65535));
+    return l;
+  };
+  j.live.push_back(live(0));
+  Cycle t = pick(g, 1, 50);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t burst = pick(g, 0, 3) == 0 ? pick(g, 2, 6) : 1;
+    for (uint32_t b = 0; b < burst; ++b) {
+      const uint32_t w = pick(g, 0, 19);
+      const uint8_t kind = w < 2 ? 0 : w < 4 ? 1 : w < 8 ? 2 : w < 12 ? 3 : w < 17 ? 5 : 6;
+      bool dup = false;
+      for (const auto& s : j.strobes) dup = dup || (s.edge == t && s.kind == kind);
+      if (!dup)
+        j.strobes.push_back(EncoderJob::Strobe{t, kind, static_cast<uint8_t>(pick(g, 0, 255)),
+                                               static_cast<uint8_t>(pick(g, 1, 7))});
+      if (pick(g, 0, 1)) ++t;
+    }
+    if (pick(g, 0, 2) == 0) j.live.push_back(live(t + pick(g, 0, 100)));
+    t += pick(g, 0, 3) == 0 ? pick(g, 1, 5) : pick(g, 1, 3000);
+    std::sort(j.live.begin(), j.live.end(),
+              [](const auto& a, const auto& b) { return a.edge < b.edge; });
+  }
+  for (size_t i = 0; i < 40 * n; ++i) j.busy.push_back(pick(g, 1, 40));
+  return j;
+}
+
+// Every kind of FIFO entry: v1 motion (steps up to 2^32 - 1, feed 0), v2 LINE (four signed axes,
+// T from 0 to long, clamped or not), numerators (v1 and v2), dwells (T = 0 too), kind 3; random
+// DIR setup/hold so that dir_fast goes both ways.
 PrepJob prep_job(std::mt19937_64& g, size_t n) {
   PrepJob j;
   j.min_half = pick(g, 0, 3) == 0 ? pick(g, 1, 5000) : pick(g, 1, 100);
+  for (int a = 0; a < kAxes; ++a) {
+    j.setup[a] = static_cast<uint16_t>(pick(g, 0, 3) == 0 ? 0 : pick(g, 0, 3000));
+    j.hold[a] = static_cast<uint16_t>(pick(g, 0, 3) == 0 ? 0 : pick(g, 0, 3000));
+  }
+  auto steps = [&]() -> uint32_t {
+    const uint32_t k = pick(g, 0, 9);
+    return k == 0 ? 0 : k < 8 ? pick(g, 0, 100'000) : pick(g, 0, 0xFFFF'FFFFu);
+  };
   for (size_t i = 0; i < n; ++i) {
     PrepCommand c{};
-    c.init = pick(g, 0, 7) == 0;
+    const uint32_t what = pick(g, 0, 15);
+    c.v2 = pick(g, 0, 1) == 1;
     c.code = static_cast<uint8_t>(pick(g, 0, 3));
-    auto steps = [&]() -> uint32_t {
-      const uint32_t k = pick(g, 0, 9);
-      const uint32_t m = k == 0 ? 0 : k < 8 ? pick(g, 0, 100'000) : pick(g, 0, 0xFFFF'FFFFu);
-      return m;
-    };
-    c.a = c.init ? pick(g, 0, 0xFFFF'FFFFu) : steps();
-    c.b = c.init ? pick(g, 0, 0xFFFF'FFFFu) : steps();
-    c.feed = static_cast<uint16_t>(pick(g, 0, 9) == 0 ? 0 : pick(g, 1, 65535));
+    c.power = static_cast<uint8_t>(pick(g, 0, 255));
+    c.kind = what == 0 ? kEntryNumerators : what == 1 ? kEntryDwell : what == 2 ? 3 : kEntryMotion;
+    if (c.kind == kEntryNumerators) {
+      c.steps = {pick(g, 0, 0xFFFF'FFFFu), pick(g, 0, 0xFFFF'FFFFu), 0, 0};
+    } else if (c.kind == kEntryMotion && !c.v2) {
+      c.power = 0xFF;
+      c.steps = {steps(), steps(), 0, 0};
+      c.t = static_cast<uint16_t>(pick(g, 0, 9) == 0 ? 0 : pick(g, 1, 65535));
+    } else {
+      if (c.kind != kEntryMotion) c.v2 = true;
+      for (auto& s : c.steps) {
+        const uint32_t m = pick(g, 0, 2) == 0 ? 0 : pick(g, 0, 9) == 0 ? steps() : pick(g, 0, 5000);
+        s = pick(g, 0, 1) ? 0u - (m & 0x7FFF'FFFFu) : (m & 0x7FFF'FFFFu);
+      }
+      const uint32_t tk = pick(g, 0, 7);
+      c.t = tk == 0 ? 0 : tk < 3 ? pick(g, 0, 10'000) : pick(g, 0, 0xFFFF'FFFFu);
+    }
     c.gap = pick(g, 0, 1) ? 0 : pick(g, 0, 200);
     j.commands.push_back(c);
   }
@@ -246,10 +461,11 @@ int sc_main(int argc, char* argv[]) {
     std::string name;
     UartRxJob rx;
     UartTxJob tx;
-    DecoderJob dec;
+    FrameJob dec;
     PrepJob prep;
     int kind;
     BlockRun twin;
+    EncoderJob enc{};
   };
   std::vector<Case> cases;
   for (uint64_t s = 0; s < seeds; ++s) {
@@ -270,15 +486,13 @@ int sc_main(int argc, char* argv[]) {
                          {}});
     cases.push_back(
         Case{fmt::format("uart_tx 3000000 seed {}", seed + s), {}, tx_job(g, 300), {}, {}, 1, {}});
-    cases.push_back(Case{fmt::format("packet_decoder_v1 seed {}", seed + s),
-                         {},
-                         {},
-                         decoder_job(g, 150),
-                         {},
-                         2,
-                         {}});
+    cases.push_back(
+        Case{fmt::format("frame_decoder seed {}", seed + s), {}, {}, frame_job(g, 150), {}, 2, {}});
     cases.push_back(
         Case{fmt::format("segment_prep seed {}", seed + s), {}, {}, {}, prep_job(g, 150), 3, {}});
+    Case e{fmt::format("response_encoder seed {}", seed + s), {}, {}, {}, {}, 4, {}};
+    e.enc = encoder_job(g, 300);
+    cases.push_back(std::move(e));
   }
   BlockBench b("bench");
   b.body = [&] {
@@ -307,30 +521,74 @@ int sc_main(int argc, char* argv[]) {
           c.twin.edges = b.pins.take_sorted();
           break;
         }
+        case 4: {
+          b.enc.reset();
+          b.enc_job = &c.enc;
+          b.enc_ready = 0;
+          b.enc_k = 0;
+          for (const auto& st : c.enc.strobes) {
+            if (st.kind >= 5) {
+              SegDone d{st.kind == 5};
+              transport(b.to_enc_done, b.gp, b.clk, d, st.edge);
+            } else {
+              RespReq r{st.kind, st.seq, st.reason};
+              transport(b.to_enc_req, b.gp, b.clk, r, st.edge);
+            }
+          }
+          while (b.enc.step(std::numeric_limits<Cycle>::max())) {
+          }
+          break;
+        }
         case 2: {
           b.dec.reset();
-          b.delays = &c.dec.accept_delay;
+          b.frame_job = &c.dec;
+          std::vector<std::pair<Cycle, DecoderState>> log;
+          b.dec.log = &log;
           for (const auto& [t, byte] : c.dec.bytes) {
             RxByte x{byte};
             transport(b.to_dec, b.gp, b.clk, x, t);
           }
-          c.twin.counters = {b.dec.timeouts, b.dec.overruns};
+          b.dec.log = nullptr;
+          // v1 packets queued, and the state whenever it changes (last value per edge).
+          for (Cycle p : b.dec.v1_packet_cycles)
+            c.twin.events.push_back(BlockEvent{p, {kEvV1, 0, 0, 0, 0, 0}});
+          uint64_t prev[3] = {0, 0, 0};
+          for (size_t k = 0; k < log.size(); ++k) {
+            if (k + 1 < log.size() && log[k + 1].first == log[k].first) continue;
+            const DecoderState& st = log[k].second;
+            const uint64_t v[3] = {st.next_seq | static_cast<uint64_t>(st.v2_mode) << 8,
+                                   st.frames_ok | static_cast<uint64_t>(st.crc_errors) << 16 |
+                                       static_cast<uint64_t>(st.length_errors) << 32 |
+                                       static_cast<uint64_t>(st.unknown_types) << 48,
+                                   st.timeouts | static_cast<uint64_t>(st.overruns) << 16 |
+                                       static_cast<uint64_t>(st.noise) << 32};
+            if (v[0] == prev[0] && v[1] == prev[1] && v[2] == prev[2]) continue;
+            c.twin.events.push_back(
+                BlockEvent{log[k].first, {kEvState | v[0], v[1], v[2], 0, 0, 0}});
+            for (int x = 0; x < 3; ++x) prev[x] = v[x];
+          }
           break;
         }
         default: {
           b.pprep.timing[0].high = b.pprep.timing[0].low = c.prep.min_half;
           for (int a = 1; a < kAxes; ++a) b.pprep.timing[a] = AxisTiming{1, 1, 0, 0};
+          for (int a = 0; a < kAxes; ++a) {
+            b.pprep.timing[a].setup = c.prep.setup[a];
+            b.pprep.timing[a].hold = c.prep.hold[a];
+          }
           b.prep.reset();
           b.delays = &c.prep.accept_delay;
           b.busy = &c.prep.busy;
           Cycle accept = 0;
           for (size_t k = 0; k < c.prep.commands.size(); ++k) {
             const PrepCommand& p = c.prep.commands[k];
-            Command cmd{p.init, p.code, p.a, p.b, p.feed};
+            FifoEntry cmd{p.v2, p.kind, p.code, p.power, p.t, p.steps};
             accept = transport(b.to_prep, b.gp, b.clk, cmd, accept + p.gap);
             c.twin.events.push_back(BlockEvent{accept, {k, 0, 0, 0}});
           }
           c.twin.counters = {b.prep.num_x, b.prep.num_y};
+          for (Cycle e : b.prep.clamp_cycles)
+            c.twin.events.push_back(BlockEvent{e, {1ull << 63, 0, 0, 0}});
           break;
         }
       }
@@ -349,14 +607,20 @@ int sc_main(int argc, char* argv[]) {
   for (Case& c : cases) {
     BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
                  : c.kind == 1 ? rtl_uart_tx(c.tx)
-                 : c.kind == 2 ? rtl_decoder(c.dec)
+                 : c.kind == 2 ? rtl_frame_decoder(c.dec)
+                 : c.kind == 4 ? rtl_encoder(c.enc)
                                : rtl_prep(c.prep);
     events += r.events.size() + r.edges.size();
     const std::string d = compare(r, c.twin);
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       sort_events(r);
       sort_events(c.twin);
-      for (size_t i = 0; i < std::max(r.events.size(), c.twin.events.size()) && i < 12; ++i) {
+      size_t first = 0;
+      while (first < r.events.size() && first < c.twin.events.size() &&
+             r.events[first] == c.twin.events[first])
+        ++first;
+      for (size_t i = first > 10 ? first - 10 : 0;
+           i < std::max(r.events.size(), c.twin.events.size()) && i < first + 4; ++i) {
         auto pr = [](const std::vector<BlockEvent>& v, size_t i) {
           return i < v.size() ? fmt::format("{} {:x} {:x}", v[i].cycle, v[i].v[0], v[i].v[1])
                               : std::string("-");

@@ -3,7 +3,8 @@
 // edges and released on cycle -20, as in every harness; cycle 1 is the first stimulus edge.
 #include <memory>
 
-#include "Vpacket_decoder_v1.h"
+#include "Vframe_decoder.h"
+#include "Vresponse_encoder.h"
 #include "Vsegment_prep.h"
 #include "Vuart_rx_115200.h"
 #include "Vuart_rx_3000000.h"
@@ -93,38 +94,69 @@ BlockRun rtl_uart_tx(const UartTxJob& j) {
   return r;
 }
 
-BlockRun rtl_decoder(const DecoderJob& j) {
+BlockRun rtl_frame_decoder(const FrameJob& j) {
   auto ctx = std::make_unique<VerilatedContext>();
-  auto m = std::make_unique<Vpacket_decoder_v1>(ctx.get(), "packet_decoder_v1");
+  auto m = std::make_unique<Vframe_decoder>(ctx.get(), "frame_decoder");
   m->s_axis_tvalid = 0;
-  m->m_axis_tready = 0;
+  m->m_axis_tready = 1;
   reset(*m);
   BlockRun r;
-  size_t next = 0, k = 0;
-  Cycle accept_at = -1;  // accept edge of the pending command (-1: none seen)
+  size_t next = 0;
   const Cycle end = j.bytes.empty() ? 0 : j.bytes.back().first + 200;
+  std::array<uint64_t, 3> state{0, 0, 0}, counters{0, 0, 0};
+  uint64_t pend[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // strobes seen after the previous edge
   for (Cycle c = 1; c <= end; ++c) {
     // A byte valid after edge b is on the input for edge b + 1.
     const bool byte = next < j.bytes.size() && j.bytes[next].first + 1 == c;
     m->s_axis_tvalid = byte ? 1 : 0;
     m->s_axis_tdata = byte ? j.bytes[next].second : 0;
     if (byte) ++next;
-    m->m_axis_tready = (accept_at == c) ? 1 : 0;
+    m->m_axis_tready = j.full_at(c - 1) ? 0 : 1;  // room after edge c - 1
+    m->eval();
+    const bool write = m->m_axis_tvalid && m->m_axis_tready;
+    std::array<uint32_t, 6> d{};
+    for (int w = 0; w < 6; ++w) d[w] = m->m_axis_tdata[w];
     clock_once(*m);
-    if (accept_at == c) accept_at = -1;
-    if (m->timeout) ++r.counters[0];
-    if (m->overrun) ++r.counters[1];
-    if (m->m_axis_tvalid && accept_at < 0) {
-      const auto& d = m->m_axis_tdata;  // {code[1:0], a[31:0], b[31:0], feed[15:0]}: 82 bits
-      const uint64_t feed = d[0] & 0xffff;
-      const uint64_t b = (d[0] >> 16) | (static_cast<uint64_t>(d[1] & 0xffff) << 16);
-      const uint64_t a = (d[1] >> 16) | (static_cast<uint64_t>(d[2] & 0xffff) << 16);
-      const uint64_t code = (d[2] >> 16) & 3;
-      r.events.push_back(BlockEvent{
-          c, {code | static_cast<uint64_t>(m->m_axis_tuser) << 8, a, b | feed << 32, 0}});
-      accept_at = c + 1 + (k < j.accept_delay.size() ? j.accept_delay[k] : 0);
-      ++k;
+    if (write) {
+      r.events.push_back(
+          BlockEvent{c,
+                     {kEvWrite | (d[5] & 0x1fffu), d[4], d[0] | static_cast<uint64_t>(d[1]) << 32,
+                      d[2] | static_cast<uint64_t>(d[3]) << 32, 0, 0}});
     }
+    // Counters count the strobes of the previous clock (cnc_core's registers).
+    counters[0] += pend[0] | pend[1] << 16 | pend[2] << 32 | pend[3] << 48;
+    counters[1] += pend[4] | pend[5] << 16 | pend[6] << 32;
+    for (auto& x : pend) x = 0;
+    const std::array<uint64_t, 3> now{m->next_seq | static_cast<uint64_t>(m->v2_mode) << 8,
+                                      counters[0], counters[1]};
+    if (now != state) {
+      r.events.push_back(BlockEvent{c, {kEvState | now[0], now[1], now[2], 0, 0, 0}});
+      state = now;
+    }
+    auto req = [&](uint64_t kind, uint64_t seq = 0, uint64_t reason = 0) {
+      r.events.push_back(BlockEvent{c, {kEvReq | kind | seq << 8 | reason << 16, 0, 0, 0, 0, 0}});
+    };
+    // Request kinds as the twin numbers them (frame_decoder.h kReq*).
+    if (m->hello) req(0);
+    if (m->status_req) req(1);
+    if (m->nak) req(2, m->nak_seq, m->nak_reason);
+    if (m->ack_req) req(3);
+    if (m->fault_clear) req(4);
+    if (m->cfg_wr)
+      r.events.push_back(
+          BlockEvent{c,
+                     {kEvCfg | m->cfg_axis,
+                      (m->cfg_data >> 48) | ((m->cfg_data >> 32) & 0xffff) << 16 |
+                          ((m->cfg_data >> 16) & 0xffff) << 32 | (m->cfg_data & 0xffff) << 48,
+                      0, 0, 0, 0}});
+    if (m->v1_packet) r.events.push_back(BlockEvent{c, {kEvV1, 0, 0, 0, 0, 0}});
+    pend[0] = m->frame_ok;
+    pend[1] = m->crc_error;
+    pend[2] = m->length_error;
+    pend[3] = m->unknown_type;
+    pend[4] = m->timeout;
+    pend[5] = m->v1_overrun;
+    pend[6] = m->noise;
   }
   m->final();
   return r;
@@ -144,25 +176,36 @@ BlockRun rtl_prep(const PrepJob& j) {
   Cycle accept_at = -1;
   Cycle quiet = 0;
   Cycle idle_after = -1;  // exec_idle high from the clock after this edge
+  uint64_t setup = 0, hold = 0;
+  for (int a = 0; a < kAxes; ++a) {
+    setup |= static_cast<uint64_t>(j.setup[a]) << (16 * a);
+    hold |= static_cast<uint64_t>(j.hold[a]) << (16 * a);
+  }
+  m->cfg_dir_setup = setup;
+  m->cfg_dir_hold = hold;
   for (Cycle c = 1;; ++c) {
     m->exec_idle = c > idle_after ? 1 : 0;
     const bool offering = k < j.commands.size() && c > valid_from;
     if (offering) {
+      // { v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[4 x 32] }: 173 bits
       const PrepCommand& p = j.commands[k];
-      m->s_axis_tuser = p.init ? 1 : 0;
-      m->s_axis_tdata[0] = p.feed | (p.b << 16);
-      m->s_axis_tdata[1] = (p.b >> 16) | (p.a << 16);
-      m->s_axis_tdata[2] = (p.a >> 16) | (static_cast<uint32_t>(p.code & 3) << 16);
+      for (int a = 0; a < kAxes; ++a) m->s_axis_tdata[a] = p.steps[a];
+      m->s_axis_tdata[4] = p.t;
+      m->s_axis_tdata[5] = p.power | static_cast<uint32_t>(p.code & 3) << 8 |
+                           static_cast<uint32_t>(p.kind & 3) << 10 | (p.v2 ? 1u << 12 : 0u);
     }
     m->s_axis_tvalid = offering ? 1 : 0;
     m->m_axis_tready = (accept_at == c) ? 1 : 0;
-    m->eval();  // s_axis_tready depends on s_axis_tuser and exec_idle
+    m->eval();  // s_axis_tready depends on the entry's kind and exec_idle
     const bool take = offering && m->s_axis_tready;
     clock_once(*m);
     if (take) {
       r.events.push_back(BlockEvent{c, {k, 0, 0, 0}});
       if (++k < j.commands.size()) valid_from = c + j.commands[k].gap;
     }
+    if (m->init_applied)
+      r.events.push_back(BlockEvent{c, {1ull << 62 | (m->init_v2 ? 1u : 0u), 0, 0, 0}});
+    if (m->clamped) r.events.push_back(BlockEvent{c, {1ull << 63, 0, 0, 0}});
     if (accept_at == c) {
       accept_at = -1;
       idle_after = c + (seg - 1 < j.busy.size() ? j.busy[seg - 1] : 0);
@@ -171,9 +214,14 @@ BlockRun rtl_prep(const PrepJob& j) {
       r.events.push_back(BlockEvent{
           c,
           {m->m_axis_period | static_cast<uint64_t>(m->m_axis_code) << 32 |
-               static_cast<uint64_t>(m->m_axis_dir) << 40,
+               static_cast<uint64_t>(m->m_axis_dir) << 40 |
+               static_cast<uint64_t>(m->m_axis_dir_fast) << 44 |
+               static_cast<uint64_t>(m->m_axis_v2) << 45 |
+               static_cast<uint64_t>(m->m_axis_power) << 48,
            m->m_axis_total, m->m_axis_steps[0] | static_cast<uint64_t>(m->m_axis_steps[1]) << 32,
-           m->m_axis_tmn[0] | static_cast<uint64_t>(m->m_axis_tmn[1]) << 32}});
+           m->m_axis_steps[2] | static_cast<uint64_t>(m->m_axis_steps[3]) << 32,
+           m->m_axis_tmn[0] | static_cast<uint64_t>(m->m_axis_tmn[1]) << 32,
+           m->m_axis_tmn[6] | static_cast<uint64_t>(m->m_axis_tmn[7]) << 32}});
       accept_at = c + 1 + (seg < j.accept_delay.size() ? j.accept_delay[seg] : 0);
       ++seg;
     }
@@ -182,6 +230,66 @@ BlockRun rtl_prep(const PrepJob& j) {
     }
   }
   r.counters = {m->numerator_x, m->numerator_y};
+  m->final();
+  return r;
+}
+
+BlockRun rtl_encoder(const EncoderJob& j) {
+  auto ctx = std::make_unique<VerilatedContext>();
+  auto m = std::make_unique<Vresponse_encoder>(ctx.get(), "response_encoder");
+  m->m_axis_tready = 0;
+  reset(*m);
+  BlockRun r;
+  size_t next = 0, k = 0;
+  Cycle ready_from = 0, quiet = 0;
+  const Cycle last = j.strobes.empty() ? 0 : j.strobes.back().edge;
+  for (Cycle c = 1;; ++c) {
+    // Inputs for edge c: strobes high after edge c - 1, live values after edge c - 1.
+    m->ident_req = m->status_req = m->nak_req = m->ack_req = m->done_evt = m->v1_ack = 0;
+    while (next < j.strobes.size() && j.strobes[next].edge < c - 1) ++next;
+    for (size_t i = next; i < j.strobes.size() && j.strobes[i].edge == c - 1; ++i) {
+      const auto& s = j.strobes[i];
+      if (s.kind == 0) m->ident_req = 1;
+      if (s.kind == 1) m->status_req = 1;
+      if (s.kind == 2) {
+        m->nak_req = 1;
+        m->nak_seq = s.seq;
+        m->nak_reason = s.reason;
+      }
+      if (s.kind == 3) m->ack_req = 1;
+      if (s.kind == 5) m->done_evt = 1;
+      if (s.kind == 6) m->v1_ack = 1;
+    }
+    const auto& l = j.live_after(c - 1);
+    m->next_seq = l.next_seq;
+    m->fifo_level = l.level;
+    m->fifo_free = static_cast<uint16_t>(64 - l.level);
+    m->segments_done = j.done_after(c - 1);
+    m->state = l.state;
+    m->faults = (l.state >> 2) & 1;
+    for (int a = 0; a < kAxes; ++a) m->position[a] = static_cast<uint32_t>(l.position[a]);
+    // counters[143:128] is the first (frames ok): word 4 bits 31:16
+    for (int w = 0; w < 5; ++w) m->counters[w] = 0;
+    for (int i = 0; i < 9; ++i) {
+      const int bit = 16 * (8 - i);
+      m->counters[bit / 32] |= static_cast<uint32_t>(l.counters[i]) << (bit % 32);
+    }
+    m->m_axis_tready = c >= ready_from ? 1 : 0;
+    m->eval();
+    const bool take = m->m_axis_tvalid && m->m_axis_tready;
+    const uint8_t byte = m->m_axis_tdata;
+    clock_once(*m);
+    if (take) {
+      r.events.push_back(BlockEvent{c, {byte, 0, 0, 0, 0, 0}});
+      ready_from = c + (k < j.busy.size() ? j.busy[k] : 1);
+      ++k;
+    }
+    if (c > last + 2 && !m->m_axis_tvalid) {
+      if (++quiet > 200) break;
+    } else {
+      quiet = 0;
+    }
+  }
   m->final();
   return r;
 }

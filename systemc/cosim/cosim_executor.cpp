@@ -1,12 +1,12 @@
 // Block-level co-simulation of segment_executor (with its dda_linear and step_pulse) against
 // SegmentExecutorTwin + DdaLinearTwin + StepPulseTwin (CTest label cosim).
 //
-// The block is driven directly, on all four axes (v1 packets move only X and Y, so the system
-// co-simulation never moves Z and E) with random segments (up to 4 moving axes, random periods
-// at and above the pulse generators' minimum, moves with no steps) and random 0..600-clock step
-// timing per job. The RTL is the Verilated C++ model `vexec` (tb/core.cmake), clocked by the
+// The block is driven directly, on all four axes, with random QUEUED segment streams (see
+// random_job: back-to-back offers taken on the running segment's last tick, reversals with and
+// without dir_fast, dwells, zero-length entries, laser power 0..255) and random 1..600-clock
+// step timing per job. The RTL is the Verilated C++ model `vexec` (tb/core.cmake), clocked by the
 // harness; the twins run in SystemC. Each job compares STEP/DIR/LASER edges, seg_start,
-// seg_done and positions; the first difference is printed with its cycle.
+// seg_done, seg_done_v2 and positions; the first difference is printed with its cycle.
 #include <fmt/format.h>
 
 #include <memory>
@@ -18,7 +18,6 @@
 #include "executor_job.h"
 #include "fpgacnc/twins/compare.h"
 #include "fpgacnc/twins/segment_executor.h"
-#include "fpgacnc/twins/status_ack.h"
 
 using namespace fpgacnc::twins;
 
@@ -40,6 +39,12 @@ uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
   return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
 }
 
+// A queued stream as segment_prep produces it: v1-like segments (T = P * n), v2 segments with any
+// T >= n_dom * min_period, dwells, LINEs without steps, zero-length entries; random codes and
+// laser power (0 included); dir_fast computed as segment_prep does (from the DIR each axis will
+// have), periods sometimes long enough for fast reversals. Offers mostly back to back (valid
+// 0..2 edges after the previous accept: queued on the running segment's last tick), some right
+// around the previous segment's end, some late.
 Job random_job(uint64_t seed, size_t segments) {
   std::mt19937_64 g(seed);
   Job j;
@@ -51,24 +56,55 @@ Job random_job(uint64_t seed, size_t segments) {
   CoreParams p;
   p.timing = j.timing;
   const uint32_t minp = p.min_period();
+  uint32_t fast_p = 0;  // a period that makes every reversal fast
+  for (const auto& t : j.timing)
+    fast_p = std::max(fast_p, std::max(t.hold, 1u) + std::max(t.setup, 1u));
+  std::array<bool, kAxes> track{};  // DIR at the start of the next segment (reset: low)
+  uint64_t prev_t = 0;
   for (size_t i = 0; i < segments; ++i) {
     ExecSegment s{};
     s.code = static_cast<uint8_t>(pick(g, 0, 3));
-    const uint32_t big = pick(g, 0, 20) == 0 ? 5000 : 60;
+    s.power = pick(g, 0, 5) == 0 ? 0 : static_cast<uint8_t>(pick(g, 1, 255));
+    s.v2 = pick(g, 0, 3) != 0;
+    const uint32_t kind = pick(g, 0, 19);
+    const uint32_t big = pick(g, 0, 20) == 0 ? 2000 : 40;
     uint32_t n = 0;
     for (int a = 0; a < kAxes; ++a) {
       s.steps[a] = pick(g, 0, 2) == 0 ? 0 : pick(g, 0, big);
       s.dir[a] = pick(g, 0, 1) == 1;
       n = std::max(n, s.steps[a]);
     }
-    if (pick(g, 0, 15) == 0) {
+    if (kind <= 2) {  // zero-length, dwell, LINE without steps
       s.steps = {0, 0, 0, 0};
       n = 0;
     }
-    s.period = minp + (pick(g, 0, 1) ? 0 : pick(g, 0, 3 * minp));
-    s.total = static_cast<uint64_t>(s.period) * n;
+    s.period = std::max(minp, pick(g, 0, 2) == 0 ? fast_p : 0u) +
+               (pick(g, 0, 1) ? 0 : pick(g, 0, 3 * minp));
+    if (kind == 0) {
+      s.total = 0;
+      s.period = 0;
+    } else if (n == 0) {  // dwell or a LINE without steps: T ticks
+      s.total = pick(g, 1, 3000);
+      s.period = 0;
+      if (kind == 1) s.code = s.power = 0;
+    } else {
+      s.total = static_cast<uint64_t>(s.period) * n;
+      if (s.v2 && pick(g, 0, 1)) s.total += pick(g, 0, n - 1);  // T not a multiple of n
+    }
     for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.total - s.steps[a];
-    j.offers.push_back(ExecOffer{s, pick(g, 0, 3) == 0 ? pick(g, 0, 400) : pick(g, 0, 2)});
+    std::array<bool, kAxes> rev{};
+    for (int a = 0; a < kAxes; ++a) {
+      if (s.steps[a] == 0) continue;
+      rev[a] = track[a] != s.dir[a];
+      track[a] = s.dir[a];
+    }
+    s.dir_fast = n == 0 || dir_fast(rev, j.timing, s.total / n);
+    const uint32_t when = pick(g, 0, 9);
+    int64_t gap = pick(g, 0, 2);
+    if (when == 0) gap = pick(g, 0, 400);
+    if (when == 1) gap = std::max<int64_t>(0, static_cast<int64_t>(prev_t) - 2 + pick(g, 0, 4));
+    j.offers.push_back(ExecOffer{s, gap});
+    prev_t = s.total;
   }
   return j;
 }
@@ -86,7 +122,8 @@ SC_MODULE(ExecBench) {
   tlm_utils::simple_initiator_socket<ExecBench> status;  // (segment_prep's idle query; unused)
   std::vector<Job>* jobs = nullptr;
   std::vector<RunResult> results;
-  std::vector<Cycle> seg_done;
+  std::vector<Cycle> seg_done, seg_done_v2;
+  std::array<uint64_t, 4> stats{};  // zero gap, fast reversals, zero-length / HOLD on a last tick
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
@@ -107,6 +144,7 @@ SC_MODULE(ExecBench) {
   }
   void on_done(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
     seg_done.push_back(clk.at(d));
+    if (payload<SegDone>(g).v2) seg_done_v2.push_back(clk.at(d));
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void run() {
@@ -119,16 +157,22 @@ SC_MODULE(ExecBench) {
       exec.reset();
       for (auto& x : pulse) x->reset();
       seg_done.clear();
+      seg_done_v2.clear();
       Cycle accept = 0;
       for (size_t i = 0; i < j.offers.size(); ++i) {
         const ExecSegment& e = j.offers[i].seg;
-        Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0};
+        Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
         accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
       }
       RunResult r;
       r.edges = pins.take_sorted();
       r.seg_start = exec.seg_start_cycles;
       r.seg_done = seg_done;
+      r.seg_done_v2 = seg_done_v2;
+      stats[0] += exec.zero_gap;
+      stats[1] += exec.fast_reversals;
+      stats[2] += exec.zero_len_on_last_tick;
+      stats[3] += exec.hold_on_last_tick;
       for (int a = 0; a < kAxes; ++a) r.position[a] = pulse[a]->position;
       r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
       results.push_back(std::move(r));
@@ -191,7 +235,11 @@ int sc_main(int argc, char* argv[]) {
       fmt::print("FAIL segment_executor seed {}: first difference: {}\n", seed + i, d);
     }
   }
-  fmt::print("cosim_executor: {} jobs, {} segments, {} edges: {}\n", jobs.size(),
-             jobs.size() * segments, edges, bad ? "DIFFER" : "all identical");
+  fmt::print(
+      "cosim_executor: {} jobs, {} segments ({} started with zero gap, {} of them reversing "
+      "with dir_fast; {} zero-length and {} HOLD-path segments taken on a last tick), {} edges: "
+      "{}\n",
+      jobs.size(), jobs.size() * segments, bench.stats[0], bench.stats[1], bench.stats[2],
+      bench.stats[3], edges, bad ? "DIFFER" : "all identical");
   return bad ? 1 : 0;
 }

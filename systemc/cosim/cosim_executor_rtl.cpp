@@ -50,6 +50,9 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (offering) {
       const ExecSegment& s = j.offers[next].seg;
       m->s_axis_code = s.code;
+      m->s_axis_power = s.power;
+      m->s_axis_v2 = s.v2 ? 1 : 0;
+      m->s_axis_dir_fast = s.dir_fast ? 1 : 0;
       uint8_t d = 0;
       for (int a = 0; a < kAxes; ++a) {
         d |= static_cast<uint8_t>(s.dir[a] ? 1u << a : 0u);
@@ -78,6 +81,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
     }
     if (m->seg_start) r.seg_start.push_back(c);
     if (m->seg_done) r.seg_done.push_back(c);
+    if (m->seg_done && m->seg_done_v2) r.seg_done_v2.push_back(c);
     if (next >= j.offers.size() && m->idle && !m->step) {
       if (++quiet > 2) break;
     } else {

@@ -26,8 +26,10 @@
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/twins/compare.h"
 #include "fpgacnc/twins/rtl_driver.h"
+#include "fpgacnc/twins/v2_frames.h"
 #include "fpgacnc/twins/virtual_board.h"
 
 using namespace fpgacnc::twins;
@@ -46,7 +48,7 @@ uint32_t pulse(uint32_t v) {
 
 struct Job {
   std::string name;
-  std::vector<HostPacket> packets;
+  HostScript script;
   std::array<AxisTiming, kAxes> timing;
   size_t segments = 0;
 };
@@ -59,6 +61,9 @@ SC_MODULE(RtlHarness) {
   sc_core::sc_signal<bool> rst, rx, tx, laser, cfg_wr, busy, running, seg_start, seg_done;
   sc_core::sc_signal<uint32_t> step, dir, cfg_addr, cfg_wdata, last_code, last_feed, packet_count,
       frame_errors, timeouts, overruns, violations, last_period, numerator_x, numerator_y;
+  sc_core::sc_signal<uint32_t> fifo_level, next_seq, segments_done, faults, frames_ok, crc_errors,
+      length_errors, unknown_types, noise_bytes, clamped, naks;
+  sc_core::sc_signal<bool> v2_mode;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -91,6 +96,18 @@ SC_MODULE(RtlHarness) {
     dut.numerator_x(numerator_x);
     dut.numerator_y(numerator_y);
     dut.position(position);
+    dut.fifo_level(fifo_level);
+    dut.next_seq(next_seq);
+    dut.v2_mode(v2_mode);
+    dut.segments_done(segments_done);
+    dut.faults(faults);
+    dut.frames_ok(frames_ok);
+    dut.crc_errors(crc_errors);
+    dut.length_errors(length_errors);
+    dut.unknown_types(unknown_types);
+    dut.noise_bytes(noise_bytes);
+    dut.clamped(clamped);
+    dut.naks(naks);
     SC_THREAD(run);
   }
 
@@ -103,7 +120,7 @@ SC_MODULE(RtlHarness) {
       const auto t0 = std::chrono::steady_clock::now();
       CoreParams p = params;
       p.timing = job.timing;
-      RtlDriver drv(p, job.packets, true);
+      RtlDriver drv(p, job.script, true);
       rst.write(true);
       rx.write(true);
       cfg_wr.write(false);
@@ -163,7 +180,7 @@ Job random_job(uint64_t seed, size_t segments) {
     const auto b = pack_init(pick(g, 500, 400'000), pick(g, 500, 400'000));
     return HostPacket{{b.begin(), b.end()}, false, 1};
   };
-  j.packets.push_back(init());
+  j.script.v1.push_back(init());
   auto steps = [&]() -> int32_t {
     const uint32_t kind = pick(g, 0, 9);
     int32_t m = kind == 0  ? 0
@@ -174,14 +191,14 @@ Job random_job(uint64_t seed, size_t segments) {
   for (size_t i = 0; i < segments; ++i) {
     const uint32_t what = pick(g, 0, 99);
     if (what == 0) {  // a new init between moves
-      j.packets.push_back(init());
+      j.script.v1.push_back(init());
     } else if (what == 1) {  // a truncated packet, then silence past the watchdog
       std::vector<uint8_t> part;
       for (uint32_t k = pick(g, 1, 10); k > 0; --k)
         part.push_back(static_cast<uint8_t>(pick(g, 0, 254)));
-      j.packets.push_back(HostPacket{part, false, pick(g, 1, 100)});
-      j.packets.push_back(HostPacket{{}, false, 0});
-      j.packets.back().gap = 0;
+      j.script.v1.push_back(HostPacket{part, false, pick(g, 1, 100)});
+      j.script.v1.push_back(HostPacket{{}, false, 0});
+      j.script.v1.back().gap = 0;
     }
     const int32_t sx = steps(), sy = steps();
     uint16_t feed = static_cast<uint16_t>(pick(g, 1, 65535));
@@ -191,14 +208,15 @@ Job random_job(uint64_t seed, size_t segments) {
       fx = sx % 3;
       fy = sy % 3;
     }
-    // (a first byte of 0xFF would start an init packet: the code byte stays below it)
-    const auto b = pack_motion(static_cast<uint8_t>(pick(g, 0, 254)), fx, fy, feed);
+    // Motion codes 0..3: other first bytes are noise to the v1/v2 decoder (docs/protocol.md
+    // "Telling v1 from v2"); the truncated packets above bring noise bytes.
+    const auto b = pack_motion(static_cast<uint8_t>(pick(g, 0, 3)), fx, fy, feed);
     int64_t gap = pick(g, 1, 40);
     if (what == 1) gap += 20'000 + pick(g, 0, 500);  // past the watchdog
-    j.packets.push_back(HostPacket{{b.begin(), b.end()}, true, gap});
+    j.script.v1.push_back(HostPacket{{b.begin(), b.end()}, true, gap});
   }
   // Empty packets (used above as placeholders) carry no frames: drop them.
-  std::erase_if(j.packets, [](const HostPacket& p) { return p.bytes.empty(); });
+  std::erase_if(j.script.v1, [](const HostPacket& p) { return p.bytes.empty(); });
   return j;
 }
 
@@ -210,21 +228,123 @@ Job corpus_job(const std::string& path, size_t max_moves, double feed_override) 
   Job j;
   j.name = fmt::format("{} (first {} moves, feed override {}%, rapids 12000 mm/min)", path,
                        max_moves, feed_override);
-  j.packets = job_packets(packed, 50'000'000, max_moves);
-  j.segments = j.packets.size() - 1;
+  j.script.v1 = job_packets(packed, 50'000'000, max_moves);
+  j.segments = j.script.v1.size() - 1;
+  return j;
+}
+
+// A random v2 session: CONFIG_AXIS for every axis (the cfg port's timing, or new timing applied
+// while the board is idle), NUMERATORS, then `segments` FIFO frames: LINEs on 1..4 axes (SHORT
+// and int32, codes 0..3, power 0..255, T at, above and below n_dom * min_period: clamped),
+// LINEs without steps, zero-length LINEs, DWELLs, NUMERATORS, CONFIG_AXIS with new timing
+// mid-stream (active once the board is quiet); mostly back to back (the FIFO
+// fills and the window closes), some gaps (the FIFO runs dry); a few frames corrupted once (NAK
+// BAD_CRC, go-back-N), line noise between frames, frames cut short followed by silence past the
+// watchdog (NAK TIMEOUT); some jobs ignore the credit (NAK FIFO_FULL, duplicates).
+Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
+  using namespace fpgacnc::twins::v2;
+  std::mt19937_64 g(seed * 0x9E37'79B9'7F4A'7C15ull + 2);
+  Job j;
+  j.segments = segments;
+  if (pick(g, 0, 4) != 0)
+    for (auto& t : j.timing) t = random_timing(g);
+  V2Script sc;
+  sc.ignore_credit = pick(g, 0, 3) == 0;
+  j.name = fmt::format("v2 random seed {}{}", seed, sc.ignore_credit ? " (ignoring credit)" : "");
+  std::array<AxisTiming, kAxes> tm = j.timing;
+  if (pick(g, 0, 2) == 0)
+    for (auto& t : tm) t = random_timing(g);
+  for (uint8_t a = 0; a < kAxes; ++a)
+    sc.items.push_back(V2Item{kConfigAxis, config_axis_payload(a, tm[a])});
+  CoreParams p;
+  p.timing = tm;
+  const uint32_t minp = p.min_period();
+  auto numerators = [&] {
+    return V2Item{kNumerators, numerators_payload(pick(g, 500, 400'000), pick(g, 500, 400'000))};
+  };
+  sc.items.push_back(numerators());
+  for (size_t i = 0; i < segments; ++i) {
+    V2Item it{kLine, {}};
+    const uint32_t kind = pick(g, 0, 19);
+    const auto code = static_cast<uint8_t>(pick(g, 0, 3));
+    const auto power = static_cast<uint8_t>(pick(g, 0, 4) == 0 ? 0 : pick(g, 1, 255));
+    if (kind == 0 && pick(g, 0, 3) == 0) {  // new step timing for an axis, mid-stream
+      it = V2Item{kConfigAxis, config_axis_payload(static_cast<uint8_t>(pick(g, 0, kAxes - 1)),
+                                                   random_timing(g))};
+    } else if (kind == 0) {
+      it = V2Item{kDwell, dwell_payload(pick(g, 0, 3) == 0 ? 0 : pick(g, 1, 20'000))};
+    } else if (kind == 1) {
+      it = numerators();
+    } else if (kind <= 3) {  // zero-length, or T ticks without steps
+      const int32_t none[2] = {0, 0};
+      it.payload = line_payload(code, power, kind == 2 ? 0 : pick(g, 1, 5000), none, true);
+    } else {
+      const int k = static_cast<int>(pick(g, 1, kAxes));
+      // (40 000 steps, int32 on the wire, only with a fast minimum period: RTL time)
+      const uint32_t m =
+          std::array<uint32_t, 4>{3, 12, 60, minp <= 10 ? 40'000u : 300u}[pick(g, 0, 3)];
+      std::vector<int32_t> st(static_cast<size_t>(k));
+      uint32_t n = 0;
+      for (auto& x : st) {
+        const uint32_t v = pick(g, 0, 2) == 0 ? 0 : pick(g, 0, m);
+        x = pick(g, 0, 1) ? -static_cast<int32_t>(v) : static_cast<int32_t>(v);
+        n = std::max(n, v);
+      }
+      uint64_t t;
+      const uint32_t how = pick(g, 0, 9);
+      if (how == 0)
+        t = pick(g, 0, std::max<uint32_t>(minp, 2) - 1) * static_cast<uint64_t>(n);  // clamped
+      else
+        t = static_cast<uint64_t>(pick(g, minp, 4 * minp)) * n + (n ? pick(g, 0, n - 1) : 0);
+      bool fits = true;
+      for (int32_t x : st) fits = fits && x >= -32768 && x <= 32767;
+      it.payload =
+          line_payload(code, power, static_cast<uint32_t>(std::min<uint64_t>(t, 2'000'000)), st,
+                       fits && pick(g, 0, 4) != 0);
+    }
+    const uint32_t gap = pick(g, 0, 19);
+    it.gap = gap < 17 ? 1 : gap < 19 ? pick(g, 1, 3000) : pick(g, 1, 30'000);
+    it.corrupt = pick(g, 0, 32) == 0;
+    const uint32_t pre = pick(g, 0, 59);
+    if (pre == 0) {  // line noise between frames (never a SYNC)
+      for (uint32_t b = pick(g, 1, 5); b > 0; --b)
+        it.pre.push_back(static_cast<uint8_t>(pick(g, 0, 254) == 0xA5 ? 0x5A : pick(g, 0, 254)));
+    } else if (pre == 1) {  // a frame cut short, then silence past the watchdog
+      it.pre = {kSync, static_cast<uint8_t>(pick(g, 6, 20)), static_cast<uint8_t>(pick(g, 0, 255)),
+                kLine};
+      it.pre.resize(pick(g, 1, 6));
+      it.pre_gap = static_cast<int64_t>(watchdog) + pick(g, 1, 500);
+    }
+    sc.items.push_back(std::move(it));
+  }
+  j.script.v2 = std::move(sc);
+  return j;
+}
+
+Job corpus_v2_job(const std::string& path, size_t max_frames, double feed_override) {
+  fpgacnc::config::MachineConfig cfg;
+  cfg.rapid_feed_mm_min = 12'000.0;
+  const auto plan = fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
+  const auto packed = fpgacnc::protocol::v2::pack_job(plan, cfg);
+  Job j;
+  j.name = fmt::format("{} as v2 frames (first {} LINE/DWELL, feed override {}%)", path, max_frames,
+                       feed_override);
+  j.script.v2 = job_script(packed, max_frames);
+  j.segments = j.script.v2->items.size();
   return j;
 }
 
 }  // namespace
 
 int sc_main(int argc, char* argv[]) {
-  uint64_t seed = 1, seeds = 20;
-  size_t segments = 100, corpus_moves = 12;
+  uint64_t seed = 1, seeds = 20, v2_seeds = 20;
+  size_t segments = 100, corpus_moves = 12, v2_corpus_frames = 200;
   double corpus_override = 1000.0;
   std::string corpus_dir = FPGACNC_CORPUS_DIR, examples_dir = FPGACNC_EXAMPLES_DIR;
   fpgacnc::cosim::Options opts("cosim");
   opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
   opts.size("--segments", &segments).size("--corpus-moves", &corpus_moves);
+  opts.u64("--v2-seeds", &v2_seeds).size("--v2-corpus-frames", &v2_corpus_frames);
   opts.real("--corpus-feed-override", &corpus_override);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
@@ -236,6 +356,10 @@ int sc_main(int argc, char* argv[]) {
     jobs.push_back(corpus_job(corpus_dir + "/Circle_Diamond_Square_Calibration.gcode", corpus_moves,
                               corpus_override));
   }
+  for (uint64_t s = 0; s < v2_seeds; ++s) jobs.push_back(random_v2_job(seed + s, segments, 20'000));
+  if (v2_corpus_frames > 0)
+    jobs.push_back(
+        corpus_v2_job(examples_dir + "/jsdc-laser.gcode", v2_corpus_frames, corpus_override));
 
   CoreParams p;
   p.baud = 3'000'000;
@@ -249,7 +373,7 @@ int sc_main(int argc, char* argv[]) {
   std::vector<RunResult> twin_results;
   for (const Job& j : jobs)
     twins.add_job(
-        TwinJob{j.packets, j.timing, [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
+        TwinJob{j.script, j.timing, [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
   const auto t0 = std::chrono::steady_clock::now();
   sc_core::sc_start();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -272,9 +396,16 @@ int sc_main(int argc, char* argv[]) {
     rtl_wall += a.wall_s;
     twin_wall += b.wall_s;
     if (!diff.empty()) ++bad;
-    fmt::print("{} {}: {} moves acked, {} edges, {} clocks, {} timeouts{}{}\n",
+    const std::string v2 =
+        jobs[i].script.v2
+            ? fmt::format(
+                  " ({} device frames, {} NAKs, {} retransmitted, {} segments done, {} "
+                  "zero-gap starts)",
+                  a.device_frames, a.naks, a.retransmitted, a.segments_done, b.zero_gap)
+            : "";
+    fmt::print("{} {}: {} answers, {} edges, {} clocks, {} timeouts{}{}{}\n",
                diff.empty() ? "ok  " : "FAIL", jobs[i].name, a.acks.size(), a.edges.size(),
-               a.end_cycle, a.timeouts, diff.empty() ? "" : ": first difference: ", diff);
+               a.end_cycle, a.timeouts, v2, diff.empty() ? "" : ": first difference: ", diff);
   }
   fmt::print(
       "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "

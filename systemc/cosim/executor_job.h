@@ -17,11 +17,15 @@ struct ExecSegment {
   std::array<uint64_t, kAxes> tmn;
   uint64_t total;
   uint32_t period;
+  uint8_t power = 0xFF;
+  bool v2 = false;
+  bool dir_fast = false;
 };
 struct ExecOffer {
   ExecSegment seg;
   int64_t gap;  // valid from `gap` edges after the previous accept (first: after cycle 0)
 };
+
 struct ExecJob {
   std::array<AxisTiming, kAxes> timing;
   std::vector<ExecOffer> offers;

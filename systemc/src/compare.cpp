@@ -43,10 +43,12 @@ std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
                        twin.edges.size(), more_rtl ? "rtl" : "twin",
                        edge_text(more_rtl ? rtl.edges[n] : twin.edges[n]));
   }
-  for (auto s : {compare_cycles("ACK", rtl.acks, twin.acks),
-                 compare_cycles("packet_decoder_v1 packet_done", rtl.packet_done, twin.packet_done),
-                 compare_cycles("segment_executor seg_start", rtl.seg_start, twin.seg_start),
-                 compare_cycles("segment_executor seg_done", rtl.seg_done, twin.seg_done)}) {
+  for (auto s :
+       {compare_cycles("ACK", rtl.acks, twin.acks),
+        compare_cycles("decoder packet_done", rtl.packet_done, twin.packet_done),
+        compare_cycles("segment_executor seg_start", rtl.seg_start, twin.seg_start),
+        compare_cycles("segment_executor seg_done", rtl.seg_done, twin.seg_done),
+        compare_cycles("segment_executor seg_done_v2", rtl.seg_done_v2, twin.seg_done_v2)}) {
     if (!s.empty()) return s;
   }
   if (rtl.position != twin.position)
@@ -59,6 +61,9 @@ std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
         "{}",
         rtl.timeouts, rtl.overruns, rtl.frame_errors, rtl.violations, twin.timeouts, twin.overruns,
         twin.frame_errors, twin.violations);
+  if (rtl.zero_gap != twin.zero_gap)
+    return fmt::format("segments started with zero idle clocks: rtl {}, twin {}", rtl.zero_gap,
+                       twin.zero_gap);
   if (rtl.error.empty() && rtl.end_cycle != twin.end_cycle)
     return fmt::format("job duration: rtl {} clocks, twin {}", rtl.end_cycle, twin.end_cycle);
   return "";

@@ -19,7 +19,7 @@ void clock_once(Vcnc_core& m) {
 }
 }  // namespace
 
-RunResult run_on_rtl(const CoreParams& p, std::vector<HostPacket> packets, bool record_tx) {
+RunResult run_on_rtl(const CoreParams& p, const HostScript& script, bool record_tx) {
   const CoreParams built;
   if (p.clk_hz != built.clk_hz || p.baud != built.baud || p.watchdog_clks != built.watchdog_clks ||
       p.feed0_period != built.feed0_period || p.default_numerator != built.default_numerator)
@@ -29,7 +29,7 @@ RunResult run_on_rtl(const CoreParams& p, std::vector<HostPacket> packets, bool 
   const auto t0 = std::chrono::steady_clock::now();
   auto ctx = std::make_unique<VerilatedContext>();
   auto m = std::make_unique<Vcnc_core>(ctx.get(), "cnc_core");
-  RtlDriver drv(p, std::move(packets), record_tx);
+  RtlDriver drv(p, script, record_tx);
   drv.reserve(1u << 20);
   m->rst = 1;
   m->rx = 1;

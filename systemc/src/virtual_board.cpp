@@ -2,13 +2,29 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 
 namespace fpgacnc::twins {
 
 std::vector<Edge> PinRecorder::take_sorted() {
   std::sort(edges_.begin(), edges_.end(), [](const Edge& a, const Edge& b) {
-    return a.cycle != b.cycle ? a.cycle < b.cycle : a.signal < b.signal;
+    if (a.cycle != b.cycle) return a.cycle < b.cycle;
+    if (a.signal != b.signal) return a.signal < b.signal;
+    return a.value < b.value;
   });
+  // Back-to-back cutting segments: the laser's fall at R + T and the next rise on the same edge
+  // cancel (the pin stays high). Compacted in place.
+  size_t w = 0;
+  for (size_t i = 0; i < edges_.size(); ++i) {
+    const Edge e = edges_[i];
+    if (e.signal == simboard::kLaser && i + 1 < edges_.size() && edges_[i + 1].cycle == e.cycle &&
+        edges_[i + 1].signal == e.signal && edges_[i + 1].value != e.value) {
+      ++i;
+      continue;
+    }
+    edges_[w++] = e;
+  }
+  edges_.resize(w);
   return std::move(edges_);
 }
 
@@ -17,31 +33,49 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
       p_(p),
       clk_(p.clk_hz),
       rx_("uart_rx", clk_, p_),
-      dec_("packet_decoder_v1", clk_, p_),
+      dec_("frame_decoder", clk_, p_),
+      fifo_("segment_fifo", clk_, v2::kFifoDepth),
       prep_("segment_prep", clk_, p_),
       exec_("segment_executor", clk_, p_, pins_),
-      status_("status_ack", clk_),
+      enc_("response_encoder", clk_, EncoderParams{v2::kFifoDepth, p.clk_hz, p.baud, v2::kBuildId}),
       tx_("uart_tx", clk_, p_, pins_),
       host_pin_("host_pin"),
-      host_line_("host_line") {
+      host_line_("host_line"),
+      cfg_("cfg"),
+      state_("state") {
   pins_.record_tx = record_tx;
   host_pin_.bind(rx_.pin);
   rx_.bytes.bind(dec_.bytes);
-  dec_.commands.bind(prep_.commands);
+  dec_.fifo.bind(fifo_.in);
+  dec_.resp.bind(enc_.req);
+  dec_.cfg.bind(cfg_);
+  fifo_.out.bind(prep_.commands);
   prep_.segments.bind(exec_.segments);
   prep_.exec_status.bind(exec_.status);
+  prep_.applied.bind(enc_.applied);
+  prep_.report_applied = true;
+  prep_.entry_ends = &entry_ends_;
+  exec_.entry_ends = &entry_ends_;
   for (int a = 0; a < kAxes; ++a) {
     dda_[a] = std::make_unique<DdaLinearTwin>(sc_core::sc_gen_unique_name("dda_linear"), clk_);
     pulse_[a] = std::make_unique<StepPulseTwin>(sc_core::sc_gen_unique_name("step_pulse"), clk_,
                                                 p_.timing[a], a, pins_);
+    pulse_[a]->keep_history = true;
     exec_.dda[a]->bind(dda_[a]->load);
     exec_.pulse[a]->bind(pulse_[a]->ctl);
     dda_[a]->step.bind(pulse_[a]->req);
   }
-  exec_.done.bind(status_.done);
-  status_.tx.bind(tx_.bytes);
+  exec_.done.bind(enc_.done);
+  enc_.tx.bind(tx_.bytes);
+  enc_.state.bind(state_);
+  enc_.before_decide = [this](Cycle d) { dec_.advance(d); };
+  dec_.before_write = [this](Cycle w) { apply_cfg(w); };
   tx_.line.bind(host_line_);
   host_line_.register_b_transport(this, &VirtualBoard::on_line);
+  cfg_.register_b_transport(this, &VirtualBoard::on_cfg);
+  state_.register_b_transport(this, &VirtualBoard::on_state);
+  const BitTimer t(p.clk_hz, p.baud);
+  tx_centre9_ = ceil_div(static_cast<__int128>(19) * t.mod, 2 * t.inc);
   SC_THREAD(host_thread);
 }
 
@@ -50,16 +84,78 @@ void VirtualBoard::reset(const std::array<AxisTiming, kAxes>& timing) {
   pins_.clear();
   rx_.reset();
   dec_.reset();
+  fifo_.reset();
   prep_.reset();
   exec_.reset();
   for (auto& p : pulse_) p->reset();
-  status_.reset();
+  enc_.reset();
   tx_.reset();
+  tx_bytes_.clear();
+  entry_ends_.clear();
+  pending_cfg_.clear();
 }
 
 void VirtualBoard::on_line(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
-  if (host_) host_->on_tx_byte(clk_.at(delay), payload<LineFrame>(gp).byte);
+  tx_bytes_.emplace_back(clk_.at(delay), payload<LineFrame>(gp).byte);
   gp.set_response_status(tlm::TLM_OK_RESPONSE);
+}
+
+// CONFIG_AXIS (cnc_core "configuration"): the write strobe after edge c lands in the shadow
+// registers on c + 1; they become active on an edge e >= c + 2 at which the board was quiet
+// after e - 1 (FIFO empty, nothing prepared, executor and every STEP pulse idle), so a setting
+// never changes in the middle of a move. The twins read the step timing from p_ when they
+// compute, and compute everything an entry causes when it is written: a pending setting is
+// applied before the next FIFO write W if the board was quiet before it (e <= W).
+void VirtualBoard::on_cfg(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
+  pending_cfg_.emplace_back(clk_.at(delay), payload<CfgAxis>(gp));
+  gp.set_response_status(tlm::TLM_OK_RESPONSE);
+}
+
+void VirtualBoard::apply_cfg(Cycle write) {
+  if (pending_cfg_.empty()) return;
+  Cycle quiet = exec_.idle_edge(write);
+  if (!fifo_.pops().empty()) quiet = std::max(quiet, fifo_.pops().back());
+  const Cycle active = std::max(pending_cfg_.back().first + 2, quiet + 1);
+  if (active > write) return;
+  for (const auto& [c, a] : pending_cfg_) p_.timing[a.axis] = a.timing;
+  pending_cfg_.clear();
+}
+
+// The live state a response frame starting on edge d is filled in from: registers as they are
+// after edge d - 1.
+void VirtualBoard::on_state(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
+  const Cycle t = clk_.at(delay) - 1;
+  StatusSnapshot s;
+  s.dec = dec_.state_after(t);
+  s.fifo_level = fifo_.level_after(t);
+  // Busy (cnc_core: executor busy, prep busy or FIFO not empty): an entry in the FIFO, or the
+  // last one popped still prepared or running (entries end in order).
+  const auto& pops = fifo_.pops();
+  const auto popped = std::upper_bound(pops.begin(), pops.end(), t) - pops.begin();
+  s.busy = s.fifo_level > 0 || (popped > 0 && static_cast<size_t>(popped) <= entry_ends_.size() &&
+                                entry_ends_[static_cast<size_t>(popped) - 1] > t);
+  for (int a = 0; a < kAxes; ++a) {
+    s.position[a] = static_cast<int32_t>(pulse_[a]->position_after(t));
+    for (Cycle v : pulse_[a]->violation_cycles)
+      if (v <= t && v > enc_.fault_clear_at) s.fault = true;
+  }
+  s.frame_errors = static_cast<uint16_t>(rx_.frame_errors);
+  const auto& cl = prep_.clamp_cycles;
+  s.clamped = static_cast<uint16_t>(std::upper_bound(cl.begin(), cl.end(), t) - cl.begin());
+  payload<StatusSnapshot>(gp) = s;
+  gp.set_response_status(tlm::TLM_OK_RESPONSE);
+}
+
+size_t VirtualBoard::deliver(Cycle before, bool one) {
+  size_t n = 0;
+  while (!tx_bytes_.empty() && tx_bytes_.front().first + tx_centre9_ < before) {
+    const auto [start, byte] = tx_bytes_.front();
+    tx_bytes_.pop_front();
+    if (host_) host_->on_tx_byte(start, byte);
+    ++n;
+    if (one) break;
+  }
+  return n;
 }
 
 RunResult VirtualBoard::run_job(const TwinJob& job) {
@@ -72,42 +168,78 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   const uint64_t now = sc_core::sc_time_stamp().value();
   clk_.set_base(sc_core::sc_time::from_value((now + per - 1) / per * per));
   reset(job.timing);
-  StopAndWaitHost host(job.packets, SenderTiming{p_.clk_hz, p_.baud}, tx_.frame_clocks());
-  host_ = &host;
+  auto host = make_host(job.script, SenderTiming{p_.clk_hz, p_.baud}, tx_.frame_clocks());
+  host_ = host.get();
+  constexpr Cycle kNever = std::numeric_limits<Cycle>::max();
   RunResult r;
-  while (!host.done()) {
-    if (host.waiting()) {
-      r.error = "no ACK for packet " + std::to_string(host.packets_sent());
-      break;
+  bool woke = false;
+  while (!host->done()) {
+    if (host->waiting()) {
+      // Nothing comes from the host until an answer: the next tx byte, computing the next
+      // frame of the encoder when none is queued. The host decides again right after the
+      // byte that ends its wait.
+      if (deliver(kNever, true) == 0 && !enc_.step(kNever)) {
+        r.error = "no answer for packet " + std::to_string(host->packets_sent());
+        break;
+      }
+      woke = true;
+      continue;
     }
-    for (const HostFrame& f : host.next_packet()) {
-      RxFrame frame{f.byte};
-      transport(host_pin_, gp_, clk_, frame, f.start);
-      qk.set(clk_.delay_to(f.start));
+    if (!woke) {
+      // The host decides on edge ready(): answers that start by then are final; it has heard
+      // the bytes whose stop-bit centre is before it.
+      const Cycle ready = host->ready();
+      while (enc_.step(ready + 1)) {
+      }
+      deliver(ready, false);
+      // Every event computed from now on is later than `ready`: time may advance to it.
+      qk.set(clk_.delay_to(ready));
       if (qk.need_sync()) qk.sync();
     }
+    woke = false;
+    for (const HostFrame& f : host->next_packet()) {
+      RxFrame frame{f.byte};
+      transport(host_pin_, gp_, clk_, frame, f.start);
+    }
   }
+  // Answers after the last decision (DONE frames, the last ACK's tail). A packet cut short at
+  // the very end is not timed out: the RTL harness stops when the core is quiet.
+  while (enc_.step(kNever)) {
+  }
+  deliver(kNever, false);
   qk.sync();
   host_ = nullptr;
   r.edges = pins_.take_sorted();
   pins_.clear();
-  r.acks = host.acks;
+  r.acks = host->acks;
   r.packet_done = dec_.packet_done_cycles;
   r.seg_start = exec_.seg_start_cycles;
-  r.seg_done = status_.seg_done_cycles;
-  r.end_cycle = host.ready();
+  r.seg_done = enc_.seg_done_cycles;
+  r.end_cycle = host->ready();
   if (!r.edges.empty())
     r.end_cycle = std::max<Cycle>(r.end_cycle, static_cast<Cycle>(r.edges.back().cycle));
   for (int a = 0; a < kAxes; ++a) {
     r.position[a] = pulse_[a]->position;
     r.violations += pulse_[a]->violations;
   }
-  r.moves_done = status_.moves_done;
+  const DecoderState& d = dec_.current();
+  r.moves_done = enc_.moves_done;
   r.packets = dec_.packets;
-  r.timeouts = dec_.timeouts;
-  r.overruns = dec_.overruns;
+  r.timeouts = d.timeouts;
+  r.overruns = d.overruns;
   r.frame_errors = rx_.frame_errors;
-  r.packets_sent = host.packets_sent();
+  r.packets_sent = host->packets_sent();
+  r.segments_done = enc_.segments_done;  // (v2: replaced by what the host saw, below)
+  r.frames_ok = d.frames_ok;
+  r.clamped = prep_.clamped;
+  r.zero_gap = exec_.zero_gap;
+  if (auto* h = dynamic_cast<V2StreamHost*>(host.get())) {
+    r.device_frames = h->acks.size();
+    r.naks = h->naks;
+    r.retransmitted = h->retransmitted;
+    r.segments_done = h->device_done();
+    for (const auto& f : h->statuses) r.statuses.push_back(f.payload);
+  }
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
@@ -119,10 +251,10 @@ void VirtualBoard::host_thread() {
   }
 }
 
-RunResult run_on_twins(const CoreParams& p, std::vector<HostPacket> packets, bool record_tx) {
+RunResult run_on_twins(const CoreParams& p, HostScript script, bool record_tx) {
   VirtualBoard board("virtual_board", p, record_tx);
   RunResult out;
-  board.add_job(TwinJob{std::move(packets), p.timing, [&](RunResult&& r) { out = std::move(r); }});
+  board.add_job(TwinJob{std::move(script), p.timing, [&](RunResult&& r) { out = std::move(r); }});
   sc_core::sc_start();
   return out;
 }

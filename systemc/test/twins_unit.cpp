@@ -1,11 +1,15 @@
 // Unit tests of the twins (CTest label unit): the documented arithmetic (docs/protocol.md worked
-// examples, docs/timing.md) and small jobs on the virtual board whose edge times follow from
-// the documented latencies. Plain checks; exit status 1 on any failure.
+// examples and v2 test vectors, docs/timing.md), each v2 block twin driven alone through its
+// sockets (frame_decoder: every NAK reason and the SEQ rules; response_encoder: priorities and
+// the ACK test vector; segment_executor: queued segments), and small jobs on the virtual board
+// whose edge times follow from the documented latencies. Plain checks; exit status 1 on any
+// failure.
 #include <fmt/format.h>
 
 #include <systemc>
 
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/twins/v2_frames.h"
 #include "fpgacnc/twins/virtual_board.h"
 
 namespace {
@@ -22,6 +26,11 @@ void check(bool ok, const std::string& what) {
 template <class A, class B>
 void check_eq(const A& a, const B& b, const std::string& what) {
   check(a == static_cast<A>(b), fmt::format("{}: got {}, expected {}", what, a, b));
+}
+using Bytes = std::vector<uint8_t>;
+void check_bytes(const Bytes& got, const Bytes& want, const std::string& what) {
+  check(got == want, fmt::format("{}: got {:02X}, expected {:02X}", what, fmt::join(got, " "),
+                                 fmt::join(want, " ")));
 }
 
 void arithmetic() {
@@ -53,12 +62,529 @@ void arithmetic() {
   check_eq(st.level(0x01, 4339), 1, "stop bit");
 }
 
-std::vector<HostPacket> worked_example_job() {
+// docs/protocol.md "v2": CRC check value, the worked examples (test vectors), SEQ classes, the
+// v2 LINE timing and dir_fast.
+void v2_arithmetic() {
+  const std::string s = "123456789";
+  check_eq(crc16_ccitt(reinterpret_cast<const uint8_t*>(s.data()), s.size()), 0x29B1,
+           "CRC-16/CCITT-FALSE check value");
+  using namespace fpgacnc::twins::v2;
+  check_bytes(frame(0, kHello), {0xA5, 0x00, 0x00, 0x01, 0xDC, 0xBD}, "HELLO");
+  check_bytes(frame(0, kStatusQuery), {0xA5, 0x00, 0x00, 0x02, 0xEC, 0xDE}, "STATUS_QUERY");
+  check_bytes(
+      frame(1, kConfigAxis, config_axis_payload(0, AxisTiming{100, 100, 200, 200})),
+      {0xA5, 0x09, 0x01, 0x04, 0x00, 0x00, 0x64, 0x00, 0x64, 0x00, 0xC8, 0x00, 0xC8, 0xDC, 0x4C},
+      "CONFIG_AXIS");
+  const int32_t xy[2] = {320, -160};
+  check_bytes(frame(7, kLine, line_payload(1, 255, 5'000'000, xy, true)),
+              {0xA5, 0x0A, 0x07, 0x10, 0x81, 0xFF, 0x00, 0x4C, 0x4B, 0x40, 0x01, 0x40, 0xFF, 0x60,
+               0xC0, 0xB7},
+              "LINE SHORT");
+  const int32_t xyze[4] = {320, -160, 0, 0};
+  check_bytes(frame(8, kLine, line_payload(1, 255, 5'000'000, xyze, false)),
+              {0xA5, 0x16, 0x08, 0x10, 0x01, 0xFF, 0x00, 0x4C, 0x4B, 0x40, 0x00, 0x00, 0x01, 0x40,
+               0xFF, 0xFF, 0xFF, 0x60, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xD6, 0xAB},
+              "LINE int32");
+  check_bytes(frame(9, kDwell, dwell_payload(50'000'000)),
+              {0xA5, 0x04, 0x09, 0x11, 0x02, 0xFA, 0xF0, 0x80, 0x9D, 0x53}, "DWELL");
+  check_bytes(frame(0, kAck, {0x08, 0x00, 0x3F, 0x00, 0x00, 0x00, 0x05}),
+              {0xA5, 0x07, 0x00, 0x80, 0x08, 0x00, 0x3F, 0x00, 0x00, 0x00, 0x05, 0xAA, 0x5D},
+              "ACK");
+  check_bytes(frame(1, kNak, {0x09, 0x01, 0x08, 0x00, 0x3F}),
+              {0xA5, 0x05, 0x01, 0x81, 0x09, 0x01, 0x08, 0x00, 0x3F, 0xE0, 0xB4}, "NAK");
+  // The parser finds the frames after noise and a corrupted frame.
+  FrameParser fp;
+  Bytes stream{0x00, 0x13, 0xAA};
+  auto ack = frame(0, kAck, {0x08, 0x00, 0x3F, 0x00, 0x00, 0x00, 0x05});
+  auto bad = ack;
+  bad[6] ^= 1;
+  stream.insert(stream.end(), bad.begin(), bad.end());
+  stream.insert(stream.end(), ack.begin(), ack.end());
+  int good = 0;
+  for (uint8_t b : stream)
+    if (auto f = fp.feed(b)) good += f->type == kAck && f->u32(3) == 5 ? 1 : 0;
+  check_eq(good, 1, "parser: one good ACK after noise and a bad frame");
+  check_eq(fp.bad, 1u, "parser: one bad frame");
+
+  check(classify_seq(7, 7) == SeqClass::Accept, "SEQ = next_seq");
+  check(classify_seq(6, 7) == SeqClass::Duplicate, "SEQ = next_seq - 1");
+  check(classify_seq(135, 7) == SeqClass::Duplicate, "SEQ = next_seq - 128 (mod 256)");
+  check(classify_seq(134, 7) == SeqClass::Ahead, "SEQ = next_seq - 129 is ahead");
+  check(classify_seq(8, 7) == SeqClass::Ahead, "SEQ = next_seq + 1");
+  check(classify_seq(255, 0) == SeqClass::Duplicate, "wrap: 255 before 0");
+
+  // The LINE example: T = 5 000 000, X 320, Y -160: P = 15 625, no clamp.
+  V2Timing v = prepare_v2({320, 160, 0, 0}, 5'000'000, 200);
+  check_eq(v.period, 15'625u, "v2 P");
+  check_eq(v.total, 5'000'000u, "v2 T");
+  check(!v.clamped, "v2 not clamped");
+  v = prepare_v2({320, 0, 0, 7}, 1000, 200);
+  check(v.clamped, "T / n < min_period: clamped");
+  check_eq(v.total, 64'000u, "clamped T = n_dom * min_period");
+  check_eq(v.period, 200u, "clamped P");
+  v = prepare_v2({0, 0, 0, 0}, 1234, 200);
+  check_eq(v.total, 1234u, "no steps: T ticks");
+  check(!v.clamped, "no steps: never clamped");
+  std::array<AxisTiming, kAxes> tm{};
+  tm[0] = AxisTiming{1, 1, 30, 20};
+  tm[1] = AxisTiming{1, 1, 0, 0};
+  check(dir_fast({true, false, false, false}, tm, 50), "dir_fast: P = hold + setup");
+  check(!dir_fast({true, false, false, false}, tm, 49), "dir_fast: P < hold + setup");
+  check(dir_fast({false, true, false, false}, tm, 2), "dir_fast: 0 settings count as 1");
+  check(!dir_fast({false, true, false, false}, tm, 1), "dir_fast: 1 < 1 + 1");
+  check(dir_fast({false, false, false, false}, tm, 1), "dir_fast: no reversal");
+}
+
+// ---- frame_decoder alone -----------------------------------------------------------------------
+
+SC_MODULE(DecoderBench) {
+  CoreParams p;
+  CycleClock clk{50'000'000};
+  FrameDecoderTwin dec;
+  tlm_utils::simple_initiator_socket<DecoderBench> to_dec;
+  tlm_utils::simple_target_socket<DecoderBench> fifo, resp, cfg;
+  std::vector<std::pair<Cycle, FifoEntry>> writes;
+  std::vector<std::pair<Cycle, RespReq>> reqs;
+  std::vector<CfgAxis> cfgs;
+  uint32_t level = 0;  // FIFO level answered to the decoder
+  tlm::tlm_generic_payload gp;
+  Cycle t = 10;
+
+  SC_CTOR(DecoderBench)
+      : dec("frame_decoder", clk, (p.watchdog_clks = 1000, p)),
+        to_dec("to_dec"),
+        fifo("fifo"),
+        resp("resp"),
+        cfg("cfg") {
+    to_dec.bind(dec.bytes);
+    dec.fifo.bind(fifo);
+    dec.resp.bind(resp);
+    dec.cfg.bind(cfg);
+    fifo.register_b_transport(this, &DecoderBench::on_fifo);
+    resp.register_b_transport(this, &DecoderBench::on_resp);
+    cfg.register_b_transport(this, &DecoderBench::on_cfg);
+    dec.reset();
+  }
+  void on_fifo(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    if (g.is_read())
+      payload<FifoLevel>(g).level = level;
+    else
+      writes.emplace_back(clk.at(d), payload<FifoEntry>(g));
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_resp(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    reqs.emplace_back(clk.at(d), payload<RespReq>(g));
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_cfg(tlm::tlm_generic_payload & g, sc_core::sc_time&) {
+    cfgs.push_back(payload<CfgAxis>(g));
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  // Bytes valid every 10 edges from `t` on.
+  void send(const Bytes& b) {
+    for (uint8_t x : b) {
+      RxByte r{x};
+      transport(to_dec, gp, clk, r, t);
+      t += 10;
+    }
+  }
+  // Runs `b` and returns the requests and writes it caused.
+  std::pair<std::vector<RespReq>, size_t> run(const Bytes& b) {
+    const size_t r0 = reqs.size(), w0 = writes.size();
+    send(b);
+    std::vector<RespReq> out;
+    for (size_t i = r0; i < reqs.size(); ++i) out.push_back(reqs[i].second);
+    return {out, writes.size() - w0};
+  }
+};
+
+bool is_nak(const std::vector<RespReq>& r, uint8_t seq, uint8_t reason) {
+  return r.size() == 1 && r[0].kind == kReqNak && r[0].seq == seq && r[0].reason == reason;
+}
+bool is_ack(const std::vector<RespReq>& r) {
+  return r.size() == 1 && r[0].kind == kReqAck;
+}
+
+void decoder_tests(DecoderBench& b) {
+  using namespace fpgacnc::twins::v2;
+  // v1 in auto mode: the worked example packets, byte-exact into the FIFO.
+  const auto init = fpgacnc::protocol::v1::pack_init(18'750'000, 18'750'000);
+  const auto move = fpgacnc::protocol::v1::pack_motion(1, 320, -160, 1200);
+  auto [r, w] = b.run(Bytes(init.begin(), init.end()));
+  check(r.empty() && w == 1, "v1 init: one FIFO write, no answer");
+  check(b.writes.back().second.kind == kEntryNumerators && !b.writes.back().second.v2 &&
+            b.writes.back().second.steps[0] == 18'750'000,
+        "v1 init entry");
+  const Cycle last = b.t - 10;  // valid edge of the last byte
+  check_eq(b.writes.back().first, last + kDecoderTake + kDecoderWrite, "v1 write edge");
+  std::tie(r, w) = b.run(Bytes(move.begin(), move.end()));
+  const FifoEntry& m = b.writes.back().second;
+  check(w == 1 && m.kind == kEntryMotion && !m.v2 && m.code == 1 && m.power == 0xFF &&
+            m.t == 1200 && static_cast<int32_t>(m.steps[1]) == -160 && m.steps[0] == 320,
+        "v1 motion entry");
+  // Noise in auto mode: counted, nothing else.
+  std::tie(r, w) = b.run({0x04, 0x13, 0xFE});
+  check(r.empty() && w == 0, "auto mode noise ignored");
+  check_eq(b.dec.current().noise, 3u, "noise counted");
+  // HELLO switches to v2 mode and asks for IDENT; SEQ ignored.
+  std::tie(r, w) = b.run(frame(77, kHello));
+  check(r.size() == 1 && r[0].kind == kReqIdent, "HELLO -> IDENT");
+  check(b.dec.current().v2_mode, "a good frame switches to v2 mode");
+  // v1 bytes are noise now.
+  std::tie(r, w) = b.run(Bytes(move.begin(), move.end()));
+  check(r.empty() && w == 0, "v2 mode: a v1 packet is noise");
+  // Sequenced frames.
+  const int32_t xy[2] = {320, -160};
+  const auto line = [&](uint8_t seq) {
+    return frame(seq, kLine, line_payload(1, 200, 5'000'000, xy, true));
+  };
+  std::tie(r, w) = b.run(line(0));
+  check(is_ack(r) && w == 1, "LINE seq 0 accepted");
+  const FifoEntry& e = b.writes.back().second;
+  check(e.v2 && e.kind == kEntryMotion && e.code == 1 && e.power == 200 && e.t == 5'000'000 &&
+            e.steps[0] == 320 && static_cast<int32_t>(e.steps[1]) == -160 && e.steps[2] == 0,
+        "LINE entry (SHORT steps sign-extended)");
+  check_eq(b.dec.current().next_seq, 1, "next_seq 1");
+  std::tie(r, w) = b.run(line(0));
+  check(is_ack(r) && w == 0, "duplicate ACKed, not executed");
+  std::tie(r, w) = b.run(line(2));
+  check(is_nak(r, 2, kOutOfOrder) && w == 0, "ahead: NAK OUT_OF_ORDER");
+  auto bad = line(1);
+  bad[8] ^= 0x10;
+  std::tie(r, w) = b.run(bad);
+  check(is_nak(r, 1, kBadCrc) && w == 0, "NAK BAD_CRC");
+  std::tie(r, w) = b.run({kSync, 65});
+  check(is_nak(r, 0, kBadLength) && w == 0, "LEN > 64: NAK BAD_LENGTH at once");
+  std::tie(r, w) = b.run(frame(1, 0x12, {1, 2, 3}));
+  check(is_nak(r, 1, kUnknownType), "LINE_PROFILE reserved: NAK UNKNOWN_TYPE");
+  std::tie(r, w) = b.run(frame(1, 0x20));
+  check(is_nak(r, 1, kUnknownType), "heater type reserved: NAK UNKNOWN_TYPE");
+  std::tie(r, w) = b.run(frame(1, kDwell, {0, 0, 1}));
+  check(is_nak(r, 1, kBadLength), "DWELL of 3 bytes: NAK BAD_LENGTH");
+  std::tie(r, w) = b.run(frame(1, kLine, {0x81, 0, 0, 0, 0, 1, 0, 1, 0}));
+  check(is_nak(r, 1, kBadLength), "LINE with half an axis: NAK BAD_LENGTH");
+  std::tie(r, w) = b.run(frame(1, kLine, Bytes(6 + 5 * 4, 0)));
+  check(is_nak(r, 1, kBadLength), "LINE with 5 axes: NAK BAD_LENGTH");
+  std::tie(r, w) = b.run(frame(1, kLine, line_payload(1, 1, 10, xy, true)));
+  check(is_ack(r) && w == 1, "LINE seq 1 accepted");
+  auto flags = line_payload(1, 1, 10, xy, true);
+  flags[0] |= 0x04;
+  std::tie(r, w) = b.run(frame(2, kLine, flags));
+  check(is_nak(r, 2, kBadField) && w == 0, "reserved flag bit: NAK BAD_FIELD");
+  std::tie(r, w) = b.run(frame(2, kConfigAxis, config_axis_payload(4, AxisTiming{})));
+  check(is_nak(r, 2, kBadField), "axis 4: NAK BAD_FIELD");
+  std::tie(r, w) = b.run(frame(2, kConfigAxis, config_axis_payload(3, AxisTiming{5, 6, 7, 8})));
+  check(is_ack(r) && b.cfgs.size() == 1 && b.cfgs[0].axis == 3 && b.cfgs[0].timing.low == 6 &&
+            b.cfgs[0].timing.hold == 8,
+        "CONFIG_AXIS applied");
+  b.level = v2::kFifoDepth;
+  std::tie(r, w) = b.run(frame(3, kDwell, dwell_payload(100)));
+  check(is_nak(r, 3, kFifoFull) && w == 0, "no free slot: NAK FIFO_FULL, not accepted");
+  check_eq(b.dec.current().next_seq, 3, "FIFO_FULL leaves next_seq");
+  b.level = 0;
+  std::tie(r, w) = b.run(frame(3, kDwell, dwell_payload(100)));
+  check(is_ack(r) && w == 1 && b.writes.back().second.kind == kEntryDwell &&
+            b.writes.back().second.t == 100,
+        "DWELL entry");
+  std::tie(r, w) = b.run(frame(4, kNumerators, numerators_payload(5, 6)));
+  check(is_ack(r) && w == 1 && b.writes.back().second.kind == kEntryNumerators &&
+            b.writes.back().second.v2 && b.writes.back().second.steps[1] == 6,
+        "NUMERATORS entry");
+  std::tie(r, w) = b.run(frame(5, kStatusQuery, {1}));
+  check(is_nak(r, 5, kBadLength), "STATUS_QUERY with a payload: NAK BAD_LENGTH");
+  std::tie(r, w) = b.run(frame(200, kStatusQuery));
+  check(r.size() == 1 && r[0].kind == kReqStatus, "STATUS_QUERY (SEQ ignored)");
+  std::tie(r, w) = b.run(frame(5, kFaultClear));
+  check(r.size() == 2 && r[0].kind == kReqFaultClear && r[1].kind == kReqAck, "FAULT_CLEAR");
+  // A frame cut short: NAK TIMEOUT when the watchdog expires (1000 edges here).
+  const auto cut = line(6);
+  b.send(Bytes(cut.begin(), cut.begin() + 5));
+  const Cycle last_take = b.t - 10 + kDecoderTake;
+  const size_t r0 = b.reqs.size();
+  b.dec.advance(last_take + 1000);
+  check_eq(b.reqs.size(), r0, "no timeout before the watchdog expires");
+  b.dec.advance(last_take + 1001);
+  check(b.reqs.size() == r0 + 1 && b.reqs.back().second.reason == kTimeout &&
+            b.reqs.back().second.seq == 6 && b.reqs.back().first == last_take + 1000,
+        "NAK TIMEOUT (SEQ as received) after edge last + WATCHDOG_CLKS");
+  check_eq(b.dec.current().timeouts, 1u, "timeouts counted");
+  // A duplicate RELEASE also returns to auto mode (after a HELLO switched to v2 again).
+  b.run(frame(0, kHello));
+  std::tie(r, w) = b.run(frame(5, kRelease));
+  check(is_ack(r) && !b.dec.current().v2_mode, "duplicate RELEASE -> auto mode");
+  b.run(frame(0, kHello));
+  // RELEASE: ACK, back to auto mode: v1 again.
+  std::tie(r, w) = b.run(frame(6, kRelease));
+  check(is_ack(r) && !b.dec.current().v2_mode, "RELEASE -> auto mode");
+  std::tie(r, w) = b.run(Bytes(move.begin(), move.end()));
+  check(w == 1, "auto mode again: v1 packet accepted");
+  // SEQ wrap: 250 frames later next_seq wraps through 255 -> 0.
+  uint8_t seq = 7;
+  size_t writes = 0;
+  for (int i = 0; i < 250; ++i) {
+    std::tie(r, w) = b.run(frame(seq++, kDwell, dwell_payload(1)));
+    writes += w;
+  }
+  check_eq(writes, 250u, "250 frames through the SEQ wrap");
+  check_eq(b.dec.current().next_seq, 1, "next_seq wrapped");
+  std::tie(r, w) = b.run(frame(255, kDwell, dwell_payload(1)));
+  check(is_ack(r) && w == 0, "duplicate across the wrap");
+}
+
+// ---- response_encoder alone --------------------------------------------------------------------
+
+SC_MODULE(EncoderBench) {
+  CycleClock clk{50'000'000};
+  ResponseEncoderTwin enc;
+  tlm_utils::simple_initiator_socket<EncoderBench> req, done, applied;
+  tlm_utils::simple_target_socket<EncoderBench> tx, state;
+  std::vector<std::pair<Cycle, uint8_t>> bytes;  // (accept edge, byte)
+  StatusSnapshot snap;
+  Cycle busy_until = -1;
+  tlm::tlm_generic_payload gp;
+
+  SC_CTOR(EncoderBench)
+      : enc("response_encoder", clk, EncoderParams{}),
+        req("req"),
+        done("done"),
+        applied("applied"),
+        tx("tx"),
+        state("state") {
+    req.bind(enc.req);
+    applied.bind(enc.applied);
+    done.bind(enc.done);
+    enc.tx.bind(tx);
+    enc.state.bind(state);
+    tx.register_b_transport(this, &EncoderBench::on_tx);
+    state.register_b_transport(this, &EncoderBench::on_state);
+    enc.reset();
+  }
+  // A transmitter that takes one byte per 10 edges.
+  void on_tx(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    const Cycle a = std::max(clk.at(d), busy_until);
+    bytes.emplace_back(a, payload<TxByte>(g).byte);
+    busy_until = a + 10;
+    d = clk.delay_to(a);
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void on_state(tlm::tlm_generic_payload & g, sc_core::sc_time&) {
+    payload<StatusSnapshot>(g) = snap;
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void request(Cycle c, uint8_t kind, uint8_t seq = 0, uint8_t reason = 0) {
+    RespReq r{kind, seq, reason};
+    transport(req, gp, clk, r, c);
+  }
+  void seg_done(Cycle c, bool v2) {
+    SegDone d{v2};
+    transport(done, gp, clk, d, c);
+  }
+  // The frames sent so far, split by the parser.
+  std::vector<v2::DeviceFrame> frames() {
+    v2::FrameParser p;
+    std::vector<v2::DeviceFrame> out;
+    for (auto [c, b] : bytes)
+      if (auto f = p.feed(b)) out.push_back(*f);
+    return out;
+  }
+};
+
+void encoder_tests(EncoderBench& b) {
+  using namespace fpgacnc::twins::v2;
+  // The ACK test vector: next_seq 8, 63 free (level 1), 5 segments done.
+  b.snap.dec.next_seq = 8;
+  b.snap.fifo_level = 1;
+  for (int i = 0; i < 5; ++i) b.seg_done(104, true);
+  b.request(104, kReqAck);
+  while (b.enc.step(1'000'000)) {
+  }
+  Bytes got;
+  for (auto [c, x] : b.bytes) got.push_back(x);
+  // DONE and ACK were both pending: one ACK (it stands for the DONE).
+  check_bytes(got, {0xA5, 0x07, 0x00, 0x80, 0x08, 0x00, 0x3F, 0x00, 0x00, 0x00, 0x05, 0xAA, 0x5D},
+              "ACK frame (docs test vector), a pending DONE folded into it");
+  check_eq(b.bytes.front().first, 104 + kRespStart + 1,
+           "first byte taken kRespStart + 1 after the last strobe");
+  for (size_t i = 1; i < b.bytes.size(); ++i)
+    check_eq(b.bytes[i].first, b.bytes[i - 1].first + 10, "bytes back to back");
+  // Priority: IDENT, STATUS, NAK, ACK, DONE when all are pending on the same edge.
+  b.bytes.clear();
+  const Cycle t = 10'000;
+  b.seg_done(t, true);
+  b.request(t, kReqAck);
+  b.request(t, kReqNak, 9, kBadCrc);
+  b.request(t, kReqStatus);
+  b.request(t, kReqIdent);
+  b.request(t, kReqNak, 10, kOutOfOrder);  // replaces the pending NAK
+  while (b.enc.step(1'000'000)) {
+  }
+  auto f = b.frames();
+  check_eq(f.size(), 4u, "four frames (ACK stands for DONE)");
+  if (f.size() == 4) {
+    check_eq(f[0].type, kIdent, "IDENT first");
+    check_eq(f[1].type, kStatus, "then STATUS");
+    check_eq(f[2].type, kNak, "then NAK");
+    check_eq(f[3].type, kAck, "then ACK");
+    check_eq(f[0].seq, 1, "device SEQ counts frames");
+    check_eq(f[0].payload.size(), 18u, "IDENT length");
+    check_eq(f[0].u8(0), 2, "IDENT version");
+    check_eq(f[0].u8(1), kAxes, "IDENT N_AXES");
+    check_eq(f[0].u16(2), 64, "IDENT FIFO depth");
+    check_eq(f[0].u32(4), 50'000'000u, "IDENT CLK_HZ");
+    check_eq(f[0].u32(8), 115'200u, "IDENT BAUD");
+    check_eq(f[0].u8(17), 64, "IDENT MAX_PAYLOAD");
+    check_eq(f[1].payload.size(), static_cast<size_t>(kStatusPayload), "STATUS length");
+    check_eq(f[2].u8(0), 10, "the newer NAK replaced the older");
+    check_eq(f[2].u8(1), kOutOfOrder, "NAK reason");
+    check_eq(f[3].u32(3), 6u, "segments done 6");
+  }
+  // v1 moves: one 0xAA each, between frames, offered 2 edges after seg_done.
+  b.bytes.clear();
+  b.seg_done(50'000, false);
+  b.seg_done(50'001, false);
+  while (b.enc.step(1'000'000)) {
+  }
+  check(b.bytes.size() == 2 && b.bytes[0].second == 0xAA && b.bytes[1].second == 0xAA, "two 0xAA");
+  if (b.bytes.size() == 2) {
+    check_eq(b.bytes[0].first, 50'000 + kRespStart + 1, "0xAA taken on seg_done + 3");
+    check_eq(b.bytes[1].first, 50'010 + kRespStart + 1, "second 0xAA back to back");
+  }
+  // Nothing before the limit: no frame decided.
+  b.bytes.clear();
+  b.request(60'000, kReqAck);
+  check(!b.enc.step(60'000 + kRespStart), "no frame before the limit");
+  check(b.enc.step(60'001 + kRespStart), "the frame at the limit - 1");
+}
+
+// ---- segment_executor alone: queued segments -----------------------------------------------
+
+SC_MODULE(ExecBench) {
+  CoreParams p;
+  CycleClock clk{50'000'000};
+  PinRecorder pins;
+  SegmentExecutorTwin exec;
+  std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda;
+  std::array<std::unique_ptr<StepPulseTwin>, kAxes> pulse;
+  tlm_utils::simple_initiator_socket<ExecBench> seg, status;
+  tlm_utils::simple_target_socket<ExecBench> done;
+  std::vector<std::pair<Cycle, bool>> seg_done;
+  tlm::tlm_generic_payload gp;
+
+  SC_CTOR(ExecBench)
+      : exec("segment_executor", clk, p, pins), seg("seg"), status("status"), done("done") {
+    seg.bind(exec.segments);
+    status.bind(exec.status);
+    exec.done.bind(done);
+    done.register_b_transport(this, &ExecBench::on_done);
+    for (int a = 0; a < kAxes; ++a) {
+      dda[a] = std::make_unique<DdaLinearTwin>(sc_core::sc_gen_unique_name("dda_linear"), clk);
+      pulse[a] = std::make_unique<StepPulseTwin>(sc_core::sc_gen_unique_name("step_pulse"), clk,
+                                                 p.timing[a], a, pins);
+      exec.dda[a]->bind(dda[a]->load);
+      exec.pulse[a]->bind(pulse[a]->ctl);
+      dda[a]->step.bind(pulse[a]->req);
+    }
+  }
+  void on_done(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
+    seg_done.emplace_back(clk.at(d), payload<SegDone>(g).v2);
+    g.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  void reset() {
+    exec.reset();
+    for (auto& x : pulse) x->reset();
+    pins.clear();
+    seg_done.clear();
+  }
+  static Segment make(std::array<int32_t, kAxes> steps, uint64_t t, uint8_t code, uint8_t power,
+                      bool fast) {
+    Segment s{};
+    s.code = code;
+    s.power = power;
+    s.total = t;
+    s.v2 = true;
+    s.dir_fast = fast;
+    for (int a = 0; a < kAxes; ++a) {
+      s.dir[a] = steps[a] >= 0;
+      s.steps[a] = static_cast<uint32_t>(steps[a] < 0 ? -steps[a] : steps[a]);
+      s.tmn[a] = t - s.steps[a];
+    }
+    return s;
+  }
+  Cycle offer(Segment s, Cycle valid) {
+    return transport(seg, gp, clk, s, valid);
+  }
+};
+
+void executor_tests(ExecBench& b) {
+  b.p.timing[0] = AxisTiming{5, 5, 30, 20};
+  b.p.timing[1] = AxisTiming{5, 5, 30, 20};
+  b.reset();
+  // Segment 1: X +10, Y +1 over 1000 ticks, laser; valid on edge 5: accepted 6; X and Y
+  // reverse (DIR resets low): D = max(7, -20 + 20) = 7, R = 7 + 30 = 37.
+  const Cycle a1 = b.offer(ExecBench::make({10, 1, 0, 0}, 1000, 1, 255, true), 5);
+  check_eq(a1, 6, "first accept");
+  check_eq(b.exec.seg_start_cycles.at(0), 37, "first R after DIR setup");
+  const Cycle e1 = 37 + 1000;
+  // Segment 2, valid long before e1, same direction: zero gap, R' = e1.
+  const Cycle a2 = b.offer(ExecBench::make({5, 3, 0, 0}, 500, 2, 10, false), 100);
+  check_eq(a2, e1, "queued: accepted on the last tick");
+  check_eq(b.exec.seg_start_cycles.at(1), e1, "zero gap: R' = R + T");
+  // Segment 3: X reverses with dir_fast: zero gap; DIR X changes at max(e2 + 1, last X rise +
+  // hold) = e2 + 20 (X's last step is on e2).
+  const Cycle e2 = e1 + 500;
+  b.offer(ExecBench::make({-4, 3, 0, 0}, 400, 0, 0, true), e1 + 1);
+  check_eq(b.exec.seg_start_cycles.at(2), e2, "reversal with dir_fast: zero gap");
+  // Segment 4: Y reverses without dir_fast: idle, HOLD, SETUP.
+  const Cycle e3 = e2 + 400;
+  b.offer(ExecBench::make({0, -2, 0, 0}, 300, 0, 0, false), e2 + 5);
+  const Cycle d4 = std::max(e3 + 2, e3 + 20);  // accept e3 + 1, Y's last rise on e3
+  check_eq(b.exec.seg_start_cycles.at(3), d4 + 30, "reversal without dir_fast: DIR wait");
+  // Segment 5 offered after segment 4 ended: not ready in time, accepted on valid + 1.
+  const Cycle e4 = d4 + 30 + 300;
+  b.offer(ExecBench::make({0, -1, 0, 0}, 100, 0, 0, true), e4 + 50);
+  check_eq(b.exec.seg_start_cycles.at(4), e4 + 51, "late segment: R = valid + 1");
+  check_eq(b.exec.zero_gap, 2u, "two zero-gap starts");
+  const auto edges = b.pins.take_sorted();
+  std::vector<fpgacnc::simboard::Edge> laser, dir_x;
+  for (const auto& e : edges) {
+    if (e.signal == fpgacnc::simboard::kLaser) laser.push_back(e);
+    if (e.signal == fpgacnc::simboard::dir_signal(0)) dir_x.push_back(e);
+  }
+  // Laser: one rise on R1, stays high through segment 2 (code 2, power 10), falls on e2.
+  check_eq(laser.size(), 2u, "laser: one pulse over two back-to-back cutting segments");
+  if (laser.size() == 2) {
+    check_eq(laser[0].cycle, 37u, "laser rises on R1");
+    check_eq(laser[1].cycle, static_cast<uint64_t>(e2), "laser falls at the end of segment 2");
+  }
+  check_eq(dir_x.size(), 2u, "DIR X: two changes");
+  if (dir_x.size() == 2)
+    check_eq(dir_x[1].cycle, static_cast<uint64_t>(e2 + 20), "fast DIR change after hold");
+  // No STEP X rise within hold before / setup after the fast DIR change.
+  for (const auto& e : edges)
+    if (e.signal == 0 && e.value == 1)
+      check(e.cycle + 20 <= static_cast<uint64_t>(e2 + 20) ||
+                e.cycle >= static_cast<uint64_t>(e2 + 20 + 30),
+            fmt::format("STEP X at {} respects hold/setup around the DIR change", e.cycle));
+  check_eq(b.pulse[0]->position, 10 + 5 - 4, "X position");
+  check_eq(b.pulse[1]->position, 1 + 3 + 3 - 2 - 1, "Y position");
+  // Zero-length and dwell.
+  b.reset();
+  b.offer(ExecBench::make({0, 0, 0, 0}, 0, 1, 255, true), 10);
+  check_eq(b.seg_done.at(0).first, 11, "zero-length: done on its accept edge");
+  b.offer(ExecBench::make({0, 0, 0, 0}, 700, 0, 0, true), 12);
+  check_eq(b.seg_done.at(1).first, 13 + 700, "dwell: T ticks");
+  check(b.pins.size() == 0, "no edges from a zero-length segment and a dwell");
+}
+
+// ---- whole boards ------------------------------------------------------------------------------
+
+HostScript worked_example_job() {
   using namespace fpgacnc::protocol::v1;
   const auto init = pack_init(18'750'000, 18'750'000);
   const auto move = pack_motion(1, 320, -160, 1200);
-  return {HostPacket{{init.begin(), init.end()}, false, 1},
-          HostPacket{{move.begin(), move.end()}, true, 1}};
+  return HostScript{{HostPacket{{init.begin(), init.end()}, false, 1},
+                     HostPacket{{move.begin(), move.end()}, true, 1}},
+                    {}};
 }
 
 void worked_example(const RunResult& r) {
@@ -68,17 +594,18 @@ void worked_example(const RunResult& r) {
   // Init frames from cycle 1, the motion packet 1 clock after them, its last byte 10 frames on.
   const Cycle last_start = 1 + 9 * st.frame() + 1 + 10 * st.frame();
   const Cycle valid = last_start + 2 + bt.rx_tick(10);  // uart_rx: synchronizer + stop sample
-  const Cycle a = valid + 2;                            // decoder take + 1, prep accept
-  const Cycle A = a + kPrepLatency + 1;                 // executor accept
-  const Cycle D = A + 1;                                // X reverses (DIR 0 -> 1), hold long over
-  const Cycle R = D + 200;                              // DIR setup
+  const Cycle take = valid + kDecoderTake;
+  const Cycle a = take + kDecoderWrite + kFifoWriteToValid;  // FIFO -> prep accept
+  const Cycle A = a + kPrepLatency + 1;                      // executor accept
+  const Cycle D = A + 1;    // X reverses (DIR 0 -> 1), hold long over
+  const Cycle R = D + 200;  // DIR setup
   check_eq(r.packet_done.size(), 2u, "packets");
-  check_eq(r.packet_done.back(), valid + 1, "packet_done");
+  check_eq(r.packet_done.back(), take + kDecoderResp, "packet_done");
   check_eq(r.seg_start.at(0), R, "run start R");
   check_eq(r.position[0], 320, "X position");
   check_eq(r.position[1], -160, "Y position");
   check_eq(r.acks.size(), 1u, "one ACK");
-  check_eq(r.acks.at(0), R + 5'000'000 + 2, "ACK start edge = R + T + 2");
+  check_eq(r.acks.at(0), R + 5'000'000 + kRespStart + 1, "ACK start edge = R + T + 3");
   // Edges: DIR X at D; laser at R; first X step at R + 15625; last steps at R + T.
   std::vector<fpgacnc::simboard::Edge> x_steps, y_steps;
   bool dir_ok = false, laser_ok = false;
@@ -103,14 +630,76 @@ void zero_move_and_watchdog(const RunResult& r) {
   check_eq(r.timeouts, 1u, "one watchdog timeout");
   check_eq(r.acks.size(), 1u, "ACK of the zero move");
   check(r.edges.empty(), "a zero move makes no edges");
-  // The zero move completes on the executor's accept edge: ACK 2 edges later.
-  check_eq(r.acks.at(0), r.seg_done.at(0) + 2, "ACK 2 edges after seg_done");
+  // The zero move completes on the executor's accept edge: ACK 3 edges later.
+  check_eq(r.acks.at(0), r.seg_done.at(0) + kRespStart + 1, "ACK 3 edges after seg_done");
+}
+
+// A v2 session: CONFIG_AXIS, NUMERATORS, 40 short LINE frames (a square spiral on X/Y, reversals
+// with dir_fast, one clamped), a DWELL: every segment after the first starts on the previous
+// one's last tick (zero gap), the STATUS at the end has the positions and counters.
+V2Script spiral_script(std::vector<uint64_t>& t_out, std::array<int64_t, 2>& pos) {
+  using namespace fpgacnc::twins::v2;
+  V2Script s;
+  for (uint8_t a = 0; a < kAxes; ++a)
+    s.items.push_back(V2Item{kConfigAxis, config_axis_payload(a, AxisTiming{50, 50, 100, 100})});
+  s.items.push_back(V2Item{kNumerators, numerators_payload(1000, 2000)});
+  pos = {0, 0};
+  for (int i = 0; i < 40; ++i) {
+    const int32_t n = 5 + i;
+    int32_t xy[2] = {0, 0};
+    xy[i % 2] = (i / 2) % 2 ? -n : n;
+    xy[1 - i % 2] = i == 20 ? 0 : 1;
+    // Segments last longer than a frame on the wire (16 bytes, 69 000 clocks at 115 200 baud),
+    // so the FIFO fills.
+    uint32_t t = static_cast<uint32_t>(n) * 20'000;
+    if (i == 20) t = 10;  // clamped to n * 100
+    t_out.push_back(i == 20 ? static_cast<uint64_t>(n) * 100 : t);
+    pos[0] += xy[0];
+    pos[1] += xy[1];
+    s.items.push_back(V2Item{kLine, line_payload(1, 128, t, xy, true)});
+  }
+  s.items.push_back(V2Item{kDwell, dwell_payload(12'345)});
+  t_out.push_back(12'345);
+  return s;
+}
+
+void spiral(const RunResult& r, const std::vector<uint64_t>& t, const std::array<int64_t, 2>& pos,
+            const std::vector<std::vector<uint8_t>>& status_payloads) {
+  std::vector<fpgacnc::twins::v2::DeviceFrame> statuses;
+  for (const auto& p : status_payloads)
+    statuses.push_back(fpgacnc::twins::v2::DeviceFrame{0, fpgacnc::twins::v2::kStatus, p});
+  check(r.error.empty(), "v2 host error: " + r.error);
+  check_eq(r.position[0], pos[0], "v2 X position");
+  check_eq(r.position[1], pos[1], "v2 Y position");
+  check_eq(r.segments_done, 1u + t.size(), "segments done: NUMERATORS + LINEs + DWELL");
+  check_eq(r.clamped, 1u, "one clamped segment");
+  check_eq(r.seg_start.size(), t.size(), "seg_start per segment");
+  check_eq(r.naks, 0u, "no NAK");
+  size_t zero = 0;
+  for (size_t i = 1; i < r.seg_start.size() && i < t.size(); ++i)
+    zero += r.seg_start[i] == r.seg_start[i - 1] + static_cast<Cycle>(t[i - 1]) ? 1 : 0;
+  check_eq(zero, t.size() - 1, "every segment after the first starts on R + T (zero gap)");
+  check_eq(r.zero_gap, t.size() - 1, "executor: zero-gap starts");
+  check_eq(statuses.size(), 1u, "one STATUS");
+  if (!statuses.empty()) {
+    const auto& s = statuses[0];
+    check_eq(s.u8(0) & 3, 2, "STATUS: idle, v2 mode");
+    check_eq(static_cast<int32_t>(s.u32(9)), pos[0], "STATUS position X");
+    check_eq(static_cast<int32_t>(s.u32(13)), pos[1], "STATUS position Y");
+    check_eq(s.u32(5), 1u + t.size(), "STATUS segments done");
+    check_eq(s.u16(25), 4u + 1 + t.size() + 1 + 1, "STATUS frames ok (HELLO..STATUS_QUERY)");
+    check_eq(s.u16(25 + 16), 1u, "STATUS clamped");
+  }
 }
 
 }  // namespace
 
 int sc_main(int, char*[]) {
   arithmetic();
+  v2_arithmetic();
+  DecoderBench dec_bench("decoder_bench");
+  EncoderBench enc_bench("encoder_bench");
+  ExecBench exec_bench("exec_bench");
   CoreParams p;
   VirtualBoard board("virtual_board", p);
   std::vector<RunResult> results;
@@ -118,16 +707,37 @@ int sc_main(int, char*[]) {
   board.add_job(TwinJob{worked_example_job(), p.timing, keep});
   // A truncated packet (3 bytes), a pause past the watchdog, then a move with no steps.
   const auto zero = fpgacnc::protocol::v1::pack_motion(0, 0, 0, 100);
-  board.add_job(TwinJob{{HostPacket{{0x01, 0x00, 0x00}, false, 1},
-                         HostPacket{{zero.begin(), zero.end()}, true, 6'000'000}},
-                        p.timing,
-                        keep});
+  board.add_job(TwinJob{HostScript{{HostPacket{{0x01, 0x00, 0x00}, false, 1},
+                                    HostPacket{{zero.begin(), zero.end()}, true, 6'000'000}},
+                                   {}},
+                        p.timing, keep});
+  std::vector<uint64_t> spiral_t;
+  std::array<int64_t, 2> spiral_pos{};
+  V2Script sp = spiral_script(spiral_t, spiral_pos);
+  board.add_job(TwinJob{HostScript{{}, sp}, p.timing, keep});
+  // The block benches run in a thread of their own (sockets need a running simulation).
+  struct Blocks : sc_core::sc_module {
+    SC_HAS_PROCESS(Blocks);
+    DecoderBench& d;
+    EncoderBench& e;
+    ExecBench& x;
+    Blocks(sc_core::sc_module_name n, DecoderBench& d, EncoderBench& e, ExecBench& x)
+        : sc_module(n), d(d), e(e), x(x) {
+      SC_THREAD(run);
+    }
+    void run() {
+      decoder_tests(d);
+      encoder_tests(e);
+      executor_tests(x);
+    }
+  } blocks("blocks", dec_bench, enc_bench, exec_bench);
   sc_core::sc_start();
-  if (results.size() == 2) {
+  if (results.size() == 3) {
     worked_example(results[0]);
     zero_move_and_watchdog(results[1]);
+    spiral(results[2], spiral_t, spiral_pos, results[2].statuses);
   } else {
-    check(false, "both jobs ran");
+    check(false, "all jobs ran");
   }
   fmt::print("twins_unit: {}\n", failures ? "FAILED" : "all checks passed");
   return failures ? 1 : 0;

@@ -1,18 +1,29 @@
-// The stop-and-wait v1 host as a schedule of UART frames on the rx pin, shared by every
-// harness (virtual board, RTL runner, co-simulation) so that both models see the same byte
-// stream at the same cycles: packet i's first frame starts `gap` clocks after the host became
-// ready (the end of the previous packet's ACK byte on tx, or the end of the previous packet's
-// last frame when it expects no ACK, e.g. the init packet); frames of a packet follow back to
-// back (SenderTiming::frame() clocks each).
+// The hosts as schedules of UART frames on the rx pin, shared by every harness (virtual board,
+// RTL runner, co-simulation) so that both models see the same byte stream at the same cycles.
+//
+// A host hands out packets (a v1 packet or a v2 frame: UART frames back to back,
+// SenderTiming::frame() clocks each) and hears the device's bytes on tx. Its decisions depend
+// only on the bytes and their start edges, in this order: next_packet() is asked on the edge
+// `ready()` (the end of the previous packet) unless waiting(), after every tx byte whose stop
+// bit centre (start + the tx bit timer's 9.5 bits) lies before that edge was given to
+// on_tx_byte(); a waiting host is asked again right after the byte that ends its wait.
+//
+// v1 (StopAndWaitHost): packet i's first frame starts `gap` clocks after the host became ready
+// (the end of the previous packet's ACK byte on tx, or the end of the previous packet's last
+// frame when it expects no ACK, e.g. the init packet).
+// v2 (V2StreamHost): docs/protocol.md "Host streaming" as a schedule, see below.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <vector>
 
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/twins/timing.h"
+#include "fpgacnc/twins/v2_frames.h"
 
 namespace fpgacnc::twins {
 
@@ -27,17 +38,33 @@ struct HostFrame {
   uint8_t byte;
 };
 
-class StopAndWaitHost {
+class Host {
+ public:
+  virtual ~Host() = default;
+  virtual bool done() const = 0;
+  virtual bool waiting() const = 0;
+  virtual size_t packets_sent() const = 0;
+  virtual Cycle ready() const = 0;
+  // Frames of the next packet (empty, and waiting() or done(), when there is none now).
+  virtual std::vector<HostFrame> next_packet() = 0;
+  // A byte on tx, by its start edge.
+  virtual void on_tx_byte(Cycle start, uint8_t byte) = 0;
+  // Start edges of the answers the host acted on (v1 ACK bytes, v2 device frames).
+  std::vector<Cycle> acks;
+  uint64_t unexpected = 0;
+};
+
+class StopAndWaitHost : public Host {
  public:
   StopAndWaitHost(std::vector<HostPacket> packets, const SenderTiming& sender, int64_t ack_frame)
       : packets_(std::move(packets)), sender_(sender), ack_frame_(ack_frame) {}
 
-  bool done() const { return next_ >= packets_.size() && !waiting_; }
-  bool waiting() const { return waiting_; }
-  size_t packets_sent() const { return next_; }
-  Cycle ready() const { return ready_; }
+  bool done() const override { return next_ >= packets_.size() && !waiting_; }
+  bool waiting() const override { return waiting_; }
+  size_t packets_sent() const override { return next_; }
+  Cycle ready() const override { return ready_; }
   // Frames of the next packet (empty when waiting for an ACK or done).
-  std::vector<HostFrame> next_packet() {
+  std::vector<HostFrame> next_packet() override {
     std::vector<HostFrame> f;
     if (waiting_ || next_ >= packets_.size()) return f;
     const HostPacket& p = packets_[next_++];
@@ -51,7 +78,7 @@ class StopAndWaitHost {
     return f;
   }
   // The start edge of a byte on tx (an ACK when 0xAA and one is awaited).
-  void on_tx_byte(Cycle start, uint8_t byte) {
+  void on_tx_byte(Cycle start, uint8_t byte) override {
     if (waiting_ && byte == 0xAA) {
       waiting_ = false;
       ready_ = start + ack_frame_;
@@ -60,8 +87,6 @@ class StopAndWaitHost {
       ++unexpected;
     }
   }
-  std::vector<Cycle> acks;
-  uint64_t unexpected = 0;
 
  private:
   std::vector<HostPacket> packets_;
@@ -90,6 +115,218 @@ inline std::vector<HostPacket> job_packets(const protocol::v1::Job& job, uint64_
     extra = 0;
   }
   return out;
+}
+
+// A v2 session as a schedule (docs/protocol.md "Host streaming"):
+//   HELLO, then wait for IDENT (next_seq, FIFO depth);
+//   the sequenced frames in order (SEQ from IDENT's next_seq), each `gap` clocks after the host
+//   is ready, while credit = free - (FIFO frames sent, not acknowledged) > 0 for FIFO frames
+//   and fewer than 127 frames are unacknowledged; a NAK of any reason goes back to its
+//   next_seq (go-back-N); ACK, DONE and NAK carry next_seq and free slots;
+//   when every frame is acknowledged and `segments done` counts every FIFO frame:
+//   STATUS_QUERY (wait for STATUS), then RELEASE (wait for its ACK).
+// A frame with `corrupt` is sent once with a wrong CRC (the device NAKs BAD_CRC); `pre` bytes go
+// out once before it.
+// Waiting for answers, the host acts on each complete device frame: it is ready again at the
+// end of that frame's last byte on tx. No retransmission timer: the models never lose bytes.
+struct V2Item {
+  uint8_t type;
+  std::vector<uint8_t> payload;
+  int64_t gap = 1;
+  bool corrupt = false;
+  // Bytes sent once, as a packet of their own, before the frame's first transmission (line
+  // noise, a frame cut short), and the gap from their end to the frame.
+  std::vector<uint8_t> pre{};
+  int64_t pre_gap = 1;
+  bool fifo() const { return type == v2::kLine || type == v2::kDwell || type == v2::kNumerators; }
+};
+struct V2Script {
+  std::vector<V2Item> items;  // sequenced frames
+  int64_t hello_gap = 1;
+  bool status_at_end = true;
+  bool ignore_credit = false;  // send while fewer than 127 are unacknowledged (FIFO_FULL NAKs)
+};
+
+class V2StreamHost : public Host {
+ public:
+  V2StreamHost(V2Script script, const SenderTiming& sender, int64_t byte_frame)
+      : s_(std::move(script)), sender_(sender), byte_frame_(byte_frame) {
+    V2Item rel{v2::kRelease, {}, 1, false};
+    s_.items.push_back(rel);
+    for (const V2Item& i : s_.items) fifo_total_ += i.fifo() ? 1 : 0;
+    corrupted_.assign(s_.items.size(), false);
+    pre_done_.assign(s_.items.size(), false);
+  }
+
+  bool done() const override { return phase_ == Phase::Done; }
+  bool waiting() const override { return waiting_; }
+  size_t packets_sent() const override { return sent_; }
+  Cycle ready() const override { return ready_; }
+
+  std::vector<HostFrame> next_packet() override {
+    if (waiting_ || phase_ == Phase::Done) return {};
+    switch (phase_) {
+      case Phase::Start:
+        phase_ = Phase::Hello;
+        return send(v2::frame(0, v2::kHello), s_.hello_gap, true);
+      case Phase::Stream:
+        if (can_send()) return send_item();
+        if (acked_ + 1 == s_.items.size() && done_ == fifo_total_) {
+          if (s_.status_at_end) {
+            phase_ = Phase::Status;
+            return send(v2::frame(0, v2::kStatusQuery), 1, true);
+          }
+          phase_ = Phase::Release;
+          return send_item();
+        }
+        break;
+      case Phase::Release:
+        if (can_send()) return send_item();
+        break;
+      default:
+        break;
+    }
+    waiting_ = true;
+    return {};
+  }
+
+  void on_tx_byte(Cycle start, uint8_t byte) override {
+    if (!frame_start_) frame_start_ = start;
+    const auto f = parser_.feed(byte);
+    if (parser_.bad + parser_.noise != bad_seen_) {
+      bad_seen_ = parser_.bad + parser_.noise;
+      ++unexpected;
+      frame_start_.reset();
+    }
+    if (!f) return;
+    acks.push_back(*frame_start_);
+    frame_start_.reset();
+    handle(*f);
+    if (waiting_) {
+      waiting_ = false;
+      ready_ = start + byte_frame_;
+    }
+  }
+
+  // Figures for the report.
+  uint64_t naks = 0, retransmitted = 0, dones = 0;
+  std::vector<v2::DeviceFrame> statuses;
+  uint32_t device_done() const { return done_; }
+
+ private:
+  enum class Phase { Start, Hello, Stream, Status, Release, Done };
+
+  uint8_t seq_of(size_t i) const { return static_cast<uint8_t>(base_seq_ + i); }
+  bool can_send() const {
+    if (next_ >= s_.items.size()) return false;
+    if (phase_ == Phase::Stream && next_ + 1 == s_.items.size()) return false;  // RELEASE last
+    if (next_ - acked_ >= 127) return false;
+    if (!s_.items[next_].fifo() || s_.ignore_credit) return true;
+    uint32_t in_flight = 0;
+    for (size_t i = acked_; i < next_; ++i) in_flight += s_.items[i].fifo() ? 1 : 0;
+    return free_ > in_flight;
+  }
+  std::vector<HostFrame> send(std::vector<uint8_t> bytes, int64_t gap, bool wait_after) {
+    std::vector<HostFrame> f;
+    Cycle t = ready_ + gap;
+    for (uint8_t b : bytes) {
+      f.push_back(HostFrame{t, b});
+      t += sender_.frame();
+    }
+    ready_ = t;
+    ++sent_;
+    waiting_ = wait_after;
+    return f;
+  }
+  std::vector<HostFrame> send_item() {
+    const V2Item& it = s_.items[next_];
+    int64_t gap = it.gap;
+    if (!it.pre.empty() && !pre_done_[next_]) {
+      pre_done_[next_] = true;
+      after_pre_ = true;
+      return send(it.pre, gap, false);
+    }
+    if (after_pre_) gap = it.pre_gap;
+    after_pre_ = false;
+    auto bytes = v2::frame(seq_of(next_), it.type, it.payload);
+    if (it.corrupt && !corrupted_[next_]) {
+      corrupted_[next_] = true;
+      bytes.back() ^= 0x5A;
+    }
+    if (next_ < sent_hi_) ++retransmitted;
+    ++next_;
+    sent_hi_ = std::max(sent_hi_, next_);
+    return send(std::move(bytes), gap, false);
+  }
+  // Cumulative acknowledgement: next_seq names the first frame not accepted.
+  void credit(uint8_t next_seq, uint16_t free) {
+    const size_t d = static_cast<uint8_t>(next_seq - seq_of(acked_));
+    if (d <= sent_hi_ - acked_) acked_ += d;
+    free_ = free;
+    if (next_ < acked_) next_ = acked_;
+  }
+  void handle(const v2::DeviceFrame& f) {
+    if (f.type == v2::kIdent && phase_ == Phase::Hello && f.payload.size() == 18) {
+      base_seq_ = f.u8(16);
+      free_ = f.u16(2);
+      phase_ = Phase::Stream;
+    } else if ((f.type == v2::kAck || f.type == v2::kDone) && f.payload.size() == 7) {
+      if (f.type == v2::kDone) ++dones;
+      credit(f.u8(0), f.u16(1));
+      done_ = f.u32(3);
+      if (phase_ == Phase::Release && acked_ == s_.items.size()) phase_ = Phase::Done;
+    } else if (f.type == v2::kNak && f.payload.size() == 5) {
+      ++naks;
+      credit(f.u8(2), f.u16(3));
+      next_ = acked_;
+    } else if (f.type == v2::kStatus && phase_ == Phase::Status) {
+      statuses.push_back(f);
+      phase_ = Phase::Release;
+    } else {
+      ++unexpected;
+    }
+  }
+
+  V2Script s_;
+  SenderTiming sender_;
+  int64_t byte_frame_;
+  Phase phase_ = Phase::Start;
+  bool waiting_ = false;
+  Cycle ready_ = 0;
+  size_t sent_ = 0;
+  uint8_t base_seq_ = 0;
+  size_t next_ = 0, acked_ = 0, sent_hi_ = 0;
+  uint32_t free_ = 0, done_ = 0, fifo_total_ = 0;
+  std::vector<bool> corrupted_, pre_done_;
+  bool after_pre_ = false;
+  v2::FrameParser parser_;
+  uint64_t bad_seen_ = 0;
+  std::optional<Cycle> frame_start_;
+};
+
+// A job packed by the host's v2 packer as a session: CONFIG_AXIS for every axis, then its FIFO
+// frames (NUMERATORS, LINE, DWELL; at most `max_frames` LINE/DWELL), back to back.
+inline V2Script job_script(const protocol::v2::Job& job, size_t max_frames = SIZE_MAX) {
+  V2Script s;
+  for (const auto& f : job.config) s.items.push_back(V2Item{f.type, f.payload, 1, false});
+  size_t motion = 0;
+  for (const auto& jf : job.frames) {
+    const bool numerators = jf.frame.type == v2::kNumerators;
+    if (!numerators && motion++ >= max_frames) break;
+    s.items.push_back(V2Item{jf.frame.type, jf.frame.payload, 1, false});
+  }
+  return s;
+}
+
+// How a job is driven: v1 stop-and-wait packets or a v2 session.
+struct HostScript {
+  std::vector<HostPacket> v1;
+  std::optional<V2Script> v2;
+};
+inline std::unique_ptr<Host> make_host(const HostScript& s, const SenderTiming& sender,
+                                       int64_t byte_frame) {
+  if (s.v2) return std::make_unique<V2StreamHost>(*s.v2, sender, byte_frame);
+  return std::make_unique<StopAndWaitHost>(s.v1, sender, byte_frame);
 }
 
 }  // namespace fpgacnc::twins

@@ -33,11 +33,12 @@ inline constexpr int kSettleEdges = 4;
 
 class RtlDriver {
  public:
-  RtlDriver(const CoreParams& p, std::vector<HostPacket> packets, bool record_tx)
+  RtlDriver(const CoreParams& p, const HostScript& script, bool record_tx)
       : p_(p),
         sender_{p.clk_hz, p.baud},
         timer_(p.clk_hz, p.baud),
-        host_(std::move(packets), sender_, timer_.tx_boundary(10)),
+        host_ptr_(make_host(script, sender_, timer_.tx_boundary(10))),
+        host_(*host_ptr_),
         mask_(record_tx ? 0x3ffu : 0x1ffu) {
     prev_sig_ &= mask_;
     for (int i = 0; i <= 10; ++i)
@@ -78,6 +79,7 @@ class RtlDriver {
       prev_count_ = o.packet_count;
     }
     if (o.seg_start) r_.seg_start.push_back(c);
+    if (o.seg_start && o.seg_done) ++r_.zero_gap;  // started on the previous one's last tick
     if (o.seg_done) r_.seg_done.push_back(c);
     // tx monitor: start edge, then samples at the bit centres.
     if (!tx_start_) {
@@ -108,12 +110,13 @@ class RtlDriver {
     if (!r_.error.empty()) return true;
     return host_.done() && cycle_ >= host_.ready() && cycle_ > last_active_ + 2;
   }
-  // Checks for a missing ACK (call after after_edge).
+  // Checks for a missing answer (call after after_edge).
   void check_stall() {
     if (host_.waiting() && next_frame_ >= frames_.size() && cycle_ > host_.ready() + 64 &&
         cycle_ > last_active_ + 64 + 2 * timer_.tx_boundary(10))
-      r_.error = "no ACK for packet " + std::to_string(host_.packets_sent());
+      r_.error = "no answer for packet " + std::to_string(host_.packets_sent());
   }
+  const Host& host() const { return host_; }
 
   RunResult take_result(const std::array<int64_t, kAxes>& position, uint64_t timeouts,
                         uint64_t overruns, uint64_t frame_errors, uint64_t violations) {
@@ -129,6 +132,13 @@ class RtlDriver {
     r_.frame_errors = frame_errors;
     r_.violations = violations;
     r_.packets_sent = host_.packets_sent();
+    if (auto* h = dynamic_cast<V2StreamHost*>(&host_)) {
+      r_.device_frames = h->acks.size();
+      r_.naks = h->naks;
+      r_.retransmitted = h->retransmitted;
+      r_.segments_done = h->device_done();
+      for (const auto& f : h->statuses) r_.statuses.push_back(f.payload);
+    }
     return std::move(r_);
   }
   void reserve(size_t n) { r_.edges.reserve(n); }
@@ -148,7 +158,8 @@ class RtlDriver {
   CoreParams p_;
   SenderTiming sender_;
   BitTimer timer_;
-  StopAndWaitHost host_;
+  std::unique_ptr<Host> host_ptr_;
+  Host& host_;
   uint32_t mask_;
   std::vector<HostFrame> frames_;
   size_t next_frame_ = 0;

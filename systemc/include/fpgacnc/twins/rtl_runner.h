@@ -9,6 +9,6 @@
 namespace fpgacnc::twins {
 
 // Throws std::invalid_argument when `p` is not what the Verilated model was built with.
-RunResult run_on_rtl(const CoreParams& p, std::vector<HostPacket> packets, bool record_tx = false);
+RunResult run_on_rtl(const CoreParams& p, const HostScript& script, bool record_tx = false);
 
 }  // namespace fpgacnc::twins

@@ -18,11 +18,18 @@ struct RunResult {
   std::vector<Cycle> packet_done;     // decoder: edge after which packet_done is high
   std::vector<Cycle> seg_start;       // executor: edge after which seg_start is high
   std::vector<Cycle> seg_done;        // executor: edge after which seg_done is high
+  std::vector<Cycle> seg_done_v2;     // the same for v2 segments (seg_done_v2; block level)
   Cycle end_cycle = 0;                // job duration: last ACK's end or last edge, the later
   std::array<int64_t, 4> position{};  // position counters of the core
   uint64_t moves_done = 0, packets = 0, timeouts = 0, overruns = 0, frame_errors = 0,
            violations = 0;
   uint64_t packets_sent = 0;
+  // v2: what the host saw (device frames, NAKs, retransmitted frames, `segments done` of the
+  // last ACK/DONE) and the device side (v2 frames with a good CRC, clamped segments, segments
+  // started with zero idle clocks: seg_start in the clock of the previous seg_done).
+  uint64_t device_frames = 0, naks = 0, retransmitted = 0, segments_done = 0;
+  uint64_t frames_ok = 0, clamped = 0, zero_gap = 0;
+  std::vector<std::vector<uint8_t>> statuses;  // payloads of the STATUS frames the host got
   double wall_s = 0.0;
   std::string error;  // "" = the host got every ACK it waited for
 };

@@ -1,23 +1,44 @@
-// Twin of rtl/segment_prep.v: v1 timing semantics (docs/protocol.md "Timing semantics",
-// docs/timing.md "Segment length").
+// Twin of rtl/segment_prep.v: the command FIFO entry becomes a prepared segment (docs/protocol.md
+// "Timing semantics" and "LINE", docs/timing.md "Segment length" and "Queued segments").
 //
-// Target `commands`: a Command valid from the delay's edge V. It is accepted on the first edge
-// after V on which the block is idle (its previous segment taken by the executor) and, for an
-// init, the executor is idle (asked on initiator `exec_status`); the delay returned names the
-// accept edge. An init sets NUMERATOR_X/Y. A motion becomes a Segment (dominant axis,
-// P = NUMERATOR_dom / feed or FEED0_PERIOD, raised to min_period, T = P * N, tmn = T - |steps|)
-// valid PREP_LATENCY = 68 edges after acceptance, offered on initiator `segments`; the block
-// is idle again from the edge after the executor takes it.
+// Target `commands`: a FifoEntry valid from the delay's edge V. It is accepted (popped) on the
+// first edge after V on which the block is idle (its previous segment taken by the executor);
+// the delay returned names the accept edge. Then, by kind:
+//   numerators (v1 init or v2 NUMERATORS): also waits until the executor and every STEP pulse
+//     are idle (asked on initiator `exec_status`); sets NUMERATOR_X/Y on the accept edge
+//     (init_applied); a v2 one is reported on initiator `applied` (it counts as a segment done).
+//   v1 motion: dominant axis, P = NUMERATOR_dom / feed or FEED0_PERIOD, raised to min_period,
+//     T = P * N; valid PREP_LATENCY (68) edges after acceptance.
+//   v2 motion: n_dom = max |steps|, P = floor(T / n_dom); P < min_period raises T to
+//     n_dom * min_period (counted: clamped); T and no steps is a segment of T ticks without
+//     steps; valid kPrepLatencyV2 (+ kPrepClampExtra when clamped) edges after acceptance.
+//   dwell: T ticks, no steps, laser off; valid kPrepLatencyDwell edges after acceptance.
+//   kind 3 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+// DIR per axis is the sign of the entry's steps field (1 for 0) whatever the kind.
+// tmn[a] = T - |steps_a|. The prepared segment carries DIR per axis and dir_fast: the block
+// tracks the DIR each axis will have when the segment starts (all low after reset) and sets
+// dir_fast when every moving axis that reverses has floor(T / n_dom) >= its DIR hold + setup.
+// It is offered on initiator `segments`; the block is idle again from the edge after the
+// executor takes it.
 #pragma once
 
 #include "fpgacnc/twins/tlm_common.h"
 
 namespace fpgacnc::twins {
 
+// PREP_LATENCY: v1 motion 68 (divider, clamp, multiplier, subtract); v2 entries (LINE, DWELL)
+// first scan the axes for n_dom, one per clock: 68 + N_AXES, clamped or not.
 inline constexpr Cycle kPrepLatency = 68;
+inline constexpr Cycle kPrepLatencyV2 = 68 + kAxes;
+inline constexpr Cycle kPrepClampExtra = 0;
+inline constexpr Cycle kPrepClampStrobe = kAxes + 34;  // `clamped` after the divider (33 + 1)
+inline constexpr Cycle kPrepLatencyDwell = 68 + kAxes;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
   Cycle edge;
+};
+struct Applied {  // segment_prep -> response side: a v2 NUMERATORS entry applied on the edge
+  bool v2;
 };
 
 class SegmentPrepTwin : public sc_core::sc_module {
@@ -25,12 +46,14 @@ class SegmentPrepTwin : public sc_core::sc_module {
   tlm_utils::simple_target_socket<SegmentPrepTwin> commands;
   tlm_utils::simple_initiator_socket<SegmentPrepTwin> segments;
   tlm_utils::simple_initiator_socket<SegmentPrepTwin> exec_status;
+  tlm_utils::simple_initiator_socket<SegmentPrepTwin> applied;  // bind when used (optional)
 
   SegmentPrepTwin(sc_core::sc_module_name name, const CycleClock& clk, const CoreParams& p)
       : sc_module(name),
         commands("commands"),
         segments("segments"),
         exec_status("exec_status"),
+        applied("applied"),
         clk_(clk),
         p_(p) {
     commands.register_b_transport(this, &SegmentPrepTwin::b_transport);
@@ -42,41 +65,94 @@ class SegmentPrepTwin : public sc_core::sc_module {
     last_period = 0;
     last_feed = 0;
     last_code = 0;
+    dir_track_ = {};
+    clamped = 0;
+    clamp_cycles.clear();
+    applied_cycles.clear();
   }
   uint32_t num_x = 18'750'000, num_y = 18'750'000;
   uint32_t last_period = 0;
   uint16_t last_feed = 0;
   uint8_t last_code = 0;
+  uint64_t clamped = 0;
+  std::vector<Cycle> clamp_cycles;           // edges of the `clamped` strobe
+  std::vector<Cycle> applied_cycles;         // edges of init_applied (v1 init and v2 NUMERATORS)
+  bool report_applied = false;               // `applied` is bound
+  std::vector<Cycle>* entry_ends = nullptr;  // numerators entries end on their accept edge
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
-    const Command c = payload<Command>(gp);
+    const FifoEntry c = payload<FifoEntry>(gp);
     Cycle accept = std::max(clk_.at(delay) + 1, free_from_);
-    if (c.init) {
+    if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};
       transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
       accept = std::max(accept, idle.edge + 1);
-      num_x = c.a;
-      num_y = c.b;
+      num_x = c.steps[0];
+      num_y = c.steps[1];
       free_from_ = accept + 1;
+      applied_cycles.push_back(accept);
+      if (entry_ends) entry_ends->push_back(accept);
+      if (report_applied) {
+        Applied a{c.v2};
+        transport(applied, gp_, clk_, a, accept);
+      }
     } else {
-      const auto sx = static_cast<int32_t>(c.a), sy = static_cast<int32_t>(c.b);
-      const uint32_t ax = sx < 0 ? 0u - c.a : c.a, ay = sy < 0 ? 0u - c.b : c.b;
-      const PreparedTiming t =
-          prepare_timing(ax, ay, num_x, num_y, c.feed, p_.feed0_period, p_.min_period());
       Segment s{};
-      s.code = c.code;
-      s.dir = {sx >= 0, sy >= 0, false, false};
-      s.steps = {ax, ay, 0, 0};
-      for (int a = 0; a < kAxes; ++a) s.tmn[a] = t.total - s.steps[a];
-      s.total = t.total;
-      s.period = t.period;
-      s.feed = c.feed;
-      const Cycle taken = transport(segments, gp_, clk_, s, accept + kPrepLatency);
+      Cycle latency = kPrepLatency;
+      std::array<uint32_t, kAxes> abs{};
+      for (int a = 0; a < kAxes; ++a) {
+        const auto v = static_cast<int32_t>(c.steps[a]);
+        abs[a] = v < 0 ? 0u - c.steps[a] : c.steps[a];
+        s.dir[a] = v >= 0;
+      }
+      if (c.kind == kEntryMotion && !c.v2) {  // v1
+        const auto feed = static_cast<uint16_t>(c.t & 0xffffu);
+        abs[2] = abs[3] = 0;
+        const PreparedTiming t =
+            prepare_timing(abs[0], abs[1], num_x, num_y, feed, p_.feed0_period, p_.min_period());
+        s.code = c.code;
+        s.power = c.power;
+        s.total = t.total;
+        s.period = t.period;
+        s.feed = feed;
+        last_feed = feed;
+      } else if (c.kind == kEntryMotion) {  // v2 LINE
+        const V2Timing t = prepare_v2(abs, c.t, p_.min_period());
+        s.code = c.code;
+        s.power = c.power;
+        s.total = t.total;
+        s.period = t.period;
+        s.v2 = true;
+        latency = t.n_dom == 0 ? kPrepLatencyDwell : kPrepLatencyV2;
+        if (t.clamped) {
+          latency += kPrepClampExtra;
+          ++clamped;
+          clamp_cycles.push_back(accept + kPrepClampStrobe);
+        }
+      } else {  // dwell; kind 3 (never written by the decoder): a zero-length segment
+        abs = {};
+        s.total = c.kind == kEntryDwell ? c.t : 0;
+        s.power = 0;
+        s.v2 = true;
+        latency = kPrepLatencyDwell;
+      }
+      s.steps = abs;
+      for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.total - s.steps[a];
+      // DIR at the start of this segment, and whether its reversals fit in its first period.
+      std::array<bool, kAxes> rev{};
+      for (int a = 0; a < kAxes; ++a) {
+        if (abs[a] == 0) continue;
+        rev[a] = dir_track_[a] != s.dir[a];
+        dir_track_[a] = s.dir[a];
+      }
+      uint32_t n_dom = 0;
+      for (uint32_t n : abs) n_dom = std::max(n_dom, n);
+      s.dir_fast = n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom);
+      const Cycle taken = transport(segments, gp_, clk_, s, accept + latency);
       free_from_ = taken + 1;
-      last_period = t.period;
-      last_feed = c.feed;
-      last_code = c.code;
+      last_period = s.period;
+      last_code = s.code;
     }
     delay = clk_.delay_to(accept);
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
@@ -85,6 +161,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
   const CycleClock& clk_;
   const CoreParams& p_;
   Cycle free_from_ = 0;  // first edge on which a command can be accepted
+  std::array<bool, kAxes> dir_track_{};
   tlm::tlm_generic_payload gp_;
 };
 

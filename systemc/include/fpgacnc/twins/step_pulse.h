@@ -7,8 +7,12 @@
 //   write, address kDirWrite: DIR takes PulseCmd::dir on the delay's edge.
 //   read: PulseState: hold reference (DIR may change from edge last_rise + hold on), the edge
 //     after which the generator is idle (last rise + high + low - 1), current DIR.
+// position_after(t): the position counter after edge t (the STATUS frame's snapshot, asked in
+// time order: rises up to the last edge asked for are folded into a base value).
 // Pins go to the PinRecorder; the position counter follows every rise (+1 with DIR high).
 #pragma once
+
+#include <deque>
 
 #include "fpgacnc/twins/tlm_common.h"
 
@@ -38,9 +42,21 @@ class StepPulseTwin : public sc_core::sc_module {
     position = 0;
     pulses = 0;
     violations = 0;
+    history_.clear();
+    base_position_ = 0;
+    violation_cycles.clear();
   }
   int64_t position = 0;
   uint64_t pulses = 0, violations = 0;
+  int64_t position_after(Cycle t) {
+    while (!history_.empty() && history_.front().first <= t) {
+      base_position_ += history_.front().second;
+      history_.pop_front();
+    }
+    return base_position_;
+  }
+  std::vector<Cycle> violation_cycles;  // rise edges of late (violating) pulses
+  bool keep_history = false;            // answer position reads (the board's STATUS)
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
@@ -58,12 +74,16 @@ class StepPulseTwin : public sc_core::sc_module {
       return;
     }
     const Cycle rise = std::max(e, idle_from_ + 1);
-    if (rise != e) ++violations;
+    if (rise != e) {
+      ++violations;
+      violation_cycles.push_back(rise);
+    }
     pins_.add(rise, simboard::step_signal(axis_), 1);
     pins_.add(rise + high, simboard::step_signal(axis_), 0);
     last_rise_ = rise;
     idle_from_ = rise + high + low - 1;
     position += dir_ ? 1 : -1;
+    if (keep_history) history_.emplace_back(rise, dir_ ? 1 : -1);
     ++pulses;
     delay = clk_.delay_to(rise);
   }
@@ -75,6 +95,8 @@ class StepPulseTwin : public sc_core::sc_module {
   Cycle last_rise_ = kResetHoldRef;
   Cycle idle_from_ = -1;
   bool dir_ = false;
+  std::deque<std::pair<Cycle, int>> history_;  // rises not yet folded into base_position_
+  int64_t base_position_ = 0;
 };
 
 }  // namespace fpgacnc::twins

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <numeric>
 
@@ -109,6 +110,94 @@ inline PreparedTiming prepare_timing(uint32_t abs_x, uint32_t abs_y, uint32_t nu
 // T ticks falls on tick ceil(k * T / n).
 inline int64_t dda_tick(uint64_t k, uint64_t n, uint64_t total) {
   return ceil_div(static_cast<__int128>(k) * total, n);
+}
+
+// ---- protocol v2 (docs/protocol.md "v2") -------------------------------------------------------
+
+// CRC-16/CCITT-FALSE: polynomial 0x1021, initial 0xFFFF, no reflection, no final XOR ("123456789"
+// gives 0x29B1). Bitwise, MSB first.
+inline uint16_t crc16_ccitt(const uint8_t* data, size_t n, uint16_t crc = 0xFFFF) {
+  for (size_t i = 0; i < n; ++i) {
+    crc = static_cast<uint16_t>(crc ^ (static_cast<uint16_t>(data[i]) << 8));
+    for (int b = 0; b < 8; ++b)
+      crc = static_cast<uint16_t>((crc & 0x8000u) ? (crc << 1) ^ 0x1021u : crc << 1);
+  }
+  return crc;
+}
+
+namespace v2 {
+inline constexpr uint8_t kSync = 0xA5;
+inline constexpr int kMaxPayload = 64;
+inline constexpr int kFifoDepth = 64;
+inline constexpr uint32_t kBuildId = 0x2026'0005;
+// Host -> device types.
+inline constexpr uint8_t kHello = 0x01, kStatusQuery = 0x02, kFaultClear = 0x03, kConfigAxis = 0x04,
+                         kNumerators = 0x05, kRelease = 0x06, kLine = 0x10, kDwell = 0x11;
+// Device -> host types.
+inline constexpr uint8_t kAck = 0x80, kNak = 0x81, kDone = 0x82, kStatus = 0x83, kIdent = 0x84;
+// NAK reasons.
+inline constexpr uint8_t kBadCrc = 1, kBadLength = 2, kUnknownType = 3, kTimeout = 4,
+                         kOutOfOrder = 5, kFifoFull = 6, kBadField = 7;
+// STATUS counters (payload order).
+enum Counter : int {
+  kFramesOk,
+  kCrcErrors,
+  kLengthErrors,
+  kUnknownTypes,
+  kTimeouts,
+  kFramingErrors,
+  kOverruns,
+  kNoiseBytes,
+  kClamped,
+  kCounters
+};
+inline constexpr int kStatusPayload = 27 + 4 * kAxes;
+}  // namespace v2
+
+// SEQ relative to the device's next_seq (docs/protocol.md "Sequence numbers").
+enum class SeqClass { Accept, Duplicate, Ahead };
+inline SeqClass classify_seq(uint8_t seq, uint8_t next_seq) {
+  const uint8_t d = static_cast<uint8_t>(seq - next_seq);
+  if (d == 0) return SeqClass::Accept;
+  if (d >= 128) return SeqClass::Duplicate;  // next_seq - 1 .. next_seq - 128
+  return SeqClass::Ahead;
+}
+
+// segment_prep for a v2 LINE (docs/protocol.md "LINE"): the segment lasts T clocks; the dominant
+// axis has n_dom = max |steps|; T is raised to n_dom * min_period when T / n_dom is smaller.
+struct V2Timing {
+  uint32_t n_dom;
+  uint32_t period;  // floor(T / n_dom) after the clamp (0 without steps)
+  uint64_t total;
+  bool clamped;
+};
+inline V2Timing prepare_v2(const std::array<uint32_t, kAxes>& abs_steps, uint32_t t,
+                           uint32_t min_period) {
+  V2Timing r{0, 0, t, false};
+  for (uint32_t n : abs_steps) r.n_dom = std::max(r.n_dom, n);
+  if (r.n_dom == 0) return r;
+  r.period = t / r.n_dom;
+  if (r.period < min_period) {
+    r.total = static_cast<uint64_t>(r.n_dom) * min_period;
+    r.period = min_period;
+    r.clamped = true;
+  }
+  return r;
+}
+
+// "dir_fast": a reversing axis can change DIR during the previous segment's run when the
+// segment's first step of every reversing axis comes at least DIR hold + DIR setup after its
+// start. Every ceil(k T / n_a) >= floor(T / n_dom) = period, so period >= hold + setup (0
+// settings counting as 1) for every reversing moving axis is enough.
+inline bool dir_fast(const std::array<bool, kAxes>& reversing,
+                     const std::array<AxisTiming, kAxes>& timing, uint64_t period) {
+  for (int a = 0; a < kAxes; ++a) {
+    if (!reversing[a]) continue;
+    const uint64_t need = std::max<uint32_t>(timing[a].hold & 0xffffu, 1) +
+                          std::max<uint32_t>(timing[a].setup & 0xffffu, 1);
+    if (period < need) return false;
+  }
+  return true;
 }
 
 }  // namespace fpgacnc::twins

@@ -68,6 +68,25 @@ struct Command {  // packet_decoder_v1 -> segment_prep (valid from the delay's e
   uint32_t a, b;  // NUMERATOR_X/Y or steps_x/steps_y (two's complement)
   uint16_t feed;
 };
+// The command FIFO entry (frame_decoder -> segment_fifo -> segment_prep), the fields of
+// { v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0] }:
+//   kind 0 motion: v1 (t = feed, steps X/Y, power 0xFF) or v2 LINE (t = T, steps per axis)
+//   kind 1 numerators: steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y (v1 init or v2 frame)
+//   kind 2 dwell (v2): t = T clocks, no steps, laser off
+inline constexpr uint8_t kEntryMotion = 0, kEntryNumerators = 1, kEntryDwell = 2;
+struct FifoEntry {
+  bool v2;
+  uint8_t kind;
+  uint8_t code;
+  uint8_t power;
+  uint32_t t;
+  std::array<uint32_t, kAxes> steps;  // two's complement
+};
+// frame_decoder -> segment_fifo: write on the delay's edge. Read (TLM_READ_COMMAND): the level
+// after the delay's edge.
+struct FifoLevel {
+  uint32_t level;
+};
 struct Segment {  // segment_prep -> segment_executor (valid from the delay's edge)
   uint8_t code;
   std::array<bool, kAxes> dir;
@@ -76,6 +95,9 @@ struct Segment {  // segment_prep -> segment_executor (valid from the delay's ed
   uint64_t total;
   uint32_t period;
   uint16_t feed;
+  uint8_t power = 0xFF;
+  bool v2 = false;
+  bool dir_fast = false;
 };
 // segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
 // address kDirWrite: DIR load of `dir` on the delay's edge; read (TLM_READ_COMMAND) fills the
@@ -88,8 +110,10 @@ struct PulseState {
   Cycle idle_from;  // first edge after which STEP is low and its low time elapsed
   bool dir;
 };
-struct SegDone {};  // segment_executor -> status/ACK: seg_done strobe after the delay's edge
-struct TxByte {     // status/ACK -> uart_tx (offered from the delay's edge; accept returned)
+struct SegDone {    // segment_executor -> status/ACK: seg_done strobe after the delay's edge
+  bool v2 = false;  // seg_done_v2
+};
+struct TxByte {  // status/ACK -> uart_tx (offered from the delay's edge; accept returned)
   uint8_t byte;
 };
 struct LineFrame {  // uart_tx -> host: a frame whose start edge is the delay's edge

@@ -1,27 +1,32 @@
-// The virtual board: cnc_core composed of its twins, driven by the stop-and-wait host over
-// the rx pin, answering on tx (docs/systemc.md).
+// The virtual board: cnc_core composed of its twins, driven by a host (v1 stop-and-wait or a v2
+// streaming session, host_schedule.h) over the rx pin, answering on tx (docs/systemc.md).
 //
-//   VirtualHost --pin--> UartRxTwin --bytes--> PacketDecoderTwin --commands--> SegmentPrepTwin
-//        ^                                                                       | segments
-//        |                                                                       v
-//        +--line-- UartTxTwin <--tx-- StatusAckTwin <--done-- SegmentExecutorTwin
-//                                                              | dda[a]    | pulse[a]
-//                                                              v           v
-//                                                       DdaLinearTwin -> StepPulseTwin (x4)
+//   host --pin--> UartRxTwin --bytes--> FrameDecoderTwin --fifo--> SegmentFifoTwin --out-->
+//    ^                                   | resp  | cfg (board)                 SegmentPrepTwin
+//    |                                   v                                        | segments
+//    +--line-- UartTxTwin <--tx-- ResponseEncoderTwin <--done-- SegmentExecutorTwin
+//                                   ^ state (board)          | dda[a]    | pulse[a]
+//                                                            v           v
+//                                                     DdaLinearTwin -> StepPulseTwin (x4)
 //
 // Jobs run in order in the host's thread (one SystemC elaboration can run many); each job
-// starts at cycle 0 from the reset state with its own step timing.
+// starts at cycle 0 from the reset state with its own step timing. The host sends each packet
+// with its delay; the response encoder computes the answers lazily, in time order, up to the
+// edge before which every input is known (docs/systemc.md "Time").
 #pragma once
 
 #include <functional>
 #include <memory>
 
+#include <deque>
+
+#include "fpgacnc/twins/frame_decoder.h"
 #include "fpgacnc/twins/host_schedule.h"
-#include "fpgacnc/twins/packet_decoder_v1.h"
+#include "fpgacnc/twins/response_encoder.h"
 #include "fpgacnc/twins/run_result.h"
 #include "fpgacnc/twins/segment_executor.h"
+#include "fpgacnc/twins/segment_fifo.h"
 #include "fpgacnc/twins/segment_prep.h"
-#include "fpgacnc/twins/status_ack.h"
 #include "fpgacnc/twins/uart_rx.h"
 #include "fpgacnc/twins/uart_tx.h"
 
@@ -31,7 +36,7 @@
 namespace fpgacnc::twins {
 
 struct TwinJob {
-  std::vector<HostPacket> packets;
+  HostScript script;
   std::array<AxisTiming, kAxes> timing{};
   std::function<void(RunResult&&)> done;  // called in the host thread at the job's end
 };
@@ -49,31 +54,43 @@ class VirtualBoard : public sc_core::sc_module {
  private:
   void host_thread();
   void on_line(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);
+  void on_cfg(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);
+  void on_state(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);
   void reset(const std::array<AxisTiming, kAxes>& timing);
   RunResult run_job(const TwinJob& job);
+  // Gives the host the tx bytes whose stop-bit centre is before edge `before` (all when
+  // `one` is false; only the next one otherwise). Returns the number given.
+  size_t deliver(Cycle before, bool one);
 
   CoreParams p_;
   CycleClock clk_;
   PinRecorder pins_;
   UartRxTwin rx_;
-  PacketDecoderTwin dec_;
+  FrameDecoderTwin dec_;
+  SegmentFifoTwin fifo_;
   SegmentPrepTwin prep_;
   SegmentExecutorTwin exec_;
   std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda_;
   std::array<std::unique_ptr<StepPulseTwin>, kAxes> pulse_;
-  StatusAckTwin status_;
+  ResponseEncoderTwin enc_;
   UartTxTwin tx_;
   tlm_utils::simple_initiator_socket<VirtualBoard> host_pin_;
   tlm_utils::simple_target_socket<VirtualBoard> host_line_;
+  tlm_utils::simple_target_socket<VirtualBoard> cfg_;
+  tlm_utils::simple_target_socket<VirtualBoard> state_;
   tlm::tlm_generic_payload gp_;
   std::vector<TwinJob> jobs_;
-  StopAndWaitHost* host_ = nullptr;
+  Host* host_ = nullptr;
+  std::deque<std::pair<Cycle, uint8_t>> tx_bytes_;  // (start edge, byte) not yet given
+  std::vector<Cycle> entry_ends_;                   // per FIFO entry: busy until after this edge
+  std::vector<std::pair<Cycle, CfgAxis>> pending_cfg_;  // CONFIG_AXIS in the shadow registers
+  void apply_cfg(Cycle write);
+  int64_t tx_centre9_ = 0;  // start -> stop-bit centre
   sc_core::sc_time quantum_{1, sc_core::SC_MS};
 };
 
 // Runs one job on a fresh virtual board: elaborates, sc_start()s and returns. SystemC allows
 // one elaboration per process, so call this at most once (the CLI does).
-RunResult run_on_twins(const CoreParams& p, std::vector<HostPacket> packets,
-                       bool record_tx = false);
+RunResult run_on_twins(const CoreParams& p, HostScript script, bool record_tx = false);
 
 }  // namespace fpgacnc::twins

@@ -1,0 +1,406 @@
+// Twin of rtl/frame_decoder.v: v1 packets and v2 frames from one byte stream (docs/protocol.md
+// "Telling v1 from v2", "Frame", "Host to device", "Sequence numbers", "NAK reasons").
+//
+// Target `bytes`: RxByte valid from the delay's edge b; the decoder takes it on edge
+// t = b + kDecoderTake. Between packets (auto mode) 0xFF starts a v1 init, 0x00..0x03 a v1
+// motion, 0xA5 a v2 frame, anything else is noise (counted); in v2 mode only 0xA5 starts
+// anything. A started packet or frame whose next byte comes more than WATCHDOG_CLKS edges after
+// the previous one is dropped on edge previous + WATCHDOG_CLKS (v1: timeouts; v2: also NAK
+// TIMEOUT, SEQ as received or 0). v1: a complete packet is written to the command FIFO (an init
+// as a numerators entry), or dropped when the FIFO is full (overruns).
+// v2 (edges relative to the take edge of the byte that ends the frame):
+//   LEN > MAX_PAYLOAD: NAK BAD_LENGTH at the LEN byte, the frame abandoned at once;
+//   CRC mismatch: NAK BAD_CRC; a good CRC switches to v2 mode;
+//   then TYPE unknown: NAK UNKNOWN_TYPE; LEN wrong for TYPE: NAK BAD_LENGTH; reserved LINE
+//   flag bits or an axis >= N_AXES: NAK BAD_FIELD;
+//   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
+//   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
+//   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
+//   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS written to the FIFO,
+//   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR acts; RELEASE, accepted or a duplicate, returns to
+//   auto mode.
+// Initiators: `fifo` (FIFO write; level read before a write), `resp` (requests to the response
+// encoder: a strobe after the delay's edge), `cfg` (CONFIG_AXIS writes). state_after(t): the
+// DecoderState after edge t (next_seq, mode, counters), from a history: asked in time order
+// (older history is dropped).
+#pragma once
+
+#include <deque>
+#include <functional>
+
+#include "fpgacnc/twins/tlm_common.h"
+
+namespace fpgacnc::twins {
+
+// Edges relative to the take edge L of the byte that ends a packet or frame: it is checked in the
+// clock after L ("CHECK"): the FIFO's room as it is after edge L, the entry written on L + 1,
+// next_seq and the mode change on L + 1, the request and counter strobes are high after L + 1
+// (the counters they feed change on L + 2). Noise and an oversized LEN strobe after their own
+// take edge; the watchdog fires on the edge WATCHDOG_CLKS after the last byte's.
+inline constexpr Cycle kDecoderTake = 1;   // byte valid after edge b -> taken on b + 1
+inline constexpr Cycle kDecoderWrite = 1;  // L -> FIFO write / config write edge
+inline constexpr Cycle kDecoderResp = 1;   // L -> request strobe (high after this edge)
+
+// Requests to the response encoder.
+inline constexpr uint8_t kReqIdent = 0, kReqStatus = 1, kReqNak = 2, kReqAck = 3,
+                         kReqFaultClear = 4;
+struct RespReq {
+  uint8_t kind;
+  uint8_t seq = 0, reason = 0;  // NAK
+};
+struct CfgAxis {  // CONFIG_AXIS accepted: the axis's step timing
+  uint8_t axis;
+  AxisTiming timing;
+};
+struct DecoderState {
+  uint8_t next_seq = 0;
+  bool v2_mode = false;
+  // frames ok, CRC errors, length errors, unknown types, timeouts (v1 and v2), overruns, noise
+  uint16_t frames_ok = 0, crc_errors = 0, length_errors = 0, unknown_types = 0, timeouts = 0,
+           overruns = 0, noise = 0;
+};
+
+class FrameDecoderTwin : public sc_core::sc_module {
+ public:
+  tlm_utils::simple_target_socket<FrameDecoderTwin> bytes;
+  tlm_utils::simple_initiator_socket<FrameDecoderTwin> fifo;
+  tlm_utils::simple_initiator_socket<FrameDecoderTwin> resp;
+  tlm_utils::simple_initiator_socket<FrameDecoderTwin> cfg;
+
+  FrameDecoderTwin(sc_core::sc_module_name name, const CycleClock& clk, const CoreParams& p,
+                   uint32_t fifo_depth = v2::kFifoDepth)
+      : sc_module(name),
+        bytes("bytes"),
+        fifo("fifo"),
+        resp("resp"),
+        cfg("cfg"),
+        clk_(clk),
+        wd_(static_cast<Cycle>(p.watchdog_clks)),
+        depth_(fifo_depth) {
+    bytes.register_b_transport(this, &FrameDecoderTwin::on_byte);
+  }
+
+  void reset() {
+    count_ = 0;
+    last_take_ = 0;
+    kind_ = Kind::None;
+    s_ = DecoderState{};
+    history_.clear();
+    history_.emplace_back(-1'000'000'000, s_);
+    packets = frames = fifo_writes = cfg_writes = 0;
+    packet_done_cycles.clear();
+    v1_packet_cycles.clear();
+    naks.clear();
+  }
+  // Fires the watchdog of a started packet if it expires before edge h (no byte can come
+  // earlier than h: the caller knows the host's schedule).
+  void advance(Cycle h) {
+    if (count_ > 0 && last_take_ + wd_ < h) expire();
+  }
+  const DecoderState& current() const { return s_; }
+  DecoderState state_after(Cycle t) {
+    while (history_.size() > 1 && history_[1].first <= t) history_.pop_front();
+    return history_.front().second;
+  }
+
+  uint64_t packets = 0;  // v1 packets written to the FIFO
+  uint64_t frames = 0;   // v2 frames with a good CRC
+  uint64_t fifo_writes = 0, cfg_writes = 0;
+  // v1 packets queued and v2 frames that passed every check (cnc_core packet_count): the edge
+  // after which the strobe is high.
+  std::vector<Cycle> packet_done_cycles;
+  std::vector<Cycle> v1_packet_cycles;                         // v1 packets only
+  std::vector<std::pair<Cycle, RespReq>> naks;                 // every NAK request
+  std::vector<std::pair<Cycle, DecoderState>>* log = nullptr;  // every state change, when set
+  std::function<void(Cycle)> before_write;  // called with the edge of each FIFO write
+
+ private:
+  enum class Kind { None, V1Init, V1Motion, V2 };
+
+  // The state as it is after edge c (history in edge order).
+  void commit(Cycle c, const DecoderState& st) {
+    if (log) log->emplace_back(c, st);
+    if (history_.back().first == c)
+      history_.back().second = st;
+    else
+      history_.emplace_back(c, st);
+  }
+  void commit(Cycle c) { commit(c, s_); }
+  // A CHECK on the clock after edge L: registers change on L + 1, counters on L + 2.
+  void commit_check(Cycle l) {
+    DecoderState regs = history_.back().second;
+    regs.next_seq = s_.next_seq;
+    regs.v2_mode = s_.v2_mode;
+    commit(l + 1, regs);
+    commit(l + 2);
+  }
+  void request(Cycle c, RespReq r) {
+    if (r.kind == kReqNak) naks.emplace_back(c, r);
+    transport(resp, gp_, clk_, r, c);
+  }
+
+  void expire() {
+    const Cycle f = last_take_ + wd_;
+    ++s_.timeouts;
+    commit(f + 1);
+    if (kind_ == Kind::V2)
+      request(f, RespReq{kReqNak, count_ > 2 ? seq_ : uint8_t{0}, v2::kTimeout});
+    count_ = 0;
+    kind_ = Kind::None;
+  }
+
+  uint32_t fifo_level(Cycle c) {
+    FifoLevel l{0};
+    transport(fifo, gp_, clk_, l, c, tlm::TLM_READ_COMMAND);
+    return l.level;
+  }
+  // Written on L + kDecoderWrite if the FIFO has room after edge L.
+  bool write_fifo(Cycle l, FifoEntry e) {
+    if (fifo_level(l) >= depth_) return false;
+    if (before_write) before_write(l + kDecoderWrite);
+    transport(fifo, gp_, clk_, e, l + kDecoderWrite);
+    ++fifo_writes;
+    return true;
+  }
+
+  void on_byte(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
+    const uint8_t byte = payload<RxByte>(gp).byte;
+    const Cycle take = clk_.at(delay) + kDecoderTake;
+    gp.set_response_status(tlm::TLM_OK_RESPONSE);
+    if (count_ > 0 && take - last_take_ > wd_) expire();
+    last_take_ = take;
+    if (count_ == 0) {
+      if (byte == v2::kSync) {
+        kind_ = Kind::V2;
+      } else if (!s_.v2_mode && byte == 0xFF) {
+        kind_ = Kind::V1Init;
+      } else if (!s_.v2_mode && byte <= 3) {
+        kind_ = Kind::V1Motion;
+        code_ = byte;
+      } else {
+        ++s_.noise;
+        commit(take + 1);
+        return;
+      }
+      count_ = 1;
+      return;
+    }
+    if (kind_ == Kind::V2) {
+      v2_byte(take, byte);
+      return;
+    }
+    buf_[count_ - 1] = byte;
+    ++count_;
+    if (count_ < (kind_ == Kind::V1Init ? 9 : 11)) return;
+    v1_packet(take);
+  }
+
+  static uint32_t be32(const uint8_t* b) {
+    return static_cast<uint32_t>(b[0]) << 24 | static_cast<uint32_t>(b[1]) << 16 |
+           static_cast<uint32_t>(b[2]) << 8 | b[3];
+  }
+  static uint16_t be16(const uint8_t* b) { return static_cast<uint16_t>(b[0] << 8 | b[1]); }
+
+  void v1_packet(Cycle take) {
+    const bool init = kind_ == Kind::V1Init;
+    count_ = 0;
+    kind_ = Kind::None;
+    FifoEntry e{};
+    e.v2 = false;
+    e.kind = init ? kEntryNumerators : kEntryMotion;
+    e.code = init ? 0 : code_;
+    e.power = init ? 0 : 0xFF;
+    e.steps[0] = be32(&buf_[0]);
+    e.steps[1] = be32(&buf_[4]);
+    e.t = init ? 0 : be16(&buf_[8]);
+    if (!write_fifo(take, e)) {
+      ++s_.overruns;
+      commit_check(take);
+      return;
+    }
+    ++packets;
+    packet_done_cycles.push_back(take + kDecoderResp);
+    v1_packet_cycles.push_back(take + kDecoderResp);
+  }
+
+  void v2_byte(Cycle take, uint8_t byte) {
+    // count_ bytes so far: 1 SYNC, 2 LEN, 3 SEQ, 4 TYPE, then payload, then CRC.
+    if (count_ == 1) {
+      len_ = byte;
+      if (len_ > v2::kMaxPayload) {  // at once: strobes after this byte's edge
+        ++s_.length_errors;
+        commit(take + 1);
+        request(take, RespReq{kReqNak, 0, v2::kBadLength});
+        count_ = 0;
+        kind_ = Kind::None;
+        return;
+      }
+    } else if (count_ == 2) {
+      seq_ = byte;
+    } else if (count_ == 3) {
+      type_ = byte;
+    } else if (count_ < 4 + len_) {
+      payload_[count_ - 4] = byte;
+    } else if (count_ == 4 + len_) {
+      crc_hi_ = byte;
+    }
+    ++count_;
+    if (count_ < 6 + len_) return;
+    // The last CRC byte.
+    uint8_t body[3 + v2::kMaxPayload];
+    body[0] = static_cast<uint8_t>(len_);
+    body[1] = seq_;
+    body[2] = type_;
+    std::copy(payload_.begin(), payload_.begin() + len_, body + 3);
+    const uint16_t crc = crc16_ccitt(body, 3 + static_cast<size_t>(len_));
+    if (crc != static_cast<uint16_t>(crc_hi_ << 8 | byte)) {
+      count_ = 0;
+      kind_ = Kind::None;
+      ++s_.crc_errors;
+      commit_check(take);
+      request(take + kDecoderResp, RespReq{kReqNak, seq_, v2::kBadCrc});
+      return;
+    }
+    ++frames;
+    s_.v2_mode = true;
+    frame(take);
+  }
+
+  // Expected payload length of a type (-1: unknown type; -2: LINE, checked apart).
+  static int expected_len(uint8_t type) {
+    switch (type) {
+      case v2::kHello:
+      case v2::kStatusQuery:
+      case v2::kFaultClear:
+      case v2::kRelease:
+        return 0;
+      case v2::kConfigAxis:
+        return 9;
+      case v2::kNumerators:
+        return 8;
+      case v2::kDwell:
+        return 4;
+      case v2::kLine:
+        return -2;
+      default:
+        return -1;
+    }
+  }
+
+  void frame(Cycle take) {
+    count_ = 0;
+    kind_ = Kind::None;
+    const Cycle r = take + kDecoderResp;
+    const int want = expected_len(type_);
+    if (want == -1) {
+      ++s_.unknown_types;
+      commit_check(take);
+      request(r, RespReq{kReqNak, seq_, v2::kUnknownType});
+      return;
+    }
+    int width = 4, axes = 0;
+    if (want == -2) {
+      width = (payload_[0] & 0x80) ? 2 : 4;
+      const int rest = len_ - 6;
+      if (rest < 0 || rest % width != 0 || rest / width > kAxes) {
+        ++s_.length_errors;
+        commit_check(take);
+        request(r, RespReq{kReqNak, seq_, v2::kBadLength});
+        return;
+      }
+      axes = rest / width;
+    } else if (want != len_) {
+      ++s_.length_errors;
+      commit_check(take);
+      request(r, RespReq{kReqNak, seq_, v2::kBadLength});
+      return;
+    }
+    if ((type_ == v2::kLine && (payload_[0] & 0x7C) != 0) ||
+        (type_ == v2::kConfigAxis && payload_[0] >= kAxes)) {
+      commit_check(take);
+      request(r, RespReq{kReqNak, seq_, v2::kBadField});
+      return;
+    }
+    if (type_ == v2::kHello || type_ == v2::kStatusQuery) {
+      ++s_.frames_ok;
+      packet_done_cycles.push_back(r);
+      commit_check(take);
+      request(r, RespReq{type_ == v2::kHello ? kReqIdent : kReqStatus});
+      return;
+    }
+    const SeqClass sc = classify_seq(seq_, s_.next_seq);
+    if (sc == SeqClass::Ahead) {
+      commit_check(take);
+      request(r, RespReq{kReqNak, seq_, v2::kOutOfOrder});
+      return;
+    }
+    if (sc == SeqClass::Duplicate) {
+      ++s_.frames_ok;
+      packet_done_cycles.push_back(r);
+      if (type_ == v2::kRelease) s_.v2_mode = false;
+      commit_check(take);
+      request(r, RespReq{kReqAck});
+      return;
+    }
+    if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators) {
+      FifoEntry e{};
+      e.v2 = true;
+      if (type_ == v2::kLine) {
+        e.kind = kEntryMotion;
+        e.code = payload_[0] & 3;
+        e.power = payload_[1];
+        e.t = be32(&payload_[2]);
+        for (int a = 0; a < axes; ++a) {
+          const uint8_t* p = &payload_[6 + width * a];
+          e.steps[a] =
+              width == 2
+                  ? static_cast<uint32_t>(static_cast<int32_t>(static_cast<int16_t>(be16(p))))
+                  : be32(p);
+        }
+      } else if (type_ == v2::kDwell) {
+        e.kind = kEntryDwell;
+        e.t = be32(&payload_[0]);
+      } else {
+        e.kind = kEntryNumerators;
+        e.steps[0] = be32(&payload_[0]);
+        e.steps[1] = be32(&payload_[4]);
+      }
+      if (!write_fifo(take, e)) {
+        commit_check(take);
+        request(r, RespReq{kReqNak, seq_, v2::kFifoFull});
+        return;
+      }
+    } else if (type_ == v2::kConfigAxis) {
+      CfgAxis c{payload_[0], AxisTiming{be16(&payload_[1]), be16(&payload_[3]), be16(&payload_[5]),
+                                        be16(&payload_[7])}};
+      ++cfg_writes;
+      transport(cfg, gp_, clk_, c, take + kDecoderWrite);
+    } else if (type_ == v2::kFaultClear) {
+      request(r, RespReq{kReqFaultClear});
+    } else if (type_ == v2::kRelease) {
+      s_.v2_mode = false;
+    }
+    ++s_.frames_ok;
+    packet_done_cycles.push_back(r);
+    ++s_.next_seq;
+    commit_check(take);
+    request(r, RespReq{kReqAck});
+  }
+
+  const CycleClock& clk_;
+  Cycle wd_;
+  uint32_t depth_;
+  int count_ = 0;
+  Kind kind_ = Kind::None;
+  uint8_t code_ = 0;
+  std::array<uint8_t, 10> buf_{};
+  int len_ = 0;
+  uint8_t seq_ = 0, type_ = 0, crc_hi_ = 0;
+  std::array<uint8_t, v2::kMaxPayload> payload_{};
+  Cycle last_take_ = 0;
+  DecoderState s_;
+  std::deque<std::pair<Cycle, DecoderState>> history_;  // (edge, state after it)
+  tlm::tlm_generic_payload gp_;
+};
+
+}  // namespace fpgacnc::twins
