@@ -29,7 +29,7 @@
 // Latency (fixed, whatever the values): m_axis_tvalid rises PREP_LATENCY clocks after the edge
 // that accepts the entry:
 //   v1 MOTION       : 68            (DIV 33, CLAMP 1, MUL 33, SUB 1)
-//   v2 LINE, DWELL, kind 3: 68 + N_AXES (MAX N_AXES, then as v1; the multiplier always runs)
+//   v2 LINE, DWELL, kind 3: 67 + N_AXES (MAX N_AXES - 1, then as v1; the multiplier always runs)
 // The next entry is accepted on the edge after the executor takes the prepared segment.
 // Output (m_axis_*): one prepared segment, held until accepted.
 `default_nettype none
@@ -99,7 +99,6 @@ module segment_prep #(
   reg [7:0] power_reg;
   reg [N_AXES-1:0] dir_reg;
   reg [SW-1:0] abs_reg;
-  reg [31:0] t_reg;  // v2 T
   reg [15:0] feed_reg;  // v1 feed, 0 otherwise
   reg [31:0] n_dom_reg;
   reg [AXW-1:0] scan_idx_reg;
@@ -121,15 +120,15 @@ module segment_prep #(
   // direction tracking and dir_fast
   reg [N_AXES-1:0] dir_track_reg;  // DIR when the segment being prepared starts
   reg [N_AXES-1:0] rev_reg;  // moving axes that reverse
-  reg [N_AXES-1:0] fast_reg;  // P >= hold' + setup' per axis
-  reg [17*N_AXES-1:0] hs_reg;  // max(hold,1) + max(setup,1) per axis
+  reg fast_reg;  // no reversing axis checked so far has P < hold' + setup'
+  reg chk_rev_reg;  // the axis in chk_hs_reg reverses
+  reg [16:0] chk_hs_reg;  // max(hold,1) + max(setup,1) of one axis
   reg dir_fast_reg;
 
   // |steps| and direction of the entry, masked by kind (v1: X and Y only; DWELL/kind 3: none)
   wire [SW-1:0] abs_in;
   wire [N_AXES-1:0] dir_in;
   wire [N_AXES-1:0] moving;
-  wire [17*N_AXES-1:0] hs_now;
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_in
@@ -139,17 +138,20 @@ module segment_prep #(
       assign abs_in[32*a+:32] = use_axis ? mag : 32'd0;
       assign dir_in[a] = !s[31];
       assign moving[a] = (abs_reg[32*a+:32] != 32'd0);
-      wire [15:0] h = cfg_dir_hold[16*a+:16];
-      wire [15:0] su = cfg_dir_setup[16*a+:16];
-      assign hs_now[17*a+:17] = {1'b0, (h == 16'd0) ? 16'd1 : h} +
-                                {1'b0, (su == 16'd0) ? 16'd1 : su};
     end
   endgenerate
 
-  wire [31:0] abs_x = abs_reg[31:0];
-  wire [31:0] abs_y = (N_AXES > 1) ? abs_reg[32*(N_AXES>1?1:0)+:32] : 32'd0;
-  wire x_dom = (abs_x >= abs_y);
+  // One comparator finds the dominant axis: n_dom_reg starts as |X| and takes each next axis that
+  // is strictly larger (X wins a tie). v1 does one step (Y) in the first DIV clock.
   wire [31:0] scan_val = abs_reg[32*scan_idx_reg+:32];
+  wire scan_gt = (scan_val > n_dom_reg);
+
+  // dir_fast: the axes are checked one per clock during the multiplier's iterations (two stages:
+  // hold' + setup' of axis scan_idx_reg into chk_hs_reg, then the compare with P).
+  wire [15:0] chk_hold = cfg_dir_hold[16*scan_idx_reg+:16];
+  wire [15:0] chk_setup = cfg_dir_setup[16*scan_idx_reg+:16];
+  wire [16:0] chk_hs = {1'b0, (chk_hold == 16'd0) ? 16'd1 : chk_hold} +
+                       {1'b0, (chk_setup == 16'd0) ? 16'd1 : chk_setup};
 
   wire [32:0] rem_shift = {rem_reg, dividend_reg[31]};
   wire [32:0] rem_diff = rem_shift - {1'b0, divisor_reg};
@@ -178,31 +180,31 @@ module segment_prep #(
           power_reg    <= (in_kind == K_MOTION) ? in_power : 8'd0;
           dir_reg      <= dir_in;
           abs_reg      <= abs_in;
-          t_reg        <= (in_kind == K_DWELL || (in_kind == K_MOTION && in_v2)) ? in_t : 32'd0;
+          // v2 T goes straight into the divider; v1 loads its numerator in the first DIV clock
+          dividend_reg <= (in_kind == K_DWELL || (in_kind == K_MOTION && in_v2)) ? in_t : 32'd0;
           feed_reg     <= in_v1_motion ? in_t[15:0] : 16'd0;
-          n_dom_reg    <= 32'd0;
-          scan_idx_reg <= {AXW{1'b0}};
+          n_dom_reg    <= abs_in[31:0];
+          scan_idx_reg <= {{(AXW - 1) {1'b0}}, 1'b1};
           rem_reg      <= 32'd0;
           quot_reg     <= 32'd0;
           iter_reg     <= 6'd0;
-          // v1: the dominant axis (X or Y) is chosen one clock later; v2: scan all axes first
+          // v1: the dominant axis (X or Y) is chosen one clock later; v2: scan the other axes first
           state_reg    <= in_v1_motion ? S_DIV : S_MAX;
         end
       end
       S_MAX: begin
-        if (scan_val > n_dom_reg) n_dom_reg <= scan_val;
+        if (scan_gt) n_dom_reg <= scan_val;
         scan_idx_reg <= scan_idx_reg + 1'b1;
         if (scan_idx_reg == AX_LAST) state_reg <= S_DIV;
       end
       S_DIV: begin
         if (iter_reg == 6'd0) begin
           if (path_v1_reg) begin
-            dividend_reg <= x_dom ? num_x_reg : num_y_reg;
+            dividend_reg <= scan_gt ? num_y_reg : num_x_reg;
             divisor_reg  <= {16'd0, feed_reg};
-            n_dom_reg    <= x_dom ? abs_x : abs_y;
+            if (scan_gt) n_dom_reg <= scan_val;
           end else begin
-            dividend_reg <= t_reg;
-            divisor_reg  <= n_dom_reg;
+            divisor_reg <= n_dom_reg;
           end
           iter_reg <= 6'd1;
         end else begin
@@ -214,49 +216,52 @@ module segment_prep #(
         end
       end
       S_CLAMP: begin
-        // The quotient of a divide by zero (feed 0, n_dom 0) is discarded.
+        // The quotient of a divide by zero (feed 0, n_dom 0) is discarded. The multiplier computes
+        // T = P * n_dom + total_reg: v1 and a clamped v2 start from 0; an unclamped v2 from the
+        // remainder (P * n_dom + rem = the T given; with n_dom = 0 the remainder is T itself).
+        mplier_reg <= n_dom_reg;
+        total_reg  <= 64'd0;
         if (path_v1_reg) begin
           if (feed_reg == 16'd0)
             quot_reg <= (FEED0_PERIOD < min_period) ? min_period : FEED0_PERIOD;
           else if (quot_reg < min_period) quot_reg <= min_period;
-          total_reg  <= 64'd0;
-          mplier_reg <= n_dom_reg;
         end else if (n_dom_reg == 32'd0) begin
-          quot_reg   <= 32'd0;
-          total_reg  <= {32'd0, t_reg};
-          mplier_reg <= 32'd0;
+          quot_reg  <= 32'd0;
+          total_reg <= {32'd0, rem_reg};
         end else if (quot_reg < min_period) begin
           quot_reg    <= min_period;
-          total_reg   <= 64'd0;
-          mplier_reg  <= n_dom_reg;
           clamped_reg <= 1'b1;
         end else begin
-          total_reg  <= {32'd0, t_reg};
-          mplier_reg <= 32'd0;  // T stays as given
+          total_reg <= {32'd0, rem_reg};
         end
         state_reg <= S_MUL;
         iter_reg  <= 6'd0;
       end
       S_MUL: begin
         if (iter_reg == 6'd0) begin
-          mcand_reg <= {32'd0, quot_reg};
-          iter_reg  <= 6'd1;
-          rev_reg   <= (dir_reg ^ dir_track_reg) & moving;
-          hs_reg    <= hs_now;
+          mcand_reg    <= {32'd0, quot_reg};
+          iter_reg     <= 6'd1;
+          rev_reg      <= (dir_reg ^ dir_track_reg) & moving;
+          scan_idx_reg <= {AXW{1'b0}};
+          fast_reg     <= 1'b1;
+          chk_rev_reg  <= 1'b0;
         end else begin
           if (mplier_reg[0]) total_reg <= total_reg + mcand_reg;
           mplier_reg <= {1'b0, mplier_reg[31:1]};
           mcand_reg  <= {mcand_reg[62:0], 1'b0};
           iter_reg   <= iter_reg + 6'd1;
-          for (i = 0; i < N_AXES; i = i + 1)
-            fast_reg[i] <= (quot_reg >= {15'd0, hs_reg[17*i+:17]});
+          // axis k: sum in iteration k + 1, compare in k + 2 (the last axis repeats harmlessly)
+          chk_hs_reg  <= chk_hs;
+          chk_rev_reg <= rev_reg[scan_idx_reg];
+          if (scan_idx_reg != AX_LAST) scan_idx_reg <= scan_idx_reg + 1'b1;
+          if (chk_rev_reg && quot_reg < {15'd0, chk_hs_reg}) fast_reg <= 1'b0;
           if (iter_reg == 6'd32) state_reg <= S_SUB;
         end
       end
       S_SUB: begin
         for (i = 0; i < N_AXES; i = i + 1)
           tmn_reg[64*i+:64] <= total_reg - {32'd0, abs_reg[32*i+:32]};
-        dir_fast_reg  <= &(fast_reg | ~rev_reg);
+        dir_fast_reg  <= fast_reg;
         dir_track_reg <= (dir_track_reg & ~moving) | (dir_reg & moving);
         state_reg     <= S_OUT;
       end
@@ -279,7 +284,6 @@ module segment_prep #(
       power_reg        <= 8'd0;
       dir_reg          <= {N_AXES{1'b0}};
       abs_reg          <= {SW{1'b0}};
-      t_reg            <= 32'd0;
       feed_reg         <= 16'd0;
       n_dom_reg        <= 32'd0;
       scan_idx_reg     <= {AXW{1'b0}};
@@ -294,8 +298,9 @@ module segment_prep #(
       tmn_reg          <= {64 * N_AXES{1'b0}};
       dir_track_reg    <= {N_AXES{1'b0}};
       rev_reg          <= {N_AXES{1'b0}};
-      fast_reg         <= {N_AXES{1'b0}};
-      hs_reg           <= {17 * N_AXES{1'b0}};
+      fast_reg         <= 1'b0;
+      chk_rev_reg      <= 1'b0;
+      chk_hs_reg       <= 17'd0;
       dir_fast_reg     <= 1'b0;
     end
   end

@@ -23,6 +23,6 @@ fpgacnc_verilated(vde1soc TOP de1soc_top
                   ARGS -GCLK_HZ=50000000)
 
 fpgacnc_bench(test_segment_executor LABEL rtl
-              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_executor.cpp LIBS vexec fmt::fmt)
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_executor.cpp LIBS vexec vprep fmt::fmt)
 fpgacnc_bench(test_segment_prep LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_prep.cpp LIBS vprep fmt::fmt)

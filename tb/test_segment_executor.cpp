@@ -7,10 +7,13 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "Vsegment_prep.h"
 #include "common/exec_harness.h"
+#include "common/fifo_entry.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
 
@@ -559,6 +562,251 @@ TEST(SegmentExecutorQueue, RandomQueues) {
   EXPECT_GT(st.zero_len, 20u);
   EXPECT_GT(st.dwells, 20u);
   EXPECT_GT(st.zero_gap, st.segments / 2);
+}
+
+// ---------------------------------------------------------------- segment_prep -> executor
+// Both blocks connected as in cnc_core (prep's m_axis to the executor, exec_idle back), FIFO
+// entries always valid at prep's input. Checks the end-to-end rule of docs/timing.md "Queued
+// segments": the executor takes segment i on edge A_i = max(ready edge after segment i-1, P_i + L_i
+// + 1), P_i = prep's accept edge = A_{i-1} + 1, L_i = PREP_LATENCY (68 v1, 67 + N_AXES v2); a
+// segment taken on the previous one's end edge with no reversal (or with dir_fast) starts there
+// (zero gap); prep's dir_fast equals the reference; pulse and DIR rules; positions.
+class Chain {
+ public:
+  explicit Chain(const std::vector<AxisTiming>& t)
+      : ctx_(std::make_unique<VerilatedContext>()), mon_(kAxes), timing_(t) {
+    prep_ = std::make_unique<Vsegment_prep>(ctx_.get());
+    ex_ = std::make_unique<Vsegment_executor>(ctx_.get());
+    prep_->min_period = fpgacnc::tb::min_period(t);
+    ex_->cfg_step_high = ex_->cfg_step_low = ex_->cfg_dir_setup = ex_->cfg_dir_hold = 0;
+    for (int a = 0; a < kAxes; ++a) {
+      ex_->cfg_step_high |= static_cast<uint64_t>(t[a].high) << (16 * a);
+      ex_->cfg_step_low |= static_cast<uint64_t>(t[a].low) << (16 * a);
+      ex_->cfg_dir_setup |= static_cast<uint64_t>(t[a].setup) << (16 * a);
+      ex_->cfg_dir_hold |= static_cast<uint64_t>(t[a].hold) << (16 * a);
+    }
+    prep_->cfg_dir_setup = ex_->cfg_dir_setup;
+    prep_->cfg_dir_hold = ex_->cfg_dir_hold;
+    prep_->rst = ex_->rst = 1;
+    clock();
+    clock();
+    prep_->rst = ex_->rst = 0;
+    clock();
+  }
+  ~Chain() {
+    prep_->final();
+    ex_->final();
+  }
+
+  struct Taken {
+    uint64_t edge;
+    bool fast;
+    uint64_t total;
+  };
+
+  // Feeds the entries (always valid) and runs until everything is done.
+  void run(const std::vector<fpgacnc::tb::Entry>& entries) {
+    size_t next = 0;
+    uint64_t quiet = 0;
+    while (quiet < 3) {
+      const bool offering = next < entries.size();
+      if (offering) entries[next].pack(prep_->s_axis_tdata);
+      prep_->s_axis_tvalid = offering;
+      connect();
+      prep_->eval();  // s_axis_tready depends on the entry's kind and exec_idle
+      const bool prep_take = offering && prep_->s_axis_tready;
+      const bool ex_take = ex_->s_axis_tvalid && ex_->s_axis_tready;
+      const Taken tk{cycle_ + 1, prep_->m_axis_dir_fast != 0, prep_->m_axis_total};
+      clock();
+      if (prep_take) prep_accepts.push_back(cycle_), ++next;
+      if (ex_take) ex_accepts.push_back(tk);
+      if (!offering && !prep_->busy && !ex_->busy && ex_->idle)
+        ++quiet;
+      else
+        quiet = 0;
+      if (cycle_ > 500'000'000) throw std::runtime_error("chain does not finish");
+    }
+  }
+
+  std::vector<uint64_t> prep_accepts, starts, dones, inits;
+  std::vector<Taken> ex_accepts;
+  uint64_t violations = 0;
+  StepMonitor& mon() { return mon_; }
+  Vsegment_executor& ex() { return *ex_; }
+
+ private:
+  void connect() {
+    ex_->s_axis_code = prep_->m_axis_code;
+    ex_->s_axis_power = prep_->m_axis_power;
+    ex_->s_axis_v2 = prep_->m_axis_v2;
+    ex_->s_axis_dir_fast = prep_->m_axis_dir_fast;
+    ex_->s_axis_dir = prep_->m_axis_dir;
+    for (int w = 0; w < kAxes; ++w) ex_->s_axis_steps[w] = prep_->m_axis_steps[w];
+    for (int w = 0; w < 2 * kAxes; ++w) ex_->s_axis_tmn[w] = prep_->m_axis_tmn[w];
+    ex_->s_axis_total = prep_->m_axis_total;
+    ex_->s_axis_tvalid = prep_->m_axis_tvalid;
+    prep_->m_axis_tready = ex_->s_axis_tready;
+    prep_->exec_idle = ex_->idle;
+  }
+  void clock() {
+    connect();
+    prep_->clk = ex_->clk = 0;
+    prep_->eval();
+    ex_->eval();
+    prep_->clk = ex_->clk = 1;
+    prep_->eval();
+    ex_->eval();
+    ++cycle_;
+    mon_.sample(cycle_, ex_->step, ex_->dir);
+    if (ex_->violation) ++violations;
+    if (ex_->seg_start) starts.push_back(cycle_);
+    if (ex_->seg_done) dones.push_back(cycle_);
+    if (prep_->init_applied) {
+      inits.push_back(cycle_);
+      if (ex_->busy)
+        ADD_FAILURE() << "NUMERATORS applied while the executor is busy, cycle " << cycle_;
+    }
+  }
+
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<Vsegment_prep> prep_;
+  std::unique_ptr<Vsegment_executor> ex_;
+  StepMonitor mon_;
+  std::vector<AxisTiming> timing_;
+  uint64_t cycle_ = 0;
+};
+
+TEST(SegmentPrepExecutorChain, RandomStreamsZeroGapWhenPrepared) {
+  const uint64_t seed = fpgacnc::tb::test_seed(20261206, "SegmentPrepExecutorChain");
+  std::mt19937_64 rng(seed);
+  auto uni = [&](uint64_t lo, uint64_t hi) {
+    return std::uniform_int_distribution<uint64_t>(lo, hi)(rng);
+  };
+  using fpgacnc::tb::Entry;
+  uint64_t zero_gap = 0, late = 0, segments = 0;
+  for (int batch = 0; batch < 40; ++batch) {
+    std::vector<AxisTiming> t(kAxes);
+    for (auto& at : t)
+      at = uni(0, 3) == 0 ? AxisTiming{1, 1, 1, 1} : fpgacnc::tb::random_timing(uni, 10, 40);
+    const uint64_t pmin = fpgacnc::tb::min_period(t);
+    Chain c(t);
+    std::vector<Entry> entries;
+    const int len = static_cast<int>(uni(30, 60));
+    for (int i = 0; i < len; ++i) {
+      const int what = static_cast<int>(uni(0, 29));
+      if (what == 0) {
+        entries.push_back(fpgacnc::tb::dwell(static_cast<uint32_t>(uni(0, 200))));
+      } else if (what == 1) {
+        entries.push_back(fpgacnc::tb::numerators(static_cast<uint32_t>(uni(100000, 40000000)),
+                                                  static_cast<uint32_t>(uni(100000, 40000000)),
+                                                  uni(0, 1)));
+      } else if (what < 6) {
+        // v1: both numerators and feed random; small counts
+        entries.push_back(fpgacnc::tb::v1_motion(
+            static_cast<int>(uni(0, 3)), static_cast<int32_t>(uni(0, 20)) - 10,
+            static_cast<int32_t>(uni(0, 20)) - 10, static_cast<uint16_t>(uni(1000, 65535))));
+      } else {
+        Entry e;
+        e.v2 = true;
+        e.code = static_cast<int>(uni(0, 3));
+        e.power = static_cast<int>(uni(0, 255));
+        uint64_t n = 0;
+        for (int a = 0; a < kAxes; ++a) {
+          e.steps[a] = static_cast<int32_t>(uni(0, 3) == 0 ? 0 : uni(0, 16)) - 8;
+          n = std::max<uint64_t>(n, mag(e.steps[a]));
+        }
+        // T from below the prep latency to several times it
+        e.t = static_cast<uint32_t>(std::max<uint64_t>(n, 1) * uni(pmin, pmin + 60) + uni(0, 20));
+        entries.push_back(e);
+      }
+    }
+    c.run(entries);
+    // replay: which entries reached the executor, their latencies and directions
+    struct Seg {
+      uint64_t T, latency;
+      int64_t steps[kAxes];
+      bool v2;
+    };
+    std::vector<Seg> segs;
+    std::vector<bool> after_numerators;
+    bool prev_num = false;
+    for (const Entry& e : entries) {
+      if (e.kind == fpgacnc::tb::kNumerators) {
+        prev_num = true;
+        continue;
+      }
+      Seg s{};
+      s.v2 = e.v2;
+      s.latency = e.v2 ? 67 + kAxes : 68;
+      for (int a = 0; a < kAxes; ++a)
+        s.steps[a] = (e.kind == fpgacnc::tb::kMotion && (e.v2 || a < 2)) ? e.steps[a] : 0;
+      segs.push_back(s);
+      after_numerators.push_back(prev_num);
+      prev_num = false;
+    }
+    ASSERT_EQ(c.ex_accepts.size(), segs.size()) << "batch " << batch;
+    int track[kAxes] = {0, 0, 0, 0};
+    uint64_t ready = 0, R_prev = 0, T_prev = 0;
+    size_t start_idx = 0;
+    int64_t pos[kAxes] = {0, 0, 0, 0};
+    for (size_t i = 0; i < segs.size(); ++i) {
+      const auto& tk = c.ex_accepts[i];
+      const uint64_t T = tk.total;
+      // dir_fast reference
+      uint64_t n = 0;
+      for (int a = 0; a < kAxes; ++a) n = std::max<uint64_t>(n, mag(segs[i].steps[a]));
+      bool fast = true, rev = false;
+      for (int a = 0; a < kAxes; ++a) {
+        if (segs[i].steps[a] == 0) continue;
+        const int d = segs[i].steps[a] > 0;
+        if (d != track[a]) {
+          rev = true;
+          if (T / n < fpgacnc::tb::at_least_1(t[a].hold) + fpgacnc::tb::at_least_1(t[a].setup))
+            fast = false;
+        }
+        track[a] = d;
+        pos[a] += segs[i].steps[a];
+      }
+      ASSERT_EQ(tk.fast, fast) << "batch " << batch << " segment " << i << " dir_fast";
+      if (i > 0 && !after_numerators[i]) {
+        // prep took the entry on the edge after the executor took the previous segment
+        const uint64_t P = c.ex_accepts[i - 1].edge + 1;
+        ASSERT_EQ(tk.edge, std::max(ready, P + segs[i].latency + 1))
+            << "batch " << batch << " segment " << i << " accept edge (seed " << seed << ")";
+      }
+      if (T == 0) {
+        ready = tk.edge + (tk.edge == ready && T_prev ? 2 : 1);
+        T_prev = 0;
+        continue;
+      }
+      ASSERT_LT(start_idx, c.starts.size());
+      const uint64_t R = c.starts[start_idx++];
+      if (T_prev && tk.edge == R_prev + T_prev && (!rev || fast)) {
+        ASSERT_EQ(R, R_prev + T_prev) << "batch " << batch << " segment " << i << " zero gap";
+        ++zero_gap;
+      } else if (i > 0) {
+        ++late;
+      }
+      if (!rev) {
+        ASSERT_EQ(R, tk.edge) << "batch " << batch << " segment " << i;
+      }
+      R_prev = R;
+      T_prev = T;
+      ready = R + T;
+      ++segments;
+    }
+    ASSERT_EQ(start_idx, c.starts.size());
+    for (int a = 0; a < kAxes; ++a) {
+      for (auto& v : c.mon().check_pulses(a, t[a])) ADD_FAILURE() << "batch " << batch << ": " << v;
+      EXPECT_EQ(c.mon().axis(a).position, pos[a]) << "batch " << batch << " axis " << a;
+    }
+    EXPECT_EQ(c.violations, 0u) << "batch " << batch;
+    if (HasFailure()) return;
+  }
+  std::printf("chain: segments %llu, zero gap %llu, not zero gap %llu\n",
+              (unsigned long long)segments, (unsigned long long)zero_gap, (unsigned long long)late);
+  EXPECT_GT(zero_gap, segments / 4);
+  EXPECT_GT(late, segments / 10);
 }
 
 }  // namespace

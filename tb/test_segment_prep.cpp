@@ -12,53 +12,24 @@
 #include <stdexcept>
 
 #include "Vsegment_prep.h"
+#include "common/fifo_entry.h"
 #include "common/seed.h"
 #include "verilated.h"
 
 namespace {
 
-constexpr int kAxes = 4;
+constexpr int kAxes = fpgacnc::tb::kEntryAxes;
 constexpr uint64_t kLatencyV1 = 68;
-constexpr uint64_t kLatencyV2 = 68 + kAxes;
+constexpr uint64_t kLatencyV2 = 67 + kAxes;
 
-enum Kind { kMotion = 0, kNumerators = 1, kDwell = 2, kKind3 = 3 };
-
-// One FIFO entry { v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N-1:0] }.
-struct Entry {
-  bool v2 = false;
-  int kind = kMotion;
-  int code = 0;
-  int power = 0xFF;
-  uint32_t t = 0;
-  int32_t steps[kAxes] = {0, 0, 0, 0};
-};
-
-Entry v1_motion(int code, int32_t x, int32_t y, uint16_t feed) {
-  Entry e;
-  e.code = code;
-  e.t = feed;
-  e.steps[0] = x;
-  e.steps[1] = y;
-  return e;
-}
-Entry numerators(uint32_t nx, uint32_t ny, bool v2 = false) {
-  Entry e;
-  e.v2 = v2;
-  e.kind = kNumerators;
-  e.steps[0] = static_cast<int32_t>(nx);
-  e.steps[1] = static_cast<int32_t>(ny);
-  return e;
-}
-Entry v2_line(int code, int power, uint32_t t, std::initializer_list<int32_t> steps) {
-  Entry e;
-  e.v2 = true;
-  e.code = code;
-  e.power = power;
-  e.t = t;
-  int a = 0;
-  for (int32_t s : steps) e.steps[a++] = s;
-  return e;
-}
+using fpgacnc::tb::Entry;
+using fpgacnc::tb::kDwell;
+using fpgacnc::tb::kKind3;
+using fpgacnc::tb::kMotion;
+using fpgacnc::tb::kNumerators;
+using fpgacnc::tb::numerators;
+using fpgacnc::tb::v1_motion;
+using fpgacnc::tb::v2_line;
 
 uint64_t mag(int64_t v) {
   return static_cast<uint64_t>(v < 0 ? -v : v);
@@ -96,20 +67,7 @@ class PrepBench {
       last_init_v2_ = m_->init_v2 != 0;
     }
   }
-  void drive(const Entry& e) {
-    for (int w = 0; w < 6; ++w) m_->s_axis_tdata[w] = 0;
-    auto put = [&](int pos, int width, uint64_t v) {
-      for (int b = 0; b < width; ++b)
-        if ((v >> b) & 1) m_->s_axis_tdata[(pos + b) / 32] |= 1u << ((pos + b) % 32);
-    };
-    for (int a = 0; a < kAxes; ++a) put(32 * a, 32, static_cast<uint32_t>(e.steps[a]));
-    const int sw = 32 * kAxes;
-    put(sw, 32, e.t);
-    put(sw + 32, 8, static_cast<uint64_t>(e.power));
-    put(sw + 40, 2, static_cast<uint64_t>(e.code));
-    put(sw + 42, 2, static_cast<uint64_t>(e.kind));
-    put(sw + 44, 1, e.v2 ? 1 : 0);
-  }
+  void drive(const Entry& e) { e.pack(m_->s_axis_tdata); }
   // Offers an entry until it is taken; returns the clocks from the accept edge to the first cycle
   // with m_axis_tvalid (0 for NUMERATORS).
   uint64_t send(const Entry& e) {

@@ -1,0 +1,75 @@
+// The command-FIFO entry that segment_prep takes (rtl-back contract, docs/timing.md):
+// { v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N-1:0] }, axis a in [32*a+:32].
+#pragma once
+
+#include <cstdint>
+#include <initializer_list>
+
+namespace fpgacnc::tb {
+
+inline constexpr int kEntryAxes = 4;
+
+enum EntryKind { kMotion = 0, kNumerators = 1, kDwell = 2, kKind3 = 3 };
+
+struct Entry {
+  bool v2 = false;
+  int kind = kMotion;
+  int code = 0;
+  int power = 0xFF;
+  uint32_t t = 0;  // v1: feed; v2 LINE / DWELL: T
+  int32_t steps[kEntryAxes] = {0, 0, 0, 0};
+
+  // Writes the entry into a Verilated wide port (`words` 32-bit words, at least 6 for 4 axes).
+  template <class Wide>
+  void pack(Wide& w, int words = 6) const {
+    for (int i = 0; i < words; ++i) w[i] = 0;
+    auto put = [&](int pos, int width, uint64_t v) {
+      for (int b = 0; b < width; ++b)
+        if ((v >> b) & 1) w[(pos + b) / 32] |= 1u << ((pos + b) % 32);
+    };
+    for (int a = 0; a < kEntryAxes; ++a) put(32 * a, 32, static_cast<uint32_t>(steps[a]));
+    const int sw = 32 * kEntryAxes;
+    put(sw, 32, t);
+    put(sw + 32, 8, static_cast<uint64_t>(power));
+    put(sw + 40, 2, static_cast<uint64_t>(code));
+    put(sw + 42, 2, static_cast<uint64_t>(kind));
+    put(sw + 44, 1, v2 ? 1 : 0);
+  }
+};
+
+inline Entry v1_motion(int code, int32_t x, int32_t y, uint16_t feed) {
+  Entry e;
+  e.code = code;
+  e.t = feed;
+  e.steps[0] = x;
+  e.steps[1] = y;
+  return e;
+}
+inline Entry numerators(uint32_t nx, uint32_t ny, bool v2 = false) {
+  Entry e;
+  e.v2 = v2;
+  e.kind = kNumerators;
+  e.steps[0] = static_cast<int32_t>(nx);
+  e.steps[1] = static_cast<int32_t>(ny);
+  return e;
+}
+inline Entry v2_line(int code, int power, uint32_t t, std::initializer_list<int32_t> steps) {
+  Entry e;
+  e.v2 = true;
+  e.code = code;
+  e.power = power;
+  e.t = t;
+  int a = 0;
+  for (int32_t s : steps) e.steps[a++] = s;
+  return e;
+}
+inline Entry dwell(uint32_t t) {
+  Entry e;
+  e.v2 = true;
+  e.kind = kDwell;
+  e.power = 0;
+  e.t = t;
+  return e;
+}
+
+}  // namespace fpgacnc::tb
