@@ -85,6 +85,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     last_take_ = 0;
     kind_ = Kind::None;
     s_ = DecoderState{};
+    mode_before_ = false;
+    mode_from_ = 0;
     history_.clear();
     history_.emplace_back(-1'000'000'000, s_);
     packets = frames = fifo_writes = cfg_writes = 0;
@@ -128,6 +130,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
   void commit(Cycle c) { commit(c, s_); }
   // A CHECK on the clock after edge L: registers change on L + 1, counters on L + 2.
   void commit_check(Cycle l) {
+    mode_before_ = history_.back().second.v2_mode;
+    mode_from_ = l + 2;
     DecoderState regs = history_.back().second;
     regs.next_seq = s_.next_seq;
     regs.v2_mode = s_.v2_mode;
@@ -170,11 +174,13 @@ class FrameDecoderTwin : public sc_core::sc_module {
     if (count_ > 0 && take - last_take_ > wd_) expire();
     last_take_ = take;
     if (count_ == 0) {
+      // The mode register as it is after edge take - 1 (a CHECK changes it on L + 1).
+      const bool v2m = take >= mode_from_ ? s_.v2_mode : mode_before_;
       if (byte == v2::kSync) {
         kind_ = Kind::V2;
-      } else if (!s_.v2_mode && byte == 0xFF) {
+      } else if (!v2m && byte == 0xFF) {
         kind_ = Kind::V1Init;
-      } else if (!s_.v2_mode && byte <= 3) {
+      } else if (!v2m && byte <= 3) {
         kind_ = Kind::V1Motion;
         code_ = byte;
       } else {
@@ -399,6 +405,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
   std::array<uint8_t, v2::kMaxPayload> payload_{};
   Cycle last_take_ = 0;
   DecoderState s_;
+  bool mode_before_ = false;  // the mode before the last CHECK, for a byte taken on L + 1
+  Cycle mode_from_ = 0;
   std::deque<std::pair<Cycle, DecoderState>> history_;  // (edge, state after it)
   tlm::tlm_generic_payload gp_;
 };

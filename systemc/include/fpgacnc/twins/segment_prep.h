@@ -27,12 +27,12 @@
 namespace fpgacnc::twins {
 
 // PREP_LATENCY: v1 motion 68 (divider, clamp, multiplier, subtract); v2 entries (LINE, DWELL)
-// first scan the axes for n_dom, one per clock: 68 + N_AXES, clamped or not.
+// first scan the axes for n_dom (N_AXES - 1 clocks): 67 + N_AXES, clamped or not.
 inline constexpr Cycle kPrepLatency = 68;
-inline constexpr Cycle kPrepLatencyV2 = 68 + kAxes;
+inline constexpr Cycle kPrepLatencyV2 = 67 + kAxes;
 inline constexpr Cycle kPrepClampExtra = 0;
-inline constexpr Cycle kPrepClampStrobe = kAxes + 34;  // `clamped` after the divider (33 + 1)
-inline constexpr Cycle kPrepLatencyDwell = 68 + kAxes;
+inline constexpr Cycle kPrepClampStrobe = kAxes + 33;  // `clamped`: scan, divider, clamp
+inline constexpr Cycle kPrepLatencyDwell = 67 + kAxes;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
   Cycle edge;
