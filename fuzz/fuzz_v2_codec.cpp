@@ -5,14 +5,19 @@
 //         second parser, in chunks whose sizes come from the data itself; both must yield the
 //         same frames and counters;
 //   odd:  the data is a list of frames (SEQ, TYPE, LEN, payload), encoded with valid CRCs, so
-//         that every decoder sees well-formed frames of every type and length.
-// For every frame a parser yields: payload <= 64 bytes; every decoder (decode_credit, _nak,
-// _ident, _status for 1..4 axes) returns or throws ProtocolError (anything else escapes and is
-// reported as a crash); encode(frame) is 6 + LEN bytes with SYNC, LEN and the CRC-16 of bytes
-// 1..3+N, and parsed back gives exactly that frame, with no error counted.
+//         that every decoder sees well-formed frames of every type and length; then builder
+//         round trips: line/dwell/config_axis/numerators and ack/done/nak/ident/status built
+//         from the data decode back to the same fields.
+// For every frame a parser yields: payload <= 64 bytes; every decoder (device answers:
+// decode_credit, _nak, _ident, _status for 1..4 axes; host frames: decode_line, _dwell,
+// _config_axis, _numerators) returns or throws ProtocolError (anything else escapes and is
+// reported as a crash); check_host_frame agrees with the host decoders (no NAK reason exactly
+// when the decoder accepts); encode(frame) is 6 + LEN bytes with SYNC, LEN and the CRC-16 of
+// bytes 1..3+N, and parsed back gives exactly that frame, with no error counted.
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <span>
 #include <string>
 #include <vector>
@@ -55,6 +60,135 @@ void run_decoders(const v2::Frame& f) {
     } catch (const v2::ProtocolError&) {
     }
   }
+  // Host frames: the decoders and check_host_frame (the device's rules) agree.
+  for (size_t axes : {size_t{2}, size_t{4}}) {
+    const auto reason = v2::check_host_frame(f, axes);
+    bool accepted = false;
+    bool host_type = true;
+    try {
+      switch (static_cast<v2::Type>(f.type)) {
+        case v2::Type::Line: {
+          const auto l = v2::decode_line(f, axes);
+          if (l.steps.size() > axes) fail("decode_line: more axes than allowed");
+          break;
+        }
+        case v2::Type::Dwell:
+          (void)v2::decode_dwell(f);
+          break;
+        case v2::Type::ConfigAxis: {
+          const auto c = v2::decode_config_axis(f, axes);
+          if (c.axis >= axes) fail("decode_config_axis: axis out of range accepted");
+          break;
+        }
+        case v2::Type::Numerators:
+          (void)v2::decode_numerators(f);
+          break;
+        default:
+          host_type = false;
+      }
+      accepted = true;
+    } catch (const v2::ProtocolError&) {
+    }
+    if (host_type && accepted != !reason.has_value()) {
+      fail("check_host_frame and the host decoder disagree on type " + std::to_string(f.type) +
+           " LEN " + std::to_string(f.payload.size()));
+    }
+  }
+}
+
+// Builders round trip through encode, the parser and the decoders.
+template <class T>
+T parse_back(const v2::Frame& f, T (*decode)(const v2::Frame&)) {
+  v2::FrameParser p;
+  p.feed(v2::encode(f));
+  const auto g = p.next();
+  if (!g || !same(*g, f)) fail("built frame not parsed back");
+  return decode(*g);
+}
+
+struct Reader {
+  std::span<const uint8_t> d;
+  size_t i = 0;
+  uint32_t u(int bytes) {
+    uint32_t v = 0;
+    for (int k = 0; k < bytes; ++k) v = (v << 8) | (i < d.size() ? d[i++] : 0u);
+    return v;
+  }
+};
+
+void builders(std::span<const uint8_t> d) {
+  Reader r{d};
+  const auto seq = static_cast<uint8_t>(r.u(1));
+  // LINE
+  const auto code = static_cast<uint8_t>(r.u(1) & 3);
+  const auto power = static_cast<uint8_t>(r.u(1));
+  const uint32_t t = r.u(4);
+  const size_t k = r.u(1) % 5;
+  const bool shrt = r.u(1) & 1;
+  std::vector<int32_t> steps;
+  for (size_t a = 0; a < k; ++a) {
+    const uint32_t v = r.u(4);
+    // Mostly small counts (SHORT), sometimes full int32.
+    steps.push_back((v & 0x80000000u) ? static_cast<int32_t>(v) : static_cast<int16_t>(v));
+  }
+  const v2::Frame lf = v2::line(seq, code, power, t, steps, shrt);
+  const v2::Line l = v2::decode_line(lf, 4);
+  bool fits = true;
+  for (int32_t s : steps) fits = fits && s >= INT16_MIN && s <= INT16_MAX;
+  if (l.code != code || l.power != power || l.t != t || l.steps != steps ||
+      l.short_steps != (shrt && fits)) {
+    fail("line() -> decode_line round trip differs");
+  }
+  if (v2::check_host_frame(lf, 4)) fail("check_host_frame rejects a built LINE");
+  // DWELL, CONFIG_AXIS, NUMERATORS
+  const uint32_t dt = r.u(4);
+  if (v2::decode_dwell(v2::dwell(seq, dt)) != dt) fail("dwell round trip");
+  const v2::ConfigAxis ca{static_cast<uint8_t>(r.u(1) & 3), static_cast<uint16_t>(r.u(2)),
+                          static_cast<uint16_t>(r.u(2)), static_cast<uint16_t>(r.u(2)),
+                          static_cast<uint16_t>(r.u(2))};
+  if (!(v2::decode_config_axis(
+            v2::config_axis(seq, ca.axis, ca.step_high, ca.step_low, ca.dir_setup, ca.dir_hold),
+            4) == ca)) {
+    fail("config_axis round trip");
+  }
+  const uint32_t nx = r.u(4), ny = r.u(4);
+  if (v2::decode_numerators(v2::numerators(seq, nx, ny)) != std::array<uint32_t, 2>{nx, ny}) {
+    fail("numerators round trip");
+  }
+  // Device frames.
+  const v2::Credit c{static_cast<uint8_t>(r.u(1)), static_cast<uint16_t>(r.u(2)), r.u(4)};
+  if (!(parse_back(v2::ack(seq, c), v2::decode_credit) == c)) fail("ack round trip");
+  if (!(parse_back(v2::done(seq, c), v2::decode_credit) == c)) fail("done round trip");
+  const v2::Nak n{static_cast<uint8_t>(r.u(1)), static_cast<v2::NakReason>(1 + r.u(1) % 7),
+                  static_cast<uint8_t>(r.u(1)), static_cast<uint16_t>(r.u(2))};
+  if (!(parse_back(v2::nak(seq, n), v2::decode_nak) == n)) fail("nak round trip");
+  v2::Ident id;
+  id.n_axes = static_cast<uint8_t>(r.u(1));
+  id.fifo_depth = static_cast<uint16_t>(r.u(2));
+  id.clk_hz = r.u(4);
+  id.baud = r.u(4);
+  id.build_id = r.u(4);
+  id.next_seq = static_cast<uint8_t>(r.u(1));
+  try {
+    if (!(parse_back(v2::ident(seq, id), v2::decode_ident) == id)) fail("ident round trip");
+  } catch (const v2::ProtocolError&) {
+    // decode_ident may refuse field values the device never sends (e.g. 0 axes).
+  }
+  v2::Status st;
+  const size_t axes = 1 + r.u(1) % 4;
+  st.state = static_cast<uint8_t>(r.u(1));
+  st.faults = static_cast<uint8_t>(r.u(1));
+  st.fifo_level = static_cast<uint16_t>(r.u(2));
+  st.next_seq = static_cast<uint8_t>(r.u(1));
+  st.done = r.u(4);
+  for (size_t a = 0; a < axes; ++a) st.position.push_back(static_cast<int32_t>(r.u(4)));
+  for (auto& x : st.counters) x = static_cast<uint16_t>(r.u(2));
+  v2::FrameParser p;
+  const v2::Frame sf = v2::status(seq, st);
+  p.feed(v2::encode(sf));
+  const auto g = p.next();
+  if (!g || !same(*g, sf)) fail("status frame not parsed back");
+  if (!(v2::decode_status(*g, axes) == st)) fail("status round trip");
 }
 
 void round_trip(const v2::Frame& f) {
@@ -64,8 +198,7 @@ void round_trip(const v2::Frame& f) {
       bytes[3] != f.type) {
     fail("encoded header wrong");
   }
-  const uint16_t crc =
-      v2::crc16(std::span<const uint8_t>(bytes.data() + 1, bytes.size() - 3));
+  const uint16_t crc = v2::crc16(std::span<const uint8_t>(bytes.data() + 1, bytes.size() - 3));
   if (bytes[bytes.size() - 2] != (crc >> 8) || bytes[bytes.size() - 1] != (crc & 0xFF)) {
     fail("encoded CRC wrong");
   }
@@ -150,6 +283,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (got.size() != frames.size()) fail("a stream of good frames lost or gained frames");
   for (size_t k = 0; k < got.size(); ++k) {
     if (!same(got[k], frames[k])) fail("a stream of good frames parsed differently");
+  }
+  try {
+    builders(in);
+  } catch (const v2::ProtocolError& e) {
+    fail(std::string("a decoder refused a frame built by the codec: ") + e.what());
   }
   // A payload over 64 bytes is refused.
   v2::Frame big;

@@ -78,6 +78,9 @@ cmake --build "$BUILD" -j "$JOBS" >"$BUILD/build.log" 2>&1 ||
 
 ALL=(fuzz_gcode fuzz_v2_codec)
 declare -A CORPUS=([fuzz_gcode]=gcode [fuzz_v2_codec]=v2_codec)
+# Longest input: a G-code file of ~100 lines; a v2 stream of ~15 frames (decoders throw often,
+# longer inputs only slow the search down).
+declare -A MAXLEN=([fuzz_gcode]=4096 [fuzz_v2_codec]=1024)
 if [ ${#TARGETS[@]} -eq 0 ]; then
   for t in "${ALL[@]}"; do
     if [ -x "$BUILD/$t" ]; then
@@ -100,7 +103,7 @@ for t in "${TARGETS[@]}"; do
   mkdir -p "$work"
   log="$BUILD/logs/$t.$MODE.log"
   cmd=("$BUILD/$t" -seed="$SEED" -max_total_time="$TIME" -timeout=25 -rss_limit_mb=2048
-       -max_len=4096 -print_final_stats=1 -artifact_prefix="$BUILD/artifacts/$t-" "$work" "$seeds")
+       -max_len="${MAXLEN[$t]}" -print_final_stats=1 -artifact_prefix="$BUILD/artifacts/$t-" "$work" "$seeds")
   echo "fuzz.sh: $t for ${TIME} s (seed $SEED): ${cmd[*]}"
   rc=0
   "${cmd[@]}" >"$log" 2>&1 || rc=$?
