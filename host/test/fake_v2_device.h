@@ -21,6 +21,7 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "fpgacnc/link/link.h"
@@ -63,6 +64,7 @@ class FakeV2Device : public link::Link {
     uint32_t initial_done = 0;
     bool answer_hello = true;  // false: a v2 device that never answers (or a dead line)
     bool send_done = true;     // false: DONE frames are never sent (ACK and STATUS still are)
+    std::chrono::microseconds line_delay{0};  // host bytes reach the decoder this much later
     FakeFaults faults;
   };
 
@@ -94,9 +96,10 @@ class FakeV2Device : public link::Link {
         b ^= static_cast<uint8_t>(1u << (rng_() % 8));
         ++st_.flipped;
       }
-      inbox_.push_back(b);
+      const auto ready = clock::now() + o_.line_delay;
+      inbox_.push_back({b, ready});
       if (chance(o_.faults.host_dup)) {
-        inbox_.push_back(b);
+        inbox_.push_back({b, ready});
         ++st_.duplicated;
       }
     }
@@ -167,14 +170,14 @@ class FakeV2Device : public link::Link {
     }
     // Line: bytes reach the decoder unless stalled.
     if (stall_done_ && now < stall_until_) return;
-    if (!inbox_.empty()) {
+    if (!inbox_.empty() && inbox_.front().second <= now) {
       last_in_ = now;
-      while (!inbox_.empty()) {
-        const uint8_t b = inbox_.front();
+      while (!inbox_.empty() && inbox_.front().second <= now) {
+        const uint8_t b = inbox_.front().first;
         inbox_.pop_front();
         rx(b);
       }
-    } else if (in_frame_ && now - last_in_ > o_.watchdog) {
+    } else if (inbox_.empty() && in_frame_ && now - last_in_ > o_.watchdog) {
       ++st_.timeouts;
       nak(frame_seq_, v2::NakReason::Timeout);
       in_frame_ = false;
@@ -335,7 +338,7 @@ class FakeV2Device : public link::Link {
   std::mt19937_64 rng_;
   FakeStats st_;
   // line
-  std::deque<uint8_t> inbox_;
+  std::deque<std::pair<uint8_t, clock::time_point>> inbox_;  // byte, when it reaches the decoder
   std::deque<uint8_t> out_;
   std::vector<uint8_t> written_;
   uint64_t host_bytes_ = 0;

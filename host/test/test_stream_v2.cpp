@@ -112,6 +112,7 @@ TEST(StreamV2, CleanJobRunsEveryFrameOnceInOrder) {
   }
   EXPECT_EQ(r.retransmissions, 0u);
   EXPECT_EQ(r.go_backs, 0u);
+  EXPECT_EQ(r.min_window, v2::kMaxUnacked);
   for (size_t k = 1; k < 8; ++k)
     EXPECT_EQ(r.naks[k], 0u) << v2::nak_reason_name(static_cast<uint8_t>(k));
   EXPECT_EQ(r.sequenced_frames, 4 + job.frames.size());
@@ -148,6 +149,28 @@ TEST(StreamV2, TinyFifoAndSlowDeviceNeverOverflow) {
   EXPECT_EQ(dev.stats().max_fifo_level, 2u);
   EXPECT_EQ(r.retransmissions, 0u);
   EXPECT_TRUE(r.position_ok);
+}
+
+TEST(StreamV2, LongCreditWaitIsNotATimeout) {
+  // Segments longer than the retransmission timeout and a full FIFO: the host waits for credit
+  // longer than the timeout with nothing unacknowledged; the frame it then sends starts a fresh
+  // timer (regression: it used to time out at once and shrink the window).
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(6, false), cfg);
+  const auto job = v2::pack_job(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 2;
+  o.exec_period = std::chrono::microseconds(250'000);
+  o.line_delay = std::chrono::microseconds(20'000);  // the ACK comes 20 ms after the frame
+  FakeV2Device dev(o);
+  auto so = clean_options();
+  so.retransmit_timeout = milliseconds(100);
+  so.idle_poll = milliseconds(100);
+  const auto r = lk::stream_v2(dev, plan, cfg, so);
+  expect_executed_in_order(dev, job);
+  EXPECT_EQ(r.timeouts, 0u);
+  EXPECT_EQ(r.retransmissions, 0u);
+  EXPECT_EQ(r.min_window, v2::kMaxUnacked);
 }
 
 TEST(StreamV2, SequenceAndDoneCountersWrapAround) {
@@ -214,6 +237,7 @@ TEST_P(StreamV2Faults, JobCompletesEverySegmentExactlyOnce) {
   }
   EXPECT_GT(r.rx_crc_errors + r.rx_bad_length, 0u) << "corrupted answers seen by the host parser";
   EXPECT_GT(r.duplicates, 0u);
+  EXPECT_LT(r.min_window, v2::kMaxUnacked) << "the window shrinks at go-backs";
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, StreamV2Faults, ::testing::Values(1u, 2u, 3u));

@@ -493,7 +493,9 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           name, static_cast<double>(opt.answer_timeout.count()) / 1000.0, acked, n, done_count,
           total_fifo, last));
     }
-    if (sent > acked && now - last_progress > rto) {
+    // The timer runs from the later of the last progress and the (last) sending of the oldest
+    // unacknowledged frame: a frame sent after a long credit wait starts a fresh timer.
+    if (sent > acked && now - std::max(last_progress, sent_at[acked]) > rto) {
       ++rep.timeouts;
       go_back();
       probing = true;
