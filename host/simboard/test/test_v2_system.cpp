@@ -5,9 +5,8 @@
 // Job: a square spiral of short segments, each 0.1 mm (16 steps) along X or Y at 3000 mm/min:
 // T = 0.1 / 3000 * 60 * 50e6 = 100 000 clocks (2 ms) per segment; sides of 1, 1, 2, 2, 3, 3, ...
 // segments (every corner turns 90 degrees; X and Y each reverse every other side), laser on
-// (M3 S1000: power 255). FPGACNC_V2_SEGMENTS sets the number of segments (default 1000: a run
-// of 10 000 = 20 s of machine time takes several minutes of simulation on this machine; see
-// host/README.md for the figures of the full run).
+// (M3 S1000: power 255). FPGACNC_V2_SEGMENTS sets the number of segments: CTest runs 10 000
+// (20 s of machine time, a few minutes of simulation); run by hand the default is 1 000.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
