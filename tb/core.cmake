@@ -4,7 +4,6 @@ fpgacnc_verilated(vexec TOP segment_executor
                   SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/dda_linear.v
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
 fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
-fpgacnc_verilated(vdecoder TOP packet_decoder_v1 SOURCES ${FPGACNC_RTL_DIR}/packet_decoder_v1.v)
 fpgacnc_verilated(vframe TOP frame_decoder
                   SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
 fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo.v
