@@ -9,8 +9,10 @@
 //   short:  N moves of 0.1 mm (16 steps) along X at 3 000 mm/min (2 ms each): real-feed segments;
 //   tiny:   N moves of 1 step (6.25 um) along X at 60 000 mm/min: the link is the bottleneck.
 // Printed per run: segments per second sustained (between the completion of the first and the
-// last segment, simulated time), bytes on the wire per segment each way, and for v2 the rx line
-// utilisation over the same interval (fraction of clocks the UART line carries a frame bit).
+// last segment, simulated time), bytes on the wire per segment each way (everything the session
+// wrote and read, v2's HELLO/STATUS/CONFIG/RELEASE included, divided by the segments), and for v2
+// the rx line utilisation over the same interval (fraction of clocks the UART line carries a
+// frame bit) and the line's limit in LINE frames per second (baud / 10 / mean LINE frame bytes).
 #include <fmt/format.h>
 
 #include <chrono>
@@ -133,6 +135,18 @@ Figures run(double baud, const std::string& protocol, const plan::Plan& plan,
   return f;
 }
 
+double line_frame_bytes(const plan::Plan& plan, const config::MachineConfig& cfg) {
+  const auto job = protocol::v2::pack_job(plan, cfg);
+  double bytes = 0;
+  size_t lines = 0;
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type != static_cast<uint8_t>(protocol::v2::Type::Line)) continue;
+    bytes += static_cast<double>(protocol::v2::encode(jf.frame).size());
+    ++lines;
+  }
+  return bytes / static_cast<double>(lines);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -152,11 +166,12 @@ int main(int argc, char** argv) {
         v1 = run<Vcnc_core_1m>(baud, "v1", plan, cfg);
         v2 = run<Vcnc_core_1m>(baud, "v2", plan, cfg);
       }
-      const double v2_limit = baud / 10.0 / v2.down_per_seg;  // frames/s the line can carry
+      // LINE frames per second the line can carry: 10 bits per byte, the job's mean LINE frame.
+      const double v2_limit = baud / 10.0 / line_frame_bytes(plan, cfg);
       fmt::print(
           "bench: {} job at {:.0f} baud: v1 {:.1f} segments/s ({:.1f} B down + {:.1f} B up per "
           "segment), v2 {:.1f} segments/s ({:.1f} B down + {:.1f} B up), v2/v1 {:.2f}x, v2 line "
-          "utilisation {:.1f}% (line limit {:.1f} segments/s)\n",
+          "utilisation {:.1f}% (line limit {:.1f} LINE frames/s)\n",
           job, baud, v1.seg_per_s, v1.down_per_seg, v1.up_per_seg, v2.seg_per_s, v2.down_per_seg,
           v2.up_per_seg, v2.seg_per_s / v1.seg_per_s, 100.0 * v2.utilisation, v2_limit);
     }
