@@ -71,6 +71,7 @@ module cnc_core #(
     output wire [        15:0] fifo_level,     // entries in the command FIFO
     output wire [         7:0] next_seq,       // v2 sequence number expected next
     output wire                v2_mode,        // the decoder accepts only v2 frames
+    output wire                rx_partial,     // the decoder holds a started, incomplete packet/frame
     output wire [        31:0] segments_done,  // completed v2 FIFO entries
     output wire [         7:0] faults,         // latched faults (bit 0 STEP violation)
     output wire [        15:0] frames_ok,
@@ -143,6 +144,7 @@ module cnc_core #(
       .nak_reason   (dec_nak_reason),
       .next_seq     (dec_next_seq),
       .v2_mode      (dec_v2_mode),
+      .partial      (rx_partial),
       .frame_ok     (dec_frame_ok),
       .crc_error    (dec_crc_error),
       .length_error (dec_length_error),

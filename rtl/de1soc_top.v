@@ -48,6 +48,7 @@ module de1soc_top #(
   wire [15:0] clamped, naks;
   wire [7:0] next_seq, faults;
   wire v2_mode;
+  wire rx_partial;
   wire [31:0] segments_done;
 
   cnc_core #(
@@ -83,6 +84,7 @@ module de1soc_top #(
       .fifo_level   (fifo_level),
       .next_seq     (next_seq),
       .v2_mode      (v2_mode),
+      .rx_partial   (rx_partial),
       .segments_done(segments_done),
       .faults       (faults),
       .frames_ok    (frames_ok),
@@ -96,7 +98,7 @@ module de1soc_top #(
 
   // The status the board does not display.
   /* verilator lint_off UNUSEDSIGNAL */
-  wire unused_status = &{running, seg_start, seg_done, position, last_period, numerator_x,
+  wire unused_status = &{rx_partial, running, seg_start, seg_done, position, last_period, numerator_x,
                          numerator_y, packet_count[15:8], frame_errors[15:1], timeouts[15:1],
                          overruns[15:1], violations, last_feed[15:8], fifo_level, next_seq,
                          segments_done, faults[7:1], frames_ok, crc_errors, length_errors,

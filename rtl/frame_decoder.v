@@ -85,6 +85,7 @@ module frame_decoder #(
 
     output wire [7:0] next_seq,
     output wire       v2_mode,
+    output wire       partial,     // a packet or frame has started and is not complete yet
 
     output wire frame_ok,
     output wire crc_error,
@@ -431,6 +432,7 @@ module frame_decoder #(
   assign nak_reason    = nak_reason_reg;
   assign next_seq      = next_seq_reg;
   assign v2_mode       = v2_mode_reg;
+  assign partial       = (st_reg != ST_HUNT);
   assign frame_ok      = frame_ok_reg;
   assign crc_error     = crc_error_reg;
   assign length_error  = length_error_reg;

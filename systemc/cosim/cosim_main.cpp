@@ -64,6 +64,7 @@ SC_MODULE(RtlHarness) {
   sc_core::sc_signal<uint32_t> fifo_level, next_seq, segments_done, faults, frames_ok, crc_errors,
       length_errors, unknown_types, noise_bytes, clamped, naks;
   sc_core::sc_signal<bool> v2_mode;
+  sc_core::sc_signal<bool> rx_partial;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -99,6 +100,7 @@ SC_MODULE(RtlHarness) {
     dut.fifo_level(fifo_level);
     dut.next_seq(next_seq);
     dut.v2_mode(v2_mode);
+    dut.rx_partial(rx_partial);
     dut.segments_done(segments_done);
     dut.faults(faults);
     dut.frames_ok(frames_ok);

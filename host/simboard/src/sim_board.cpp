@@ -119,7 +119,10 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
         s.tx_stop_end = cyc + s.stop_tail;
       }
     }
-    if (m.busy || m.step || !drv_idle || tx == 0 || mon.busy() || cyc < s.tx_stop_end) {
+    // rx_partial: a packet or frame was cut short; the clock runs on so that the decoder's 100 ms
+    // watchdog drops it (and NAKs a v2 frame with TIMEOUT) as on the real board.
+    if (m.busy || m.step || m.rx_partial || !drv_idle || tx == 0 || mon.busy() ||
+        cyc < s.tx_stop_end) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;

@@ -114,6 +114,37 @@ TEST(V2System, HelloGetsIdent) {
   EXPECT_EQ(id->next_seq, 0);
 }
 
+// A frame cut short on an otherwise idle board: the board keeps its clock running while the
+// decoder holds the partial frame, so the 100 ms watchdog drops it and NAKs it with TIMEOUT
+// (as the real board does), instead of waiting for the next byte forever.
+TEST(V2System, CutFrameOnIdleBoardIsNakedWithTimeout) {
+  sb::BoardLink link(sb::BoardOptions{});
+  const int32_t steps[2] = {16, 0};
+  const auto full = v2::encode(v2::line(0, 1, 0, 100'000, steps));
+  ASSERT_GT(full.size(), 8u);
+  link.write(std::span<const uint8_t>(full.data(), 7));  // SYNC LEN SEQ TYPE and 3 payload bytes
+  v2::FrameParser parser;
+  std::optional<v2::Frame> nak;
+  const auto give_up = std::chrono::steady_clock::now() + 20s;
+  while (!nak && std::chrono::steady_clock::now() < give_up) {
+    if (auto b = link.read_byte(100ms)) parser.feed(std::span<const uint8_t>(&*b, 1));
+    while (auto f = parser.next()) {
+      if (f->type == static_cast<uint8_t>(v2::Type::Nak)) nak = f;
+    }
+  }
+  ASSERT_TRUE(nak.has_value()) << "no NAK within 20 s of a cut frame";
+  const auto n = v2::decode_nak(*nak);
+  EXPECT_EQ(n.reason, v2::NakReason::Timeout);
+  EXPECT_EQ(n.seq, 0) << "SEQ of the cut frame";
+  EXPECT_EQ(n.next_seq, 0) << "nothing accepted";
+  EXPECT_GE(link.board().cycle(), 5'000'000u) << "the watchdog needs 100 ms of board time";
+  // Nothing moved, and the board still takes a good frame afterwards.
+  EXPECT_TRUE(link.board().edges().empty());
+  const auto id = lk::probe_v2(link, 2000ms);
+  ASSERT_TRUE(id.has_value()) << "no IDENT after the cut frame";
+  EXPECT_EQ(id->next_seq, 0);
+}
+
 // (a) Zero gap through the pins, and the same job with v1 stop-and-wait for comparison.
 TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
   const size_t n = env_size("FPGACNC_V2_SEGMENTS", 1000);

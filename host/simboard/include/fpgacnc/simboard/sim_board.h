@@ -9,23 +9,25 @@
 //   - with an FST path the traced model (Vcnc_core_trace) writes a waveform.
 //
 // Time policy. Simulated time advances clock by clock while anything is in flight: rx bits
-// queued or being sent, the core busy (a move prepared or running), a STEP pulse high, tx
-// sending; it keeps running `kQuietCycles` clocks past the last activity. When all is quiet the
-// board blocks in poll() on the pty master WITHOUT advancing clocks, so simulated time does not
-// depend on how fast or slow the host is: a stop-and-wait host (v1) writes its next packet only
-// after it has received the ACK, which the board flushes the moment the byte's stop bit is
-// decoded, so every packet finds the board quiet and starts on the next clock; edge timestamps
-// are reproducible run to run. While busy, the pty is read (non-blocking) every
-// `poll_interval_cycles` clocks (1024 by default, well under one UART frame of 4340 clocks),
-// and everything read is queued in the rx driver, so a packet whose bytes are already written
-// never sees a gap on the line because of the polling. Bytes written while the board is busy
-// start at the next poll boundary (or right after the bytes already queued); bytes that arrive
-// while only the quiet tail (kQuietCycles after the last activity) is running wait for its end,
-// so a host that answers an ACK fast or slow gets the same cycle numbers. The one race left is
-// a host that writes a packet in pieces without waiting (the v1 streamer writes the init packet
-// and the first move back to back): a piece that arrives while earlier bytes are still on the
-// line follows them at once, one that arrives after the line went idle starts after the quiet
-// tail (32 clocks later). From the first ACK on, a stop-and-wait job is cycle-reproducible.
+// queued or being sent, the core busy (a move prepared, queued or running), a STEP pulse high,
+// tx sending, the decoder holding a started packet or frame (`rx_partial`: a cut one is then
+// dropped by its 100 ms watchdog, and a v2 frame NAKed with TIMEOUT, as on the real board); it
+// keeps running `kQuietCycles` clocks past the last activity. When all is quiet the board blocks in
+// poll() on the pty master WITHOUT advancing clocks, so simulated time does not depend on how fast
+// or slow the host is: a stop-and-wait host (v1) writes its next packet only after it has received
+// the ACK, which the board flushes the moment the byte's stop bit is decoded, so every packet finds
+// the board quiet and starts on the next clock; edge timestamps are reproducible run to run. While
+// busy, the pty is read (non-blocking) every `poll_interval_cycles` clocks (1024 by default, well
+// under one UART frame of 4340 clocks), and everything read is queued in the rx driver, so a packet
+// whose bytes are already written never sees a gap on the line because of the polling. Bytes
+// written while the board is busy start at the next poll boundary (or right after the bytes already
+// queued); bytes that arrive while only the quiet tail (kQuietCycles after the last activity) is
+// running wait for its end, so a host that answers an ACK fast or slow gets the same cycle numbers.
+// The one race left is a host that writes a packet in pieces without waiting (the v1 streamer
+// writes the init packet and the first move back to back): a piece that arrives while earlier bytes
+// are still on the line follows them at once, one that arrives after the line went idle starts
+// after the quiet tail (32 clocks later). From the first ACK on, a stop-and-wait job is
+// cycle-reproducible.
 //
 // Threads: start() runs the board in its own thread until stop() (the destructor stops it);
 // run_until() runs the same loop in the caller's thread. pause() freezes the board (no clocks,
