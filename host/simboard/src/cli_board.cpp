@@ -171,11 +171,21 @@ bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::Mach
   print_figures(b);
   const auto edges = b.edges();
   const auto n = net_steps(edges);
-  const bool ok = n[0] == plan.final_steps[0] && n[1] == plan.final_steps[1];
+  // v2 drives all four axes; v1 carries X and Y only, so Z/E that never stepped while the plan
+  // moves them are reported as not driven rather than as a mismatch.
+  const bool xy_ok = n[0] == plan.final_steps[0] && n[1] == plan.final_steps[1];
+  const bool ze_ok = n[2] == plan.final_steps[2] && n[3] == plan.final_steps[3];
+  const auto pulses = step_pulses(edges);
+  const bool ze_idle = pulses[2] == 0 && pulses[3] == 0;
+  const char* verdict = !xy_ok    ? "MISMATCH"
+                        : ze_ok   ? "match"
+                        : ze_idle ? "X/Y match; Z and E not driven (protocol v1)"
+                                  : "MISMATCH";
   fmt::print(
-      "net steps from the edges: X {} Y {} (planned final target X {} Y {}: {}); Z and E are "
-      "not driven by v1\n",
-      n[0], n[1], plan.final_steps[0], plan.final_steps[1], ok ? "match" : "MISMATCH");
+      "net steps from the edges: X {} Y {} Z {} E {} (planned final target X {} Y {} Z {} E {}: "
+      "{})\n",
+      n[0], n[1], n[2], n[3], plan.final_steps[0], plan.final_steps[1], plan.final_steps[2],
+      plan.final_steps[3], verdict);
   if (!outputs.plot_path.empty()) {
     PlotOptions po;
     po.steps_per_mm = {cfg.steps_per_mm[0], cfg.steps_per_mm[1]};
