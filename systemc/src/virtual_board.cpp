@@ -56,15 +56,8 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   prep_.report_applied = true;
   prep_.entry_ends = &entry_ends_;
   exec_.entry_ends = &entry_ends_;
-  for (int a = 0; a < kAxes; ++a) {
-    dda_[a] = std::make_unique<DdaLinearTwin>(sc_core::sc_gen_unique_name("dda_linear"), clk_);
-    pulse_[a] = std::make_unique<StepPulseTwin>(sc_core::sc_gen_unique_name("step_pulse"), clk_,
-                                                p_.timing[a], a, pins_);
-    pulse_[a]->keep_history = true;
-    exec_.dda[a]->bind(dda_[a]->load);
-    exec_.pulse[a]->bind(pulse_[a]->ctl);
-    dda_[a]->step.bind(pulse_[a]->req);
-  }
+  make_axis_twins(exec_, clk_, p_, pins_, dda_, pulse_);
+  for (auto& pulse : pulse_) pulse->keep_history = true;
   exec_.done.bind(enc_.done);
   enc_.tx.bind(tx_.bytes);
   enc_.state.bind(state_);

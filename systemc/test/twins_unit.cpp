@@ -476,14 +476,7 @@ SC_MODULE(ExecBench) {
     status.bind(exec.status);
     exec.done.bind(done);
     done.register_b_transport(this, &ExecBench::on_done);
-    for (int a = 0; a < kAxes; ++a) {
-      dda[a] = std::make_unique<DdaLinearTwin>(sc_core::sc_gen_unique_name("dda_linear"), clk);
-      pulse[a] = std::make_unique<StepPulseTwin>(sc_core::sc_gen_unique_name("step_pulse"), clk,
-                                                 p.timing[a], a, pins);
-      exec.dda[a]->bind(dda[a]->load);
-      exec.pulse[a]->bind(pulse[a]->ctl);
-      dda[a]->step.bind(pulse[a]->req);
-    }
+    make_axis_twins(exec, clk, p, pins, dda, pulse);
   }
   void on_done(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
     seg_done.emplace_back(clk.at(d), payload<SegDone>(g).v2);

@@ -24,6 +24,7 @@
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
+#include <array>
 #include <memory>
 
 #include "fpgacnc/twins/dda_linear.h"
@@ -185,5 +186,23 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   bool running_ = false;   // the last segment accepted has T > 0
   tlm::tlm_generic_payload gp_;
 };
+
+// Creates the per-axis DDA and step_pulse twins of `exec` and binds them: executor -> DDA load,
+// executor -> step_pulse control, DDA step -> step_pulse request. Shared by the virtual board
+// and the executor benches. Call from the enclosing module's constructor (names are generated
+// in its scope).
+inline void make_axis_twins(SegmentExecutorTwin& exec, const CycleClock& clk, const CoreParams& p,
+                            PinRecorder& pins,
+                            std::array<std::unique_ptr<DdaLinearTwin>, kAxes>& dda,
+                            std::array<std::unique_ptr<StepPulseTwin>, kAxes>& pulse) {
+  for (int a = 0; a < kAxes; ++a) {
+    dda[a] = std::make_unique<DdaLinearTwin>(sc_core::sc_gen_unique_name("dda_linear"), clk);
+    pulse[a] = std::make_unique<StepPulseTwin>(sc_core::sc_gen_unique_name("step_pulse"), clk,
+                                               p.timing[a], a, pins);
+    exec.dda[a]->bind(dda[a]->load);
+    exec.pulse[a]->bind(pulse[a]->ctl);
+    dda[a]->step.bind(pulse[a]->req);
+  }
+}
 
 }  // namespace fpgacnc::twins
