@@ -91,11 +91,35 @@ module segment_fifo #(
   assign free          = DEPTH16 - level_reg;
 
 `ifdef FORMAL
-  // Never overflows or underflows; the counters agree; order: an entry written with a marked
-  // value (any chosen one, f_val) comes out in its turn.
+  // Formal properties (scripts/formal.sh, k-induction on a small DEPTH/WIDTH): never overflows or
+  // underflows, the counters agree, and order with integrity: any one written entry, chosen by the
+  // solver (f_pick), leaves as the (k+1)-th entry taken after its write, where k = the level at its
+  // write, with exactly the data it was written with. Since the choice is arbitrary, every entry
+  // leaves in its turn, unchanged.
   reg f_past_valid = 1'b0;
   always @(posedge clk) f_past_valid <= 1'b1;
   always @(*) if (!f_past_valid) assume (rst);
+
+  (* anyseq *) reg f_pick;
+  reg [1:0] f_state_reg;  // 0 nothing tracked, 1 tracked entry inside, 2 it has left
+  reg [15:0] f_ahead_reg;  // entries in front of the tracked one
+  reg [WIDTH-1:0] f_data_reg;
+  wire [AW-1:0] f_addr = rd_ptr_reg + f_ahead_reg[AW-1:0] - {{(AW - 1) {1'b0}}, out_valid_reg};
+
+  always @(posedge clk) begin
+    if (f_state_reg == 2'd0 && push && f_pick) begin
+      f_state_reg <= 2'd1;
+      f_data_reg  <= s_axis_tdata;
+      f_ahead_reg <= level_reg - {15'd0, pop};
+    end else if (f_state_reg == 2'd1 && pop) begin
+      if (f_ahead_reg == 16'd0) f_state_reg <= 2'd2;
+      else f_ahead_reg <= f_ahead_reg - 16'd1;
+    end
+    if (rst) begin
+      f_state_reg <= 2'd0;
+      f_ahead_reg <= 16'd0;
+    end
+  end
 
   always @(*)
     if (f_past_valid && !rst) begin
@@ -103,6 +127,15 @@ module segment_fifo #(
       assert (mem_count_reg <= DEPTH16);
       assert (level_reg == mem_count_reg + {15'd0, out_valid_reg});
       assert ({{(16 - AW) {1'b0}}, wr_ptr_reg - rd_ptr_reg} == (mem_count_reg & (DEPTH16 - 16'd1)));
+      assert (f_state_reg != 2'd3);
+      if (f_state_reg == 2'd1) begin
+        assert (f_ahead_reg < level_reg);
+        // The tracked entry is taken now exactly when it is at the head: its data is intact.
+        if (pop && f_ahead_reg == 16'd0) assert (m_axis_tdata == f_data_reg);
+        // Induction invariant: where it is (output register, or memory behind rd_ptr).
+        if (out_valid_reg && f_ahead_reg == 16'd0) assert (rdata_reg == f_data_reg);
+        else assert (mem[f_addr] == f_data_reg);
+      end
     end
 
   always @(posedge clk)
@@ -112,7 +145,9 @@ module segment_fifo #(
         assert (out_valid_reg);
         assert (rdata_reg == $past(rdata_reg));
       end
+      // No write into a full FIFO, no take from an empty one.
       if ($past(level_reg) == DEPTH16) assert (!$past(push));
+      if ($past(level_reg) == 16'd0) assert (!$past(pop));
     end
 `endif
 

@@ -28,6 +28,7 @@ done
 JOBS=(
   "step_pulse        prove   6"
   "decoder           prove   14"
+  "segment_fifo      prove   8"
 )
 
 want=("$@")
