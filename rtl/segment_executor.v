@@ -274,6 +274,76 @@ module segment_executor #(
       if (code_reg == 2'd0) assert (!laser);
       if (power_reg == 8'd0) assert (!laser);
     end
+
+`ifdef FORMAL_DIR
+  // DIR timing at the pins (scripts/formal/executor_dir.ys): no STEP rising edge within DIR setup
+  // clocks after a DIR change, and no DIR change within DIR hold clocks after a STEP rising edge.
+  // Proved for segments taken through HOLD/SETUP (s_axis_dir_fast = 0 assumed; inputs as
+  // segment_prep makes them, below): the zero-gap
+  // reversal path relies on segment_prep's arithmetic (floor(T/n_dom) >= hold + setup), which the
+  // benches check edge for edge against the reference model. Configuration assumed stable.
+  reg [64*N_AXES-1:0] f_cfg_q;
+  always @(posedge clk) f_cfg_q <= {cfg_step_high, cfg_step_low, cfg_dir_setup, cfg_dir_hold};
+  always @(*) if (f_past_valid) assume ({cfg_step_high, cfg_step_low, cfg_dir_setup, cfg_dir_hold} == f_cfg_q);
+  always @(*) assume (!s_axis_dir_fast);
+  // No STEP timing violation (a step requested before the previous pulse's high + low time; the
+  // prep's clamp T >= n_dom * min_period prevents it, a violation is counted and latched as a
+  // fault): step_pulse assumes it never holds a pending step under FORMAL_DIR.
+  reg [N_AXES-1:0] f_step_q, f_dir_q;
+  reg f_rst_q;  // the pins' values before a reset edge do not count as changes
+  wire [N_AXES-1:0] f_dir_chg = f_rst_q ? {N_AXES{1'b0}} : (dir ^ f_dir_q);
+  wire [N_AXES-1:0] f_step_rise = f_rst_q ? {N_AXES{1'b0}} : (step & ~f_step_q);
+  reg [17*N_AXES-1:0] f_since_dir, f_since_step;  // clocks since the pin changed, saturating
+  integer f_a;
+  always @(posedge clk) begin
+    f_step_q <= step;
+    f_dir_q  <= dir;
+    f_rst_q  <= rst;
+    for (f_a = 0; f_a < N_AXES; f_a = f_a + 1) begin
+      if (f_dir_chg[f_a]) f_since_dir[17*f_a+:17] <= 17'd1;
+      else if (f_since_dir[17*f_a+:17] != 17'h10000)
+        f_since_dir[17*f_a+:17] <= f_since_dir[17*f_a+:17] + 17'd1;
+      if (f_step_rise[f_a]) f_since_step[17*f_a+:17] <= 17'd1;
+      else if (f_since_step[17*f_a+:17] != 17'h10000)
+        f_since_step[17*f_a+:17] <= f_since_step[17*f_a+:17] + 17'd1;
+    end
+    if (rst) begin
+      f_since_dir  <= {N_AXES{17'h10000}};
+      f_since_step <= {N_AXES{17'h10000}};
+    end
+  end
+  genvar f_g;
+  generate
+    for (f_g = 0; f_g < N_AXES; f_g = f_g + 1) begin : g_f_dir
+      // Clocks since this axis's DIR edge (0 in the clock right after the edge that changed it).
+      wire [16:0] f_sd = f_dir_chg[f_g] ? 17'd0 : f_since_dir[17*f_g+:17];
+      wire [16:0] f_setup = (cfg_dir_setup[16*f_g+:16] == 16'd0) ? 17'd1 : {1'b0, cfg_dir_setup[16*f_g+:16]};
+      // segment_prep's output contract: n <= T, tmn = T - n.
+      always @(*)
+        if (s_axis_tvalid)
+          assume ({32'd0, s_axis_steps[32*f_g+:32]} <= s_axis_total &&
+                  s_axis_tmn[64*f_g+:64] == s_axis_total - {32'd0, s_axis_steps[32*f_g+:32]});
+      always @(*)
+        if (f_past_valid && !rst) begin
+          // A STEP rising edge now: the last DIR change was at least DIR setup clocks ago.
+          if (f_step_rise[f_g]) assert (f_sd >= f_setup);
+          // DIR hold, compositionally: the executor writes DIR only when step_pulse's hold_ok is
+          // high, and step_pulse (set step_pulse) proves that DIR changes only on a write and that
+          // hold_ok means at least DIR hold clocks since the last STEP rising edge.
+          if (dir_wr[f_g]) assert (pulse_hold_ok[f_g]);
+          // Induction invariants: DIR writes happen only on leaving HOLD; in SETUP the written axes
+          // changed DIR exactly setup_cnt_reg - 1 clocks ago, every other axis (and every axis in
+          // any other state) at least DIR setup clocks ago.
+          if (state_reg != S_HOLD) assert (!pend_reg[f_g]);
+          assert (f_since_dir[17*f_g+:17] <= 17'h10000);
+          assert ((dir[f_g] != dir_tgt_reg[f_g]) == pend_reg[f_g]);
+          if (state_reg == S_SETUP && setup_axes_reg[f_g])
+            assert (f_sd + 17'd1 == {1'b0, setup_cnt_reg} && setup_cnt_reg != 16'd0);
+          else assert (f_sd >= f_setup);
+        end
+    end
+  endgenerate
+`endif
 `endif
 
 endmodule

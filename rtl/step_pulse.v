@@ -97,6 +97,11 @@ module step_pulse (
   reg [47:0] f_cfg_q;
   always @(posedge clk) f_cfg_q <= {cfg_high, cfg_low, cfg_hold};
   always @(*) if (f_past_valid) assume ({cfg_high, cfg_low, cfg_hold} == f_cfg_q);
+`ifdef FORMAL_DIR
+  // For the executor's DIR timing proof (scripts/formal/executor_dir.ys): no STEP timing violation,
+  // i.e. no step request while a pulse or its low time is in progress, so nothing is ever pending.
+  always @(*) assume (!pending_reg);
+`endif
 
   reg        f_pulsed;    // a STEP pulse has ended since reset
   reg        f_rose;      // a STEP rising edge happened since reset
