@@ -443,6 +443,79 @@ module frame_decoder #(
   assign v1_overrun    = v1_overrun_reg;
 
 `ifdef FORMAL
+`ifdef FORMAL_V2
+  // Formal properties of the v2 path (scripts/formal/frame_decoder_v2.ys, k-induction): any byte
+  // stream. An independent monitor follows each frame from the 0xA5 the decoder takes as a sync
+  // byte and computes CRC-16/CCITT-FALSE bit by bit over the bytes after it. Whenever the decoder
+  // accepts a v2 frame (FIFO write, configuration write, any sequenced action: v2_accept), that
+  // frame was complete (LEN + 5 bytes after the sync: LEN, SEQ, TYPE, payload, CRC) and its CRC
+  // checked (the CRC over LEN..payload equals the two CRC bytes: the residue over all of them is 0).
+  // So no segment or configuration comes from a frame with a bad CRC or from a partial frame.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+
+  function [15:0] f_crc_bits;  // bit-serial LFSR form of the CRC (MSB first)
+    input [15:0] c;
+    input [7:0] b;
+    integer k;
+    reg [15:0] x;
+    reg fb;
+    begin
+      x = c;
+      for (k = 7; k >= 0; k = k - 1) begin
+        fb = x[15] ^ b[k];
+        x  = {x[14:0], 1'b0} ^ (fb ? 16'h1021 : 16'h0000);
+      end
+      f_crc_bits = x;
+    end
+  endfunction
+
+  reg        f_in_reg;   // a frame has started (its sync byte was taken) and not been abandoned
+  reg [ 7:0] f_n_reg;    // bytes taken after the sync byte
+  reg [ 7:0] f_len_reg;  // the first of them (LEN)
+  reg [15:0] f_crc_reg;  // CRC over the bytes after the sync
+  wire       f_sync = take && (st_reg == ST_HUNT) && (d == 8'hA5);
+
+  always @(posedge clk) begin
+    if (f_sync) begin
+      f_in_reg  <= 1'b1;
+      f_n_reg   <= 8'd0;
+      f_crc_reg <= 16'hFFFF;
+    end else begin
+      if (st_reg == ST_HUNT && !chk_reg) f_in_reg <= 1'b0;
+      if (take && in_frame) begin
+        f_n_reg   <= f_n_reg + 8'd1;
+        f_crc_reg <= f_crc_bits(f_crc_reg, d);
+        if (st_reg == ST_LEN) f_len_reg <= d;
+      end
+    end
+    if (rst) begin
+      f_in_reg <= 1'b0;
+      f_n_reg  <= 8'd0;
+    end
+  end
+
+  always @(*)
+    if (f_past_valid && !rst) begin
+      if (v2_accept) begin
+        assert (f_in_reg && f_n_reg == f_len_reg + 8'd5);
+        assert (f_crc_reg == 16'h0000);
+      end
+      if (m_axis_tvalid && !chk_v1_reg) assert (v2_accept);
+      // Induction invariants: the monitor follows the decoder's frame state.
+      if (in_frame) assert (f_in_reg);
+      if (v2_chk) assert (f_in_reg && f_n_reg == f_len_reg + 8'd5 && f_crc_reg == crc);
+      if (in_frame && st_reg != ST_LEN) assert (f_crc_reg == crc && f_len_reg == len_reg);
+      if (st_reg == ST_LEN) assert (f_n_reg == 8'd0 && f_crc_reg == 16'hFFFF);
+      if (st_reg == ST_SEQ) assert (f_n_reg == 8'd1);
+      if (st_reg == ST_TYPE) assert (f_n_reg == 8'd2);
+      if (st_reg == ST_PAY) assert (f_n_reg == 8'd3 + {1'b0, cnt_reg} && {1'b0, cnt_reg} < len_reg);
+      if (st_reg == ST_CRC1) assert (f_n_reg == len_reg + 8'd3);
+      if (st_reg == ST_CRC2) assert (f_n_reg == len_reg + 8'd4);
+      if (in_frame && st_reg != ST_LEN) assert (len_reg <= MAXP);
+    end
+`else
   // Formal properties of the v1 path (scripts/formal.sh, k-induction with a small WATCHDOG_CLKS
   // override). The input never carries 0xA5 (assumed), so the decoder stays in auto mode and
   // only v1 packets and noise occur. An independent monitor counts the bytes since the last
@@ -519,6 +592,7 @@ module frame_decoder #(
       assert (v1_packet_reg == ($past(chk_reg) && $past(m_axis_tready)));
       assert (v1_overrun_reg == ($past(chk_reg) && !$past(m_axis_tready)));
     end
+`endif  // FORMAL_V2
 `endif
 
 endmodule

@@ -28,6 +28,7 @@ JOBS=(
   "step_pulse          prove   6"
   "decoder             sat     16"
   "frame_decoder_v1    sat     16"
+  "frame_decoder_v2    sat     16"
   "executor_laser      sat     8"
   "executor_dir        sat     12"
   "segment_fifo        prove   8"
