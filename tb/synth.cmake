@@ -10,3 +10,10 @@ add_test(NAME synth_report
 set_tests_properties(synth_report PROPERTIES LABELS synth TIMEOUT 600)
 
 # ice40_timing is not in CTest while it fails: run it with `make synth` (see docs/synthesis.md).
+
+# check_qsf: the Quartus project lists exactly de1soc_top's RTL files and every top port has a pin
+# and an I/O standard (scripts/check_qsf.sh; a few seconds).
+add_test(NAME check_qsf
+         COMMAND ${CMAKE_SOURCE_DIR}/scripts/check_qsf.sh
+         WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+set_tests_properties(check_qsf PROPERTIES LABELS synth TIMEOUT 120)
