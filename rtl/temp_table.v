@@ -8,9 +8,10 @@
 //   busy). Entry i is the temperature at code 64*i; with i = code >> 6, f = code & 63:
 //     temp = t[i] + ((t[i+1] - t[i]) * f >>> 6)     (arithmetic shift: floor), Q11.4.
 //   temp, done: temp is registered and valid from the done strobe on.
-// Memory: 128 words per channel (65 used), one write port and one registered read port: block
-//   RAM. The contents are 0 at configuration (0 degC: an enabled heater with no table trips
-//   MINTEMP) and are not cleared by rst.
+//   Until a channel's last entry (index 64) has been written after reset, its lookups return
+//   -2048 degC (0x8000): an enabled heater with no table trips MINTEMP.
+// Memory: 128 words per channel (65 used), one write port and one registered read port, no
+//   initial contents and no reset (block RAM, M10K); rst clears only the loaded flags.
 // Latency: start at edge S -> done (and temp) high after edge S + 5. One 17 x 7-bit multiply (a small DSP
 // block or LUTs), registered on both sides.
 // rst is synchronous, active high (idle).
@@ -39,13 +40,15 @@ module temp_table (
   reg [15:0] rdata_reg;
   reg [7:0] rd_addr_reg;
 
-  integer k;
-  initial begin
-    for (k = 0; k < WORDS; k = k + 1) mem[k] = 16'd0;
-  end
+  reg [1:0] loaded_reg;  // entry 64 of the channel written since reset
+  reg ch_reg;
 
   always @(posedge clk) begin
     if (wr) mem[{wr_ch, wr_idx}] <= wr_data;
+  end
+  always @(posedge clk) begin
+    if (wr && wr_idx == 7'd64) loaded_reg[wr_ch] <= 1'b1;
+    if (rst) loaded_reg <= 2'b00;
   end
   always @(posedge clk) begin
     rdata_reg <= mem[rd_addr_reg];
@@ -73,6 +76,7 @@ module temp_table (
       if (start) begin
         rd_addr_reg <= {ch, 1'b0, code[11:6]};
         f_reg       <= code[5:0];
+        ch_reg      <= ch[0];
         st_reg      <= S_A;
       end
       S_A: begin  // t[i] is being read
@@ -92,7 +96,7 @@ module temp_table (
         st_reg   <= S_S;
       end
       default: begin  // S_S
-        temp_reg <= a_reg + prod_shift[15:0];
+        temp_reg <= loaded_reg[ch_reg] ? a_reg + prod_shift[15:0] : 16'h8000;
         done_reg <= 1'b1;
         st_reg   <= S_IDLE;
       end
@@ -101,6 +105,7 @@ module temp_table (
       st_reg      <= S_IDLE;
       rd_addr_reg <= 8'd0;
       f_reg       <= 6'd0;
+      ch_reg      <= 1'b0;
       a_reg       <= 16'sd0;
       diff_reg    <= 17'sd0;
       prod_reg    <= 24'sd0;

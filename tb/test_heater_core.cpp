@@ -152,8 +152,8 @@ TEST(HeaterCore, WorkedFramesTableAndStatus) {
   EXPECT_GT(st.u16(h1 + 4), 0u) << "bed duty (heating)";
   EXPECT_EQ(st.u8(h1 + 6), 0x84u) << "bed mode byte: enabled, PID";
   EXPECT_EQ(st.u8(h1 + 7), 0u) << "bed faults";
-  // Hot end (channel 0): no table (reads 0 degC), off.
-  EXPECT_EQ(st.u16(h0), 0u);
+  // Hot end (channel 0): no table (reads -2048 degC, 0x8000), off.
+  EXPECT_EQ(st.u16(h0), 0x8000u);
   EXPECT_EQ(st.u8(h0 + 6), 0u);
   EXPECT_EQ(b.adc.violations(), 0u) << b.adc.first_violation();
   // The watchdog (10 ticks) is fed by the STATUS queries; silence trips it (faults bit 5), both

@@ -311,6 +311,14 @@ TEST(TempTable, InterpolationIsBitExact) {
   d.m->wr = 0;
   d.m->start = 0;
   d.reset();
+  // No table loaded since reset: -2048 degC (0x8000).
+  d.m->ch = 1;
+  d.m->code = 1234;
+  d.m->start = 1;
+  d.tick();
+  d.m->start = 0;
+  for (int i = 0; i < 6; ++i) d.tick();
+  EXPECT_EQ(d.m->temp, 0x8000) << "lookup before the table's last entry was written";
   std::array<thermal::Table, 2> tabs{};
   tabs[0] = thermal::thermistor_table();
   for (auto& v : tabs[1]) v = static_cast<int16_t>(rng() % 65536);  // any s16, steep steps

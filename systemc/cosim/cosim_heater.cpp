@@ -43,6 +43,7 @@ SC_MODULE(HeaterTwins) {
   ht::WatchdogTwin wd;
   bool wd_fault = false, estop = false;
   th::Table table[2] = {};
+  bool loaded[2] = {false, false};  // entry 64 written (temp_table's flag)
 
   SC_CTOR(HeaterTwins) : in("in") {
     in.register_b_transport(this, &HeaterTwins::b_transport);
@@ -82,6 +83,7 @@ SC_MODULE(HeaterTwins) {
           ch[k].setpoint(static_cast<int16_t>(u16(1)), kill());
         } else if (e.type == 0x22) {
           const int n = (static_cast<int>(e.pay.size()) - 2) / 2;
+          for (int i = 0; i < n; ++i) loaded[k] = loaded[k] || e.pay[1] + i == 64;
           for (int i = 0; i < n; ++i)
             table[k][static_cast<size_t>(e.pay[1] + i)] =
                 static_cast<int16_t>(u16(2 + 2 * static_cast<size_t>(i)));
@@ -113,7 +115,7 @@ SC_MODULE(HeaterTwins) {
         break;
       case Event::kEval:
         for (int k = 0; k < 2; ++k) {
-          e.temp[k] = th::table_lookup(table[k], e.code[k]);
+          e.temp[k] = loaded[k] ? th::table_lookup(table[k], e.code[k]) : -32768;
           const ht::SampleOut o = ch[k].sample(e.temp[k], kill());
           e.u[k] = o.u;
           e.faults[k] = o.faults;
