@@ -17,9 +17,10 @@
 //   heater[1:0] pins; adc_* pins (ltc2308_spi).
 //   tick: 1-clock strobe at each sample tick; sample_done: 1-clock strobe when the channels
 //   evaluate this tick's temperatures.
-// Latency: tick at edge T -> eval high after edge T + 3 * (ADC_TCONV + 1 + 24 * ADC_SCK_DIV) + 15
-//   (defaults: 633 clocks); a MINTEMP/MAXTEMP fault is latched on the eval edge and the heater pin
-//   is low after the next edge. Watchdog and e-stop: heater low after the next edge.
+// Latency (defaults, measured by tb/test_heater_block.cpp): tick strobe high after edge T -> the
+//   channels evaluate on edge T + 635 (ADC read 619 clocks, two table lookups); a MINTEMP/MAXTEMP
+//   fault is latched on that edge and the heater pin is low after edge T + 636. Watchdog and
+//   e-stop: heater low after the next edge.
 // rst is synchronous, active high.
 `default_nettype none
 
