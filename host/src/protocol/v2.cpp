@@ -284,6 +284,14 @@ Status decode_status(const Frame& f, size_t n_axes) {
   if (n_axes > (kMaxPayload - 27) / 4) {
     throw ProtocolError(fmt::format("STATUS: {} axes cannot fit a frame", n_axes));
   }
+  // Issue 7 (heat-rtl): the device appends a 16-byte heater block (docs/protocol.md); skipped
+  // here until the host decodes it.
+  if (f.type == static_cast<uint8_t>(Type::Status) &&
+      f.payload.size() == status_payload_size(n_axes) + 16) {
+    Frame g = f;
+    g.payload.resize(status_payload_size(n_axes));
+    return decode_status(g, n_axes);
+  }
   expect(f, Type::Status, status_payload_size(n_axes));
   const auto& p = f.payload;
   Status s;
