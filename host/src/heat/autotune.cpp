@@ -74,8 +74,7 @@ std::string format_autotune(const RelayResult& r, const RelayOptions& o, const s
   out += fmt::format(
       "critical period Pu {:.1f} s (cycles {:.1f}..{:.1f} s, last {} of {} cycles), amplitude "
       "a {:.3f} degC around {:.2f} degC\n",
-      r.period_s, r.period_min_s, r.period_max_s, r.cycles, r.cycles_seen, r.amplitude_c,
-      r.mean_c);
+      r.period_s, r.period_min_s, r.period_max_s, r.cycles, r.cycles_seen, r.amplitude_c, r.mean_c);
   out +=
       fmt::format("critical gain Ku = 4 d / (pi a) = 4 * {:g} / (pi * {:.3f}) = {:.2f} {}/degC\n",
                   r.d, r.amplitude_c, r.ku, units);

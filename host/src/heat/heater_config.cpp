@@ -53,9 +53,7 @@ HeaterConfig default_hotend() {
   h.kp_v_per_c = 1.6;
   h.ti_s = 24.0;
   h.td_s = 4.0;
-  h.max_temp_c = 285.0;
-  h.runaway_band_c = 10.0;
-  h.runaway_period_s = 45.0;
+  h.max_temp_c = 275.0;
   h.watch_rise_c = 2.0;
   h.watch_period_s = 20.0;
   h.wait_tolerance_c = 2.0;
@@ -156,11 +154,11 @@ ThermistorCurve make_curve(const ThermistorConfig& t) {
 double adc_code_of(const ThermistorConfig& t, const ThermistorCurve& c, double temp_c) {
   const double r = c.resistance(temp_c);
   const double v = t.supply_v * r / (r + t.pullup_ohm);
-  return std::clamp(4095.0 * v / t.adc_vref_v, 0.0, 4095.0);
+  return std::clamp(4096.0 * v / t.adc_vref_v, 0.0, 4095.0);
 }
 
 double temp_of_code(const ThermistorConfig& t, const ThermistorCurve& c, double code) {
-  const double v = code / 4095.0 * t.adc_vref_v;
+  const double v = code / 4096.0 * t.adc_vref_v;
   if (v <= 0.0) return 1e9;              // short
   if (v >= t.supply_v) return -kKelvin;  // open
   const double r = t.pullup_ohm * v / (t.supply_v - v);
@@ -274,7 +272,7 @@ class HeaterReader {
         channel(x, full, out.bed());
       } else if (k == "watchdog_s") {
         out.watchdog_s = number(x, full);
-        if (!(out.watchdog_s > 0.0)) fail(x, full, "must be > 0");
+        if (!(out.watchdog_s >= 0.0)) fail(x, full, "must be >= 0 (0: off)");
       } else {
         fail(x, full, "unknown key (expected hotend, bed or watchdog_s)");
       }

@@ -50,7 +50,7 @@ struct HeaterConfig {
   double manual_v = 0.0;      // manual mode output
   double sample_s = 1.0;      // control sample period
   // Safety (hardware, per channel).
-  double min_temp_c = 0.0;         // below: sensor open (or a heater in a freezer)
+  double min_temp_c = 5.0;         // below: sensor open (or a heater in a freezer)
   double max_temp_c = 130.0;       // above: over-temperature / sensor short
   double runaway_band_c = 4.0;     // holding: |T - set| above this for longer than ...
   double runaway_period_s = 40.0;  // ... this is a runaway
@@ -65,7 +65,9 @@ struct HeaterConfig {
 
 struct HeaterSet {
   std::array<HeaterConfig, kChannels> ch;
-  double watchdog_s = 10.0;  // device: heaters off when no valid frame for this long
+  // Device watchdog: heaters off when no valid frame arrives for this long (0: off). The streamer
+  // keeps it fed with STATUS_QUERY while a job runs.
+  double watchdog_s = 10.0;
   HeaterSet();
   HeaterConfig& hotend() { return ch[kHotend]; }
   HeaterConfig& bed() { return ch[kBed]; }
@@ -91,8 +93,9 @@ struct ThermistorCurve {
 };
 // Throws std::runtime_error naming the file and line for a bad CSV.
 ThermistorCurve make_curve(const ThermistorConfig& t);
-// ADC code (0..4095, 12-bit LTC2308) of a temperature and back (divider: pull-up to supply_v,
-// thermistor to ground; code = round(4095 * v / adc_vref_v), clamped).
+// ADC code (0..4095, 12-bit LTC2308, 1 mV per code with the 4.096 V reference) of a temperature
+// and back (divider: pull-up to supply_v, thermistor to ground; code = 4096 * v / adc_vref_v,
+// clamped to 0..4095; not rounded).
 double adc_code_of(const ThermistorConfig& t, const ThermistorCurve& c, double temp_c);
 double temp_of_code(const ThermistorConfig& t, const ThermistorCurve& c, double code);
 
