@@ -9,9 +9,11 @@
 #include <deque>
 #include <random>
 
+#include "common/thermal_plant.h"
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/heat/autotune.h"
 #include "fpgacnc/heat/heater_config.h"
+#include "fpgacnc/heat/heater_job.h"
 
 namespace heat = fpgacnc::heat;
 using fpgacnc::config::parse_machine_config;
@@ -198,4 +200,37 @@ TEST(Autotune, RelayOnTheReferenceBedModel) {
   EXPECT_GT(r.ku, 0.0);
   EXPECT_LT(r.period_max_s - r.period_min_s, 3.0) << "limit cycle not settled";
   EXPECT_NEAR(r.mean_c, 60.0, 1.0);
+}
+
+// The same relay test on heat-rtl's bed plant (tb/common/thermal_plant.h) as the device sees it:
+// 1 s ticks, the reading one tick old, through the thermistor, the 12-bit ADC and the host's
+// 65-entry table with the RTL's interpolation (Q11.4), relay 0/12 V = duty 0.5 of the 24 V supply.
+TEST(Autotune, RelayOnTheThermalPlantBedThroughAdcAndTable) {
+  namespace th = fpgacnc::thermal;
+  fpgacnc::config::MachineConfig cfg;
+  const auto host_table = heat::thermistor_table(cfg.heaters.bed());
+  th::Table table{};
+  for (size_t i = 0; i < table.size(); ++i) table[i] = host_table[i];
+  EXPECT_EQ(table, th::thermistor_table()) << "host table differs from the bench's";
+  th::BedPlant plant;
+  th::DelayedSensor sensor(1);
+  th::Thermistor ntc;
+  heat::RelayOptions o;
+  o.setpoint_c = 60.0;
+  o.u_high = 12.0;
+  heat::RelayController relay(o);
+  std::vector<heat::RelaySample> s;
+  double temp = plant.temperature();
+  for (int k = 0; k < 3000; ++k) {
+    const double reading = sensor.sample(temp);
+    const int code = th::adc_code(ntc.voltage(reading));
+    const double t_c = th::from_q4(th::table_lookup(table, code));
+    const double u = relay.update(t_c);
+    s.push_back({static_cast<double>(k), t_c, u});
+    temp = plant.step(1.0, u / th::kBedSupplyV);
+  }
+  const auto r = heat::analyse_relay(s, o);
+  fmt::print("{}", heat::format_autotune(r, o));
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_NEAR(r.period_s, 53.0, 53.0 * 0.15) << "critical period, expected 53 s +-15 %";
 }
