@@ -12,7 +12,7 @@ RelayResult analyse_relay(const std::vector<RelaySample>& s, const RelayOptions&
   RelayResult r;
   r.d = (o.u_high - o.u_low) / 2.0;
   const double mid = (o.u_high + o.u_low) / 2.0;
-  // Relay-on switching instants (u goes from below the middle to above it).
+  // Relay-on switching samples (u goes from below the middle to above it).
   std::vector<size_t> on;
   for (size_t i = 1; i < s.size(); ++i) {
     if (s[i - 1].u < mid && s[i].u >= mid) on.push_back(i);
@@ -25,13 +25,25 @@ RelayResult analyse_relay(const std::vector<RelaySample>& s, const RelayOptions&
                             o.skip_cycles, o.cycles);
     return r;
   }
+  // Switch instants: the relay went on between samples i-1 and i, when the temperature fell
+  // through set - h; interpolated on that crossing when the two samples straddle it (a device
+  // polled less often than it samples), else the midpoint.
+  const double thr = o.setpoint_c - o.hysteresis_c;
+  auto t_on = [&](size_t i) {
+    const auto& a = s[i - 1];
+    const auto& b = s[i];
+    if (a.temp_c > thr && b.temp_c <= thr) {
+      return a.t_s + (a.temp_c - thr) / (a.temp_c - b.temp_c) * (b.t_s - a.t_s);
+    }
+    return (a.t_s + b.t_s) / 2.0;
+  };
   double sum_p = 0.0, sum_a = 0.0, sum_m = 0.0;
   r.period_min_s = 1e300;
   r.period_max_s = 0.0;
   // The last `cycles` complete cycles (the oscillation settles as the transient dies out).
   const size_t first = on.size() - 1 - static_cast<size_t>(o.cycles);
   for (size_t c = first; c + 1 < on.size(); ++c) {
-    const double p = s[on[c + 1]].t_s - s[on[c]].t_s;
+    const double p = t_on(on[c + 1]) - t_on(on[c]);
     double lo = 1e300, hi = -1e300;
     for (size_t i = on[c]; i < on[c + 1]; ++i) {
       lo = std::min(lo, s[i].temp_c);
