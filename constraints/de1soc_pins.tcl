@@ -124,3 +124,23 @@ set_location_assignment PIN_AA26 -to HEX5[5]
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to HEX5[5]
 set_location_assignment PIN_AA25 -to HEX5[6]
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to HEX5[6]
+
+# Heaters and e-stop (issue 7, docs/heater.md): GPIO_0[7..9] (pins from the Terasic DE1-SoC
+# manual). heater_* drive MOSFET gate drivers; estop_n is active low (normally-closed switch to
+# ground), with the weak pull-up on so that an open wire reads as "stop".
+set_location_assignment PIN_AJ19 -to heater_hotend
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to heater_hotend
+set_location_assignment PIN_AJ17 -to heater_bed
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to heater_bed
+set_location_assignment PIN_AJ16 -to estop_n
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to estop_n
+set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to estop_n
+# On-board LTC2308 ADC (DE1-SoC dedicated pins; the manual calls SDI/SDO ADC_DIN/ADC_DOUT).
+set_location_assignment PIN_AJ4 -to ADC_CONVST
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_CONVST
+set_location_assignment PIN_AK2 -to ADC_SCK
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SCK
+set_location_assignment PIN_AK4 -to ADC_SDI
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SDI
+set_location_assignment PIN_AK3 -to ADC_SDO
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SDO

@@ -19,6 +19,15 @@
 // changes in the middle of a move. The cfg port wins over a CONFIG_AXIS frame on the same clock
 // and field.
 // Faults: a STEP timing violation is latched (faults bit 0) until a FAULT_CLEAR frame.
+// Heaters (docs/heater.md): heater_block (two channels, LTC2308 on adc_*, sample tick every
+// SAMPLE_CLKS clocks) takes the heater frames from the decoder; its status is appended to STATUS
+// (16 bytes) and its faults are faults bits 5 (watchdog), 6 (channel 0), 7 (channel 1).
+// E-stop: `estop` (active high here; the board top inverts its active-low pin) is synchronized by
+// two flops and latched (faults bit 4) until a FAULT_CLEAR while it is released. While it is
+// active or latched: STEP and laser gated low at the outputs, the command FIFO held flushed,
+// segment_prep and segment_executor held in reset (a stand-in for the executor's abort input:
+// the running segment and the prepared one are dropped; it also zeroes the position counters and
+// the v1 numerators), both heaters low. Pin to STEP/laser low: 2 clocks; to heaters low: 3.
 // Status outputs: the v1 ones, plus the v2 counters that STATUS reports (16 bits, wrapping).
 //   packet_count counts v1 packets queued and v2 frames that passed every check.
 // rst is synchronous, active high; the board top synchronizes its reset button.
@@ -36,7 +45,10 @@ module cnc_core #(
     parameter DIR_SETUP         = 200,
     parameter DIR_HOLD          = 200,
     parameter FIFO_DEPTH        = 64,                  // command FIFO entries (power of two)
-    parameter BUILD_ID          = 32'h2026_0005        // reported by IDENT
+    parameter BUILD_ID          = 32'h2026_0005,       // reported by IDENT
+    parameter SAMPLE_CLKS       = CLK_HZ,              // heater sample tick (1 s)
+    parameter HEAT_PWM_BITS     = 10,
+    parameter HEAT_PWM_DIV      = 4883                 // heater PWM 10 Hz at 50 MHz
 ) (
     input wire clk,
     input wire rst,
@@ -47,6 +59,13 @@ module cnc_core #(
     output wire [N_AXES-1:0] step,
     output wire [N_AXES-1:0] dir,
     output wire              laser,
+
+    input  wire       estop,       // e-stop, active high, asynchronous
+    output wire [1:0] heater,      // 0 hot end, 1 bed
+    output wire       adc_convst,  // LTC2308
+    output wire       adc_sck,
+    output wire       adc_sdi,
+    input  wire       adc_sdo,
 
     input wire        cfg_wr,
     input wire [ 7:0] cfg_addr,
@@ -73,7 +92,7 @@ module cnc_core #(
     output wire                v2_mode,        // the decoder accepts only v2 frames
     output wire                rx_partial,     // the decoder holds a started, incomplete packet/frame
     output wire [        31:0] segments_done,  // completed v2 FIFO entries
-    output wire [         7:0] faults,         // latched faults (bit 0 STEP violation)
+    output wire [         7:0] faults,         // latched faults (docs/protocol.md STATUS byte 1)
     output wire [        15:0] frames_ok,
     output wire [        15:0] crc_errors,
     output wire [        15:0] length_errors,
@@ -113,6 +132,9 @@ module cnc_core #(
   wire dec_cfg_wr;
   wire [7:0] dec_cfg_axis;
   wire [63:0] dec_cfg_data;
+  wire dec_heat_wr;
+  wire [7:0] dec_heat_type, dec_heat_len;
+  wire [159:0] dec_heat_data;
   wire dec_fault_clear, dec_hello, dec_status, dec_ack, dec_nak;
   wire [7:0] dec_nak_seq, dec_nak_reason, dec_next_seq;
   wire dec_v2_mode, dec_frame_ok, dec_crc_error, dec_length_error, dec_unknown_type;
@@ -134,6 +156,10 @@ module cnc_core #(
       .cfg_wr       (dec_cfg_wr),
       .cfg_axis     (dec_cfg_axis),
       .cfg_data     (dec_cfg_data),
+      .heat_wr      (dec_heat_wr),
+      .heat_type    (dec_heat_type),
+      .heat_len     (dec_heat_len),
+      .heat_data    (dec_heat_data),
       .fault_clear  (dec_fault_clear),
       .release_req  (dec_release),
       .hello        (dec_hello),
@@ -155,6 +181,22 @@ module cnc_core #(
       .v1_overrun   (dec_v1_overrun)
   );
 
+  // ---------------------------------------------------------------- e-stop
+  reg estop_s1_reg, estop_s2_reg, estop_latch_reg;
+  always @(posedge clk) begin
+    estop_s1_reg <= estop;
+    estop_s2_reg <= estop_s1_reg;
+    if (dec_fault_clear && !estop_s2_reg) estop_latch_reg <= 1'b0;
+    if (estop_s2_reg) estop_latch_reg <= 1'b1;
+    if (rst) begin
+      estop_s1_reg    <= 1'b0;
+      estop_s2_reg    <= 1'b0;
+      estop_latch_reg <= 1'b0;
+    end
+  end
+  wire estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
+  wire motion_rst = rst || estop_stop;  // stand-in for the executor's abort (see header)
+
   // ---------------------------------------------------------------- command FIFO
   wire [ENTRY_W-1:0] cmd_tdata;
   wire cmd_tvalid, cmd_tready;
@@ -166,6 +208,7 @@ module cnc_core #(
   ) u_fifo (
       .clk          (clk),
       .rst          (rst),
+      .flush        (estop_stop),
       .s_axis_tdata (dec_tdata),
       .s_axis_tvalid(dec_tvalid),
       .s_axis_tready(fifo_s_tready),
@@ -271,7 +314,7 @@ module cnc_core #(
       .DEFAULT_NUMERATOR(DEFAULT_NUMERATOR)
   ) u_prep (
       .clk            (clk),
-      .rst            (rst),
+      .rst            (motion_rst),
       .s_axis_tdata   (cmd_tdata),
       .s_axis_tvalid  (cmd_tvalid),
       .s_axis_tready  (cmd_tready),
@@ -301,12 +344,16 @@ module cnc_core #(
 
   // ---------------------------------------------------------------- execution
   wire exec_busy, exec_violation, seg_done_v2;
+  wire [N_AXES-1:0] exec_step;
+  wire exec_laser;
+  assign step  = exec_step & {N_AXES{!estop_stop}};
+  assign laser = exec_laser && !estop_stop;
 
   segment_executor #(
       .N_AXES(N_AXES)
   ) u_exec (
       .clk            (clk),
-      .rst            (rst),
+      .rst            (motion_rst),
       .s_axis_code    (seg_code),
       .s_axis_power   (seg_power),
       .s_axis_v2      (seg_v2),
@@ -321,9 +368,9 @@ module cnc_core #(
       .cfg_step_low   (cfg_low_reg),
       .cfg_dir_setup  (cfg_setup_reg),
       .cfg_dir_hold   (cfg_hold_reg),
-      .step           (step),
+      .step           (exec_step),
       .dir            (dir),
-      .laser          (laser),
+      .laser          (exec_laser),
       .busy           (exec_busy),
       .idle           (exec_idle),
       .running        (running),
@@ -390,11 +437,46 @@ module cnc_core #(
     end
   end
 
+  // ---------------------------------------------------------------- heaters
+  wire [127:0] heat_status;
+  wire [7:0] heat_faults0, heat_faults1;
+  wire heat_wd_fault;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire heat_tick, heat_done;
+  /* verilator lint_on UNUSEDSIGNAL */
+  heater_block #(
+      .SAMPLE_CLKS(SAMPLE_CLKS),
+      .PWM_BITS   (HEAT_PWM_BITS),
+      .PWM_DIV    (HEAT_PWM_DIV)
+  ) u_heat (
+      .clk        (clk),
+      .rst        (rst),
+      .frame_wr   (dec_heat_wr),
+      .frame_type (dec_heat_type),
+      .frame_len  (dec_heat_len),
+      .frame_data (dec_heat_data),
+      .frame_ok   (dec_frame_ok),
+      .fault_clear(dec_fault_clear),
+      .estop      (estop_stop),
+      .heater     (heater),
+      .heat_status(heat_status),
+      .faults0    (heat_faults0),
+      .faults1    (heat_faults1),
+      .wd_fault   (heat_wd_fault),
+      .tick       (heat_tick),
+      .sample_done(heat_done),
+      .adc_convst (adc_convst),
+      .adc_sck    (adc_sck),
+      .adc_sdi    (adc_sdi),
+      .adc_sdo    (adc_sdo)
+  );
+
   // ---------------------------------------------------------------- answers
   wire [7:0] enc_tdata;
   wire enc_tvalid, tx_tready;
-  wire [7:0] faults_w = {7'd0, fault_step_reg};
-  wire [7:0] state_w = {5'd0, fault_step_reg, dec_v2_mode, busy};
+  wire [7:0] faults_w = {heat_faults1 != 8'd0, heat_faults0 != 8'd0, heat_wd_fault, estop_latch_reg,
+                         3'd0, fault_step_reg};
+  wire [7:0] state_w = {4'd0, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
   wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
                                 unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,
                                 noise_bytes_reg, clamped_reg};
@@ -405,7 +487,8 @@ module cnc_core #(
       .CLK_HZ     (CLK_HZ),
       .BAUD       (BAUD),
       .BUILD_ID   (BUILD_ID),
-      .MAX_PAYLOAD(64)
+      .MAX_PAYLOAD(64),
+      .HEAT_BYTES (16)
   ) u_enc (
       .clk          (clk),
       .rst          (rst),
@@ -425,6 +508,7 @@ module cnc_core #(
       .faults       (faults_w),
       .position     (position),
       .counters     (counters_w),
+      .heat_status  (heat_status),
       .m_axis_tdata (enc_tdata),
       .m_axis_tvalid(enc_tvalid),
       .m_axis_tready(tx_tready),

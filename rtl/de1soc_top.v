@@ -2,10 +2,16 @@
 // controller's pin names (hardware.md): 50 MHz clk, KEY[0] as rst_n, USB-UART on GPIO_0[0..1],
 // X/Y STEP/DIR and the laser enable on GPIO_0[2..6].
 //   LEDR[0] busy, LEDR[1] laser, LEDR[2] dir_x, LEDR[3] dir_y, LEDR[4] v2 mode, LEDR[5] a fault
-//   is latched (STEP timing violation, until FAULT_CLEAR), LEDR[7] heartbeat (1 Hz),
+//   is latched (STEP timing violation, e-stop, heater, watchdog: until FAULT_CLEAR), LEDR[7]
+//   heartbeat (1 Hz),
 //   LEDR[8] a framing error was seen, LEDR[9] a packet was dropped (watchdog or overrun).
 //   HEX5 last motion code, HEX4 'b' busy / '0' idle, HEX3-2 packet count (low byte),
 //   HEX1-0 last feed (low byte), as on the original.
+// Heaters (docs/heater.md): heater_hotend on GPIO_0[7], heater_bed on GPIO_0[8] (MOSFET gate
+// drivers), e-stop input estop_n on GPIO_0[9] (active low: a normally-closed switch to ground
+// with a pull-up, so a broken wire stops the machine), the on-board LTC2308 ADC on its dedicated
+// pins ADC_CONVST/ADC_SCK/ADC_SDI/ADC_SDO (thermistors on ADC inputs 0 and 1). LEDR[6] heater 0
+// or 1 on.
 // The reset button is synchronized (two flops) and released synchronously.
 `default_nettype none
 
@@ -28,7 +34,14 @@ module de1soc_top #(
     output wire [6:0] HEX2,
     output wire [6:0] HEX3,
     output wire [6:0] HEX4,
-    output wire [6:0] HEX5
+    output wire [6:0] HEX5,
+    input  wire       estop_n,
+    output wire       heater_hotend,
+    output wire       heater_bed,
+    output wire       ADC_CONVST,
+    output wire       ADC_SCK,
+    output wire       ADC_SDI,
+    input  wire       ADC_SDO
 );
 
   localparam integer HALF_SECOND = CLK_HZ / 2;
@@ -50,6 +63,9 @@ module de1soc_top #(
   wire v2_mode;
   wire rx_partial;
   wire [31:0] segments_done;
+  wire [1:0] heater_w;
+  assign heater_hotend = heater_w[0];
+  assign heater_bed    = heater_w[1];
 
   cnc_core #(
       .CLK_HZ(CLK_HZ),
@@ -63,6 +79,12 @@ module de1soc_top #(
       .step        (step),
       .dir         (dir),
       .laser       (laser),
+      .estop       (!estop_n),
+      .heater      (heater_w),
+      .adc_convst  (ADC_CONVST),
+      .adc_sck     (ADC_SCK),
+      .adc_sdi     (ADC_SDI),
+      .adc_sdo     (ADC_SDO),
       .cfg_wr      (1'b0),
       .cfg_addr    (8'd0),
       .cfg_wdata   (16'd0),
@@ -129,8 +151,8 @@ module de1soc_top #(
   assign dir_x  = dir[0];
   assign step_y = step[1];
   assign dir_y  = dir[1];
-  assign LEDR   = {drop_seen_reg, frame_seen_reg, hb_reg, 1'b0, faults[0], v2_mode, dir[1], dir[0],
-                   laser, busy};
+  assign LEDR   = {drop_seen_reg, frame_seen_reg, hb_reg, |heater_w, |faults, v2_mode, dir[1],
+                   dir[0], laser, busy};
 
   hex7seg u_hex0 (.digit(last_feed[3:0]),    .seg_n(HEX0));
   hex7seg u_hex1 (.digit(last_feed[7:4]),    .seg_n(HEX1));

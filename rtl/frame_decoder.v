@@ -13,8 +13,8 @@
 // the next byte. Otherwise the whole frame is read, the CRC is folded in over LEN..CRC low
 // (crc16_ccitt, residue 0 for a good frame) and the frame is checked on the clock after its last
 // byte (the CHECK clock), in this order: CRC (BAD_CRC), TYPE (UNKNOWN_TYPE), LEN for the TYPE
-// (BAD_LENGTH), fields (BAD_FIELD: LINE flag bits [6:2], CONFIG_AXIS axis >= N_AXES), then for
-// sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
+// (BAD_LENGTH), fields (BAD_FIELD: LINE flag bits [6:2], CONFIG_AXIS axis >= N_AXES, heater
+// fields: see "Heater frames" below), then for sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
 // duplicate: ACK only, nothing executed; = next_seq -> accepted (FIFO types need a free slot, else
 // FIFO_FULL), next_seq += 1, ACK.
 // Only the CHECK clock of a frame that passed every check writes anything: nothing of a rejected
@@ -44,6 +44,12 @@
 //   (v1 or v2, cut short by the watchdog), noise (a byte discarded in HUNT), v1_packet (a v1
 //   packet written to the FIFO), v1_overrun (a v1 packet dropped, FIFO full).
 //   next_seq, v2_mode: registers.
+//   Heater frames (TYPE 0x20..0x24, docs/protocol.md "Heater frames"; sequenced, not queued):
+//               heat_wr strobe (registered, like cfg_wr) + heat_type, heat_len, heat_data (payload
+//               bytes 0..19, byte i in [8*i+:8]) of an accepted frame. BAD_FIELD: channel > 1;
+//               HEATER_CONFIG mode > 4, duty_max or manual > 0x8000; THERMISTOR_TABLE first + n >
+//               65; HEATER_SAFETY Tmin >= Tmax. LEN: CONFIG 20, SETPOINT 3, TABLE 4..18 even,
+//               SAFETY 13, WATCHDOG 2.
 // Latency: last byte's edge L -> CHECK clock (m_axis_tvalid) between L and L + 1, entry in the
 //   FIFO at edge L + 1, strobes high from L + 1 to L + 2.
 // Watchdog: a started packet or frame with no byte for WATCHDOG_CLKS clocks is dropped (timeout
@@ -74,6 +80,11 @@ module frame_decoder #(
     output wire [ 7:0] cfg_axis,
     output wire [63:0] cfg_data,
 
+    output wire         heat_wr,
+    output wire [  7:0] heat_type,
+    output wire [  7:0] heat_len,
+    output wire [159:0] heat_data,
+
     output wire       fault_clear,
     output wire       release_req,
     output wire       hello,
@@ -99,13 +110,15 @@ module frame_decoder #(
 
   localparam ENTRY_W = 45 + 32 * N_AXES;
   localparam integer PB_LINE = 6 + 4 * N_AXES;
-  localparam integer PB = (PB_LINE > 10) ? PB_LINE : 10;  // payload bytes kept (v1: 10)
+  localparam integer PB_V1 = (PB_LINE > 10) ? PB_LINE : 10;  // payload bytes kept (v1: 10)
+  localparam integer PB = (PB_V1 > 20) ? PB_V1 : 20;  // heater frames: 20
 
   localparam [2:0] ST_HUNT = 3'd0, ST_V1 = 3'd1, ST_LEN = 3'd2, ST_SEQ = 3'd3, ST_TYPE = 3'd4,
                    ST_PAY = 3'd5, ST_CRC1 = 3'd6, ST_CRC2 = 3'd7;
 
   localparam [7:0] T_HELLO = 8'h01, T_STATUS = 8'h02, T_FCLR = 8'h03, T_CFG = 8'h04,
                    T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11;
+  localparam [7:0] T_HCFG = 8'h20, T_HSET = 8'h21, T_HTAB = 8'h22, T_HSAF = 8'h23, T_HWD = 8'h24;
 
   localparam [7:0] R_BAD_CRC = 8'd1, R_BAD_LENGTH = 8'd2, R_UNKNOWN_TYPE = 8'd3, R_TIMEOUT = 8'd4,
                    R_OUT_OF_ORDER = 8'd5, R_FIFO_FULL = 8'd6, R_BAD_FIELD = 8'd7;
@@ -133,7 +146,7 @@ module frame_decoder #(
   reg               v2_mode_reg;
   reg  [       7:0] next_seq_reg;
 
-  reg cfg_wr_reg, fault_clear_reg, release_reg, hello_reg, status_reg, ack_reg, nak_reg;
+  reg cfg_wr_reg, heat_wr_reg, fault_clear_reg, release_reg, hello_reg, status_reg, ack_reg, nak_reg;
   reg [7:0] nak_seq_reg, nak_reason_reg;
   reg frame_ok_reg, crc_error_reg, length_error_reg, unknown_type_reg, timeout_reg, noise_reg;
   reg v1_packet_reg, v1_overrun_reg;
@@ -211,13 +224,36 @@ module frame_decoder #(
   wire t_rel = (type_reg == T_REL);
   wire t_line = (type_reg == T_LINE);
   wire t_dwell = (type_reg == T_DWELL);
-  wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell;
+  // ---- heater frames
+  wire t_hcfg = (type_reg == T_HCFG);
+  wire t_hset = (type_reg == T_HSET);
+  wire t_htab = (type_reg == T_HTAB);
+  wire t_hsaf = (type_reg == T_HSAF);
+  wire t_hwd = (type_reg == T_HWD);
+  wire t_heat = t_hcfg || t_hset || t_htab || t_hsaf || t_hwd;
+  wire heat_len_ok = (t_hcfg && len_reg == 8'd20) || (t_hset && len_reg == 8'd3) ||
+                     (t_htab && len_reg >= 8'd4 && len_reg <= 8'd18 && !len_reg[0]) ||
+                     (t_hsaf && len_reg == 8'd13) || (t_hwd && len_reg == 8'd2);
+  wire [15:0] h_umax = {pb(pay_reg, 14), pb(pay_reg, 15)};
+  wire [15:0] h_manual = {pb(pay_reg, 18), pb(pay_reg, 19)};
+  wire signed [15:0] h_tmin = {pb(pay_reg, 1), pb(pay_reg, 2)};
+  wire signed [15:0] h_tmax = {pb(pay_reg, 3), pb(pay_reg, 4)};
+  wire [7:0] h_tab_end = pb(pay_reg, 1) + {1'b0, len_reg[7:1]} - 8'd1;  // first + (LEN - 2) / 2
+  wire heat_field_ok = (pb(pay_reg, 0) <= 8'd1 || t_hwd) &&
+                       !(t_hcfg && (pb(pay_reg, 1) > 8'd4 || h_umax > 16'h8000 ||
+                                    h_manual > 16'h8000)) &&
+                       !(t_htab && (pb(pay_reg, 1) > 8'd64 || h_tab_end > 8'd65)) &&
+                       !(t_hsaf && h_tmin >= h_tmax);
+
+  wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
+               t_heat;
   wire len0 = (len_reg == 8'd0);
   wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
                 (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
-                (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok);
-  wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8);
-  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell;
+                (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok) || heat_len_ok;
+  wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8) &&
+                  (!t_heat || heat_field_ok);
+  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_heat;
   wire to_fifo = t_num || t_line || t_dwell;
   wire [7:0] seq_diff = seq_reg - next_seq_reg;
   wire seq_new = (seq_diff == 8'd0);
@@ -240,6 +276,7 @@ module frame_decoder #(
   integer i;
   always @(posedge clk) begin
     cfg_wr_reg       <= 1'b0;
+    heat_wr_reg      <= 1'b0;
     fault_clear_reg  <= 1'b0;
     release_reg      <= 1'b0;
     hello_reg        <= 1'b0;
@@ -295,6 +332,7 @@ module frame_decoder #(
           ack_reg         <= 1'b1;
           next_seq_reg    <= next_seq_reg + 8'd1;
           cfg_wr_reg      <= t_cfg;
+          heat_wr_reg     <= t_heat;
           fault_clear_reg <= t_fclr;
           release_reg     <= t_rel;
           if (t_rel) v2_mode_reg <= 1'b0;
@@ -385,6 +423,7 @@ module frame_decoder #(
       v2_mode_reg      <= 1'b0;
       next_seq_reg     <= 8'd0;
       cfg_wr_reg       <= 1'b0;
+      heat_wr_reg      <= 1'b0;
       fault_clear_reg  <= 1'b0;
       release_reg      <= 1'b0;
       hello_reg        <= 1'b0;
@@ -408,8 +447,13 @@ module frame_decoder #(
   // written again before the next frame's fifth byte).
   reg [7:0] cfg_axis_reg;
   reg [63:0] cfg_data_reg;
+  reg [7:0] heat_type_reg, heat_len_reg;
+  reg [159:0] heat_data_reg;
   always @(posedge clk) begin
     if (v2_chk) begin
+      heat_type_reg <= type_reg;
+      heat_len_reg  <= len_reg;
+      heat_data_reg <= pay_reg[159:0];
       cfg_axis_reg <= pb(pay_reg, 0);
       cfg_data_reg <= {pb(pay_reg, 1), pb(pay_reg, 2), pb(pay_reg, 3), pb(pay_reg, 4),
                        pb(pay_reg, 5), pb(pay_reg, 6), pb(pay_reg, 7), pb(pay_reg, 8)};
@@ -422,6 +466,10 @@ module frame_decoder #(
   assign cfg_wr        = cfg_wr_reg;
   assign cfg_axis      = cfg_axis_reg;
   assign cfg_data      = cfg_data_reg;
+  assign heat_wr       = heat_wr_reg;
+  assign heat_type     = heat_type_reg;
+  assign heat_len      = heat_len_reg;
+  assign heat_data     = heat_data_reg;
   assign fault_clear   = fault_clear_reg;
   assign release_req   = release_reg;
   assign hello         = hello_reg;

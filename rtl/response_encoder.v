@@ -20,7 +20,9 @@
 //   STATUS 0x83: state u8, faults u8, fifo_level u16, next_seq u8, segments_done u32,
 //                position int32 x N_AXES (axis 0 first), counters u16 x 9 (counters[143:128]
 //                first: frames ok, CRC errors, length errors, unknown types, timeouts, UART
-//                framing errors, overruns, noise bytes, clamped segments)
+//                framing errors, overruns, noise bytes, clamped segments), then HEAT_BYTES
+//                bytes of heat_status (its most significant bytes first; cnc_core: 16, the two
+//                heater channels, docs/protocol.md; 0 leaves STATUS at 27 + 4 * N_AXES bytes)
 //   IDENT 0x84: 2, N_AXES u8, FIFO_DEPTH u16, CLK_HZ u32, BAUD u32, BUILD_ID u32, next_seq u8,
 //                MAX_PAYLOAD u8
 // Output m_axis_* (to uart_tx): tdata/tvalid from registers only, held until taken.
@@ -35,7 +37,8 @@ module response_encoder #(
     parameter CLK_HZ      = 50_000_000,
     parameter BAUD        = 115_200,
     parameter BUILD_ID    = 32'h2026_0005,
-    parameter MAX_PAYLOAD = 64
+    parameter MAX_PAYLOAD = 64,
+    parameter HEAT_BYTES  = 0  // heater status bytes appended to STATUS (0..16)
 ) (
     input wire clk,
     input wire rst,
@@ -57,6 +60,9 @@ module response_encoder #(
     input wire [         7:0] faults,
     input wire [32*N_AXES-1:0] position,
     input wire [   16*9-1:0] counters,
+    /* verilator lint_off UNUSEDSIGNAL */
+    input wire [127:0] heat_status,  // its top HEAT_BYTES bytes are sent
+    /* verilator lint_on UNUSEDSIGNAL */
 
     output wire [7:0] m_axis_tdata,
     output wire       m_axis_tvalid,
@@ -65,7 +71,8 @@ module response_encoder #(
     output wire frame_start  // 1-clock strobe: a frame's fields were snapshotted
 );
 
-  localparam integer STATUS_LEN = 27 + 4 * N_AXES;
+  localparam integer STATUS_BASE = 27 + 4 * N_AXES;
+  localparam integer STATUS_LEN = STATUS_BASE + HEAT_BYTES;
   localparam integer MAX_LEN = (STATUS_LEN > 18) ? STATUS_LEN : 18;
   localparam integer SHB = 3 + MAX_LEN;  // LEN, SEQ, TYPE, payload
   localparam integer SHW = 8 * SHB;
@@ -106,8 +113,12 @@ module response_encoder #(
   always @(*)
     for (a = 0; a < N_AXES; a = a + 1) pos_be[32*(N_AXES-1-a)+:32] = position[32*a+:32];
 
-  wire [8*(3+STATUS_LEN)-1:0] img_status = {SLEN8, dseq_reg, 8'h83, state, faults, fifo_level,
-                                           next_seq, segments_done, pos_be, counters};
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [8*(3+STATUS_BASE)+127:0] img_status_full = {SLEN8, dseq_reg, 8'h83, state, faults,
+                                                   fifo_level, next_seq, segments_done, pos_be,
+                                                   counters, heat_status};
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [8*(3+STATUS_LEN)-1:0] img_status = img_status_full[8*(3+STATUS_BASE)+127-:8*(3+STATUS_LEN)];
   wire [8*21-1:0] img_ident = {8'd18, dseq_reg, 8'h84, 8'd2, NAX8, DEPTH16, CLK32, BAUD32,
                                BUILD32, next_seq, MAXP8};
   wire [8*8-1:0] img_nak = {8'd5, dseq_reg, 8'h81, nak_seq_reg, nak_reason_reg, next_seq,

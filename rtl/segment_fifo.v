@@ -15,6 +15,8 @@
 //   and no read-during-write on the same address (a read is issued only for an entry written on
 //   an earlier edge), so Quartus and Yosys map it to M10K blocks.
 // DEPTH must be a power of two (pointers wrap), at most 32768.
+//   flush      synchronous: empties the FIFO on this edge like rst (an entry offered on the same
+//              edge is dropped); used by the e-stop.
 // rst is synchronous, active high (empty; the memory contents are not cleared).
 `default_nettype none
 
@@ -24,6 +26,7 @@ module segment_fifo #(
 ) (
     input wire clk,
     input wire rst,
+    input wire flush,
 
     input  wire [WIDTH-1:0] s_axis_tdata,
     input  wire             s_axis_tvalid,
@@ -75,7 +78,7 @@ module segment_fifo #(
     endcase
     if (rd_en) out_valid_reg <= 1'b1;
     else if (pop) out_valid_reg <= 1'b0;
-    if (rst) begin
+    if (rst || flush) begin
       wr_ptr_reg    <= {AW{1'b0}};
       rd_ptr_reg    <= {AW{1'b0}};
       mem_count_reg <= 16'd0;
@@ -106,8 +109,8 @@ module segment_fifo #(
     end
 
   always @(posedge clk)
-    if (f_past_valid && !$past(rst) && !rst) begin
-      // A held output is not replaced before it is taken.
+    if (f_past_valid && !$past(rst) && !$past(flush) && !rst) begin
+      // A held output is not replaced before it is taken (unless flushed).
       if ($past(out_valid_reg) && !$past(m_axis_tready)) begin
         assert (out_valid_reg);
         assert (rdata_reg == $past(rdata_reg));

@@ -35,6 +35,7 @@ constexpr fpgacnc::tb::PinAccess<Vde1soc_top> kBoardPins{
     [](Vde1soc_top& m, bool asserted) { m.rst_n = asserted ? 0 : 1; },
     [](const Vde1soc_top& m) { return static_cast<uint32_t>(m.step_x | (m.step_y << 1)); },
     [](const Vde1soc_top& m) { return static_cast<uint32_t>(m.dir_x | (m.dir_y << 1)); },
+    [](Vde1soc_top& m) { m.estop_n = 1; },  // e-stop released (active low)
 };
 
 // The board through its pins, checking LEDR and HEX4 against busy/laser/DIR every clock.

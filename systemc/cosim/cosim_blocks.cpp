@@ -347,7 +347,7 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
             AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
       } else {
         const uint8_t types[] = {kHello, kStatusQuery, kFaultClear, kRelease, 0x12,
-                                 0x13,   0x20,         0x2F,        0x07,     0x83};
+                                 0x13,   0x25,         0x2F,        0x07,     0x83};
         type = types[pick(g, 0, 9)];
       }
       if (pick(g, 0, 19) == 0) p.resize(pick(g, 0, 20));  // wrong length for the type

@@ -65,6 +65,9 @@ SC_MODULE(RtlHarness) {
       length_errors, unknown_types, noise_bytes, clamped, naks;
   sc_core::sc_signal<bool> v2_mode;
   sc_core::sc_signal<bool> rx_partial;
+  // Heater and e-stop pins (issue 7): e-stop released, ADC SDO low, heater outputs unobserved.
+  sc_core::sc_signal<bool> estop, adc_convst, adc_sck, adc_sdi, adc_sdo;
+  sc_core::sc_signal<uint32_t> heater;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -110,6 +113,12 @@ SC_MODULE(RtlHarness) {
     dut.noise_bytes(noise_bytes);
     dut.clamped(clamped);
     dut.naks(naks);
+    dut.estop(estop);
+    dut.heater(heater);
+    dut.adc_convst(adc_convst);
+    dut.adc_sck(adc_sck);
+    dut.adc_sdi(adc_sdi);
+    dut.adc_sdo(adc_sdo);
     SC_THREAD(run);
   }
 

@@ -288,9 +288,32 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return 4;
       case v2::kLine:
         return -2;
+      case 0x20:  // heater frames (docs/protocol.md "Heater frames")
+        return 20;
+      case 0x21:
+        return 3;
+      case 0x22:
+        return -3;  // THERMISTOR_TABLE: 4..18, even
+      case 0x23:
+        return 13;
+      case 0x24:
+        return 2;
       default:
         return -1;
     }
+  }
+
+  // Heater frames' BAD_FIELD rules (rtl/frame_decoder.v): channel > 1; HEATER_CONFIG mode > 4,
+  // duty_max or manual > 0x8000; THERMISTOR_TABLE first > 64 or first + n > 65; HEATER_SAFETY
+  // Tmin >= Tmax. Other types: true.
+  bool heater_fields_ok() const {
+    if (type_ < 0x20 || type_ > 0x24) return true;
+    auto u16 = [&](int i) { return (payload_[i] << 8) | payload_[i + 1]; };
+    if (type_ != 0x24 && payload_[0] > 1) return false;
+    if (type_ == 0x20) return payload_[1] <= 4 && u16(14) <= 0x8000 && u16(18) <= 0x8000;
+    if (type_ == 0x22) return payload_[1] <= 64 && payload_[1] + (len_ - 2) / 2 <= 65;
+    if (type_ == 0x23) return static_cast<int16_t>(u16(1)) < static_cast<int16_t>(u16(3));
+    return true;
   }
 
   void frame(Cycle take) {
@@ -315,6 +338,13 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return;
       }
       axes = rest / width;
+    } else if (want == -3) {
+      if (len_ < 4 || len_ > 18 || (len_ & 1)) {
+        ++s_.length_errors;
+        commit_check(take);
+        request(r, RespReq{kReqNak, seq_, v2::kBadLength});
+        return;
+      }
     } else if (want != len_) {
       ++s_.length_errors;
       commit_check(take);
@@ -322,7 +352,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
       return;
     }
     if ((type_ == v2::kLine && (payload_[0] & 0x7C) != 0) ||
-        (type_ == v2::kConfigAxis && payload_[0] >= kAxes)) {
+        (type_ == v2::kConfigAxis && payload_[0] >= kAxes) || !heater_fields_ok()) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;

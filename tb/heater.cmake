@@ -1,0 +1,23 @@
+# Heater benches (docs/heater.md): unit benches of pwm, pid_incr, ltc2308_spi, temp_table, and the
+# heater_block benches (safety faults, closed-loop bed and hot end against the plant models).
+fpgacnc_verilated(vpwm TOP pwm SOURCES ${FPGACNC_RTL_DIR}/pwm.v ARGS -GPWM_BITS=4 -GPWM_DIV=3)
+fpgacnc_verilated(vpid TOP pid_incr SOURCES ${FPGACNC_RTL_DIR}/pid_incr.v)
+fpgacnc_verilated(vadc TOP ltc2308_spi SOURCES ${FPGACNC_RTL_DIR}/ltc2308_spi.v)
+fpgacnc_verilated(vtable TOP temp_table SOURCES ${FPGACNC_RTL_DIR}/temp_table.v)
+set(FPGACNC_HEATER_RTL
+    ${FPGACNC_RTL_DIR}/heater_block.v ${FPGACNC_RTL_DIR}/heater_channel.v
+    ${FPGACNC_RTL_DIR}/heater_safety.v ${FPGACNC_RTL_DIR}/pid_incr.v ${FPGACNC_RTL_DIR}/pwm.v
+    ${FPGACNC_RTL_DIR}/ltc2308_spi.v ${FPGACNC_RTL_DIR}/temp_table.v)
+# Scaled time: one sample tick every 4096 clocks, PWM period 1024 clocks (4 per tick).
+fpgacnc_verilated(vheat TOP heater_block SOURCES ${FPGACNC_HEATER_RTL}
+                  ARGS -GSAMPLE_CLKS=4096 -GPWM_DIV=1)
+
+fpgacnc_bench(test_heater_units LABEL rtl
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_units.cpp LIBS vpwm vpid vadc vtable)
+fpgacnc_bench(test_heater_block LABEL rtl
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_block.cpp LIBS vheat)
+# cnc_core with heaters at 3 Mbaud, scaled sample tick (4096 clocks) and heater PWM (1024 clocks).
+fpgacnc_verilated(vcore_heat TOP cnc_core PREFIX Vcnc_core_heat SOURCES ${FPGACNC_CORE_RTL}
+                  ARGS -GBAUD=3000000 -GSAMPLE_CLKS=4096 -GHEAT_PWM_DIV=1)
+fpgacnc_bench(test_heater_core LABEL system
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_core.cpp LIBS vcore_heat)
