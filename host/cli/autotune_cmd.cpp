@@ -51,6 +51,9 @@ void run_autotune(const AutotuneArgs& a, const StreamHooks& hooks) {
   o.relay.skip_cycles = a.skip;
   o.max_plant_s = a.max_time;
   const std::string port = a.port.empty() ? cfg.port : a.port;
+  if (port.empty() && cfg.heaters.watchdog_s > 0.0 && cfg.heaters.watchdog_s < 60.0) {
+    cfg.heaters.watchdog_s = 60.0;  // simulated board: see stream_cmd.cpp
+  }
   std::unique_ptr<link::Link> lk;
   if (port.empty()) {
     lk = hooks.open_default_link(cfg, a.sim);

@@ -99,6 +99,11 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
         "port in the configuration)");
   }
 
+  if (port.empty() && cfg.heaters.watchdog_s > 0.0 && cfg.heaters.watchdog_s < 60.0) {
+    // Simulated board: 60 plant seconds (~0.1 s of board time) for the heater watchdog, whose
+    // STATUS_QUERY feeding is paced by the host's wall clock (docs/heater.md, "Simulated board").
+    cfg.heaters.watchdog_s = 60.0;
+  }
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   // Plan and pack the whole job before opening anything: an error writes no byte.

@@ -449,6 +449,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     clock_type::time_point start_wall{};
   } ws;
   auto last_heater_poll = clock_type::now();
+  bool status_outstanding = false;
   std::vector<size_t> fifo_item;  // item index of the k-th FIFO frame
   for (size_t i = 0; i < n; ++i) {
     if (items[i].fifo) fifo_item.push_back(i);
@@ -460,7 +461,13 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       return fmt::format("{}{} (M{} S{:g}, waiting)", src, a->source_line, a->mcode, a->target_c);
     }
     if (done_count < fifo_item.size()) {
-      return fmt::format("{}{}", src, items[fifo_item[done_count]].jf->source_line);
+      std::string l = fmt::format("{}{}", src, items[fifo_item[done_count]].jf->source_line);
+      if (next_wait < waits.size() && acked > waits[next_wait]) {  // a wait once it has drained
+        const auto* a = items[waits[next_wait]].heater;
+        l += fmt::format(" (M{} S{:g} at line {} waits for it)", a->mcode, a->target_c,
+                         a->source_line);
+      }
+      return l;
     }
     return "the end of the job";
   };
@@ -544,6 +551,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       r.target_c = a->target_c;
       r.start_c = ws.start_c;
       r.plant_s = now - ws.start_plant;
+      r.end_plant_s = now;
+      r.end_c = temp;
       r.wall_s = std::chrono::duration<double>(clock_type::now() - ws.start_wall).count();
       r.skipped = skipped;
       rep.heater_waits.push_back(r);
@@ -593,6 +602,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           const uint16_t fr =
               static_cast<uint16_t>(stt.fifo_level >= depth ? 0 : depth - stt.fifo_level);
           update(stt.next_seq, fr, stt.done);
+          status_outstanding = false;
           rep.status_end = stt;
           if (opt.on_status) opt.on_status(stt);
           check_faults(stt);
@@ -663,7 +673,11 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       rep.max_rto_s = std::max(rep.max_rto_s, std::chrono::duration<double>(rto).count());
       continue;
     }
-    if (hj && now - last_heater_poll > opt.heater_poll) {  // heaters: progress, faults, watchdog
+    // Heaters: progress, faults, watchdog. One STATUS_QUERY outstanding at a time (answered or
+    // given up after the retransmission timeout): polls must not queue up on a slow line.
+    if (hj && now - last_heater_poll > opt.heater_poll &&
+        (!status_outstanding || now - last_heater_poll > opt.retransmit_timeout)) {
+      status_outstanding = true;
       s.send(v2::status_query());
       ++rep.status_polls;
       last_heater_poll = now;

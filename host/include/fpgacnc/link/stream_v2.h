@@ -74,8 +74,10 @@ struct HeaterWaitReport {
   int source_line = 0;
   uint8_t channel = 0;
   double target_c = 0.0;
-  double start_c = 0.0;  // temperature when the wait began (FIFO drained)
-  double plant_s = 0.0;  // plant seconds from the setpoint to the end of the wait
+  double start_c = 0.0;      // temperature when the wait began (FIFO drained)
+  double plant_s = 0.0;      // plant seconds from the start to the end of the wait
+  double end_plant_s = 0.0;  // plant time (StreamV2Options::plant_time) at the end of the wait
+  double end_c = 0.0;        // temperature at the end of the wait
   double wall_s = 0.0;
   bool skipped = false;  // above the target already (S waits only when heating)
 };
