@@ -174,9 +174,11 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       for (size_t c = 0; c < heat::kChannels; ++c) {
         if (heaters->used[c]) used.push_back(traces[c]);
       }
-      heat::write_heater_svg(a.heater_plot, used,
-                             fmt::format("{}: heaters as STATUS reports them", a.input),
-                             fmt::format("{} over {}; time in plant seconds", a.input, lk->name()));
+      heat::write_heater_svg(
+          a.heater_plot, used, fmt::format("{}: heaters as STATUS reports them", a.input),
+          fmt::format("{} on {}; time in plant seconds", a.input,
+                      port.empty() ? std::string("the simulated board (1 plant s = 102 400 clocks)")
+                                   : lk->name()));
       fmt::print("heater plot written to {}\n", a.heater_plot);
     };
     link::StreamV2Report r;

@@ -74,6 +74,22 @@ TEST(HeatConfig, DefaultsAreTheReferenceBedAndTheHotEnd) {
   EXPECT_EQ(heat::check_heater(he, "heater.hotend"), "");
 }
 
+TEST(HeatConfig, ExampleFileHeatersEqualTheDefaults) {
+  const auto c = fpgacnc::config::load_machine_config(FPGACNC_HOST_DIR "/machine.example.toml");
+  fpgacnc::config::MachineConfig d;
+  EXPECT_EQ(c.heaters.watchdog_s, d.heaters.watchdog_s);
+  for (size_t ch = 0; ch < heat::kChannels; ++ch) {
+    const auto& a = c.heaters.ch[ch];
+    const auto& b = d.heaters.ch[ch];
+    EXPECT_EQ(heat::config_frame(a, 0), heat::config_frame(b, 0)) << ch;
+    EXPECT_EQ(heat::safety_frame(a, 0), heat::safety_frame(b, 0)) << ch;
+    EXPECT_EQ(heat::thermistor_table(a), heat::thermistor_table(b)) << ch;
+    EXPECT_EQ(a.wait_tolerance_c, b.wait_tolerance_c) << ch;
+    EXPECT_EQ(a.wait_settle_s, b.wait_settle_s) << ch;
+    EXPECT_EQ(a.wait_timeout_s, b.wait_timeout_s) << ch;
+  }
+}
+
 TEST(HeatConfig, KeysAreRead) {
   const auto c = parse_machine_config(R"(
 [heater]
