@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <functional>
 #include <thread>
 
 #include "fpgacnc/heat/heater_job.h"
@@ -31,9 +32,13 @@ class MiniSession {
   }
   void write(const v2::Frame& f) { l_.write(v2::encode(f)); }
 
-  v2::Status status(size_t n_axes) {
+  // `stamp` (if set) is called right before each STATUS_QUERY goes out: the device fills STATUS
+  // from its live state when the answer starts, a fixed few bytes later, while the host may read
+  // the answer late (scheduling), so the time of the query is the better time stamp.
+  v2::Status status(size_t n_axes, const std::function<void()>& stamp = {}) {
     const auto give_up = clock_type::now() + timeout_;
     while (clock_type::now() < give_up) {
+      if (stamp) stamp();
       write(v2::status_query());
       const auto deadline = clock_type::now() + milliseconds(300);
       while (clock_type::now() < deadline) {
@@ -149,9 +154,10 @@ AutotuneLinkResult run_relay_test(link::Link& lk, const config::MachineConfig& c
   };
   try {
     for (;;) {
-      const auto h = s.status(n_axes);
+      double t_query = 0.0;
+      const auto h = s.status(n_axes, [&] { t_query = plant_now(); });
       const auto& hs = h.heaters.at(o.channel);
-      const double t = plant_now() - p0;
+      const double t = t_query - p0;
       if (hs.faults || (h.faults & (v2::kFaultWatchdog | v2::kFaultEstop))) {
         throw link::Error(fmt::format(
             "{}: autotune stopped after {:.0f} s: {} heater fault {} at {:.1f} degC (device faults "
