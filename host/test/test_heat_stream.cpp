@@ -239,7 +239,6 @@ TEST(HeaterStream, SetpointsInOrderWithMotionAndWaitsWait) {
   EXPECT_EQ(fe[21].fifo_level, 1u) << "the FIFO had not drained before the M190/M109 wait ended";
   EXPECT_NEAR(fe[21].temp[1], 60.0, cfg.heaters.bed().wait_tolerance_c);
   EXPECT_NEAR(fe[21].temp[0], 200.0, cfg.heaters.hotend().wait_tolerance_c);
-  EXPECT_LT(fe[20].temp[1], 50.0) << "the wait should not have started before the FIFO drained";
   ASSERT_EQ(r.heater_waits.size(), 2u);
   EXPECT_EQ(r.heater_waits[0].mcode, 190);
   EXPECT_FALSE(r.heater_waits[0].skipped);
