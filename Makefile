@@ -34,6 +34,20 @@ soak: build
 	$(BUILD)/systemc/cosim_blocks --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS)
 	$(BUILD)/systemc/cosim_heater --seed $(SOAK_SEED) --seeds 20 --seconds 3600
 	$(MAKE) fuzz-soak
+	$(MAKE) soak-part-heaters
+
+# part.gcode end to end on the simulated board with heaters (issue 7): printer start sequence
+# (M140/M104/M190/M109), the whole file (44 305 lines), heaters off; hours of simulation (the
+# motion runs in real board time at 50 MHz).
+CORPUS ?= ../shared/gcode-corpus
+.PHONY: soak-part-heaters heater-plot
+soak-part-heaters: build
+	cat examples/printer-start.gcode $(CORPUS)/part.gcode examples/printer-end.gcode > $(BUILD)/part-heaters.gcode
+	$(BUILD)/host/fpgacnc stream $(BUILD)/part-heaters.gcode --heater-plot $(BUILD)/part-heaters.svg
+
+# The bed warm-up plot of docs/heater.md (temperature, setpoint and duty from STATUS, plant time).
+heater-plot: build
+	$(BUILD)/host/fpgacnc stream examples/bed-warmup.gcode --config examples/bed-warmup.toml --heater-plot docs/images/bed-warmup.svg
 
 # libFuzzer targets (clang, ASan + UBSan; separate tree $(BUILD)/fuzz): `make fuzz` runs each
 # FUZZ_TIME seconds (the fuzz_smoke test of `make test` runs 30 s each), `make fuzz-soak`

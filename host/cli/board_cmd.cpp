@@ -54,6 +54,14 @@ StreamHooks simboard_stream_hooks() {
       o.line_faults.emplace_back(name, v);
     });
   };
+  // Heaters: plant time of the simulated board (scaled thermal time) and a STATUS poll that
+  // keeps up with it (issue 7, docs/heater.md "Simulated board").
+  h.configure_v2 = [](link::Link& lk, link::StreamV2Options& o) {
+    if (auto clk = simboard::plant_clock(lk)) {
+      o.plant_time = std::move(clk);
+      o.heater_poll = std::chrono::milliseconds(5);
+    }
+  };
   h.after_default_stream = [](link::Link& lk, const plan::Plan& p, const config::MachineConfig& cfg,
                               const SimOutputOptions& o) {
     simboard::report_board_run(lk, p, cfg, {o.plot_path, o.fst_path, o.edges_csv});

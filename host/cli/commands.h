@@ -10,6 +10,7 @@
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/link/link.h"
+#include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/planner.h"
 
 namespace fpgacnc::cli {
@@ -46,10 +47,14 @@ using AfterDefaultStream = std::function<void(
     link::Link&, const plan::Plan&, const config::MachineConfig&, const SimOutputOptions&)>;
 // Adds options of the default link to a subcommand (the simulated board's --line-* options).
 using AddSimOptions = std::function<void(CLI::App&, SimOutputOptions&)>;
+// Heaters (issue 7): adjusts the v2 options for a default link (the simulated board gives its
+// plant clock and a faster STATUS poll; host/simboard scales thermal time).
+using ConfigureDefaultV2 = std::function<void(link::Link&, link::StreamV2Options&)>;
 struct StreamHooks {
   OpenDefaultLink open_default_link;
   AfterDefaultStream after_default_stream;
   AddSimOptions add_sim_options;
+  ConfigureDefaultV2 configure_v2;
 };
 StreamHooks default_stream_hooks();
 // Hooks that run the simulated board in-process (host/simboard).
@@ -62,5 +67,10 @@ void register_board(CLI::App& app);
 // fpgacnc sim FILE [--model tlm|rtl|both]: a whole job on the twins or the Verilated RTL
 // (host/cli/sim_cmd.cpp, built with systemc/).
 void register_sim(CLI::App& app);
+
+// fpgacnc autotune [--heater bed|hotend] [--setpoint C] [--relay-v V] ... [--port DEV]: relay
+// test on a heater, proposes PID gains (host/cli/autotune_cmd.cpp). Without --port: the hooks'
+// default link (the simulated board).
+void register_autotune(CLI::App& app, StreamHooks hooks);
 
 }  // namespace fpgacnc::cli

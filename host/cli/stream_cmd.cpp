@@ -1,6 +1,7 @@
 // fpgacnc stream FILE [--port DEV] [--config F] [--protocol auto|v1|v2] [--baud N] [--timeout S]
 //                     [--retransmit-timeout S] [--feed-override PCT]
 //                     [--plot OUT.svg] [--fst OUT.fst] [--edges OUT.csv] [--line-* ...]
+//                     [--heater-plot OUT.svg]
 //
 // Protocol: auto (default) sends HELLO and uses v2 when an IDENT comes back within 300 ms, else
 // waits 150 ms more (the device watchdog drops the HELLO bytes) and uses v1.
@@ -17,6 +18,8 @@
 #include <stdexcept>
 
 #include "commands.h"
+#include "fpgacnc/heat/heater_job.h"
+#include "fpgacnc/heat/heater_plot.h"
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
@@ -36,6 +39,7 @@ struct StreamArgs {
   std::string protocol;  // "": from config
   CommonOptions common;
   SimOutputOptions sim;
+  std::string heater_plot;  // temperature and duty against time (.svg)
 };
 
 // Progress bar on stderr (only when stderr is a terminal): moves done/total, rate, ETA.
@@ -53,9 +57,16 @@ class ProgressBar {
     const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0.0;
     constexpr int kWidth = 30;
     const int fill = total ? static_cast<int>(kWidth * done / total) : kWidth;
-    fmt::print(stderr, "\r[{:=<{}}{: <{}}] {}/{} {}  {:.1f} {}/s  ETA {:.0f} s ", "", fill, "",
-               kWidth - fill, done, total, unit_, rate, unit_, eta);
+    fmt::print(stderr, "\r[{:=<{}}{: <{}}] {}/{} {}  {:.1f} {}/s  ETA {:.0f} s {}", "", fill, "",
+               kWidth - fill, done, total, unit_, rate, unit_, eta, extra_);
+    done_ = done;
+    total_ = total;
     if (done == total) fmt::print(stderr, "\n");
+  }
+  // Heaters: temperatures shown after the bar (issue 7), redrawn at most every 100 ms.
+  void set_extra(std::string extra) {
+    extra_ = std::move(extra);
+    if (done_ != total_) update(done_, total_);
   }
 
  private:
@@ -64,6 +75,8 @@ class ProgressBar {
   clock::time_point t0_;
   clock::time_point last_{};
   std::string unit_;
+  std::string extra_;
+  size_t done_ = 0, total_ = 1;
 };
 
 void print_final(const plan::Plan& p) {
@@ -86,14 +99,23 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
         "port in the configuration)");
   }
 
+  if (port.empty() && cfg.heaters.watchdog_s > 0.0 && cfg.heaters.watchdog_s < 60.0) {
+    // Simulated board: 60 plant seconds (~0.1 s of board time) for the heater watchdog, whose
+    // STATUS_QUERY feeding is paced by the host's wall clock (docs/heater.md, "Simulated board").
+    cfg.heaters.watchdog_s = 60.0;
+  }
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   // Plan and pack the whole job before opening anything: an error writes no byte.
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
   std::optional<protocol::v2::Job> job2;
+  std::optional<heat::HeaterJob> heaters;
   std::optional<protocol::v1::Job> job1;
   std::string v1_error;
-  if (cfg.protocol != "v1") job2 = protocol::v2::pack_job(p, cfg);
+  if (cfg.protocol != "v1") {
+    job2 = protocol::v2::pack_job(p, cfg);
+    heaters = heat::make_heater_job(p, *job2, cfg);  // M104/M109/M140/M190: line:col errors
+  }
   if (cfg.protocol == "v1") {
     job1 = protocol::v1::pack_job(p);
   } else if (cfg.protocol == "auto") {
@@ -121,15 +143,61 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   if (choice.protocol == "v2") {
     ProgressBar bar("frames");
     o2.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
-    const link::StreamV2Report r = link::stream_v2_job(*lk, *job2, o2, choice.ident);
+    if (port.empty() && hooks.configure_v2) hooks.configure_v2(*lk, o2);
+    o2.heaters = heaters ? &*heaters : nullptr;
+    // Heater samples for the progress line and --heater-plot (plant time).
+    std::vector<heat::HeaterTrace> traces(heat::kChannels);
+    for (size_t c = 0; c < heat::kChannels; ++c) traces[c].name = heat::kChannelNames[c];
+    const auto t0 = std::chrono::steady_clock::now();
+    auto plant_now = [&]() {
+      return o2.plant_time
+                 ? o2.plant_time()
+                 : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+    const double p0 = plant_now();
+    o2.on_status = [&](const protocol::v2::Status& st) {
+      if (st.heaters.empty()) return;
+      bar.set_extra(heat::format_heaters(st));
+      if (a.heater_plot.empty() || !heaters) return;
+      const double t = plant_now() - p0;
+      for (size_t c = 0; c < st.heaters.size() && c < heat::kChannels; ++c) {
+        if (!heaters->used[c]) continue;
+        traces[c].t_s.push_back(t);
+        traces[c].temp_c.push_back(st.heaters[c].temp_c());
+        traces[c].setpoint_c.push_back(st.heaters[c].setpoint_c());
+        traces[c].duty.push_back(st.heaters[c].duty());
+      }
+    };
+    auto write_heater_plot = [&]() {
+      if (a.heater_plot.empty() || !heaters || !heaters->any()) return;
+      std::vector<heat::HeaterTrace> used;
+      for (size_t c = 0; c < heat::kChannels; ++c) {
+        if (heaters->used[c]) used.push_back(traces[c]);
+      }
+      heat::write_heater_svg(
+          a.heater_plot, used, fmt::format("{}: heaters as STATUS reports them", a.input),
+          fmt::format("{} on {}; time in plant seconds", a.input,
+                      port.empty() ? std::string("the simulated board (1 plant s = 102 400 clocks)")
+                                   : lk->name()));
+      fmt::print("heater plot written to {}\n", a.heater_plot);
+    };
+    link::StreamV2Report r;
+    try {
+      r = link::stream_v2_job(*lk, *job2, o2, choice.ident);
+    } catch (const link::Error&) {
+      try {
+        write_heater_plot();  // up to the error: shows what happened
+      } catch (const std::exception&) {
+      }
+      throw;
+    }
+    write_heater_plot();
     fmt::print(
         "streamed {} over {} with protocol v2: {} segments as {} LINE and {} DWELL frames, {} "
         "bytes in {:.2f} s\n",
         a.input, lk->name(), job2->segments, r.lines, r.dwells, r.bytes_written, r.elapsed.count());
     fmt::print("{}", link::format_report(r));
-    if (r.skipped_heater) {
-      fmt::print("{} heater commands not sent (v2 has no heater frames yet)\n", r.skipped_heater);
-    }
+    if (r.skipped_heater) fmt::print("{} heater commands not sent\n", r.skipped_heater);
     if (r.t_raised) {
       fmt::print("{} segments faster than the STEP timing allows: slowed to it\n", r.t_raised);
     }
@@ -199,6 +267,9 @@ void register_stream(CLI::App& app, StreamHooks hooks) {
                   "rsvg-convert)");
   sub->add_option("--fst", args->sim.fst_path, "simulated board: FST waveform of the core");
   sub->add_option("--edges", args->sim.edges_csv, "simulated board: STEP/DIR/LASER edge list CSV");
+  sub->add_option("--heater-plot", args->heater_plot,
+                  "v2 with heaters: temperature, setpoint and duty of the heaters used against "
+                  "time as STATUS reports them (.svg)");
   if (hooks.add_sim_options) hooks.add_sim_options(*sub, args->sim);
   sub->callback([args, hooks = std::move(hooks)] { run_stream(*args, hooks); });
 }

@@ -14,7 +14,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -66,12 +68,36 @@ class FakeV2Device : public link::Link {
     bool send_done = true;     // false: DONE frames are never sent (ACK and STATUS still are)
     std::chrono::microseconds line_delay{0};  // host bytes reach the decoder this much later
     FakeFaults faults;
+    // Heaters (issue 7): STATUS carries the heater block; each enabled channel's temperature
+    // approaches its setpoint exponentially with `heater_tau` of wall time (from `ambient_c`).
+    bool heaters = false;
+    std::chrono::microseconds heater_tau{50'000};
+    double ambient_c = 20.0;
+    // Latch fault bits `inject_fault` on channel `inject_channel` once it has been enabled for
+    // `inject_after` (0 bits: never).
+    uint8_t inject_fault = 0;
+    uint8_t inject_channel = 1;
+    std::chrono::microseconds inject_after{0};
+  };
+  // A sequenced non-FIFO heater frame as accepted, with the device state at that moment.
+  struct HeaterEvent {
+    v2::Frame frame;
+    size_t fifo_accepted = 0;  // FIFO frames accepted before it
+    uint32_t done = 0;
+    size_t fifo_level = 0;
+    std::array<double, 2> temp{};
+  };
+  struct FifoEvent {  // every accepted FIFO frame, with the heater temperatures then
+    size_t index = 0;
+    std::array<double, 2> temp{};
+    size_t fifo_level = 0;
   };
 
   explicit FakeV2Device(Options o) : o_(o), rng_(o.faults.seed) {
     next_seq_ = o.initial_next_seq;
     done_ = o.initial_done;
     position_.assign(o.n_axes, 0);
+    temp_ = {o.ambient_c, o.ambient_c};
     last_in_ = clock::now();
   }
 
@@ -136,6 +162,9 @@ class FakeV2Device : public link::Link {
   uint8_t next_seq() const { return next_seq_; }
   uint32_t done() const { return done_; }
   const std::vector<int32_t>& position() const { return position_; }
+  const std::vector<HeaterEvent>& heater_events() const { return heater_events_; }
+  const std::vector<FifoEvent>& fifo_events() const { return fifo_events_; }
+  double heater_temp(size_t c) const { return temp_[c]; }
 
  private:
   using clock = std::chrono::steady_clock;
@@ -146,8 +175,35 @@ class FakeV2Device : public link::Link {
 
   uint16_t free_slots() const { return static_cast<uint16_t>(o_.fifo_depth - fifo_.size()); }
 
+  void advance_heaters(clock::time_point now) {
+    const double dt = std::chrono::duration<double>(now - heat_last_).count();
+    heat_last_ = now;
+    if (!o_.heaters) return;
+    const double tau = std::chrono::duration<double>(o_.heater_tau).count();
+    for (size_t c = 0; c < 2; ++c) {
+      const double target = enabled_[c] ? setpoint_[c] : o_.ambient_c;
+      temp_[c] += (target - temp_[c]) * std::min(1.0, dt / tau);
+      if (enabled_[c] && o_.inject_fault && c == o_.inject_channel &&
+          now - enabled_at_[c] >= o_.inject_after) {
+        heater_faults_[c] |= o_.inject_fault;
+        enabled_[c] = false;
+      }
+    }
+  }
+  void heater_frame(const v2::Frame& f) {
+    heater_events_.push_back({f, fifo_accepted_, done_, fifo_.size(), temp_});
+    if (f.type == static_cast<uint8_t>(v2::Type::HeaterSetpoint)) {
+      const auto [c, q] = v2::decode_heater_setpoint(f);
+      setpoint_[c] = q / 16.0;
+      const bool on = q > 0 && !heater_faults_[c];
+      if (on && !enabled_[c]) enabled_at_[c] = clock::now();
+      enabled_[c] = on;
+    }
+  }
+
   void advance() {
     const auto now = clock::now();
+    advance_heaters(now);
     // Execution.
     while (!fifo_.empty()) {
       if (!running_) {
@@ -267,9 +323,14 @@ class FakeV2Device : public link::Link {
         return;
       }
       fifo_.push_back(f);
+      fifo_events_.push_back({fifo_accepted_++, temp_, fifo_.size()});
       st_.max_fifo_level = std::max(st_.max_fifo_level, fifo_.size());
     } else if (type == v2::Type::ConfigAxis) {
       configs_.push_back(v2::decode_config_axis(f, o_.n_axes));
+    } else if (f.type >= 0x20 && f.type <= 0x24) {
+      heater_frame(f);
+    } else if (type == v2::Type::FaultClear) {
+      heater_faults_ = {};
     } else if (type == v2::Type::Release) {
       ++st_.releases;
       v2_mode_ = false;
@@ -305,6 +366,18 @@ class FakeV2Device : public link::Link {
       s.counters[v2::kLengthErrors] = static_cast<uint16_t>(st_.length_errors);
       s.counters[v2::kTimeouts] = static_cast<uint16_t>(st_.timeouts);
       s.counters[v2::kNoiseBytes] = static_cast<uint16_t>(st_.noise);
+      if (o_.heaters) {
+        for (size_t c = 0; c < 2; ++c) {
+          v2::HeaterStatus h;
+          h.temp_q4 = static_cast<int16_t>(std::lround(temp_[c] * 16.0));
+          h.setpoint_q4 = static_cast<int16_t>(std::lround(setpoint_[c] * 16.0));
+          h.duty_q15 = enabled_[c] && temp_[c] < setpoint_[c] ? 0x4000 : 0;
+          h.mode = static_cast<uint8_t>(4 | (enabled_[c] ? 0x80 : 0));
+          h.faults = heater_faults_[c];
+          if (heater_faults_[c]) s.faults |= c == 0 ? v2::kFaultHotend : v2::kFaultBed;
+          s.heaters.push_back(h);
+        }
+      }
       f = v2::status(dev_seq_, s);
     } else if (pend_nak_) {
       pend_nak_ = false;
@@ -365,6 +438,16 @@ class FakeV2Device : public link::Link {
   std::vector<int32_t> position_;
   std::vector<v2::Frame> executed_;
   std::vector<v2::ConfigAxis> configs_;
+  // heaters
+  clock::time_point heat_last_ = clock::now();
+  std::array<double, 2> temp_{20.0, 20.0};
+  std::array<double, 2> setpoint_{};
+  std::array<bool, 2> enabled_{};
+  std::array<clock::time_point, 2> enabled_at_{};
+  std::array<uint8_t, 2> heater_faults_{};
+  size_t fifo_accepted_ = 0;
+  std::vector<HeaterEvent> heater_events_;
+  std::vector<FifoEvent> fifo_events_;
 };
 
 }  // namespace fpgacnc::test

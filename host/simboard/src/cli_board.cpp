@@ -26,6 +26,14 @@ void print_figures(const SimBoard& b) {
     fmt::print("simulated board: line faults ({}): {}\n", b.options().line_faults.describe(),
                describe(s.line));
   }
+  const ThermalStats t = b.thermal();  // issue 7
+  if (t.ticks) {
+    fmt::print(
+        "simulated board heaters: {} sample ticks = {} plant seconds (1 per {} clocks); hot end "
+        "{:.1f} degC, bed {:.1f} degC; ADC timing violations {}{}\n",
+        t.ticks, t.ticks, SimBoard::kSampleClks, t.plant_c[0], t.plant_c[1], t.adc_violations,
+        t.adc_violations ? " (" + t.adc_first_violation + ")" : std::string());
+  }
   if (s.frame_errors || s.timeouts || s.violations) {
     fmt::print(
         "simulated board: {} framing errors, {} packet timeouts, {} step timing violations\n",
@@ -159,6 +167,18 @@ std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
   if (o.line_faults.any()) fmt::print("line faults: {}\n", o.line_faults.describe());
   std::fflush(stdout);
   return lk;
+}
+
+std::function<double()> plant_clock(link::Link& lk) {
+  auto* bl = dynamic_cast<BoardLink*>(&lk);
+  if (!bl) return {};
+  SimBoard* b = &bl->board();
+  return [b] { return b->plant_seconds(); };
+}
+
+SimBoard* board_of(link::Link& lk) {
+  auto* bl = dynamic_cast<BoardLink*>(&lk);
+  return bl ? &bl->board() : nullptr;
 }
 
 bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::MachineConfig& cfg,

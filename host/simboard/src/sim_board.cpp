@@ -1,7 +1,7 @@
 #include "fpgacnc/simboard/sim_board.h"
 
-#include <Vcnc_core.h>
-#include <Vcnc_core_trace.h>
+#include <Vcnc_core_board.h>
+#include <Vcnc_core_board_trace.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
@@ -17,9 +17,80 @@
 #include <cstring>
 #include <deque>
 
+#include "common/ltc2308_model.h"
+#include "common/thermal_plant.h"
 #include "common/uart_bits.h"
 
 namespace fpgacnc::simboard {
+
+// The simulated board's cnc_core: scaled thermal time (host/simboard/CMakeLists.txt).
+using Vcnc_core = Vcnc_core_board;
+using Vcnc_core_trace = Vcnc_core_board_trace;
+
+// Heater plants on the heater pins and thermistors on the ADC pins (see sim_board.h).
+struct ThermalWorld {
+  thermal::BedPlant bed;
+  thermal::HotEndPlant hotend;
+  thermal::DelayedSensor bed_sensor;
+  thermal::Thermistor ntc;
+  tb::Ltc2308Model adc;
+  std::array<double, 2> sensed;  // thermistor temperature per channel (0 hot end, 1 bed)
+  std::array<uint64_t, 2> high{};
+  std::array<double, 2> last_duty{};
+  std::array<SensorFault, 2> sensor{SensorFault::kNone, SensorFault::kNone};
+  std::array<bool, 2> cut{};
+  uint64_t tick_clk = 0;  // clocks into the current sub-step
+  uint64_t sub = 0;       // sub-steps into the current tick
+  uint64_t ticks = 0;
+  bool active = false;
+  uint8_t estop = 0;
+
+  ThermalWorld(double clk_hz, const std::array<double, 2>& initial)
+      : bed({}, initial[1]),
+        hotend({}, initial[0]),
+        bed_sensor(kSubSteps, initial[1]),  // the reading is one plant second old
+        adc(clk_hz),
+        sensed{initial[0], initial[1]} {
+    adc.source = [this](int ch) {
+      if (ch < 0 || ch > 1) return 0.0;
+      switch (sensor[static_cast<size_t>(ch)]) {
+        case SensorFault::kOpen:
+          return ntc.vcc;
+        case SensorFault::kShort:
+          return 0.0;
+        default:
+          return ntc.voltage(sensed[static_cast<size_t>(ch)]);
+      }
+    };
+    update_active();
+  }
+  void update_active() {
+    const double amb = 20.0 + 0.5;
+    active = high[0] || high[1] || hotend.block_temperature() > amb || hotend.temperature() > amb ||
+             bed.temperature() > amb;
+  }
+  // The plants advance in kSubSteps steps per sample tick (1/16 plant second: the ADC sees a
+  // temperature that moves within the tick as on a real board), each with the duty of its clocks.
+  static constexpr uint64_t kSubSteps = 16;
+  static constexpr uint64_t kSubClks = SimBoard::kSampleClks / kSubSteps;
+  void substep() {
+    const double dt = 1.0 / static_cast<double>(kSubSteps);
+    for (size_t c = 0; c < 2; ++c) {
+      last_duty[c] = cut[c] ? 0.0 : static_cast<double>(high[c]) / static_cast<double>(kSubClks);
+    }
+    sensed[0] = hotend.step(dt, last_duty[0]);
+    sensed[1] = bed_sensor.sample(bed.temperature());
+    bed.step(dt, last_duty[1]);
+    update_active();
+    high = {};
+    tick_clk = 0;
+    if (++sub == kSubSteps) {
+      sub = 0;
+      ++ticks;
+      adc.conversions.clear();
+    }
+  }
+};
 
 struct SimBoard::Model {
   std::unique_ptr<VerilatedContext> ctx;
@@ -44,14 +115,17 @@ struct SimBoard::Model {
   std::vector<LineFrame> frames;  // scratch: frames for one host byte
   uint64_t bytes_in = 0, bytes_out = 0;
   uint64_t trace_time = 0;
+  ThermalWorld heat;
 
-  Model(double clk_hz, double baud, size_t reserve, const LineFaults& faults)
+  Model(double clk_hz, double baud, size_t reserve, const LineFaults& faults,
+        const std::array<double, 2>& initial_c)
       : ctx(std::make_unique<VerilatedContext>()),
         line(faults),
         driver(clk_hz, baud, &line),
         monitor(clk_hz, baud),
         rec(reserve),
-        stop_tail(static_cast<uint64_t>(std::ceil(clk_hz / baud / 2.0)) + 1) {}
+        stop_tail(static_cast<uint64_t>(std::ceil(clk_hz / baud / 2.0)) + 1),
+        heat(clk_hz, initial_c) {}
 };
 
 namespace {
@@ -95,6 +169,13 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
     }
     clock_once(m, fst, s.trace_time);
     ++cyc;
+    // Heaters: the ADC pin model answers the master, the plants integrate the heater pins.
+    ThermalWorld& h = s.heat;
+    m.adc_sdo = static_cast<uint8_t>(h.adc.tick(m.adc_convst, m.adc_sck, m.adc_sdi));
+    h.high[0] += m.heater & 1u;
+    h.high[1] += (m.heater >> 1) & 1u;
+    if (++h.tick_clk == ThermalWorld::kSubClks) [[unlikely]]
+      h.substep();
     const uint32_t tx = m.tx;
     const uint32_t sig =
         (static_cast<uint32_t>(m.step) | (static_cast<uint32_t>(m.dir) << 4) |
@@ -122,7 +203,7 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
     // rx_partial: a packet or frame was cut short; the clock runs on so that the decoder's 100 ms
     // watchdog drops it (and NAKs a v2 frame with TIMEOUT) as on the real board.
     if (m.busy || m.step || m.rx_partial || !drv_idle || tx == 0 || mon.busy() ||
-        cyc < s.tx_stop_end) {
+        cyc < s.tx_stop_end || h.active) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;
@@ -140,6 +221,8 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
   m.rst = 1;
   m.rx = 1;
   m.cfg_wr = 0;
+  m.estop = 0;
+  m.adc_sdo = 0;
   m.clk = 0;
   m.eval();
   for (int i = 0; i < 8; ++i) clock_once(m, s.fst.get(), s.trace_time);
@@ -225,7 +308,8 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
   } catch (const std::invalid_argument& e) {
     throw BoardError(fmt::format("simulated board: {}", e.what()));
   }
-  model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges, opt_.line_faults);
+  model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges, opt_.line_faults,
+                                   opt_.initial_c);
   model_->sig_mask = 0x1ff;
   if (opt_.record_tx) model_->sig_mask |= 1u << kTx;
   if (opt_.record_rx) model_->sig_mask |= 1u << kRx;
@@ -530,6 +614,46 @@ std::string SimBoard::stats_line() const {
              s.cycles, static_cast<double>(s.cycles) / opt_.clk_hz, s.sim_wall_s, s.wall_s,
              s.clocks_per_s / 1e6, s.bytes_in, s.bytes_out, s.edges, s.moves_done) +
          (opt_.line_faults.any() ? "; line faults: " + describe(s.line) : std::string());
+}
+
+}  // namespace fpgacnc::simboard
+
+namespace fpgacnc::simboard {
+
+// ---- Heaters (issue 7) ----
+
+ThermalStats SimBoard::thermal() const {
+  std::lock_guard<std::mutex> l(mu_);
+  const ThermalWorld& h = model_->heat;
+  ThermalStats t;
+  t.ticks = h.ticks;
+  t.plant_c = {h.hotend.temperature(), h.bed.temperature()};
+  t.sensed_c = h.sensed;
+  t.last_duty = h.last_duty;
+  t.adc_violations = h.adc.violations();
+  t.adc_first_violation = h.adc.first_violation();
+  return t;
+}
+
+double SimBoard::plant_seconds() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return static_cast<double>(model_->cycle) / static_cast<double>(kSampleClks);
+}
+
+void SimBoard::inject_sensor(int channel, SensorFault f) {
+  std::lock_guard<std::mutex> l(mu_);
+  model_->heat.sensor.at(static_cast<size_t>(channel)) = f;
+}
+
+void SimBoard::disconnect_heater(int channel, bool disconnected) {
+  std::lock_guard<std::mutex> l(mu_);
+  model_->heat.cut.at(static_cast<size_t>(channel)) = disconnected;
+}
+
+void SimBoard::set_estop(bool pressed) {
+  std::lock_guard<std::mutex> l(mu_);
+  if (model_->core) model_->core->estop = pressed;
+  if (model_->core_trace) model_->core_trace->estop = pressed;
 }
 
 }  // namespace fpgacnc::simboard

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <toml.hpp>
 
+#include "../heat/heater_toml.h"
+
 namespace fpgacnc::config {
 namespace {
 
@@ -106,6 +108,8 @@ class Reader {
           }
           if (clocks == 0) fail(tv, full, "must be >= 1 clock");
         }
+      } else if (k == "heater") {  // issue 7: host/src/heat/heater_config.cpp
+        heat::read_heater_toml(v, c.heaters, name_);
       } else {
         fail(v, k, "unknown key");
       }

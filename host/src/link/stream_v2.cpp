@@ -131,7 +131,12 @@ v2::Status query_status(Session& s, StreamV2Report& rep, size_t n_axes, const St
                           static_cast<double>(opt.answer_timeout.count()) / 1000.0));
 }
 
-std::string frame_name(const v2::Frame& f, const v2::JobFrame* jf) {
+std::string frame_name(const v2::Frame& f, const v2::JobFrame* jf,
+                       const heat::HeaterAction* ha = nullptr) {
+  if (ha) {
+    return fmt::format("{} (M{} S{:g}, line {})", v2::type_name(f.type), ha->mcode, ha->target_c,
+                       ha->source_line);
+  }
   if (!jf) return v2::type_name(f.type);
   return fmt::format("{} of segment {} (line {})", v2::type_name(f.type), jf->segment_index,
                      jf->source_line);
@@ -205,7 +210,11 @@ StreamV2Options stream_v2_options(const config::MachineConfig& cfg) {
 StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
                          const StreamV2Options& options, std::optional<v2::Ident> ident) {
   const v2::Job job = v2::pack_job(plan, cfg);  // throws before any byte
-  StreamV2Report r = stream_v2_job(link, job, options, ident);
+  // Heater commands: validated (line:col errors) and placed before any byte is sent.
+  const heat::HeaterJob heaters = heat::make_heater_job(plan, job, cfg);
+  StreamV2Options opt = options;
+  opt.heaters = &heaters;
+  StreamV2Report r = stream_v2_job(link, job, opt, ident);
   r.final_steps = plan.final_steps;
   r.final_mm = plan.final_mm;
   return r;
@@ -214,7 +223,8 @@ StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::Machi
 StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Options& opt,
                              std::optional<v2::Ident> ident) {
   StreamV2Report rep;
-  rep.skipped_heater = job.skipped_heater;
+  const heat::HeaterJob* hj = opt.heaters && opt.heaters->any() ? opt.heaters : nullptr;
+  rep.skipped_heater = hj ? 0 : job.skipped_heater;
   rep.t_raised = job.t_raised;
   rep.total_t = job.total_t;
   rep.target = job.target;
@@ -280,16 +290,40 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     v2::Frame frame;
     bool fifo;
     const v2::JobFrame* jf;
+    const heat::HeaterAction* heater = nullptr;  // HEATER_SETPOINT of an M104/M109/M140/M190
   };
   std::vector<Item> items;
   if (st.faults) {
     items.push_back({v2::fault_clear(0), false, nullptr});
     rep.faults_cleared = st.faults;
   }
+  const size_t clear_items = items.size();  // faults are checked once these are acknowledged
   for (size_t a = 0; a < job.config.size() && a < n_axes; ++a) {
     items.push_back({job.config[a], false, nullptr});
   }
-  for (const auto& jf : job.frames) items.push_back({jf.frame, true, &jf});
+  // Heaters: setup frames, then each setpoint before the FIFO frame it precedes in the program.
+  std::vector<size_t> waits;  // item indices of M109/M190 setpoints
+  {
+    size_t ai = 0;
+    auto actions_before = [&](size_t frame) {
+      if (!hj) return;
+      for (; ai < hj->actions.size() && hj->actions[ai].before_frame <= frame; ++ai) {
+        const auto& a = hj->actions[ai];
+        if (a.wait) waits.push_back(items.size());
+        items.push_back({v2::heater_setpoint(0, a.channel, a.target_q4), false, nullptr, &a});
+        ++rep.heater_frames;
+      }
+    };
+    if (hj) {
+      for (const auto& f : hj->setup) items.push_back({f, false, nullptr});
+      rep.heater_frames += hj->setup.size();
+    }
+    for (size_t j = 0; j < job.frames.size(); ++j) {
+      actions_before(j);
+      items.push_back({job.frames[j].frame, true, &job.frames[j]});
+    }
+    actions_before(SIZE_MAX);
+  }
   const size_t n = items.size();
   rep.sequenced_frames = n;
   std::vector<size_t> fifo_before(n + 1, 0);  // FIFO frames in [0, i)
@@ -384,11 +418,11 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     if (acked == (goback_at ? *goback_at : SIZE_MAX)) {
       if (++goback_same > opt.max_goback_same) {
         const auto* jf = items[acked].jf;
-        throw Error(
-            fmt::format("{}: {} (seq {}) refused {} times without progress (NAKs: {} BAD_CRC, {} "
-                        "BAD_LENGTH, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL)",
-                        name, frame_name(items[acked].frame, jf), seq_of(acked), goback_same,
-                        rep.naks[1], rep.naks[2], rep.naks[4], rep.naks[5], rep.naks[6]));
+        throw Error(fmt::format(
+            "{}: {} (seq {}) refused {} times without progress (NAKs: {} BAD_CRC, {} "
+            "BAD_LENGTH, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL)",
+            name, frame_name(items[acked].frame, jf, items[acked].heater), seq_of(acked),
+            goback_same, rep.naks[1], rep.naks[2], rep.naks[4], rep.naks[5], rep.naks[6]));
       }
     }
     sent = acked;
@@ -398,6 +432,134 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     cwnd = ssthresh;
     rep.min_window = std::min(rep.min_window, static_cast<size_t>(cwnd));
     last_progress = clock_type::now();
+  };
+
+  // ---- Heaters (issue 7): M109/M190 gates, STATUS polling, faults ----
+  const auto plant_now = [&]() -> double {
+    if (opt.plant_time) return opt.plant_time();
+    return std::chrono::duration<double>(clock_type::now() - t0).count();
+  };
+  size_t next_wait = 0;  // index into `waits` of the wait in force
+  // Items up to and including the pending wait's setpoint may be sent, nothing after it.
+  auto gate = [&]() { return next_wait < waits.size() ? waits[next_wait] + 1 : n; };
+  struct WaitState {
+    bool started = false;  // setpoint accepted and FIFO drained
+    bool in_band = false;
+    double band_since = 0.0, start_plant = 0.0, start_c = 0.0;
+    clock_type::time_point start_wall{};
+  } ws;
+  auto last_heater_poll = clock_type::now();
+  bool status_outstanding = false;
+  std::vector<size_t> fifo_item;  // item index of the k-th FIFO frame
+  for (size_t i = 0; i < n; ++i) {
+    if (items[i].fifo) fifo_item.push_back(i);
+  }
+  const std::string src = hj && !hj->source.empty() ? hj->source + ":" : std::string();
+  auto current_line = [&]() -> std::string {
+    if (next_wait < waits.size() && ws.started) {
+      const auto* a = items[waits[next_wait]].heater;
+      return fmt::format("{}{} (M{} S{:g}, waiting)", src, a->source_line, a->mcode, a->target_c);
+    }
+    if (done_count < fifo_item.size()) {
+      std::string l = fmt::format("{}{}", src, items[fifo_item[done_count]].jf->source_line);
+      if (next_wait < waits.size() && acked > waits[next_wait]) {  // a wait once it has drained
+        const auto* a = items[waits[next_wait]].heater;
+        l += fmt::format(" (M{} S{:g} at line {} waits for it)", a->mcode, a->target_c,
+                         a->source_line);
+      }
+      return l;
+    }
+    return "the end of the job";
+  };
+  auto check_faults = [&](const v2::Status& stt) {
+    if (acked < clear_items) return;  // faults of a previous job, FAULT_CLEAR not yet taken
+    const uint8_t bad =
+        stt.faults & (v2::kFaultEstop | v2::kFaultWatchdog | v2::kFaultHotend | v2::kFaultBed);
+    if (!bad) return;
+    std::string what;
+    auto add = [&what](const std::string& x) { what += (what.empty() ? "" : "; ") + x; };
+    for (size_t c = 0; c < stt.heaters.size() && c < heat::kChannels; ++c) {
+      const auto& h = stt.heaters[c];
+      if (!h.faults) continue;
+      std::string hint;
+      if (h.faults & v2::kHeaterMinTemp) hint += ", below min_temp_c: sensor open or unplugged?";
+      if (h.faults & v2::kHeaterMaxTemp) hint += ", above max_temp_c: overheating or sensor short?";
+      if (h.faults & v2::kHeaterRunaway)
+        hint += ", left the setpoint while holding (thermal runaway)";
+      if (h.faults & v2::kHeaterHeating)
+        hint += ", did not rise after the setpoint increase: heater disconnected?";
+      add(fmt::format("{} heater fault {} at {:.1f} degC (setpoint {:.1f}){}",
+                      heat::kChannelNames[c], v2::heater_fault_names(h.faults), h.temp_c(),
+                      h.setpoint_c(), hint));
+    }
+    if ((bad & (v2::kFaultHotend | v2::kFaultBed)) && what.empty()) {
+      add(fmt::format("heater fault bits 0x{:02X}", bad & (v2::kFaultHotend | v2::kFaultBed)));
+    }
+    if (bad & v2::kFaultWatchdog) add("heater watchdog: the device heard no frame for too long");
+    if (bad & v2::kFaultEstop) add("e-stop: motion stopped, FIFO flushed, heaters off");
+    throw Error(
+        fmt::format("{}: job stopped at G-code line {}: {} (the device switched the heaters "
+                    "off and latched the fault; the next job clears it)",
+                    name, current_line(), what));
+  };
+  auto wait_status = [&](const v2::Status& stt) {
+    if (next_wait >= waits.size()) return;
+    const size_t w = waits[next_wait];
+    if (acked <= w || done_count < fifo_before[w]) return;  // not accepted or FIFO not drained
+    const auto* a = items[w].heater;
+    if (stt.heaters.size() <= a->channel) {
+      throw Error(fmt::format("{}: M{} at line {}{}: the device reports no heaters in STATUS", name,
+                              a->mcode, src, a->source_line));
+    }
+    const auto& h = stt.heaters[a->channel];
+    const auto& hc = hj->config.ch[a->channel];
+    const double now = plant_now();
+    const double temp = h.temp_c();
+    bool done = false, skipped = false;
+    if (!ws.started) {
+      ws.started = true;
+      ws.start_plant = now;
+      ws.start_c = temp;
+      ws.start_wall = clock_type::now();
+      // S waits only when heating (Marlin): off, or already above the target.
+      if (a->target_c <= 0.0 || temp > a->target_c + hc.wait_tolerance_c) done = skipped = true;
+    }
+    if (!done) {
+      if (std::fabs(temp - a->target_c) <= hc.wait_tolerance_c) {
+        if (!ws.in_band) {
+          ws.in_band = true;
+          ws.band_since = now;
+        }
+        done = now - ws.band_since >= hc.wait_settle_s;
+      } else {
+        ws.in_band = false;
+      }
+    }
+    if (!done && now - ws.start_plant > hc.wait_timeout_s) {
+      throw Error(fmt::format(
+          "{}: M{} S{:g} at line {}{}: the {} is at {:.1f} degC after {:.0f} s (from {:.1f} degC; "
+          "heater.{}.wait_timeout_s = {:g}, wait_tolerance_c = {:g}); job stopped",
+          name, a->mcode, a->target_c, src, a->source_line, heat::kChannelNames[a->channel], temp,
+          now - ws.start_plant, ws.start_c, heat::kChannelNames[a->channel], hc.wait_timeout_s,
+          hc.wait_tolerance_c));
+    }
+    if (done) {
+      HeaterWaitReport r;
+      r.mcode = a->mcode;
+      r.source_line = a->source_line;
+      r.channel = a->channel;
+      r.target_c = a->target_c;
+      r.start_c = ws.start_c;
+      r.plant_s = now - ws.start_plant;
+      r.end_plant_s = now;
+      r.end_c = temp;
+      r.wall_s = std::chrono::duration<double>(clock_type::now() - ws.start_wall).count();
+      r.skipped = skipped;
+      rep.heater_waits.push_back(r);
+      ++next_wait;
+      ws = WaitState{};
+      last_progress = clock_type::now();
+    }
   };
 
   auto handle = [&](const v2::Frame& frame) {
@@ -423,9 +585,10 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           }
           if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
               acked < n && k.seq == seq_of(acked) && ++fatal_nak_count >= 3) {
-            throw Error(fmt::format("{}: device refuses {} (seq {}): NAK {}", name,
-                                    frame_name(items[acked].frame, items[acked].jf), k.seq,
-                                    v2::nak_reason_name(static_cast<uint8_t>(k.reason))));
+            throw Error(
+                fmt::format("{}: device refuses {} (seq {}): NAK {}", name,
+                            frame_name(items[acked].frame, items[acked].jf, items[acked].heater),
+                            k.seq, v2::nak_reason_name(static_cast<uint8_t>(k.reason))));
           }
           if (acked < n) {
             go_back();
@@ -439,6 +602,11 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           const uint16_t fr =
               static_cast<uint16_t>(stt.fifo_level >= depth ? 0 : depth - stt.fifo_level);
           update(stt.next_seq, fr, stt.done);
+          status_outstanding = false;
+          rep.status_end = stt;
+          if (opt.on_status) opt.on_status(stt);
+          check_faults(stt);
+          if (hj) wait_status(stt);
           break;
         }
         default:
@@ -452,12 +620,12 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   std::vector<uint8_t> batch;
   for (;;) {
     // Complete?
-    if (acked == n && done_count == total_fifo) break;
+    if (acked == n && done_count == total_fifo && next_wait == waits.size()) break;
 
     // Send what the window and the credit allow.
     batch.clear();
     size_t batch_frames = 0;
-    const size_t limit = probing ? std::min(n, acked + 1) : n;
+    const size_t limit = std::min(probing ? std::min(n, acked + 1) : n, gate());
     const size_t window = static_cast<size_t>(cwnd);
     while (sent < limit && sent - acked < window) {
       if (items[sent].fifo) {
@@ -480,13 +648,14 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     // Answers already there (read before any timer: a host that was not scheduled for a while
     // must not take answers waiting in its input for a silence).
     while (const auto f = s.receive(milliseconds(0))) handle(*f);
-    if (acked == n && done_count == total_fifo) break;
+    if (acked == n && done_count == total_fifo && next_wait == waits.size()) break;
 
     // Timers.
     const auto now = clock_type::now();
     if (now - s.last_rx() > opt.answer_timeout) {
       const std::string last = acked == 0 ? std::string("none")
-                                          : frame_name(items[acked - 1].frame, items[acked - 1].jf);
+                                          : frame_name(items[acked - 1].frame, items[acked - 1].jf,
+                                                       items[acked - 1].heater);
       throw Error(fmt::format(
           "{}: no answer from the device for {:.3g} s ({} of {} frames acknowledged, {} of {} "
           "FIFO frames done; last acknowledged: {})",
@@ -504,7 +673,17 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       rep.max_rto_s = std::max(rep.max_rto_s, std::chrono::duration<double>(rto).count());
       continue;
     }
-    if (sent == acked && now - s.last_rx() > opt.idle_poll && now - last_poll > opt.idle_poll) {
+    // Heaters: progress, faults, watchdog. One STATUS_QUERY outstanding at a time (answered or
+    // given up after the retransmission timeout): polls must not queue up on a slow line.
+    if (hj && now - last_heater_poll > opt.heater_poll &&
+        (!status_outstanding || now - last_heater_poll > opt.retransmit_timeout)) {
+      status_outstanding = true;
+      s.send(v2::status_query());
+      ++rep.status_polls;
+      last_heater_poll = now;
+      last_poll = now;
+    } else if (sent == acked && now - s.last_rx() > opt.idle_poll &&
+               now - last_poll > opt.idle_poll) {
       s.send(v2::status_query());
       ++rep.status_polls;
       last_poll = now;
@@ -593,6 +772,24 @@ std::string format_report(const StreamV2Report& r) {
     s += fmt::format(" {} {}", a < 4 ? config::kAxisNames[a] : '?', r.moved[a]);
   }
   s += fmt::format(" steps: {}\n", r.position_ok ? "matches the plan" : "DOES NOT match the plan");
+  if (r.heater_frames || !r.status_end.heaters.empty()) {  // issue 7
+    s += fmt::format("heaters: {} heater frames", r.heater_frames);
+    const std::string h = heat::format_heaters(r.status_end);
+    if (!h.empty()) s += "; at the end " + h;
+    s += "\n";
+    for (const auto& w : r.heater_waits) {
+      if (w.skipped) {
+        s += fmt::format("  M{} S{:g} (line {}): no wait, {} at {:.1f} degC already\n", w.mcode,
+                         w.target_c, w.source_line, heat::kChannelNames[w.channel], w.start_c);
+      } else {
+        s += fmt::format(
+            "  M{} S{:g} (line {}): {} {:.1f} -> {:g} degC settled in {:.0f} s plant time ({:.2f} "
+            "s wall)\n",
+            w.mcode, w.target_c, w.source_line, heat::kChannelNames[w.channel], w.start_c,
+            w.target_c, w.plant_s, w.wall_s);
+      }
+    }
+  }
   if (!r.released) s += "warning: RELEASE not acknowledged (the device stays in v2 mode)\n";
   return s;
 }

@@ -89,6 +89,16 @@ std::string type_name(uint8_t type) {
       return "LINE";
     case Type::Dwell:
       return "DWELL";
+    case Type::HeaterConfig:
+      return "HEATER_CONFIG";
+    case Type::HeaterSetpoint:
+      return "HEATER_SETPOINT";
+    case Type::ThermistorTable:
+      return "THERMISTOR_TABLE";
+    case Type::HeaterSafety:
+      return "HEATER_SAFETY";
+    case Type::HeaterWatchdog:
+      return "HEATER_WATCHDOG";
     case Type::Ack:
       return "ACK";
     case Type::Nak:
@@ -138,6 +148,11 @@ bool is_sequenced(uint8_t type) {
     case Type::Release:
     case Type::Line:
     case Type::Dwell:
+    case Type::HeaterConfig:
+    case Type::HeaterSetpoint:
+    case Type::ThermistorTable:
+    case Type::HeaterSafety:
+    case Type::HeaterWatchdog:
       return true;
     default:
       return false;
@@ -284,15 +299,9 @@ Status decode_status(const Frame& f, size_t n_axes) {
   if (n_axes > (kMaxPayload - 27) / 4) {
     throw ProtocolError(fmt::format("STATUS: {} axes cannot fit a frame", n_axes));
   }
-  // Issue 7 (heat-rtl): the device appends a 16-byte heater block (docs/protocol.md); skipped
-  // here until the host decodes it.
-  if (f.type == static_cast<uint8_t>(Type::Status) &&
-      f.payload.size() == status_payload_size(n_axes) + 16) {
-    Frame g = f;
-    g.payload.resize(status_payload_size(n_axes));
-    return decode_status(g, n_axes);
-  }
-  expect(f, Type::Status, status_payload_size(n_axes));
+  const size_t base = status_payload_size(n_axes);
+  const size_t with_heaters = base + kHeaterChannels * kHeaterStatusBytes;
+  expect(f, Type::Status, f.payload.size() == with_heaters ? with_heaters : base);
   const auto& p = f.payload;
   Status s;
   s.state = p[0];
@@ -309,6 +318,16 @@ Status decode_status(const Frame& f, size_t n_axes) {
   for (auto& c : s.counters) {
     c = get16(p, i);
     i += 2;
+  }
+  // Heater block (issue 7).
+  for (; i + kHeaterStatusBytes <= p.size(); i += kHeaterStatusBytes) {
+    HeaterStatus h;
+    h.temp_q4 = static_cast<int16_t>(get16(p, i));
+    h.setpoint_q4 = static_cast<int16_t>(get16(p, i + 2));
+    h.duty_q15 = get16(p, i + 4);
+    h.mode = p[i + 6];
+    h.faults = p[i + 7];
+    s.heaters.push_back(h);
   }
   return s;
 }
@@ -344,6 +363,13 @@ Frame status(uint8_t dev_seq, const Status& s) {
   put32(p, s.done);
   for (const int32_t x : s.position) put32(p, static_cast<uint32_t>(x));
   for (const uint16_t c : s.counters) put16(p, c);
+  for (const auto& h : s.heaters) {  // issue 7
+    put16(p, static_cast<uint16_t>(h.temp_q4));
+    put16(p, static_cast<uint16_t>(h.setpoint_q4));
+    put16(p, h.duty_q15);
+    p.push_back(h.mode);
+    p.push_back(h.faults);
+  }
   if (p.size() > kMaxPayload) {
     throw std::invalid_argument(
         fmt::format("STATUS frame: {} axes do not fit a frame", s.position.size()));
@@ -446,6 +472,31 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (f.payload[0] & 0x7C) return NakReason::BadField;
       return std::nullopt;
     }
+    // Heaters (issue 7).
+    case Type::HeaterConfig:
+      if (n != 20) return NakReason::BadLength;
+      if (f.payload[0] > 1 || f.payload[1] > 4 || get16(f.payload, 14) > 0x8000 ||
+          get16(f.payload, 18) > 0x8000)
+        return NakReason::BadField;
+      return std::nullopt;
+    case Type::HeaterSetpoint:
+      if (n != 3) return NakReason::BadLength;
+      if (f.payload[0] > 1) return NakReason::BadField;
+      return std::nullopt;
+    case Type::ThermistorTable:
+      if (n < 4 || n > 18 || n % 2) return NakReason::BadLength;
+      if (f.payload[0] > 1 || f.payload[1] + (n - 2) / 2 > kThermistorEntries)
+        return NakReason::BadField;
+      return std::nullopt;
+    case Type::HeaterSafety:
+      if (n != 13) return NakReason::BadLength;
+      if (f.payload[0] > 1 ||
+          static_cast<int16_t>(get16(f.payload, 1)) >= static_cast<int16_t>(get16(f.payload, 3)))
+        return NakReason::BadField;
+      return std::nullopt;
+    case Type::HeaterWatchdog:
+      if (n != 2) return NakReason::BadLength;
+      return std::nullopt;
     default:
       return NakReason::UnknownType;
   }
@@ -494,6 +545,113 @@ ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {
 std::array<uint32_t, 2> decode_numerators(const Frame& f) {
   check_or_throw(f, Type::Numerators, 0);
   return {get32(f.payload, 0), get32(f.payload, 4)};
+}
+
+// ---- Heaters (issue 7) ----
+
+std::string heater_fault_names(uint8_t faults) {
+  static constexpr std::array<const char*, 4> kNames{"MINTEMP", "MAXTEMP", "RUNAWAY", "HEATING"};
+  std::string s;
+  for (size_t b = 0; b < 8; ++b) {
+    if (!(faults & (1u << b))) continue;
+    if (!s.empty()) s += '|';
+    s += b < kNames.size() ? std::string(kNames[b]) : fmt::format("bit{}", b);
+  }
+  return s.empty() ? "none" : s;
+}
+
+Frame heater_config(uint8_t seq, const HeaterConfigFrame& c) {
+  if (c.channel > 1 || c.mode > 4 || c.duty_max > 0x8000 || c.manual > 0x8000) {
+    throw std::invalid_argument(fmt::format(
+        "HEATER_CONFIG: channel {} (0..1), mode {} (0..4), duty_max 0x{:04X} / manual 0x{:04X} "
+        "(<= 0x8000)",
+        c.channel, c.mode, c.duty_max, c.manual));
+  }
+  std::vector<uint8_t> p{c.channel, c.mode};
+  put32(p, c.kp);
+  put32(p, c.ki);
+  put32(p, c.kd);
+  put16(p, c.duty_max);
+  put16(p, c.hysteresis_q4);
+  put16(p, c.manual);
+  return make(seq, Type::HeaterConfig, std::move(p));
+}
+
+Frame heater_setpoint(uint8_t seq, uint8_t channel, int16_t setpoint_q4) {
+  if (channel > 1) throw std::invalid_argument(fmt::format("HEATER_SETPOINT: channel {}", channel));
+  std::vector<uint8_t> p{channel};
+  put16(p, static_cast<uint16_t>(setpoint_q4));
+  return make(seq, Type::HeaterSetpoint, std::move(p));
+}
+
+Frame thermistor_table(uint8_t seq, const ThermistorChunk& c) {
+  if (c.channel > 1 || c.entries.empty() || c.entries.size() > kThermistorChunk ||
+      c.first + c.entries.size() > kThermistorEntries) {
+    throw std::invalid_argument(
+        fmt::format("THERMISTOR_TABLE: channel {}, entries {}..{} (1..8 entries within 0..64)",
+                    c.channel, c.first, c.first + c.entries.size()));
+  }
+  std::vector<uint8_t> p{c.channel, c.first};
+  for (const int16_t e : c.entries) put16(p, static_cast<uint16_t>(e));
+  return make(seq, Type::ThermistorTable, std::move(p));
+}
+
+Frame heater_safety(uint8_t seq, const HeaterSafetyFrame& c) {
+  if (c.channel > 1 || c.tmin_q4 >= c.tmax_q4) {
+    throw std::invalid_argument(fmt::format("HEATER_SAFETY: channel {}, Tmin {} >= Tmax {}",
+                                            c.channel, c.tmin_q4 / 16.0, c.tmax_q4 / 16.0));
+  }
+  std::vector<uint8_t> p{c.channel};
+  put16(p, static_cast<uint16_t>(c.tmin_q4));
+  put16(p, static_cast<uint16_t>(c.tmax_q4));
+  put16(p, c.runaway_band_q4);
+  put16(p, c.runaway_ticks);
+  put16(p, c.watch_rise_q4);
+  put16(p, c.watch_ticks);
+  return make(seq, Type::HeaterSafety, std::move(p));
+}
+
+Frame heater_watchdog(uint8_t seq, uint16_t ticks) {
+  std::vector<uint8_t> p;
+  put16(p, ticks);
+  return make(seq, Type::HeaterWatchdog, std::move(p));
+}
+
+HeaterConfigFrame decode_heater_config(const Frame& f) {
+  check_or_throw(f, Type::HeaterConfig, 0);
+  const auto& p = f.payload;
+  return HeaterConfigFrame{p[0],         p[1],         get32(p, 2),  get32(p, 6),
+                           get32(p, 10), get16(p, 14), get16(p, 16), get16(p, 18)};
+}
+
+std::pair<uint8_t, int16_t> decode_heater_setpoint(const Frame& f) {
+  check_or_throw(f, Type::HeaterSetpoint, 0);
+  return {f.payload[0], static_cast<int16_t>(get16(f.payload, 1))};
+}
+
+ThermistorChunk decode_thermistor_table(const Frame& f) {
+  check_or_throw(f, Type::ThermistorTable, 0);
+  ThermistorChunk c{f.payload[0], f.payload[1], {}};
+  for (size_t i = 2; i + 2 <= f.payload.size(); i += 2)
+    c.entries.push_back(static_cast<int16_t>(get16(f.payload, i)));
+  return c;
+}
+
+HeaterSafetyFrame decode_heater_safety(const Frame& f) {
+  check_or_throw(f, Type::HeaterSafety, 0);
+  const auto& p = f.payload;
+  return HeaterSafetyFrame{p[0],
+                           static_cast<int16_t>(get16(p, 1)),
+                           static_cast<int16_t>(get16(p, 3)),
+                           get16(p, 5),
+                           get16(p, 7),
+                           get16(p, 9),
+                           get16(p, 11)};
+}
+
+uint16_t decode_heater_watchdog(const Frame& f) {
+  check_or_throw(f, Type::HeaterWatchdog, 0);
+  return get16(f.payload, 0);
 }
 
 std::string hex(std::span<const uint8_t> bytes) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "fpgacnc/error.h"
+#include "fpgacnc/heat/heater_config.h"
 
 namespace fpgacnc::config {
 
@@ -41,6 +42,8 @@ struct MachineConfig {
   // true: G1/G2/G3 cut only while M3/M4 is active with S>0 (or no S given);
   // false: original v1 semantics, every G1/G2/G3 is laser-on.
   bool laser_requires_m3 = true;
+  // [heater.hotend], [heater.bed]: heater channels (issue 7; fpgacnc/heat/heater_config.h).
+  heat::HeaterSet heaters;
 };
 
 // Thrown for an unreadable file, a syntax error, an unknown key or a wrong type/value.

@@ -18,6 +18,12 @@
 //     silent;
 //  4. complete when `segments done` has counted every FIFO frame; then STATUS_QUERY (final
 //     position compared with the job's target) and RELEASE (back to auto mode).
+// Heaters (issue 7, fpgacnc/heat/heater_job.h): the heater setup frames follow CONFIG_AXIS; each
+// M104/M109/M140/M190 is a HEATER_SETPOINT between the FIFO frames where it stands in the program.
+// After an M109/M190 setpoint nothing more is sent until the FIFO has drained and STATUS shows
+// the temperature within the channel's tolerance for its settle time (plant seconds). While a job
+// uses heaters STATUS is polled every `heater_poll` (progress line, faults, device watchdog); a
+// heater, watchdog or e-stop fault stops the job with an Error naming the G-code line.
 // Errors: link::Error when the device never answers (answer timeout), refuses a frame for a
 // reason a retransmission cannot fix, or cannot take the job (axes, payload, version).
 #pragma once
@@ -31,6 +37,7 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/heat/heater_job.h"
 #include "fpgacnc/link/link.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2.h"
@@ -49,6 +56,30 @@ struct StreamV2Options {
   bool release = true;           // send RELEASE at the end
   // Called when `segments done` advances: (FIFO frames done, FIFO frames in the job).
   std::function<void(size_t, size_t)> progress;
+  // ---- Heaters (issue 7) ----
+  // The job's heater commands and setup frames (stream_v2() makes them from the plan); null or
+  // empty: no heater frames are sent.
+  const heat::HeaterJob* heaters = nullptr;
+  std::chrono::milliseconds heater_poll{250};  // STATUS_QUERY period while heaters are in use
+  // Plant time in seconds for M109/M190 settle times and timeouts (the simulated board runs its
+  // thermal time faster than the wall clock); unset: wall seconds.
+  std::function<double()> plant_time;
+  // Every STATUS decoded during the job (progress line with temperatures).
+  std::function<void(const protocol::v2::Status&)> on_status;
+};
+
+// One M109/M190 wait as it happened.
+struct HeaterWaitReport {
+  int mcode = 0;
+  int source_line = 0;
+  uint8_t channel = 0;
+  double target_c = 0.0;
+  double start_c = 0.0;      // temperature when the wait began (FIFO drained)
+  double plant_s = 0.0;      // plant seconds from the start to the end of the wait
+  double end_plant_s = 0.0;  // plant time (StreamV2Options::plant_time) at the end of the wait
+  double end_c = 0.0;        // temperature at the end of the wait
+  double wall_s = 0.0;
+  bool skipped = false;  // above the target already (S waits only when heating)
 };
 
 struct StreamV2Report {
@@ -78,7 +109,9 @@ struct StreamV2Report {
   uint64_t rx_abandoned = 0;
   uint8_t faults_cleared = 0;  // fault bits latched before the job (cleared)
   bool released = false;       // RELEASE acknowledged
-  size_t skipped_heater = 0;
+  size_t skipped_heater = 0;   // heater commands not sent (no heater job given)
+  size_t heater_frames = 0;    // heater setup + setpoint frames of the session
+  std::vector<HeaterWaitReport> heater_waits;
   size_t t_raised = 0;
   uint64_t total_t = 0;  // sum of T of the job's frames (clocks)
   std::chrono::duration<double> elapsed{0};

@@ -33,6 +33,12 @@ enum class Type : uint8_t {
   Release = 0x06,
   Line = 0x10,
   Dwell = 0x11,
+  // Heaters (issue 7): sequenced, not queued.
+  HeaterConfig = 0x20,
+  HeaterSetpoint = 0x21,
+  ThermistorTable = 0x22,
+  HeaterSafety = 0x23,
+  HeaterWatchdog = 0x24,
   Ack = 0x80,
   Nak = 0x81,
   Done = 0x82,
@@ -143,8 +149,13 @@ struct Ident {  // 18 bytes
 constexpr uint8_t kStateBusy = 0x01;
 constexpr uint8_t kStateV2 = 0x02;
 constexpr uint8_t kStateFault = 0x04;
+constexpr uint8_t kStateEstop = 0x08;  // the e-stop input is active now
 // STATUS fault bits.
 constexpr uint8_t kFaultStepTiming = 0x01;
+constexpr uint8_t kFaultEstop = 0x10;
+constexpr uint8_t kFaultWatchdog = 0x20;  // heater watchdog (host silent)
+constexpr uint8_t kFaultHotend = 0x40;    // channel 0 fault (its own byte says which)
+constexpr uint8_t kFaultBed = 0x80;       // channel 1 fault
 // STATUS counters, in order.
 enum Counter : size_t {
   kFramesOk = 0,
@@ -160,16 +171,41 @@ enum Counter : size_t {
 // "frames_ok", "crc_errors", ...
 std::string counter_name(size_t index);
 
-struct Status {  // 27 + 4 * n_axes bytes
+// STATUS heater block, one per channel (0 hot end, 1 bed), 8 bytes each.
+struct HeaterStatus {
+  int16_t temp_q4 = 0;      // Q11.4 degC
+  int16_t setpoint_q4 = 0;  // Q11.4 degC
+  uint16_t duty_q15 = 0;    // Q1.15, 0x8000 = 100 %
+  uint8_t mode = 0;         // bits 2..0 mode, bit 6 holding, bit 7 enabled
+  uint8_t faults = 0;       // kHeaterMinTemp ...
+  double temp_c() const { return temp_q4 / 16.0; }
+  double setpoint_c() const { return setpoint_q4 / 16.0; }
+  double duty() const { return duty_q15 / 32768.0; }
+  bool enabled() const { return (mode & 0x80) != 0; }
+  bool holding() const { return (mode & 0x40) != 0; }
+  bool operator==(const HeaterStatus&) const = default;
+};
+constexpr uint8_t kHeaterMinTemp = 0x01;
+constexpr uint8_t kHeaterMaxTemp = 0x02;
+constexpr uint8_t kHeaterRunaway = 0x04;
+constexpr uint8_t kHeaterHeating = 0x08;
+constexpr size_t kHeaterChannels = 2;
+constexpr size_t kHeaterStatusBytes = 8;
+// "MINTEMP|RUNAWAY" (or "none").
+std::string heater_fault_names(uint8_t faults);
+
+struct Status {  // 27 + 4 * n_axes bytes, + 16 with the heater block (issue 7)
   uint8_t state = 0, faults = 0;
   uint16_t fifo_level = 0;
   uint8_t next_seq = 0;
   uint32_t done = 0;
   std::vector<int32_t> position;
   std::array<uint16_t, kCounters> counters{};
+  std::vector<HeaterStatus> heaters;  // empty: the device sent no heater block
   bool operator==(const Status&) const = default;
 };
 
+// Without the heater block; decode_status accepts this size or this + 16.
 size_t status_payload_size(size_t n_axes);
 
 // Decoders: throw ProtocolError naming the frame type and what is wrong (type, length, field).
@@ -227,6 +263,46 @@ std::array<uint32_t, 2> decode_numerators(const Frame& f);
 // The NAK reason the device gives a good-CRC host frame with these type/length/fields, or
 // nullopt when it is well formed (sequence and FIFO rules not included).
 std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes);
+
+// ---- Heaters (issue 7; docs/protocol.md "Heater frames", docs/heater.md formats) ----
+
+struct HeaterConfigFrame {  // HEATER_CONFIG, 20 bytes
+  uint8_t channel = 0;
+  uint8_t mode = 0;                 // 0 OFF, 1 MANUAL, 2 ON_OFF, 3 P, 4 PID
+  uint32_t kp = 0, ki = 0, kd = 0;  // Q8.24 duty per degC
+  uint16_t duty_max = 0x8000;       // Q1.15
+  uint16_t hysteresis_q4 = 16;      // Q12.4 degC
+  uint16_t manual = 0;              // Q1.15
+  bool operator==(const HeaterConfigFrame&) const = default;
+};
+struct HeaterSafetyFrame {  // HEATER_SAFETY, 13 bytes
+  uint8_t channel = 0;
+  int16_t tmin_q4 = 0, tmax_q4 = 0;
+  uint16_t runaway_band_q4 = 0, runaway_ticks = 0;
+  uint16_t watch_rise_q4 = 0, watch_ticks = 0;
+  bool operator==(const HeaterSafetyFrame&) const = default;
+};
+struct ThermistorChunk {  // THERMISTOR_TABLE, 2 + 2n bytes
+  uint8_t channel = 0;
+  uint8_t first = 0;
+  std::vector<int16_t> entries;  // 1..8, Q11.4
+  bool operator==(const ThermistorChunk&) const = default;
+};
+constexpr size_t kThermistorEntries = 65;  // entry i: temperature at ADC code 64 * i
+constexpr size_t kThermistorChunk = 8;
+
+// Builders (throw std::invalid_argument for a field the device would refuse).
+Frame heater_config(uint8_t seq, const HeaterConfigFrame& c);
+Frame heater_setpoint(uint8_t seq, uint8_t channel, int16_t setpoint_q4);
+Frame thermistor_table(uint8_t seq, const ThermistorChunk& c);
+Frame heater_safety(uint8_t seq, const HeaterSafetyFrame& c);
+Frame heater_watchdog(uint8_t seq, uint16_t ticks);
+// Decoders (fake devices, tests): the device's LEN and field rules (ProtocolError naming them).
+HeaterConfigFrame decode_heater_config(const Frame& f);
+std::pair<uint8_t, int16_t> decode_heater_setpoint(const Frame& f);
+ThermistorChunk decode_thermistor_table(const Frame& f);
+HeaterSafetyFrame decode_heater_safety(const Frame& f);
+uint16_t decode_heater_watchdog(const Frame& f);
 
 // Hex dump "A5 0A 07 10 ..." (upper case, space separated).
 std::string hex(std::span<const uint8_t> bytes);

@@ -4,6 +4,7 @@
 // and, for both, the line fault options (parse_line_fault_option).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -70,5 +71,11 @@ std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
 // link.
 bool report_board_run(link::Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
                       const SimOutputs& outputs);
+
+// Heaters (issue 7): for a link made by make_default_link, the board's plant clock (plant
+// seconds, SimBoard::plant_seconds) and the board itself; empty / null for any other link.
+std::function<double()> plant_clock(link::Link& link);
+class SimBoard;
+SimBoard* board_of(link::Link& link);
 
 }  // namespace fpgacnc::simboard

@@ -40,6 +40,21 @@
 // pin), bytes decoded from tx pass it before they are queued for the pty (lost device frames, bit
 // flips). A stall holds the rx line idle while the board keeps running: the held line counts as
 // activity, so simulated time advances through it exactly as through a byte on the line.
+//
+// Heaters (issue 7, docs/heater.md "Simulated board"). The Verilated core is built with a scaled
+// thermal time base: one sample tick every kSampleClks = 102 400 clocks (2.048 ms of board time)
+// instead of 50 000 000, and the heater PWM at 1024 clocks per period (HEAT_PWM_DIV 1), so one
+// plant second passes every 2.048 ms of simulated time (488x faster than the board's motion time;
+// at about 5 M clocks/s one plant second is about 20 ms of wall time). The plants of
+// tb/common/thermal_plant.h are attached to the heater pins (duty = share of high clocks over the
+// tick; bed: the reference FOPDT with its sensor one tick old; hot end: the 40 W model) and the
+// thermistors (100k/3950, 4.7k to 3.3 V) to the LTC2308 pin model (tb/common/ltc2308_model.h) on
+// the ADC pins: channel 0 the hot end, 1 the bed. The plants advance once per tick. While a
+// heater pin has been high during the last tick or a plant is more than 0.5 degC above ambient,
+// the board counts as active (its clock runs without host traffic), so temperatures evolve as on
+// a real board; at ambient with the heaters off it is quiet as before. Faults can be injected:
+// a sensor open (the ADC reads the divider supply) or short (0 V), a heater disconnected (its pin
+// no longer heats), the e-stop input.
 #pragma once
 
 #include <array>
@@ -80,6 +95,20 @@ struct BoardOptions {
   size_t reserve_edges = size_t{1} << 20;
   uint32_t poll_interval_cycles = 1024;
   LineFaults line_faults;  // serial line fault injection (default: none)
+  // Heaters: plant temperatures at reset (0 hot end, 1 bed), degC; ambient is 20 degC.
+  std::array<double, 2> initial_c{20.0, 20.0};
+};
+
+enum class SensorFault { kNone, kOpen, kShort };
+
+// Heater state of the simulated board (plant side).
+struct ThermalStats {
+  uint64_t ticks = 0;                 // sample ticks since reset (= plant seconds)
+  std::array<double, 2> plant_c{};    // plant temperature (bed: the bed; hot end: the thermistor)
+  std::array<double, 2> sensed_c{};   // what the thermistor reads now (bed: one tick old)
+  std::array<double, 2> last_duty{};  // duty over the last tick
+  uint64_t adc_violations = 0;        // LTC2308 timing rule violations by the master
+  std::string adc_first_violation;
 };
 
 struct BoardStats {
@@ -102,6 +131,8 @@ class SimBoard {
  public:
   // Clock cycles of inactivity after which the board counts as quiet.
   static constexpr uint64_t kQuietCycles = 32;
+  // Heater sample tick of the Verilated core (cnc_core SAMPLE_CLKS, see the file comment).
+  static constexpr uint64_t kSampleClks = 102'400;
 
   // Creates the pty and the model, resets the core and writes the step timing. Throws
   // BoardError.
@@ -145,6 +176,14 @@ class SimBoard {
   void write_edges_csv(const std::string& path) const;
   // One-line summary of stats() for reports.
   std::string stats_line() const;
+
+  // ---- Heaters (issue 7) ----
+  ThermalStats thermal() const;
+  // Plant seconds since reset (sample ticks, fractional).
+  double plant_seconds() const;
+  void inject_sensor(int channel, SensorFault f);
+  void disconnect_heater(int channel, bool disconnected);
+  void set_estop(bool pressed);
 
   // Implementation detail (model, UART driver/monitor, recorder), defined in sim_board.cpp.
   struct Model;

@@ -1,0 +1,3 @@
+; Printer end sequence: heaters off.
+M104 S0
+M140 S0
