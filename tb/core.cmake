@@ -27,4 +27,4 @@ fpgacnc_bench(test_segment_executor LABEL rtl
 fpgacnc_bench(test_segment_prep LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_prep.cpp LIBS vprep fmt::fmt)
 fpgacnc_bench(test_profile LABEL rtl
-              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_profile.cpp LIBS vexec vprep fmt::fmt)
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_profile.cpp LIBS vexec vprep vcore_3m fmt::fmt)

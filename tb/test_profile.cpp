@@ -25,11 +25,15 @@
 #include <string>
 #include <vector>
 
+#include "Vcnc_core_3m.h"
 #include "Vsegment_executor.h"
 #include "Vsegment_prep.h"
+#include "common/core_pins.h"
 #include "common/fifo_entry.h"
+#include "common/pin_harness.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
+#include "common/v2_frames.h"
 #include "verilated.h"
 
 namespace {
@@ -580,6 +584,173 @@ TEST(Profile, WorkedExample) {
       ASSERT_EQ(tr.rises[k], b.starts[0] + r.ticks_of[i][k]) << "axis " << i << " step " << k;
   }
   EXPECT_EQ(b.laser_on_cycles, r.ticks);
+}
+
+// ---------------------------------------------------------------- cnc_core through the pins
+// LINE_PROFILE frames at 3 Mbaud: frame -> FIFO -> prep -> executor; every STEP edge equal to the
+// reference from each segment's seg_start, zero gap between the queued segments (no reversal),
+// DONE counts; then frames breaking each field rule are NAKed BAD_FIELD (BAD_LENGTH for a short
+// payload) and nothing moves.
+class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
+ public:
+  CoreBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_3m>(), true, 3'000'000.0) {
+    fpgacnc::tb::reset_core(*this);
+  }
+  std::vector<uint64_t> starts;
+  std::vector<fpgacnc::tb::v2::DeviceMsg> msgs;
+
+ protected:
+  void observe() override {
+    if (tx_bytes().size() != tx_seen_) {
+      tx_seen_ = tx_bytes().size();
+      if (auto m = parser_.push(tx_bytes().back().value, tx_bytes().back().start_cycle))
+        msgs.push_back(*m);
+    }
+    if (dut().seg_start) starts.push_back(cycle());
+  }
+
+ private:
+  size_t tx_seen_ = 0;
+  fpgacnc::tb::v2::DeviceParser parser_;
+};
+
+std::vector<uint8_t> profile_frame(uint8_t seq, const Prof& p, bool short_steps) {
+  std::vector<uint8_t> b;
+  b.push_back(static_cast<uint8_t>(p.code | (short_steps ? 0x80 : 0)));
+  b.push_back(static_cast<uint8_t>(p.power));
+  for (uint64_t v : {p.ve, p.vc, p.vx})
+    for (int k = 5; k >= 0; --k) b.push_back(static_cast<uint8_t>(v >> (8 * k)));
+  for (uint32_t v : {p.a, p.d})
+    for (int k = 3; k >= 0; --k) b.push_back(static_cast<uint8_t>(v >> (8 * k)));
+  for (int i = 0; i < kAxes; ++i) {
+    const auto s = static_cast<uint32_t>(static_cast<int32_t>(p.steps[i]));
+    for (int k = short_steps ? 1 : 3; k >= 0; --k) b.push_back(static_cast<uint8_t>(s >> (8 * k)));
+  }
+  return fpgacnc::tb::v2::frame(0x12, seq, b);
+}
+
+TEST(ProfileCore, FramesThroughThePinsZeroGapAndBadFields) {
+  const uint64_t seed = fpgacnc::tb::test_seed(20261107, "ProfileCore");
+  std::mt19937_64 rng(seed);
+  auto uni = [&](uint64_t lo, uint64_t hi) {
+    return std::uniform_int_distribution<uint64_t>(lo, hi)(rng);
+  };
+  CoreBench b;
+  b.send(fpgacnc::tb::v2::hello());
+  for (int i = 0; i < 30000 && b.msgs.empty(); ++i) b.tick();
+  ASSERT_FALSE(b.msgs.empty()) << "no IDENT";
+  constexpr int kSegs = 10;
+  std::vector<Prof> segs;
+  for (int i = 0; i < kSegs; ++i) {
+    Prof p;
+    // negative directions only (DIR low after reset): no reversal, so every join is zero-gap;
+    // each segment lasts longer than one 42-byte frame (~7 000 clocks at 3 Mbaud)
+    // (no STEP timing violation: checked below)
+    const uint64_t n = i == 0 ? 150 : uni(30, 100);
+    p.steps[0] = -static_cast<int64_t>(n);
+    p.steps[1] = -static_cast<int64_t>(uni(0, n));
+    p.steps[2] = -static_cast<int64_t>(uni(0, 1));
+    // the core's default STEP high + low is 200 clocks: V_cruise below 1/200 step per clock
+    p.vc = uni(kOne / 1000, kOne / 400);
+    p.ve = uni(kOne / 4000, p.vc);
+    p.vx = uni(kOne / 4000, p.vc);
+    p.a = static_cast<uint32_t>(uni(3'000, 100'000));
+    uint32_t d = 0;
+    p.d = stopping_d(p, &d) ? d : 0;
+    p.code = 1;
+    p.power = static_cast<int>(uni(0, 255));
+    segs.push_back(p);
+    b.queue(profile_frame(static_cast<uint8_t>(i), p, i % 2 == 0));
+  }
+  uint64_t guard = 0;
+  while ((b.dut().segments_done < kSegs || !b.rx_idle()) && ++guard < 5'000'000) b.tick();
+  ASSERT_EQ(b.dut().segments_done, static_cast<uint32_t>(kSegs)) << "by cycle " << b.cycle();
+  for (int i = 0; i < 200; ++i) b.tick();
+  ASSERT_EQ(b.starts.size(), static_cast<size_t>(kSegs));
+  for (int a = 0; a < kAxes; ++a)
+    for (auto& v : b.mon().check_pulses(a, fpgacnc::tb::AxisTiming{})) ADD_FAILURE() << v;
+  std::vector<uint64_t> want[kAxes];
+  for (int i = 0; i < kSegs; ++i) {
+    const RefRun r = reference(segs[i]);
+    if (i + 1 < kSegs) {
+      EXPECT_EQ(b.starts[i + 1] - b.starts[i], r.ticks) << "segment " << i + 1 << ": zero gap";
+    }
+    for (int a = 0; a < kAxes; ++a)
+      for (uint64_t t : r.ticks_of[a]) want[a].push_back(b.starts[i] + t);
+  }
+  for (int a = 0; a < kAxes; ++a) {
+    const auto& tr = b.mon().axis(a);
+    ASSERT_EQ(tr.rises.size(), want[a].size()) << "axis " << a << " steps, seed " << seed;
+    for (size_t k = 0; k < want[a].size(); ++k)
+      ASSERT_EQ(tr.rises[k], want[a][k]) << "axis " << a << " step " << k << ", seed " << seed;
+  }
+  // Rule breakers: each NAKed with the reason, nothing queued.
+  Prof ok;
+  ok.steps[0] = -10;
+  ok.vc = kOne / 100;
+  ok.vx = kOne / 200;
+  ok.a = 1000;
+  struct Bad {
+    const char* what;
+    Prof p;
+    bool short_steps;
+    int cut;
+    uint8_t reason;
+  };
+  std::vector<Bad> bad;
+  auto with = [&](auto f) {
+    Prof p = ok;
+    f(p);
+    return p;
+  };
+  bad.push_back({"V_exit = 0", with([](Prof& p) { p.vx = 0; }), true, 0, 7});
+  bad.push_back({"V_entry > V_cruise", with([](Prof& p) { p.ve = p.vc + 1; }), true, 0, 7});
+  bad.push_back({"V_exit > V_cruise", with([](Prof& p) { p.vx = p.vc + 1; }), false, 0, 7});
+  bad.push_back({"V_cruise = 2^47", with([](Prof& p) { p.vc = kOne / 2; }), true, 0, 7});
+  bad.push_back({"A = 0, V_entry = 0", with([](Prof& p) { p.a = 0; }), true, 0, 7});
+  bad.push_back({"no steps", with([](Prof& p) { p.steps[0] = 0; }), true, 0, 7});
+  bad.push_back({"n = 2^24", with([](Prof& p) { p.steps[1] = 1 << 24; }), false, 0, 7});
+  bad.push_back({"n = -2^24", with([](Prof& p) { p.steps[3] = -(1 << 24); }), false, 0, 7});
+  bad.push_back({"payload 27 bytes", ok, true, 9, 2});
+  const uint32_t done_before = b.dut().segments_done;
+  const size_t rises_before =
+      b.mon().axis(0).rises.size() + b.mon().axis(1).rises.size() + b.mon().axis(3).rises.size();
+  uint8_t seq = kSegs;
+  for (const auto& x : bad) {
+    auto f = profile_frame(seq, x.p, x.short_steps);
+    if (x.cut) {
+      std::vector<uint8_t> pl(f.begin() + 4, f.end() - 2);
+      pl.resize(pl.size() - static_cast<size_t>(x.cut));
+      f = fpgacnc::tb::v2::frame(0x12, seq, pl);
+    }
+    const size_t n0 = b.msgs.size();
+    b.send(f);
+    auto answered = [&] {  // a NAK or ACK after n0 (a pending DONE may come first)
+      for (size_t k = n0; k < b.msgs.size(); ++k)
+        if (b.msgs[k].type != fpgacnc::tb::v2::kDone) return true;
+      return false;
+    };
+    for (int i = 0; i < 30000 && !answered(); ++i) b.tick();
+    ASSERT_TRUE(answered()) << x.what << ": no answer";
+    const auto& m = b.msgs.back();
+    EXPECT_EQ(m.type, fpgacnc::tb::v2::kNak) << x.what;
+    if (m.type == fpgacnc::tb::v2::kNak) {
+      EXPECT_EQ(m.u8(0), seq) << x.what;
+      EXPECT_EQ(m.u8(1), x.reason) << x.what;
+    }
+  }
+  // the first good one after them is accepted with the same seq (nothing was consumed)
+  const size_t n0 = b.msgs.size();
+  b.send(profile_frame(seq, ok, true));
+  for (int i = 0; i < 30000 && b.msgs.size() == n0; ++i) b.tick();
+  ASSERT_GT(b.msgs.size(), n0);
+  EXPECT_EQ(b.msgs.back().type, fpgacnc::tb::v2::kAck);
+  guard = 0;
+  while (b.dut().segments_done == done_before && ++guard < 1'000'000) b.tick();
+  EXPECT_EQ(b.dut().segments_done, done_before + 1);
+  EXPECT_EQ(
+      b.mon().axis(0).rises.size() + b.mon().axis(1).rises.size() + b.mon().axis(3).rises.size(),
+      rises_before + 10);
 }
 
 }  // namespace
