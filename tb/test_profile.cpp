@@ -44,7 +44,7 @@ using u128 = unsigned __int128;
 
 constexpr int kAxes = 4;
 constexpr uint64_t kOne = uint64_t{1} << 48;
-constexpr uint64_t kPrepLatency = 26 + kAxes;  // LINE_PROFILE (segment_prep header)
+constexpr uint64_t kPrepLatency = 25 + kAxes;  // LINE_PROFILE (segment_prep header)
 
 uint64_t mag(int64_t v) {
   return static_cast<uint64_t>(v < 0 ? -v : v);
@@ -620,6 +620,9 @@ TEST(Profile, AbortDropsRunningAndPreparedSegments) {
   ProfBench probe;
   probe.run({a.entry()});
   ASSERT_EQ(probe.starts.size(), 1u);
+  // prep latency (25 + N_AXES), then taken by the idle executor on the next edge (no reversal)
+  ASSERT_EQ(probe.prep_accepts.size(), 1u);
+  EXPECT_EQ(probe.starts[0], probe.prep_accepts[0] + kPrepLatency + 1) << "LINE_PROFILE latency";
   const uint64_t abort_edge = probe.starts[0] + ra.ticks / 2;
   b.run({a.entry(), c.entry()}, abort_edge);
   ASSERT_EQ(b.starts.size(), 1u) << "only A started";
