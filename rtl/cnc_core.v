@@ -24,10 +24,10 @@
 // (16 bytes) and its faults are faults bits 5 (watchdog), 6 (channel 0), 7 (channel 1).
 // E-stop: `estop` (active high here; the board top inverts its active-low pin) is synchronized by
 // two flops and latched (faults bit 4) until a FAULT_CLEAR while it is released. While it is
-// active or latched: STEP and laser gated low at the outputs, the command FIFO held flushed,
-// segment_prep and segment_executor held in reset (a stand-in for the executor's abort input:
-// the running segment and the prepared one are dropped; it also zeroes the position counters and
-// the v1 numerators), both heaters low. Pin to STEP/laser low: 2 clocks; to heaters low: 3.
+// active or latched: the laser gated low at the output, the command FIFO held flushed,
+// segment_prep and segment_executor aborted (the running segment and the prepared one are dropped:
+// no new STEP rising edge, a STEP pulse already high finishes its high time; positions and the v1
+// numerators are kept), both heaters low. Pin to laser low: 2 clocks; to heaters low: 3.
 // Status outputs: the v1 ones, plus the v2 counters that STATUS reports (16 bits, wrapping).
 //   packet_count counts v1 packets queued and v2 frames that passed every check.
 // rst is synchronous, active high; the board top synchronizes its reset button.
@@ -102,7 +102,7 @@ module cnc_core #(
     output wire [        15:0] naks            // NAK frames requested
 );
 
-  localparam ENTRY_W = 45 + 32 * N_AXES;
+  localparam ENTRY_W = 222 + 32 * N_AXES;  // FIFO entry (segment_prep header): 350 bits for 4 axes
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;
@@ -195,7 +195,6 @@ module cnc_core #(
     end
   end
   wire estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
-  wire motion_rst = rst || estop_stop;  // stand-in for the executor's abort (see header)
 
   // ---------------------------------------------------------------- command FIFO
   wire [ENTRY_W-1:0] cmd_tdata;
@@ -307,6 +306,15 @@ module cnc_core #(
   wire [31:0] seg_period;
   wire seg_tvalid, seg_tready;
   wire init_applied, init_v2, prep_clamped;
+  // PROFILE segments (LINE_PROFILE): segment_prep -> segment_executor
+  wire [1:0] seg_kind, seg_p_op1;
+  wire [46:0] seg_p_u1, seg_p_v1, seg_p_vcruise, seg_p_vexit;
+  wire [47:0] seg_p_vcma, seg_p_vxpa;
+  wire [31:0] seg_p_accel, seg_p_decel_at;
+  wire [23:0] seg_p_n_dom;
+  wire [71*N_AXES-1:0] seg_p_v0, seg_p_vc, seg_p_vx;
+  wire [56*N_AXES-1:0] seg_p_acc;
+  wire motion_abort = estop_stop;  // e-stop: prep and executor drop what they hold, stay idle
 
   segment_prep #(
       .N_AXES           (N_AXES),
@@ -314,7 +322,8 @@ module cnc_core #(
       .DEFAULT_NUMERATOR(DEFAULT_NUMERATOR)
   ) u_prep (
       .clk            (clk),
-      .rst            (motion_rst),
+      .rst            (rst),
+      .abort          (motion_abort),
       .s_axis_tdata   (cmd_tdata),
       .s_axis_tvalid  (cmd_tvalid),
       .s_axis_tready  (cmd_tready),
@@ -332,6 +341,21 @@ module cnc_core #(
       .m_axis_total   (seg_total),
       .m_axis_period  (seg_period),
       .m_axis_feed    (seg_feed),
+      .m_axis_kind    (seg_kind),
+      .m_axis_prof_u1 (seg_p_u1),
+      .m_axis_prof_v1 (seg_p_v1),
+      .m_axis_prof_op1(seg_p_op1),
+      .m_axis_prof_accel   (seg_p_accel),
+      .m_axis_prof_vcruise (seg_p_vcruise),
+      .m_axis_prof_vexit   (seg_p_vexit),
+      .m_axis_prof_vcma    (seg_p_vcma),
+      .m_axis_prof_vxpa    (seg_p_vxpa),
+      .m_axis_prof_decel_at(seg_p_decel_at),
+      .m_axis_prof_n_dom   (seg_p_n_dom),
+      .m_axis_prof_v0      (seg_p_v0),
+      .m_axis_prof_vc      (seg_p_vc),
+      .m_axis_prof_vx      (seg_p_vx),
+      .m_axis_prof_acc     (seg_p_acc),
       .m_axis_tvalid  (seg_tvalid),
       .m_axis_tready  (seg_tready),
       .numerator_x    (numerator_x),
@@ -344,16 +368,14 @@ module cnc_core #(
 
   // ---------------------------------------------------------------- execution
   wire exec_busy, exec_violation, seg_done_v2;
-  wire [N_AXES-1:0] exec_step;
   wire exec_laser;
-  assign step  = exec_step & {N_AXES{!estop_stop}};
-  assign laser = exec_laser && !estop_stop;
+  assign laser = exec_laser && !estop_stop;  // also low at once (the executor's own is registered)
 
   segment_executor #(
       .N_AXES(N_AXES)
   ) u_exec (
       .clk            (clk),
-      .rst            (motion_rst),
+      .rst            (rst),
       .s_axis_code    (seg_code),
       .s_axis_power   (seg_power),
       .s_axis_v2      (seg_v2),
@@ -362,13 +384,29 @@ module cnc_core #(
       .s_axis_steps   (seg_steps),
       .s_axis_tmn     (seg_tmn),
       .s_axis_total   (seg_total),
+      .s_axis_kind    (seg_kind),
+      .s_axis_prof_u1 (seg_p_u1),
+      .s_axis_prof_v1 (seg_p_v1),
+      .s_axis_prof_op1(seg_p_op1),
+      .s_axis_prof_accel   (seg_p_accel),
+      .s_axis_prof_vcruise (seg_p_vcruise),
+      .s_axis_prof_vexit   (seg_p_vexit),
+      .s_axis_prof_vcma    (seg_p_vcma),
+      .s_axis_prof_vxpa    (seg_p_vxpa),
+      .s_axis_prof_decel_at(seg_p_decel_at),
+      .s_axis_prof_n_dom   (seg_p_n_dom),
+      .s_axis_prof_v0      (seg_p_v0),
+      .s_axis_prof_vc      (seg_p_vc),
+      .s_axis_prof_vx      (seg_p_vx),
+      .s_axis_prof_acc     (seg_p_acc),
       .s_axis_tvalid  (seg_tvalid),
       .s_axis_tready  (seg_tready),
       .cfg_step_high  (cfg_high_reg),
       .cfg_step_low   (cfg_low_reg),
       .cfg_dir_setup  (cfg_setup_reg),
       .cfg_dir_hold   (cfg_hold_reg),
-      .step           (exec_step),
+      .abort          (motion_abort),
+      .step           (step),
       .dir            (dir),
       .laser          (exec_laser),
       .busy           (exec_busy),
