@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -60,7 +61,116 @@ uint16_t u16_timing(uint32_t v, const char* what) {
   return static_cast<uint16_t>(v);
 }
 
+void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
+  for (int i = bytes - 1; i >= 0; --i) p.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+
+// The k of a segment: axes up to the last moving one, at least 2 (X, Y).
+size_t frame_axes(const plan::Steps4& steps) {
+  size_t k = 2;
+  for (size_t a = 0; a < 4; ++a) {
+    if (steps[a] != 0) k = std::max(k, a + 1);
+  }
+  return k;
+}
+
+void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job& job,
+                   const std::function<void(JobFrame)>& push) {
+  const plan::ProfilePlan pp = plan::plan_profiles(plan, cfg);
+  job.profile_stats = pp.stats;
+  size_t seg_seen = 0;
+  size_t last_seg = SIZE_MAX;
+  for (const auto& item : pp.items) {
+    if (const auto* p = std::get_if<plan::Profile>(&item)) {
+      if (p->code > 3) {
+        throw std::invalid_argument(fmt::format("segment {} (line {}): motion code {} not valid",
+                                                p->segment_index, p->source_line, p->code));
+      }
+      plan::Segment s;
+      s.code = p->code;
+      s.spindle_s = p->spindle_s;
+      const size_t k = frame_axes(p->steps);
+      std::array<int32_t, 4> s32{};
+      for (size_t a = 0; a < 4; ++a) {
+        s32[a] = static_cast<int32_t>(p->steps[a]);
+        job.target[a] += p->steps[a];
+      }
+      JobFrame jf;
+      jf.frame = line_profile(0, p->code, laser_power(s, cfg), p->fields,
+                              std::span<const int32_t>(s32.data(), k));
+      jf.segment_index = p->segment_index;
+      jf.source_line = p->source_line;
+      jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
+      jf.axes = static_cast<uint8_t>(k);
+      jf.split = p->split;
+      jf.profile = true;
+      if (jf.frame.payload[0] & kLineShort) ++job.short_lines;
+      job.total_t += p->clocks;
+      ++job.profiles;
+      job.max_axes = std::max(job.max_axes, k);
+      if (p->segment_index != last_seg) {
+        ++seg_seen;
+        last_seg = p->segment_index;
+      }
+      push(std::move(jf));
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      const double clocks = std::round(d->seconds * static_cast<double>(cfg.clk_hz));
+      if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
+        throw std::invalid_argument(
+            fmt::format("dwell (line {}): {} s out of range", d->source_line, d->seconds));
+      }
+      uint64_t left = static_cast<uint64_t>(clocks);
+      const bool split = left > kMaxT;
+      while (left > 0) {
+        const uint64_t t = std::min(left, kMaxT);
+        JobFrame jf;
+        jf.frame = dwell(0, static_cast<uint32_t>(t));
+        jf.segment_index = seg_seen;
+        jf.source_line = d->source_line;
+        jf.t = static_cast<uint32_t>(t);
+        jf.split = split;
+        job.total_t += t;
+        ++job.dwells;
+        push(std::move(jf));
+        left -= t;
+      }
+    } else {
+      ++job.skipped_heater;
+    }
+  }
+  job.segments = seg_seen;
+  job.split_moves = pp.stats.split_moves;
+}
+
 }  // namespace
+
+Frame line_profile(uint8_t seq, uint8_t code, uint8_t power, const plan::ProfileFields& f,
+                   std::span<const int32_t> steps, bool short_if_fits) {
+  if (code > 3) throw std::invalid_argument("LINE_PROFILE frame: motion code > 3");
+  bool fits16 = short_if_fits;
+  for (const int32_t v : steps) {
+    if (v < INT16_MIN || v > INT16_MAX) fits16 = false;
+  }
+  const size_t w = fits16 ? 2 : 4;
+  if (28 + steps.size() * w > kMaxPayload) {
+    throw std::invalid_argument(
+        fmt::format("LINE_PROFILE frame: {} axes of {} bytes exceed {} bytes of payload",
+                    steps.size(), w, kMaxPayload));
+  }
+  Frame fr;
+  fr.seq = seq;
+  fr.type = kTypeLineProfile;
+  auto& p = fr.payload;
+  p.push_back(static_cast<uint8_t>(code | (fits16 ? kLineShort : 0)));
+  p.push_back(power);
+  put_be(p, f.v_entry, 6);
+  put_be(p, f.v_cruise, 6);
+  put_be(p, f.v_exit, 6);
+  put_be(p, f.a, 4);
+  put_be(p, f.d, 4);
+  for (const int32_t v : steps) put_be(p, static_cast<uint32_t>(v), static_cast<int>(w));
+  return fr;
+}
 
 uint32_t min_period(const config::StepTiming& t) {
   return std::max<uint32_t>(t.step_high, 1) + std::max<uint32_t>(t.step_low, 1);
@@ -88,6 +198,11 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
     JobFrame jf;
     jf.frame = numerators(0, plan.numerator[0], plan.numerator[1]);
     push(std::move(jf));
+  }
+
+  if (cfg.motion == "profile") {
+    pack_profiles(plan, cfg, job, push);
+    return job;
   }
 
   size_t seg_index = 0;
@@ -194,6 +309,40 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
     }
   }
   return job;
+}
+
+JobTimes job_times(const plan::Plan& plan, const config::MachineConfig& cfg,
+                   uint64_t v1_overhead_clocks) {
+  JobTimes t;
+  const double clk = static_cast<double>(cfg.clk_hz);
+  uint64_t v1 = 0;
+  for (const auto& item : plan.items) {
+    if (const auto* s = std::get_if<plan::Segment>(&item)) {
+      const bool x_dom = iabs(s->steps[0]) >= iabs(s->steps[1]);
+      const int64_t n = std::max(iabs(s->steps[0]), iabs(s->steps[1]));
+      const uint32_t num = plan.numerator[x_dom ? 0 : 1];
+      v1 += static_cast<uint64_t>(num / std::max<uint16_t>(s->feed_v1, 1)) *
+                static_cast<uint64_t>(n) +
+            v1_overhead_clocks;
+      ++t.v1_moves;
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      v1 += static_cast<uint64_t>(std::llround(d->seconds * clk));
+    }
+  }
+  t.v1_clocks = v1;
+  config::MachineConfig c = cfg;
+  c.motion = "constant";
+  const Job jc = pack_job(plan, c);
+  c.motion = "profile";
+  const Job jp = pack_job(plan, c);
+  t.v2_lines = jc.lines;
+  t.v2_profiles = jp.profiles;
+  t.v2_constant_clocks = jc.total_t;
+  t.v2_profile_clocks = jp.total_t;
+  t.v1_s = static_cast<double>(v1) / clk;
+  t.v2_constant_s = static_cast<double>(jc.total_t) / clk;
+  t.v2_profile_s = static_cast<double>(jp.total_t) / clk;
+  return t;
 }
 
 std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq,

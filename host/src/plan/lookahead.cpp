@@ -1,0 +1,503 @@
+#include "fpgacnc/plan/lookahead.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace fpgacnc::plan {
+namespace {
+
+using i128 = __int128;
+constexpr i128 kOne = i128{1} << kFracBits;
+constexpr uint64_t kMaxClocks = uint64_t{1} << 62;
+
+int64_t iabs(int64_t v) {
+  return v < 0 ? -v : v;
+}
+
+// Smallest i in [1, hi] with g(i) >= t, or 0 when g(hi) < t. g must be non-decreasing.
+template <class G>
+uint64_t first_reaching(uint64_t hi, i128 t, G g) {
+  if (hi == 0 || g(hi) < t) return 0;
+  uint64_t lo = 1;
+  while (lo < hi) {
+    const uint64_t mid = lo + (hi - lo) / 2;
+    if (g(mid) >= t) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
+    }
+  }
+  return lo;
+}
+
+uint64_t ceil_div(i128 a, i128 b) {
+  if (a <= 0) return 0;
+  const i128 q = (a + b - 1) / b;
+  if (q > static_cast<i128>(kMaxClocks)) throw std::invalid_argument("segment never ends");
+  return static_cast<uint64_t>(q);
+}
+
+// ceil(sqrt(x)) for x >= 0 (x < 2^100).
+uint64_t isqrt_ceil(i128 x) {
+  if (x <= 0) return 0;
+  auto r = static_cast<uint64_t>(std::sqrt(static_cast<long double>(x)));
+  while (static_cast<i128>(r) * r > x) --r;
+  while (static_cast<i128>(r) * r < x) ++r;
+  return r;
+}
+
+}  // namespace
+
+const char* profile_field_error(const ProfileFields& f) {
+  if (f.n_dom < 1 || f.n_dom > kMaxProfileSteps) return "n_dom outside 1..2^24-1";
+  if (f.v_cruise > kMaxVCruise) return "V_cruise >= 2^47";
+  if (f.v_entry > f.v_cruise) return "V_entry > V_cruise";
+  if (f.v_exit > f.v_cruise) return "V_exit > V_cruise";
+  if (f.v_exit < 1) return "V_exit < 1";
+  if (f.a < 1 && f.v_entry < 1) return "A = 0 and V_entry = 0";
+  return nullptr;
+}
+
+ProfileRun simulate_profile(const ProfileFields& f, bool record_knots) {
+  if (const char* e = profile_field_error(f)) {
+    throw std::invalid_argument(fmt::format("profile fields: {}", e));
+  }
+  ProfileRun r;
+  const i128 n_end = static_cast<i128>(f.n_dom) * kOne;
+  const i128 d_start = static_cast<i128>(f.d) * kOne;
+  const auto a = static_cast<int64_t>(f.a);
+  const auto vc = static_cast<int64_t>(f.v_cruise);
+  const auto ve = static_cast<int64_t>(f.v_exit);
+  int64_t v = static_cast<int64_t>(f.v_entry);
+  i128 u = 0;
+  uint64_t c = 0;
+  auto knot = [&](uint64_t clk, int64_t vv) {
+    if (record_knots) r.knots.emplace_back(clk, static_cast<uint64_t>(vv));
+  };
+  auto peak = [&](int64_t vv) { r.v_peak = std::max(r.v_peak, static_cast<uint64_t>(vv)); };
+  auto finish = [&](uint64_t clocks, int64_t v_last) {
+    if (clocks > kMaxClocks) throw std::invalid_argument("segment never ends");
+    r.clocks = clocks;
+    r.v_last = static_cast<uint64_t>(v_last);
+    knot(clocks - 1, v_last);
+    return r;
+  };
+  for (int guard = 0; guard < 16; ++guard) {
+    peak(v);
+    knot(c, v);          // V used from clock c on
+    if (u >= d_start) {  // decelerating: V <- max(V - A, V_exit)
+      if (v > ve && a > 0) {
+        const auto jcap = static_cast<uint64_t>((v - ve + a - 1) / a);
+        auto g = [&](uint64_t i) {
+          const i128 ii = i;
+          return u + ii * v - static_cast<i128>(a) * ii * (ii - 1) / 2;
+        };
+        const uint64_t i = first_reaching(jcap, n_end, g);
+        if (i) return finish(c + i, v - static_cast<int64_t>(i - 1) * a);
+        u = g(jcap);
+        c += jcap;
+        knot(c - 1, v - static_cast<int64_t>(jcap - 1) * a);
+        v = ve;
+      } else if (v < ve) {  // one clock at V, then V_exit
+        u += v;
+        ++c;
+        if (u >= n_end) return finish(c, v);
+        v = ve;
+      } else {  // constant at V (V == V_exit, or A == 0)
+        if (v < 1) throw std::invalid_argument("segment never ends");
+        return finish(c + ceil_div(n_end - u, v), v);
+      }
+    } else {  // accelerating / cruising: V <- min(V + A, V_cruise)
+      if (v < vc && a > 0) {
+        const auto jcap = static_cast<uint64_t>((vc - v + a - 1) / a);
+        auto g = [&](uint64_t i) {
+          const i128 ii = i;
+          return u + ii * v + static_cast<i128>(a) * ii * (ii - 1) / 2;
+        };
+        const uint64_t i = first_reaching(jcap, std::min(d_start, n_end), g);
+        if (i) {
+          u = g(i);
+          c += i;
+          const int64_t used = v + static_cast<int64_t>(i - 1) * a;
+          peak(used);
+          if (u >= n_end) return finish(c, used);
+          knot(c - 1, used);
+          v = std::max(used - a, ve);
+        } else {
+          u = g(jcap);
+          c += jcap;
+          knot(c - 1, v + static_cast<int64_t>(jcap - 1) * a);
+          v = vc;
+        }
+      } else {  // constant at V until U >= D * 2^48
+        if (v < 1) throw std::invalid_argument("segment never ends");
+        const uint64_t i = ceil_div(std::min(d_start, n_end) - u, v);
+        u += static_cast<i128>(i) * v;
+        c += i;
+        if (c > kMaxClocks) throw std::invalid_argument("segment never ends");
+        if (u >= n_end) return finish(c, v);
+        knot(c - 1, v);
+        v = std::max(v - a, ve);
+      }
+    }
+  }
+  throw std::logic_error("simulate_profile: too many phases");
+}
+
+ProfileRun simulate_profile_naive(const ProfileFields& f) {
+  if (const char* e = profile_field_error(f)) {
+    throw std::invalid_argument(fmt::format("profile fields: {}", e));
+  }
+  ProfileRun r;
+  const i128 n_end = static_cast<i128>(f.n_dom) * kOne;
+  const i128 d_start = static_cast<i128>(f.d) * kOne;
+  const auto a = static_cast<int64_t>(f.a);
+  int64_t v = static_cast<int64_t>(f.v_entry);
+  i128 u = 0;
+  for (uint64_t c = 1;; ++c) {
+    r.v_peak = std::max(r.v_peak, static_cast<uint64_t>(v));
+    u += v;
+    if (u >= n_end) {
+      r.clocks = c;
+      r.v_last = static_cast<uint64_t>(v);
+      return r;
+    }
+    if (u >= d_start) {
+      v = std::max(v - a, static_cast<int64_t>(f.v_exit));
+    } else {
+      v = std::min(v + a, static_cast<int64_t>(f.v_cruise));
+    }
+    if (c > (uint64_t{1} << 40)) throw std::invalid_argument("naive: too long");
+  }
+}
+
+MotionLimits motion_limits(const config::MachineConfig& cfg) {
+  MotionLimits m;
+  for (size_t i = 0; i < 4; ++i) {
+    m.v_max[i] = cfg.max_feed_mm_min[i] / 60.0;
+    m.a_max[i] = cfg.max_accel_mm_s2[i];
+    m.steps_per_mm[i] = cfg.steps_per_mm[i];
+  }
+  m.junction_deviation = cfg.junction_deviation_mm;
+  m.window = std::max<uint32_t>(cfg.lookahead_segments, 1);
+  m.clk_hz = cfg.clk_hz;
+  m.min_period = std::max<uint32_t>(cfg.step_timing.step_high, 1) +
+                 std::max<uint32_t>(cfg.step_timing.step_low, 1);
+  return m;
+}
+
+double junction_speed(const std::array<double, 4>& u_prev, const std::array<double, 4>& u_next,
+                      double delta, const std::array<double, 4>& a_max) {
+  double cos_theta = 0.0;  // grbl: theta = angle between -u_prev and u_next (pi = straight on)
+  for (size_t i = 0; i < 4; ++i) cos_theta -= u_prev[i] * u_next[i];
+  if (cos_theta > 0.999999) return 0.0;  // reversal
+  if (cos_theta < -0.999999) return std::numeric_limits<double>::infinity();
+  std::array<double, 4> ju{};
+  double norm = 0.0;
+  for (size_t i = 0; i < 4; ++i) {
+    ju[i] = u_next[i] - u_prev[i];
+    norm += ju[i] * ju[i];
+  }
+  norm = std::sqrt(norm);
+  double a_j = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < 4; ++i) {
+    const double c = std::fabs(ju[i]) / norm;
+    if (c > 1e-12) a_j = std::min(a_j, a_max[i] / c);
+  }
+  const double s = std::sqrt(0.5 * (1.0 - cos_theta));  // sin(theta/2)
+  if (!(delta > 0.0)) return 0.0;
+  return std::sqrt(a_j * delta * s / (1.0 - s));
+}
+
+Lookahead::Lookahead(const MotionLimits& lim) : lim_(lim) {
+  lim_.window = std::max<size_t>(lim_.window, 1);
+}
+
+void Lookahead::push(const Segment& s, size_t segment_index) {
+  int64_t n_dom = 0;
+  for (size_t a = 0; a < 4; ++a) n_dom = std::max(n_dom, iabs(s.steps[a]));
+  if (n_dom == 0) return;
+  const int64_t parts = (n_dom + kMaxProfileSteps - 1) / kMaxProfileSteps;
+  if (parts > 1) ++stats_.split_moves;
+  const double clk = static_cast<double>(lim_.clk_hz);
+  const double one = std::ldexp(1.0, kFracBits);
+  for (int64_t k = 1; k <= parts; ++k) {
+    Block b;
+    Profile& p = b.p;
+    p.segment_index = segment_index;
+    p.source_line = s.source_line;
+    p.code = s.code;
+    p.spindle_s = s.spindle_s;
+    p.split = parts > 1;
+    int64_t n = 0;
+    std::array<double, 4> d{};
+    for (size_t a = 0; a < 4; ++a) {
+      const i128 t = s.steps[a];
+      p.steps[a] = static_cast<int64_t>(t * k / parts - t * (k - 1) / parts);
+      n = std::max(n, iabs(p.steps[a]));
+      d[a] = static_cast<double>(p.steps[a]) / lim_.steps_per_mm[a];
+    }
+    if (n == 0) continue;
+    const double lxyz = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    double feed;  // mm/s path
+    if (s.exec_feed_mm_min > 0.0) {
+      feed = s.exec_feed_mm_min / 60.0;
+    } else {  // step-file segment: the v1 feed word is the dominant X/Y axis feed
+      const double dom = std::max(std::fabs(d[0]), std::fabs(d[1]));
+      feed = dom > 0.0 ? s.feed_v1 / 60.0 * lxyz / dom : s.feed_v1 / 60.0;
+    }
+    if (lxyz > 0.0) {
+      p.length_mm = lxyz;
+      for (size_t a = 0; a < 3; ++a) b.unit[a] = d[a] / lxyz;
+    } else {
+      p.length_mm = std::fabs(d[3]);
+      b.unit[3] = d[3] > 0 ? 1.0 : -1.0;
+    }
+    const double len = p.length_mm;
+    double vc = feed;
+    double acc = std::numeric_limits<double>::infinity();
+    for (size_t a = 0; a < 4; ++a) {
+      if (p.steps[a] == 0) continue;
+      const double r = std::fabs(d[a]) / len;  // axis speed / path speed
+      vc = std::min(vc, lim_.v_max[a] / r);
+      acc = std::min(acc, lim_.a_max[a] / r);
+    }
+    b.scale_v = static_cast<double>(n) / len / clk * one;  // LSB per mm/s
+    const double scale_a = b.scale_v / clk;                // LSB per mm/s^2
+    const uint64_t v_cap =
+        std::min<uint64_t>(kMaxVCruise, (uint64_t{1} << kFracBits) / lim_.min_period);
+    vc = std::min(vc, static_cast<double>(v_cap) / b.scale_v);
+    const double a_lsb = std::floor(acc * scale_a);
+    uint64_t a_int;
+    if (a_lsb < 1.0) {
+      a_int = 1;
+      ++stats_.a_clamped;
+    } else {
+      a_int = static_cast<uint64_t>(std::min(a_lsb, static_cast<double>(kMaxA)));
+    }
+    p.fields.a = static_cast<uint32_t>(a_int);
+    p.fields.n_dom = static_cast<uint32_t>(n);
+    p.accel = static_cast<double>(a_int) / scale_a;
+    p.v_cruise = vc;
+    // Stop speed: the rate one dominant step of acceleration gives, sqrt(2 A) in real units.
+    const uint64_t v_stop = isqrt_ceil(static_cast<i128>(a_int) << (kFracBits + 1));
+    p.v_stop = static_cast<double>(v_stop) / b.scale_v;
+    p.lsb_mm_s = 1.0 / b.scale_v;
+    // Speed changes are planned over L minus a margin of 2 V_cruise (steps per clock) + 2^-16
+    // dominant steps: the clock staircase covers up to about one V of distance differently
+    // from the continuous ramp (docs/motion.md).
+    const double mu = 2.0 * vc * b.scale_v / one + std::ldexp(1.0, -16);
+    b.l_eff = len * std::max(0.0, static_cast<double>(n) - mu) / static_cast<double>(n);
+    add_block(std::move(b));
+  }
+}
+
+void Lookahead::add_block(Block b) {
+  const std::array<double, 4>* prev_unit = nullptr;
+  double prev_vc = 0.0;
+  if (!buf_.empty()) {
+    prev_unit = &buf_.back().unit;
+    prev_vc = buf_.back().p.v_cruise;
+  } else if (last_unit_) {
+    prev_unit = &*last_unit_;
+    prev_vc = last_vc_;
+  }
+  if (prev_unit) {
+    const double vj = junction_speed(*prev_unit, b.unit, lim_.junction_deviation, lim_.a_max);
+    b.v_junction_max = std::min({vj, prev_vc, b.p.v_cruise});
+  } else {
+    b.v_junction_max = 0.0;
+  }
+  buf_.push_back(std::move(b));
+  while (buf_.size() > lim_.window) {
+    const auto exits = plan_exits(buf_);
+    const Block& f = buf_.front();
+    out_.push_back(finalize(f, prev_exit_, exits[0], false, stats_));
+    prev_exit_ = exits[0];
+    last_unit_ = f.unit;
+    last_vc_ = f.p.v_cruise;
+    buf_.pop_front();
+  }
+}
+
+std::vector<double> Lookahead::plan_exits(const std::deque<Block>& buf) const {
+  const size_t n = buf.size();
+  std::vector<double> emax(n);
+  double next = 0.0;  // the window ends in a stop
+  for (size_t k = n; k-- > 0;) {
+    const Block& b = buf[k];
+    emax[k] = std::min(
+        {b.v_junction_max, b.p.v_cruise, std::sqrt(next * next + 2.0 * b.p.accel * b.l_eff)});
+    next = emax[k];
+  }
+  std::vector<double> exits(n);
+  double entry = std::min(prev_exit_, emax.empty() ? 0.0 : emax[0]);
+  for (size_t k = 0; k < n; ++k) {
+    const Block& b = buf[k];
+    const double lim_next = k + 1 < n ? emax[k + 1] : 0.0;
+    exits[k] = std::min(lim_next, std::sqrt(entry * entry + 2.0 * b.p.accel * b.l_eff));
+    entry = exits[k];
+  }
+  return exits;
+}
+
+Profile Lookahead::finalize(const Block& b, double v_entry, double v_exit, bool stop_after,
+                            ProfileStats& st) const {
+  Profile p = b.p;
+  p.v_entry = v_entry;
+  p.v_exit = v_exit;
+  p.stop_after = stop_after;
+  const double sv = b.scale_v;
+  const uint64_t v_cap =
+      std::min<uint64_t>(kMaxVCruise, (uint64_t{1} << kFracBits) / lim_.min_period);
+  // Rounding: every rate DOWN (never faster than planned); a 1e-12 relative shrink keeps a
+  // product that lands a hair above an integer from rounding up.
+  auto lsb = [&](double v) {
+    const double x = std::floor(v * sv * (1.0 - 1e-12));
+    return x <= 0.0 ? uint64_t{0} : static_cast<uint64_t>(std::min(x, 1e18));
+  };
+  ProfileFields& f = p.fields;
+  uint64_t vc = std::clamp<uint64_t>(lsb(p.v_cruise), 1, v_cap);
+  const uint64_t v_stop = std::min<uint64_t>(
+      std::max<uint64_t>(static_cast<uint64_t>(std::llround(p.v_stop * sv)), 1), vc);
+  const uint64_t v0 = std::min(lsb(v_entry), vc);
+  const uint64_t ve = std::min(std::max(lsb(v_exit), v_stop), vc);
+  const long double a = f.a;
+  const long double span = static_cast<long double>(f.n_dom) * std::ldexp(1.0L, kFracBits);
+  const long double tri =
+      (2.0L * a * span + static_cast<long double>(v0) * v0 + static_cast<long double>(ve) * ve) /
+      2.0L;
+  const long double vp2 = std::min(static_cast<long double>(vc) * vc, tri);
+  const long double vp = std::sqrt(vp2);
+  uint64_t d;
+  if (vp <= static_cast<long double>(ve)) {  // accelerate (or hold) up to V_exit: no decel
+    vc = ve;
+    d = f.n_dom;
+  } else if (vp <= static_cast<long double>(v0)) {  // decelerate from the first clock
+    vc = v0;
+    d = 0;
+  } else {
+    const long double dec =
+        (vp2 - static_cast<long double>(ve) * ve) / (2.0L * a * std::ldexp(1.0L, kFracBits));
+    const long double dd = std::floor(static_cast<long double>(f.n_dom) - dec);
+    d = dd <= 0 ? 0 : static_cast<uint64_t>(std::min<long double>(dd, f.n_dom));
+  }
+  f.v_entry = v0;
+  f.v_cruise = vc;
+  f.v_exit = ve;
+  f.d = static_cast<uint32_t>(d);
+  ProfileRun run = simulate_profile(f);
+  if (run.v_last > ve) {  // decelerate earlier: largest D whose exit rate is <= V_exit
+    ++st.d_adjusted;
+    uint64_t lo = 0, hi = d;  // exit(hi) too fast
+    f.d = 0;
+    if (simulate_profile(f).v_last > ve) {
+      ++st.exit_overshoot;
+      hi = 0;
+    }
+    while (hi - lo > 1) {
+      const uint64_t mid = lo + (hi - lo) / 2;
+      f.d = static_cast<uint32_t>(mid);
+      if (simulate_profile(f).v_last > ve) {
+        hi = mid;
+      } else {
+        lo = mid;
+      }
+    }
+    f.d = static_cast<uint32_t>(lo);
+    run = simulate_profile(f);
+  }
+  p.clocks = run.clocks;
+  p.v_last = run.v_last;
+  ++st.blocks;
+  st.total_clocks += run.clocks;
+  return p;
+}
+
+void Lookahead::stop() {
+  if (buf_.empty()) {
+    prev_exit_ = 0.0;
+    last_unit_.reset();
+    return;
+  }
+  const auto exits = plan_exits(buf_);
+  for (size_t k = 0; k < buf_.size(); ++k) {
+    const bool last = k + 1 == buf_.size();
+    out_.push_back(finalize(buf_[k], prev_exit_, last ? 0.0 : exits[k], last, stats_));
+    prev_exit_ = exits[k];
+  }
+  buf_.clear();
+  prev_exit_ = 0.0;
+  last_unit_.reset();
+}
+
+std::vector<Profile> Lookahead::take() {
+  std::vector<Profile> r;
+  r.swap(out_);
+  return r;
+}
+
+std::vector<Profile> Lookahead::preview() const {
+  std::vector<Profile> r;
+  ProfileStats scratch;
+  const auto exits = plan_exits(buf_);
+  double entry = prev_exit_;
+  for (size_t k = 0; k < buf_.size(); ++k) {
+    const bool last = k + 1 == buf_.size();
+    r.push_back(finalize(buf_[k], entry, last ? 0.0 : exits[k], last, scratch));
+    entry = exits[k];
+  }
+  return r;
+}
+
+ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg) {
+  ProfilePlan out;
+  Lookahead la(motion_limits(cfg));
+  auto drain = [&] {
+    for (auto& p : la.take()) out.items.emplace_back(std::move(p));
+  };
+  size_t seg_index = 0;
+  uint64_t dwell_clocks = 0;
+  for (const auto& item : plan.items) {
+    if (const auto* s = std::get_if<Segment>(&item)) {
+      try {
+        la.push(*s, seg_index);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(
+            fmt::format("segment {} (line {}): {}", seg_index, s->source_line, e.what()));
+      }
+      ++seg_index;
+      drain();
+    } else if (const auto* d = std::get_if<Dwell>(&item)) {
+      la.stop();
+      ++out.stats.forced_stops;
+      drain();
+      dwell_clocks +=
+          static_cast<uint64_t>(std::llround(d->seconds * static_cast<double>(cfg.clk_hz)));
+      out.items.emplace_back(*d);
+    } else if (const auto* h = std::get_if<HeaterCommand>(&item)) {
+      if (h->mcode == 109 || h->mcode == 190) {
+        la.stop();
+        ++out.stats.forced_stops;
+        drain();
+      }
+      out.items.emplace_back(*h);
+    }
+  }
+  la.stop();
+  drain();
+  const ProfileStats& ls = la.stats();
+  out.stats.blocks = ls.blocks;
+  out.stats.split_moves = ls.split_moves;
+  out.stats.a_clamped = ls.a_clamped;
+  out.stats.d_adjusted = ls.d_adjusted;
+  out.stats.exit_overshoot = ls.exit_overshoot;
+  out.stats.total_clocks = ls.total_clocks + dwell_clocks;
+  return out;
+}
+
+}  // namespace fpgacnc::plan
