@@ -436,3 +436,53 @@ TEST(Packer, ProfileJobFromCorpusFiles) {
   }
   EXPECT_GE(planned, 8u);
 }
+
+TEST(MotionConfig, KeysParseValidateAndExampleEqualsDefaults) {
+  const auto c = fpgacnc::config::parse_machine_config(
+      "motion = \"profile\"\njunction_deviation_mm = 0.05\nlookahead_segments = 16\n"
+      "[max_accel_mm_s2]\nx = 500\nz = 50.5\n",
+      "t.toml");
+  EXPECT_EQ(c.motion, "profile");
+  EXPECT_EQ(c.junction_deviation_mm, 0.05);
+  EXPECT_EQ(c.lookahead_segments, 16u);
+  EXPECT_EQ(c.max_accel_mm_s2[0], 500.0);
+  EXPECT_EQ(c.max_accel_mm_s2[1], 1000.0);  // default kept
+  EXPECT_EQ(c.max_accel_mm_s2[2], 50.5);
+  using fpgacnc::config::Error;
+  using fpgacnc::config::parse_machine_config;
+  EXPECT_THROW(parse_machine_config("motion = \"trapezoid\"\n", "t"), Error);
+  EXPECT_THROW(parse_machine_config("lookahead_segments = 0\n", "t"), Error);
+  EXPECT_THROW(parse_machine_config("junction_deviation_mm = -1\n", "t"), Error);
+  EXPECT_THROW(parse_machine_config("[max_accel_mm_s2]\ny = 0\n", "t"), Error);
+  EXPECT_THROW(parse_machine_config("[max_accel_mm_s2]\nq = 1\n", "t"), Error);
+  const auto ex = fpgacnc::config::load_machine_config(FPGACNC_HOST_DIR "/machine.example.toml");
+  const MachineConfig d;
+  EXPECT_EQ(ex.max_accel_mm_s2, d.max_accel_mm_s2);
+  EXPECT_EQ(ex.junction_deviation_mm, d.junction_deviation_mm);
+  EXPECT_EQ(ex.lookahead_segments, d.lookahead_segments);
+  EXPECT_EQ(ex.motion, d.motion);
+}
+
+TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
+  // motion = "constant" still packs LINE frames (same T as before this change: length/feed).
+  MachineConfig c;
+  c.laser_requires_m3 = false;
+  const auto plan =
+      pl::plan_program(fpgacnc::gcode::parse_string("G1 X2 Y-1 F1341.64\nG4 P0.001\n"), c, {});
+  const auto job = v2::pack_job(plan, c);
+  EXPECT_EQ(job.profiles, 0u);
+  ASSERT_EQ(job.lines, 1u);
+  // 2.236 mm at 1341.64 mm/min = 0.1 s = 5 000 000 clocks
+  EXPECT_NEAR(static_cast<double>(job.frames[1].t), 5e6, 10.0);
+  EXPECT_EQ(job.frames[1].frame.type, 0x10);
+  c.motion = "profile";
+  const auto jp = v2::pack_job(plan, c);
+  ASSERT_EQ(jp.profiles, 1u);
+  EXPECT_EQ(jp.frames[1].frame.type, v2::kTypeLineProfile);
+  EXPECT_EQ(jp.frames[2].frame.type, 0x11);  // DWELL after the stop
+  // The profile takes longer than the instant-speed constant feed, by about v/a:
+  // 22.36 mm/s at 1000 mm/s^2 (X limits; path accel 1000*L/dx = 1118) -> ~0.02 s more.
+  const double extra = (static_cast<double>(jp.frames[1].t) - 5e6) / 5e7;
+  EXPECT_GT(extra, 0.015);
+  EXPECT_LT(extra, 0.025);
+}
