@@ -376,23 +376,22 @@ TEST(Lookahead, LongMoveSplitBelow2To24) {
   ck.check_sequence(ps, plan);
 }
 
-TEST(Packer, LineProfileFrameLayout) {
+TEST(Packer, LineProfileFrameIsTheWorkedExample) {
+  // docs/protocol.md worked frame: seq 10, code 1, SHORT, power 255, V_entry 0,
+  // V_cruise 18 014 398 509, V_exit 10^9, A 18 014, D 288, X +320, Y -160.
   pl::ProfileFields f;
-  f.v_entry = 0x0102030405ULL;
-  f.v_cruise = 0x7A0B0C0D0E0FULL;
-  f.v_exit = 0x1112131415ULL;
-  f.a = 0x21222324;
-  f.d = 0x00313233;
-  const std::array<int32_t, 2> st{300, -2};
-  const auto fr = v2::line_profile(7, 1, 200, f, st);
-  EXPECT_EQ(fr.type, 0x12);
-  EXPECT_EQ(fr.seq, 7);
-  const std::vector<uint8_t> want{0x81, 200,  0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x7A, 0x0B, 0x0C,
-                                  0x0D, 0x0E, 0x0F, 0x00, 0x11, 0x12, 0x13, 0x14, 0x15, 0x21, 0x22,
-                                  0x23, 0x24, 0x00, 0x31, 0x32, 0x33, 0x01, 0x2C, 0xFF, 0xFE};
-  EXPECT_EQ(fr.payload, want);
+  f.v_entry = 0;
+  f.v_cruise = 18'014'398'509ULL;
+  f.v_exit = 1'000'000'000ULL;
+  f.a = 18'014;
+  f.d = 288;
+  const std::array<int32_t, 2> st{320, -160};
+  const auto fr = v2::line_profile(10, v2::to_line_profile(1, 255, f, st));
+  EXPECT_EQ(v2::hex(v2::encode(fr)),
+            "A5 20 0A 12 81 FF 00 00 00 00 00 00 00 04 31 BD E8 2D 00 00 3B 9A CA 00 00 00 46 5E "
+            "00 00 01 20 01 40 FF 60 51 62");
   const std::array<int32_t, 3> big{70000, 0, -1};
-  const auto fr2 = v2::line_profile(0, 0, 0, f, big);
+  const auto fr2 = v2::line_profile(0, v2::to_line_profile(0, 0, f, big));
   EXPECT_EQ(fr2.payload.size(), 28u + 12u);
   EXPECT_EQ(fr2.payload[0], 0x00);
 }
@@ -478,7 +477,7 @@ TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
   c.motion = "profile";
   const auto jp = v2::pack_job(plan, c);
   ASSERT_EQ(jp.profiles, 1u);
-  EXPECT_EQ(jp.frames[1].frame.type, v2::kTypeLineProfile);
+  EXPECT_EQ(jp.frames[1].frame.type, static_cast<uint8_t>(v2::Type::LineProfile));
   EXPECT_EQ(jp.frames[2].frame.type, 0x11);  // DWELL after the stop
   // The profile takes longer than the instant-speed constant feed, by about v/a:
   // 22.36 mm/s at 1000 mm/s^2 (X limits; path accel 1000*L/dx = 1118) -> ~0.02 s more.

@@ -61,10 +61,6 @@ uint16_t u16_timing(uint32_t v, const char* what) {
   return static_cast<uint16_t>(v);
 }
 
-void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
-  for (int i = bytes - 1; i >= 0; --i) p.push_back(static_cast<uint8_t>(v >> (8 * i)));
-}
-
 // The k of a segment: axes up to the last moving one, at least 2 (X, Y).
 size_t frame_axes(const plan::Steps4& steps) {
   size_t k = 2;
@@ -96,8 +92,8 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         job.target[a] += p->steps[a];
       }
       JobFrame jf;
-      jf.frame = line_profile(0, p->code, laser_power(s, cfg), p->fields,
-                              std::span<const int32_t>(s32.data(), k));
+      jf.frame = line_profile(0, to_line_profile(p->code, laser_power(s, cfg), p->fields,
+                                                 std::span<const int32_t>(s32.data(), k)));
       jf.segment_index = p->segment_index;
       jf.source_line = p->source_line;
       jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
@@ -144,32 +140,18 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
 
 }  // namespace
 
-Frame line_profile(uint8_t seq, uint8_t code, uint8_t power, const plan::ProfileFields& f,
-                   std::span<const int32_t> steps, bool short_if_fits) {
-  if (code > 3) throw std::invalid_argument("LINE_PROFILE frame: motion code > 3");
-  bool fits16 = short_if_fits;
-  for (const int32_t v : steps) {
-    if (v < INT16_MIN || v > INT16_MAX) fits16 = false;
-  }
-  const size_t w = fits16 ? 2 : 4;
-  if (28 + steps.size() * w > kMaxPayload) {
-    throw std::invalid_argument(
-        fmt::format("LINE_PROFILE frame: {} axes of {} bytes exceed {} bytes of payload",
-                    steps.size(), w, kMaxPayload));
-  }
-  Frame fr;
-  fr.seq = seq;
-  fr.type = kTypeLineProfile;
-  auto& p = fr.payload;
-  p.push_back(static_cast<uint8_t>(code | (fits16 ? kLineShort : 0)));
-  p.push_back(power);
-  put_be(p, f.v_entry, 6);
-  put_be(p, f.v_cruise, 6);
-  put_be(p, f.v_exit, 6);
-  put_be(p, f.a, 4);
-  put_be(p, f.d, 4);
-  for (const int32_t v : steps) put_be(p, static_cast<uint32_t>(v), static_cast<int>(w));
-  return fr;
+LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
+                            std::span<const int32_t> steps) {
+  LineProfile lp;
+  lp.code = code;
+  lp.power = power;
+  lp.v_entry = f.v_entry;
+  lp.v_cruise = f.v_cruise;
+  lp.v_exit = f.v_exit;
+  lp.accel = f.a;
+  lp.decel_at = f.d;
+  lp.steps.assign(steps.begin(), steps.end());
+  return lp;
 }
 
 uint32_t min_period(const config::StepTiming& t) {

@@ -2,9 +2,9 @@
 //
 // - cfg.motion == "profile": the plan goes through the look-ahead planner
 //   (plan::plan_profiles, docs/motion.md) and every block becomes a LINE_PROFILE frame (TYPE
-//   0x12: flags, power, V_entry/V_cruise/V_exit u48, A u32, D u32, steps; SHORT and k as for
-//   LINE); its JobFrame.t is the exact clock count of the hardware recurrence (saturated at
-//   UINT32_MAX; total_t sums the exact counts). The rest of this list is the "constant" mode.
+//   0x12, docs/protocol.md; SHORT and k as for LINE); its JobFrame.t is the exact clock count of
+//   the hardware recurrence (saturated at UINT32_MAX; total_t sums the exact counts). The rest of
+//   this list is the "constant" mode.
 // - Every planned segment becomes a LINE frame: SHORT (int16 steps) when every count fits,
 //   else int32; k = axes up to the last moving one, at least 2 (X, Y); Z and E are driven.
 // - Laser power: 0 for code 0 (rapid / laser off); else the S word in force scaled by
@@ -69,12 +69,9 @@ struct Job {
 // (step timing over 65535 clocks, motion code > 3, a segment that cannot be split).
 Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg);
 
-// LINE_PROFILE (TYPE 0x12) frame, payload per docs/protocol.md "LINE_PROFILE" (28 + k*w bytes,
-// big-endian): flags (code | 0x80 SHORT), power, V_entry, V_cruise, V_exit (u48), A, D (u32),
-// steps of axes 0..k-1. Local builder of the packer until the codec has one (prof).
-constexpr uint8_t kTypeLineProfile = 0x12;
-Frame line_profile(uint8_t seq, uint8_t code, uint8_t power, const plan::ProfileFields& f,
-                   std::span<const int32_t> steps, bool short_if_fits = true);
+// The LINE_PROFILE of one planned block (codec: v2::line_profile builds the frame).
+LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
+                            std::span<const int32_t> steps);
 
 // Job time estimates (seconds) at the same feeds: v1 stop-and-wait (each move at its v1 feed
 // word, T = floor(NUMERATOR_dom / feed) * n_dom over X/Y, plus `v1_overhead_clocks` per move for
