@@ -97,6 +97,8 @@ struct Checker {
   pl::MotionLimits lim;
   size_t checked = 0;
   double worst_junction_mismatch_lsb = 0.0;
+  double worst_jump_up_clocks = 0.0, worst_jump_down_clocks = 0.0;
+  double worst_tail_steps = 0.0;
 
   explicit Checker(const MachineConfig& cfg) : c(cfg), lim(pl::motion_limits(cfg)) {}
 
@@ -143,6 +145,20 @@ struct Checker {
     EXPECT_EQ(run.clocks, p.clocks) << where;
     EXPECT_LE(run.v_peak, f.v_cruise) << where;
     EXPECT_LE(run.v_last, f.v_exit) << where << ": exit faster than planned";
+    // Deceleration starts late enough: after the last clock above V_exit at most 2 + V_peak
+    // dominant steps remain at V_exit (D rounds down by < 1 step, which also lowers a triangle
+    // peak by up to one step of deceleration; the staircase covers up to about V_peak
+    // less than the continuous ramp).
+    const auto kn = pl::simulate_profile(f, true);
+    if (kn.v_peak > f.v_exit) {
+      uint64_t since = 0;
+      for (const auto& [clk, v] : kn.knots) {
+        if (v > f.v_exit) since = clk + 1;
+      }
+      const double tail_steps = static_cast<double>(kn.clocks - since) * f.v_exit / kOne;
+      EXPECT_LE(tail_steps, 2.5) << where << ": tail at V_exit";
+      worst_tail_steps = std::max(worst_tail_steps, tail_steps);
+    }
     EXPECT_LE(f.v_entry / sv, p.v_entry * (1 + 1e-9)) << where;
     ++checked;
     return sv;
@@ -269,7 +285,7 @@ TEST(Junction, DeviationFormula) {
 TEST(Lookahead, RandomMovesRespectLimitsAndJunctions) {
   std::mt19937_64 rng(seed_from_env(6002));
   size_t total = 0;
-  double worst = 0;
+  double worst = 0, jump_up = 0, jump_down = 0, tail = 0;
   for (int job = 0; job < 12; ++job) {
     const MachineConfig c = random_machine(rng);
     const pl::Plan plan = random_plan(rng, c, 400);
@@ -280,13 +296,20 @@ TEST(Lookahead, RandomMovesRespectLimitsAndJunctions) {
     ck.check_sequence(profiles_of(pp), plan);
     total += ck.checked;
     worst = std::max(worst, ck.worst_junction_mismatch_lsb);
+    jump_up = std::max(jump_up, ck.worst_jump_up_clocks);
+    jump_down = std::max(jump_down, ck.worst_jump_down_clocks);
+    tail = std::max(tail, ck.worst_tail_steps);
     if (HasFailure()) {
       std::printf("failed in job %d (window %u, jd %g)\n", job, c.lookahead_segments,
                   c.junction_deviation_mm);
       return;
     }
   }
-  std::printf("%zu profiles checked, worst junction mismatch %.3f LSB\n", total, worst);
+  std::printf(
+      "%zu profiles checked, worst junction mismatch %.3f LSB; executed speed step at a "
+      "junction: up %.3f, down %.3f clocks of acceleration; longest tail at V_exit %.3f "
+      "dominant steps\n",
+      total, worst, jump_up, jump_down, tail);
 }
 
 TEST(Lookahead, EveryPrefixCanStopAndEmittedProfilesAreFinal) {
@@ -419,6 +442,23 @@ TEST(Packer, ProfileJobFromCorpusFiles) {
     EXPECT_EQ(job.lines, 0u) << name;
     EXPECT_GT(job.profiles, 0u) << name;
     EXPECT_EQ(job.target, plan.final_steps) << name;
+    // Tail at V_exit at the end of each stop: the staircase reaches V_exit a little before the
+    // end (D rounds down), the rest runs at V_exit.
+    const auto pp = pl::plan_profiles(plan, c);
+    double worst_tail_ms = 0.0;
+    for (const auto& p : profiles_of(pp)) {
+      if (!p.stop_after) continue;
+      const auto run = pl::simulate_profile(p.fields, true);
+      if (run.v_peak <= p.fields.v_exit) continue;  // the whole segment at V_exit: no tail
+      uint64_t since = 0;  // first clock at V_exit after the last clock above it
+      for (const auto& [clk, v] : run.knots) {
+        if (v > p.fields.v_exit) since = clk + 1;
+      }
+      worst_tail_ms = std::max(worst_tail_ms, (run.clocks - since) / 5e4);
+    }
+    EXPECT_LT(worst_tail_ms, 10.0) << name;
+    std::printf("%s: longest run at V_exit at the end of a stop %.3f ms\n", name.c_str(),
+                worst_tail_ms);
     size_t profile_frames = 0;
     for (const auto& jf : job.frames) {
       if (!jf.profile) continue;

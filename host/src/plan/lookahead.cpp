@@ -371,16 +371,15 @@ Profile Lookahead::finalize(const Block& b, double v_entry, double v_exit, bool 
   const long double tri =
       (2.0L * a * span + static_cast<long double>(v0) * v0 + static_cast<long double>(ve) * ve) /
       2.0L;
-  const long double vp2 = std::min(static_cast<long double>(vc) * vc, tri);
-  const long double vp = std::sqrt(vp2);
+  // Peak of the trapezoid: the cruise rate, or where the acceleration and deceleration ramps
+  // meet (never below the entry: a segment that must decelerate all along peaks at V_entry).
+  const long double vp2 =
+      std::max(std::min(static_cast<long double>(vc) * vc, tri), static_cast<long double>(v0) * v0);
   uint64_t d;
-  if (vp <= static_cast<long double>(ve)) {  // accelerate (or hold) up to V_exit: no decel
+  if (vp2 <= static_cast<long double>(ve) * ve) {  // accelerate (or hold) up to V_exit: no decel
     vc = ve;
     d = f.n_dom;
-  } else if (vp <= static_cast<long double>(v0)) {  // decelerate from the first clock
-    vc = v0;
-    d = 0;
-  } else {
+  } else {  // deceleration from the peak to V_exit starts at D (rounded down: early enough)
     const long double dec =
         (vp2 - static_cast<long double>(ve) * ve) / (2.0L * a * std::ldexp(1.0L, kFracBits));
     const long double dd = std::floor(static_cast<long double>(f.n_dom) - dec);
