@@ -95,14 +95,18 @@ void print_times(const plan::Plan& p, const config::MachineConfig& cfg) {
       p.source, cfg.max_accel_mm_s2[0], cfg.max_accel_mm_s2[1], cfg.max_accel_mm_s2[2],
       cfg.max_accel_mm_s2[3], cfg.junction_deviation_mm, cfg.lookahead_segments);
   fmt::print("  {:<42} {:>8} {:>14} {:>12}\n", "mode", "frames", "clocks", "seconds");
-  fmt::print(
-      "  {:<42} {:>8} {:>14} {:>12.3f}\n",
-      fmt::format("v1 stop-and-wait (+{} clocks/move)", protocol::v2::kV1OverheadClocks115200),
-      t.v1_moves, t.v1_clocks, t.v1_s);
+  fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n",
+             fmt::format("v1 stop-and-wait, X/Y only (+{} clk/move)",
+                         protocol::v2::kV1OverheadClocks115200),
+             t.v1_moves, t.v1_clocks, t.v1_s);
   fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n", "v2 constant feed (LINE, zero gap)", t.v2_lines,
              t.v2_constant_clocks, t.v2_constant_s);
   fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n", "v2 planned (LINE_PROFILE, zero gap)",
              t.v2_profiles, t.v2_profile_clocks, t.v2_profile_s);
+  if (p.stats.ze_only_moves) {
+    fmt::print("  (v1 does not drive Z/E: its {} Z/E-only moves take only the per-move overhead)\n",
+               p.stats.ze_only_moves);
+  }
 }
 
 void run_plan(const PlanArgs& a) {
