@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 namespace fpgacnc::plan {
@@ -62,13 +63,28 @@ const char* profile_field_error(const ProfileFields& f) {
   return nullptr;
 }
 
+namespace {
+Recurrence to_recurrence(const ProfileFields& f) {
+  return Recurrence{f.n_dom, f.v_entry, f.v_cruise, f.v_exit, f.a, f.d};
+}
+}  // namespace
+
 ProfileRun simulate_profile(const ProfileFields& f, bool record_knots) {
   if (const char* e = profile_field_error(f)) {
     throw std::invalid_argument(fmt::format("profile fields: {}", e));
   }
+  return simulate_recurrence(to_recurrence(f), record_knots);
+}
+
+ProfileRun simulate_recurrence(const Recurrence& f, bool record_knots) {
+  if (f.n_end < 1 || f.n_end > kMaxArcCost || f.v_cruise > kMaxArcV || f.a > kMaxArcA ||
+      f.v_entry > f.v_cruise || f.v_exit > f.v_cruise || f.v_exit < 1 ||
+      (f.a < 1 && f.v_entry < 1)) {
+    throw std::invalid_argument("recurrence fields out of range");
+  }
   ProfileRun r;
-  const i128 n_end = static_cast<i128>(f.n_dom) * kOne;
-  const i128 d_start = static_cast<i128>(f.d) * kOne;
+  const i128 n_end = static_cast<i128>(f.n_end) * kOne;
+  const i128 d_start = static_cast<i128>(std::min<uint64_t>(f.d, f.n_end)) * kOne;
   const auto a = static_cast<int64_t>(f.a);
   const auto vc = static_cast<int64_t>(f.v_cruise);
   const auto ve = static_cast<int64_t>(f.v_exit);
@@ -217,14 +233,45 @@ Lookahead::Lookahead(const MotionLimits& lim) : lim_(lim) {
   lim_.window = std::max<size_t>(lim_.window, 1);
 }
 
+void Lookahead::set_block_rates(Block& b, double n_units, double vc, double acc, uint64_t v_cap,
+                                uint64_t a_max) {
+  Profile& p = b.p;
+  const double clk = static_cast<double>(lim_.clk_hz);
+  const double one = std::ldexp(1.0, kFracBits);
+  const double len = p.length_mm;
+  b.scale_v = n_units / len / clk * one;   // LSB per mm/s
+  const double scale_a = b.scale_v / clk;  // LSB per mm/s^2
+  b.v_cap = v_cap;
+  vc = std::min(vc, static_cast<double>(v_cap) / b.scale_v);
+  const double a_lsb = std::floor(acc * scale_a);
+  uint64_t a_int;
+  if (a_lsb < 1.0) {
+    a_int = 1;
+    ++stats_.a_clamped;
+  } else {
+    a_int = static_cast<uint64_t>(std::min(a_lsb, static_cast<double>(a_max)));
+  }
+  p.rec.a = a_int;
+  p.rec.n_end = static_cast<uint64_t>(n_units);
+  p.accel = static_cast<double>(a_int) / scale_a;
+  p.v_cruise = vc;
+  // Stop speed: the rate one path unit of acceleration gives, sqrt(2 A) in real units.
+  b.v_stop = isqrt_ceil(static_cast<i128>(a_int) << (kFracBits + 1));
+  p.v_stop = static_cast<double>(b.v_stop) / b.scale_v;
+  p.lsb_mm_s = 1.0 / b.scale_v;
+  // Speed changes are planned over L minus a margin of 2 V_cruise (units per clock) + 2^-16
+  // units: the clock staircase covers up to about one V of distance differently from the
+  // continuous ramp (docs/motion.md).
+  const double mu = 2.0 * vc * b.scale_v / one + std::ldexp(1.0, -16);
+  b.l_eff = len * std::max(0.0, n_units - mu) / n_units;
+}
+
 void Lookahead::push(const Segment& s, size_t segment_index) {
   int64_t n_dom = 0;
   for (size_t a = 0; a < 4; ++a) n_dom = std::max(n_dom, iabs(s.steps[a]));
   if (n_dom == 0) return;
   const int64_t parts = (n_dom + kMaxProfileSteps - 1) / kMaxProfileSteps;
   if (parts > 1) ++stats_.split_moves;
-  const double clk = static_cast<double>(lim_.clk_hz);
-  const double one = std::ldexp(1.0, kFracBits);
   for (int64_t k = 1; k <= parts; ++k) {
     Block b;
     Profile& p = b.p;
@@ -257,6 +304,7 @@ void Lookahead::push(const Segment& s, size_t segment_index) {
       p.length_mm = std::fabs(d[3]);
       b.unit[3] = d[3] > 0 ? 1.0 : -1.0;
     }
+    b.unit_out = b.unit;
     const double len = p.length_mm;
     double vc = feed;
     double acc = std::numeric_limits<double>::infinity();
@@ -266,41 +314,117 @@ void Lookahead::push(const Segment& s, size_t segment_index) {
       vc = std::min(vc, lim_.v_max[a] / r);
       acc = std::min(acc, lim_.a_max[a] / r);
     }
-    b.scale_v = static_cast<double>(n) / len / clk * one;  // LSB per mm/s
-    const double scale_a = b.scale_v / clk;                // LSB per mm/s^2
     const uint64_t v_cap =
         std::min<uint64_t>(kMaxVCruise, (uint64_t{1} << kFracBits) / lim_.min_period);
-    vc = std::min(vc, static_cast<double>(v_cap) / b.scale_v);
-    const double a_lsb = std::floor(acc * scale_a);
-    uint64_t a_int;
-    if (a_lsb < 1.0) {
-      a_int = 1;
-      ++stats_.a_clamped;
-    } else {
-      a_int = static_cast<uint64_t>(std::min(a_lsb, static_cast<double>(kMaxA)));
-    }
-    p.fields.a = static_cast<uint32_t>(a_int);
+    set_block_rates(b, static_cast<double>(n), vc, acc, v_cap, kMaxA);
     p.fields.n_dom = static_cast<uint32_t>(n);
-    p.accel = static_cast<double>(a_int) / scale_a;
-    p.v_cruise = vc;
-    // Stop speed: the rate one dominant step of acceleration gives, sqrt(2 A) in real units.
-    const uint64_t v_stop = isqrt_ceil(static_cast<i128>(a_int) << (kFracBits + 1));
-    p.v_stop = static_cast<double>(v_stop) / b.scale_v;
-    p.lsb_mm_s = 1.0 / b.scale_v;
-    // Speed changes are planned over L minus a margin of 2 V_cruise (steps per clock) + 2^-16
-    // dominant steps: the clock staircase covers up to about one V of distance differently
-    // from the continuous ramp (docs/motion.md).
-    const double mu = 2.0 * vc * b.scale_v / one + std::ldexp(1.0, -16);
-    b.l_eff = len * std::max(0.0, static_cast<double>(n) - mu) / static_cast<double>(n);
     add_block(std::move(b));
   }
+}
+
+bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chords,
+                         size_t first_index) {
+  if (!lim_.arc_walk || chords.empty()) return false;
+  const auto& spm = lim_.steps_per_mm;
+  if (spm[0] != spm[1]) return false;  // a circle in mm is an ellipse on the step lattice
+  const Segment& first = chords.front();
+  const Segment& last = chords.back();
+  Steps4 start{};
+  for (size_t a = 0; a < 4; ++a) start[a] = first.target[a] - first.steps[a];
+  const int64_t dx = last.target[0] - start[0], dy = last.target[1] - start[1];
+  const int64_t dz = last.target[2] - start[2], de = last.target[3] - start[3];
+  if (de != 0) return false;  // ARC carries no E
+  const int64_t cx = std::llround(m.center[0] * spm[0]), cy = std::llround(m.center[1] * spm[1]);
+  const int64_t i = cx - start[0], j = cy - start[1];
+  const bool full = dx == 0 && dy == 0;
+  if (full != m.full_circle) return false;  // the end rounds onto the start: no native arc
+  constexpr int64_t kLim = int64_t{1} << 22;
+  if ((i == 0 && j == 0) || (dx == i && dy == j)) return false;
+  if (iabs(i) >= kLim || iabs(j) >= kLim || iabs(dx - i) >= kLim || iabs(dy - j) >= kLim) {
+    return false;
+  }
+  if (iabs(dz) > std::numeric_limits<int32_t>::max()) return false;
+  const double r0 = std::hypot(static_cast<double>(i), static_cast<double>(j));
+  const double r1 = std::hypot(static_cast<double>(dx - i), static_cast<double>(dy - j));
+  if (std::fabs(r1 - r0) > 2.0) return false;  // inconsistent arc: chords
+  const bool cw = m.motion == gcode::Motion::kArcCw;
+  ArcFields af;
+  af.code = cw ? 2 : 3;
+  af.i = static_cast<int32_t>(i);
+  af.j = static_cast<int32_t>(j);
+  af.dx = static_cast<int32_t>(dx);
+  af.dy = static_cast<int32_t>(dy);
+  af.dz = static_cast<int32_t>(dz);
+  const auto walk = lim_.arc_walk(af);
+  if (!walk || walk->second < 1 || walk->second > kMaxArcCost) return false;
+  af.n_ramp = walk->first;
+  af.c_total = walk->second;
+
+  // Geometry relative to the centre: start p0 = (-i, -j), end p1 = (dx - i, dy - j).
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  const double a0 = std::atan2(static_cast<double>(-j), static_cast<double>(-i));
+  const double a1 = std::atan2(static_cast<double>(dy - j), static_cast<double>(dx - i));
+  double sweep;
+  if (full) {
+    sweep = kTwoPi;
+  } else {
+    sweep = cw ? a0 - a1 : a1 - a0;
+    if (sweep <= 0.0) sweep += kTwoPi;
+  }
+  const double lxy_steps = 0.5 * (r0 + r1) * sweep;  // spiral: mean radius
+  const double lxy = lxy_steps / spm[0];             // mm
+  const double dz_mm = static_cast<double>(dz) / spm[2];
+  Block b;
+  Profile& p = b.p;
+  p.segment_index = first_index;
+  p.source_line = m.line;
+  p.code = first.code == 0 ? 0 : af.code;
+  p.spindle_s = first.spindle_s;
+  p.arc = true;
+  p.arc_fields = af;
+  p.steps = {dx, dy, dz, 0};
+  p.length_mm = std::hypot(lxy, dz_mm);
+  const double len = p.length_mm;
+  const double fxy = lxy / len;  // XY speed / path speed
+  auto tangent = [&](double px, double py, std::array<double, 4>& u) {
+    const double r = std::hypot(px, py);
+    const double tx = cw ? py / r : -py / r, ty = cw ? -px / r : px / r;
+    u = {tx * fxy, ty * fxy, dz_mm / len, 0.0};
+  };
+  tangent(static_cast<double>(-i), static_cast<double>(-j), b.unit);
+  tangent(static_cast<double>(dx - i), static_cast<double>(dy - j), b.unit_out);
+  const double feed =
+      first.exec_feed_mm_min > 0.0 ? first.exec_feed_mm_min / 60.0 : first.feed_v1 / 60.0;
+  // The tangent sweeps every XY direction: the XY speed and acceleration are held to the
+  // smaller X/Y limit; the centripetal acceleration v_xy^2 / R to half of it and the tangential
+  // to sqrt(3)/2 of it (their vector sum stays within the limit).
+  const double a_xy = std::min(lim_.a_max[0], lim_.a_max[1]);
+  const double r_mm = std::min(r0, r1) / spm[0];
+  double vc = std::min(
+      {feed, std::min(lim_.v_max[0], lim_.v_max[1]) / fxy, std::sqrt(0.5 * a_xy * r_mm) / fxy});
+  double acc = 0.5 * std::sqrt(3.0) * a_xy / fxy;
+  if (dz != 0) {
+    const double fz = std::fabs(dz_mm) / len;
+    vc = std::min(vc, lim_.v_max[2] / fz);
+    acc = std::min(acc, lim_.a_max[2] / fz);
+  }
+  // Step rates: an XY lattice move steps each axis at most once, so the move rate is at most
+  // the tangential rate in steps per clock: keep it below 1 / min_period (and 1/2); Z likewise.
+  const double clk = static_cast<double>(lim_.clk_hz);
+  const double max_steps_per_clock = std::min(0.5, 1.0 / lim_.min_period);
+  vc = std::min(vc, max_steps_per_clock * clk / spm[0] / fxy);
+  if (dz != 0) vc = std::min(vc, max_steps_per_clock * clk / spm[2] * len / std::fabs(dz_mm));
+  set_block_rates(b, static_cast<double>(af.c_total), vc, acc, kMaxArcV, kMaxArcA);
+  ++stats_.arcs;
+  add_block(std::move(b));
+  return true;
 }
 
 void Lookahead::add_block(Block b) {
   const std::array<double, 4>* prev_unit = nullptr;
   double prev_vc = 0.0;
   if (!buf_.empty()) {
-    prev_unit = &buf_.back().unit;
+    prev_unit = &buf_.back().unit_out;
     prev_vc = buf_.back().p.v_cruise;
   } else if (last_unit_) {
     prev_unit = &*last_unit_;
@@ -318,7 +442,7 @@ void Lookahead::add_block(Block b) {
     const Block& f = buf_.front();
     out_.push_back(finalize(f, prev_exit_, exits[0], false, stats_));
     prev_exit_ = exits[0];
-    last_unit_ = f.unit;
+    last_unit_ = f.unit_out;
     last_vc_ = f.p.v_cruise;
     buf_.pop_front();
   }
@@ -352,63 +476,67 @@ Profile Lookahead::finalize(const Block& b, double v_entry, double v_exit, bool 
   p.v_exit = v_exit;
   p.stop_after = stop_after;
   const double sv = b.scale_v;
-  const uint64_t v_cap =
-      std::min<uint64_t>(kMaxVCruise, (uint64_t{1} << kFracBits) / lim_.min_period);
   // Rounding: every rate DOWN (never faster than planned); a 1e-12 relative shrink keeps a
   // product that lands a hair above an integer from rounding up.
   auto lsb = [&](double v) {
     const double x = std::floor(v * sv * (1.0 - 1e-12));
-    return x <= 0.0 ? uint64_t{0} : static_cast<uint64_t>(std::min(x, 1e18));
+    return x <= 0.0 ? uint64_t{0} : static_cast<uint64_t>(std::min(x, 9e18));
   };
-  ProfileFields& f = p.fields;
-  uint64_t vc = std::clamp<uint64_t>(lsb(p.v_cruise), 1, v_cap);
-  const uint64_t v_stop = std::min<uint64_t>(
-      std::max<uint64_t>(static_cast<uint64_t>(std::llround(p.v_stop * sv)), 1), vc);
+  Recurrence& f = p.rec;
+  uint64_t vc = std::clamp<uint64_t>(lsb(p.v_cruise), 1, b.v_cap);
+  const uint64_t v_stop = std::min<uint64_t>(std::max<uint64_t>(b.v_stop, 1), vc);
   const uint64_t v0 = std::min(lsb(v_entry), vc);
   const uint64_t ve = std::min(std::max(lsb(v_exit), v_stop), vc);
-  const long double a = f.a;
-  const long double span = static_cast<long double>(f.n_dom) * std::ldexp(1.0L, kFracBits);
-  const long double tri =
-      (2.0L * a * span + static_cast<long double>(v0) * v0 + static_cast<long double>(ve) * ve) /
-      2.0L;
+  const long double a = static_cast<long double>(f.a);
+  const long double one = std::ldexp(1.0L, kFracBits);
+  const long double span = static_cast<long double>(f.n_end) * one;
+  const long double v0l = static_cast<long double>(v0), vel = static_cast<long double>(ve);
+  const long double vcl = static_cast<long double>(vc);
+  const long double tri = (2.0L * a * span + v0l * v0l + vel * vel) / 2.0L;
   // Peak of the trapezoid: the cruise rate, or where the acceleration and deceleration ramps
   // meet (never below the entry: a segment that must decelerate all along peaks at V_entry).
-  const long double vp2 =
-      std::max(std::min(static_cast<long double>(vc) * vc, tri), static_cast<long double>(v0) * v0);
+  const long double vp2 = std::max(std::min(vcl * vcl, tri), v0l * v0l);
   uint64_t d;
-  if (vp2 <= static_cast<long double>(ve) * ve) {  // accelerate (or hold) up to V_exit: no decel
+  if (vp2 <= vel * vel) {  // accelerate (or hold) up to V_exit: no deceleration
     vc = ve;
-    d = f.n_dom;
+    d = f.n_end;
   } else {  // deceleration from the peak to V_exit starts at D (rounded down: early enough)
-    const long double dec =
-        (vp2 - static_cast<long double>(ve) * ve) / (2.0L * a * std::ldexp(1.0L, kFracBits));
-    const long double dd = std::floor(static_cast<long double>(f.n_dom) - dec);
-    d = dd <= 0 ? 0 : static_cast<uint64_t>(std::min<long double>(dd, f.n_dom));
+    const long double dec = (vp2 - vel * vel) / (2.0L * a * one);
+    const long double dd = std::floor(static_cast<long double>(f.n_end) - dec);
+    d = dd <= 0 ? 0 : static_cast<uint64_t>(std::min<long double>(dd, f.n_end));
   }
   f.v_entry = v0;
   f.v_cruise = vc;
   f.v_exit = ve;
-  f.d = static_cast<uint32_t>(d);
-  ProfileRun run = simulate_profile(f);
+  f.d = d;
+  ProfileRun run = simulate_recurrence(f);
   if (run.v_last > ve) {  // decelerate earlier: largest D whose exit rate is <= V_exit
     ++st.d_adjusted;
     uint64_t lo = 0, hi = d;  // exit(hi) too fast
     f.d = 0;
-    if (simulate_profile(f).v_last > ve) {
+    if (simulate_recurrence(f).v_last > ve) {
       ++st.exit_overshoot;
       hi = 0;
     }
     while (hi - lo > 1) {
       const uint64_t mid = lo + (hi - lo) / 2;
-      f.d = static_cast<uint32_t>(mid);
-      if (simulate_profile(f).v_last > ve) {
+      f.d = mid;
+      if (simulate_recurrence(f).v_last > ve) {
         hi = mid;
       } else {
         lo = mid;
       }
     }
-    f.d = static_cast<uint32_t>(lo);
-    run = simulate_profile(f);
+    f.d = lo;
+    run = simulate_recurrence(f);
+  }
+  if (!p.arc) {
+    p.fields.v_entry = f.v_entry;
+    p.fields.v_cruise = f.v_cruise;
+    p.fields.v_exit = f.v_exit;
+    p.fields.a = static_cast<uint32_t>(f.a);
+    p.fields.d = static_cast<uint32_t>(f.d);
+    p.fields.n_dom = static_cast<uint32_t>(f.n_end);
   }
   p.clocks = run.clocks;
   p.v_last = run.v_last;

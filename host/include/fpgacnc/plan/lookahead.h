@@ -24,6 +24,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <variant>
 #include <vector>
@@ -46,6 +47,26 @@ struct ProfileFields {
   uint32_t n_dom = 0;
 };
 
+// The recurrence in general form: n_end path units (n_dom dominant steps for a line, C_TOTAL
+// cost units for an arc), rates in 2^-48 units per clock, A in 2^-48 units per clock^2, D units.
+struct Recurrence {
+  uint64_t n_end = 0;
+  uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;  // < 2^63
+  uint64_t a = 0;                                  // < 2^48
+  uint64_t d = 0;
+};
+
+// ARC frame geometry (docs/protocol.md "ARC"): steps relative to the arc's start.
+struct ArcFields {
+  uint8_t code = 2;  // 2 = G2 (CW), 3 = G3 (CCW)
+  int32_t i = 0, j = 0, dx = 0, dy = 0, dz = 0;
+  uint32_t n_ramp = 0;
+  uint64_t c_total = 0;
+};
+inline constexpr uint64_t kMaxArcV = (uint64_t{1} << 63) - 1;
+inline constexpr uint64_t kMaxArcA = (uint64_t{1} << 48) - 1;
+inline constexpr uint64_t kMaxArcCost = (uint64_t{1} << 46) - 1;
+
 // Exact result of the hardware recurrence for one profiled segment.
 struct ProfileRun {
   uint64_t clocks = 0;  // clocks from the segment's first clock to its end (U >= n_dom * 2^48)
@@ -59,6 +80,7 @@ struct ProfileRun {
 // Throws std::invalid_argument when the fields break the device's limits (prof.md) or the
 // segment would never end. Cost: O(phases * log) (binary searches over 128-bit quadratics).
 ProfileRun simulate_profile(const ProfileFields& f, bool record_knots = false);
+ProfileRun simulate_recurrence(const Recurrence& r, bool record_knots = false);
 // Same by stepping every clock (reference for tests; only for short segments).
 ProfileRun simulate_profile_naive(const ProfileFields& f);
 // Why the device would NAK these fields (BAD_FIELD), or nullptr when acceptable.
@@ -72,6 +94,10 @@ struct MotionLimits {
   size_t window = 64;
   uint64_t clk_hz = 50'000'000;
   uint32_t min_period = 200;  // STEP high + low, clocks: caps the dominant step rate
+  // Native arcs (ARC frames): the reference walk of the arc helper (N_RAMP and C_TOTAL for
+  // the geometry in `f`, code/i/j/dx/dy set; nullopt when the walk cannot close the arc).
+  // Empty: arcs stay chords.
+  std::function<std::optional<std::pair<uint32_t, uint64_t>>(const ArcFields& f)> arc_walk;
 };
 MotionLimits motion_limits(const config::MachineConfig& cfg);
 
@@ -88,7 +114,10 @@ struct Profile {
   double v_stop = 0.0;      // stop speed of this block, mm/s (V_stop converted)
   double lsb_mm_s = 0.0;    // mm/s of one V LSB in this block (1 / scale)
   bool stop_after = false;  // planned to stop at its end (exit = V_stop)
-  ProfileFields fields;
+  ProfileFields fields;     // LINE_PROFILE (lines)
+  bool arc = false;         // an ARC frame: arc_fields + rec, `fields` unused
+  ArcFields arc_fields;
+  Recurrence rec;       // the recurrence actually sent (lines: the same values as `fields`)
   uint64_t clocks = 0;  // simulate_profile(fields).clocks
   uint64_t v_last = 0;  // simulate_profile(fields).v_last
 };
@@ -101,6 +130,8 @@ struct ProfileStats {
   uint64_t d_adjusted = 0;      // D lowered after the exact check (exit rate was above V_exit)
   uint64_t exit_overshoot = 0;  // could not bring the exit down to V_exit even with D = 0
   uint64_t total_clocks = 0;    // sum of block clocks + dwell clocks
+  uint64_t arcs = 0;            // ARC blocks
+  uint64_t arcs_as_chords = 0;  // arcs that could not be sent natively (chords instead)
 };
 
 using ProfileItem = std::variant<Profile, Dwell, HeaterCommand>;
@@ -117,6 +148,10 @@ class Lookahead {
   explicit Lookahead(const MotionLimits& lim);
   // Adds one plan segment (split into blocks if needed); emitted profiles go to out().
   void push(const Segment& s, size_t segment_index);
+  // Adds one G2/G3 move as an ARC block from its chord segments (consecutive, all with the
+  // move's arc_id; first_index = the first chord's segment index). Returns false (nothing
+  // added) when the arc cannot be sent natively: the caller pushes the chords instead.
+  bool push_arc(const gcode::Move& m, const std::vector<Segment>& chords, size_t first_index);
   void stop();
   // Profiles final so far (moved out).
   std::vector<Profile> take();
@@ -132,8 +167,14 @@ class Lookahead {
     double scale_v = 0.0;          // LSB per mm/s
     double l_eff = 0.0;            // length used for speed changes, mm (L minus a safety margin)
     double v_junction_max = 0.0;   // entry junction limit, mm/s
-    std::array<double, 4> unit{};  // path direction (XYZ, or E alone)
+    std::array<double, 4> unit{};  // path direction at the start (XYZ, or E alone)
+    std::array<double, 4> unit_out{};  // at the end (= unit for a line)
+    uint64_t v_cap = 0;                // largest V field (LSB)
+    uint64_t v_stop = 0;               // stop rate (LSB)
   };
+  // Fills scale, A, stop rate, margin of a block of n_units path units and length p.length_mm.
+  void set_block_rates(Block& b, double n_units, double vc, double acc, uint64_t v_cap,
+                       uint64_t a_max);
   void add_block(Block b);
   // Plans buf_[0..] from entry prev_exit_ to a stop at the end; returns exit speeds.
   std::vector<double> plan_exits(const std::deque<Block>& buf) const;
@@ -141,7 +182,7 @@ class Lookahead {
                    ProfileStats& st) const;
   MotionLimits lim_;
   std::deque<Block> buf_;
-  std::optional<std::array<double, 4>> last_unit_;  // direction of the last emitted block
+  std::optional<std::array<double, 4>> last_unit_;  // end direction of the last emitted block
   double last_vc_ = 0.0;
   double prev_exit_ = 0.0;  // planned exit speed of the last emitted block (mm/s path)
   std::vector<Profile> out_;
