@@ -525,3 +525,140 @@ TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
   EXPECT_GT(extra, 0.015);
   EXPECT_LT(extra, 0.025);
 }
+
+namespace {
+
+// Stand-in for the arc helper's reference walk (systemc/include/fpgacnc/twin/arc_walk.h, not yet
+// in this branch): C_TOTAL ~ R * arc length in steps (the cross-product cost), N_RAMP 1. The
+// planner only uses C_TOTAL as its path unit; the device checks it against its own walk.
+std::optional<std::pair<uint32_t, uint64_t>> fake_walk(const pl::ArcFields& f) {
+  const double r0 = std::hypot(f.i, f.j), r1 = std::hypot(f.dx - f.i, f.dy - f.j);
+  const double a0 = std::atan2(-f.j, -f.i), a1 = std::atan2(f.dy - f.j, f.dx - f.i);
+  double sweep = f.code == 2 ? a0 - a1 : a1 - a0;
+  if (sweep <= 0) sweep += 2 * 3.14159265358979;
+  const double c = 0.5 * (r0 + r1) * 0.5 * (r0 + r1) * sweep;
+  return std::make_pair(uint32_t{1}, static_cast<uint64_t>(std::max(1.0, std::llround(c) * 1.0)));
+}
+
+}  // namespace
+
+TEST(Packer, ArcFrameIsTheWorkedExample) {
+  // docs/protocol.md "ARC" worked frame: seq 11, G3, power 255, I -100, J 0, DX -100, DY 100,
+  // DZ 0, N_RAMP 127, C_TOTAL 15 703, V_cruise 1 125 544 154 615, V_entry = V_exit =
+  // 281 386 038 653, A 1 125 544, D 13 828.
+  pl::ArcFields g;
+  g.code = 3;
+  g.i = -100;
+  g.j = 0;
+  g.dx = -100;
+  g.dy = 100;
+  g.dz = 0;
+  g.n_ramp = 127;
+  g.c_total = 15'703;
+  pl::Recurrence r{15'703, 281'386'038'653ULL, 1'125'544'154'615ULL, 281'386'038'653ULL, 1'125'544,
+                   13'828};
+  EXPECT_EQ(v2::hex(v2::encode(v2::arc_frame(11, 255, g, r))),
+            "A5 3F 0B 13 03 FF FF FF 9C 00 00 00 FF FF 9C 00 00 64 00 00 00 00 00 00 7F 00 00 "
+            "00 00 3D 57 00 00 00 41 83 EA 35 7D 00 00 01 06 0F A8 D5 F7 00 00 00 41 83 EA 35 "
+            "7D 00 00 00 11 2C A8 00 00 00 00 36 04 47 F8");
+}
+
+TEST(Lookahead, NativeArcsRespectTangentialCentripetalAndJunctionLimits) {
+  MachineConfig c;
+  c.laser_requires_m3 = false;
+  c.motion = "profile";
+  const std::string g =
+      "G0 X0 Y0\nG1 X10 Y0 F3000\n"
+      "G3 X20 Y10 I0 J10\n"           // tangent continues +X: smooth junction
+      "G2 X30 Y20 I10 J0\n"           // reverses curvature, tangent +Y at the join
+      "G1 X30 Y40\n"                  // the G2 ends heading +X: a 90 degree corner
+      "G2 X30 Y40 I5 J0 Z-2 F600\n"   // full helical circle, R = 5 mm
+      "G3 X31 Y41 I0.5 J0.5 F3000\n"  // tiny radius (0.707 mm): centripetal limit
+      "G1 X0 Y0\n";
+  const auto plan = pl::plan_program(fpgacnc::gcode::parse_string(g), c, {});
+  pl::MotionLimits lim = pl::motion_limits(c);
+  lim.arc_walk = fake_walk;
+  const auto pp = pl::plan_profiles(plan, lim);
+  EXPECT_EQ(pp.stats.arcs, 4u);
+  EXPECT_EQ(pp.stats.arcs_as_chords, 0u);
+  EXPECT_EQ(pp.stats.exit_overshoot, 0u);
+  const auto ps = profiles_of(pp);
+  ASSERT_EQ(ps.size(), 7u);  // G0 X0 Y0 does not move
+  pl::Steps4 sum{};
+  const double clk = static_cast<double>(c.clk_hz);
+  for (size_t k = 0; k < ps.size(); ++k) {
+    const auto& p = ps[k];
+    for (size_t a = 0; a < 4; ++a) sum[a] += p.steps[a];
+    const auto run = pl::simulate_recurrence(p.rec);
+    EXPECT_EQ(run.clocks, p.clocks) << k;
+    EXPECT_LE(run.v_peak, p.rec.v_cruise) << k;
+    EXPECT_LE(run.v_last, p.rec.v_exit) << k;
+    const double vc = p.rec.v_cruise * p.lsb_mm_s;  // mm/s along the path
+    const double acc = p.rec.a * p.lsb_mm_s * clk;  // mm/s^2
+    if (!p.arc) continue;
+    const auto& f = p.arc_fields;
+    const double r_mm = std::min(std::hypot(f.i, f.j), std::hypot(f.dx - f.i, f.dy - f.j)) / 160;
+    const double dz_mm = f.dz / 400.0;
+    const double fxy =
+        std::sqrt(std::max(0.0, p.length_mm * p.length_mm - dz_mm * dz_mm)) / p.length_mm;
+    const double vxy = vc * fxy;
+    EXPECT_LE(vxy * vxy / r_mm, 0.5 * 1000 * (1 + 1e-9)) << "arc " << k << " centripetal";
+    EXPECT_LE(acc * fxy, 0.5 * std::sqrt(3.0) * 1000 * (1 + 1e-9)) << "arc " << k;
+    EXPECT_LE(vxy, 50.0 * (1 + 1e-9)) << "arc " << k << " feed";
+    if (f.dz != 0) {
+      EXPECT_LE(vc * std::fabs(dz_mm) / p.length_mm, 10.0 * (1 + 1e-9)) << "Z max feed";
+    }
+  }
+  EXPECT_EQ(sum, plan.final_steps);
+  // Tangent-continuous joins (line -> G3, G3 -> G2) keep the feed; G2 -> line is a 90 degree
+  // corner (junction deviation); the tiny arc is limited by its centripetal acceleration,
+  // sqrt(a/2 * R) = sqrt(500 * 0.707) = 18.8 mm/s.
+  EXPECT_NEAR(ps[0].v_exit, 50.0, 1e-6);
+  EXPECT_NEAR(ps[1].v_exit, 50.0, 1e-6);
+  EXPECT_LT(ps[2].v_exit, 10.0);
+  EXPECT_NEAR(ps[5].v_cruise, std::sqrt(500 * std::hypot(0.5, 0.5)), 0.05);
+  for (size_t k = 0; k + 1 < ps.size(); ++k) {
+    const double ex = ps[k].rec.v_exit * ps[k].lsb_mm_s;
+    const double en = ps[k + 1].rec.v_entry * ps[k + 1].lsb_mm_s;
+    EXPECT_LE(std::fabs(ex - en), std::max(ps[k].lsb_mm_s, ps[k + 1].lsb_mm_s) * 1.000001)
+        << "junction " << k;
+  }
+  // Packed: ARC frames for the arcs, LINE_PROFILE for the lines; constant mode keeps chords.
+  const auto job = v2::pack_job(plan, c, fake_walk);
+  EXPECT_EQ(job.arcs, 4u);
+  EXPECT_EQ(job.profiles, 3u);
+  EXPECT_EQ(job.target, plan.final_steps);
+  for (const auto& jf : job.frames) {
+    if (jf.frame.type == v2::kTypeArc) {
+      EXPECT_EQ(jf.frame.payload.size(), 63u);
+    }
+  }
+  c.motion = "constant";
+  EXPECT_EQ(v2::pack_job(plan, c, fake_walk).arcs, 0u);
+}
+
+TEST(Lookahead, ArcsThatCannotGoNativeStayChords) {
+  MachineConfig c;
+  c.laser_requires_m3 = false;
+  c.motion = "profile";
+  pl::MotionLimits lim;
+  // Arc with extrusion (ARC has no E) and a spiral whose radii differ by 1 mm (> 2 steps).
+  auto plan = pl::plan_program(
+      fpgacnc::gcode::parse_string("G1 X10 F3000\nG2 X20 Y0 I5 J0 E1\nG2 X31 Y0 I5 J0\n"), c, {});
+  lim = pl::motion_limits(c);
+  lim.arc_walk = fake_walk;
+  auto pp = pl::plan_profiles(plan, lim);
+  EXPECT_EQ(pp.stats.arcs, 0u);
+  EXPECT_EQ(pp.stats.arcs_as_chords, 2u);
+  // Unequal X/Y steps per mm: a circle is an ellipse on the lattice.
+  c.steps_per_mm[1] = 80;
+  plan = pl::plan_program(fpgacnc::gcode::parse_string("G2 X10 Y0 I5 J0 F3000\n"), c, {});
+  lim = pl::motion_limits(c);
+  lim.arc_walk = fake_walk;
+  pp = pl::plan_profiles(plan, lim);
+  EXPECT_EQ(pp.stats.arcs, 0u);
+  EXPECT_EQ(pp.stats.arcs_as_chords, 1u);
+  int64_t x = 0;
+  for (const auto& p : profiles_of(pp)) x += p.steps[0];
+  EXPECT_EQ(x, plan.final_steps[0]);
+}

@@ -582,29 +582,54 @@ std::vector<Profile> Lookahead::preview() const {
 }
 
 ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg) {
+  return plan_profiles(plan, motion_limits(cfg));
+}
+
+ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim) {
   ProfilePlan out;
-  Lookahead la(motion_limits(cfg));
+  Lookahead la(lim);
   auto drain = [&] {
     for (auto& p : la.take()) out.items.emplace_back(std::move(p));
   };
   size_t seg_index = 0;
   uint64_t dwell_clocks = 0;
+  std::vector<Segment> chords;  // of the arc being collected
+  size_t chords_first = 0;
+  auto flush_arc = [&] {
+    if (chords.empty()) return;
+    const uint32_t id = chords.front().arc_id;
+    if (!la.push_arc(plan.arcs.at(id - 1), chords, chords_first)) {
+      if (lim.arc_walk) ++out.stats.arcs_as_chords;
+      for (size_t k = 0; k < chords.size(); ++k) la.push(chords[k], chords_first + k);
+    }
+    chords.clear();
+    drain();
+  };
   for (const auto& item : plan.items) {
     if (const auto* s = std::get_if<Segment>(&item)) {
       try {
-        la.push(*s, seg_index);
+        if (!chords.empty() && s->arc_id != chords.front().arc_id) flush_arc();
+        if (lim.arc_walk && s->arc_id != 0 && s->arc_id <= plan.arcs.size()) {
+          if (chords.empty()) chords_first = seg_index;
+          chords.push_back(*s);
+        } else {
+          la.push(*s, seg_index);
+        }
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(
             fmt::format("segment {} (line {}): {}", seg_index, s->source_line, e.what()));
       }
       ++seg_index;
       drain();
-    } else if (const auto* d = std::get_if<Dwell>(&item)) {
+      continue;
+    }
+    flush_arc();
+    if (const auto* d = std::get_if<Dwell>(&item)) {
       la.stop();
       ++out.stats.forced_stops;
       drain();
       dwell_clocks +=
-          static_cast<uint64_t>(std::llround(d->seconds * static_cast<double>(cfg.clk_hz)));
+          static_cast<uint64_t>(std::llround(d->seconds * static_cast<double>(lim.clk_hz)));
       out.items.emplace_back(*d);
     } else if (const auto* h = std::get_if<HeaterCommand>(&item)) {
       if (h->mcode == 109 || h->mcode == 190) {
@@ -615,9 +640,11 @@ ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg) {
       out.items.emplace_back(*h);
     }
   }
+  flush_arc();
   la.stop();
   drain();
   const ProfileStats& ls = la.stats();
+  out.stats.arcs = ls.arcs;
   out.stats.blocks = ls.blocks;
   out.stats.split_moves = ls.split_moves;
   out.stats.a_clamped = ls.a_clamped;

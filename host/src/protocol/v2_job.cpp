@@ -70,9 +70,16 @@ size_t frame_axes(const plan::Steps4& steps) {
   return k;
 }
 
+void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
+  for (int i = bytes - 1; i >= 0; --i) p.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+
 void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job& job,
-                   const std::function<void(JobFrame)>& push) {
-  const plan::ProfilePlan pp = plan::plan_profiles(plan, cfg);
+                   const std::function<void(JobFrame)>& push,
+                   const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
+  plan::MotionLimits lim = plan::motion_limits(cfg);
+  lim.arc_walk = arc_walk;
+  const plan::ProfilePlan pp = plan::plan_profiles(plan, lim);
   job.profile_stats = pp.stats;
   size_t seg_seen = 0;
   size_t last_seg = SIZE_MAX;
@@ -85,6 +92,25 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       plan::Segment s;
       s.code = p->code;
       s.spindle_s = p->spindle_s;
+      if (p->arc) {
+        JobFrame jf;
+        jf.frame = arc_frame(0, laser_power(s, cfg), p->arc_fields, p->rec);
+        jf.segment_index = p->segment_index;
+        jf.source_line = p->source_line;
+        jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
+        jf.axes = 3;
+        jf.profile = true;
+        for (size_t a = 0; a < 3; ++a) job.target[a] += p->steps[a];
+        job.total_t += p->clocks;
+        ++job.arcs;
+        job.max_axes = std::max<size_t>(job.max_axes, p->steps[2] != 0 ? 3 : 2);
+        if (p->segment_index != last_seg) {
+          ++seg_seen;
+          last_seg = p->segment_index;
+        }
+        push(std::move(jf));
+        continue;
+      }
       const size_t k = frame_axes(p->steps);
       std::array<int32_t, 4> s32{};
       for (size_t a = 0; a < 4; ++a) {
@@ -140,6 +166,28 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
 
 }  // namespace
 
+Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r) {
+  Frame fr;
+  fr.seq = seq;
+  fr.type = kTypeArc;
+  auto& p = fr.payload;
+  p.push_back(g.code);
+  p.push_back(power);
+  put_be(p, static_cast<uint32_t>(g.i), 3);
+  put_be(p, static_cast<uint32_t>(g.j), 3);
+  put_be(p, static_cast<uint32_t>(g.dx), 3);
+  put_be(p, static_cast<uint32_t>(g.dy), 3);
+  put_be(p, static_cast<uint32_t>(g.dz), 4);
+  put_be(p, g.n_ramp, 3);
+  put_be(p, g.c_total, 6);
+  put_be(p, r.v_entry, 8);
+  put_be(p, r.v_cruise, 8);
+  put_be(p, r.v_exit, 8);
+  put_be(p, r.a, 6);
+  put_be(p, r.d, 6);
+  return fr;
+}
+
 LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
                             std::span<const int32_t> steps) {
   LineProfile lp;
@@ -158,7 +206,8 @@ uint32_t min_period(const config::StepTiming& t) {
   return std::max<uint32_t>(t.step_high, 1) + std::max<uint32_t>(t.step_low, 1);
 }
 
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
+             const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
   Job job;
   const auto& st = cfg.step_timing;
   const uint16_t sh = u16_timing(st.step_high, "step_high");
@@ -183,7 +232,7 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
   }
 
   if (cfg.motion == "profile") {
-    pack_profiles(plan, cfg, job, push);
+    pack_profiles(plan, cfg, job, push, arc_walk);
     return job;
   }
 

@@ -192,6 +192,9 @@ class Lookahead {
 // Plans every segment of `plan` (dwells and M109/M190 force stops; heater commands pass
 // through). Throws std::invalid_argument for a segment that cannot be converted.
 ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg);
+// Same with explicit limits; with lim.arc_walk set, G2/G3 chords (Segment::arc_id) are sent as
+// ARC blocks where push_arc accepts them (counted in stats.arcs; else chords, arcs_as_chords).
+ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim);
 
 // Junction speed limit (mm/s) between two unit directions under junction deviation delta and
 // per-axis accelerations (grbl): 0 for a reversal, +inf for a straight continuation.

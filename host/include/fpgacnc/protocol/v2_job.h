@@ -55,6 +55,7 @@ struct Job {
   size_t t_raised = 0;        // LINE frames whose T was raised to n_dom * min_period
   size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
   size_t profiles = 0;        // LINE_PROFILE frames (motion = "profile")
+  size_t arcs = 0;            // ARC frames (motion = "profile" with an arc walk)
   plan::ProfileStats profile_stats;
   size_t max_axes = 0;      // largest k of any LINE (the device must have at least that many)
   uint32_t min_period = 0;  // clocks
@@ -67,7 +68,15 @@ struct Job {
 
 // Throws std::invalid_argument naming the segment (and line) for something v2 cannot carry
 // (step timing over 65535 clocks, motion code > 3, a segment that cannot be split).
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg);
+// `arc_walk` (motion = "profile" only): the arc helper's reference walk; when given, G2/G3 in
+// XY go out as ARC frames (docs/motion.md), else as chords.
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
+             const decltype(plan::MotionLimits::arc_walk)& arc_walk = {});
+
+// ARC frame (TYPE 0x13, docs/protocol.md "ARC", 63-byte payload, big-endian): built here until
+// the codec has an ARC builder (arc helper). Power 0 = laser off; code = 2 (G2) or 3 (G3).
+constexpr uint8_t kTypeArc = 0x13;
+Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r);
 
 // The LINE_PROFILE of one planned block (codec: v2::line_profile builds the frame).
 LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
