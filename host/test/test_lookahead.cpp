@@ -12,6 +12,12 @@
 #include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
+#if __has_include("fpgacnc/twins/arc_walk.h")
+#include "fpgacnc/twins/arc_walk.h"
+#define TEST_HAVE_ARC_WALK 1
+#else
+#define TEST_HAVE_ARC_WALK 0
+#endif
 
 namespace pl = fpgacnc::plan;
 namespace v2 = fpgacnc::protocol::v2;
@@ -500,6 +506,9 @@ TEST(MotionConfig, KeysParseValidateAndExampleEqualsDefaults) {
   EXPECT_EQ(ex.junction_deviation_mm, d.junction_deviation_mm);
   EXPECT_EQ(ex.lookahead_segments, d.lookahead_segments);
   EXPECT_EQ(ex.motion, d.motion);
+  EXPECT_EQ(ex.native_arcs, d.native_arcs);
+  EXPECT_TRUE(fpgacnc::config::parse_machine_config("native_arcs = true\n", "t").native_arcs);
+  EXPECT_THROW(parse_machine_config("native_arcs = 1\n", "t"), Error);
 }
 
 TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
@@ -662,3 +671,93 @@ TEST(Lookahead, ArcsThatCannotGoNativeStayChords) {
   for (const auto& p : profiles_of(pp)) x += p.steps[0];
   EXPECT_EQ(x, plan.final_steps[0]);
 }
+
+#if TEST_HAVE_ARC_WALK
+namespace {
+// The ARC block of a profile through the arc helper's clock-exact model (arc_walk.h run()).
+fpgacnc::twins::arc::RunResult run_arc(const pl::Profile& p) {
+  namespace ta = fpgacnc::twins::arc;
+  ta::Frame fr;
+  fr.g = {p.arc_fields.i, p.arc_fields.j, p.arc_fields.dx, p.arc_fields.dy, p.arc_fields.code == 3};
+  fr.dz = p.arc_fields.dz;
+  fr.n_ramp = p.arc_fields.n_ramp;
+  fr.c_total = p.arc_fields.c_total;
+  fr.v_entry = p.rec.v_entry;
+  fr.v_cruise = p.rec.v_cruise;
+  fr.v_exit = p.rec.v_exit;
+  fr.a = p.rec.a;
+  fr.d = p.rec.d;
+  return ta::run(fr, p.clocks + 1000);
+}
+}  // namespace
+#endif
+
+TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
+  if (!pl::have_reference_arc_walk()) {
+    GTEST_SKIP() << "fpgacnc/twins/arc_walk.h not in the tree (arc helper): arcs stay chords";
+  }
+  MachineConfig c;
+  c.motion = "profile";
+  c.native_arcs = true;
+  size_t arcs = 0;
+  for (const char* name :
+       {"arc-ijk.gcode", "g2-arc.gcode", "circle.gcode", "circle-inch.gcode",
+        "full-circle-without-xyz.gcode", "Circle_Diamond_Square_Calibration.gcode"}) {
+    const auto plan = pl::plan_gcode_file(std::string(FPGACNC_CORPUS_DIR) + "/" + name, c, {});
+    const auto job = v2::pack_job(plan, c);
+    EXPECT_EQ(job.target, plan.final_steps) << name;
+    EXPECT_EQ(job.profile_stats.exit_overshoot, 0u) << name;
+    arcs += job.arcs;
+#if TEST_HAVE_ARC_WALK
+    // Every ARC frame's N_RAMP / C_TOTAL: the reference walk lands on the end point with that
+    // total (what the device's guard checks).
+    auto lim = pl::motion_limits(c);
+    lim.arc_walk = pl::reference_arc_walk();
+    for (const auto& p : profiles_of(pl::plan_profiles(plan, lim))) {
+      if (!p.arc) continue;
+      namespace ta = fpgacnc::twins::arc;
+      const ta::Geometry g{p.arc_fields.i, p.arc_fields.j, p.arc_fields.dx, p.arc_fields.dy,
+                           p.arc_fields.code == 3};
+      const auto w = ta::walk(g, p.arc_fields.n_ramp);
+      EXPECT_TRUE(w.reached) << name << " line " << p.source_line;
+      EXPECT_EQ(w.c_total, p.arc_fields.c_total) << name << " line " << p.source_line;
+    }
+#endif
+    std::printf("%s: %zu ARC frames, %zu LINE_PROFILE, %llu arcs as chords, %.3f s\n", name,
+                job.arcs, job.profiles,
+                static_cast<unsigned long long>(job.profile_stats.arcs_as_chords),
+                job.total_t / 5e7);
+  }
+  EXPECT_GT(arcs, 0u);
+}
+
+#if TEST_HAVE_ARC_WALK
+TEST(Lookahead, ReferenceWalkArcsRunClockExact) {
+  // Small fast arcs (incl. a full helical circle and a tiny radius) through the arc helper's
+  // clock-exact block model: end point and Z exact, no guard, no late move, and the block ends
+  // on the clock the host's time model says (the corpus arcs take ~10^9 clocks: too slow here;
+  // their end clocks agreed exactly when run once, 2026-11-21).
+  MachineConfig c;
+  c.laser_requires_m3 = false;
+  c.motion = "profile";
+  c.native_arcs = true;
+  const auto plan = pl::plan_program(
+      fpgacnc::gcode::parse_string("G1 X1 F3000\nG3 X2 Y1 I0 J1\nG2 X3 Y2 I1 J0\n"
+                                   "G2 X3 Y2 I0.5 J0 Z-0.2\nG3 X3.2 Y2.2 I0.1 J0.1\nG1 X0 Y0\n"),
+      c, {});
+  auto lim = pl::motion_limits(c);
+  lim.arc_walk = pl::reference_arc_walk();
+  const auto pp = pl::plan_profiles(plan, lim);
+  EXPECT_EQ(pp.stats.arcs, 4u);
+  for (const auto& p : profiles_of(pp)) {
+    if (!p.arc) continue;
+    const auto run = run_arc(p);
+    EXPECT_FALSE(run.err) << "line " << p.source_line;
+    EXPECT_FALSE(run.late) << "line " << p.source_line;
+    EXPECT_EQ(run.x, p.arc_fields.dx) << "line " << p.source_line;
+    EXPECT_EQ(run.y, p.arc_fields.dy) << "line " << p.source_line;
+    EXPECT_EQ(run.z, p.arc_fields.dz) << "line " << p.source_line;
+    EXPECT_EQ(run.end_clock, p.clocks) << "line " << p.source_line;
+  }
+}
+#endif

@@ -99,6 +99,8 @@ class Reader {
       } else if (k == "motion") {
         c.motion = string(v, k);
         if (!valid_motion_name(c.motion)) fail(v, k, "expected \"profile\" or \"constant\"");
+      } else if (k == "native_arcs") {
+        c.native_arcs = boolean(v, k);
       } else if (k == "laser_requires_m3") {
         c.laser_requires_m3 = boolean(v, k);
       } else if (k == "step_timing") {

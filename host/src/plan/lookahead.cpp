@@ -409,9 +409,10 @@ bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chord
     acc = std::min(acc, lim_.a_max[2] / fz);
   }
   // Step rates: an XY lattice move steps each axis at most once, so the move rate is at most
-  // the tangential rate in steps per clock: keep it below 1 / min_period (and 1/2); Z likewise.
+  // the tangential rate in steps per clock: keep it below 1 / min_period and 1/8 (the walk needs 4
+  // clocks a move, protocol.md host rule); Z likewise.
   const double clk = static_cast<double>(lim_.clk_hz);
-  const double max_steps_per_clock = std::min(0.5, 1.0 / lim_.min_period);
+  const double max_steps_per_clock = std::min(0.125, 1.0 / lim_.min_period);
   vc = std::min(vc, max_steps_per_clock * clk / spm[0] / fxy);
   if (dz != 0) vc = std::min(vc, max_steps_per_clock * clk / spm[2] * len / std::fabs(dz_mm));
   set_block_rates(b, static_cast<double>(af.c_total), vc, acc, kMaxArcV, kMaxArcA);

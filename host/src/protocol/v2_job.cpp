@@ -79,6 +79,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
                    const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
   plan::MotionLimits lim = plan::motion_limits(cfg);
   lim.arc_walk = arc_walk;
+  if (!lim.arc_walk && cfg.native_arcs) lim.arc_walk = plan::reference_arc_walk();
   const plan::ProfilePlan pp = plan::plan_profiles(plan, lim);
   job.profile_stats = pp.stats;
   size_t seg_seen = 0;

@@ -48,6 +48,9 @@ struct MachineConfig {
   // v2 motion: "profile" (LINE_PROFILE frames, look-ahead planned trapezoids) or "constant"
   // (LINE frames, constant feed per segment, no acceleration). v1 always moves at constant feed.
   std::string motion = "constant";
+  // motion = "profile": send G2/G3 in XY as ARC frames (the device must have the circular DDA
+  // and the host the arc helper's reference walk); false: chords.
+  bool native_arcs = false;
 };
 
 // Thrown for an unreadable file, a syntax error, an unknown key or a wrong type/value.

@@ -68,8 +68,9 @@ struct Job {
 
 // Throws std::invalid_argument naming the segment (and line) for something v2 cannot carry
 // (step timing over 65535 clocks, motion code > 3, a segment that cannot be split).
-// `arc_walk` (motion = "profile" only): the arc helper's reference walk; when given, G2/G3 in
-// XY go out as ARC frames (docs/motion.md), else as chords.
+// `arc_walk` (motion = "profile" only): the arc walk; when given, or when cfg.native_arcs and
+// the arc helper's reference walk is built in (plan::reference_arc_walk), G2/G3 in XY go out as
+// ARC frames (docs/motion.md), else as chords.
 Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
              const decltype(plan::MotionLimits::arc_walk)& arc_walk = {});
 
