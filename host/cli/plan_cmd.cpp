@@ -179,11 +179,13 @@ void run_plan(const PlanArgs& a) {
       const auto& ps = j.profile_stats;
       fmt::print(
           "v2 planned: {} LINE_PROFILE frames ({} SHORT), {} DWELL frames, {} moves split "
-          "(n_dom >= 2^24), {} forced stops, {} D lowered by the exact check, {} exits above "
-          "plan, {} A raised to 1 LSB; {} wire bytes; job time without gaps {:.3f} s\n",
-          j.profiles, j.short_lines, j.dwells, ps.split_moves, ps.forced_stops, ps.d_adjusted,
-          ps.exit_overshoot, ps.a_clamped, j.wire_bytes,
-          static_cast<double>(j.total_t) / static_cast<double>(cfg.clk_hz));
+          "(n_dom >= 2^24), {} ARC frames ({} arcs as chords), {} forced stops, {} D lowered by "
+          "the exact check, {} exits above plan, {} A raised to 1 LSB; {} wire bytes; job time "
+          "{} clocks = {:.6f} s (incl. {} DIR reversal pauses, {} clocks)\n",
+          j.profiles, j.short_lines, j.dwells, ps.split_moves, j.arcs, ps.arcs_as_chords,
+          ps.forced_stops, ps.d_adjusted, ps.exit_overshoot, ps.a_clamped, j.wire_bytes, j.total_t,
+          static_cast<double>(j.total_t) / static_cast<double>(cfg.clk_hz), j.reversal_gaps,
+          j.reversal_gap_clocks);
     } else {
       fmt::print(
           "v2: {} LINE frames ({} SHORT), {} DWELL frames, {} moves split, {} segments raised "

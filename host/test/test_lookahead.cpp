@@ -761,3 +761,21 @@ TEST(Lookahead, ReferenceWalkArcsRunClockExact) {
   }
 }
 #endif
+
+TEST(Packer, ProfileJobTimeCountsReversalPauses) {
+  // The job of the simulated-board check (docs/motion.md, "Time model against the RTL"): the
+  // board ran these four segments in exactly the clocks below (laser edges) with a 400-clock
+  // DIR hold + setup pause at each of the three reversals.
+  MachineConfig c;
+  c.motion = "profile";
+  const auto plan = pl::plan_program(
+      fpgacnc::gcode::parse_string("G21 G90\nM3 S1000\nG1 X5 Y2 F3000\nX10 Y0\nX10 Y8\nG0 X0 Y0\n"),
+      c, {});
+  const auto job = v2::pack_job(plan, c);
+  std::vector<uint64_t> clocks;
+  for (const auto& p : profiles_of(pl::plan_profiles(plan, c))) clocks.push_back(p.clocks);
+  EXPECT_EQ(clocks, (std::vector<uint64_t>{7'249'937, 7'113'612, 10'222'727, 14'483'012}));
+  EXPECT_EQ(job.reversal_gaps, 3u);
+  EXPECT_EQ(job.reversal_gap_clocks, 1200u);
+  EXPECT_EQ(job.total_t, 39'070'488u);  // board: last STEP 39 925 162 - first run edge 854 674
+}

@@ -84,6 +84,44 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
   job.profile_stats = pp.stats;
   size_t seg_seen = 0;
   size_t last_seg = SIZE_MAX;
+  // Reversal gaps (docs/timing.md, "Profiled segments"): a profiled segment with an axis whose
+  // direction differs from its DIR pin takes the HOLD/SETUP path: run from
+  // R = max(A + 1, max_a(L_a + hold)) + setup, A = the previous segment's end, L_a = the last STEP
+  // of axis a (every moving axis steps on its segment's last tick). The first segment starts
+  // from idle (not counted). DIR pins reset to 0 (negative). After an ARC, X/Y DIR are unknown:
+  // no gap counted for them (the arc block's own DIR handling is the arc helper's).
+  const int64_t hold = std::max<uint32_t>(cfg.step_timing.dir_hold, 1);
+  const int64_t setup = std::max<uint32_t>(cfg.step_timing.dir_setup, 1);
+  std::array<int, 4> dir{-1, -1, -1, -1};  // -1, +1, 0 = unknown
+  std::array<int64_t, 4> last_step{};
+  last_step.fill(std::numeric_limits<int64_t>::min() / 4);
+  int64_t now = 0;  // clock of the current segment's start, relative to the first one's
+  bool first = true;
+  auto advance = [&](const plan::Steps4& steps, uint64_t clocks, bool arc) {
+    int64_t d_edge = std::numeric_limits<int64_t>::min();
+    bool rev = false;
+    for (size_t a = 0; a < 4; ++a) {
+      if (steps[a] == 0) continue;
+      const int sgn = steps[a] > 0 ? 1 : -1;
+      if (dir[a] != 0 && sgn != dir[a]) {
+        rev = true;
+        d_edge = std::max(d_edge, last_step[a] + hold);
+      }
+    }
+    if (rev && !first) {
+      const int64_t r = std::max(now + 1, d_edge) + setup;
+      job.reversal_gap_clocks += static_cast<uint64_t>(r - now);
+      ++job.reversal_gaps;
+      now = r;
+    }
+    first = false;
+    now += static_cast<int64_t>(clocks);
+    for (size_t a = 0; a < 4; ++a) {
+      if (steps[a] == 0) continue;
+      dir[a] = arc && a < 2 ? 0 : (steps[a] > 0 ? 1 : -1);
+      last_step[a] = now;
+    }
+  };
   for (const auto& item : pp.items) {
     if (const auto* p = std::get_if<plan::Profile>(&item)) {
       if (p->code > 3) {
@@ -103,6 +141,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         jf.profile = true;
         for (size_t a = 0; a < 3; ++a) job.target[a] += p->steps[a];
         job.total_t += p->clocks;
+        advance(p->steps, p->clocks, true);
         ++job.arcs;
         job.max_axes = std::max<size_t>(job.max_axes, p->steps[2] != 0 ? 3 : 2);
         if (p->segment_index != last_seg) {
@@ -129,6 +168,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       jf.profile = true;
       if (jf.frame.payload[0] & kLineShort) ++job.short_lines;
       job.total_t += p->clocks;
+      advance(p->steps, p->clocks, false);
       ++job.profiles;
       job.max_axes = std::max(job.max_axes, k);
       if (p->segment_index != last_seg) {
@@ -153,6 +193,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         jf.t = static_cast<uint32_t>(t);
         jf.split = split;
         job.total_t += t;
+        advance(plan::Steps4{}, t, false);
         ++job.dwells;
         push(std::move(jf));
         left -= t;
@@ -161,6 +202,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       ++job.skipped_heater;
     }
   }
+  job.total_t += job.reversal_gap_clocks;
   job.segments = seg_seen;
   job.split_moves = pp.stats.split_moves;
 }

@@ -3,7 +3,8 @@
 // - cfg.motion == "profile": the plan goes through the look-ahead planner
 //   (plan::plan_profiles, docs/motion.md) and every block becomes a LINE_PROFILE frame (TYPE
 //   0x12, docs/protocol.md; SHORT and k as for LINE); its JobFrame.t is the exact clock count of
-//   the hardware recurrence (saturated at UINT32_MAX; total_t sums the exact counts). The rest of
+//   the hardware recurrence (saturated at UINT32_MAX; total_t sums the exact counts and the DIR
+//   hold/setup pauses at reversals, reversal_gap_clocks). The rest of
 //   this list is the "constant" mode.
 // - Every planned segment becomes a LINE frame: SHORT (int16 steps) when every count fits,
 //   else int32; k = axes up to the last moving one, at least 2 (X, Y); Z and E are driven.
@@ -56,6 +57,9 @@ struct Job {
   size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
   size_t profiles = 0;        // LINE_PROFILE frames (motion = "profile")
   size_t arcs = 0;            // ARC frames (motion = "profile" with an arc walk)
+  // motion = "profile": DIR hold/setup pauses at reversals (HOLD/SETUP path), in total_t.
+  size_t reversal_gaps = 0;
+  uint64_t reversal_gap_clocks = 0;
   plan::ProfileStats profile_stats;
   size_t max_axes = 0;      // largest k of any LINE (the device must have at least that many)
   uint32_t min_period = 0;  // clocks
