@@ -1,5 +1,6 @@
 // fpgacnc plan FILE [--config F] [--csv OUT] [--hex OUT] [--v2-hex OUT] [--feed-override PCT]
 //                   [--motion profile|constant] [--times] [--speed-svg OUT [--zoom T0 T1]]
+//                   [--board-edges E.csv]
 #include <fmt/format.h>
 
 #include <cmath>
@@ -28,6 +29,7 @@ struct PlanArgs {
   bool times = false;
   std::string speed_svg;
   std::vector<double> zoom{0.0, 10.0};
+  std::string board_edges;  // simulated board edge CSV to overlay on the speed plot
   bool quiet = false;
   CommonOptions common;
 };
@@ -83,6 +85,72 @@ plan::SpeedSeries constant_speed_series(const protocol::v2::Job& j,
     s.pts.emplace_back(t0 / clk, v);
     t0 += jf.t;
     s.pts.emplace_back(t0 / clk, v);
+  }
+  return s;
+}
+
+// Path speed measured from a simulated board's STEP edges (fpgacnc stream --edges F.csv): X/Y/Z
+// positions from the STEP rises and DIR levels, speed over 1 ms windows. Time 0 is aligned with
+// the plan: the first STEP rise is put at the first dominant step of the first profile.
+plan::SpeedSeries board_speed_series(const std::string& path, const config::MachineConfig& cfg,
+                                     const plan::ProfilePlan& pp) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error(fmt::format("{}: error: cannot open file", path));
+  std::string line;
+  std::getline(f, line);  // header: cycle,time_s,signal,value
+  std::array<int, 3> dir{-1, -1, -1};
+  std::array<int64_t, 3> pos{};
+  std::vector<std::pair<uint64_t, std::array<int64_t, 3>>> pts;
+  while (std::getline(f, line)) {
+    const auto c1 = line.find(',');
+    const auto c2 = line.find(',', c1 + 1);
+    const auto c3 = line.find(',', c2 + 1);
+    if (c3 == std::string::npos) continue;
+    const uint64_t cyc = std::stoull(line.substr(0, c1));
+    const std::string sig = line.substr(c2 + 1, c3 - c2 - 1);
+    const int val = std::stoi(line.substr(c3 + 1));
+    if (sig.size() != 6 || (sig[5] != 'x' && sig[5] != 'y' && sig[5] != 'z')) continue;
+    const size_t a = static_cast<size_t>(sig[5] == 'x' ? 0 : sig[5] == 'y' ? 1 : 2);
+    if (sig.rfind("dir_", 0) == 0) dir[a] = val ? 1 : -1;
+    if (sig.rfind("step_", 0) == 0 && val == 1) {
+      pos[a] += dir[a];
+      pts.emplace_back(cyc, pos);
+    }
+  }
+  plan::SpeedSeries s;
+  s.name = "simulated board (STEP edges; windows of >= 1 ms and 16 steps)";
+  s.color = "#27ae60";
+  if (pts.empty()) return s;
+  uint64_t first_tick = 0;  // first dominant step of the first profile, clocks
+  for (const auto& it : pp.items) {
+    if (const auto* p = std::get_if<plan::Profile>(&it)) {
+      plan::Recurrence r = p->rec;
+      r.n_end = 1;
+      r.v_exit = r.v_cruise;
+      r.d = 1;
+      first_tick = plan::simulate_recurrence(r).clocks;
+      break;
+    }
+  }
+  const double clk = static_cast<double>(cfg.clk_hz);
+  const double t0 = static_cast<double>(pts.front().first) - static_cast<double>(first_tick);
+  // Windows of at least 1 ms and 16 STEP events (a slow move has few steps per ms).
+  const uint64_t win = cfg.clk_hz / 1000;
+  size_t k = 0;
+  while (k + 1 < pts.size()) {
+    const size_t k0 = k;
+    while (k + 1 < pts.size() && (k - k0 < 16 || pts[k].first - pts[k0].first < win)) ++k;
+    const double dt = static_cast<double>(pts[k].first - pts[k0].first);
+    if (dt <= 0) break;
+    double d2 = 0.0;
+    for (size_t a = 0; a < 3; ++a) {
+      const double d =
+          static_cast<double>(pts[k].second[a] - pts[k0].second[a]) / cfg.steps_per_mm[a];
+      d2 += d * d;
+    }
+    const double v = std::sqrt(d2) / (dt / clk);
+    s.pts.emplace_back((static_cast<double>(pts[k0].first) - t0) / clk, v);
+    s.pts.emplace_back((static_cast<double>(pts[k].first) - t0) / clk, v);
   }
   return s;
 }
@@ -166,9 +234,11 @@ void run_plan(const PlanArgs& a) {
         "{}: path speed against time (accel X/Y {}/{} mm/s^2, junction deviation {} mm)",
         std::filesystem::path(p.source).filename().string(), cfg.max_accel_mm_s2[0],
         cfg.max_accel_mm_s2[1], cfg.junction_deviation_mm);
-    const std::string svg = plan::speed_svg(
-        {constant_speed_series(jc, cfg), plan::profile_speed_series(pp, cfg.clk_hz)}, title,
-        a.zoom[0], a.zoom[1]);
+    std::vector<plan::SpeedSeries> series;
+    if (!a.board_edges.empty()) series.push_back(board_speed_series(a.board_edges, cfg, pp));
+    series.push_back(constant_speed_series(jc, cfg));
+    series.push_back(plan::profile_speed_series(pp, cfg.clk_hz));
+    const std::string svg = plan::speed_svg(series, title, a.zoom[0], a.zoom[1]);
     std::ofstream f(a.speed_svg);
     f << svg;
     if (!f) throw std::runtime_error(fmt::format("{}: error: cannot write file", a.speed_svg));
@@ -227,6 +297,8 @@ void register_plan(CLI::App& app) {
                 "print the job time of v1 stop-and-wait, v2 constant feed and v2 planned");
   sub->add_option("--speed-svg", args->speed_svg,
                   "write an SVG of path speed against time (planned and constant feed)");
+  sub->add_option("--board-edges", args->board_edges,
+                  "overlay the speed measured from a simulated board's edge CSV (stream --edges)");
   sub->add_option("--zoom", args->zoom, "zoom window of the speed plot, seconds (T0 T1)")
       ->expected(2);
   sub->add_flag("-q,--quiet", args->quiet, "print only the summary");

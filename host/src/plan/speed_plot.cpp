@@ -131,7 +131,7 @@ std::string speed_svg(const std::vector<SpeedSeries>& series, const std::string&
   vmax *= 1.08;
   zoom_t1 = std::min(zoom_t1, t_end);
   if (!(zoom_t1 > zoom_t0)) zoom_t0 = 0, zoom_t1 = t_end;
-  const double width = 1100, height = 700;
+  const double width = 1100, height = 668 + 18.0 * static_cast<double>(series.size());
   std::string out = fmt::format(
       "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' "
       "font-family='sans-serif'>\n<rect width='100%' height='100%' fill='white'/>\n"
