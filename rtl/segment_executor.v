@@ -15,7 +15,11 @@
 // abort (e-stop): on an edge where abort is high the executor drops the running or waiting
 // segment and is idle after it (no seg_done for it); laser is low from that clock (combinational
 // gate) and no step request is issued in an abort clock, so no further STEP rises (pulses already
-// high finish their high time). A DIR write pending stays pending (written when its hold ends).
+// high finish their high time). A DIR write pending is cancelled (no DIR edge in or after an abort
+// clock; the next segment that needs the other direction takes the HOLD/SETUP path), and no
+// segment is accepted for 65 535 clocks after the abort (1.3 ms at 50 MHz, covering any DIR setup
+// setting after a DIR edge that came just before the abort; in cnc_core the e-stop is held until a
+// FAULT_CLEAR frame anyway).
 //
 // Input (s_axis_*): one segment from segment_prep: code, laser power, v2 bit, dir_fast, per-axis
 // direction and |steps|, the per-axis DDA constant T - |steps| and the length T in clocks.
@@ -119,6 +123,7 @@ module segment_executor #(
   reg [N_AXES-1:0] dir_tgt_reg;  // DIR level written or pending per axis
   reg [N_AXES-1:0] pend_reg;  // DIR write pending
   reg [15:0] setup_cnt_reg;
+  reg [15:0] settle_reg;  // after an abort: clocks before a segment is accepted from IDLE again
   reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
   reg [63:0] left_reg;  // ticks left including the current one
   reg last_reg;  // the current tick is the last (left_reg == 1)
@@ -137,7 +142,7 @@ module segment_executor #(
   wire line_tick = tick && (kind_reg == K_LINE);
   wire prof_tick = tick && (kind_reg == K_PROFILE);
   wire run_last = tick && ((kind_reg == K_PROFILE) ? prof_last : last_reg);
-  wire ready = !abort && ((state_reg == S_IDLE) || run_last);
+  wire ready = !abort && (((state_reg == S_IDLE) && (settle_reg == 16'd0)) || run_last);
   wire accept = ready && s_axis_tvalid;
   wire prof_in = (s_axis_kind == K_PROFILE);
   wire [N_AXES-1:0] rev = (s_axis_dir ^ dir_tgt_reg) & moving;
@@ -146,8 +151,8 @@ module segment_executor #(
   wire hold_clear = ((pend_reg & ~pulse_hold_ok) == {N_AXES{1'b0}});
   // DIR writes: in HOLD all pending axes together once every hold has elapsed; otherwise (a write
   // pending during RUN) each axis as soon as its own hold has elapsed.
-  wire [N_AXES-1:0] dir_wr = (state_reg == S_HOLD) ? (pend_reg & {N_AXES{hold_clear}})
-                                                   : (pend_reg & pulse_hold_ok);
+  wire [N_AXES-1:0] dir_wr = {N_AXES{!abort}} & ((state_reg == S_HOLD) ? (pend_reg & {N_AXES{hold_clear}})
+                                                                       : (pend_reg & pulse_hold_ok));
 
   // SETUP ends when the clocks since the DIR write (setup_cnt_reg, 1 in the first SETUP clock)
   // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
@@ -309,8 +314,12 @@ module segment_executor #(
       default: state_reg <= S_IDLE;
     endcase
 
+    if (settle_reg != 16'd0) settle_reg <= settle_reg - 16'd1;
     if (abort) begin
+      settle_reg    <= 16'hFFFF;  // a DIR edge just before the abort gets its setup time
       state_reg     <= S_IDLE;
+      pend_reg      <= {N_AXES{1'b0}};  // pending DIR writes are cancelled: DIR keeps its level
+      dir_tgt_reg   <= dir;
       laser_reg     <= 1'b0;
       seg_start_reg <= 1'b0;
       seg_done_reg  <= 1'b0;
@@ -325,6 +334,7 @@ module segment_executor #(
       dir_tgt_reg     <= {N_AXES{1'b0}};
       pend_reg        <= {N_AXES{1'b0}};
       setup_cnt_reg   <= 16'd0;
+      settle_reg      <= 16'd0;
       setup_axes_reg  <= {N_AXES{1'b0}};
       left_reg        <= 64'd0;
       last_reg        <= 1'b0;
@@ -360,6 +370,8 @@ module segment_executor #(
       if (state_reg != S_RUN) assert (!laser);
       if (code_reg == 2'd0) assert (!laser);
       if (power_reg == 8'd0) assert (!laser);
+      // E-stop (abort): the laser is low in the abort clock itself.
+      if (abort) assert (!laser);
     end
 
 `ifdef FORMAL_DIR
@@ -378,6 +390,7 @@ module segment_executor #(
   // fault): step_pulse assumes it never holds a pending step under FORMAL_DIR.
   reg [N_AXES-1:0] f_step_q, f_dir_q;
   reg f_rst_q;  // the pins' values before a reset edge do not count as changes
+  reg f_abort_q;  // abort was high in the previous clock
   wire [N_AXES-1:0] f_dir_chg = f_rst_q ? {N_AXES{1'b0}} : (dir ^ f_dir_q);
   wire [N_AXES-1:0] f_step_rise = f_rst_q ? {N_AXES{1'b0}} : (step & ~f_step_q);
   reg [17*N_AXES-1:0] f_since_dir, f_since_step;  // clocks since the pin changed, saturating
@@ -386,6 +399,7 @@ module segment_executor #(
     f_step_q <= step;
     f_dir_q  <= dir;
     f_rst_q  <= rst;
+    f_abort_q <= abort;
     for (f_a = 0; f_a < N_AXES; f_a = f_a + 1) begin
       if (f_dir_chg[f_a]) f_since_dir[17*f_a+:17] <= 17'd1;
       else if (f_since_dir[17*f_a+:17] != 17'h10000)
@@ -414,6 +428,9 @@ module segment_executor #(
         if (f_past_valid && !rst) begin
           // A STEP rising edge now: the last DIR change was at least DIR setup clocks ago.
           if (f_step_rise[f_g]) assert (f_sd >= f_setup);
+          // E-stop (abort): no STEP rising edge on the clock after an abort clock (held abort:
+          // none at all; a pulse already high finishes its high time).
+          if (f_abort_q) assert (!f_step_rise[f_g]);
           // DIR hold, compositionally: the executor writes DIR only when step_pulse's hold_ok is
           // high, and step_pulse (set step_pulse) proves that DIR changes only on a write and that
           // hold_ok means at least DIR hold clocks since the last STEP rising edge.
@@ -426,7 +443,8 @@ module segment_executor #(
           assert ((dir[f_g] != dir_tgt_reg[f_g]) == pend_reg[f_g]);
           if (state_reg == S_SETUP && setup_axes_reg[f_g])
             assert (f_sd + 17'd1 == {1'b0, setup_cnt_reg} && setup_cnt_reg != 16'd0);
-          else assert (f_sd >= f_setup);
+          else assert (f_sd + {1'b0, settle_reg} >= f_setup);
+          if (state_reg != S_IDLE) assert (settle_reg == 16'd0);
         end
     end
   endgenerate

@@ -98,7 +98,8 @@ module segment_fifo #(
   // underflows, the counters agree, and order with integrity: any one written entry, chosen by the
   // solver (f_pick), leaves as the (k+1)-th entry taken after its write, where k = the level at its
   // write, with exactly the data it was written with. Since the choice is arbitrary, every entry
-  // leaves in its turn, unchanged.
+  // leaves in its turn, unchanged (unless a flush empties the FIFO first: then it is empty on the
+  // next clock).
   reg f_past_valid = 1'b0;
   always @(posedge clk) f_past_valid <= 1'b1;
   always @(*) if (!f_past_valid) assume (rst);
@@ -118,7 +119,7 @@ module segment_fifo #(
       if (f_ahead_reg == 16'd0) f_state_reg <= 2'd2;
       else f_ahead_reg <= f_ahead_reg - 16'd1;
     end
-    if (rst) begin
+    if (rst || flush) begin  // a flush discards the tracked entry with all the others
       f_state_reg <= 2'd0;
       f_ahead_reg <= 16'd0;
     end
@@ -140,6 +141,9 @@ module segment_fifo #(
         else assert (mem[f_addr] == f_data_reg);
       end
     end
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst) && $past(flush)) assert (level_reg == 16'd0 && !m_axis_tvalid);
 
   always @(posedge clk)
     if (f_past_valid && !$past(rst) && !$past(flush) && !rst) begin
