@@ -44,6 +44,12 @@ struct EncoderParams {
   uint32_t fifo_depth = v2::kFifoDepth;
   uint64_t clk_hz = 50'000'000, baud = 115'200;
   uint32_t build_id = v2::kBuildId;
+  // cnc_core appends its 16-byte heater block to STATUS (rtl/response_encoder.v HEAT_BYTES 16;
+  // the block-level encoder bench uses 0). The twins model idle heaters (no frames, ADC at 0):
+  // per channel temperature 0 until the first sample's eval, then -2048 degC (0x8000, no table),
+  // setpoint, duty, mode and faults 0. The first eval is on edge SAMPLE_CLKS (= clk_hz) + 635
+  // after reset release (docs/heater.md), i.e. cycle clk_hz + 635 + kResetHoldRef here.
+  bool heater_block = false;
 };
 
 class ResponseEncoderTwin : public sc_core::sc_module {
@@ -230,6 +236,15 @@ class ResponseEncoderTwin : public sc_core::sc_module {
              {s.dec.frames_ok, s.dec.crc_errors, s.dec.length_errors, s.dec.unknown_types,
               s.dec.timeouts, s.frame_errors, s.dec.overruns, s.dec.noise, s.clamped})
           put16(pl, c);
+        if (p_.heater_block) {
+          // State after edge d - 1 (the snapshot's convention).
+          const bool evaluated =
+              d - 1 >= static_cast<Cycle>(p_.clk_hz) + 635 - 20;  // kResetHoldRef = -20
+          for (int ch = 0; ch < 2; ++ch) {
+            put16(pl, evaluated ? 0x8000 : 0);
+            for (int i = 0; i < 6; ++i) pl.push_back(0);
+          }
+        }
       } else if (pend_.nak) {
         pend_.nak = false;
         type = v2::kNak;
