@@ -208,6 +208,24 @@ module heater_channel #(
   assign pid_done = u_done;
   assign enabled  = enable_reg;
 
+`ifdef FORMAL
+  // Formal properties (scripts/formal/heater_channel.ys, k-induction): the heater pin is low on
+  // every clock after one in which a fault of the channel was latched or kill (e-stop, watchdog)
+  // was high; a latched fault stays latched until fault_clear; the channel is not enabled again
+  // while a fault is latched (nothing restarts until cleared and a new setpoint is sent).
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst) && !rst) begin
+      if ($past(faults_w) != 4'd0 || $past(kill)) assert (!heater);
+      if ($past(faults_w) != 4'd0) assert (!enable_reg);
+      if (!$past(fault_clear)) assert ((faults_w & $past(faults_w)) == $past(faults_w));
+      if (!$past(enable_reg) && !$past(set_wr)) assert (!enable_reg);
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

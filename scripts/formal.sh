@@ -32,6 +32,7 @@ JOBS=(
   "executor_laser      sat     8"
   "executor_dir        sat     12"
   "segment_fifo        prove   8"
+  "heater_channel      sat     6"
 )
 
 want=("$@")
