@@ -17,9 +17,8 @@
 // gate) and no step request is issued in an abort clock, so no further STEP rises (pulses already
 // high finish their high time). A DIR write pending is cancelled (no DIR edge in or after an abort
 // clock; the next segment that needs the other direction takes the HOLD/SETUP path), and no
-// segment is accepted for 65 535 clocks after the abort (1.3 ms at 50 MHz, covering any DIR setup
-// setting after a DIR edge that came just before the abort; in cnc_core the e-stop is held until a
-// FAULT_CLEAR frame anyway).
+// segment is accepted from IDLE until the largest DIR setup setting has passed since the last abort
+// clock (a DIR edge just before the abort still gets its setup time).
 //
 // Input (s_axis_*): one segment from segment_prep: code, laser power, v2 bit, dir_fast, per-axis
 // direction and |steps|, the per-axis DDA constant T - |steps| and the length T in clocks.
@@ -124,6 +123,15 @@ module segment_executor #(
   reg [N_AXES-1:0] pend_reg;  // DIR write pending
   reg [15:0] setup_cnt_reg;
   reg [15:0] settle_reg;  // after an abort: clocks before a segment is accepted from IDLE again
+  reg [15:0] setup_max_reg;  // the largest DIR setup setting of all axes (registered)
+  reg [15:0] setup_max_w;
+  integer sm_i;
+  always @(*) begin
+    setup_max_w = 16'd0;
+    for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1)
+      if (cfg_dir_setup[16*sm_i+:16] > setup_max_w) setup_max_w = cfg_dir_setup[16*sm_i+:16];
+  end
+  always @(posedge clk) setup_max_reg <= (setup_max_w == 16'd0) ? 16'd1 : setup_max_w;
   reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
   reg [63:0] left_reg;  // ticks left including the current one
   reg last_reg;  // the current tick is the last (left_reg == 1)
@@ -316,7 +324,7 @@ module segment_executor #(
 
     if (settle_reg != 16'd0) settle_reg <= settle_reg - 16'd1;
     if (abort) begin
-      settle_reg    <= 16'hFFFF;  // a DIR edge just before the abort gets its setup time
+      settle_reg    <= setup_max_reg;  // a DIR edge just before the abort gets its setup time
       state_reg     <= S_IDLE;
       pend_reg      <= {N_AXES{1'b0}};  // pending DIR writes are cancelled: DIR keeps its level
       dir_tgt_reg   <= dir;
@@ -445,6 +453,7 @@ module segment_executor #(
             assert (f_sd + 17'd1 == {1'b0, setup_cnt_reg} && setup_cnt_reg != 16'd0);
           else assert (f_sd + {1'b0, settle_reg} >= f_setup);
           if (state_reg != S_IDLE) assert (settle_reg == 16'd0);
+          if (f_past_valid && !f_rst_q) assert (setup_max_reg >= f_setup);
         end
     end
   endgenerate
