@@ -20,98 +20,15 @@
 #include <string>
 #include <vector>
 
-#include "Varc_dda.h"
+#include "common/arc_rtl.h"
 #include "common/seed.h"
 #include "fpgacnc/twins/arc_walk.h"
-#include "verilated.h"
 
 namespace {
 
 namespace arc = fpgacnc::twins::arc;
 
-// ---------------------------------------------------------------- RTL harness
-class ArcRtl {
- public:
-  ArcRtl()
-      : ctx_(std::make_unique<VerilatedContext>()), m_(std::make_unique<Varc_dda>(ctx_.get())) {
-    m_->rst = 1;
-    m_->load = 0;
-    tick();
-    tick();
-    m_->rst = 0;
-    tick();
-  }
-
-  static void set96(VlWide<3>& w, arc::u128 v) {
-    w[0] = static_cast<uint32_t>(v);
-    w[1] = static_cast<uint32_t>(v >> 32);
-    w[2] = static_cast<uint32_t>(v >> 64);
-  }
-
-  // Loads the frame, runs until the block is idle; events in the reference's clock numbering.
-  arc::RunResult run(const arc::Frame& f, uint64_t max_clocks) {
-    const arc::Derived d = arc::derive(f);
-    const auto s24 = [](int64_t v) { return static_cast<uint32_t>(v) & 0xFFFFFFu; };
-    m_->ccw = f.g.ccw;
-    m_->i_in = s24(f.g.i);
-    m_->j_in = s24(f.g.j);
-    m_->dx_in = s24(f.g.dx);
-    m_->dy_in = s24(f.g.dy);
-    m_->dz_in = static_cast<uint32_t>(f.dz);
-    m_->n_ramp = f.n_ramp;
-    m_->dt_q = static_cast<uint64_t>(d.dt_q) & ((uint64_t{1} << 48) - 1);
-    m_->dt_r = static_cast<uint32_t>(d.dt_r);
-    m_->c_total = f.c_total;
-    m_->v_entry = f.v_entry;
-    m_->v_cruise = f.v_cruise;
-    m_->v_exit = f.v_exit;
-    m_->acc_a = f.a;
-    m_->dec_d = f.d;
-    set96(m_->vz_entry, d.vz_entry);
-    set96(m_->vz_cruise, d.vz_cruise);
-    set96(m_->vz_exit, d.vz_exit);
-    set96(m_->az, d.az);
-    m_->load = 1;
-    tick();  // the load edge: clock 0 follows
-    m_->load = 0;
-    arc::RunResult r;
-    bool done = false;
-    for (uint64_t n = 1; n <= max_clocks + 2; ++n) {
-      tick();  // edge n: the pins show the event of clock n - 1
-      arc::Event ev;
-      ev.clock = n - 1;
-      if (m_->x_step) ev.dx = m_->x_dir ? 1 : -1;
-      if (m_->y_step) ev.dy = m_->y_dir ? 1 : -1;
-      if (m_->z_step) ev.dz = m_->z_dir ? 1 : -1;
-      ev.last = m_->last;
-      if (ev.dx || ev.dy || ev.dz) r.events.push_back(ev);
-      if (ev.dx || ev.dy) r.moves += 1;
-      r.x += ev.dx;
-      r.y += ev.dy;
-      r.z += ev.dz;
-      if (ev.last) {
-        r.end_clock = n - 1;
-        if (m_->busy) ADD_FAILURE() << "busy still high on the clock after the last move";
-        done = true;
-        break;
-      }
-    }
-    if (!done) ADD_FAILURE() << "RTL did not finish within " << max_clocks << " clocks";
-    r.err = m_->err;
-    r.late = m_->late;
-    return r;
-  }
-
- private:
-  void tick() {
-    m_->clk = 0;
-    m_->eval();
-    m_->clk = 1;
-    m_->eval();
-  }
-  std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<Varc_dda> m_;
-};
+using fpgacnc::tb::ArcRtl;
 
 // ---------------------------------------------------------------- geometry of the ideal arc
 struct Ideal {
@@ -325,6 +242,129 @@ TEST(ArcWalk, RandomGeometry) {
   EXPECT_EQ(n, 4000);
   std::printf("[arc] reference walk, %d random arcs: worst radial error %.4f steps (%s)\n", n,
               worst, worst_arc.c_str());
+}
+
+// Compares one RTL run with the reference (same frame): events, end clock, err, late.
+void expect_same(const arc::RunResult& ref, const arc::RunResult& got, const std::string& what) {
+  ASSERT_EQ(got.err, ref.err) << what;
+  ASSERT_EQ(got.late, ref.late) << what;
+  const size_t ne = std::min(got.events.size(), ref.events.size());
+  for (size_t k = 0; k < ne; ++k) {
+    const arc::Event &a = ref.events[k], &b = got.events[k];
+    ASSERT_TRUE(a.clock == b.clock && a.dx == b.dx && a.dy == b.dy && a.dz == b.dz &&
+                a.last == b.last)
+        << what << ": event " << k << " expected clock " << a.clock << " d=(" << int(a.dx) << ","
+        << int(a.dy) << "," << int(a.dz) << ") last " << a.last << ", got clock " << b.clock
+        << " d=(" << int(b.dx) << "," << int(b.dy) << "," << int(b.dz) << ") last " << b.last;
+  }
+  ASSERT_EQ(got.events.size(), ref.events.size()) << what;
+  ASSERT_EQ(got.end_clock, ref.end_clock) << what;
+}
+
+arc::Frame planned(const arc::Geometry& g, double v) {
+  arc::Frame f;
+  f.g = g;
+  const arc::Plan p = arc::plan(g);
+  f.n_ramp = p.n_ramp;
+  f.c_total = p.c_total;
+  const Ideal id = ideal_of(g);
+  const double k = double(f.c_total) / id.len(id.th);
+  f.v_cruise = f.v_entry = f.v_exit =
+      static_cast<uint64_t>(std::llround(v * k * std::ldexp(1.0, 48)));
+  f.a = 1;
+  f.d = f.c_total;
+  return f;
+}
+
+// Arcs back to back, each loaded on the edge of the previous one's last move: the next arc's
+// clock 0 follows at once (zero gap) and every arc's edges equal the reference's.
+TEST(ArcDda, ZeroGapChains) {
+  const uint64_t seed = fpgacnc::tb::test_seed(63, "ArcDda.ZeroGapChains");
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  ArcRtl rtl;
+  // a full circle of R = 200 as four quarter arcs, CCW from (200, 0) about the centre
+  {
+    std::vector<arc::Frame> fs;
+    const int pts[5][2] = {{200, 0}, {0, 200}, {-200, 0}, {0, -200}, {200, 0}};
+    for (int q = 0; q < 4; ++q) {
+      arc::Geometry g{-pts[q][0], -pts[q][1], pts[q + 1][0] - pts[q][0], pts[q + 1][1] - pts[q][1],
+                      true};
+      fs.push_back(planned(g, 0.05));
+    }
+    const std::vector<arc::RunResult> got = rtl.run_chain(fs, 1u << 24);
+    for (size_t q = 0; q < fs.size(); ++q)
+      expect_same(arc::run(fs[q]), got[q], "quarter " + std::to_string(q));
+  }
+  int chains = 0, arcs = 0;
+  while (chains < 40) {
+    std::vector<arc::Frame> fs;
+    const int len = 2 + static_cast<int>(u01(rng) * 4);
+    while (static_cast<int>(fs.size()) < len) {
+      arc::Frame f;
+      if (!random_geometry(rng, 1.0, 300.0, f.g)) continue;
+      const arc::Plan p = arc::plan(f.g);
+      ASSERT_TRUE(p.ok);
+      f.n_ramp = p.n_ramp;
+      f.c_total = p.c_total;
+      const Ideal id = ideal_of(f.g);
+      random_profile(rng, f, id.len(id.th));
+      if (u01(rng) < 0.3) f.dz = static_cast<int32_t>(1 + u01(rng) * 20);
+      fs.push_back(f);
+    }
+    const std::vector<arc::RunResult> got = rtl.run_chain(fs, 1u << 26);
+    for (size_t q = 0; q < fs.size(); ++q) {
+      const arc::RunResult ref = arc::run(fs[q]);
+      ASSERT_FALSE(ref.err);
+      // late is sticky per arc and cleared by the next load: compare it on the chain's last arc
+      arc::RunResult g2 = got[q];
+      if (q + 1 < fs.size()) g2.late = ref.late;
+      expect_same(ref, g2,
+                  describe(fs[q]) + " chain " + std::to_string(chains) + " arc " +
+                      std::to_string(q) + " seed " + std::to_string(seed));
+      ++arcs;
+    }
+    ++chains;
+  }
+  std::printf("[arc] %d chains, %d arcs back to back: RTL == reference, zero gap\n", chains, arcs);
+}
+
+// Inconsistent frames stop at the guard with err (RTL and reference alike); a tangential speed
+// above the host rule makes moves wait for the walk (late), still edge for edge.
+TEST(ArcDda, GuardAndLate) {
+  ArcRtl rtl;
+  const arc::Geometry g{-150, 40, -230, 200, false};
+  const arc::Frame good = planned(g, 0.05);
+  {
+    const arc::RunResult ref = arc::run(good), got = rtl.run(good, ref.end_clock + 16);
+    EXPECT_FALSE(ref.err);
+    expect_same(ref, got, "consistent");
+    EXPECT_EQ(got.x, g.dx);
+    EXPECT_EQ(got.y, g.dy);
+  }
+  for (int64_t delta : {-1, 1, -1000}) {
+    arc::Frame f = good;
+    f.c_total = static_cast<uint64_t>(int64_t(f.c_total) + delta);
+    f.d = f.c_total;
+    const arc::RunResult ref = arc::run(f, 1u << 24);
+    EXPECT_TRUE(ref.err) << "C_TOTAL " << delta;
+    expect_same(ref, rtl.run(f, ref.end_clock + 16), "C_TOTAL off by " + std::to_string(delta));
+  }
+  {
+    arc::Frame f = good;
+    f.n_ramp = 1;  // ramp at once: a different walk that misses the planned total
+    f.g.dx += 1;   // and an end point off the walk
+    const arc::RunResult ref = arc::run(f, 1u << 24);
+    EXPECT_TRUE(ref.err);
+    expect_same(ref, rtl.run(f, ref.end_clock + 16), "end point off the walk");
+  }
+  {
+    const arc::Frame fast = planned(g, 0.4);  // 0.4 steps per clock: above 1/8
+    const arc::RunResult ref = arc::run(fast);
+    EXPECT_TRUE(ref.late);
+    EXPECT_FALSE(ref.err);
+    expect_same(ref, rtl.run(fast, ref.end_clock + 16), "late");
+  }
 }
 
 // The RTL against the reference, edge for edge, with geometry, speed and Z checks.

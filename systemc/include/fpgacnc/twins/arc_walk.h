@@ -297,84 +297,113 @@ struct RunResult {
   bool late = false;            // some move waited for the walk
 };
 
+// The block clock by clock (rtl/arc_dda.v's registers in exact integers).
+class Dda {
+ public:
+  explicit Dda(const Frame& f)
+      : f_(f), dv_(derive(f)), w_(f.g, f.n_ramp), c2_(u128{f.c_total} << FRAC) {
+    x1_ = int64_t{f.g.dx} - f.g.i;
+    y1_ = int64_t{f.g.dy} - f.g.j;
+    px_ = -int64_t{f.g.i};
+    py_ = -int64_t{f.g.j};
+    nz_ = static_cast<uint64_t>(f.dz < 0 ? -int64_t{f.dz} : int64_t{f.dz});
+    zdir_ = f.dz < 0 ? -1 : 1;
+    pending_ = w_.next();
+    c_next_ = pending_.cost;
+    v_ = f.v_entry;
+    vz_ = dv_.vz_entry;
+  }
+
+  bool done() const { return done_; }
+  bool err() const { return err_; }
+  bool late() const { return late_; }
+  uint64_t next_clock() const { return c_; }
+
+  // Clock c (0, 1, ... after the load): its event. Call only while !done().
+  Event clock() {
+    Event ev;
+    ev.clock = c_;
+    if (z_due_) ev.dz = static_cast<int8_t>(zdir_);
+    const uint64_t uint_part = static_cast<uint64_t>(u_ >> FRAC);
+    if (c_ + 1 == ready_ && uint_part >= c_next_) late_ = true;
+    if (c_ >= ready_ && uint_part >= c_next_) {
+      ev.dx = pending_.dx;
+      ev.dy = pending_.dy;
+      px_ += pending_.dx;
+      py_ += pending_.dy;
+      const bool at_end = px_ == x1_ && py_ == y1_;
+      if (at_end || c_next_ >= f_.c_total) {
+        done_ = true;
+        ev.last = true;
+        if (!at_end || c_next_ != f_.c_total) err_ = true;
+        c_ += 1;
+        return ev;
+      }
+      pending_ = w_.next();
+      c_next_ += pending_.cost;
+      ready_ = c_ + WALK_CLOCKS;
+    }
+    // Z for clock c + 1
+    const u128 rzn = rz_ + vz_;
+    z_due_ = rzn >= c2_ && zc_ < nz_;
+    rz_ = z_due_ ? rzn - c2_ : rzn;
+    if (z_due_) zc_ += 1;
+    // U, V for clock c + 1
+    u_ += v_;
+    if ((u_ >> FRAC) >= u128{f_.d}) {
+      if (v_ >= u128{f_.v_exit} + f_.a) {
+        v_ -= f_.a;
+        vz_ -= dv_.az;
+      } else {
+        v_ = f_.v_exit;
+        vz_ = dv_.vz_exit;
+      }
+    } else {
+      if (v_ + f_.a <= f_.v_cruise) {
+        v_ += f_.a;
+        vz_ += dv_.az;
+      } else {
+        v_ = f_.v_cruise;
+        vz_ = dv_.vz_cruise;
+      }
+    }
+    c_ += 1;
+    return ev;
+  }
+
+ private:
+  Frame f_;
+  Derived dv_;
+  Walker w_;
+  u128 c2_;
+  int64_t x1_ = 0, y1_ = 0, px_ = 0, py_ = 0;
+  uint64_t nz_ = 0, zc_ = 0;
+  int zdir_ = 1;
+  Move pending_;
+  uint64_t c_next_ = 0, ready_ = WALK_CLOCKS - 1, c_ = 0;
+  u128 u_ = 0, v_ = 0, vz_ = 0, rz_ = 0;
+  bool z_due_ = false, done_ = false, err_ = false, late_ = false;
+};
+
 // Clock-exact run of the block. max_clocks bounds runaway inputs (0: none).
 inline RunResult run(const Frame& f, uint64_t max_clocks = 0) {
   RunResult res;
-  const Derived dv = derive(f);
-  const int64_t x1 = int64_t{f.g.dx} - f.g.i, y1 = int64_t{f.g.dy} - f.g.j;
-  const u128 c2 = u128{f.c_total} << FRAC;
-  const uint64_t nz = static_cast<uint64_t>(f.dz < 0 ? -int64_t{f.dz} : int64_t{f.dz});
-  const int zdir = f.dz < 0 ? -1 : 1;
-  Walker w(f.g, f.n_ramp);
-  Move pending = w.next();  // the move being prepared / waiting
-  uint64_t c_next = pending.cost;
-  uint64_t ready = WALK_CLOCKS - 1;
-  u128 u = 0, v = f.v_entry, vz = dv.vz_entry, rz = 0;
-  uint64_t zc = 0;
-  bool z_due = false;  // z(c) > z(c-1), decided at the end of clock c-1
-  int64_t px = -int64_t{f.g.i}, py = -int64_t{f.g.j};
-  for (uint64_t c = 0;; ++c) {
-    Event ev;
-    ev.clock = c;
-    if (z_due) ev.dz = static_cast<int8_t>(zdir);
-    const uint64_t uint_part = static_cast<uint64_t>(u >> FRAC);
-    bool end = false;
-    if (c + 1 == ready && uint_part >= c_next) res.late = true;
-    if (c >= ready && uint_part >= c_next) {
-      ev.dx = pending.dx;
-      ev.dy = pending.dy;
-      px += pending.dx;
-      py += pending.dy;
-      res.moves += 1;
-      const bool at_end = px == x1 && py == y1;
-      if (at_end || c_next >= f.c_total) {
-        end = true;
-        ev.last = true;
-        if (!at_end || c_next != f.c_total) res.err = true;
-      } else {
-        pending = w.next();
-        c_next += pending.cost;
-        ready = c + WALK_CLOCKS;
-      }
-    }
+  Dda dda(f);
+  while (!dda.done()) {
+    const Event ev = dda.clock();
     if (ev.dx || ev.dy || ev.dz) res.events.push_back(ev);
+    if (ev.dx || ev.dy) res.moves += 1;
     res.x += ev.dx;
     res.y += ev.dy;
     res.z += ev.dz;
-    if (end) {
-      res.end_clock = c;
-      break;
-    }
-    if (max_clocks && c >= max_clocks) {
+    res.end_clock = ev.clock;
+    if (max_clocks && ev.clock >= max_clocks && !dda.done()) {
       res.err = true;
-      res.end_clock = c;
-      break;
-    }
-    // Z for clock c + 1.
-    const u128 rzn = rz + vz;
-    z_due = rzn >= c2 && zc < nz;
-    rz = z_due ? rzn - c2 : rzn;
-    if (z_due) zc += 1;
-    // U, V for clock c + 1.
-    u += v;
-    if ((u >> FRAC) >= u128{f.d}) {
-      if (v >= u128{f.v_exit} + f.a) {
-        v -= f.a;
-        vz -= dv.az;
-      } else {
-        v = f.v_exit;
-        vz = dv.vz_exit;
-      }
-    } else {
-      if (v + f.a <= f.v_cruise) {
-        v += f.a;
-        vz += dv.az;
-      } else {
-        v = f.v_cruise;
-        vz = dv.vz_cruise;
-      }
+      return res;
     }
   }
+  res.err = dda.err();
+  res.late = dda.late();
   return res;
 }
 
