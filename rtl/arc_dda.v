@@ -106,7 +106,7 @@ module arc_dda (
   reg z_due_reg, zdir_reg;
 
   // outputs
-  reg xs_reg, xd_reg, ys_reg, yd_reg, zs_reg, last_reg, err_reg, late_reg;
+  reg xs_reg, xd_reg, ys_reg, yd_reg, zs_reg, zd_reg, last_reg, err_reg, late_reg;
 
   // ---------------- W0: candidates ----------------
   wire               x_zero = (x_reg == 24'sd0);
@@ -169,6 +169,7 @@ module arc_dda (
     if (busy_reg) begin
       // Z and U/V for the next clock
       zs_reg <= z_due_reg;
+      if (z_due_reg) zd_reg <= zdir_reg;  // with the step: a chained load may change zdir_reg
       z_due_reg <= z_go;
       if (z_go) begin
         rz_reg <= rz_sub[95:0];
@@ -305,6 +306,7 @@ module arc_dda (
       zs_reg    <= 1'b0;
       xd_reg    <= 1'b0;
       yd_reg    <= 1'b0;
+      zd_reg    <= 1'b0;
       last_reg  <= 1'b0;
       err_reg   <= 1'b0;
       late_reg  <= 1'b0;
@@ -319,7 +321,7 @@ module arc_dda (
   assign y_step = ys_reg;
   assign y_dir  = yd_reg;
   assign z_step = zs_reg;
-  assign z_dir  = zdir_reg;
+  assign z_dir  = zd_reg;
   assign last   = last_reg;
   assign err    = err_reg;
   assign late   = late_reg;

@@ -309,7 +309,7 @@ TEST(ArcDda, ZeroGapChains) {
       f.c_total = p.c_total;
       const Ideal id = ideal_of(f.g);
       random_profile(rng, f, id.len(id.th));
-      if (u01(rng) < 0.3) f.dz = static_cast<int32_t>(1 + u01(rng) * 20);
+      if (u01(rng) < 0.5) f.dz = static_cast<int32_t>((1 + u01(rng) * 20) * (u01(rng) < 0.5 ? -1 : 1));
       fs.push_back(f);
     }
     const std::vector<arc::RunResult> got = rtl.run_chain(fs, 1u << 26);
