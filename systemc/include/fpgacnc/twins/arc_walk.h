@@ -253,6 +253,16 @@ inline Plan plan(const Geometry& g) {
   return p;
 }
 
+// Host scaling of the profile: K = C_TOTAL / L cost units per step of arc (L: ideal_length), so
+// that a tangential speed of v steps per clock is V = v K 2^48 (likewise A, and D = K x the
+// distance in steps at which deceleration starts).
+inline double cost_per_step(const Geometry& g, uint64_t c_total) {
+  return double(c_total) / ideal_length(g);
+}
+inline uint64_t to_fixed48(double cost_units) {
+  return static_cast<uint64_t>(std::llround(std::ldexp(cost_units, FRAC)));
+}
+
 // Everything the block is loaded with (the ARC frame fields and what prep derives from them).
 struct Frame {
   Geometry g;
