@@ -20,7 +20,8 @@
 // from prep), a step when Rz >= C_TOTAL*2^48: z(c) = min(|DZ|, floor(U(c)|DZ| / (C_TOTAL 2^48))).
 // End: the move that reaches the end point, or the first move whose cumulative cost reaches
 // C_TOTAL; err when the two do not coincide (inconsistent frame). `ending` is high on that clock:
-// a load on the same edge starts the next arc on the next clock (zero gap).
+// a load on the same edge starts the next arc on the next clock (zero gap); that load clears err, so
+// a driver that chains reads `end_err` (valid with `ending`) instead.
 //
 // Interface: `load` is taken when !busy or ending; its clock is the segment's clock -1 (clock 0 is
 // the first busy clock). Outputs: *_step are one-clock pulses, registered: an event of clock c is
@@ -57,7 +58,8 @@ module arc_dda (
     input wire        [95:0] az,        // acc_a * |dz|
 
     output wire busy,
-    output wire ending,  // this clock's move is the last one
+    output wire ending,   // this clock's move is the last one
+    output wire end_err,  // with ending: the arc ends inconsistently (err will be set)
     output wire x_step,
     output wire x_dir,  // 1: +
     output wire y_step,
@@ -316,6 +318,7 @@ module arc_dda (
 
   assign busy   = busy_reg;
   assign ending = end_w;
+  assign end_err = end_w && !(pend_end_reg && exact_reg);
   assign x_step = xs_reg;
   assign x_dir  = xd_reg;
   assign y_step = ys_reg;

@@ -365,6 +365,15 @@ TEST(ArcDda, GuardAndLate) {
     EXPECT_FALSE(ref.err);
     expect_same(ref, rtl.run(fast, ref.end_clock + 16), "late");
   }
+  {
+    // an inconsistent arc chained to a good one: its err comes out on end_err with `ending`
+    arc::Frame bad = good;
+    bad.c_total += 1;
+    bad.d = bad.c_total;
+    const std::vector<arc::RunResult> got = rtl.run_chain({bad, good}, 1u << 24);
+    expect_same(arc::run(bad), got[0], "chained inconsistent arc");
+    expect_same(arc::run(good), got[1], "the arc after it");
+  }
 }
 
 // The RTL against the reference, edge for edge, with geometry, speed and Z checks.

@@ -54,6 +54,7 @@ class ArcRtl {
     bool finished = false;
     for (uint64_t guard = 0; guard < max_clocks + 2; ++guard) {
       const bool chain = m_->ending && cur + 1 < fs.size();
+      if (chain && m_->end_err) out[cur].err = true;  // the chained load clears the sticky err
       if (chain) {
         apply(fs[cur + 1]);
         m_->load = 1;
