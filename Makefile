@@ -32,6 +32,7 @@ soak: build
 	$(BUILD)/systemc/cosim --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100 --corpus-moves $(SOAK_MOVES) --corpus-feed-override 100
 	$(BUILD)/systemc/cosim_executor --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100
 	$(BUILD)/systemc/cosim_blocks --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS)
+	$(BUILD)/systemc/arc_twin_rtl --seed $(SOAK_SEED) --arcs 20000
 	$(MAKE) fuzz-soak
 
 # libFuzzer targets (clang, ASan + UBSan; separate tree $(BUILD)/fuzz): `make fuzz` runs each
