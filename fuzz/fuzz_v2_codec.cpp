@@ -75,6 +75,12 @@ void run_decoders(const v2::Frame& f) {
         case v2::Type::Dwell:
           (void)v2::decode_dwell(f);
           break;
+        case v2::Type::LineProfile: {
+          const auto l = v2::decode_line_profile(f, axes);
+          if (l.steps.size() > axes) fail("decode_line_profile: more axes than allowed");
+          if (!v2::line_profile_field_error(l).empty()) fail("decode_line_profile: bad field");
+          break;
+        }
         case v2::Type::ConfigAxis: {
           const auto c = v2::decode_config_axis(f, axes);
           if (c.axis >= axes) fail("decode_config_axis: axis out of range accepted");

@@ -83,7 +83,7 @@ module cnc_core #(
     output wire [        15:0] naks            // NAK frames requested
 );
 
-  localparam ENTRY_W = 45 + 32 * N_AXES;
+  localparam ENTRY_W = 222 + 32 * N_AXES;  // FIFO entry (segment_prep header): 350 bits for 4 axes
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;
@@ -264,6 +264,15 @@ module cnc_core #(
   wire [31:0] seg_period;
   wire seg_tvalid, seg_tready;
   wire init_applied, init_v2, prep_clamped;
+  // PROFILE segments (LINE_PROFILE): segment_prep -> segment_executor
+  wire [1:0] seg_kind, seg_p_op1;
+  wire [46:0] seg_p_u1, seg_p_v1, seg_p_vcruise, seg_p_vexit;
+  wire [47:0] seg_p_vcma, seg_p_vxpa;
+  wire [31:0] seg_p_accel, seg_p_decel_at;
+  wire [23:0] seg_p_n_dom;
+  wire [71*N_AXES-1:0] seg_p_v0, seg_p_vc, seg_p_vx;
+  wire [56*N_AXES-1:0] seg_p_acc;
+  wire motion_abort = 1'b0;  // e-stop input of segment_prep / segment_executor (heat-rtl wires it)
 
   segment_prep #(
       .N_AXES           (N_AXES),
@@ -272,6 +281,7 @@ module cnc_core #(
   ) u_prep (
       .clk            (clk),
       .rst            (rst),
+      .abort          (motion_abort),
       .s_axis_tdata   (cmd_tdata),
       .s_axis_tvalid  (cmd_tvalid),
       .s_axis_tready  (cmd_tready),
@@ -289,6 +299,21 @@ module cnc_core #(
       .m_axis_total   (seg_total),
       .m_axis_period  (seg_period),
       .m_axis_feed    (seg_feed),
+      .m_axis_kind    (seg_kind),
+      .m_axis_prof_u1 (seg_p_u1),
+      .m_axis_prof_v1 (seg_p_v1),
+      .m_axis_prof_op1(seg_p_op1),
+      .m_axis_prof_accel   (seg_p_accel),
+      .m_axis_prof_vcruise (seg_p_vcruise),
+      .m_axis_prof_vexit   (seg_p_vexit),
+      .m_axis_prof_vcma    (seg_p_vcma),
+      .m_axis_prof_vxpa    (seg_p_vxpa),
+      .m_axis_prof_decel_at(seg_p_decel_at),
+      .m_axis_prof_n_dom   (seg_p_n_dom),
+      .m_axis_prof_v0      (seg_p_v0),
+      .m_axis_prof_vc      (seg_p_vc),
+      .m_axis_prof_vx      (seg_p_vx),
+      .m_axis_prof_acc     (seg_p_acc),
       .m_axis_tvalid  (seg_tvalid),
       .m_axis_tready  (seg_tready),
       .numerator_x    (numerator_x),
@@ -315,12 +340,28 @@ module cnc_core #(
       .s_axis_steps   (seg_steps),
       .s_axis_tmn     (seg_tmn),
       .s_axis_total   (seg_total),
+      .s_axis_kind    (seg_kind),
+      .s_axis_prof_u1 (seg_p_u1),
+      .s_axis_prof_v1 (seg_p_v1),
+      .s_axis_prof_op1(seg_p_op1),
+      .s_axis_prof_accel   (seg_p_accel),
+      .s_axis_prof_vcruise (seg_p_vcruise),
+      .s_axis_prof_vexit   (seg_p_vexit),
+      .s_axis_prof_vcma    (seg_p_vcma),
+      .s_axis_prof_vxpa    (seg_p_vxpa),
+      .s_axis_prof_decel_at(seg_p_decel_at),
+      .s_axis_prof_n_dom   (seg_p_n_dom),
+      .s_axis_prof_v0      (seg_p_v0),
+      .s_axis_prof_vc      (seg_p_vc),
+      .s_axis_prof_vx      (seg_p_vx),
+      .s_axis_prof_acc     (seg_p_acc),
       .s_axis_tvalid  (seg_tvalid),
       .s_axis_tready  (seg_tready),
       .cfg_step_high  (cfg_high_reg),
       .cfg_step_low   (cfg_low_reg),
       .cfg_dir_setup  (cfg_setup_reg),
       .cfg_dir_hold   (cfg_hold_reg),
+      .abort          (motion_abort),
       .step           (step),
       .dir            (dir),
       .laser          (laser),

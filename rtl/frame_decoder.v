@@ -13,7 +13,9 @@
 // the next byte. Otherwise the whole frame is read, the CRC is folded in over LEN..CRC low
 // (crc16_ccitt, residue 0 for a good frame) and the frame is checked on the clock after its last
 // byte (the CHECK clock), in this order: CRC (BAD_CRC), TYPE (UNKNOWN_TYPE), LEN for the TYPE
-// (BAD_LENGTH), fields (BAD_FIELD: LINE flag bits [6:2], CONFIG_AXIS axis >= N_AXES), then for
+// (BAD_LENGTH), fields (BAD_FIELD: LINE / LINE_PROFILE flag bits [6:2], CONFIG_AXIS axis >=
+// N_AXES, the LINE_PROFILE field rules of docs/protocol.md: 1 <= max|steps| < 2^24, V_cruise <
+// 2^47, V_entry <= V_cruise, V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1), then for
 // sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
 // duplicate: ACK only, nothing executed; = next_seq -> accepted (FIFO types need a free slot, else
 // FIFO_FULL), next_seq += 1, ACK.
@@ -21,14 +23,17 @@
 // or cut frame reaches the FIFO or the configuration.
 //
 // Outputs
-//   m_axis_*    FIFO write, entry {v2, kind[1:0], code[1:0], power[7:0], t[31:0],
-//               steps[32*N_AXES-1:0]} (axis a in [32*a+:32]):
+//   m_axis_*    FIFO write, entry {D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof,
+//               v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0]} (axis a in
+//               [32*a+:32]; 222 + 32*N_AXES bits; the top 177 bits are 0 except for LINE_PROFILE):
 //                 v1 motion: kind 0, v2 0, t = {16'd0, feed}, steps[0] = x, steps[1] = y,
 //                            code = byte0[1:0], power = 8'hFF
 //                 v1 init:   kind 1, v2 0, steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y
 //                 LINE:      kind 0, v2 1, t = T, steps sign-extended (int16 when SHORT), code
 //                            = flags[1:0], power
 //                 NUMERATORS kind 1, v2 1; DWELL kind 2, v2 1, t = T, code 0, power 0.
+//                 LINE_PROFILE: kind 0, v2 1, prof 1, t = A, V_entry/V_cruise/V_exit/D, steps
+//                            sign-extended, code = flags[1:0], power.
 //               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
 //               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
 //               from its registers. A v1 packet completing while m_axis_tready is low is dropped
@@ -66,7 +71,7 @@ module frame_decoder #(
     input  wire       s_axis_tvalid,
     output wire       s_axis_tready,
 
-    output wire [45+32*N_AXES-1:0] m_axis_tdata,
+    output wire [222+32*N_AXES-1:0] m_axis_tdata,
     output wire                    m_axis_tvalid,
     input  wire                    m_axis_tready,
 
@@ -97,15 +102,16 @@ module frame_decoder #(
     output wire v1_overrun
 );
 
-  localparam ENTRY_W = 45 + 32 * N_AXES;
-  localparam integer PB_LINE = 6 + 4 * N_AXES;
-  localparam integer PB = (PB_LINE > 10) ? PB_LINE : 10;  // payload bytes kept (v1: 10)
+  localparam ENTRY_W = 222 + 32 * N_AXES;
+  localparam BASE_W = 45 + 32 * N_AXES;  // entry without the LINE_PROFILE fields
+  localparam integer PB = 28 + 4 * N_AXES;  // payload bytes kept (LINE_PROFILE, int32 steps)
 
   localparam [2:0] ST_HUNT = 3'd0, ST_V1 = 3'd1, ST_LEN = 3'd2, ST_SEQ = 3'd3, ST_TYPE = 3'd4,
                    ST_PAY = 3'd5, ST_CRC1 = 3'd6, ST_CRC2 = 3'd7;
 
   localparam [7:0] T_HELLO = 8'h01, T_STATUS = 8'h02, T_FCLR = 8'h03, T_CFG = 8'h04,
-                   T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11;
+                   T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11,
+                   T_LPROF = 8'h12;
 
   localparam [7:0] R_BAD_CRC = 8'd1, R_BAD_LENGTH = 8'd2, R_UNKNOWN_TYPE = 8'd3, R_TIMEOUT = 8'd4,
                    R_OUT_OF_ORDER = 8'd5, R_FIFO_FULL = 8'd6, R_BAD_FIELD = 8'd7;
@@ -191,16 +197,57 @@ module frame_decoder #(
     end
   end
 
+  // LINE_PROFILE: the same step fields from byte 28
+  wire [7:0] len_m28 = len_reg - 8'd28;
+  wire       prof_len_ok = (len_reg >= 8'd28) &&
+                           (short_steps ? (len_m28[0] == 1'b0 && {1'b0, len_m28[7:1]} <= NAX8)
+                                        : (len_m28[1:0] == 2'b00 && {2'b00, len_m28[7:2]} <= NAX8));
+  reg [32*N_AXES-1:0] prof_steps;
+  always @(*) begin
+    prof_steps = {32 * N_AXES{1'b0}};
+    for (a = 0; a < N_AXES; a = a + 1) begin
+      if (short_steps) begin
+        if ({1'b0, len_reg} >= 9'd30 + 9'd2 * a[8:0])
+          prof_steps[32*a+:32] = {{16{pay_reg[8*(28+2*a)+7]}}, pay_reg[8*(28+2*a)+:8],
+                                  pay_reg[8*(29+2*a)+:8]};
+      end else begin
+        if ({1'b0, len_reg} >= 9'd32 + 9'd4 * a[8:0]) prof_steps[32*a+:32] = be32(pay_reg, 28 + 4 * a);
+      end
+    end
+  end
+  wire [47:0] p_ve = {pb(pay_reg, 2), pb(pay_reg, 3), be32(pay_reg, 4)};
+  wire [47:0] p_vc = {pb(pay_reg, 8), pb(pay_reg, 9), be32(pay_reg, 10)};
+  wire [47:0] p_vx = {pb(pay_reg, 14), pb(pay_reg, 15), be32(pay_reg, 16)};
+  wire [31:0] p_a = be32(pay_reg, 20);
+  wire [31:0] p_d = be32(pay_reg, 24);
+  // every axis |steps| < 2^24 and at least one axis moves
+  reg prof_range_ok, prof_moves;
+  always @(*) begin
+    prof_range_ok = 1'b1;
+    prof_moves    = 1'b0;
+    for (a = 0; a < N_AXES; a = a + 1) begin
+      if (!(prof_steps[32*a+24+:8] == 8'h00 ||
+            (prof_steps[32*a+24+:8] == 8'hFF && prof_steps[32*a+:24] != 24'd0)))
+        prof_range_ok = 1'b0;
+      if (prof_steps[32*a+:32] != 32'd0) prof_moves = 1'b1;
+    end
+  end
+  wire prof_field_ok = (flags[6:2] == 5'd0) && prof_range_ok && prof_moves && !p_vc[47] &&
+                       (p_ve <= p_vc) && (p_vx <= p_vc) && (p_vx != 48'd0) &&
+                       (p_a != 32'd0 || p_ve != 48'd0);
+
   wire [32*N_AXES-1:0] two_steps = {{32 * (N_AXES - 2) {1'b0}}, be32(pay_reg, 4), be32(pay_reg, 0)};
 
   // v1 packet
-  wire [ENTRY_W-1:0] e_v1_motion = {1'b0, 2'd0, code_reg, 8'hFF, 16'd0, pb(pay_reg, 8),
+  wire [BASE_W-1:0] e_v1_motion = {1'b0, 2'd0, code_reg, 8'hFF, 16'd0, pb(pay_reg, 8),
                                     pb(pay_reg, 9), two_steps};
-  wire [ENTRY_W-1:0] e_v1_init = {1'b0, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
+  wire [BASE_W-1:0] e_v1_init = {1'b0, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
   // v2 frames
-  wire [ENTRY_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(pay_reg, 1), be32(pay_reg, 2), line_steps};
-  wire [ENTRY_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(pay_reg, 0), {32 * N_AXES{1'b0}}};
-  wire [ENTRY_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
+  wire [BASE_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(pay_reg, 1), be32(pay_reg, 2), line_steps};
+  wire [BASE_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(pay_reg, 0), {32 * N_AXES{1'b0}}};
+  wire [BASE_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
+  wire [ENTRY_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(pay_reg, 1),
+                                p_a, prof_steps};
 
   // ---------------------------------------------------------------- CHECK
   wire t_hello = (type_reg == T_HELLO);
@@ -211,14 +258,18 @@ module frame_decoder #(
   wire t_rel = (type_reg == T_REL);
   wire t_line = (type_reg == T_LINE);
   wire t_dwell = (type_reg == T_DWELL);
-  wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell;
+  wire t_lprof = (type_reg == T_LPROF);
+  wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
+               t_lprof;
   wire len0 = (len_reg == 8'd0);
   wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
                 (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
-                (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok);
-  wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8);
-  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell;
-  wire to_fifo = t_num || t_line || t_dwell;
+                (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok) ||
+                (t_lprof && prof_len_ok);
+  wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8) &&
+                  !(t_lprof && !prof_field_ok);
+  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof;
+  wire to_fifo = t_num || t_line || t_dwell || t_lprof;
   wire [7:0] seq_diff = seq_reg - next_seq_reg;
   wire seq_new = (seq_diff == 8'd0);
   wire seq_dup = seq_diff[7];  // next_seq - 128 .. next_seq - 1
@@ -228,12 +279,14 @@ module frame_decoder #(
                    (!to_fifo || m_axis_tready);
   wire v1_write = chk_reg && chk_v1_reg && m_axis_tready;
 
+  localparam PW = ENTRY_W - BASE_W;
   reg [ENTRY_W-1:0] entry;
   always @(*) begin
-    if (chk_v1_reg) entry = is_init_reg ? e_v1_init : e_v1_motion;
-    else if (t_line) entry = e_line;
-    else if (t_dwell) entry = e_dwell;
-    else entry = e_num;
+    if (chk_v1_reg) entry = {{PW{1'b0}}, is_init_reg ? e_v1_init : e_v1_motion};
+    else if (t_line) entry = {{PW{1'b0}}, e_line};
+    else if (t_dwell) entry = {{PW{1'b0}}, e_dwell};
+    else if (t_lprof) entry = e_lprof;
+    else entry = {{PW{1'b0}}, e_num};
   end
 
   // ---------------------------------------------------------------- byte handling and strobes

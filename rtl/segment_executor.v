@@ -1,4 +1,21 @@
-// segment_executor: runs prepared linear segments on N_AXES axes at a constant rate, back to back.
+// segment_executor: runs prepared linear segments on N_AXES axes at a constant rate (kind LINE) or
+// with a trapezoidal speed profile (kind PROFILE), back to back.
+//
+// Segment kinds (s_axis_kind, held in kind_reg for the running segment; another kind, e.g. an arc,
+// adds its own generator next to dda_linear / profile_gen, its tick gate and its end condition in
+// run_last):
+//   0 LINE: constant rate, T clocks (below). Also DWELL and zero-length segments.
+//   1 PROFILE: s_axis_prof_* from segment_prep (docs/timing.md "Profiled segments"): profile_gen
+//     (the dominant-axis U/V master) and one dda_profile per axis. Tick j (j = 1, 2, ...) is the
+//     clock after edge R + j - 1 as for LINE; the axes step in tick j when floor(U(j)*n_i/M)
+//     increments, STEP rises at edge R + j. The segment's last tick is the first j with
+//     U(j) >= n_dom*2^48 (profile_gen last, from registers). The LINE tick counter is not used.
+//     A profiled segment never uses dir_fast (segment_prep sends 0): a reversing axis always
+//     takes the HOLD/SETUP path.
+// abort (e-stop): on an edge where abort is high the executor drops the running or waiting
+// segment and is idle after it (no seg_done for it); laser is low from that clock (combinational
+// gate) and no step request is issued in an abort clock, so no further STEP rises (pulses already
+// high finish their high time). A DIR write pending stays pending (written when its hold ends).
 //
 // Input (s_axis_*): one segment from segment_prep: code, laser power, v2 bit, dir_fast, per-axis
 // direction and |steps|, the per-axis DDA constant T - |steps| and the length T in clocks.
@@ -50,6 +67,21 @@ module segment_executor #(
     input  wire [ 32*N_AXES-1:0] s_axis_steps,
     input  wire [ 64*N_AXES-1:0] s_axis_tmn,
     input  wire [          63:0] s_axis_total,
+    input  wire [           1:0] s_axis_kind,       // 0 LINE, 1 PROFILE
+    input  wire [          46:0] s_axis_prof_u1,     // PROFILE: U(1) = V_entry
+    input  wire [          46:0] s_axis_prof_v1,     // V(1)
+    input  wire [           1:0] s_axis_prof_op1,    // op(1)
+    input  wire [          31:0] s_axis_prof_accel,  // A
+    input  wire [          46:0] s_axis_prof_vcruise,
+    input  wire [          46:0] s_axis_prof_vexit,
+    input  wire [          47:0] s_axis_prof_vcma,   // V_cruise - A
+    input  wire [          47:0] s_axis_prof_vxpa,   // V_exit + A
+    input  wire [          31:0] s_axis_prof_decel_at,
+    input  wire [          23:0] s_axis_prof_n_dom,
+    input  wire [ 71*N_AXES-1:0] s_axis_prof_v0,     // per axis V_entry * n_a
+    input  wire [ 71*N_AXES-1:0] s_axis_prof_vc,     // V_cruise * n_a
+    input  wire [ 71*N_AXES-1:0] s_axis_prof_vx,     // V_exit * n_a
+    input  wire [ 56*N_AXES-1:0] s_axis_prof_acc,    // A * n_a
     input  wire                  s_axis_tvalid,
     output wire                  s_axis_tready,
 
@@ -57,6 +89,10 @@ module segment_executor #(
     input wire [16*N_AXES-1:0] cfg_step_low,
     input wire [16*N_AXES-1:0] cfg_dir_setup,
     input wire [16*N_AXES-1:0] cfg_dir_hold,
+
+    /* verilator lint_off SYMRSVDWORD */
+    input wire abort,  // e-stop: drop everything (see above)
+    /* verilator lint_on SYMRSVDWORD */
 
     output wire [N_AXES-1:0] step,
     output wire [N_AXES-1:0] dir,
@@ -73,9 +109,11 @@ module segment_executor #(
 );
 
   localparam [2:0] S_IDLE = 3'd0, S_HOLD = 3'd1, S_SETUP = 3'd2, S_RUN = 3'd3, S_ZERO = 3'd4;
+  localparam [1:0] K_LINE = 2'd0, K_PROFILE = 2'd1;
 
   reg [2:0] state_reg;
   reg [1:0] code_reg;
+  reg [1:0] kind_reg;
   reg [7:0] power_reg;
   reg v2_reg;
   reg [N_AXES-1:0] dir_tgt_reg;  // DIR level written or pending per axis
@@ -90,15 +128,20 @@ module segment_executor #(
   reg seg_done_v2_reg;
   reg [32*N_AXES-1:0] pos_reg;
 
-  wire [N_AXES-1:0] dda_step, pulse_idle, pulse_hold_ok, pulse_violation;
+  wire [N_AXES-1:0] dda_step, prof_step, pulse_idle, pulse_hold_ok, pulse_violation;
   wire [N_AXES-1:0] moving;
+  wire prof_last;
+  wire [1:0] prof_op;
 
-  wire run_last = (state_reg == S_RUN) && last_reg;
-  wire ready = (state_reg == S_IDLE) || run_last;
-  wire accept = ready && s_axis_tvalid;
   wire tick = (state_reg == S_RUN);
+  wire line_tick = tick && (kind_reg == K_LINE);
+  wire prof_tick = tick && (kind_reg == K_PROFILE);
+  wire run_last = tick && ((kind_reg == K_PROFILE) ? prof_last : last_reg);
+  wire ready = !abort && ((state_reg == S_IDLE) || run_last);
+  wire accept = ready && s_axis_tvalid;
+  wire prof_in = (s_axis_kind == K_PROFILE);
   wire [N_AXES-1:0] rev = (s_axis_dir ^ dir_tgt_reg) & moving;
-  wire zero_len = (s_axis_total == 64'd0);
+  wire zero_len = !prof_in && (s_axis_total == 64'd0);
   wire cutting = (s_axis_code != 2'd0) && (s_axis_power != 8'd0);
   wire hold_clear = ((pend_reg & ~pulse_hold_ok) == {N_AXES{1'b0}});
   // DIR writes: in HOLD all pending axes together once every hold has elapsed; otherwise (a write
@@ -110,11 +153,32 @@ module segment_executor #(
   // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
   // (the run starts on edge D + max(largest setup, 1)).
   wire [N_AXES-1:0] setup_ok;
+  wire [N_AXES-1:0] step_req;
+
+  profile_gen u_prof (
+      .clk     (clk),
+      .rst     (rst),
+      .load    (accept && prof_in),
+      .u1      (s_axis_prof_u1),
+      .v1      (s_axis_prof_v1),
+      .op1     (s_axis_prof_op1),
+      .accel   (s_axis_prof_accel),
+      .vcruise (s_axis_prof_vcruise),
+      .vexit   (s_axis_prof_vexit),
+      .vcma    (s_axis_prof_vcma),
+      .vxpa    (s_axis_prof_vxpa),
+      .decel_at(s_axis_prof_decel_at),
+      .n_dom   (s_axis_prof_n_dom),
+      .tick    (prof_tick),
+      .last    (prof_last),
+      .op      (prof_op)
+  );
 
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
+      assign step_req[a] = (dda_step[a] || prof_step[a]) && !abort;
       assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
       dda_linear u_dda (
@@ -123,8 +187,22 @@ module segment_executor #(
           .load (accept),
           .steps(s_axis_steps[32*a+:32]),
           .tmn  (s_axis_tmn[64*a+:64]),
-          .tick (tick),
+          .tick (line_tick),
           .step (dda_step[a])
+      );
+
+      dda_profile u_pdda (
+          .clk  (clk),
+          .rst  (rst),
+          .load (accept && prof_in),
+          .n_dom(s_axis_prof_n_dom),
+          .v0   (s_axis_prof_v0[71*a+:71]),
+          .vc   (s_axis_prof_vc[71*a+:71]),
+          .vx   (s_axis_prof_vx[71*a+:71]),
+          .acc  (s_axis_prof_acc[56*a+:56]),
+          .tick (prof_tick),
+          .op   (prof_op),
+          .step (prof_step[a])
       );
 
       step_pulse u_pulse (
@@ -133,7 +211,7 @@ module segment_executor #(
           .cfg_high (cfg_step_high[16*a+:16]),
           .cfg_low  (cfg_step_low[16*a+:16]),
           .cfg_hold (cfg_dir_hold[16*a+:16]),
-          .step_req (dda_step[a]),
+          .step_req (step_req[a]),
           .dir_in   (dir_tgt_reg[a]),
           .dir_wr   (dir_wr[a]),
           .step     (step[a]),
@@ -144,7 +222,7 @@ module segment_executor #(
       );
 
       always @(posedge clk) begin
-        if (dda_step[a])
+        if (step_req[a])
           pos_reg[32*a+:32] <= dir[a] ? pos_reg[32*a+:32] + 32'd1 : pos_reg[32*a+:32] - 32'd1;
         if (rst) pos_reg[32*a+:32] <= 32'd0;
       end
@@ -166,6 +244,7 @@ module segment_executor #(
     end
 
     if (accept) begin
+      kind_reg    <= prof_in ? K_PROFILE : K_LINE;
       code_reg    <= s_axis_code;
       power_reg   <= s_axis_power;
       v2_reg      <= s_axis_v2;
@@ -204,7 +283,7 @@ module segment_executor #(
         end
       end
       S_RUN: begin
-        if (last_reg) begin
+        if (run_last) begin
           seg_done_reg    <= 1'b1;
           seg_done_v2_reg <= v2_reg;
           if (!accept) begin
@@ -230,8 +309,16 @@ module segment_executor #(
       default: state_reg <= S_IDLE;
     endcase
 
+    if (abort) begin
+      state_reg     <= S_IDLE;
+      laser_reg     <= 1'b0;
+      seg_start_reg <= 1'b0;
+      seg_done_reg  <= 1'b0;
+    end
+
     if (rst) begin
       state_reg       <= S_IDLE;
+      kind_reg        <= K_LINE;
       code_reg        <= 2'd0;
       power_reg       <= 8'd0;
       v2_reg          <= 1'b0;
@@ -249,7 +336,7 @@ module segment_executor #(
   end
 
   assign s_axis_tready = ready;
-  assign laser         = laser_reg;
+  assign laser         = laser_reg && !abort;
   assign busy          = (state_reg != S_IDLE);
   assign idle          = (state_reg == S_IDLE) && (&pulse_idle);
   assign running       = (state_reg == S_RUN);

@@ -19,7 +19,7 @@
 `default_nettype none
 
 module segment_fifo #(
-    parameter WIDTH = 173,
+    parameter WIDTH = 350,  // the command-FIFO entry for 4 axes (segment_prep header)
     parameter DEPTH = 64
 ) (
     input wire clk,

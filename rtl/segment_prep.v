@@ -1,8 +1,13 @@
 // segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
 //
-// Input (s_axis_*): one FIFO entry, width ENTRY_W = 45 + 32*N_AXES,
-//   { v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0] }
-//   steps: axis a in [32*a+:32], signed.
+// Input (s_axis_*): one FIFO entry, width ENTRY_W = 222 + 32*N_AXES (350 for 4 axes),
+//   { D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
+//     v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0] }
+//   steps: axis a in [32*a+:32], signed. The profile fields (top 177 bits) are 0 except for
+//   LINE_PROFILE.
+//   kind 0 MOTION, v2 = 1, prof = 1 (LINE_PROFILE): t = A; V_entry, V_cruise, V_exit, D; steps per
+//          axis, |steps| < 2^24, not all 0; the frame decoder has checked the field rules of
+//          docs/protocol.md. Prepared as kind PROFILE (below).
 //   kind 0 MOTION, v2 = 0 (v1 move): t = {16'd0, feed}, steps[0] = X, steps[1] = Y (the other
 //          axes are ignored: v1 moves X and Y only), power 8'hFF.
 //   kind 0 MOTION, v2 = 1 (LINE): t = T, the segment length in clocks; steps per axis.
@@ -30,7 +35,15 @@
 // that accepts the entry:
 //   v1 MOTION       : 68            (DIV 33, CLAMP 1, MUL 33, SUB 1)
 //   v2 LINE, DWELL, kind 3: 67 + N_AXES (MAX N_AXES - 1, then as v1; the multiplier always runs)
+//   LINE_PROFILE    : 26 + N_AXES  (MAX N_AXES - 1, PMUL 25, PINIT 1)
 // The next entry is accepted on the edge after the executor takes the prepared segment.
+// PROFILE arithmetic (m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
+// exact products V_entry*n_a, V_cruise*n_a, V_exit*n_a (71 bits) and A*n_a (56 bits) by a
+// shift-add multiplier over the 24 bits of n_a (all axes and products in parallel: 4*N_AXES
+// adders of at most 71 bits); vcma = V_cruise - A, vxpa = V_exit + A; and the first master update
+// (profile_gen): U(1) = V_entry, V(1) and op(1) from V(0) = V_entry with "decelerating" = (D == 0)
+// (U(1) < 1 step). m_axis_total = 0, m_axis_period = 0, m_axis_dir_fast = 0 (a reversing axis
+// always waits DIR hold/setup before a profiled segment), m_axis_tmn = 0.
 // Output (m_axis_*): one prepared segment, held until accepted.
 `default_nettype none
 
@@ -41,8 +54,11 @@ module segment_prep #(
 ) (
     input wire clk,
     input wire rst,
+    /* verilator lint_off SYMRSVDWORD */
+    input wire abort,  // e-stop: drop the entry being prepared or waiting (idle after the edge)
+    /* verilator lint_on SYMRSVDWORD */
 
-    input  wire [45+32*N_AXES-1:0] s_axis_tdata,
+    input  wire [222+32*N_AXES-1:0] s_axis_tdata,
     input  wire                    s_axis_tvalid,
     output wire                    s_axis_tready,
 
@@ -61,6 +77,21 @@ module segment_prep #(
     output wire [          63:0] m_axis_total,     // T, segment length in clocks
     output wire [          31:0] m_axis_period,    // P, dominant step period in clocks (0: none)
     output wire [          15:0] m_axis_feed,      // v1 feed as received (status only), 0 for v2
+    output wire [           1:0] m_axis_kind,      // 0 LINE (also DWELL, zero-length), 1 PROFILE
+    output wire [          46:0] m_axis_prof_u1,
+    output wire [          46:0] m_axis_prof_v1,
+    output wire [           1:0] m_axis_prof_op1,
+    output wire [          31:0] m_axis_prof_accel,
+    output wire [          46:0] m_axis_prof_vcruise,
+    output wire [          46:0] m_axis_prof_vexit,
+    output wire [          47:0] m_axis_prof_vcma,
+    output wire [          47:0] m_axis_prof_vxpa,
+    output wire [          31:0] m_axis_prof_decel_at,
+    output wire [          23:0] m_axis_prof_n_dom,
+    output wire [ 71*N_AXES-1:0] m_axis_prof_v0,
+    output wire [ 71*N_AXES-1:0] m_axis_prof_vc,
+    output wire [ 71*N_AXES-1:0] m_axis_prof_vx,
+    output wire [ 56*N_AXES-1:0] m_axis_prof_acc,
     output wire                  m_axis_tvalid,
     input  wire                  m_axis_tready,
 
@@ -75,7 +106,7 @@ module segment_prep #(
   localparam SW = 32 * N_AXES;
   localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2;
   localparam [2:0] S_IDLE = 3'd0, S_MAX = 3'd1, S_DIV = 3'd2, S_CLAMP = 3'd3, S_MUL = 3'd4,
-                   S_SUB = 3'd5, S_OUT = 3'd6;
+                   S_SUB = 3'd5, S_OUT = 3'd6, S_PMUL = 3'd7;
   localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
   localparam integer AX_LAST_I = N_AXES - 1;
   localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
@@ -88,6 +119,25 @@ module segment_prep #(
   wire [1:0] in_kind = s_axis_tdata[SW+43:SW+42];
   wire in_v2 = s_axis_tdata[SW+44];
   wire in_v1_motion = (in_kind == K_MOTION) && !in_v2;
+  wire in_prof = s_axis_tdata[SW+45] && (in_kind == K_MOTION) && in_v2;
+  wire [46:0] in_ve = s_axis_tdata[SW+46+:47];
+  wire [46:0] in_vc = s_axis_tdata[SW+94+:47];
+  wire [46:0] in_vx = s_axis_tdata[SW+142+:47];
+  wire [31:0] in_d = s_axis_tdata[SW+190+:32];
+
+  localparam [1:0] OP_INC = 2'd0, OP_DEC = 2'd1, OP_CRU = 2'd2, OP_EXIT = 2'd3;
+  // profile registers
+  reg prof_reg;
+  reg [46:0] ve_reg, vc_reg, vx_reg;
+  reg [31:0] pa_reg, d_reg;
+  reg [46:0] v1_reg;
+  reg [1:0] op1_reg;
+  reg [47:0] vcma_reg, vxpa_reg;
+  reg [70:0] mc_ve_reg, mc_vc_reg, mc_vx_reg;  // shifted multiplicands
+  reg [55:0] mc_a_reg;
+  reg [24*N_AXES-1:0] pm_reg;  // per-axis multipliers (n_a), shifted right
+  reg [71*N_AXES-1:0] p_v0_reg, p_vc_reg, p_vx_reg;
+  reg [56*N_AXES-1:0] p_a_reg;
 
   reg [2:0] state_reg;
   reg [31:0] num_x_reg, num_y_reg;
@@ -158,8 +208,8 @@ module segment_prep #(
   wire rem_ge = !rem_diff[32];  // rem_shift >= divisor
 
   wire idle_state = (state_reg == S_IDLE);
-  wire accept_init = idle_state && (in_kind == K_NUMERATORS) && exec_idle;
-  wire accept_seg = idle_state && (in_kind != K_NUMERATORS);
+  wire accept_init = idle_state && (in_kind == K_NUMERATORS) && exec_idle && !abort;
+  wire accept_seg = idle_state && (in_kind != K_NUMERATORS) && !abort;
 
   integer i;
   always @(posedge clk) begin
@@ -183,6 +233,12 @@ module segment_prep #(
           // v2 T goes straight into the divider; v1 loads its numerator in the first DIV clock
           dividend_reg <= (in_kind == K_DWELL || (in_kind == K_MOTION && in_v2)) ? in_t : 32'd0;
           feed_reg     <= in_v1_motion ? in_t[15:0] : 16'd0;
+          prof_reg     <= in_prof;
+          ve_reg       <= in_ve;
+          vc_reg       <= in_vc;
+          vx_reg       <= in_vx;
+          pa_reg       <= in_t;
+          d_reg        <= in_d;
           n_dom_reg    <= abs_in[31:0];
           scan_idx_reg <= {{(AXW - 1) {1'b0}}, 1'b1};
           rem_reg      <= 32'd0;
@@ -195,7 +251,42 @@ module segment_prep #(
       S_MAX: begin
         if (scan_gt) n_dom_reg <= scan_val;
         scan_idx_reg <= scan_idx_reg + 1'b1;
-        if (scan_idx_reg == AX_LAST) state_reg <= S_DIV;
+        if (scan_idx_reg == AX_LAST) begin
+          state_reg <= prof_reg ? S_PMUL : S_DIV;
+          iter_reg  <= 6'd0;
+        end
+      end
+      S_PMUL: begin
+        // iteration 0 loads; 1..24 add bit iter-1 of every n_a; then PINIT (state S_SUB with
+        // prof_reg: vcma, vxpa, V(1), op(1)).
+        if (iter_reg == 6'd0) begin
+          mc_ve_reg <= {24'd0, ve_reg};
+          mc_vc_reg <= {24'd0, vc_reg};
+          mc_vx_reg <= {24'd0, vx_reg};
+          mc_a_reg  <= {24'd0, pa_reg};
+          for (i = 0; i < N_AXES; i = i + 1) pm_reg[24*i+:24] <= abs_reg[32*i+:24];
+          p_v0_reg <= {71 * N_AXES{1'b0}};
+          p_vc_reg <= {71 * N_AXES{1'b0}};
+          p_vx_reg <= {71 * N_AXES{1'b0}};
+          p_a_reg  <= {56 * N_AXES{1'b0}};
+          iter_reg <= 6'd1;
+        end else begin
+          for (i = 0; i < N_AXES; i = i + 1) begin
+            if (pm_reg[24*i]) begin
+              p_v0_reg[71*i+:71] <= p_v0_reg[71*i+:71] + mc_ve_reg;
+              p_vc_reg[71*i+:71] <= p_vc_reg[71*i+:71] + mc_vc_reg;
+              p_vx_reg[71*i+:71] <= p_vx_reg[71*i+:71] + mc_vx_reg;
+              p_a_reg[56*i+:56]  <= p_a_reg[56*i+:56] + mc_a_reg;
+            end
+            pm_reg[24*i+:24] <= {1'b0, pm_reg[24*i+1+:23]};
+          end
+          mc_ve_reg <= {mc_ve_reg[69:0], 1'b0};
+          mc_vc_reg <= {mc_vc_reg[69:0], 1'b0};
+          mc_vx_reg <= {mc_vx_reg[69:0], 1'b0};
+          mc_a_reg  <= {mc_a_reg[54:0], 1'b0};
+          iter_reg  <= iter_reg + 6'd1;
+          if (iter_reg == 6'd24) state_reg <= S_SUB;
+        end
       end
       S_DIV: begin
         if (iter_reg == 6'd0) begin
@@ -260,8 +351,32 @@ module segment_prep #(
       end
       S_SUB: begin
         for (i = 0; i < N_AXES; i = i + 1)
-          tmn_reg[64*i+:64] <= total_reg - {32'd0, abs_reg[32*i+:32]};
-        dir_fast_reg  <= fast_reg;
+          tmn_reg[64*i+:64] <= prof_reg ? 64'd0 : total_reg - {32'd0, abs_reg[32*i+:32]};
+        dir_fast_reg  <= fast_reg && !prof_reg;
+        if (prof_reg) begin
+          // PINIT: the first master update, from V(0) = V_entry; decelerating iff D == 0
+          total_reg <= 64'd0;
+          quot_reg  <= 32'd0;
+          vcma_reg  <= {1'b0, vc_reg} - {16'd0, pa_reg};
+          vxpa_reg  <= {1'b0, vx_reg} + {16'd0, pa_reg};
+          if (d_reg == 32'd0) begin
+            if ({1'b0, ve_reg} >= {1'b0, vx_reg} + {16'd0, pa_reg}) begin
+              v1_reg  <= ve_reg - {15'd0, pa_reg};
+              op1_reg <= OP_DEC;
+            end else begin
+              v1_reg  <= vx_reg;
+              op1_reg <= OP_EXIT;
+            end
+          end else begin
+            if ({1'b0, ve_reg} + {16'd0, pa_reg} <= {1'b0, vc_reg}) begin
+              v1_reg  <= ve_reg + {15'd0, pa_reg};
+              op1_reg <= OP_INC;
+            end else begin
+              v1_reg  <= vc_reg;
+              op1_reg <= OP_CRU;
+            end
+          end
+        end
         dir_track_reg <= (dir_track_reg & ~moving) | (dir_reg & moving);
         state_reg     <= S_OUT;
       end
@@ -270,6 +385,8 @@ module segment_prep #(
       end
       default: state_reg <= S_IDLE;
     endcase
+
+    if (abort) state_reg <= S_IDLE;
 
     if (rst) begin
       state_reg        <= S_IDLE;
@@ -302,6 +419,25 @@ module segment_prep #(
       chk_rev_reg      <= 1'b0;
       chk_hs_reg       <= 17'd0;
       dir_fast_reg     <= 1'b0;
+      prof_reg         <= 1'b0;
+      ve_reg           <= 47'd0;
+      vc_reg           <= 47'd0;
+      vx_reg           <= 47'd0;
+      pa_reg           <= 32'd0;
+      d_reg            <= 32'd0;
+      v1_reg           <= 47'd0;
+      op1_reg          <= OP_CRU;
+      vcma_reg         <= 48'd0;
+      vxpa_reg         <= 48'd0;
+      mc_ve_reg        <= 71'd0;
+      mc_vc_reg        <= 71'd0;
+      mc_vx_reg        <= 71'd0;
+      mc_a_reg         <= 56'd0;
+      pm_reg           <= {24 * N_AXES{1'b0}};
+      p_v0_reg         <= {71 * N_AXES{1'b0}};
+      p_vc_reg         <= {71 * N_AXES{1'b0}};
+      p_vx_reg         <= {71 * N_AXES{1'b0}};
+      p_a_reg          <= {56 * N_AXES{1'b0}};
     end
   end
 
@@ -316,6 +452,21 @@ module segment_prep #(
   assign m_axis_total    = total_reg;
   assign m_axis_period   = quot_reg;
   assign m_axis_feed     = feed_reg;
+  assign m_axis_kind     = {1'b0, prof_reg};
+  assign m_axis_prof_u1  = ve_reg;
+  assign m_axis_prof_v1  = v1_reg;
+  assign m_axis_prof_op1 = op1_reg;
+  assign m_axis_prof_accel    = pa_reg;
+  assign m_axis_prof_vcruise  = vc_reg;
+  assign m_axis_prof_vexit    = vx_reg;
+  assign m_axis_prof_vcma     = vcma_reg;
+  assign m_axis_prof_vxpa     = vxpa_reg;
+  assign m_axis_prof_decel_at = d_reg;
+  assign m_axis_prof_n_dom    = n_dom_reg[23:0];
+  assign m_axis_prof_v0       = p_v0_reg;
+  assign m_axis_prof_vc       = p_vc_reg;
+  assign m_axis_prof_vx       = p_vx_reg;
+  assign m_axis_prof_acc      = p_a_reg;
   assign m_axis_tvalid   = (state_reg == S_OUT);
   assign numerator_x     = num_x_reg;
   assign numerator_y     = num_y_reg;

@@ -2,6 +2,7 @@
 # benchmarks.
 fpgacnc_verilated(vexec TOP segment_executor
                   SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/dda_linear.v
+                          ${FPGACNC_RTL_DIR}/profile_gen.v ${FPGACNC_RTL_DIR}/dda_profile.v
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
 fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
 fpgacnc_verilated(vframe TOP frame_decoder
@@ -25,3 +26,5 @@ fpgacnc_bench(test_segment_executor LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_executor.cpp LIBS vexec vprep fmt::fmt)
 fpgacnc_bench(test_segment_prep LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_prep.cpp LIBS vprep fmt::fmt)
+fpgacnc_bench(test_profile LABEL rtl
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_profile.cpp LIBS vexec vprep vcore_3m fmt::fmt)

@@ -317,6 +317,93 @@ TEST(V2Codec, DecodersRejectWrongTypeAndLength) {
   EXPECT_THROW(v2::decode_credit(v2::hello()), v2::ProtocolError);
 }
 
+// docs/protocol.md, LINE_PROFILE worked example.
+const char* const kProfileExample =
+    "A5 20 0A 12 81 FF 00 00 00 00 00 00 00 04 31 BD E8 2D 00 00 3B 9A CA 00 00 00 46 5E 00 00 01 "
+    "20 01 40 FF 60 51 62";
+
+v2::LineProfile profile_example() {
+  v2::LineProfile p;
+  p.code = 1;
+  p.power = 255;
+  p.v_entry = 0;
+  p.v_cruise = 18'014'398'509;
+  p.v_exit = 1'000'000'000;
+  p.accel = 18'014;
+  p.decel_at = 288;
+  p.steps = {320, -160};
+  return p;
+}
+
+TEST(V2Codec, LineProfileWorkedExample) {
+  EXPECT_EQ(v2::encode(v2::line_profile(10, profile_example())), from_hex(kProfileExample));
+  const auto f = parse_one(from_hex(kProfileExample));
+  EXPECT_EQ(f.seq, 10);
+  EXPECT_EQ(v2::type_name(f.type), "LINE_PROFILE");
+  auto want = profile_example();
+  want.short_steps = true;
+  EXPECT_EQ(v2::decode_line_profile(f, 4), want);
+  EXPECT_TRUE(v2::is_fifo(0x12) && v2::is_sequenced(0x12));
+  // int32 steps for 4 axes: 28 + 16 bytes, same fields
+  auto p4 = profile_example();
+  p4.steps = {320, -160, 0, 40'000};
+  const auto f4 = v2::line_profile(11, p4);
+  EXPECT_EQ(f4.payload.size(), 44u);
+  EXPECT_EQ(f4.payload[0], 0x01);
+  EXPECT_EQ(v2::decode_line_profile(f4, 4), p4);
+  EXPECT_THROW(v2::decode_line_profile(f4, 3), v2::ProtocolError);
+}
+
+TEST(V2Codec, LineProfileFieldRules) {
+  using R = v2::NakReason;
+  const auto ok = profile_example();
+  EXPECT_EQ(v2::check_host_frame(v2::line_profile(0, ok), 4), std::nullopt);
+  // Each rule broken on the wire (the builder refuses them, so patch the encoded payload).
+  auto patched = [&](size_t byte, uint8_t value) {
+    auto f = v2::line_profile(0, ok);
+    f.payload[byte] = value;
+    return f;
+  };
+  EXPECT_EQ(v2::check_host_frame(patched(0, 0x85), 4), R::BadField);   // reserved flag bit 2
+  EXPECT_EQ(v2::check_host_frame(patched(8, 0x80), 4), R::BadField);   // V_cruise >= 2^47
+  EXPECT_EQ(v2::check_host_frame(patched(8, 0x7F), 4), std::nullopt);  // V_cruise < 2^47
+  EXPECT_EQ(v2::check_host_frame(patched(2, 0x01), 4), R::BadField);   // V_entry > V_cruise
+  EXPECT_EQ(v2::check_host_frame(patched(14, 0x01), 4), R::BadField);  // V_exit > V_cruise
+  auto f = v2::line_profile(0, ok);
+  for (size_t i = 14; i < 20; ++i) f.payload[i] = 0;  // V_exit = 0
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadField);
+  f = v2::line_profile(0, ok);
+  for (size_t i = 20; i < 24; ++i) f.payload[i] = 0;  // A = 0 with V_entry = 0
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadField);
+  f.payload[7] = 1;  // A = 0 with V_entry = 1: runs at constant speed
+  EXPECT_EQ(v2::check_host_frame(f, 4), std::nullopt);
+  f = v2::line_profile(0, ok);
+  for (size_t i = 28; i < f.payload.size(); ++i) f.payload[i] = 0;  // no steps
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadField);
+  f.payload.resize(28);  // k = 0
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadField);
+  f.payload.resize(27);
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadLength);
+  f = v2::line_profile(0, ok);
+  f.payload.pop_back();
+  EXPECT_EQ(v2::check_host_frame(f, 4), R::BadLength);
+  auto big = ok;
+  big.steps = {(1 << 24) - 1, 3};
+  EXPECT_EQ(v2::check_host_frame(v2::line_profile(0, big), 4), std::nullopt);
+  big.steps = {3, -(1 << 24)};
+  EXPECT_THROW(v2::line_profile(0, big), std::invalid_argument);
+  auto bad = ok;
+  bad.code = 4;
+  EXPECT_THROW(v2::line_profile(0, bad), std::invalid_argument);
+  bad = ok;
+  bad.v_exit = 0;
+  EXPECT_THROW(v2::line_profile(0, bad), std::invalid_argument);
+  bad = ok;
+  bad.steps.assign(10, 1);  // 28 + 10 * 4 > 64
+  bad.steps[0] = 40'000;
+  EXPECT_THROW(v2::line_profile(0, bad), std::invalid_argument);
+}
+
 TEST(V2Codec, HostFrameChecksFollowTheDeviceRules) {
   using R = v2::NakReason;
   EXPECT_EQ(v2::check_host_frame(v2::hello(), 4), std::nullopt);
@@ -335,7 +422,7 @@ TEST(V2Codec, HostFrameChecksFollowTheDeviceRules) {
   f = v2::line(0, 1, 1, 1, xyz);
   f.payload.pop_back();  // 6 + 5 bytes: not a whole number of int16
   EXPECT_EQ(v2::check_host_frame(f, 4), R::BadLength);
-  f.type = 0x12;  // LINE_PROFILE: reserved
+  f.type = 0x14;  // undefined
   EXPECT_EQ(v2::check_host_frame(f, 4), R::UnknownType);
   EXPECT_EQ(v2::check_host_frame(v2::dwell(0, 1), 4), std::nullopt);
   EXPECT_TRUE(v2::is_fifo(0x10) && v2::is_fifo(0x11) && v2::is_fifo(0x05));

@@ -256,7 +256,7 @@ void decoder_tests(DecoderBench& b) {
   std::tie(r, w) = b.run({kSync, 65});
   check(is_nak(r, 0, kBadLength) && w == 0, "LEN > 64: NAK BAD_LENGTH at once");
   std::tie(r, w) = b.run(frame(1, 0x12, {1, 2, 3}));
-  check(is_nak(r, 1, kUnknownType), "LINE_PROFILE reserved: NAK UNKNOWN_TYPE");
+  check(is_nak(r, 1, kBadLength), "LINE_PROFILE of 3 bytes: NAK BAD_LENGTH");
   std::tie(r, w) = b.run(frame(1, 0x20));
   check(is_nak(r, 1, kUnknownType), "heater type reserved: NAK UNKNOWN_TYPE");
   std::tie(r, w) = b.run(frame(1, kDwell, {0, 0, 1}));

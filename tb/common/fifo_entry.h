@@ -1,5 +1,8 @@
-// The command-FIFO entry that segment_prep takes (rtl-back contract, docs/timing.md):
-// { v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N-1:0] }, axis a in [32*a+:32].
+// The command-FIFO entry that segment_prep takes (rtl-back contract, docs/timing.md), 222 + 32*N
+// bits (350 for N = 4):
+// { D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
+//   v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N-1:0] }, axis a in [32*a+:32].
+// LINE_PROFILE: prof = 1, v2 = 1, kind 0, t = A; the profile fields are 0 for every other entry.
 #pragma once
 
 #include <cstdint>
@@ -8,6 +11,7 @@
 namespace fpgacnc::tb {
 
 inline constexpr int kEntryAxes = 4;
+inline constexpr int kEntryWords = 11;  // 350 bits
 
 enum EntryKind { kMotion = 0, kNumerators = 1, kDwell = 2, kKind3 = 3 };
 
@@ -18,10 +22,13 @@ struct Entry {
   int power = 0xFF;
   uint32_t t = 0;  // v1: feed; v2 LINE / DWELL: T
   int32_t steps[kEntryAxes] = {0, 0, 0, 0};
+  bool prof = false;  // LINE_PROFILE (t = A)
+  uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;
+  uint32_t decel_at = 0;
 
-  // Writes the entry into a Verilated wide port (`words` 32-bit words, at least 6 for 4 axes).
+  // Writes the entry into a Verilated wide port (`words` 32-bit words, 11 for 4 axes).
   template <class Wide>
-  void pack(Wide& w, int words = 6) const {
+  void pack(Wide& w, int words = kEntryWords) const {
     for (int i = 0; i < words; ++i) w[i] = 0;
     auto put = [&](int pos, int width, uint64_t v) {
       for (int b = 0; b < width; ++b)
@@ -34,6 +41,11 @@ struct Entry {
     put(sw + 40, 2, static_cast<uint64_t>(code));
     put(sw + 42, 2, static_cast<uint64_t>(kind));
     put(sw + 44, 1, v2 ? 1 : 0);
+    put(sw + 45, 1, prof ? 1 : 0);
+    put(sw + 46, 48, v_entry);
+    put(sw + 94, 48, v_cruise);
+    put(sw + 142, 48, v_exit);
+    put(sw + 190, 32, decel_at);
   }
 };
 
@@ -59,6 +71,22 @@ inline Entry v2_line(int code, int power, uint32_t t, std::initializer_list<int3
   e.code = code;
   e.power = power;
   e.t = t;
+  int a = 0;
+  for (int32_t s : steps) e.steps[a++] = s;
+  return e;
+}
+inline Entry line_profile(int code, int power, uint64_t v_entry, uint64_t v_cruise, uint64_t v_exit,
+                          uint32_t accel, uint32_t decel_at, std::initializer_list<int32_t> steps) {
+  Entry e;
+  e.v2 = true;
+  e.prof = true;
+  e.code = code;
+  e.power = power;
+  e.t = accel;
+  e.v_entry = v_entry;
+  e.v_cruise = v_cruise;
+  e.v_exit = v_exit;
+  e.decel_at = decel_at;
   int a = 0;
   for (int32_t s : steps) e.steps[a++] = s;
   return e;

@@ -91,6 +91,8 @@ std::string type_name(uint8_t type) {
       return "DWELL";
     case Type::Arc:
       return "ARC";
+    case Type::LineProfile:
+      return "LINE_PROFILE";
     case Type::Ack:
       return "ACK";
     case Type::Nak:
@@ -141,6 +143,7 @@ bool is_sequenced(uint8_t type) {
     case Type::Line:
     case Type::Dwell:
     case Type::Arc:
+    case Type::LineProfile:
       return true;
     default:
       return false;
@@ -150,7 +153,7 @@ bool is_sequenced(uint8_t type) {
 bool is_fifo(uint8_t type) {
   return type == static_cast<uint8_t>(Type::Numerators) ||
          type == static_cast<uint8_t>(Type::Line) || type == static_cast<uint8_t>(Type::Dwell) ||
-         type == static_cast<uint8_t>(Type::Arc);
+         type == static_cast<uint8_t>(Type::Arc) || type == static_cast<uint8_t>(Type::LineProfile);
 }
 
 uint16_t crc16(std::span<const uint8_t> data) {
@@ -495,6 +498,92 @@ Frame arc(uint8_t seq, const Arc& a) {
   return make(seq, Type::Arc, std::move(p));
 }
 
+namespace {
+void put48(std::vector<uint8_t>& v, uint64_t x) {
+  put16(v, static_cast<uint16_t>(x >> 32));
+  put32(v, static_cast<uint32_t>(x));
+}
+uint64_t get48(const std::vector<uint8_t>& v, size_t i) {
+  return (uint64_t{get16(v, i)} << 32) | get32(v, i + 2);
+}
+// Payload layout: flags, power, V_entry u48, V_cruise u48, V_exit u48, A u32, D u32, steps.
+constexpr size_t kProfileHeader = 28;
+
+LineProfile parse_line_profile(const Frame& f) {
+  const auto& p = f.payload;
+  LineProfile l;
+  l.code = p[0] & 0x03;
+  l.short_steps = (p[0] & kLineShort) != 0;
+  l.power = p[1];
+  l.v_entry = get48(p, 2);
+  l.v_cruise = get48(p, 8);
+  l.v_exit = get48(p, 14);
+  l.accel = get32(p, 20);
+  l.decel_at = get32(p, 24);
+  const size_t w = l.short_steps ? 2 : 4;
+  for (size_t i = kProfileHeader; i + w <= p.size(); i += w) {
+    l.steps.push_back(w == 2 ? static_cast<int32_t>(static_cast<int16_t>(get16(p, i)))
+                             : static_cast<int32_t>(get32(p, i)));
+  }
+  return l;
+}
+}  // namespace
+
+std::string line_profile_field_error(const LineProfile& p) {
+  uint64_t n_dom = 0;
+  for (const int32_t s : p.steps) {
+    const uint64_t m = s < 0 ? uint64_t{0} - static_cast<uint64_t>(static_cast<int64_t>(s))
+                             : static_cast<uint64_t>(s);
+    n_dom = std::max(n_dom, m);
+  }
+  if (n_dom == 0) return "no axis moves (n_dom = 0)";
+  if (n_dom > kProfileNDomMax) return fmt::format("n_dom {} >= 2^24", n_dom);
+  if (p.v_cruise >= kProfileVMax) return fmt::format("V_cruise {} >= 2^47", p.v_cruise);
+  if (p.v_entry > p.v_cruise) return fmt::format("V_entry {} > V_cruise {}", p.v_entry, p.v_cruise);
+  if (p.v_exit > p.v_cruise) return fmt::format("V_exit {} > V_cruise {}", p.v_exit, p.v_cruise);
+  if (p.v_exit == 0) return "V_exit = 0";
+  if (p.accel == 0 && p.v_entry == 0) return "A = 0 and V_entry = 0 (never moves)";
+  return {};
+}
+
+Frame line_profile(uint8_t seq, const LineProfile& lp, bool short_if_fits) {
+  if (lp.code > 3) {
+    throw std::invalid_argument(fmt::format("LINE_PROFILE frame: motion code {} > 3", lp.code));
+  }
+  if (const auto e = line_profile_field_error(lp); !e.empty()) {
+    throw std::invalid_argument("LINE_PROFILE frame: " + e);
+  }
+  bool fits16 = short_if_fits;
+  for (const int32_t s : lp.steps) {
+    if (s < std::numeric_limits<int16_t>::min() || s > std::numeric_limits<int16_t>::max()) {
+      fits16 = false;
+    }
+  }
+  const size_t w = fits16 ? 2 : 4;
+  if (kProfileHeader + w * lp.steps.size() > kMaxPayload) {
+    throw std::invalid_argument(
+        fmt::format("LINE_PROFILE frame: {} axes of {} bytes exceed {} bytes of payload",
+                    lp.steps.size(), w, kMaxPayload));
+  }
+  std::vector<uint8_t> p;
+  p.reserve(kProfileHeader + w * lp.steps.size());
+  p.push_back(static_cast<uint8_t>(lp.code | (fits16 ? kLineShort : 0)));
+  p.push_back(lp.power);
+  put48(p, lp.v_entry);
+  put48(p, lp.v_cruise);
+  put48(p, lp.v_exit);
+  put32(p, lp.accel);
+  put32(p, lp.decel_at);
+  for (const int32_t s : lp.steps) {
+    if (fits16) {
+      put16(p, static_cast<uint16_t>(static_cast<int16_t>(s)));
+    } else {
+      put32(p, static_cast<uint32_t>(s));
+    }
+  }
+  return make(seq, Type::LineProfile, std::move(p));
+}
+
 std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
   const size_t n = f.payload.size();
   switch (static_cast<Type>(f.type)) {
@@ -527,6 +616,15 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (f.payload[0] & 0xFC) return NakReason::BadField;
       if (!arc_field_error(parse_arc(f)).empty()) return NakReason::BadField;
       return std::nullopt;
+    case Type::LineProfile: {
+      if (n < kProfileHeader) return NakReason::BadLength;
+      const size_t w = (f.payload[0] & kLineShort) ? 2 : 4;
+      if ((n - kProfileHeader) % w != 0) return NakReason::BadLength;
+      if (n_axes && (n - kProfileHeader) / w > n_axes) return NakReason::BadLength;
+      if (f.payload[0] & 0x7C) return NakReason::BadField;
+      if (!line_profile_field_error(parse_line_profile(f)).empty()) return NakReason::BadField;
+      return std::nullopt;
+    }
     default:
       return NakReason::UnknownType;
   }
@@ -569,6 +667,11 @@ uint32_t decode_dwell(const Frame& f) {
 Arc decode_arc(const Frame& f) {
   check_or_throw(f, Type::Arc, 0);
   return parse_arc(f);
+}
+
+LineProfile decode_line_profile(const Frame& f, size_t n_axes) {
+  check_or_throw(f, Type::LineProfile, n_axes);
+  return parse_line_profile(f);
 }
 
 ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {

@@ -33,6 +33,7 @@ enum class Type : uint8_t {
   Release = 0x06,
   Line = 0x10,
   Dwell = 0x11,
+  LineProfile = 0x12,
   Arc = 0x13,  // circular DDA (issue 6)
   Ack = 0x80,
   Nak = 0x81,
@@ -56,9 +57,9 @@ std::string type_name(uint8_t type);
 // "BAD_CRC", ..., or "reason 9".
 std::string nak_reason_name(uint8_t reason);
 // Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE, LINE, DWELL,
-// ARC).
+// LINE_PROFILE, ARC).
 bool is_sequenced(uint8_t type);
-// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, ARC).
+// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC).
 bool is_fifo(uint8_t type);
 
 // A decoder was given a frame of the wrong type or length, or a field out of range.
@@ -203,6 +204,31 @@ Frame line(uint8_t seq, uint8_t code, uint8_t power, uint32_t t, std::span<const
            bool short_if_fits = true);
 Frame dwell(uint8_t seq, uint32_t t);
 
+// LINE_PROFILE (TYPE 0x12): a line run with a trapezoidal speed profile (docs/protocol.md,
+// "LINE_PROFILE"). Velocities are UQ0.48 dominant-axis steps per clock, the acceleration is in
+// 2^-48 dominant steps per clock^2, decel_at (D) is the dominant step count at which deceleration
+// starts. Device limits (else NAK BAD_FIELD): 1 <= n_dom = max|steps| < 2^24, v_cruise < 2^47,
+// v_entry <= v_cruise, v_exit <= v_cruise, v_exit >= 1, accel >= 1 or v_entry >= 1.
+constexpr uint64_t kProfileOne = uint64_t{1} << 48;   // 1 dominant step per clock (never reached)
+constexpr uint64_t kProfileVMax = uint64_t{1} << 47;  // v_cruise must be below this
+constexpr uint32_t kProfileNDomMax = (1u << 24) - 1;  // largest n_dom
+struct LineProfile {
+  uint8_t code = 0;
+  uint8_t power = 0;
+  uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;  // u48
+  uint32_t accel = 0;
+  uint32_t decel_at = 0;
+  bool short_steps = false;    // decoded: the frame used int16 steps
+  std::vector<int32_t> steps;  // k axes
+  bool operator==(const LineProfile&) const = default;
+};
+// Empty when the fields satisfy the device limits above, else the rule broken (for messages).
+std::string line_profile_field_error(const LineProfile& p);
+// Builder: SHORT (int16) when `short_if_fits` and every count fits int16 (p.short_steps is
+// ignored). Throws std::invalid_argument for a code > 3, a payload over 64 bytes or a field the
+// device would reject (line_profile_field_error).
+Frame line_profile(uint8_t seq, const LineProfile& p, bool short_if_fits = true);
+
 constexpr uint8_t kLineShort = 0x80;
 
 struct Line {
@@ -224,6 +250,7 @@ struct ConfigAxis {
 // names the rule). `n_axes` bounds k and the axis number (0: no bound beyond the payload).
 Line decode_line(const Frame& f, size_t n_axes = 0);
 uint32_t decode_dwell(const Frame& f);
+LineProfile decode_line_profile(const Frame& f, size_t n_axes = 0);
 ConfigAxis decode_config_axis(const Frame& f, size_t n_axes = 0);
 std::array<uint32_t, 2> decode_numerators(const Frame& f);
 // The NAK reason the device gives a good-CRC host frame with these type/length/fields, or

@@ -206,6 +206,27 @@ class FrameDecoderTwin : public sc_core::sc_module {
            static_cast<uint32_t>(b[2]) << 8 | b[3];
   }
   static uint16_t be16(const uint8_t* b) { return static_cast<uint16_t>(b[0] << 8 | b[1]); }
+  static uint64_t be48(const uint8_t* b) {
+    return static_cast<uint64_t>(be16(b)) << 32 | be32(b + 2);
+  }
+  uint32_t profile_step(int a, int width) const {
+    const uint8_t* p = &payload_[28 + width * a];
+    return width == 2 ? static_cast<uint32_t>(static_cast<int32_t>(static_cast<int16_t>(be16(p))))
+                      : be32(p);
+  }
+  // LINE_PROFILE field rules (docs/protocol.md), as frame_decoder.v checks them.
+  bool profile_fields_ok(int axes, int width) const {
+    bool moves = false;
+    for (int a = 0; a < axes; ++a) {
+      const auto s = static_cast<int32_t>(profile_step(a, width));
+      if (s <= -(1 << 24) || s >= (1 << 24)) return false;
+      if (s != 0) moves = true;
+    }
+    const uint64_t ve = be48(&payload_[2]), vc = be48(&payload_[8]), vx = be48(&payload_[14]);
+    const uint32_t acc = be32(&payload_[20]);
+    return moves && vc < (uint64_t{1} << 47) && ve <= vc && vx <= vc && vx != 0 &&
+           (acc != 0 || ve != 0);
+  }
 
   void v1_packet(Cycle take) {
     const bool init = kind_ == Kind::V1Init;
@@ -288,6 +309,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return 4;
       case v2::kLine:
         return -2;
+      case v2::kLineProfile:
+        return -3;
       default:
         return -1;
     }
@@ -305,9 +328,9 @@ class FrameDecoderTwin : public sc_core::sc_module {
       return;
     }
     int width = 4, axes = 0;
-    if (want == -2) {
+    if (want == -2 || want == -3) {
       width = (payload_[0] & 0x80) ? 2 : 4;
-      const int rest = len_ - 6;
+      const int rest = len_ - (want == -2 ? 6 : 28);
       if (rest < 0 || rest % width != 0 || rest / width > kAxes) {
         ++s_.length_errors;
         commit_check(take);
@@ -321,8 +344,9 @@ class FrameDecoderTwin : public sc_core::sc_module {
       request(r, RespReq{kReqNak, seq_, v2::kBadLength});
       return;
     }
-    if ((type_ == v2::kLine && (payload_[0] & 0x7C) != 0) ||
-        (type_ == v2::kConfigAxis && payload_[0] >= kAxes)) {
+    if (((type_ == v2::kLine || type_ == v2::kLineProfile) && (payload_[0] & 0x7C) != 0) ||
+        (type_ == v2::kConfigAxis && payload_[0] >= kAxes) ||
+        (type_ == v2::kLineProfile && !profile_fields_ok(axes, width))) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;
@@ -348,10 +372,22 @@ class FrameDecoderTwin : public sc_core::sc_module {
       request(r, RespReq{kReqAck});
       return;
     }
-    if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators) {
+    if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators ||
+        type_ == v2::kLineProfile) {
       FifoEntry e{};
       e.v2 = true;
-      if (type_ == v2::kLine) {
+      if (type_ == v2::kLineProfile) {
+        e.kind = kEntryMotion;
+        e.prof = true;
+        e.code = payload_[0] & 3;
+        e.power = payload_[1];
+        e.v_entry = be48(&payload_[2]);
+        e.v_cruise = be48(&payload_[8]);
+        e.v_exit = be48(&payload_[14]);
+        e.t = be32(&payload_[20]);
+        e.decel_at = be32(&payload_[24]);
+        for (int a = 0; a < axes; ++a) e.steps[a] = profile_step(a, width);
+      } else if (type_ == v2::kLine) {
         e.kind = kEntryMotion;
         e.code = payload_[0] & 3;
         e.power = payload_[1];

@@ -22,6 +22,8 @@
 // executor takes it.
 #pragma once
 
+#include <stdexcept>
+
 #include "fpgacnc/twins/tlm_common.h"
 
 namespace fpgacnc::twins {
@@ -83,6 +85,8 @@ class SegmentPrepTwin : public sc_core::sc_module {
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const FifoEntry c = payload<FifoEntry>(gp);
+    if (c.prof)
+      throw std::logic_error("segment_prep twin: LINE_PROFILE entries are not modelled yet");
     Cycle accept = std::max(clk_.at(delay) + 1, free_from_);
     if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};

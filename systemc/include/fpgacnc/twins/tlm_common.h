@@ -81,6 +81,11 @@ struct FifoEntry {
   uint8_t power;
   uint32_t t;
   std::array<uint32_t, kAxes> steps;  // two's complement
+  // LINE_PROFILE (prof, kind 0, v2, t = A): not modelled by the prep / executor twins yet (they
+  // throw); the decoder twin checks and writes these fields as the RTL does.
+  bool prof = false;
+  uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;
+  uint32_t decel_at = 0;
 };
 // frame_decoder -> segment_fifo: write on the delay's edge. Read (TLM_READ_COMMAND): the level
 // after the delay's edge.

@@ -1,0 +1,74 @@
+// dda_profile: exact DDA of one axis of a profiled segment (profile_gen is the master).
+//
+// The axis makes n steps while the dominant axis makes n_dom (M = n_dom*2^48). It keeps
+// V_i = V*n (UQ23.48, < 2^71: V < 2^47, n < 2^24) and a remainder r = R - M with R = U*n mod M
+// (r in [-M, 0), 73-bit two's complement). Per tick: s = r + V_i; s >= 0: step, r = s - M (only
+// the integer part changes: a 25-bit subtract after the sign); else r = s. So after clock c the
+// axis has made exactly floor(U(c)*n / M) steps. V_i follows the master's op of the tick
+// (profile_gen runs one clock ahead): INC V_i += A*n, DEC V_i -= A*n, CRU V_i = V_cruise*n,
+// EXIT V_i = V_exit*n (all exact products from segment_prep).
+// load (wins over a tick on the same edge; the tick's step is still issued, being combinational):
+// r = -M, V_i = V_entry*n. step is combinational from the registers and tick: the executor's
+// step_pulse raises STEP on the next edge.
+`default_nettype none
+
+module dda_profile (
+    input wire clk,
+    input wire rst,
+
+    input wire        load,
+    input wire [23:0] n_dom,
+    input wire [70:0] v0,     // V_entry * n
+    input wire [70:0] vc,     // V_cruise * n
+    input wire [70:0] vx,     // V_exit * n
+    input wire [55:0] acc,    // A * n
+
+    input wire       tick,
+    input wire [1:0] op,      // profile_gen op of this tick
+
+    output wire step
+);
+
+  localparam [1:0] OP_INC = 2'd0, OP_DEC = 2'd1, OP_CRU = 2'd2;
+
+  reg [72:0] r_reg;
+  reg [70:0] v_reg, vc_reg, vx_reg;
+  reg [55:0] a_reg;
+  reg [23:0] n_reg;
+
+  wire [72:0] s = r_reg + {2'b00, v_reg};
+  wire        wrap = !s[72];
+  wire [24:0] s_hi_m = s[72:48] - {1'b0, n_reg};
+
+  always @(posedge clk) begin
+    if (load) begin
+      r_reg  <= {1'b1, ~n_dom + 24'd1, 48'd0};  // -M (n_dom >= 1)
+      v_reg  <= v0;
+      vc_reg <= vc;
+      vx_reg <= vx;
+      a_reg  <= acc;
+      n_reg  <= n_dom;
+    end else if (tick) begin
+      r_reg <= wrap ? {s_hi_m, s[47:0]} : s;
+      case (op)
+        OP_INC:  v_reg <= v_reg + {15'd0, a_reg};
+        OP_DEC:  v_reg <= v_reg - {15'd0, a_reg};
+        OP_CRU:  v_reg <= vc_reg;
+        default: v_reg <= vx_reg;
+      endcase
+    end
+    if (rst) begin
+      r_reg  <= 73'd0;
+      v_reg  <= 71'd0;
+      vc_reg <= 71'd0;
+      vx_reg <= 71'd0;
+      a_reg  <= 56'd0;
+      n_reg  <= 24'd0;
+    end
+  end
+
+  assign step = tick && wrap;
+
+endmodule
+
+`default_nettype wire
