@@ -24,7 +24,11 @@
 // a driver that chains reads `end_err` (valid with `ending`) instead.
 //
 // Interface: `load` is taken when !busy or ending; its clock is the segment's clock -1 (clock 0 is
-// the first busy clock). Outputs: *_step are one-clock pulses, registered: an event of clock c is
+// the first busy clock in which `run` is high: while `run` is low the block is frozen (the
+// executor holds a loaded arc through DIR hold/setup); `stop` (e-stop) makes it idle at once).
+// nx_dir / ny_dir: the direction of the next X / Y move (the tangent signs of the walk's current
+// point), valid while dir_valid (busy, from the second clock of each move); the executor writes
+// DIR from them ahead of the step (at the quadrant points, where an axis reverses). Outputs: *_step are one-clock pulses, registered: an event of clock c is
 // on the pins on clock c + 1 (fixed latency 1); *_dir are valid with the step and held. `last`
 // comes with the final move's step. err / late are sticky until the next load.
 // Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz; 64-bit V; 48-bit F and cost
@@ -37,6 +41,8 @@ module arc_dda (
     input wire rst,
 
     input wire               load,
+    input wire               run,       // advance (the executor's RUN state); frozen when low
+    input wire               stop,      // abort: idle after this edge
     input wire               ccw,
     input wire signed [23:0] i_in,      // centre - start
     input wire signed [23:0] j_in,
@@ -68,7 +74,10 @@ module arc_dda (
     output wire z_dir,
     output wire last,
     output wire err,
-    output wire late
+    output wire late,
+    output wire dir_valid,  // nx_dir / ny_dir valid
+    output wire nx_dir,     // 1: + (the next X move's direction)
+    output wire ny_dir
 );
 
   localparam [1:0] W0 = 2'd0, W1 = 2'd1, W2 = 2'd2, READY = 2'd3;
@@ -158,9 +167,9 @@ module arc_dda (
   wire        [96:0] rz_sub = {1'b0, rz_next} - {1'b0, ctot_reg, 48'd0};
   wire               z_go = !rz_sub[96] && (zc_reg != nz_reg);
 
-  wire               fire = busy_reg && (st_reg == READY) && (u_reg[95:48] >= cnext_reg);
+  wire               fire = busy_reg && run && (st_reg == READY) && (u_reg[95:48] >= cnext_reg);
   wire               end_w = fire && (pend_end_reg || guard_reg);
-  wire               take = load && (!busy_reg || end_w);
+  wire               take = load && !stop && (!busy_reg || end_w);
 
 
   always @(posedge clk) begin
@@ -168,7 +177,7 @@ module arc_dda (
     ys_reg   <= 1'b0;
     zs_reg   <= 1'b0;
     last_reg <= 1'b0;
-    if (busy_reg) begin
+    if (busy_reg && run) begin
       // Z and U/V for the next clock
       zs_reg <= z_due_reg;
       if (z_due_reg) zd_reg <= zdir_reg;  // with the step: a chained load may change zdir_reg
@@ -300,6 +309,8 @@ module arc_dda (
       late_reg  <= 1'b0;
     end
 
+    if (stop) busy_reg <= 1'b0;
+
     if (rst) begin
       busy_reg  <= 1'b0;
       st_reg    <= W0;
@@ -328,5 +339,8 @@ module arc_dda (
   assign last   = last_reg;
   assign err    = err_reg;
   assign late   = late_reg;
+  assign dir_valid = busy_reg && (st_reg != W0);
+  assign nx_dir = apos_reg;
+  assign ny_dir = bpos_reg;
 
 endmodule

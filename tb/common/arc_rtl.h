@@ -23,6 +23,8 @@ class ArcRtl {
       : ctx_(std::make_unique<VerilatedContext>()), m_(std::make_unique<Varc_dda>(ctx_.get())) {
     m_->rst = 1;
     m_->load = 0;
+    m_->run = 1;
+    m_->stop = 0;
     tick();
     tick();
     m_->rst = 0;
