@@ -1,12 +1,17 @@
 // fpgacnc plan FILE [--config F] [--csv OUT] [--hex OUT] [--v2-hex OUT] [--feed-override PCT]
+//                   [--motion profile|constant] [--times] [--speed-svg OUT [--zoom T0 T1]]
 #include <fmt/format.h>
 
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
 
 #include "commands.h"
+#include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/plan/planner.h"
+#include "fpgacnc/plan/speed_plot.h"
 #include "fpgacnc/plan/stepfile.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -19,6 +24,10 @@ struct PlanArgs {
   std::string csv_out;
   std::string hex_out;
   std::string v2_hex_out;
+  std::string motion;  // "" = from the configuration
+  bool times = false;
+  std::string speed_svg;
+  std::vector<double> zoom{0.0, 10.0};
   bool quiet = false;
   CommonOptions common;
 };
@@ -49,15 +58,67 @@ void print_summary(const plan::Plan& p, const config::MachineConfig& cfg) {
              p.final_mm[1], p.final_mm[2], p.final_mm[3]);
 }
 
+// Constant-feed v2 speeds: every LINE at length / T, as the device runs it (zero gap).
+plan::SpeedSeries constant_speed_series(const protocol::v2::Job& j,
+                                        const config::MachineConfig& cfg) {
+  plan::SpeedSeries s;
+  s.name = "v2 constant feed (LINE)";
+  s.color = "#2e86c1";
+  const double clk = static_cast<double>(cfg.clk_hz);
+  uint64_t t0 = 0;
+  for (const auto& jf : j.frames) {
+    if (jf.t == 0) continue;
+    double v = 0.0;
+    if (jf.frame.type == static_cast<uint8_t>(protocol::v2::Type::Line)) {
+      const auto l = protocol::v2::decode_line(jf.frame);
+      double l2 = 0.0, le = 0.0;
+      for (size_t a = 0; a < l.steps.size(); ++a) {
+        const double d = l.steps[a] / cfg.steps_per_mm[a];
+        if (a < 3) l2 += d * d;
+        if (a == 3) le = std::fabs(d);
+      }
+      const double len = l2 > 0 ? std::sqrt(l2) : le;
+      v = len / (jf.t / clk);
+    }
+    s.pts.emplace_back(t0 / clk, v);
+    t0 += jf.t;
+    s.pts.emplace_back(t0 / clk, v);
+  }
+  return s;
+}
+
+void print_times(const plan::Plan& p, const config::MachineConfig& cfg) {
+  const auto t = protocol::v2::job_times(p, cfg);
+  fmt::print(
+      "job time, same feeds ({}; accel X {} Y {} Z {} E {} mm/s^2, junction deviation {} mm, "
+      "window {}):\n",
+      p.source, cfg.max_accel_mm_s2[0], cfg.max_accel_mm_s2[1], cfg.max_accel_mm_s2[2],
+      cfg.max_accel_mm_s2[3], cfg.junction_deviation_mm, cfg.lookahead_segments);
+  fmt::print("  {:<42} {:>8} {:>14} {:>12}\n", "mode", "frames", "clocks", "seconds");
+  fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n",
+             fmt::format("v1 stop-and-wait, X/Y only (+{} clk/move)",
+                         protocol::v2::kV1OverheadClocks115200),
+             t.v1_moves, t.v1_clocks, t.v1_s);
+  fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n", "v2 constant feed (LINE, zero gap)", t.v2_lines,
+             t.v2_constant_clocks, t.v2_constant_s);
+  fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n", "v2 planned (LINE_PROFILE, zero gap)",
+             t.v2_profiles, t.v2_profile_clocks, t.v2_profile_s);
+  if (p.stats.ze_only_moves) {
+    fmt::print("  (v1 does not drive Z/E: its {} Z/E-only moves take only the per-move overhead)\n",
+               p.stats.ze_only_moves);
+  }
+}
+
 void run_plan(const PlanArgs& a) {
-  const config::MachineConfig cfg = load_config(a.common);
+  config::MachineConfig cfg = load_config(a.common);
+  if (!a.motion.empty()) cfg.motion = a.motion;
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
   // Packing validates every segment for v1 (and v2 when asked) before anything is written.
   const auto bytes = protocol::v1::job_bytes(p);
   std::optional<protocol::v2::Job> job2;
-  if (!a.v2_hex_out.empty()) job2 = protocol::v2::pack_job(p, cfg);
+  if (!a.v2_hex_out.empty() || cfg.motion == "profile") job2 = protocol::v2::pack_job(p, cfg);
   if (!a.quiet) {
     size_t idx = 0;
     std::string out;
@@ -95,13 +156,44 @@ void run_plan(const PlanArgs& a) {
     while (pos < bytes.size()) line(protocol::v1::kMotionSize);
     if (!f) throw std::runtime_error(fmt::format("{}: error: write error", a.hex_out));
   }
+  if (a.times) print_times(p, cfg);
+  if (!a.speed_svg.empty()) {
+    config::MachineConfig c = cfg;
+    c.motion = "constant";
+    const auto jc = protocol::v2::pack_job(p, c);
+    const auto pp = plan::plan_profiles(p, cfg);
+    const std::string title = fmt::format(
+        "{}: path speed against time (accel X/Y {}/{} mm/s^2, junction deviation {} mm)",
+        std::filesystem::path(p.source).filename().string(), cfg.max_accel_mm_s2[0],
+        cfg.max_accel_mm_s2[1], cfg.junction_deviation_mm);
+    const std::string svg = plan::speed_svg(
+        {constant_speed_series(jc, cfg), plan::profile_speed_series(pp, cfg.clk_hz)}, title,
+        a.zoom[0], a.zoom[1]);
+    std::ofstream f(a.speed_svg);
+    f << svg;
+    if (!f) throw std::runtime_error(fmt::format("{}: error: cannot write file", a.speed_svg));
+  }
   if (job2) {
     const auto& j = *job2;
-    fmt::print(
-        "v2: {} LINE frames ({} SHORT), {} DWELL frames, {} moves split, {} segments raised to "
-        "the STEP rate; {} wire bytes; job time without gaps {:.3f} s\n",
-        j.lines, j.short_lines, j.dwells, j.split_moves, j.t_raised, j.wire_bytes,
-        static_cast<double>(j.total_t) / static_cast<double>(cfg.clk_hz));
+    if (j.profiles) {
+      const auto& ps = j.profile_stats;
+      fmt::print(
+          "v2 planned: {} LINE_PROFILE frames ({} SHORT), {} DWELL frames, {} moves split "
+          "(n_dom >= 2^24), {} ARC frames ({} arcs as chords), {} forced stops, {} D lowered by "
+          "the exact check, {} exits above plan, {} A raised to 1 LSB; {} wire bytes; job time "
+          "{} clocks = {:.6f} s (incl. {} DIR reversal pauses, {} clocks)\n",
+          j.profiles, j.short_lines, j.dwells, ps.split_moves, j.arcs, ps.arcs_as_chords,
+          ps.forced_stops, ps.d_adjusted, ps.exit_overshoot, ps.a_clamped, j.wire_bytes, j.total_t,
+          static_cast<double>(j.total_t) / static_cast<double>(cfg.clk_hz), j.reversal_gaps,
+          j.reversal_gap_clocks);
+    } else {
+      fmt::print(
+          "v2: {} LINE frames ({} SHORT), {} DWELL frames, {} moves split, {} segments raised "
+          "to the STEP rate; {} wire bytes; job time without gaps {:.3f} s\n",
+          j.lines, j.short_lines, j.dwells, j.split_moves, j.t_raised, j.wire_bytes,
+          static_cast<double>(j.total_t) / static_cast<double>(cfg.clk_hz));
+    }
+    if (a.v2_hex_out.empty()) return;
     std::ofstream f(a.v2_hex_out);
     if (!f) throw std::runtime_error(fmt::format("{}: error: cannot create file", a.v2_hex_out));
     // One frame per line, as sent to a device whose next_seq is 0: CONFIG_AXIS x4, NUMERATORS,
@@ -127,6 +219,16 @@ void register_plan(CLI::App& app) {
                   "NUMERATORS, LINE/DWELL, RELEASE)");
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
+  sub->add_option("--motion", args->motion,
+                  "v2 motion: profile (look-ahead planned LINE_PROFILE) or constant (LINE); "
+                  "default from the configuration")
+      ->check(CLI::IsMember({"profile", "constant"}));
+  sub->add_flag("--times", args->times,
+                "print the job time of v1 stop-and-wait, v2 constant feed and v2 planned");
+  sub->add_option("--speed-svg", args->speed_svg,
+                  "write an SVG of path speed against time (planned and constant feed)");
+  sub->add_option("--zoom", args->zoom, "zoom window of the speed plot, seconds (T0 T1)")
+      ->expected(2);
   sub->add_flag("-q,--quiet", args->quiet, "print only the summary");
   sub->callback([args] { run_plan(*args); });
 }

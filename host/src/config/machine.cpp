@@ -86,6 +86,21 @@ class Reader {
         c.laser_s_max = positive(v, k);
       } else if (k == "feed_override") {
         c.feed_override_pct = positive(v, k);
+      } else if (k == "max_accel_mm_s2") {
+        axes(v, k, c.max_accel_mm_s2);
+      } else if (k == "junction_deviation_mm") {
+        c.junction_deviation_mm = number(v, k);
+        if (!(c.junction_deviation_mm >= 0.0) || c.junction_deviation_mm > 1e3) {
+          fail(v, k, "must be >= 0 and <= 1000");
+        }
+      } else if (k == "lookahead_segments") {
+        c.lookahead_segments = static_cast<uint32_t>(unsigned_int(v, k, 1'000'000));
+        if (c.lookahead_segments == 0) fail(v, k, "must be >= 1");
+      } else if (k == "motion") {
+        c.motion = string(v, k);
+        if (!valid_motion_name(c.motion)) fail(v, k, "expected \"profile\" or \"constant\"");
+      } else if (k == "native_arcs") {
+        c.native_arcs = boolean(v, k);
       } else if (k == "laser_requires_m3") {
         c.laser_requires_m3 = boolean(v, k);
       } else if (k == "step_timing") {
@@ -140,6 +155,10 @@ bool valid_protocol_name(const std::string& name) {
   return name == "auto" || name == "v1" || name == "v2";
 }
 
+bool valid_motion_name(const std::string& name) {
+  return name == "profile" || name == "constant";
+}
+
 MachineConfig load_machine_config(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, 0, 0, "cannot open configuration file");
@@ -165,6 +184,20 @@ void validate(const MachineConfig& c, const std::string& name) {
   if (!(c.retransmit_timeout_s > 0.0)) throw Error(name, 0, 0, "retransmit_timeout_s must be > 0");
   if (c.clk_hz == 0 || c.baud == 0) throw Error(name, 0, 0, "clk_hz and baud must be > 0");
   if (!(c.feed_override_pct > 0.0)) throw Error(name, 0, 0, "feed_override must be > 0");
+  for (int a = 0; a < kAxes; ++a) {
+    if (!(c.max_accel_mm_s2[static_cast<size_t>(a)] > 0.0)) {
+      throw Error(
+          name, 0, 0,
+          fmt::format("max_accel_mm_s2.{} must be > 0", kAxisNames[static_cast<size_t>(a)]));
+    }
+  }
+  if (!(c.junction_deviation_mm >= 0.0)) {
+    throw Error(name, 0, 0, "junction_deviation_mm must be >= 0");
+  }
+  if (c.lookahead_segments == 0) throw Error(name, 0, 0, "lookahead_segments must be >= 1");
+  if (!valid_motion_name(c.motion)) {
+    throw Error(name, 0, 0, "motion: expected \"profile\" or \"constant\"");
+  }
 }
 
 }  // namespace fpgacnc::config

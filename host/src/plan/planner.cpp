@@ -110,7 +110,10 @@ void Planner::add_move(const gcode::Move& m) {
   if (m.motion == gcode::Motion::kArcCw || m.motion == gcode::Motion::kArcCcw) {
     const auto pts = arc_chord_points(m, cfg_.arc_tolerance_mm);
     plan_.stats.arc_chords += pts.size();
+    plan_.arcs.push_back(m);
+    arc_id_ = static_cast<uint32_t>(plan_.arcs.size());
     for (const auto& p : pts) add_straight(p, code, feed, rapid, m.line, s_word);
+    arc_id_ = 0;
   } else {
     add_straight(m.end, code, feed, rapid, m.line, s_word);
   }
@@ -159,6 +162,7 @@ void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double fe
     s.feed_mm_min = feed;
     s.exec_feed_mm_min = eff;
     s.spindle_s = spindle_s;
+    s.arc_id = arc_id_;
     for (size_t a = 0; a < 4; ++a) {
       const auto part = static_cast<int64_t>(static_cast<__int128>(delta[a]) * k / parts);
       s.target[a] = origin[a] + part;

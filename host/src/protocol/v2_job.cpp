@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -60,13 +61,196 @@ uint16_t u16_timing(uint32_t v, const char* what) {
   return static_cast<uint16_t>(v);
 }
 
+// The k of a segment: axes up to the last moving one, at least 2 (X, Y).
+size_t frame_axes(const plan::Steps4& steps) {
+  size_t k = 2;
+  for (size_t a = 0; a < 4; ++a) {
+    if (steps[a] != 0) k = std::max(k, a + 1);
+  }
+  return k;
+}
+
+void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
+  for (int i = bytes - 1; i >= 0; --i) p.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+
+void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job& job,
+                   const std::function<void(JobFrame)>& push,
+                   const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
+  plan::MotionLimits lim = plan::motion_limits(cfg);
+  lim.arc_walk = arc_walk;
+  if (!lim.arc_walk && cfg.native_arcs) lim.arc_walk = plan::reference_arc_walk();
+  const plan::ProfilePlan pp = plan::plan_profiles(plan, lim);
+  job.profile_stats = pp.stats;
+  size_t seg_seen = 0;
+  size_t last_seg = SIZE_MAX;
+  // Reversal gaps (docs/timing.md, "Profiled segments"): a profiled segment with an axis whose
+  // direction differs from its DIR pin takes the HOLD/SETUP path: run from
+  // R = max(A + 1, max_a(L_a + hold)) + setup, A = the previous segment's end, L_a = the last STEP
+  // of axis a (every moving axis steps on its segment's last tick). The first segment starts
+  // from idle (not counted). DIR pins reset to 0 (negative). After an ARC, X/Y DIR are unknown:
+  // no gap counted for them (the arc block's own DIR handling is the arc helper's).
+  const int64_t hold = std::max<uint32_t>(cfg.step_timing.dir_hold, 1);
+  const int64_t setup = std::max<uint32_t>(cfg.step_timing.dir_setup, 1);
+  std::array<int, 4> dir{-1, -1, -1, -1};  // -1, +1, 0 = unknown
+  std::array<int64_t, 4> last_step{};
+  last_step.fill(std::numeric_limits<int64_t>::min() / 4);
+  int64_t now = 0;  // clock of the current segment's start, relative to the first one's
+  bool first = true;
+  auto advance = [&](const plan::Steps4& steps, uint64_t clocks, bool arc) {
+    int64_t d_edge = std::numeric_limits<int64_t>::min();
+    bool rev = false;
+    for (size_t a = 0; a < 4; ++a) {
+      if (steps[a] == 0) continue;
+      const int sgn = steps[a] > 0 ? 1 : -1;
+      if (dir[a] != 0 && sgn != dir[a]) {
+        rev = true;
+        d_edge = std::max(d_edge, last_step[a] + hold);
+      }
+    }
+    if (rev && !first) {
+      const int64_t r = std::max(now + 1, d_edge) + setup;
+      job.reversal_gap_clocks += static_cast<uint64_t>(r - now);
+      ++job.reversal_gaps;
+      now = r;
+    }
+    first = false;
+    now += static_cast<int64_t>(clocks);
+    for (size_t a = 0; a < 4; ++a) {
+      if (steps[a] == 0) continue;
+      dir[a] = arc && a < 2 ? 0 : (steps[a] > 0 ? 1 : -1);
+      last_step[a] = now;
+    }
+  };
+  for (const auto& item : pp.items) {
+    if (const auto* p = std::get_if<plan::Profile>(&item)) {
+      if (p->code > 3) {
+        throw std::invalid_argument(fmt::format("segment {} (line {}): motion code {} not valid",
+                                                p->segment_index, p->source_line, p->code));
+      }
+      plan::Segment s;
+      s.code = p->code;
+      s.spindle_s = p->spindle_s;
+      if (p->arc) {
+        JobFrame jf;
+        jf.frame = arc_frame(0, laser_power(s, cfg), p->arc_fields, p->rec);
+        jf.segment_index = p->segment_index;
+        jf.source_line = p->source_line;
+        jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
+        jf.axes = 3;
+        jf.profile = true;
+        for (size_t a = 0; a < 3; ++a) job.target[a] += p->steps[a];
+        job.total_t += p->clocks;
+        advance(p->steps, p->clocks, true);
+        ++job.arcs;
+        job.max_axes = std::max<size_t>(job.max_axes, p->steps[2] != 0 ? 3 : 2);
+        if (p->segment_index != last_seg) {
+          ++seg_seen;
+          last_seg = p->segment_index;
+        }
+        push(std::move(jf));
+        continue;
+      }
+      const size_t k = frame_axes(p->steps);
+      std::array<int32_t, 4> s32{};
+      for (size_t a = 0; a < 4; ++a) {
+        s32[a] = static_cast<int32_t>(p->steps[a]);
+        job.target[a] += p->steps[a];
+      }
+      JobFrame jf;
+      jf.frame = line_profile(0, to_line_profile(p->code, laser_power(s, cfg), p->fields,
+                                                 std::span<const int32_t>(s32.data(), k)));
+      jf.segment_index = p->segment_index;
+      jf.source_line = p->source_line;
+      jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
+      jf.axes = static_cast<uint8_t>(k);
+      jf.split = p->split;
+      jf.profile = true;
+      if (jf.frame.payload[0] & kLineShort) ++job.short_lines;
+      job.total_t += p->clocks;
+      advance(p->steps, p->clocks, false);
+      ++job.profiles;
+      job.max_axes = std::max(job.max_axes, k);
+      if (p->segment_index != last_seg) {
+        ++seg_seen;
+        last_seg = p->segment_index;
+      }
+      push(std::move(jf));
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      const double clocks = std::round(d->seconds * static_cast<double>(cfg.clk_hz));
+      if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
+        throw std::invalid_argument(
+            fmt::format("dwell (line {}): {} s out of range", d->source_line, d->seconds));
+      }
+      uint64_t left = static_cast<uint64_t>(clocks);
+      const bool split = left > kMaxT;
+      while (left > 0) {
+        const uint64_t t = std::min(left, kMaxT);
+        JobFrame jf;
+        jf.frame = dwell(0, static_cast<uint32_t>(t));
+        jf.segment_index = seg_seen;
+        jf.source_line = d->source_line;
+        jf.t = static_cast<uint32_t>(t);
+        jf.split = split;
+        job.total_t += t;
+        advance(plan::Steps4{}, t, false);
+        ++job.dwells;
+        push(std::move(jf));
+        left -= t;
+      }
+    } else {
+      ++job.skipped_heater;
+    }
+  }
+  job.total_t += job.reversal_gap_clocks;
+  job.segments = seg_seen;
+  job.split_moves = pp.stats.split_moves;
+}
+
 }  // namespace
+
+Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r) {
+  Frame fr;
+  fr.seq = seq;
+  fr.type = kTypeArc;
+  auto& p = fr.payload;
+  p.push_back(g.code);
+  p.push_back(power);
+  put_be(p, static_cast<uint32_t>(g.i), 3);
+  put_be(p, static_cast<uint32_t>(g.j), 3);
+  put_be(p, static_cast<uint32_t>(g.dx), 3);
+  put_be(p, static_cast<uint32_t>(g.dy), 3);
+  put_be(p, static_cast<uint32_t>(g.dz), 4);
+  put_be(p, g.n_ramp, 3);
+  put_be(p, g.c_total, 6);
+  put_be(p, r.v_entry, 8);
+  put_be(p, r.v_cruise, 8);
+  put_be(p, r.v_exit, 8);
+  put_be(p, r.a, 6);
+  put_be(p, r.d, 6);
+  return fr;
+}
+
+LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
+                            std::span<const int32_t> steps) {
+  LineProfile lp;
+  lp.code = code;
+  lp.power = power;
+  lp.v_entry = f.v_entry;
+  lp.v_cruise = f.v_cruise;
+  lp.v_exit = f.v_exit;
+  lp.accel = f.a;
+  lp.decel_at = f.d;
+  lp.steps.assign(steps.begin(), steps.end());
+  return lp;
+}
 
 uint32_t min_period(const config::StepTiming& t) {
   return std::max<uint32_t>(t.step_high, 1) + std::max<uint32_t>(t.step_low, 1);
 }
 
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
+             const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
   Job job;
   const auto& st = cfg.step_timing;
   const uint16_t sh = u16_timing(st.step_high, "step_high");
@@ -88,6 +272,11 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
     JobFrame jf;
     jf.frame = numerators(0, plan.numerator[0], plan.numerator[1]);
     push(std::move(jf));
+  }
+
+  if (cfg.motion == "profile") {
+    pack_profiles(plan, cfg, job, push, arc_walk);
+    return job;
   }
 
   size_t seg_index = 0;
@@ -194,6 +383,40 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
     }
   }
   return job;
+}
+
+JobTimes job_times(const plan::Plan& plan, const config::MachineConfig& cfg,
+                   uint64_t v1_overhead_clocks) {
+  JobTimes t;
+  const double clk = static_cast<double>(cfg.clk_hz);
+  uint64_t v1 = 0;
+  for (const auto& item : plan.items) {
+    if (const auto* s = std::get_if<plan::Segment>(&item)) {
+      const bool x_dom = iabs(s->steps[0]) >= iabs(s->steps[1]);
+      const int64_t n = std::max(iabs(s->steps[0]), iabs(s->steps[1]));
+      const uint32_t num = plan.numerator[x_dom ? 0 : 1];
+      v1 += static_cast<uint64_t>(num / std::max<uint16_t>(s->feed_v1, 1)) *
+                static_cast<uint64_t>(n) +
+            v1_overhead_clocks;
+      ++t.v1_moves;
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      v1 += static_cast<uint64_t>(std::llround(d->seconds * clk));
+    }
+  }
+  t.v1_clocks = v1;
+  config::MachineConfig c = cfg;
+  c.motion = "constant";
+  const Job jc = pack_job(plan, c);
+  c.motion = "profile";
+  const Job jp = pack_job(plan, c);
+  t.v2_lines = jc.lines;
+  t.v2_profiles = jp.profiles;
+  t.v2_constant_clocks = jc.total_t;
+  t.v2_profile_clocks = jp.total_t;
+  t.v1_s = static_cast<double>(v1) / clk;
+  t.v2_constant_s = static_cast<double>(jc.total_t) / clk;
+  t.v2_profile_s = static_cast<double>(jp.total_t) / clk;
+  return t;
 }
 
 std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq,

@@ -41,6 +41,16 @@ struct MachineConfig {
   // true: G1/G2/G3 cut only while M3/M4 is active with S>0 (or no S given);
   // false: original v1 semantics, every G1/G2/G3 is laser-on.
   bool laser_requires_m3 = true;
+  // Motion planning (protocol v2; docs/motion.md). Per-axis acceleration limit, mm/s^2.
+  std::array<double, kAxes> max_accel_mm_s2{1000.0, 1000.0, 100.0, 1000.0};
+  double junction_deviation_mm = 0.01;  // grbl's $11
+  uint32_t lookahead_segments = 64;     // planner window W (>= 1); 64 = device FIFO depth
+  // v2 motion: "profile" (LINE_PROFILE frames, look-ahead planned trapezoids) or "constant"
+  // (LINE frames, constant feed per segment, no acceleration). v1 always moves at constant feed.
+  std::string motion = "constant";
+  // motion = "profile": send G2/G3 in XY as ARC frames (the device must have the circular DDA
+  // and the host the arc helper's reference walk); false: chords.
+  bool native_arcs = false;
 };
 
 // Thrown for an unreadable file, a syntax error, an unknown key or a wrong type/value.
@@ -57,6 +67,8 @@ MachineConfig parse_machine_config(const std::string& text, const std::string& n
 // Checks ranges (positive steps/mm, feeds, clk, baud, protocol name); throws Error naming `name`.
 // Protocol names: "auto", "v1", "v2".
 bool valid_protocol_name(const std::string& name);
+// Motion names: "profile", "constant".
+bool valid_motion_name(const std::string& name);
 void validate(const MachineConfig& cfg, const std::string& name);
 
 }  // namespace fpgacnc::config

@@ -31,6 +31,7 @@ struct Segment {
   double spindle_s = -1.0;  // S word in force (laser power for v2), negative when none given
   int source_line = 0;      // G-code (or step file) line
   Steps4 target{};          // absolute position in steps after the segment
+  uint32_t arc_id = 0;      // chord of Plan::arcs[arc_id - 1] (0: not an arc chord)
 };
 
 struct Dwell {
@@ -69,6 +70,9 @@ struct Plan {
   std::array<uint32_t, 2> numerator{18'750'000, 18'750'000};  // v1 init packet (X, Y)
   Steps4 final_steps{};
   std::array<double, 4> final_mm{};
+  // G2/G3 moves as programmed (machine mm), for packers that send arcs natively; their chords
+  // carry Segment::arc_id = index + 1.
+  std::vector<gcode::Move> arcs;
   std::string source;  // input file name
   gcode::Stats input;  // interpreter statistics (empty for a step file)
 };
@@ -96,7 +100,8 @@ class Planner {
   config::MachineConfig cfg_;
   PlanOptions opt_;
   Plan plan_;
-  Steps4 pos_{};  // absolute steps
+  Steps4 pos_{};         // absolute steps
+  uint32_t arc_id_ = 0;  // arc whose chords are being added
 };
 
 Plan plan_program(const gcode::Program& program, const config::MachineConfig& cfg,

@@ -1,5 +1,11 @@
 // Protocol v2 packer: a plan -> the frames of a v2 session (docs/protocol.md, "v2").
 //
+// - cfg.motion == "profile": the plan goes through the look-ahead planner
+//   (plan::plan_profiles, docs/motion.md) and every block becomes a LINE_PROFILE frame (TYPE
+//   0x12, docs/protocol.md; SHORT and k as for LINE); its JobFrame.t is the exact clock count of
+//   the hardware recurrence (saturated at UINT32_MAX; total_t sums the exact counts and the DIR
+//   hold/setup pauses at reversals, reversal_gap_clocks). The rest of
+//   this list is the "constant" mode.
 // - Every planned segment becomes a LINE frame: SHORT (int16 steps) when every count fits,
 //   else int32; k = axes up to the last moving one, at least 2 (X, Y); Z and E are driven.
 // - Laser power: 0 for code 0 (rapid / laser off); else the S word in force scaled by
@@ -20,6 +26,7 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2.h"
 
@@ -30,9 +37,10 @@ struct JobFrame {
   Frame frame;
   size_t segment_index = 0;  // plan segment it comes from (NUMERATORS: 0; dwell: next segment)
   int source_line = 0;
-  uint32_t t = 0;      // LINE / DWELL length in clocks
-  uint8_t axes = 0;    // LINE: k
-  bool split = false;  // part of a split move or dwell
+  uint32_t t = 0;        // LINE / DWELL length in clocks
+  uint8_t axes = 0;      // LINE: k
+  bool split = false;    // part of a split move or dwell
+  bool profile = false;  // LINE_PROFILE
 };
 
 struct Job {
@@ -47,18 +55,50 @@ struct Job {
   size_t split_moves = 0;     // segments sent as more than one LINE
   size_t t_raised = 0;        // LINE frames whose T was raised to n_dom * min_period
   size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
-  size_t max_axes = 0;        // largest k of any LINE (the device must have at least that many)
-  uint32_t min_period = 0;    // clocks
-  uint64_t total_t = 0;       // sum of T of every LINE and DWELL (job time without gaps)
-  uint64_t wire_bytes = 0;    // bytes of config + FIFO frames
-  plan::Steps4 target{};      // sum of the LINE steps per axis
+  size_t profiles = 0;        // LINE_PROFILE frames (motion = "profile")
+  size_t arcs = 0;            // ARC frames (motion = "profile" with an arc walk)
+  // motion = "profile": DIR hold/setup pauses at reversals (HOLD/SETUP path), in total_t.
+  size_t reversal_gaps = 0;
+  uint64_t reversal_gap_clocks = 0;
+  plan::ProfileStats profile_stats;
+  size_t max_axes = 0;      // largest k of any LINE (the device must have at least that many)
+  uint32_t min_period = 0;  // clocks
+  uint64_t total_t = 0;     // sum of T of every LINE and DWELL (job time without gaps)
+  uint64_t wire_bytes = 0;  // bytes of config + FIFO frames
+  plan::Steps4 target{};    // sum of the LINE steps per axis
   std::array<uint32_t, 2> numerator{};
   uint64_t clk_hz = 0;  // clock the T values are counted in (the device must run at it)
 };
 
 // Throws std::invalid_argument naming the segment (and line) for something v2 cannot carry
 // (step timing over 65535 clocks, motion code > 3, a segment that cannot be split).
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg);
+// `arc_walk` (motion = "profile" only): the arc walk; when given, or when cfg.native_arcs and
+// the arc helper's reference walk is built in (plan::reference_arc_walk), G2/G3 in XY go out as
+// ARC frames (docs/motion.md), else as chords.
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
+             const decltype(plan::MotionLimits::arc_walk)& arc_walk = {});
+
+// ARC frame (TYPE 0x13, docs/protocol.md "ARC", 63-byte payload, big-endian): built here until
+// the codec has an ARC builder (arc helper). Power 0 = laser off; code = 2 (G2) or 3 (G3).
+constexpr uint8_t kTypeArc = 0x13;
+Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r);
+
+// The LINE_PROFILE of one planned block (codec: v2::line_profile builds the frame).
+LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
+                            std::span<const int32_t> steps);
+
+// Job time estimates (seconds) at the same feeds: v1 stop-and-wait (each move at its v1 feed
+// word, T = floor(NUMERATOR_dom / feed) * n_dom over X/Y, plus `v1_overhead_clocks` per move for
+// the packet, the ACK and the host turnaround; dwells added), v2 constant feed (sum of LINE and
+// DWELL T, zero gap), v2 planned (sum of the exact LINE_PROFILE clock counts and DWELL T).
+struct JobTimes {
+  double v1_s = 0.0, v2_constant_s = 0.0, v2_profile_s = 0.0;
+  uint64_t v1_moves = 0, v2_lines = 0, v2_profiles = 0;
+  uint64_t v1_clocks = 0, v2_constant_clocks = 0, v2_profile_clocks = 0;
+};
+inline constexpr uint64_t kV1OverheadClocks115200 = 51'981;  // host/README.md, measured
+JobTimes job_times(const plan::Plan& plan, const config::MachineConfig& cfg,
+                   uint64_t v1_overhead_clocks = kV1OverheadClocks115200);
 
 // STEP minimum period of the configuration: max(step_high, 1) + max(step_low, 1).
 uint32_t min_period(const config::StepTiming& t);
