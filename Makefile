@@ -33,6 +33,7 @@ soak: build
 	$(BUILD)/systemc/cosim_executor --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS) --segments 100
 	$(BUILD)/systemc/cosim_blocks --seed $(SOAK_SEED) --seeds $(SOAK_SEEDS)
 	$(BUILD)/systemc/cosim_heater --seed $(SOAK_SEED) --seeds 20 --seconds 3600
+	$(BUILD)/systemc/arc_twin_rtl --seed $(SOAK_SEED) --arcs 20000
 	$(MAKE) fuzz-soak
 	$(MAKE) soak-part-heaters
 

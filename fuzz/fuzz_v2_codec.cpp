@@ -81,6 +81,13 @@ void run_decoders(const v2::Frame& f) {
           if (!v2::line_profile_field_error(l).empty()) fail("decode_line_profile: bad field");
           break;
         }
+        case v2::Type::Arc: {
+          const auto a = v2::decode_arc(f);
+          if (!v2::arc_field_error(a).empty()) fail("decode_arc: bad field accepted");
+          // every payload bit is a field: the builder gives the same bytes back
+          if (v2::arc(f.seq, a).payload != f.payload) fail("decode_arc: rebuilt payload differs");
+          break;
+        }
         case v2::Type::ConfigAxis: {
           const auto c = v2::decode_config_axis(f, axes);
           if (c.axis >= axes) fail("decode_config_axis: axis out of range accepted");

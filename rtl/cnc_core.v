@@ -18,7 +18,8 @@
 // active only while the FIFO is empty and nothing is prepared or running, so a setting never
 // changes in the middle of a move. The cfg port wins over a CONFIG_AXIS frame on the same clock
 // and field.
-// Faults: a STEP timing violation is latched (faults bit 0) until a FAULT_CLEAR frame.
+// Faults: a STEP timing violation (faults bit 0) and an inconsistent ARC (bit 1) are latched until
+// a FAULT_CLEAR frame.
 // Heaters (docs/heater.md): heater_block (two channels, LTC2308 on adc_*, sample tick every
 // SAMPLE_CLKS clocks) takes the heater frames from the decoder; its status is appended to STATUS
 // (16 bytes) and its faults are faults bits 5 (watchdog), 6 (channel 0), 7 (channel 1).
@@ -102,7 +103,8 @@ module cnc_core #(
     output wire [        15:0] naks            // NAK frames requested
 );
 
-  localparam ENTRY_W = 222 + 32 * N_AXES;  // FIFO entry (segment_prep header): 350 bits for 4 axes
+  // FIFO entry (segment_prep header, LINE_PROFILE and ARC fields): 839 bits for 4 axes
+  localparam ENTRY_W = 711 + 32 * N_AXES;
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;
@@ -314,6 +316,7 @@ module cnc_core #(
   wire [23:0] seg_p_n_dom;
   wire [71*N_AXES-1:0] seg_p_v0, seg_p_vc, seg_p_vx;
   wire [56*N_AXES-1:0] seg_p_acc;
+  wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
   wire motion_abort = estop_stop;  // e-stop: prep and executor drop what they hold, stay idle
 
   segment_prep #(
@@ -356,6 +359,7 @@ module cnc_core #(
       .m_axis_prof_vc      (seg_p_vc),
       .m_axis_prof_vx      (seg_p_vx),
       .m_axis_prof_acc     (seg_p_acc),
+      .m_axis_arc          (seg_arc),
       .m_axis_tvalid  (seg_tvalid),
       .m_axis_tready  (seg_tready),
       .numerator_x    (numerator_x),
@@ -367,7 +371,7 @@ module cnc_core #(
   );
 
   // ---------------------------------------------------------------- execution
-  wire exec_busy, exec_violation, seg_done_v2;
+  wire exec_busy, exec_violation, seg_done_v2, exec_arc_err;
   wire exec_laser;
   assign laser = exec_laser && !estop_stop;  // also low at once (the executor's own is registered)
 
@@ -399,6 +403,7 @@ module cnc_core #(
       .s_axis_prof_vc      (seg_p_vc),
       .s_axis_prof_vx      (seg_p_vx),
       .s_axis_prof_acc     (seg_p_acc),
+      .s_axis_arc          (seg_arc),
       .s_axis_tvalid  (seg_tvalid),
       .s_axis_tready  (seg_tready),
       .cfg_step_high  (cfg_high_reg),
@@ -416,7 +421,8 @@ module cnc_core #(
       .seg_done       (seg_done),
       .seg_done_v2    (seg_done_v2),
       .position       (position),
-      .violation      (exec_violation)
+      .violation      (exec_violation),
+      .arc_err        (exec_arc_err)
   );
 
   // ---------------------------------------------------------------- status
@@ -428,6 +434,7 @@ module cnc_core #(
   reg [15:0] noise_bytes_reg, clamped_reg, naks_reg;
   reg [31:0] segments_done_reg;
   reg fault_step_reg;
+  reg fault_arc_reg;  // an ARC ended inconsistently (faults bit 1)
 
   wire v2_seg_done = seg_done && seg_done_v2;
   wire v2_init_done = init_applied && init_v2;
@@ -454,6 +461,8 @@ module cnc_core #(
     segments_done_reg <= segments_done_reg + {31'd0, v2_seg_done} + {31'd0, v2_init_done};
     if (dec_fault_clear) fault_step_reg <= 1'b0;
     if (exec_violation) fault_step_reg <= 1'b1;
+    if (dec_fault_clear) fault_arc_reg <= 1'b0;
+    if (exec_arc_err) fault_arc_reg <= 1'b1;
     if (rst) begin
       last_code_reg     <= 2'd0;
       last_feed_reg     <= 16'd0;
@@ -472,6 +481,7 @@ module cnc_core #(
       naks_reg          <= 16'd0;
       segments_done_reg <= 32'd0;
       fault_step_reg    <= 1'b0;
+      fault_arc_reg     <= 1'b0;
     end
   end
 
@@ -513,7 +523,7 @@ module cnc_core #(
   wire [7:0] enc_tdata;
   wire enc_tvalid, tx_tready;
   wire [7:0] faults_w = {heat_faults1 != 8'd0, heat_faults0 != 8'd0, heat_wd_fault, estop_latch_reg,
-                         3'd0, fault_step_reg};
+                         2'd0, fault_arc_reg, fault_step_reg};
   wire [7:0] state_w = {4'd0, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
   wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
                                 unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,

@@ -15,7 +15,10 @@
 // byte (the CHECK clock), in this order: CRC (BAD_CRC), TYPE (UNKNOWN_TYPE), LEN for the TYPE
 // (BAD_LENGTH), fields (BAD_FIELD: LINE / LINE_PROFILE flag bits [6:2], CONFIG_AXIS axis >=
 // N_AXES, the LINE_PROFILE field rules of docs/protocol.md: 1 <= max|steps| < 2^24, V_cruise <
-// 2^47, V_entry <= V_cruise, V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; heater
+// 2^47, V_entry <= V_cruise, V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; the ARC
+// rules: flags 2 or 3, start and end not at the centre, |coordinates| about the centre < 2^22,
+// DZ != -2^31 (and DZ = 0 when N_AXES < 3), N_RAMP >= 1, 1 <= C_TOTAL < 2^46, V_cruise < 2^63,
+// V_entry and V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; ARC LEN must be 63; heater
 // fields: see "Heater frames" below), then for
 // sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
 // duplicate: ACK only, nothing executed; = next_seq -> accepted (FIFO types need a free slot, else
@@ -24,9 +27,11 @@
 // or cut frame reaches the FIFO or the configuration.
 //
 // Outputs
-//   m_axis_*    FIFO write, entry {D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof,
-//               v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0]} (axis a in
-//               [32*a+:32]; 222 + 32*N_AXES bits; the top 177 bits are 0 except for LINE_PROFILE):
+//   m_axis_*    FIFO write, entry {arc_raw[487:0], arc, D[31:0], V_exit[47:0], V_cruise[47:0],
+//               V_entry[47:0], prof, v2, kind[1:0], code[1:0], power[7:0], t[31:0],
+//               steps[32*N_AXES-1:0]} (axis a in [32*a+:32]; 711 + 32*N_AXES bits, 839 for 4
+//               axes; the profile fields are 0 except for LINE_PROFILE, the arc fields except for
+//               ARC):
 //                 v1 motion: kind 0, v2 0, t = {16'd0, feed}, steps[0] = x, steps[1] = y,
 //                            code = byte0[1:0], power = 8'hFF
 //                 v1 init:   kind 1, v2 0, steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y
@@ -35,6 +40,8 @@
 //                 NUMERATORS kind 1, v2 1; DWELL kind 2, v2 1, t = T, code 0, power 0.
 //                 LINE_PROFILE: kind 0, v2 1, prof 1, t = A, V_entry/V_cruise/V_exit/D, steps
 //                            sign-extended, code = flags[1:0], power.
+//                 ARC:       kind 0, v2 1, arc 1, code = flags[1:0], power, arc_raw = payload
+//                            bytes 2..62 (byte 2 in the top bits), t and steps 0.
 //               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
 //               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
 //               from its registers. A v1 packet completing while m_axis_tready is low is dropped
@@ -78,7 +85,7 @@ module frame_decoder #(
     input  wire       s_axis_tvalid,
     output wire       s_axis_tready,
 
-    output wire [222+32*N_AXES-1:0] m_axis_tdata,
+    output wire [711+32*N_AXES-1:0] m_axis_tdata,
     output wire                    m_axis_tvalid,
     input  wire                    m_axis_tready,
 
@@ -114,17 +121,18 @@ module frame_decoder #(
     output wire v1_overrun
 );
 
-  localparam ENTRY_W = 222 + 32 * N_AXES;
-  localparam BASE_W = 45 + 32 * N_AXES;  // entry without the LINE_PROFILE fields
-  localparam integer PB_PROF = 28 + 4 * N_AXES;  // LINE_PROFILE with int32 steps
-  localparam integer PB = (PB_PROF > 20) ? PB_PROF : 20;  // payload bytes kept (heater: 20)
+  localparam ENTRY_W = 711 + 32 * N_AXES;
+  localparam BASE_W = 45 + 32 * N_AXES;  // entry without the LINE_PROFILE and ARC fields
+  localparam PROF_W = 222 + 32 * N_AXES;  // entry without the ARC fields
+  // payload bytes kept: LINE_PROFILE with int32 steps, ARC (63); heater frames need 20
+  localparam integer PB = (28 + 4 * N_AXES > 63) ? 28 + 4 * N_AXES : 63;
 
   localparam [2:0] ST_HUNT = 3'd0, ST_V1 = 3'd1, ST_LEN = 3'd2, ST_SEQ = 3'd3, ST_TYPE = 3'd4,
                    ST_PAY = 3'd5, ST_CRC1 = 3'd6, ST_CRC2 = 3'd7;
 
   localparam [7:0] T_HELLO = 8'h01, T_STATUS = 8'h02, T_FCLR = 8'h03, T_CFG = 8'h04,
                    T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11,
-                   T_LPROF = 8'h12;
+                   T_LPROF = 8'h12, T_ARC = 8'h13;
   localparam [7:0] T_HCFG = 8'h20, T_HSET = 8'h21, T_HTAB = 8'h22, T_HSAF = 8'h23, T_HWD = 8'h24;
 
   localparam [7:0] R_BAD_CRC = 8'd1, R_BAD_LENGTH = 8'd2, R_UNKNOWN_TYPE = 8'd3, R_TIMEOUT = 8'd4,
@@ -250,6 +258,41 @@ module frame_decoder #(
                        (p_ve <= p_vc) && (p_vx <= p_vc) && (p_vx != 48'd0) &&
                        (p_a != 32'd0 || p_ve != 48'd0);
 
+  // ARC (63 bytes): payload bytes 2..62 go to the entry as they are (big-endian, byte 2 first);
+  // segment_prep takes the fields apart. Field rules of docs/protocol.md (BAD_FIELD otherwise).
+  reg [487:0] arc_raw;
+  integer b;
+  always @(*) begin
+    for (b = 0; b < 61; b = b + 1) arc_raw[8*(60-b)+:8] = pay_reg[8*(b+2)+:8];
+  end
+  wire signed [24:0] arc_i = {arc_raw[487], arc_raw[487:464]};
+  wire signed [24:0] arc_j = {arc_raw[463], arc_raw[463:440]};
+  wire signed [24:0] arc_dx = {arc_raw[439], arc_raw[439:416]};
+  wire signed [24:0] arc_dy = {arc_raw[415], arc_raw[415:392]};
+  wire [31:0] arc_dz = arc_raw[391:360];
+  wire [23:0] arc_nramp = arc_raw[359:336];
+  wire [47:0] arc_ctot = arc_raw[335:288];
+  wire [63:0] arc_ve = arc_raw[287:224];
+  wire [63:0] arc_vc = arc_raw[223:160];
+  wire [63:0] arc_vx = arc_raw[159:96];
+  wire [47:0] arc_a = arc_raw[95:48];
+  wire signed [24:0] arc_x1 = arc_dx - arc_i;  // end relative to the centre
+  wire signed [24:0] arc_y1 = arc_dy - arc_j;
+  // |v| < 2^22 for a 25-bit v (the start, -I / -J, has the same magnitudes as I / J)
+  function c22_ok;
+    input [24:0] v;
+    begin
+      c22_ok = (v[24:22] == 3'b000) || (v[24:22] == 3'b111 && v[21:0] != 22'd0);
+    end
+  endfunction
+  wire arc_field_ok = (flags[7:2] == 6'd0) && flags[1] &&
+                      (arc_i != 25'sd0 || arc_j != 25'sd0) && (arc_x1 != 25'sd0 || arc_y1 != 25'sd0) &&
+                      c22_ok(arc_i) && c22_ok(arc_j) && c22_ok(arc_x1) && c22_ok(arc_y1) &&
+                      (arc_dz != 32'h8000_0000) && (N_AXES >= 3 || arc_dz == 32'd0) &&
+                      (arc_nramp != 24'd0) && (arc_ctot != 48'd0) && (arc_ctot[47:46] == 2'b00) &&
+                      !arc_vc[63] && (arc_ve <= arc_vc) && (arc_vx <= arc_vc) && (arc_vx != 64'd0) &&
+                      (arc_a != 48'd0 || arc_ve != 64'd0);
+
   wire [32*N_AXES-1:0] two_steps = {{32 * (N_AXES - 2) {1'b0}}, be32(pay_reg, 4), be32(pay_reg, 0)};
 
   // v1 packet
@@ -260,7 +303,10 @@ module frame_decoder #(
   wire [BASE_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(pay_reg, 1), be32(pay_reg, 2), line_steps};
   wire [BASE_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(pay_reg, 0), {32 * N_AXES{1'b0}}};
   wire [BASE_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
-  wire [ENTRY_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(pay_reg, 1),
+  // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power; the arc fields above the profile
+  wire [ENTRY_W-1:0] e_arc = {arc_raw, 1'b1, {(PROF_W - BASE_W) {1'b0}}, 1'b1, 2'd0, flags[1:0],
+                              pb(pay_reg, 1), {32 * (N_AXES + 1) {1'b0}}};
+  wire [PROF_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(pay_reg, 1),
                                 p_a, prof_steps};
 
   // ---------------------------------------------------------------- CHECK
@@ -294,17 +340,20 @@ module frame_decoder #(
                        !(t_hsaf && h_tmin >= h_tmax);
 
   wire t_lprof = (type_reg == T_LPROF);
+  wire t_arc = (type_reg == T_ARC);
   wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
-               t_lprof || t_heat;
+               t_lprof || t_arc || t_heat;
   wire len0 = (len_reg == 8'd0);
   wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
                 (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
                 (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok) ||
-                (t_lprof && prof_len_ok) || heat_len_ok;
+                (t_lprof && prof_len_ok) || (t_arc && len_reg == 8'd63) || heat_len_ok;
   wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8) &&
-                  !(t_lprof && !prof_field_ok) && (!t_heat || heat_field_ok);
-  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_heat;
-  wire to_fifo = t_num || t_line || t_dwell || t_lprof;
+                  !(t_lprof && !prof_field_ok) && !(t_arc && !arc_field_ok) &&
+                  (!t_heat || heat_field_ok);
+  wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
+                   t_heat;
+  wire to_fifo = t_num || t_line || t_dwell || t_lprof || t_arc;
   wire [7:0] seq_diff = seq_reg - next_seq_reg;
   wire seq_new = (seq_diff == 8'd0);
   wire seq_dup = seq_diff[7];  // next_seq - 128 .. next_seq - 1
@@ -320,7 +369,8 @@ module frame_decoder #(
     if (chk_v1_reg) entry = {{PW{1'b0}}, is_init_reg ? e_v1_init : e_v1_motion};
     else if (t_line) entry = {{PW{1'b0}}, e_line};
     else if (t_dwell) entry = {{PW{1'b0}}, e_dwell};
-    else if (t_lprof) entry = e_lprof;
+    else if (t_lprof) entry = {{(ENTRY_W - PROF_W) {1'b0}}, e_lprof};
+    else if (t_arc) entry = e_arc;
     else entry = {{PW{1'b0}}, e_num};
   end
 

@@ -5,6 +5,15 @@
 // adds its own generator next to dda_linear / profile_gen, its tick gate and its end condition in
 // run_last):
 //   0 LINE: constant rate, T clocks (below). Also DWELL and zero-length segments.
+//   2 ARC: s_axis_arc from segment_prep: arc_dda (loaded on accept, advancing only in RUN: the
+//     arc's clock 0 is tick 1). An arc event of clock c raises STEP at edge R + c + 2 (arc_dda's
+//     output register, then step_pulse's). The segment's last tick is the clock of the arc's
+//     last move (arc_dda `ending`); a next segment accepted then starts on the next clock (zero
+//     gap) while the arc's last STEP rises one edge later. DIR: at the start the usual rules with
+//     prep's first-move directions (an arc never uses dir_fast); inside the arc X and Y reverse at
+//     the quadrant points: the direction arc_dda announces for the next move is written when the
+//     axis's DIR hold has elapsed (see arc_ann); a STEP within DIR setup of that write strobes
+//     `violation`. arc_err strobes when an arc ends inconsistently (arc_dda end_err).
 //   1 PROFILE: s_axis_prof_* from segment_prep (docs/timing.md "Profiled segments"): profile_gen
 //     (the dominant-axis U/V master) and one dda_profile per axis. Tick j (j = 1, 2, ...) is the
 //     clock after edge R + j - 1 as for LINE; the axes step in tick j when floor(U(j)*n_i/M)
@@ -85,6 +94,7 @@ module segment_executor #(
     input  wire [ 71*N_AXES-1:0] s_axis_prof_vc,     // V_cruise * n_a
     input  wire [ 71*N_AXES-1:0] s_axis_prof_vx,     // V_exit * n_a
     input  wire [ 56*N_AXES-1:0] s_axis_prof_acc,    // A * n_a
+    input  wire [           944:0] s_axis_arc,         // ARC: arc_dda's load inputs (segment_prep)
     input  wire                  s_axis_tvalid,
     output wire                  s_axis_tready,
 
@@ -108,11 +118,13 @@ module segment_executor #(
     output wire                 seg_done,     // 1-clock strobe after a segment's end
     output wire                 seg_done_v2,  // valid with seg_done: that segment's v2 bit
     output wire [32*N_AXES-1:0] position,
-    output wire                 violation     // 1-clock strobe: a step came before STEP low time
+    output wire                 violation,    // 1-clock strobe: a step came before STEP low time
+                                              // (or, in an arc, before its DIR setup)
+    output wire                 arc_err       // 1-clock strobe: an arc ended inconsistently
 );
 
   localparam [2:0] S_IDLE = 3'd0, S_HOLD = 3'd1, S_SETUP = 3'd2, S_RUN = 3'd3, S_ZERO = 3'd4;
-  localparam [1:0] K_LINE = 2'd0, K_PROFILE = 2'd1;
+  localparam [1:0] K_LINE = 2'd0, K_PROFILE = 2'd1, K_ARC = 2'd2;
 
   reg [2:0] state_reg;
   reg [1:0] code_reg;
@@ -149,18 +161,37 @@ module segment_executor #(
   wire tick = (state_reg == S_RUN);
   wire line_tick = tick && (kind_reg == K_LINE);
   wire prof_tick = tick && (kind_reg == K_PROFILE);
-  wire run_last = tick && ((kind_reg == K_PROFILE) ? prof_last : last_reg);
+  wire arc_tick = tick && (kind_reg == K_ARC);
+  wire arc_ending, arc_end_err, arc_xs, arc_ys, arc_dvalid, arc_nx, arc_ny;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire arc_zs;  // unused with N_AXES < 3 (the decoder NAKs an ARC with DZ != 0 then)
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire run_last = tick && ((kind_reg == K_PROFILE) ? prof_last :
+                           (kind_reg == K_ARC) ? arc_ending : last_reg);
   wire ready = !abort && (((state_reg == S_IDLE) && (settle_reg == 16'd0)) || run_last);
   wire accept = ready && s_axis_tvalid;
   wire prof_in = (s_axis_kind == K_PROFILE);
+  wire arc_in = (s_axis_kind == K_ARC);
   wire [N_AXES-1:0] rev = (s_axis_dir ^ dir_tgt_reg) & moving;
-  wire zero_len = !prof_in && (s_axis_total == 64'd0);
+  wire zero_len = !prof_in && !arc_in && (s_axis_total == 64'd0);
   wire cutting = (s_axis_code != 2'd0) && (s_axis_power != 8'd0);
-  wire hold_clear = ((pend_reg & ~pulse_hold_ok) == {N_AXES{1'b0}});
+  wire [N_AXES-1:0] arc_ann;  // ARC: the next X / Y move's direction differs from dir_tgt_reg
+  wire [N_AXES-1:0] arc_req;  // ARC: step requests of arc_dda
+  // a step request in flight (the arc's registered last step, issued in the next segment's first
+  // clock) counts as a STEP rise: no DIR write in that clock
+  wire [N_AXES-1:0] hold_ok = pulse_hold_ok & ~arc_req;
+  wire hold_clear = ((pend_reg & ~hold_ok) == {N_AXES{1'b0}});
   // DIR writes: in HOLD all pending axes together once every hold has elapsed; otherwise (a write
   // pending during RUN) each axis as soon as its own hold has elapsed.
   wire [N_AXES-1:0] dir_wr = {N_AXES{!abort}} & ((state_reg == S_HOLD) ? (pend_reg & {N_AXES{hold_clear}})
-                                                                       : (pend_reg & pulse_hold_ok));
+                                                                       : (pend_reg & hold_ok));
+  // ARC: X / Y reverse inside the arc (at the quadrant points). arc_dda announces the direction of
+  // the next X / Y move from the second clock of the move (at least 3 clocks before it can fire);
+  // when it differs from dir_tgt_reg a DIR write becomes pending and is done as soon as the axis's
+  // DIR hold has elapsed (dir_wr above). A STEP of the arc whose direction is not on the DIR pin
+  // yet, or that comes less than DIR setup after the DIR change, is a timing violation (reported,
+  // not delayed; the host keeps arcs slow enough near the quadrant points, docs/protocol.md).
+
 
   // SETUP ends when the clocks since the DIR write (setup_cnt_reg, 1 in the first SETUP clock)
   // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
@@ -187,11 +218,83 @@ module segment_executor #(
       .op      (prof_op)
   );
 
+  // arc_dda outputs the executor does not use (DIR comes from nx_dir / ny_dir and the prep's
+  // start directions; last / err / late are the bench's)
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire arc_busy_nc, arc_zd_nc, arc_last_nc, arc_errs_nc, arc_late_nc;
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [1:0] arc_sd;  // the direction of the arc's X / Y step on arc_req (1: +)
+  /* verilator lint_off UNUSEDSIGNAL */
+  /* verilator lint_on UNUSEDSIGNAL */
+  arc_dda u_arc (
+      .clk      (clk),
+      .rst      (rst),
+      .load     (accept && arc_in),
+      .run      (arc_tick),
+      .stop     (abort),
+      .ccw      (s_axis_arc[0]),
+      .i_in     (s_axis_arc[1+:24]),
+      .j_in     (s_axis_arc[25+:24]),
+      .dx_in    (s_axis_arc[49+:24]),
+      .dy_in    (s_axis_arc[73+:24]),
+      .dz_in    (s_axis_arc[97+:32]),
+      .n_ramp   (s_axis_arc[129+:24]),
+      .dt_q     (s_axis_arc[153+:48]),
+      .dt_r     (s_axis_arc[201+:24]),
+      .c_total  (s_axis_arc[225+:48]),
+      .v_entry  (s_axis_arc[273+:64]),
+      .v_cruise (s_axis_arc[337+:64]),
+      .v_exit   (s_axis_arc[401+:64]),
+      .acc_a    (s_axis_arc[465+:48]),
+      .dec_d    (s_axis_arc[513+:48]),
+      .vz_entry (s_axis_arc[561+:96]),
+      .vz_cruise(s_axis_arc[657+:96]),
+      .vz_exit  (s_axis_arc[753+:96]),
+      .az       (s_axis_arc[849+:96]),
+      .busy     (arc_busy_nc),
+      .ending   (arc_ending),
+      .end_err  (arc_end_err),
+      .x_step   (arc_xs),
+      .x_dir    (arc_sd[0]),
+      .y_step   (arc_ys),
+      .y_dir    (arc_sd[1]),
+      .z_step   (arc_zs),
+      .z_dir    (arc_zd_nc),
+      .last     (arc_last_nc),
+      .err      (arc_errs_nc),
+      .late     (arc_late_nc),
+      .dir_valid(arc_dvalid),
+      .nx_dir   (arc_nx),
+      .ny_dir   (arc_ny)
+  );
+
+  // arc step requests per axis: X, Y, and Z (axis 2) when there is one
+  assign arc_req[0] = arc_xs;
+  assign arc_req[1] = arc_ys;
+  generate
+    if (N_AXES >= 3) begin : g_arcz
+      assign arc_req[2] = arc_zs;
+    end
+    if (N_AXES >= 4) begin : g_arcrest
+      assign arc_req[N_AXES-1:3] = {(N_AXES - 3) {1'b0}};
+    end
+  endgenerate
+  assign arc_ann[0] = arc_tick && arc_dvalid && (arc_nx != dir_tgt_reg[0]);
+  assign arc_ann[1] = arc_tick && arc_dvalid && (arc_ny != dir_tgt_reg[1]);
+  generate
+    if (N_AXES >= 3) begin : g_annrest
+      assign arc_ann[N_AXES-1:2] = {(N_AXES - 2) {1'b0}};
+    end
+  endgenerate
+  reg [31:0] since_wr_reg;  // clocks since the last DIR write of X / Y (saturating)
+  reg arc_dir_viol_reg;
+  reg arc_err_reg;
+
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
-      assign step_req[a] = (dda_step[a] || prof_step[a]) && !abort;
+      assign step_req[a] = (dda_step[a] || prof_step[a] || arc_req[a]) && !abort;
       assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
       dda_linear u_dda (
@@ -242,10 +345,23 @@ module segment_executor #(
     end
   endgenerate
 
+  integer k;
   always @(posedge clk) begin
     seg_start_reg <= 1'b0;
     seg_done_reg  <= 1'b0;
-    pend_reg      <= (pend_reg & ~dir_wr) | (accept ? rev : {N_AXES{1'b0}});
+    pend_reg      <= (pend_reg & ~dir_wr) | (accept ? rev : arc_ann);
+    if (!accept) dir_tgt_reg <= dir_tgt_reg ^ arc_ann;
+    arc_err_reg      <= arc_tick && arc_ending && arc_end_err && !abort;
+    arc_dir_viol_reg <= 1'b0;
+    for (k = 0; k < 2; k = k + 1) begin
+      if (dir_wr[k]) since_wr_reg[16*k+:16] <= 16'd1;
+      else if (since_wr_reg[16*k+:16] != 16'hFFFF)
+        since_wr_reg[16*k+:16] <= since_wr_reg[16*k+:16] + 16'd1;
+      // an arc step whose direction is not on the DIR pin yet, or within DIR setup of the change
+      if (arc_req[k] && !abort &&
+          (arc_sd[k] != dir[k] || since_wr_reg[16*k+:16] < cfg_dir_setup[16*k+:16]))
+        arc_dir_viol_reg <= 1'b1;
+    end
 
     // tick counter: loaded on accept, counts down during RUN
     if (accept) begin
@@ -257,7 +373,7 @@ module segment_executor #(
     end
 
     if (accept) begin
-      kind_reg    <= prof_in ? K_PROFILE : K_LINE;
+      kind_reg    <= prof_in ? K_PROFILE : arc_in ? K_ARC : K_LINE;
       code_reg    <= s_axis_code;
       power_reg   <= s_axis_power;
       v2_reg      <= s_axis_v2;
@@ -350,6 +466,10 @@ module segment_executor #(
       seg_start_reg   <= 1'b0;
       seg_done_reg    <= 1'b0;
       seg_done_v2_reg <= 1'b0;
+      since_wr_reg[16*0+:16] <= 16'hFFFF;
+      since_wr_reg[16*1+:16] <= 16'hFFFF;
+      arc_dir_viol_reg <= 1'b0;
+      arc_err_reg     <= 1'b0;
     end
   end
 
@@ -362,7 +482,8 @@ module segment_executor #(
   assign seg_done      = seg_done_reg;
   assign seg_done_v2   = seg_done_v2_reg;
   assign position      = pos_reg;
-  assign violation     = |pulse_violation;
+  assign violation     = (|pulse_violation) || arc_dir_viol_reg;
+  assign arc_err       = arc_err_reg;
 
 `ifdef FORMAL
   // Formal properties (scripts/formal.sh, k-induction). Assumes only reset in the first clock.
@@ -393,6 +514,9 @@ module segment_executor #(
   always @(posedge clk) f_cfg_q <= {cfg_step_high, cfg_step_low, cfg_dir_setup, cfg_dir_hold};
   always @(*) if (f_past_valid) assume ({cfg_step_high, cfg_step_low, cfg_dir_setup, cfg_dir_hold} == f_cfg_q);
   always @(*) assume (!s_axis_dir_fast);
+  // ARC segments reverse X/Y inside the arc (at the quadrant points); there a step too close to its
+  // DIR change is reported as a timing violation, not delayed (docs/motion.md, Arcs): not covered.
+  always @(*) if (s_axis_tvalid) assume (s_axis_kind != K_ARC);
   // No STEP timing violation (a step requested before the previous pulse's high + low time; the
   // prep's clamp T >= n_dom * min_period prevents it, a violation is counted and latched as a
   // fault): step_pulse assumes it never holds a pending step under FORMAL_DIR.

@@ -1,13 +1,18 @@
 // segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
 //
-// Input (s_axis_*): one FIFO entry, width ENTRY_W = 222 + 32*N_AXES (350 for 4 axes),
-//   { D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
+// Input (s_axis_*): one FIFO entry, width ENTRY_W = 711 + 32*N_AXES (839 for 4 axes),
+//   { arc_raw[487:0], arc[0], D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
 //     v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0] }
+//   arc_raw (ARC entries only, else 0): the ARC payload bytes 2..62 as received, byte 2 in the
+//   top bits: I, J, DX, DY int24, DZ int32, N_RAMP u24, C_TOTAL u48, V_entry, V_cruise, V_exit
+//   u64, A u48, D u48 (docs/protocol.md "ARC").
 //   steps: axis a in [32*a+:32], signed. The profile fields (top 177 bits) are 0 except for
 //   LINE_PROFILE.
 //   kind 0 MOTION, v2 = 1, prof = 1 (LINE_PROFILE): t = A; V_entry, V_cruise, V_exit, D; steps per
 //          axis, |steps| < 2^24, not all 0; the frame decoder has checked the field rules of
 //          docs/protocol.md. Prepared as kind PROFILE (below).
+//   kind 0 MOTION, v2 = 1, arc = 1 (ARC): code 2 / 3 (CW / CCW), power, arc_raw; the decoder has
+//          checked the field rules. Prepared as kind ARC (below).
 //   kind 0 MOTION, v2 = 0 (v1 move): t = {16'd0, feed}, steps[0] = X, steps[1] = Y (the other
 //          axes are ignored: v1 moves X and Y only), power 8'hFF.
 //   kind 0 MOTION, v2 = 1 (LINE): t = T, the segment length in clocks; steps per axis.
@@ -36,6 +41,7 @@
 //   v1 MOTION       : 68            (DIV 33, CLAMP 1, MUL 33, SUB 1)
 //   v2 LINE, DWELL, kind 3: 67 + N_AXES (MAX N_AXES - 1, then as v1; the multiplier always runs)
 //   LINE_PROFILE    : 25 + N_AXES  (MAX N_AXES - 1, PMUL 25, PINIT 1)
+//   ARC             : 81            (AMUL 32, ADIV 47, AFIX 1)
 // The next entry is accepted on the edge after the executor takes the prepared segment.
 // PROFILE arithmetic (m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
 // exact products V_entry*n_a, V_cruise*n_a, V_exit*n_a (71 bits) and A*n_a (56 bits) by a
@@ -44,6 +50,17 @@
 // (profile_gen): U(1) = V_entry, V(1) and op(1) from V(0) = V_entry with "decelerating" = (D == 0)
 // (U(1) < 1 step). m_axis_total = 0, m_axis_period = 0, m_axis_dir_fast = 0 (a reversing axis
 // always waits DIR hold/setup before a profiled segment), m_axis_tmn = 0.
+// ARC arithmetic (m_axis_kind = 2; m_axis_arc = arc_dda's load inputs, LSB first: ccw 1, I, J,
+// DX, DY 24 each, DZ 32, N_RAMP 24, dt_q 48, dt_r 24, C_TOTAL 48, V_entry, V_cruise, V_exit 64
+// each, A 48, D 48, V_entry*|DZ|, V_cruise*|DZ|, V_exit*|DZ|, A*|DZ| 96 each; 945 bits): shift-add
+// squares of |x0|, |y0|, |x1|, |y1| (22 bits each, 4 adders of 44 bits) and the Z products (31 bits
+// of |DZ|, 3 adders of 95 bits and one of 79) in parallel, 31 iterations; dT = R1^2 - R0^2 and
+// its sign; a restoring divider (46 iterations, 25-bit remainder) gives |dT| / N_RAMP, and floor
+// division (dt_r in [0, N_RAMP)) follows in one clock. m_axis_steps: X = Y = 1 and Z = |DZ| (the
+// axes the arc may move), m_axis_dir: X / Y the tangent signs at the start (arc_dda's first-move
+// rule), Z the sign of DZ: the executor's HOLD/SETUP rule applies at the arc's start. The arc's
+// final X / Y directions are not known here: dir_fast is 0 for the next segment that moves X or Y
+// until each has moved in a prepared non-arc segment (unk_reg).
 // Output (m_axis_*): one prepared segment, held until accepted.
 `default_nettype none
 
@@ -58,7 +75,7 @@ module segment_prep #(
     input wire abort,  // e-stop: drop the entry being prepared or waiting (idle after the edge)
     /* verilator lint_on SYMRSVDWORD */
 
-    input  wire [222+32*N_AXES-1:0] s_axis_tdata,
+    input  wire [711+32*N_AXES-1:0] s_axis_tdata,
     input  wire                    s_axis_tvalid,
     output wire                    s_axis_tready,
 
@@ -92,6 +109,7 @@ module segment_prep #(
     output wire [ 71*N_AXES-1:0] m_axis_prof_vc,
     output wire [ 71*N_AXES-1:0] m_axis_prof_vx,
     output wire [ 56*N_AXES-1:0] m_axis_prof_acc,
+    output wire [           944:0] m_axis_arc,  // ARC (kind 2): arc_dda's load inputs, see below
     output wire                  m_axis_tvalid,
     input  wire                  m_axis_tready,
 
@@ -105,8 +123,10 @@ module segment_prep #(
 
   localparam SW = 32 * N_AXES;
   localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2;
-  localparam [2:0] S_IDLE = 3'd0, S_MAX = 3'd1, S_DIV = 3'd2, S_CLAMP = 3'd3, S_MUL = 3'd4,
-                   S_SUB = 3'd5, S_OUT = 3'd6, S_PMUL = 3'd7;
+  localparam [3:0] S_IDLE = 4'd0, S_MAX = 4'd1, S_DIV = 4'd2, S_CLAMP = 4'd3, S_MUL = 4'd4,
+                   S_SUB = 4'd5, S_OUT = 4'd6, S_PMUL = 4'd7, S_AMUL = 4'd8, S_ADIV = 4'd9,
+                   S_AFIX = 4'd10;
+  localparam integer ZAX = (N_AXES >= 3) ? 2 : 0;  // the Z axis of an arc (helix)
   localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
   localparam integer AX_LAST_I = N_AXES - 1;
   localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
@@ -124,6 +144,60 @@ module segment_prep #(
   wire [46:0] in_vc = s_axis_tdata[SW+94+:47];
   wire [46:0] in_vx = s_axis_tdata[SW+142+:47];
   wire [31:0] in_d = s_axis_tdata[SW+190+:32];
+  wire in_arc = s_axis_tdata[SW+222] && (in_kind == K_MOTION) && in_v2;
+  wire [487:0] in_arc_raw = s_axis_tdata[SW+223+:488];
+
+  // ARC registers: the raw frame fields (big-endian order, I first) and the derived values
+  reg arc_reg;
+  reg ccw_reg;
+  reg [487:0] araw_reg;
+  wire signed [23:0] a_i = araw_reg[487:464];
+  wire signed [23:0] a_j = araw_reg[463:440];
+  wire signed [23:0] a_dx = araw_reg[439:416];
+  wire signed [23:0] a_dy = araw_reg[415:392];
+  wire [31:0] a_dz = araw_reg[391:360];
+  wire [23:0] a_nramp = araw_reg[359:336];
+  wire [47:0] a_ctot = araw_reg[335:288];
+  wire [63:0] a_ve = araw_reg[287:224];
+  wire [63:0] a_vc = araw_reg[223:160];
+  wire [63:0] a_vx = araw_reg[159:96];
+  wire [47:0] a_acc = araw_reg[95:48];
+  wire [47:0] a_dd = araw_reg[47:0];
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire signed [24:0] a_x1 = {a_dx[23], a_dx} - {a_i[23], a_i};  // |.| < 2^22: bits 23..22 = sign
+  wire signed [24:0] a_y1 = {a_dy[23], a_dy} - {a_j[23], a_j};
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [21:0] mag_i = a_i[23] ? -a_i[21:0] : a_i[21:0];  // |.| < 2^22 (decoder rule)
+  wire [21:0] mag_j = a_j[23] ? -a_j[21:0] : a_j[21:0];
+  wire [21:0] mag_x1 = a_x1[24] ? -a_x1[21:0] : a_x1[21:0];
+  wire [21:0] mag_y1 = a_y1[24] ? -a_y1[21:0] : a_y1[21:0];
+  wire [30:0] mag_z = a_dz[31] ? -a_dz[30:0] : a_dz[30:0];  // |DZ| < 2^31
+  // squares (shift-add, 22 bits) and the Z products V*|DZ|, A*|DZ| (31 bits), one bit per clock
+  reg [4*44-1:0] sq_mc_reg;  // 4 x 44 bits: |x0|, |y0|, |x1|, |y1|
+  reg [4*22-1:0] sq_mp_reg;
+  reg [4*44-1:0] sq_reg;
+  reg [94:0] zmc_e_reg, zmc_c_reg, zmc_x_reg;
+  reg [78:0] zmc_a_reg;
+  reg [30:0] zmp_reg;
+  reg [95:0] vz_e_reg, vz_c_reg, vz_x_reg, az_reg;
+  // dT = R1^2 - R0^2 (|dT| < 2^45), floor division by N_RAMP (restoring, 46 bits)
+  reg dneg_reg;
+  reg [45:0] dnd_reg;
+  reg [24:0] drem_reg;
+  reg [45:0] dq_reg;
+  reg signed [47:0] dt_q_reg;
+  reg [23:0] dt_r_reg;
+  wire [45:0] r0sq = {2'b00, sq_reg[44*0+:44]} + {2'b00, sq_reg[44*1+:44]};
+  wire [45:0] r1sq = {2'b00, sq_reg[44*2+:44]} + {2'b00, sq_reg[44*3+:44]};
+  wire [25:0] drem_shift = {drem_reg, dnd_reg[45]};
+  wire [25:0] drem_diff = drem_shift - {2'b00, a_nramp};
+  wire drem_ge = !drem_diff[25];
+  // the tangent signs at the start point (x0, y0) = (-I, -J): arc_dda's first-move directions
+  // (a zero component takes the inward sign)
+  wire arc_dx0 = (a_j == 24'sd0) ? !a_i[23] : (ccw_reg ? !a_j[23] : a_j[23]);
+  wire arc_dy0 = (a_i == 24'sd0) ? !a_j[23] : (ccw_reg ? a_i[23] : !a_i[23]);
+  // axes whose DIR prep no longer knows after an arc (X, Y): no dir_fast until they move again
+  reg [N_AXES-1:0] unk_reg;
 
   localparam [1:0] OP_INC = 2'd0, OP_DEC = 2'd1, OP_CRU = 2'd2, OP_EXIT = 2'd3;
   // profile registers
@@ -139,7 +213,7 @@ module segment_prep #(
   reg [71*N_AXES-1:0] p_v0_reg, p_vc_reg, p_vx_reg;
   reg [56*N_AXES-1:0] p_a_reg;
 
-  reg [2:0] state_reg;
+  reg [3:0] state_reg;
   reg [31:0] num_x_reg, num_y_reg;
   reg init_applied_reg, init_v2_reg, clamped_reg;
 
@@ -234,6 +308,9 @@ module segment_prep #(
           dividend_reg <= (in_kind == K_DWELL || (in_kind == K_MOTION && in_v2)) ? in_t : 32'd0;
           feed_reg     <= in_v1_motion ? in_t[15:0] : 16'd0;
           prof_reg     <= in_prof;
+          arc_reg      <= in_arc;
+          ccw_reg      <= in_code[0];
+          araw_reg     <= in_arc_raw;
           ve_reg       <= in_ve;
           vc_reg       <= in_vc;
           vx_reg       <= in_vx;
@@ -245,7 +322,8 @@ module segment_prep #(
           quot_reg     <= 32'd0;
           iter_reg     <= 6'd0;
           // v1: the dominant axis (X or Y) is chosen one clock later; v2: scan the other axes first
-          state_reg    <= in_v1_motion ? S_DIV : S_MAX;
+          state_reg    <= in_arc ? S_AMUL : in_v1_motion ? S_DIV : S_MAX;
+          iter_reg     <= 6'd0;
         end
       end
       S_MAX: begin
@@ -287,6 +365,99 @@ module segment_prep #(
           iter_reg  <= iter_reg + 6'd1;
           if (iter_reg == 6'd24) state_reg <= S_SUB;
         end
+      end
+      S_AMUL: begin
+        // iteration 0 loads; 1..31 add bit iter-1 of |x0|, |y0|, |x1|, |y1| (squares) and |DZ|
+        if (iter_reg == 6'd0) begin
+          sq_mc_reg[44*0+:44] <= {22'd0, mag_i};
+          sq_mc_reg[44*1+:44] <= {22'd0, mag_j};
+          sq_mc_reg[44*2+:44] <= {22'd0, mag_x1};
+          sq_mc_reg[44*3+:44] <= {22'd0, mag_y1};
+          sq_mp_reg[22*0+:22] <= mag_i;
+          sq_mp_reg[22*1+:22] <= mag_j;
+          sq_mp_reg[22*2+:22] <= mag_x1;
+          sq_mp_reg[22*3+:22] <= mag_y1;
+          for (i = 0; i < 4; i = i + 1) sq_reg[44*i+:44] <= 44'd0;
+          zmc_e_reg <= {31'd0, a_ve};
+          zmc_c_reg <= {31'd0, a_vc};
+          zmc_x_reg <= {31'd0, a_vx};
+          zmc_a_reg <= {31'd0, a_acc};
+          zmp_reg   <= mag_z;
+          vz_e_reg  <= 96'd0;
+          vz_c_reg  <= 96'd0;
+          vz_x_reg  <= 96'd0;
+          az_reg    <= 96'd0;
+          iter_reg  <= 6'd1;
+        end else begin
+          for (i = 0; i < 4; i = i + 1) begin
+            if (sq_mp_reg[22*i]) sq_reg[44*i+:44] <= sq_reg[44*i+:44] + sq_mc_reg[44*i+:44];
+            sq_mp_reg[22*i+:22] <= {1'b0, sq_mp_reg[22*i+1+:21]};
+            sq_mc_reg[44*i+:44] <= {sq_mc_reg[44*i+:43], 1'b0};
+          end
+          if (zmp_reg[0]) begin
+            vz_e_reg <= vz_e_reg + {1'b0, zmc_e_reg};
+            vz_c_reg <= vz_c_reg + {1'b0, zmc_c_reg};
+            vz_x_reg <= vz_x_reg + {1'b0, zmc_x_reg};
+            az_reg   <= az_reg + {17'd0, zmc_a_reg};
+          end
+          zmp_reg   <= {1'b0, zmp_reg[30:1]};
+          zmc_e_reg <= {zmc_e_reg[93:0], 1'b0};
+          zmc_c_reg <= {zmc_c_reg[93:0], 1'b0};
+          zmc_x_reg <= {zmc_x_reg[93:0], 1'b0};
+          zmc_a_reg <= {zmc_a_reg[77:0], 1'b0};
+          iter_reg  <= iter_reg + 6'd1;
+          if (iter_reg == 6'd31) begin
+            state_reg <= S_ADIV;
+            iter_reg  <= 6'd0;
+          end
+        end
+      end
+      S_ADIV: begin
+        // iteration 0: |dT| and its sign; 1..46: one quotient bit each
+        if (iter_reg == 6'd0) begin
+          dneg_reg <= (r1sq < r0sq);
+          dnd_reg  <= (r1sq < r0sq) ? r0sq - r1sq : r1sq - r0sq;
+          drem_reg <= 25'd0;
+          dq_reg   <= 46'd0;
+          iter_reg <= 6'd1;
+        end else begin
+          dnd_reg  <= {dnd_reg[44:0], 1'b0};
+          drem_reg <= drem_ge ? drem_diff[24:0] : drem_shift[24:0];
+          dq_reg   <= {dq_reg[44:0], drem_ge};
+          iter_reg <= iter_reg + 6'd1;
+          if (iter_reg == 6'd46) state_reg <= S_AFIX;
+        end
+      end
+      S_AFIX: begin
+        // floor: dT < 0 with a remainder gives q = -Q - 1, r = N_RAMP - R
+        if (dneg_reg && drem_reg != 25'd0) begin
+          dt_q_reg <= -{2'b00, dq_reg} - 48'sd1;
+          dt_r_reg <= a_nramp - drem_reg[23:0];
+        end else begin
+          dt_q_reg <= dneg_reg ? -{2'b00, dq_reg} : {2'b00, dq_reg};
+          dt_r_reg <= drem_reg[23:0];
+        end
+        // X, Y move (first-move directions), Z when DZ != 0; the executor's HOLD/SETUP rules
+        abs_reg <= {SW{1'b0}};
+        abs_reg[31:0] <= 32'd1;
+        abs_reg[63:32] <= 32'd1;
+        dir_reg <= {N_AXES{1'b0}};
+        dir_reg[0] <= arc_dx0;
+        dir_reg[1] <= arc_dy0;
+        dir_track_reg[0] <= arc_dx0;
+        dir_track_reg[1] <= arc_dy0;
+        if (N_AXES >= 3) begin
+          abs_reg[32*ZAX+:32] <= {1'b0, mag_z};
+          dir_reg[ZAX] <= !a_dz[31];
+          if (a_dz != 32'd0) dir_track_reg[ZAX] <= !a_dz[31];
+        end
+        unk_reg[0] <= 1'b1;
+        unk_reg[1] <= 1'b1;
+        total_reg <= 64'd0;
+        quot_reg <= 32'd0;
+        tmn_reg <= {64 * N_AXES{1'b0}};
+        dir_fast_reg <= 1'b0;
+        state_reg <= S_OUT;
       end
       S_DIV: begin
         if (iter_reg == 6'd0) begin
@@ -352,7 +523,8 @@ module segment_prep #(
       S_SUB: begin
         for (i = 0; i < N_AXES; i = i + 1)
           tmn_reg[64*i+:64] <= prof_reg ? 64'd0 : total_reg - {32'd0, abs_reg[32*i+:32]};
-        dir_fast_reg  <= fast_reg && !prof_reg;
+        dir_fast_reg  <= fast_reg && !prof_reg && ((moving & unk_reg) == {N_AXES{1'b0}});
+        unk_reg       <= unk_reg & ~moving;
         if (prof_reg) begin
           // PINIT: the first master update, from V(0) = V_entry; decelerating iff D == 0
           total_reg <= 64'd0;
@@ -420,6 +592,8 @@ module segment_prep #(
       chk_hs_reg       <= 17'd0;
       dir_fast_reg     <= 1'b0;
       prof_reg         <= 1'b0;
+      arc_reg          <= 1'b0;
+      unk_reg          <= {N_AXES{1'b0}};
       ve_reg           <= 47'd0;
       vc_reg           <= 47'd0;
       vx_reg           <= 47'd0;
@@ -452,7 +626,9 @@ module segment_prep #(
   assign m_axis_total    = total_reg;
   assign m_axis_period   = quot_reg;
   assign m_axis_feed     = feed_reg;
-  assign m_axis_kind     = {1'b0, prof_reg};
+  assign m_axis_kind     = arc_reg ? 2'd2 : {1'b0, prof_reg};
+  assign m_axis_arc = {az_reg, vz_x_reg, vz_c_reg, vz_e_reg, a_dd, a_acc, a_vx, a_vc, a_ve, a_ctot,
+                       dt_r_reg, dt_q_reg, a_nramp, a_dz, a_dy, a_dx, a_j, a_i, ccw_reg};
   assign m_axis_prof_u1  = ve_reg;
   assign m_axis_prof_v1  = v1_reg;
   assign m_axis_prof_op1 = op1_reg;

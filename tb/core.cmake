@@ -3,6 +3,7 @@
 fpgacnc_verilated(vexec TOP segment_executor
                   SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/dda_linear.v
                           ${FPGACNC_RTL_DIR}/profile_gen.v ${FPGACNC_RTL_DIR}/dda_profile.v
+                          ${FPGACNC_RTL_DIR}/arc_dda.v
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
 fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
 fpgacnc_verilated(vframe TOP frame_decoder

@@ -422,7 +422,7 @@ TEST(V2Codec, HostFrameChecksFollowTheDeviceRules) {
   f = v2::line(0, 1, 1, 1, xyz);
   f.payload.pop_back();  // 6 + 5 bytes: not a whole number of int16
   EXPECT_EQ(v2::check_host_frame(f, 4), R::BadLength);
-  f.type = 0x13;  // ARC: reserved
+  f.type = 0x14;  // undefined
   EXPECT_EQ(v2::check_host_frame(f, 4), R::UnknownType);
   EXPECT_EQ(v2::check_host_frame(v2::dwell(0, 1), 4), std::nullopt);
   EXPECT_TRUE(v2::is_fifo(0x10) && v2::is_fifo(0x11) && v2::is_fifo(0x05));

@@ -1,5 +1,5 @@
 // The command-FIFO entry that segment_prep takes (rtl-back contract, docs/timing.md), 222 + 32*N
-// bits (350 for N = 4):
+// bits (350 for N = 4) plus the ARC fields (711 + 32*N bits in all, 839 for N = 4):
 // { D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
 //   v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N-1:0] }, axis a in [32*a+:32].
 // LINE_PROFILE: prof = 1, v2 = 1, kind 0, t = A; the profile fields are 0 for every other entry.
@@ -11,7 +11,7 @@
 namespace fpgacnc::tb {
 
 inline constexpr int kEntryAxes = 4;
-inline constexpr int kEntryWords = 11;  // 350 bits
+inline constexpr int kEntryWords = 27;  // 839 bits (the ARC fields above bit 350 stay 0 here)
 
 enum EntryKind { kMotion = 0, kNumerators = 1, kDwell = 2, kKind3 = 3 };
 

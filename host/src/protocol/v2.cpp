@@ -89,6 +89,8 @@ std::string type_name(uint8_t type) {
       return "LINE";
     case Type::Dwell:
       return "DWELL";
+    case Type::Arc:
+      return "ARC";
     case Type::LineProfile:
       return "LINE_PROFILE";
     case Type::HeaterConfig:
@@ -150,6 +152,7 @@ bool is_sequenced(uint8_t type) {
     case Type::Release:
     case Type::Line:
     case Type::Dwell:
+    case Type::Arc:
     case Type::LineProfile:
     case Type::HeaterConfig:
     case Type::HeaterSetpoint:
@@ -165,7 +168,7 @@ bool is_sequenced(uint8_t type) {
 bool is_fifo(uint8_t type) {
   return type == static_cast<uint8_t>(Type::Numerators) ||
          type == static_cast<uint8_t>(Type::Line) || type == static_cast<uint8_t>(Type::Dwell) ||
-         type == static_cast<uint8_t>(Type::LineProfile);
+         type == static_cast<uint8_t>(Type::Arc) || type == static_cast<uint8_t>(Type::LineProfile);
 }
 
 uint16_t crc16(std::span<const uint8_t> data) {
@@ -449,6 +452,86 @@ Frame dwell(uint8_t seq, uint32_t t) {
   return make(seq, Type::Dwell, std::move(p));
 }
 
+// ---- ARC (TYPE 0x13) ----
+namespace {
+void arc_put(std::vector<uint8_t>& v, uint64_t x, int bytes) {
+  for (int b = bytes - 1; b >= 0; --b) v.push_back(static_cast<uint8_t>(x >> (8 * b)));
+}
+uint64_t arc_get(const std::vector<uint8_t>& v, size_t i, int bytes) {
+  uint64_t x = 0;
+  for (int b = 0; b < bytes; ++b) x = (x << 8) | v[i + static_cast<size_t>(b)];
+  return x;
+}
+int32_t arc_get24s(const std::vector<uint8_t>& v, size_t i) {
+  const uint32_t x = static_cast<uint32_t>(arc_get(v, i, 3));
+  return (x & 0x800000u) ? static_cast<int32_t>(x) - (1 << 24) : static_cast<int32_t>(x);
+}
+Arc parse_arc(const Frame& f) {
+  const auto& p = f.payload;
+  Arc a;
+  a.code = p[0] & 0x03;
+  a.power = p[1];
+  a.i = arc_get24s(p, 2);
+  a.j = arc_get24s(p, 5);
+  a.dx = arc_get24s(p, 8);
+  a.dy = arc_get24s(p, 11);
+  a.dz = static_cast<int32_t>(static_cast<uint32_t>(arc_get(p, 14, 4)));
+  a.n_ramp = static_cast<uint32_t>(arc_get(p, 18, 3));
+  a.c_total = arc_get(p, 21, 6);
+  a.v_entry = arc_get(p, 27, 8);
+  a.v_cruise = arc_get(p, 35, 8);
+  a.v_exit = arc_get(p, 43, 8);
+  a.accel = arc_get(p, 51, 6);
+  a.decel_at = arc_get(p, 57, 6);
+  return a;
+}
+}  // namespace
+
+std::string arc_field_error(const Arc& a) {
+  if (a.code != 2 && a.code != 3) return fmt::format("motion code {} (ARC needs 2 or 3)", a.code);
+  const int64_t x0 = -int64_t{a.i}, y0 = -int64_t{a.j};
+  const int64_t x1 = int64_t{a.dx} - a.i, y1 = int64_t{a.dy} - a.j;
+  if (x0 == 0 && y0 == 0) return "start at the centre (I = J = 0)";
+  if (x1 == 0 && y1 == 0) return "end at the centre";
+  for (const int64_t c : {x0, y0, x1, y1}) {
+    if (c <= -kArcCoordLimit || c >= kArcCoordLimit) {
+      return fmt::format("coordinate {} relative to the centre: |.| >= 2^22", c);
+    }
+  }
+  if (a.dz == std::numeric_limits<int32_t>::min()) return "DZ = -2^31";
+  if (a.n_ramp == 0 || a.n_ramp > kArcNRampMax)
+    return fmt::format("N_RAMP {} not in 1..2^24-1", a.n_ramp);
+  if (a.c_total == 0 || a.c_total >= kArcCTotalLimit) {
+    return fmt::format("C_TOTAL {} not in 1..2^46-1", a.c_total);
+  }
+  if (a.v_cruise >= (uint64_t{1} << 63)) return fmt::format("V_cruise {} >= 2^63", a.v_cruise);
+  if (a.v_entry > a.v_cruise) return fmt::format("V_entry {} > V_cruise {}", a.v_entry, a.v_cruise);
+  if (a.v_exit > a.v_cruise) return fmt::format("V_exit {} > V_cruise {}", a.v_exit, a.v_cruise);
+  if (a.v_exit == 0) return "V_exit = 0";
+  if (a.accel > kArcU48Max || a.decel_at > kArcU48Max) return "A or D >= 2^48";
+  if (a.accel == 0 && a.v_entry == 0) return "A = 0 and V_entry = 0 (never moves)";
+  return {};
+}
+
+Frame arc(uint8_t seq, const Arc& a) {
+  if (const auto e = arc_field_error(a); !e.empty()) throw std::invalid_argument("ARC frame: " + e);
+  std::vector<uint8_t> p;
+  p.reserve(kArcPayload);
+  p.push_back(a.code);
+  p.push_back(a.power);
+  for (const int32_t c : {a.i, a.j, a.dx, a.dy})
+    arc_put(p, static_cast<uint32_t>(c) & 0xFFFFFFu, 3);
+  arc_put(p, static_cast<uint32_t>(a.dz), 4);
+  arc_put(p, a.n_ramp, 3);
+  arc_put(p, a.c_total, 6);
+  arc_put(p, a.v_entry, 8);
+  arc_put(p, a.v_cruise, 8);
+  arc_put(p, a.v_exit, 8);
+  arc_put(p, a.accel, 6);
+  arc_put(p, a.decel_at, 6);
+  return make(seq, Type::Arc, std::move(p));
+}
+
 namespace {
 void put48(std::vector<uint8_t>& v, uint64_t x) {
   put16(v, static_cast<uint16_t>(x >> 32));
@@ -562,6 +645,11 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (f.payload[0] & 0x7C) return NakReason::BadField;
       return std::nullopt;
     }
+    case Type::Arc:
+      if (n != kArcPayload) return NakReason::BadLength;
+      if (f.payload[0] & 0xFC) return NakReason::BadField;
+      if (!arc_field_error(parse_arc(f)).empty()) return NakReason::BadField;
+      return std::nullopt;
     case Type::LineProfile: {
       if (n < kProfileHeader) return NakReason::BadLength;
       const size_t w = (f.payload[0] & kLineShort) ? 2 : 4;
@@ -633,6 +721,11 @@ Line decode_line(const Frame& f, size_t n_axes) {
 uint32_t decode_dwell(const Frame& f) {
   check_or_throw(f, Type::Dwell, 0);
   return get32(f.payload, 0);
+}
+
+Arc decode_arc(const Frame& f) {
+  check_or_throw(f, Type::Arc, 0);
+  return parse_arc(f);
 }
 
 LineProfile decode_line_profile(const Frame& f, size_t n_axes) {

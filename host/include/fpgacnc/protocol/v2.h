@@ -34,6 +34,7 @@ enum class Type : uint8_t {
   Line = 0x10,
   Dwell = 0x11,
   LineProfile = 0x12,
+  Arc = 0x13,  // circular DDA (issue 6)
   // Heaters (issue 7): sequenced, not queued.
   HeaterConfig = 0x20,
   HeaterSetpoint = 0x21,
@@ -62,9 +63,9 @@ std::string type_name(uint8_t type);
 // "BAD_CRC", ..., or "reason 9".
 std::string nak_reason_name(uint8_t reason);
 // Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE, LINE, DWELL,
-// LINE_PROFILE).
+// LINE_PROFILE, ARC).
 bool is_sequenced(uint8_t type);
-// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE).
+// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC).
 bool is_fifo(uint8_t type);
 
 // A decoder was given a frame of the wrong type or length, or a field out of range.
@@ -331,6 +332,36 @@ std::pair<uint8_t, int16_t> decode_heater_setpoint(const Frame& f);
 ThermistorChunk decode_thermistor_table(const Frame& f);
 HeaterSafetyFrame decode_heater_safety(const Frame& f);
 uint16_t decode_heater_watchdog(const Frame& f);
+
+// ARC (TYPE 0x13, 63-byte payload): a circular / helical arc in XY run by the hardware circular
+// DDA (docs/protocol.md "ARC", docs/motion.md "Arcs"). Geometry in steps relative to the start:
+// centre (i, j), end (dx, dy; 0, 0 = full circle), dz Z steps over the arc. n_ramp and c_total
+// come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
+// arc_walk.h). Speeds in UQ16.48 cost units per clock, accel in 2^-48 cost units per clock^2,
+// decel_at (D) in cost units.
+constexpr size_t kArcPayload = 63;
+constexpr int32_t kArcCoordLimit = 1 << 22;  // |i|, |j|, |dx - i|, |dy - j| must be below
+constexpr uint32_t kArcNRampMax = (1u << 24) - 1;
+constexpr uint64_t kArcCTotalLimit = uint64_t{1} << 46;  // c_total must be below
+constexpr uint64_t kArcU48Max = (uint64_t{1} << 48) - 1;
+struct Arc {
+  uint8_t code = 3;  // 2 = G2 (CW), 3 = G3 (CCW)
+  uint8_t power = 0;
+  int32_t i = 0, j = 0, dx = 0, dy = 0;  // int24 on the wire
+  int32_t dz = 0;
+  uint32_t n_ramp = 1;                             // u24
+  uint64_t c_total = 0;                            // u48
+  uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;  // u64
+  uint64_t accel = 0;                              // u48
+  uint64_t decel_at = 0;                           // u48
+  bool operator==(const Arc&) const = default;
+};
+// Empty when the fields satisfy the device limits (docs/protocol.md "ARC"), else the rule broken.
+std::string arc_field_error(const Arc& a);
+// Builder; throws std::invalid_argument for fields the device would reject (arc_field_error).
+Frame arc(uint8_t seq, const Arc& a);
+// Decoder (length / field rules as the device checks them; ProtocolError otherwise).
+Arc decode_arc(const Frame& f);
 
 // Hex dump "A5 0A 07 10 ..." (upper case, space separated).
 std::string hex(std::span<const uint8_t> bytes);

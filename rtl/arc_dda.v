@@ -1,0 +1,346 @@
+// arc_dda: circular / helical DDA for one ARC segment (issue 6; docs/motion.md "Arcs", ARC frame in
+// docs/protocol.md). The integer reference is systemc/include/fpgacnc/twins/arc_walk.h; this block
+// produces the identical edge list.
+//
+// Walk: 8-connected lattice walk around the centre, coordinates x, y relative to the centre
+// (24-bit signed), F = x^2 + y^2 - T (48-bit signed) tracked with adds only. Per move the three
+// forward candidates D = (a, b), A = (a, 0), B = (0, b) (a, b: signs of the tangent s*(-y, x); a
+// zero component takes the inward sign, and its axial candidate is not offered) are scored by
+// |F| after the move; the smallest wins (ties: D, A, B). The target T ramps from R0^2 to R1^2 over
+// the first N_RAMP choices (q or q+1 before each, Bresenham remainder r; the first before move 1),
+// so the walk lands exactly on the end point. Move cost |x dy - y dx| = |x|+|y| (D), |y| (A), |x| (B).
+// The walk takes WALK_CLOCKS = 4 clocks per move: W0 candidate F and |x|, |y|; W1 |F|, F - next
+// ramp step, cumulative costs, end-point tests; W2 select; then READY until the path coordinate
+// reaches the move's cumulative cost C_k. At most one move every 4 clocks (the host keeps the
+// tangential speed below 1/8 step per clock, so this never binds; when it does, `late` is set and
+// the move waits, exactly as the reference does).
+// Pacing: U (UQ48.48) += V (UQ16.48) every clock; V ramps by A towards V_cruise until
+// U >= D*2^48, then towards V_exit (LINE_PROFILE rules, cost units). Move k fires on the first
+// READY clock with U[95:48] >= C_k. Z: remainder DDA Rz += V*|DZ| (the products vz_* and az come
+// from prep), a step when Rz >= C_TOTAL*2^48: z(c) = min(|DZ|, floor(U(c)|DZ| / (C_TOTAL 2^48))).
+// End: the move that reaches the end point, or the first move whose cumulative cost reaches
+// C_TOTAL; err when the two do not coincide (inconsistent frame). `ending` is high on that clock:
+// a load on the same edge starts the next arc on the next clock (zero gap); that load clears err, so
+// a driver that chains reads `end_err` (valid with `ending`) instead.
+//
+// Interface: `load` is taken when !busy or ending; its clock is the segment's clock -1 (clock 0 is
+// the first busy clock in which `run` is high: while `run` is low the block is frozen (the
+// executor holds a loaded arc through DIR hold/setup); `stop` (e-stop) makes it idle at once).
+// nx_dir / ny_dir: the direction of the next X / Y move (the tangent signs of the walk's current
+// point), valid while dir_valid (busy, from the second clock of each move); the executor writes
+// DIR from them ahead of the step (at the quadrant points, where an axis reverses). Outputs: *_step are one-clock pulses, registered: an event of clock c is
+// on the pins on clock c + 1 (fixed latency 1); *_dir are valid with the step and held. `last`
+// comes with the final move's step. err / late are sticky until the next load.
+// Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz; 64-bit V; 48-bit F and cost
+// sums (x3). Longest paths: 96-bit add -> 96-bit compare -> mux (Rz), 96-bit add -> 48-bit compare
+// -> mux (V / Vz update), 48-bit compare -> fire -> state registers.
+`default_nettype none
+
+module arc_dda (
+    input wire clk,
+    input wire rst,
+
+    input wire               load,
+    input wire               run,       // advance (the executor's RUN state); frozen when low
+    input wire               stop,      // abort: idle after this edge
+    input wire               ccw,
+    input wire signed [23:0] i_in,      // centre - start
+    input wire signed [23:0] j_in,
+    input wire signed [23:0] dx_in,     // end - start
+    input wire signed [23:0] dy_in,
+    input wire signed [31:0] dz_in,     // Z steps over the arc, |dz| < 2^31
+    input wire        [23:0] n_ramp,    // >= 1
+    input wire signed [47:0] dt_q,      // floor((R1^2 - R0^2) / n_ramp)
+    input wire        [23:0] dt_r,      // remainder, 0 <= dt_r < n_ramp
+    input wire        [47:0] c_total,
+    input wire        [63:0] v_entry,
+    input wire        [63:0] v_cruise,
+    input wire        [63:0] v_exit,
+    input wire        [47:0] acc_a,
+    input wire        [47:0] dec_d,
+    input wire        [95:0] vz_entry,  // v_entry * |dz|
+    input wire        [95:0] vz_cruise,
+    input wire        [95:0] vz_exit,
+    input wire        [95:0] az,        // acc_a * |dz|
+
+    output wire busy,
+    output wire ending,   // this clock's move is the last one
+    output wire end_err,  // with ending: the arc ends inconsistently (err will be set)
+    output wire x_step,
+    output wire x_dir,  // 1: +
+    output wire y_step,
+    output wire y_dir,
+    output wire z_step,
+    output wire z_dir,
+    output wire last,
+    output wire err,
+    output wire late,
+    output wire dir_valid,  // nx_dir / ny_dir valid
+    output wire nx_dir,     // 1: + (the next X move's direction)
+    output wire ny_dir
+);
+
+  localparam [1:0] W0 = 2'd0, W1 = 2'd1, W2 = 2'd2, READY = 2'd3;
+
+  reg busy_reg;
+  reg [1:0] st_reg;
+  reg ccw_reg;
+
+  // geometry and ramp
+  reg signed [23:0] x_reg, y_reg, x1_reg, y1_reg;
+  reg signed [47:0] f_reg;
+  reg signed [47:0] q_reg, qp1_reg;
+  reg [23:0] r_reg, n_reg, acc_reg, m_reg;
+  reg [47:0] ctot_reg, cnext_reg;
+
+  // W0 -> W1
+  reg signed [47:0] fa_reg, fb_reg, fd_reg;
+  reg va_reg, vb_reg, apos_reg, bpos_reg;
+  reg [23:0] ax_reg, ay_reg, axy_reg;
+  reg carry_reg;
+  reg [23:0] accn_reg;
+  // W1 -> W2
+  reg [47:0] ma_reg, mb_reg, md_reg;
+  reg signed [47:0] fa2_reg, fb2_reg, fd2_reg;
+  reg [47:0] sa_reg, sb_reg, sd_reg;
+  reg exa_reg, ex0_reg, eyb_reg, ey0_reg;
+  // W2 -> READY
+  reg mvx_reg, mvy_reg;  // the move has an x / y component
+  reg pend_end_reg, guard_reg, exact_reg;
+
+  // pacing
+  reg [95:0] u_reg;
+  reg [63:0] v_reg, vcr_reg, vex_reg;
+  reg [47:0] a_reg, d_reg;
+  reg [95:0] vz_reg, vzc_reg, vzx_reg, az_reg, rz_reg;
+  reg [31:0] nz_reg, zc_reg;
+  reg z_due_reg, zdir_reg;
+
+  // outputs
+  reg xs_reg, xd_reg, ys_reg, yd_reg, zs_reg, zd_reg, last_reg, err_reg, late_reg;
+
+  // ---------------- W0: candidates ----------------
+  wire               x_zero = (x_reg == 24'sd0);
+  wire               y_zero = (y_reg == 24'sd0);
+  wire               x_neg = x_reg[23];
+  wire               y_neg = y_reg[23];
+  // a = sign(t_x), t_x = ccw ? -y : y; inward (-sign x) when y == 0
+  wire               apos = y_zero ? x_neg : (ccw_reg ? y_neg : !y_neg);
+  // b = sign(t_y), t_y = ccw ? x : -x; inward (-sign y) when x == 0
+  wire               bpos = x_zero ? y_neg : (ccw_reg ? !x_neg : x_neg);
+  wire signed [47:0] x2 = {{23{x_reg[23]}}, x_reg, 1'b0};
+  wire signed [47:0] y2 = {{23{y_reg[23]}}, y_reg, 1'b0};
+  wire signed [47:0] ax2 = apos ? x2 : -x2;
+  wire signed [47:0] by2 = bpos ? y2 : -y2;
+  wire signed [47:0] fa_w = f_reg + ax2 + 48'sd1;
+  wire signed [47:0] fb_w = f_reg + by2 + 48'sd1;
+  wire signed [47:0] fd_w = f_reg + ax2 + by2 + 48'sd2;
+  wire        [23:0] absx = x_neg ? -x_reg : x_reg;
+  wire        [23:0] absy = y_neg ? -y_reg : y_reg;
+  wire        [24:0] acc_sum = {1'b0, acc_reg} + {1'b0, r_reg};
+  wire               carry_w = (acc_sum >= {1'b0, n_reg});
+  wire        [23:0] acc_wrap = acc_sum[23:0] - n_reg;  // < n_reg when taken: fits
+
+  // ---------------- W1 ----------------
+  wire signed [47:0] step_w = carry_reg ? qp1_reg : q_reg;
+  wire               ramp = (m_reg < n_reg);
+  wire signed [23:0] xa_w = apos_reg ? x_reg + 24'sd1 : x_reg - 24'sd1;
+  wire signed [23:0] yb_w = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
+
+  // ---------------- W2: select ----------------
+  wire               sel_d = (!va_reg || md_reg <= ma_reg) && (!vb_reg || md_reg <= mb_reg);
+  wire               sel_a = !sel_d && va_reg && (!vb_reg || ma_reg <= mb_reg);
+  wire        [47:0] s_sel = sel_d ? sd_reg : (sel_a ? sa_reg : sb_reg);
+  wire               mx_sel = sel_d || sel_a;
+  wire               my_sel = sel_d || !sel_a;
+  wire               ex_sel = mx_sel ? exa_reg : ex0_reg;
+  wire               ey_sel = my_sel ? eyb_reg : ey0_reg;
+
+  // ---------------- pacing ----------------
+  wire        [95:0] u_next = u_reg + {32'd0, v_reg};
+  wire               decel = (u_next[95:48] >= d_reg);
+  wire        [64:0] vxa = {1'b0, vex_reg} + {17'd0, a_reg};
+  wire               dec_ok = ({1'b0, v_reg} >= vxa);
+  wire        [64:0] v_plus = {1'b0, v_reg} + {17'd0, a_reg};
+  wire               acc_ok = (v_plus <= {1'b0, vcr_reg});
+  wire        [95:0] rz_next = rz_reg + vz_reg;
+  wire        [96:0] rz_sub = {1'b0, rz_next} - {1'b0, ctot_reg, 48'd0};
+  wire               z_go = !rz_sub[96] && (zc_reg != nz_reg);
+
+  wire               fire = busy_reg && run && (st_reg == READY) && (u_reg[95:48] >= cnext_reg);
+  wire               end_w = fire && (pend_end_reg || guard_reg);
+  wire               take = load && !stop && (!busy_reg || end_w);
+
+
+  always @(posedge clk) begin
+    xs_reg   <= 1'b0;
+    ys_reg   <= 1'b0;
+    zs_reg   <= 1'b0;
+    last_reg <= 1'b0;
+    if (busy_reg && run) begin
+      // Z and U/V for the next clock
+      zs_reg <= z_due_reg;
+      if (z_due_reg) zd_reg <= zdir_reg;  // with the step: a chained load may change zdir_reg
+      z_due_reg <= z_go;
+      if (z_go) begin
+        rz_reg <= rz_sub[95:0];
+        zc_reg <= zc_reg + 32'd1;
+      end else begin
+        rz_reg <= rz_next;
+      end
+      u_reg <= u_next;
+      if (decel) begin
+        if (dec_ok) begin
+          v_reg  <= v_reg - {16'd0, a_reg};
+          vz_reg <= vz_reg - az_reg;
+        end else begin
+          v_reg  <= vex_reg;
+          vz_reg <= vzx_reg;
+        end
+      end else begin
+        if (acc_ok) begin
+          v_reg  <= v_plus[63:0];
+          vz_reg <= vz_reg + az_reg;
+        end else begin
+          v_reg  <= vcr_reg;
+          vz_reg <= vzc_reg;
+        end
+      end
+
+      case (st_reg)
+        W0: begin
+          fa_reg    <= fa_w;
+          fb_reg    <= fb_w;
+          fd_reg    <= fd_w;
+          va_reg    <= !y_zero;
+          vb_reg    <= !x_zero;
+          apos_reg  <= apos;
+          bpos_reg  <= bpos;
+          ax_reg    <= absx;
+          ay_reg    <= absy;
+          axy_reg   <= absx + absy;
+          carry_reg <= carry_w;
+          accn_reg  <= carry_w ? acc_wrap : acc_sum[23:0];
+          st_reg    <= W1;
+        end
+        W1: begin
+          ma_reg  <= fa_reg[47] ? -fa_reg : fa_reg;
+          mb_reg  <= fb_reg[47] ? -fb_reg : fb_reg;
+          md_reg  <= fd_reg[47] ? -fd_reg : fd_reg;
+          fa2_reg <= ramp ? fa_reg - step_w : fa_reg;
+          fb2_reg <= ramp ? fb_reg - step_w : fb_reg;
+          fd2_reg <= ramp ? fd_reg - step_w : fd_reg;
+          sa_reg  <= cnext_reg + {24'd0, ay_reg};
+          sb_reg  <= cnext_reg + {24'd0, ax_reg};
+          sd_reg  <= cnext_reg + {24'd0, axy_reg};
+          exa_reg <= (xa_w == x1_reg);
+          ex0_reg <= (x_reg == x1_reg);
+          eyb_reg <= (yb_w == y1_reg);
+          ey0_reg <= (y_reg == y1_reg);
+          st_reg  <= W2;
+        end
+        W2: begin
+          mvx_reg <= mx_sel;
+          mvy_reg <= my_sel;
+          f_reg <= sel_d ? fd2_reg : (sel_a ? fa2_reg : fb2_reg);
+          if (mx_sel) x_reg <= xa_w;
+          if (my_sel) y_reg <= yb_w;
+          if (ramp) begin
+            acc_reg <= accn_reg;
+            m_reg   <= m_reg + 24'd1;
+          end
+          cnext_reg <= s_sel;
+          pend_end_reg <= ex_sel && ey_sel;
+          guard_reg <= (s_sel >= ctot_reg);
+          exact_reg <= (s_sel == ctot_reg);
+          if (u_reg[95:48] >= s_sel) late_reg <= 1'b1;
+          st_reg <= READY;
+        end
+        default: begin  // READY
+          if (fire) begin
+            xs_reg <= mvx_reg;
+            ys_reg <= mvy_reg;
+            if (mvx_reg) xd_reg <= apos_reg;
+            if (mvy_reg) yd_reg <= bpos_reg;
+            if (end_w) begin
+              last_reg <= 1'b1;
+              busy_reg <= 1'b0;
+              if (!(pend_end_reg && exact_reg)) err_reg <= 1'b1;
+            end
+            st_reg <= W0;
+          end
+        end
+      endcase
+    end
+
+    if (take) begin
+      busy_reg  <= 1'b1;
+      st_reg    <= W0;
+      ccw_reg   <= ccw;
+      x_reg     <= -i_in;
+      y_reg     <= -j_in;
+      x1_reg    <= dx_in - i_in;
+      y1_reg    <= dy_in - j_in;
+      f_reg     <= -dt_q;  // the first ramp step (q: dt_r < n_ramp, no carry) before move 1
+      q_reg     <= dt_q;
+      qp1_reg   <= dt_q + 48'sd1;
+      r_reg     <= dt_r;
+      n_reg     <= n_ramp;
+      acc_reg   <= dt_r;
+      m_reg     <= 24'd1;
+      ctot_reg  <= c_total;
+      cnext_reg <= 48'd0;
+      u_reg     <= 96'd0;
+      v_reg     <= v_entry;
+      vcr_reg   <= v_cruise;
+      vex_reg   <= v_exit;
+      a_reg     <= acc_a;
+      d_reg     <= dec_d;
+      vz_reg    <= vz_entry;
+      vzc_reg   <= vz_cruise;
+      vzx_reg   <= vz_exit;
+      az_reg    <= az;
+      rz_reg    <= 96'd0;
+      nz_reg    <= dz_in[31] ? -dz_in : dz_in;
+      zc_reg    <= 32'd0;
+      z_due_reg <= 1'b0;
+      zdir_reg  <= !dz_in[31];
+      err_reg   <= 1'b0;
+      late_reg  <= 1'b0;
+    end
+
+    if (stop) busy_reg <= 1'b0;
+
+    if (rst) begin
+      busy_reg  <= 1'b0;
+      st_reg    <= W0;
+      xs_reg    <= 1'b0;
+      ys_reg    <= 1'b0;
+      zs_reg    <= 1'b0;
+      xd_reg    <= 1'b0;
+      yd_reg    <= 1'b0;
+      zd_reg    <= 1'b0;
+      last_reg  <= 1'b0;
+      err_reg   <= 1'b0;
+      late_reg  <= 1'b0;
+      z_due_reg <= 1'b0;
+    end
+  end
+
+  assign busy   = busy_reg;
+  assign ending = end_w;
+  assign end_err = end_w && !(pend_end_reg && exact_reg);
+  assign x_step = xs_reg;
+  assign x_dir  = xd_reg;
+  assign y_step = ys_reg;
+  assign y_dir  = yd_reg;
+  assign z_step = zs_reg;
+  assign z_dir  = zd_reg;
+  assign last   = last_reg;
+  assign err    = err_reg;
+  assign late   = late_reg;
+  assign dir_valid = busy_reg && (st_reg != W0);
+  assign nx_dir = apos_reg;
+  assign ny_dir = bpos_reg;
+
+endmodule
