@@ -222,7 +222,8 @@ SC_MODULE(ExecBench) {
   std::vector<Job>* jobs = nullptr;
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
-  std::array<uint64_t, 4> stats{};  // zero gap, fast reversals, zero-length / HOLD on a last tick
+  std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
+  std::array<uint64_t, 3> pstats{};  // profiled: zero gap, reversing, never at cruise
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
@@ -267,6 +268,9 @@ SC_MODULE(ExecBench) {
       stats[1] += exec.fast_reversals;
       stats[2] += exec.zero_len_on_last_tick;
       stats[3] += exec.hold_on_last_tick;
+      pstats[0] += exec.profiled_zero_gap;
+      pstats[1] += exec.profiled_reversing;
+      pstats[2] += exec.profiled_triangles;
       for (int a = 0; a < kAxes; ++a) r.position[a] = pulse[a]->position;
       r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
       results.push_back(std::move(r));
@@ -329,9 +333,12 @@ int sc_main(int argc, char* argv[]) {
   const double twin_s = std::chrono::duration<double>(clock::now() - t0).count();
   double rtl_s = 0;
   int bad = 0;
-  uint64_t edges = 0, clocks = 0, profiled = 0;
+  uint64_t edges = 0, clocks = 0, profiled = 0, tiny_a = 0;
   for (const Job& j : jobs)
-    for (const auto& o : j.offers) profiled += o.seg.prof ? 1 : 0;
+    for (const auto& o : j.offers) {
+      profiled += o.seg.prof ? 1 : 0;
+      tiny_a += o.seg.prof && o.seg.profile.accel <= 2000 ? 1 : 0;
+    }
   for (size_t i = 0; i < jobs.size(); ++i) {
     const auto t1 = clock::now();
     const RunResult rtl = run_executor_rtl(jobs[i]);
@@ -386,6 +393,10 @@ int sc_main(int argc, char* argv[]) {
       "{} edges over {} clocks: {}\n",
       jobs.size(), jobs.size() * segments, profiled, bench.stats[0], bench.stats[1], bench.stats[2],
       bench.stats[3], edges, clocks, bad ? "DIFFER" : "all identical");
+  fmt::print(
+      "cosim_executor: profiled {}: {} zero-gap joins, {} with a reversing axis (HOLD/SETUP), {} "
+      "never at cruise (triangles), {} with A <= 2000\n",
+      profiled, bench.pstats[0], bench.pstats[1], bench.pstats[2], tiny_a);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

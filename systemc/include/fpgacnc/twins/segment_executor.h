@@ -73,12 +73,15 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     run_end_ = -1;
     running_ = false;
     segments_run = 0;
-    profiled = 0;
+    profiled = profiled_zero_gap = profiled_reversing = profiled_triangles = 0;
     zero_gap = fast_reversals = zero_len_on_last_tick = hold_on_last_tick = 0;
     seg_start_cycles.clear();
   }
   uint64_t segments_run = 0;
   uint64_t profiled = 0;                // PROFILE segments (LINE_PROFILE)
+  uint64_t profiled_zero_gap = 0;       // of those, started on the previous one's last tick
+  uint64_t profiled_reversing = 0;      // of those, with a reversing axis (HOLD/SETUP path)
+  uint64_t profiled_triangles = 0;      // of those, never at V_cruise
   uint64_t zero_gap = 0;                // segments started on the previous one's last tick
   uint64_t fast_reversals = 0;          // of those, with a DIR write during the run (dir_fast)
   uint64_t zero_len_on_last_tick = 0;   // T = 0 taken on a last tick (one clock in ZERO)
@@ -119,6 +122,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       prof = run_profile(s.profile, s.steps);
       s.total = prof.ticks_total;
       ++profiled;
+      if (!prof.cruised) ++profiled_triangles;
     }
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
     ++segments_run;
@@ -136,9 +140,11 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     const bool on_last_tick = running_ && valid < run_end_;
     const bool queued = on_last_tick && s.total != 0 && (!change || s.dir_fast);
     Cycle accept, run;
+    if (s.prof && change) ++profiled_reversing;
     if (queued) {
       accept = run = run_end_;
       ++zero_gap;
+      if (s.prof) ++profiled_zero_gap;
       if (change) ++fast_reversals;
       for (int a = 0; a < kAxes; ++a) {
         if (!flip[a]) continue;

@@ -269,6 +269,7 @@ inline ProfilePrepared prepare_profile(const ProfileParams& p,
 // U(j)*n_a >= k*M, and at most one per tick (V < 2^47). `ticks[a]` lists the tick of every step.
 struct ProfileRun {
   uint64_t ticks_total = 0;  // J
+  bool cruised = false;  // V reached V_cruise (false: a triangle, or a ramp that never gets there)
   std::array<std::vector<uint64_t>, kAxes> ticks;
 };
 inline ProfileRun run_profile(const ProfileParams& p,
@@ -289,6 +290,7 @@ inline ProfileRun run_profile(const ProfileParams& p,
   }
   u128 u = 0;
   uint64_t v = p.v_entry;
+  r.cruised = v == p.v_cruise;
   uint64_t j = 0;
   while (u < m) {
     // Constant velocity (cruise, V_exit reached, A = 0): the ticks before the next event (a step,
@@ -309,6 +311,7 @@ inline ProfileRun run_profile(const ProfileParams& p,
     ++j;
     u += v;
     profile_update(p, u >= d, v);
+    r.cruised = r.cruised || v == p.v_cruise;
     for (int a = 0; a < kAxes; ++a) {
       if (k[a] < abs_steps[a] && u >= next[a]) {
         r.ticks[a].push_back(j);
