@@ -751,7 +751,7 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
   check_eq(r.segments_done, moves.size(), "LINE_PROFILE segments done");
   check_eq(r.seg_start.size(), moves.size(), "LINE_PROFILE seg_start per segment");
   if (r.seg_start.size() != moves.size()) return;
-  double worst = 0;
+  long double worst = 0;
   for (size_t i = 0; i < moves.size(); ++i) {
     const auto& m = moves[i];
     const std::array<uint32_t, kAxes> n{static_cast<uint32_t>(std::abs(m.xy[0])),
@@ -773,7 +773,7 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
                fmt::format("LINE_PROFILE #{} axis {}: exact count", i, a));
       for (size_t k = 0; k < rises.size() && k < ideal.size(); ++k) {
         const long double d = static_cast<long double>(rises[k] - start) - ideal[k];
-        worst = std::max(worst, static_cast<double>(d));
+        worst = std::max(worst, d);
         check(d >= 0 && d < 1,
               fmt::format("LINE_PROFILE #{} axis {} step {}: rise at R + {}, "
                           "ideal R + {:.6f} (expected 0 <= d < 1)",
@@ -781,7 +781,8 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
       }
     }
   }
-  fmt::print("twins_unit: LINE_PROFILE job on the board: worst rise - ideal {:.6f} clock\n", worst);
+  fmt::print("twins_unit: LINE_PROFILE job on the board: worst rise - ideal = 1 - {:.3g} clock\n",
+             static_cast<double>(1.0L - worst));
 }
 
 }  // namespace
