@@ -65,7 +65,29 @@ struct PrepCommand {
   uint32_t t;
   std::array<uint32_t, kAxes> steps;
   int64_t gap;
+  bool prof = false;  // LINE_PROFILE (kind 0, v2, t = A) with these fields
+  ProfileParams profile{};
 };
+// A PROFILE segment's outputs (m_axis_prof_*) as events at its valid edge, after its segment
+// event: (kEvProf | op1 | n_dom << 8, U(1), V(1), V_cruise - A, V_exit + A, A | D << 32),
+// (kEvProf | 1, V_cruise, V_exit) and per axis a (kEvProf | 2 + a, V_entry*n_a mod 2^64,
+// the three products' bits 64..70, V_cruise*n_a mod 2^64, V_exit*n_a mod 2^64, A*n_a).
+inline constexpr uint64_t kEvProf = 6ull << 60;
+inline void profile_events(std::vector<BlockEvent>& out, Cycle c, const ProfilePrepared& pp,
+                           const ProfileParams& p) {
+  out.push_back(BlockEvent{c,
+                           {kEvProf | pp.op1 | static_cast<uint64_t>(pp.n_dom) << 8, pp.u1, pp.v1,
+                            pp.vcma, pp.vxpa, p.accel | static_cast<uint64_t>(p.decel_at) << 32}});
+  out.push_back(BlockEvent{c, {kEvProf | 1ull << 40, p.v_cruise, p.v_exit, 0, 0, 0}});
+  for (int a = 0; a < kAxes; ++a) {
+    const auto hi = [](unsigned __int128 v) { return static_cast<uint64_t>(v >> 64); };
+    out.push_back(
+        BlockEvent{c,
+                   {kEvProf | static_cast<uint64_t>(2 + a) << 40, static_cast<uint64_t>(pp.v0[a]),
+                    hi(pp.v0[a]) | hi(pp.vc[a]) << 8 | hi(pp.vx[a]) << 16,
+                    static_cast<uint64_t>(pp.vc[a]), static_cast<uint64_t>(pp.vx[a]), pp.acc[a]}});
+  }
+}
 struct PrepJob {
   uint32_t min_half;  // min_period = 2 * min_half via STEP high = low = min_half on X
   std::array<uint16_t, kAxes> setup{}, hold{};

@@ -202,6 +202,11 @@ SC_MODULE(BlockBench) {
                         static_cast<uint64_t>(s.v2) << 45 | static_cast<uint64_t>(s.power) << 48,
                     s.total, s.steps[0] | static_cast<uint64_t>(s.steps[1]) << 32,
                     s.steps[2] | static_cast<uint64_t>(s.steps[3]) << 32, s.tmn[0], s.tmn[3]}});
+    if (s.prof) {  // the RTL's products and first master update, as the executor twin derives them
+      ProfileParams pr = s.profile;
+      pr.v_entry = 0;  // (not an m_axis port: it is U(1))
+      profile_events(out->events, v, prepare_profile(s.profile, s.steps), pr);
+    }
     // The executor takes it `accept_delay` edges late and is busy `busy` edges after that.
     const size_t j = delay_index;
     const Cycle accept = v + 1 + next_delay();
@@ -441,6 +446,30 @@ PrepJob prep_job(std::mt19937_64& g, size_t n) {
       const uint32_t tk = pick(g, 0, 7);
       c.t = tk == 0 ? 0 : tk < 3 ? pick(g, 0, 10'000) : pick(g, 0, 0xFFFF'FFFFu);
     }
+    if (c.kind == kEntryMotion && pick(g, 0, 2) == 0) {  // LINE_PROFILE within the frame rules
+      c.v2 = c.prof = true;
+      bool moves = false;
+      for (auto& s : c.steps) {
+        const uint32_t m = pick(g, 0, 2) == 0   ? 0
+                           : pick(g, 0, 4) == 0 ? pick(g, 1, (1u << 24) - 1)
+                                                : pick(g, 1, 5000);
+        moves = moves || m != 0;
+        s = pick(g, 0, 1) ? 0u - m : m;
+      }
+      if (!moves) c.steps[pick(g, 0, kAxes - 1)] = pick(g, 0, 1) ? 1u : 0u - 1u;
+      auto v48 = [&](uint64_t hi) {
+        return std::uniform_int_distribution<uint64_t>(0, hi)(g) >> pick(g, 0, 40);
+      };
+      ProfileParams& pr = c.profile;
+      pr.v_cruise = pick(g, 0, 9) == 0 ? (1ull << 47) - 1 : v48((1ull << 47) - 1);
+      pr.v_entry = pick(g, 0, 3) == 0 ? pr.v_cruise : v48(pr.v_cruise);
+      pr.v_exit = std::max<uint64_t>(1, pick(g, 0, 3) == 0 ? pr.v_cruise : v48(pr.v_cruise));
+      pr.v_cruise = std::max(pr.v_cruise, pr.v_exit);
+      c.t = pick(g, 0, 3) == 0 ? pick(g, 0, 0xFFFF'FFFFu) : pick(g, 0, 5000);
+      if (c.t == 0 && pr.v_entry == 0) c.t = 1;
+      pr.accel = c.t;
+      pr.decel_at = pick(g, 0, 3) == 0 ? 0 : pick(g, 0, 0xFFFF'FFFFu) >> pick(g, 0, 31);
+    }
     c.gap = pick(g, 0, 1) ? 0 : pick(g, 0, 200);
     j.commands.push_back(c);
   }
@@ -583,6 +612,11 @@ int sc_main(int argc, char* argv[]) {
           for (size_t k = 0; k < c.prep.commands.size(); ++k) {
             const PrepCommand& p = c.prep.commands[k];
             FifoEntry cmd{p.v2, p.kind, p.code, p.power, p.t, p.steps};
+            cmd.prof = p.prof;
+            cmd.v_entry = p.profile.v_entry;
+            cmd.v_cruise = p.profile.v_cruise;
+            cmd.v_exit = p.profile.v_exit;
+            cmd.decel_at = p.profile.decel_at;
             accept = transport(b.to_prep, b.gp, b.clk, cmd, accept + p.gap);
             c.twin.events.push_back(BlockEvent{accept, {k, 0, 0, 0}});
           }
@@ -603,7 +637,7 @@ int sc_main(int argc, char* argv[]) {
   };
   sc_core::sc_start();
   int bad = 0;
-  size_t events = 0;
+  size_t events = 0, prof_segments = 0;
   for (Case& c : cases) {
     BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
                  : c.kind == 1 ? rtl_uart_tx(c.tx)
@@ -611,6 +645,9 @@ int sc_main(int argc, char* argv[]) {
                  : c.kind == 4 ? rtl_encoder(c.enc)
                                : rtl_prep(c.prep);
     events += r.events.size() + r.edges.size();
+    for (const auto& e : r.events)
+      prof_segments +=
+          c.kind == 3 && (e.v[0] >> 60) == (kEvProf >> 60) && (e.v[0] >> 40 & 0xff) == 0;
     const std::string d = compare(r, c.twin);
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       sort_events(r);
@@ -633,7 +670,7 @@ int sc_main(int argc, char* argv[]) {
       fmt::print("FAIL {}: first difference: {}\n", c.name, d);
     }
   }
-  fmt::print("cosim_blocks: {} block jobs, {} events: {}\n", cases.size(), events,
-             bad ? "DIFFER" : "all identical");
+  fmt::print("cosim_blocks: {} block jobs, {} events ({} prepared PROFILE segments): {}\n",
+             cases.size(), events, prof_segments, bad ? "DIFFER" : "all identical");
   return bad ? 1 : 0;
 }

@@ -162,6 +162,25 @@ BlockRun rtl_frame_decoder(const FrameJob& j) {
   return r;
 }
 
+template <class W>
+void put_bits(W& w, int lsb, unsigned __int128 v, int width) {
+  for (int b = 0; b < width; ++b) {
+    const int bit = lsb + b;
+    const uint32_t mask = 1u << (bit % 32);
+    if ((v >> b) & 1u)
+      w[bit / 32] |= mask;
+    else
+      w[bit / 32] &= ~mask;
+  }
+}
+template <class W>
+unsigned __int128 get_bits(const W& w, int lsb, int width) {
+  unsigned __int128 v = 0;
+  for (int b = 0; b < width; ++b)
+    if ((w[(lsb + b) / 32] >> ((lsb + b) % 32)) & 1u) v |= static_cast<unsigned __int128>(1) << b;
+  return v;
+}
+
 BlockRun rtl_prep(const PrepJob& j) {
   auto ctx = std::make_unique<VerilatedContext>();
   auto m = std::make_unique<Vsegment_prep>(ctx.get(), "segment_prep");
@@ -193,6 +212,16 @@ BlockRun rtl_prep(const PrepJob& j) {
       m->s_axis_tdata[4] = p.t;
       m->s_axis_tdata[5] = p.power | static_cast<uint32_t>(p.code & 3) << 8 |
                            static_cast<uint32_t>(p.kind & 3) << 10 | (p.v2 ? 1u << 12 : 0u);
+      // LINE_PROFILE fields above: prof at 173, V_entry 174.., V_cruise 222.., V_exit 270..,
+      // D 318.. (48-bit fields, top bit 0).
+      for (int w = 6; w < 11; ++w) m->s_axis_tdata[w] = 0;
+      if (p.prof) {
+        put_bits(m->s_axis_tdata, 173, 1, 1);
+        put_bits(m->s_axis_tdata, 174, p.profile.v_entry, 48);
+        put_bits(m->s_axis_tdata, 222, p.profile.v_cruise, 48);
+        put_bits(m->s_axis_tdata, 270, p.profile.v_exit, 48);
+        put_bits(m->s_axis_tdata, 318, p.profile.decel_at, 32);
+      }
     }
     m->s_axis_tvalid = offering ? 1 : 0;
     m->m_axis_tready = (accept_at == c) ? 1 : 0;
@@ -222,6 +251,24 @@ BlockRun rtl_prep(const PrepJob& j) {
            m->m_axis_steps[2] | static_cast<uint64_t>(m->m_axis_steps[3]) << 32,
            m->m_axis_tmn[0] | static_cast<uint64_t>(m->m_axis_tmn[1]) << 32,
            m->m_axis_tmn[6] | static_cast<uint64_t>(m->m_axis_tmn[7]) << 32}});
+      if (m->m_axis_kind == 1) {
+        ProfilePrepared pp{};
+        pp.u1 = m->m_axis_prof_u1;
+        pp.v1 = m->m_axis_prof_v1;
+        pp.op1 = m->m_axis_prof_op1;
+        pp.vcma = m->m_axis_prof_vcma;
+        pp.vxpa = m->m_axis_prof_vxpa;
+        pp.n_dom = m->m_axis_prof_n_dom;
+        for (int a = 0; a < kAxes; ++a) {
+          pp.v0[a] = get_bits(m->m_axis_prof_v0, 71 * a, 71);
+          pp.vc[a] = get_bits(m->m_axis_prof_vc, 71 * a, 71);
+          pp.vx[a] = get_bits(m->m_axis_prof_vx, 71 * a, 71);
+          pp.acc[a] = static_cast<uint64_t>(get_bits(m->m_axis_prof_acc, 56 * a, 56));
+        }
+        const ProfileParams pr{0, m->m_axis_prof_vcruise, m->m_axis_prof_vexit,
+                               m->m_axis_prof_accel, m->m_axis_prof_decel_at};
+        profile_events(r.events, c, pp, pr);
+      }
       accept_at = c + 1 + (seg < j.accept_delay.size() ? j.accept_delay[seg] : 0);
       ++seg;
     }

@@ -9,6 +9,9 @@
 // seg_done, seg_done_v2 and positions; the first difference is printed with its cycle.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <memory>
 #include <random>
 #include <systemc>
@@ -35,8 +38,78 @@ uint32_t pulse(uint32_t v) {
 
 using Job = ExecJob;
 
+// Share of the segments that are profiled (LINE_PROFILE as segment_prep prepares them), percent.
+uint64_t g_profile_pct = 40;
+uint64_t g_max_ticks = 40'000;  // J bound: max(this, 6 * n_dom * cruise period) (RTL run time)
+
 uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
   return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
+}
+
+// An upper bound of a profile's J in clocks: the speed never drops below min(V_exit, V_entry + A
+// t).
+double profile_ticks_bound(const ProfileParams& p, uint32_t n_dom) {
+  const double l = std::ldexp(static_cast<double>(n_dom), 48);
+  const double ve = static_cast<double>(p.v_entry), vx = static_cast<double>(p.v_exit),
+               a = static_cast<double>(p.accel);
+  if (ve >= vx) return l / vx + 2;
+  const double t1 = (vx - ve) / a, d1 = (ve + vx) / 2 * t1;
+  if (d1 >= l) return (-ve + std::sqrt(ve * ve + 2 * a * l)) / a + 2;
+  return t1 + (l - d1) / vx + 2;
+}
+
+// A random profile for |steps| with dominant count n_dom: cruise at minp..3*minp+2 clocks per
+// step (V_cruise = floor(2^48 / cps): every step interval is >= floor(2^48 / V_cruise) >= cps, so
+// the STEP timing holds, as the host plans it; a backlog of late pulses is outside the twins'
+// contract, see --zero-pulse), entry and exit rates
+// anywhere up to cruise (entry 0 sometimes, exit down to 1), A from 1 (tiny) up to reaching cruise
+// within one step, D from the stopping rule (triangles when accel and decel overlap) or random.
+// Retried until J fits g_max_ticks; the last resort is a flat profile.
+ProfileParams random_profile(std::mt19937_64& g, uint32_t n_dom, uint32_t minp) {
+  const double two48 = std::ldexp(1.0, 48);
+  for (int tries = 0; tries < 40; ++tries) {
+    ProfileParams p;
+    const uint32_t cps = pick(g, 0, 3) == 0 ? minp : pick(g, minp, 3 * minp + 2);
+    p.v_cruise = std::min<uint64_t>(static_cast<uint64_t>(two48 / cps), (1ull << 47) - 1);
+    auto frac = [&](uint64_t v) {
+      switch (pick(g, 0, 4)) {
+        case 0:
+          return v;
+        case 1:
+          return uint64_t{0};
+        default:
+          return static_cast<uint64_t>(static_cast<double>(v) *
+                                       std::uniform_real_distribution<double>(0, 1)(g));
+      }
+    };
+    p.v_entry = frac(p.v_cruise);
+    p.v_exit = std::max<uint64_t>(1, frac(p.v_cruise));
+    const double vc = static_cast<double>(p.v_cruise);
+    if (pick(g, 0, 5) == 0) {
+      p.accel = pick(g, 1, 2000);  // tiny A
+    } else {                       // reach cruise over 1..2*n_dom steps
+      const double l = std::ldexp(static_cast<double>(pick(g, 1, 2 * n_dom)), 48);
+      p.accel = static_cast<uint32_t>(std::clamp(vc * vc / (2 * l), 1.0, 4.0e9));
+    }
+    if (p.v_entry == 0 && p.accel == 0) p.accel = 1;
+    const double vx = static_cast<double>(p.v_exit);
+    const double stop = (vc * vc - vx * vx) / (2.0 * p.accel) / two48;
+    switch (pick(g, 0, 3)) {
+      case 0:
+        p.decel_at = pick(g, 0, n_dom + 2);
+        break;
+      default:
+        p.decel_at = static_cast<uint32_t>(std::max(0.0, n_dom - std::ceil(stop)));
+    }
+    // Slow ends (tiny A from a low entry, a tiny exit rate) are kept within a few cruise times.
+    const double budget = std::max(static_cast<double>(g_max_ticks), 6.0 * n_dom * (3 * minp + 2));
+    if (profile_ticks_bound(p, n_dom) <= budget) return p;
+  }
+  ProfileParams p;  // flat at the STEP rate
+  p.v_entry = p.v_cruise = p.v_exit = static_cast<uint64_t>(two48 / minp);
+  p.accel = 1;
+  p.decel_at = n_dom;
+  return p;
 }
 
 // A queued stream as segment_prep produces it: v1-like segments (T = P * n), v2 segments with any
@@ -77,6 +150,32 @@ Job random_job(uint64_t seed, size_t segments) {
     if (kind <= 2) {  // zero-length, dwell, LINE without steps
       s.steps = {0, 0, 0, 0};
       n = 0;
+    }
+    if (kind > 2 && pick(g, 0, 99) < g_profile_pct) {  // profiled: n_a on 1..4 axes, n_a = 1 too
+      const uint32_t pbig = pick(g, 0, 15) == 0 ? 3000 : pick(g, 0, 3) == 0 ? 3 : 60;
+      const uint32_t axes = pick(g, 1, kAxes);
+      s.steps = {0, 0, 0, 0};
+      n = 0;
+      for (uint32_t k = 0; k < axes; ++k) {
+        const uint32_t a = pick(g, 0, kAxes - 1);
+        s.steps[a] = pick(g, 0, 5) == 0 ? 1 : pick(g, 1, pbig);
+        n = std::max(n, s.steps[a]);
+      }
+      s.prof = true;
+      s.v2 = true;
+      s.profile = random_profile(g, n, minp);
+      s.total = 0;
+      s.period = 0;
+      s.tmn = {0, 0, 0, 0};
+      for (int a = 0; a < kAxes; ++a)
+        if (s.steps[a] != 0) track[a] = s.dir[a];
+      s.dir_fast = false;  // a reversing axis takes HOLD/SETUP
+      const uint32_t when = pick(g, 0, 9);
+      int64_t gap = pick(g, 0, 2);
+      if (when == 0) gap = pick(g, 0, 400);
+      j.offers.push_back(ExecOffer{s, gap});
+      prev_t = static_cast<uint64_t>(profile_ticks_bound(s.profile, n) / 2);
+      continue;
     }
     s.period = std::max(minp, pick(g, 0, 2) == 0 ? fast_p : 0u) +
                (pick(g, 0, 1) ? 0 : pick(g, 0, 3 * minp));
@@ -123,7 +222,8 @@ SC_MODULE(ExecBench) {
   std::vector<Job>* jobs = nullptr;
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
-  std::array<uint64_t, 4> stats{};  // zero gap, fast reversals, zero-length / HOLD on a last tick
+  std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
+  std::array<uint64_t, 3> pstats{};  // profiled: zero gap, reversing, never at cruise
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
@@ -155,6 +255,8 @@ SC_MODULE(ExecBench) {
       for (size_t i = 0; i < j.offers.size(); ++i) {
         const ExecSegment& e = j.offers[i].seg;
         Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
+        s.prof = e.prof;
+        s.profile = e.profile;
         accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
       }
       RunResult r;
@@ -166,6 +268,9 @@ SC_MODULE(ExecBench) {
       stats[1] += exec.fast_reversals;
       stats[2] += exec.zero_len_on_last_tick;
       stats[3] += exec.hold_on_last_tick;
+      pstats[0] += exec.profiled_zero_gap;
+      pstats[1] += exec.profiled_reversing;
+      pstats[2] += exec.profiled_triangles;
       for (int a = 0; a < kAxes; ++a) r.position[a] = pulse[a]->position;
       r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
       results.push_back(std::move(r));
@@ -177,6 +282,36 @@ SC_MODULE(ExecBench) {
   }
 };
 
+// Names where a job's runs first disagree: the segment running at the first differing edge (the
+// last seg_start at or before it, on the RTL side), its kind, and the axis and clock.
+std::string where(const Job& j, const RunResult& rtl, const RunResult& twin) {
+  const size_t n = std::min(rtl.edges.size(), twin.edges.size());
+  size_t k = 0;
+  while (k < n && rtl.edges[k].cycle == twin.edges[k].cycle &&
+         rtl.edges[k].signal == twin.edges[k].signal && rtl.edges[k].value == twin.edges[k].value)
+    ++k;
+  if (k == rtl.edges.size() && k == twin.edges.size()) return "";
+  const auto& e = k < rtl.edges.size() ? rtl.edges[k] : twin.edges[k];
+  const auto c =
+      static_cast<Cycle>(k < twin.edges.size() ? std::min(e.cycle, twin.edges[k].cycle) : e.cycle);
+  size_t seg = 0;
+  while (seg < rtl.seg_start.size() && rtl.seg_start[seg] <= c) ++seg;
+  // seg_start counts segments that ran (T > 0); map back to the offer index.
+  size_t ran = 0, idx = 0;
+  for (; idx < j.offers.size(); ++idx) {
+    const auto& o = j.offers[idx].seg;
+    if (o.prof || o.total != 0) ++ran;
+    if (ran == seg) break;
+  }
+  const int sig = e.signal;
+  const std::string axis = sig < 4   ? fmt::format("STEP axis {}", sig)
+                           : sig < 8 ? fmt::format("DIR axis {}", sig - 4)
+                                     : std::string("LASER");
+  return fmt::format(" [segment #{} ({}), {}, clock {}]", seg == 0 ? 0 : idx,
+                     idx < j.offers.size() && j.offers[idx].seg.prof ? "PROFILE" : "LINE/DWELL",
+                     axis, c);
+}
+
 }  // namespace
 
 int sc_main(int argc, char* argv[]) {
@@ -185,17 +320,30 @@ int sc_main(int argc, char* argv[]) {
   fpgacnc::cosim::Options opts("cosim_executor");
   opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
   opts.size("--segments", &segments);
+  opts.u64("--profile-pct", &g_profile_pct).u64("--max-ticks", &g_max_ticks);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
   std::vector<Job> jobs;
   for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
   ExecBench bench("bench");
   bench.jobs = &jobs;
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
   sc_core::sc_start();
+  const double twin_s = std::chrono::duration<double>(clock::now() - t0).count();
+  double rtl_s = 0;
   int bad = 0;
-  uint64_t edges = 0;
+  uint64_t edges = 0, clocks = 0, profiled = 0, tiny_a = 0;
+  for (const Job& j : jobs)
+    for (const auto& o : j.offers) {
+      profiled += o.seg.prof ? 1 : 0;
+      tiny_a += o.seg.prof && o.seg.profile.accel <= 2000 ? 1 : 0;
+    }
   for (size_t i = 0; i < jobs.size(); ++i) {
+    const auto t1 = clock::now();
     const RunResult rtl = run_executor_rtl(jobs[i]);
+    rtl_s += std::chrono::duration<double>(clock::now() - t1).count();
+    clocks += static_cast<uint64_t>(std::max<Cycle>(rtl.end_cycle, 0));
     const std::string d =
         i < bench.results.size() ? compare_runs(rtl, bench.results[i]) : "not run";
     edges += rtl.edges.size();
@@ -219,20 +367,37 @@ int sc_main(int argc, char* argv[]) {
           break;
         }
       const auto& j = jobs[i];
+      for (size_t x = 0; x < j.offers.size() && x < 4; ++x) {
+        const auto& o = j.offers[x].seg;
+        fmt::print("  offer {}: prof {} steps {} {} {} {} total {} gap {}", x, o.prof, o.steps[0],
+                   o.steps[1], o.steps[2], o.steps[3], o.total, j.offers[x].gap);
+        if (o.prof)
+          fmt::print(" ve {} vc {} vx {} A {} D {} J {}", o.profile.v_entry, o.profile.v_cruise,
+                     o.profile.v_exit, o.profile.accel, o.profile.decel_at,
+                     run_profile(o.profile, o.steps).ticks_total);
+        fmt::print("\n");
+      }
       for (int a = 0; a < kAxes; ++a)
         fmt::print("  axis {} high {} low {} setup {} hold {}\n", a, j.timing[a].high,
                    j.timing[a].low, j.timing[a].setup, j.timing[a].hold);
     }
     if (!d.empty()) {
       ++bad;
-      fmt::print("FAIL segment_executor seed {}: first difference: {}\n", seed + i, d);
+      fmt::print("FAIL segment_executor seed {}: first difference: {}{}\n", seed + i, d,
+                 i < bench.results.size() ? where(jobs[i], rtl, bench.results[i]) : "");
     }
   }
   fmt::print(
-      "cosim_executor: {} jobs, {} segments ({} started with zero gap, {} of them reversing "
-      "with dir_fast; {} zero-length and {} HOLD-path segments taken on a last tick), {} edges: "
-      "{}\n",
-      jobs.size(), jobs.size() * segments, bench.stats[0], bench.stats[1], bench.stats[2],
-      bench.stats[3], edges, bad ? "DIFFER" : "all identical");
+      "cosim_executor: {} jobs, {} segments ({} profiled; {} started with zero gap, {} of them "
+      "reversing with dir_fast; {} zero-length and {} HOLD-path segments taken on a last tick), "
+      "{} edges over {} clocks: {}\n",
+      jobs.size(), jobs.size() * segments, profiled, bench.stats[0], bench.stats[1], bench.stats[2],
+      bench.stats[3], edges, clocks, bad ? "DIFFER" : "all identical");
+  fmt::print(
+      "cosim_executor: profiled {}: {} zero-gap joins, {} with a reversing axis (HOLD/SETUP), {} "
+      "never at cruise (triangles), {} with A <= 2000\n",
+      profiled, bench.pstats[0], bench.pstats[1], bench.pstats[2], tiny_a);
+  fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
+             twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;
 }

@@ -1,5 +1,6 @@
 // RTL side of the segment_executor block co-simulation: the Verilated C++ model `vexec`
 // clocked by this loop (see cosim_executor.cpp).
+#include <cstdint>
 #include <memory>
 
 #include "Vsegment_executor.h"
@@ -23,6 +24,43 @@ uint64_t pack16(const std::array<AxisTiming, kAxes>& t, uint32_t AxisTiming::*f)
   return v;
 }
 
+// Writes `width` bits of v at bit `lsb` of a Verilated wide port (32-bit words).
+template <class W>
+void put_bits(W& w, int lsb, unsigned __int128 v, int width) {
+  for (int b = 0; b < width; ++b) {
+    const int bit = lsb + b;
+    const uint32_t mask = 1u << (bit % 32);
+    if ((v >> b) & 1u)
+      w[bit / 32] |= mask;
+    else
+      w[bit / 32] &= ~mask;
+  }
+}
+
+// The PROFILE inputs as segment_prep makes them (prepare_profile, checked against the Verilated
+// segment_prep by cosim_blocks).
+void put_profile(Vsegment_executor& m, const ExecSegment& s) {
+  m.s_axis_kind = s.prof ? 1 : 0;
+  if (!s.prof) return;
+  const ProfilePrepared pp = prepare_profile(s.profile, s.steps);
+  m.s_axis_prof_u1 = pp.u1;
+  m.s_axis_prof_v1 = pp.v1;
+  m.s_axis_prof_op1 = pp.op1;
+  m.s_axis_prof_accel = s.profile.accel;
+  m.s_axis_prof_vcruise = s.profile.v_cruise;
+  m.s_axis_prof_vexit = s.profile.v_exit;
+  m.s_axis_prof_vcma = pp.vcma;
+  m.s_axis_prof_vxpa = pp.vxpa;
+  m.s_axis_prof_decel_at = s.profile.decel_at;
+  m.s_axis_prof_n_dom = pp.n_dom;
+  for (int a = 0; a < kAxes; ++a) {
+    put_bits(m.s_axis_prof_v0, 71 * a, pp.v0[a], 71);
+    put_bits(m.s_axis_prof_vc, 71 * a, pp.vc[a], 71);
+    put_bits(m.s_axis_prof_vx, 71 * a, pp.vx[a], 71);
+    put_bits(m.s_axis_prof_acc, 56 * a, pp.acc[a], 56);
+  }
+}
+
 }  // namespace
 
 RunResult run_executor_rtl(const ExecJob& j) {
@@ -42,7 +80,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
   RunResult r;
   uint32_t prev = 0;
   Cycle c = 0, valid_from = j.offers.empty() ? -1 : j.offers[0].gap;
-  size_t next = 0;
+  size_t next = 0, prof_set = SIZE_MAX;  // offer whose profile inputs are on the ports
   Cycle quiet = 0;
   while (true) {
     // Inputs for edge c + 1: the next offer is valid once edge valid_from has passed.
@@ -62,6 +100,10 @@ RunResult run_executor_rtl(const ExecJob& j) {
       }
       m->s_axis_dir = d;
       m->s_axis_total = s.total;
+      if (prof_set != next) {  // (wide ports: written once per offer)
+        put_profile(*m, s);
+        prof_set = next;
+      }
     }
     m->s_axis_tvalid = offering ? 1 : 0;
     const bool accepted = offering && m->s_axis_tready;

@@ -15,7 +15,9 @@
 // packed by the host (feed override `--corpus-feed-override` percent).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <random>
 #include <string>
 #include <systemc>
@@ -252,6 +254,9 @@ Job corpus_job(const std::string& path, size_t max_moves, double feed_override) 
 // fills and the window closes), some gaps (the FIFO runs dry); a few frames corrupted once (NAK
 // BAD_CRC, go-back-N), line noise between frames, frames cut short followed by silence past the
 // watchdog (NAK TIMEOUT); some jobs ignore the credit (NAK FIFO_FULL, duplicates).
+bool g_v2_profiles = true;         // LINE_PROFILE frames in the random v2 sessions
+uint64_t g_v2_profile_frames = 0;  // how many were generated
+
 Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
   using namespace fpgacnc::twins::v2;
   std::mt19937_64 g(seed * 0x9E37'79B9'7F4A'7C15ull + 2);
@@ -286,6 +291,35 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
       it = V2Item{kDwell, dwell_payload(pick(g, 0, 3) == 0 ? 0 : pick(g, 1, 20'000))};
     } else if (kind == 1) {
       it = numerators();
+    } else if (kind >= 4 && kind <= 7 && g_v2_profiles) {
+      // LINE_PROFILE on 1..4 axes (n_a <= 12): cruise at 1 201..2 400 clocks per step (above any
+      // random_timing's minimum period, also after a CONFIG_AXIS mid-stream: the STEP timing
+      // holds, as the host plans it), entry and exit from cruise/8 up, A reaching cruise within
+      // 1..2*n_dom steps (or tiny), D from the stopping rule or random.
+      const double two48 = std::ldexp(1.0, 48);
+      std::vector<int32_t> st(static_cast<size_t>(pick(g, 1, kAxes)));
+      uint32_t n = 0;
+      for (auto& x : st) {
+        const uint32_t v = pick(g, 0, 2) == 0 ? 0 : pick(g, 1, pick(g, 0, 1) ? 3 : 12);
+        x = pick(g, 0, 1) ? -static_cast<int32_t>(v) : static_cast<int32_t>(v);
+        n = std::max(n, v);
+      }
+      if (n == 0) st[0] = n = 1;
+      ProfileParams pr;
+      pr.v_cruise = static_cast<uint64_t>(two48 / pick(g, 1201, 2400));
+      auto from8 = [&] { return pr.v_cruise / 8 + pick(g, 0, 7) * (pr.v_cruise / 8); };
+      pr.v_entry = pick(g, 0, 2) == 0 ? pr.v_cruise : std::min(pr.v_cruise, from8());
+      pr.v_exit = pick(g, 0, 2) == 0 ? pr.v_cruise : std::min(pr.v_cruise, from8());
+      const double vc = static_cast<double>(pr.v_cruise), vx = static_cast<double>(pr.v_exit);
+      const double l = std::ldexp(static_cast<double>(pick(g, 1, 2 * n)), 48);
+      pr.accel = pick(g, 0, 5) == 0
+                     ? pick(g, 1, 2000)
+                     : static_cast<uint32_t>(std::clamp(vc * vc / (2 * l), 1.0, 4e9));
+      const double stop = (vc * vc - vx * vx) / (2.0 * pr.accel) / two48;
+      pr.decel_at = pick(g, 0, 3) == 0 ? pick(g, 0, n + 1)
+                                       : static_cast<uint32_t>(std::max(0.0, n - std::ceil(stop)));
+      it = V2Item{kLineProfile, line_profile_payload(code, power, pr, st, pick(g, 0, 3) != 0)};
+      ++g_v2_profile_frames;
     } else if (kind <= 3) {  // zero-length, or T ticks without steps
       const int32_t none[2] = {0, 0};
       it.payload = line_payload(code, power, kind == 2 ? 0 : pick(g, 1, 5000), none, true);
@@ -357,6 +391,7 @@ int sc_main(int argc, char* argv[]) {
   opts.size("--segments", &segments).size("--corpus-moves", &corpus_moves);
   opts.u64("--v2-seeds", &v2_seeds).size("--v2-corpus-frames", &v2_corpus_frames);
   opts.real("--corpus-feed-override", &corpus_override);
+  opts.flag("--v2-profiles", &g_v2_profiles);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
 
@@ -418,6 +453,7 @@ int sc_main(int argc, char* argv[]) {
                diff.empty() ? "ok  " : "FAIL", jobs[i].name, a.acks.size(), a.edges.size(),
                a.end_cycle, a.timeouts, v2, diff.empty() ? "" : ": first difference: ", diff);
   }
+  fmt::print("cosim: {} LINE_PROFILE frames in the random v2 sessions\n", g_v2_profile_frames);
   fmt::print(
       "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "
       "clocks/s), twins {:.3f} s; wall {:.2f} s; {}\n",

@@ -20,6 +20,8 @@ struct ExecSegment {
   uint8_t power = 0xFF;
   bool v2 = false;
   bool dir_fast = false;
+  bool prof = false;  // kind PROFILE: total, tmn, period 0 and dir_fast 0, as segment_prep sends
+  ProfileParams profile{};
 };
 struct ExecOffer {
   ExecSegment seg;

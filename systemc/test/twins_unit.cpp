@@ -6,6 +6,8 @@
 // failure.
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <systemc>
 
 #include "fpgacnc/protocol/v1.h"
@@ -687,6 +689,102 @@ void spiral(const RunResult& r, const std::vector<uint64_t>& t, const std::array
   }
 }
 
+// A v2 session of LINE_PROFILE frames on the virtual board: an accelerating X/Y move, a cruise
+// joined with zero gap, a deceleration from the first clock, then one that reverses X
+// (HOLD/SETUP: accelerate, cruise, decelerate). Checked
+// against an independent real-valued model (per-tick V and U in long double): every STEP rise of
+// X and Y is 0 <= rise - (R + t_ideal) < 1 clock after its ideal time, exact counts, J per
+// segment, zero gap where no axis reverses.
+struct ProfileMove {
+  ProfileParams pr;
+  std::array<int32_t, 2> xy;
+};
+std::vector<ProfileMove> profile_moves() {
+  const uint64_t v = (1ull << 48) / 120;  // 120 clocks per step (STEP high + low = 100)
+  // Each segment lasts longer than the next frame on the wire (38 bytes, about 165 000 clocks at
+  // 115 200 baud), so the next one is queued before its end.
+  return {
+      {{0, v, v, 400'000'000, 10'000}, {3000, -2000}},       // 0 -> cruise
+      {{v, v, v, 1, 10'000}, {2500, -2500}},                 // cruise, A = 1
+      {{v, v, v / 8, 400'000'000, 0}, {900, -300}},          // decelerates from the first clock
+      {{v / 8, v, v / 8, 400'000'000, 1900}, {-2000, 600}},  // X reverses: up, cruise, down
+  };
+}
+V2Script profile_script(std::array<int64_t, 2>& pos) {
+  using namespace fpgacnc::twins::v2;
+  V2Script s;
+  for (uint8_t a = 0; a < kAxes; ++a)
+    s.items.push_back(V2Item{kConfigAxis, config_axis_payload(a, AxisTiming{50, 50, 100, 100})});
+  pos = {0, 0};
+  for (const auto& m : profile_moves()) {
+    pos[0] += m.xy[0];
+    pos[1] += m.xy[1];
+    s.items.push_back(V2Item{kLineProfile, line_profile_payload(1, 200, m.pr, m.xy, true)});
+  }
+  return s;
+}
+// The ideal times of the steps of an axis with n of n_dom steps (clocks after R, long double).
+std::vector<long double> ideal_steps(const ProfileParams& pr, uint32_t n, uint32_t n_dom) {
+  std::vector<long double> t;
+  const long double two48 = std::ldexp(1.0L, 48);
+  long double u = 0, v = static_cast<long double>(pr.v_entry) / two48;
+  uint64_t vi = pr.v_entry;  // the commanded staircase (integer V per clock)
+  for (uint64_t c = 0; t.size() < n && c < 100'000'000; ++c) {
+    const long double next = u + v;
+    while (t.size() < n) {
+      const long double target = static_cast<long double>(t.size() + 1) * n_dom / n;
+      if (next < target) break;
+      t.push_back(c + (target - u) / v);
+    }
+    u = next;
+    profile_update(pr, u >= pr.decel_at, vi);
+    v = static_cast<long double>(vi) / two48;
+  }
+  return t;
+}
+void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
+  const auto moves = profile_moves();
+  check(r.error.empty(), "LINE_PROFILE host error: " + r.error);
+  check_eq(r.naks, 0u, "LINE_PROFILE: no NAK");
+  check_eq(r.position[0], pos[0], "LINE_PROFILE X position");
+  check_eq(r.position[1], pos[1], "LINE_PROFILE Y position");
+  check_eq(r.segments_done, moves.size(), "LINE_PROFILE segments done");
+  check_eq(r.seg_start.size(), moves.size(), "LINE_PROFILE seg_start per segment");
+  if (r.seg_start.size() != moves.size()) return;
+  long double worst = 0;
+  for (size_t i = 0; i < moves.size(); ++i) {
+    const auto& m = moves[i];
+    const std::array<uint32_t, kAxes> n{static_cast<uint32_t>(std::abs(m.xy[0])),
+                                        static_cast<uint32_t>(std::abs(m.xy[1])), 0, 0};
+    const uint32_t n_dom = std::max(n[0], n[1]);
+    const ProfileRun run = run_profile(m.pr, n);
+    const Cycle start = r.seg_start[i], end = start + static_cast<Cycle>(run.ticks_total);
+    if (i + 1 < moves.size() && i + 1 != 3)
+      check_eq(r.seg_start[i + 1], end, fmt::format("LINE_PROFILE #{}: zero gap", i + 1));
+    if (i + 1 == 3) check(r.seg_start[i + 1] > end, "LINE_PROFILE #3 reverses X: HOLD/SETUP gap");
+    for (int a = 0; a < 2; ++a) {
+      std::vector<Cycle> rises;
+      for (const auto& e : r.edges)
+        if (e.signal == fpgacnc::simboard::step_signal(a) && e.value == 1 &&
+            static_cast<Cycle>(e.cycle) > start && static_cast<Cycle>(e.cycle) <= end)
+          rises.push_back(static_cast<Cycle>(e.cycle));
+      const auto ideal = ideal_steps(m.pr, n[a], n_dom);
+      check_eq(rises.size(), static_cast<size_t>(n[a]),
+               fmt::format("LINE_PROFILE #{} axis {}: exact count", i, a));
+      for (size_t k = 0; k < rises.size() && k < ideal.size(); ++k) {
+        const long double d = static_cast<long double>(rises[k] - start) - ideal[k];
+        worst = std::max(worst, d);
+        check(d >= 0 && d < 1,
+              fmt::format("LINE_PROFILE #{} axis {} step {}: rise at R + {}, "
+                          "ideal R + {:.6f} (expected 0 <= d < 1)",
+                          i, a, k + 1, rises[k] - start, static_cast<double>(ideal[k])));
+      }
+    }
+  }
+  fmt::print("twins_unit: LINE_PROFILE job on the board: worst rise - ideal = 1 - {:.3g} clock\n",
+             static_cast<double>(1.0L - worst));
+}
+
 }  // namespace
 
 int sc_main(int, char*[]) {
@@ -710,6 +808,8 @@ int sc_main(int, char*[]) {
   std::array<int64_t, 2> spiral_pos{};
   V2Script sp = spiral_script(spiral_t, spiral_pos);
   board.add_job(TwinJob{HostScript{{}, sp}, p.timing, keep});
+  std::array<int64_t, 2> profile_pos{};
+  board.add_job(TwinJob{HostScript{{}, profile_script(profile_pos)}, p.timing, keep});
   // The block benches run in a thread of their own (sockets need a running simulation).
   struct Blocks : sc_core::sc_module {
     SC_HAS_PROCESS(Blocks);
@@ -727,10 +827,11 @@ int sc_main(int, char*[]) {
     }
   } blocks("blocks", dec_bench, enc_bench, exec_bench);
   sc_core::sc_start();
-  if (results.size() == 3) {
+  if (results.size() == 4) {
     worked_example(results[0]);
     zero_move_and_watchdog(results[1]);
     spiral(results[2], spiral_t, spiral_pos, results[2].statuses);
+    profile_job(results[3], profile_pos);
   } else {
     check(false, "all jobs ran");
   }

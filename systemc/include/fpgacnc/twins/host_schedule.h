@@ -138,7 +138,10 @@ struct V2Item {
   // noise, a frame cut short), and the gap from their end to the frame.
   std::vector<uint8_t> pre{};
   int64_t pre_gap = 1;
-  bool fifo() const { return type == v2::kLine || type == v2::kDwell || type == v2::kNumerators; }
+  bool fifo() const {
+    return type == v2::kLine || type == v2::kLineProfile || type == v2::kDwell ||
+           type == v2::kNumerators;
+  }
 };
 struct V2Script {
   std::vector<V2Item> items;  // sequenced frames

@@ -21,6 +21,11 @@
 //   for codes 1..3 with power > 0 (back-to-back cutting segments keep it high: the recorder
 //   cancels a fall and a rise on the same edge). seg_done after edge R + T, sent to initiator
 //   `done` with the segment's v2 bit.
+//   Kind PROFILE (Segment::prof, from LINE_PROFILE): T is the J of run_profile (timing.h: the
+//   U/V master and floor(U*n_a/M) per axis in exact integers, as profile_gen and dda_profile);
+//   the k-th step of an axis in tick j is a step request on edge R + j, sent straight to the
+//   axis's step_pulse. dir_fast is 0, so a reversing axis always takes HOLD/SETUP. Everything
+//   else (accept edges, zero gap, laser, seg_done) as for a segment of T = J.
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
@@ -68,10 +73,15 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     run_end_ = -1;
     running_ = false;
     segments_run = 0;
+    profiled = profiled_zero_gap = profiled_reversing = profiled_triangles = 0;
     zero_gap = fast_reversals = zero_len_on_last_tick = hold_on_last_tick = 0;
     seg_start_cycles.clear();
   }
   uint64_t segments_run = 0;
+  uint64_t profiled = 0;                // PROFILE segments (LINE_PROFILE)
+  uint64_t profiled_zero_gap = 0;       // of those, started on the previous one's last tick
+  uint64_t profiled_reversing = 0;      // of those, with a reversing axis (HOLD/SETUP path)
+  uint64_t profiled_triangles = 0;      // of those, never at V_cruise
   uint64_t zero_gap = 0;                // segments started on the previous one's last tick
   uint64_t fast_reversals = 0;          // of those, with a DIR write during the run (dir_fast)
   uint64_t zero_len_on_last_tick = 0;   // T = 0 taken on a last tick (one clock in ZERO)
@@ -103,8 +113,17 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
  private:
   void on_segment(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
-    const Segment s = payload<Segment>(gp);
+    Segment s = payload<Segment>(gp);
     const Cycle valid = clk_.at(delay);
+    // PROFILE: the run in exact integers (profile_gen + dda_profile); the segment lasts J ticks
+    // and is never zero-length (n_dom >= 1), so below it is handled as a segment of T = J.
+    ProfileRun prof;
+    if (s.prof) {
+      prof = run_profile(s.profile, s.steps);
+      s.total = prof.ticks_total;
+      ++profiled;
+      if (!prof.cruised) ++profiled_triangles;
+    }
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
     ++segments_run;
     // Which moving axes reverse (DIR as it will be: every earlier write is already recorded).
@@ -121,9 +140,11 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     const bool on_last_tick = running_ && valid < run_end_;
     const bool queued = on_last_tick && s.total != 0 && (!change || s.dir_fast);
     Cycle accept, run;
+    if (s.prof && change) ++profiled_reversing;
     if (queued) {
       accept = run = run_end_;
       ++zero_gap;
+      if (s.prof) ++profiled_zero_gap;
       if (change) ++fast_reversals;
       for (int a = 0; a < kAxes; ++a) {
         if (!flip[a]) continue;
@@ -166,6 +187,12 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
       for (int a = 0; a < kAxes; ++a) {
         if (s.steps[a] == 0) continue;
+        if (s.prof) {  // a step in tick j: step request on edge R + j (STEP rises there)
+          PulseCmd none{false};
+          for (uint64_t j : prof.ticks[a])
+            transport(*pulse[a], gp_, clk_, none, run + static_cast<Cycle>(j));
+          continue;
+        }
         DdaLoad l{s.steps[a], s.total};
         transport(*dda[a], gp_, clk_, l, run);
       }

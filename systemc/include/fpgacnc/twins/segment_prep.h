@@ -14,6 +14,11 @@
 //     steps; valid kPrepLatencyV2 (+ kPrepClampExtra when clamped) edges after acceptance.
 //   dwell: T ticks, no steps, laser off; valid kPrepLatencyDwell edges after acceptance.
 //   kind 3 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+//   LINE_PROFILE (prof): a PROFILE segment carrying the profile fields (V_entry, V_cruise,
+//     V_exit, A, D) and |steps|; total = period = tmn = 0, dir_fast = 0 (a reversing axis always
+//     takes the executor's HOLD/SETUP path); valid kPrepLatencyProfile (25 + N_AXES) edges after
+//     acceptance. The executor twin derives the RTL's products from the fields (prepare_profile).
+
 // DIR per axis is the sign of the entry's steps field (1 for 0) whatever the kind.
 // tmn[a] = T - |steps_a|. The prepared segment carries DIR per axis and dir_fast: the block
 // tracks the DIR each axis will have when the segment starts (all low after reset) and sets
@@ -35,6 +40,8 @@ inline constexpr Cycle kPrepLatencyV2 = 67 + kAxes;
 inline constexpr Cycle kPrepClampExtra = 0;
 inline constexpr Cycle kPrepClampStrobe = kAxes + 33;  // `clamped`: scan, divider, clamp
 inline constexpr Cycle kPrepLatencyDwell = 67 + kAxes;
+// LINE_PROFILE: the scan (N_AXES - 1), a 25-clock shift-add multiplier, the first master update.
+inline constexpr Cycle kPrepLatencyProfile = 25 + kAxes;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
   Cycle edge;
@@ -85,8 +92,6 @@ class SegmentPrepTwin : public sc_core::sc_module {
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const FifoEntry c = payload<FifoEntry>(gp);
-    if (c.prof)
-      throw std::logic_error("segment_prep twin: LINE_PROFILE entries are not modelled yet");
     Cycle accept = std::max(clk_.at(delay) + 1, free_from_);
     if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};
@@ -110,7 +115,15 @@ class SegmentPrepTwin : public sc_core::sc_module {
         abs[a] = v < 0 ? 0u - c.steps[a] : c.steps[a];
         s.dir[a] = v >= 0;
       }
-      if (c.kind == kEntryMotion && !c.v2) {  // v1
+      if (c.prof && c.kind == kEntryMotion && c.v2) {  // LINE_PROFILE: kind PROFILE
+        s.code = c.code;
+        s.power = c.power;
+        s.v2 = true;
+        s.prof = true;
+        s.profile = ProfileParams{c.v_entry, c.v_cruise, c.v_exit, c.t, c.decel_at};
+        for (auto& n : abs) n &= 0xffffffu;  // |steps| < 2^24 (the decoder's rule)
+        latency = kPrepLatencyProfile;
+      } else if (c.kind == kEntryMotion && !c.v2) {  // v1
         const auto feed = static_cast<uint16_t>(c.t & 0xffffu);
         abs[2] = abs[3] = 0;
         const PreparedTiming t =
@@ -142,7 +155,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
         latency = kPrepLatencyDwell;
       }
       s.steps = abs;
-      for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.total - s.steps[a];
+      for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.prof ? 0 : s.total - s.steps[a];
       // DIR at the start of this segment, and whether its reversals fit in its first period.
       std::array<bool, kAxes> rev{};
       for (int a = 0; a < kAxes; ++a) {
@@ -152,7 +165,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
       }
       uint32_t n_dom = 0;
       for (uint32_t n : abs) n_dom = std::max(n_dom, n);
-      s.dir_fast = n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom);
+      s.dir_fast = !s.prof && (n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom));
       const Cycle taken = transport(segments, gp_, clk_, s, accept + latency);
       free_from_ = taken + 1;
       last_period = s.period;

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <numeric>
+#include <vector>
 
 namespace fpgacnc::twins {
 
@@ -199,6 +200,128 @@ inline bool dir_fast(const std::array<bool, kAxes>& reversing,
     if (period < need) return false;
   }
   return true;
+}
+
+// ---- LINE_PROFILE (docs/timing.md "Profiled segments", docs/protocol.md "LINE_PROFILE") --------
+
+// The frame's profile fields: V in 2^-48 dominant steps per clock (< 2^47), A in 2^-48 steps per
+// clock^2, D the dominant step count at which deceleration starts.
+struct ProfileParams {
+  uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;
+  uint32_t accel = 0, decel_at = 0;
+};
+inline constexpr uint8_t kOpInc = 0, kOpDec = 1, kOpCru = 2, kOpExit = 3;
+
+// One master update (profile_gen): the velocity of the next clock from V and whether the path
+// position after this clock has reached D (decelerating). Returns the op.
+inline uint8_t profile_update(const ProfileParams& p, bool decel, uint64_t& v) {
+  if (decel) {
+    if (v >= p.v_exit + p.accel) {
+      v -= p.accel;
+      return kOpDec;
+    }
+    v = p.v_exit;
+    return kOpExit;
+  }
+  if (v + p.accel <= p.v_cruise) {
+    v += p.accel;
+    return kOpInc;
+  }
+  v = p.v_cruise;
+  return kOpCru;
+}
+
+// segment_prep's PROFILE outputs (the Verilated executor's s_axis_prof_* inputs): the first master
+// update U(1) = V_entry, V(1), op(1) (decelerating iff D == 0: U(1) < 1 step), V_cruise - A and
+// V_exit + A, and per axis the exact products V_entry*n, V_cruise*n, V_exit*n (71 bits), A*n.
+struct ProfilePrepared {
+  uint64_t u1, v1;
+  uint8_t op1;
+  uint64_t vcma;  // 48-bit two's complement
+  uint64_t vxpa;
+  uint32_t n_dom;
+  std::array<unsigned __int128, kAxes> v0{}, vc{}, vx{};
+  std::array<uint64_t, kAxes> acc{};
+};
+inline ProfilePrepared prepare_profile(const ProfileParams& p,
+                                       const std::array<uint32_t, kAxes>& abs_steps) {
+  ProfilePrepared r{};
+  for (uint32_t n : abs_steps) r.n_dom = std::max(r.n_dom, n);
+  r.u1 = p.v_entry;
+  r.v1 = p.v_entry;
+  r.op1 = profile_update(p, p.decel_at == 0, r.v1);
+  r.vcma = (p.v_cruise - p.accel) & ((1ull << 48) - 1);
+  r.vxpa = p.v_exit + p.accel;
+  for (int a = 0; a < kAxes; ++a) {
+    const unsigned __int128 n = abs_steps[a] & 0xffffffu;
+    r.v0[a] = p.v_entry * n;
+    r.vc[a] = p.v_cruise * n;
+    r.vx[a] = p.v_exit * n;
+    r.acc[a] = static_cast<uint64_t>(p.accel * n);
+  }
+  return r;
+}
+
+// The run of a profiled segment in exact integers: U(0) = 0, V(0) = V_entry; per clock c
+// U(c+1) = U(c) + V(c), V(c+1) = profile_update(V(c), U(c+1) >= D*2^48). The segment lasts J ticks,
+// J = the first j with U(j) >= n_dom*2^48. Axis a (n_a steps) has made floor(U(j)*n_a / M) steps
+// after tick j (M = n_dom*2^48, products < 2^96): its k-th step is in the first tick j with
+// U(j)*n_a >= k*M, and at most one per tick (V < 2^47). `ticks[a]` lists the tick of every step.
+struct ProfileRun {
+  uint64_t ticks_total = 0;  // J
+  bool cruised = false;  // V reached V_cruise (false: a triangle, or a ramp that never gets there)
+  std::array<std::vector<uint64_t>, kAxes> ticks;
+};
+inline ProfileRun run_profile(const ProfileParams& p,
+                              const std::array<uint32_t, kAxes>& abs_steps) {
+  ProfileRun r;
+  uint32_t n_dom = 0;
+  for (uint32_t n : abs_steps) n_dom = std::max(n_dom, n);
+  if (n_dom == 0) return r;
+  using u128 = unsigned __int128;
+  const u128 m = static_cast<u128>(n_dom) << 48;
+  const u128 d = static_cast<u128>(p.decel_at) << 48;
+  // Next step threshold of each axis: the k-th step when U*n_a >= k*M, i.e. U >= ceil(k*M/n_a).
+  std::array<u128, kAxes> next{};
+  std::array<uint32_t, kAxes> k{};
+  for (int a = 0; a < kAxes; ++a) {
+    r.ticks[a].reserve(abs_steps[a]);
+    if (abs_steps[a] != 0) next[a] = (m + abs_steps[a] - 1) / abs_steps[a];
+  }
+  u128 u = 0;
+  uint64_t v = p.v_entry;
+  r.cruised = v == p.v_cruise;
+  uint64_t j = 0;
+  while (u < m) {
+    // Constant velocity (cruise, V_exit reached, A = 0): the ticks before the next event (a step,
+    // the start of deceleration, the end) change nothing but U; skip them in one go.
+    uint64_t vs = v;
+    profile_update(p, u >= d, vs);
+    if (vs == v && v != 0) {
+      u128 target = m;
+      if (u < d) target = std::min(target, d);
+      for (int a = 0; a < kAxes; ++a)
+        if (k[a] < abs_steps[a]) target = std::min(target, next[a]);
+      if (target > u + v) {
+        const u128 s = (target - u - 1) / v;  // u + s*v < target
+        u += s * v;
+        j += static_cast<uint64_t>(s);
+      }
+    }
+    ++j;
+    u += v;
+    profile_update(p, u >= d, v);
+    r.cruised = r.cruised || v == p.v_cruise;
+    for (int a = 0; a < kAxes; ++a) {
+      if (k[a] < abs_steps[a] && u >= next[a]) {
+        r.ticks[a].push_back(j);
+        ++k[a];
+        next[a] = (m * (k[a] + 1) + abs_steps[a] - 1) / abs_steps[a];
+      }
+    }
+  }
+  r.ticks_total = j;
+  return r;
 }
 
 }  // namespace fpgacnc::twins

@@ -81,8 +81,8 @@ struct FifoEntry {
   uint8_t power;
   uint32_t t;
   std::array<uint32_t, kAxes> steps;  // two's complement
-  // LINE_PROFILE (prof, kind 0, v2, t = A): not modelled by the prep / executor twins yet (they
-  // throw); the decoder twin checks and writes these fields as the RTL does.
+  // LINE_PROFILE (prof, kind 0, v2, t = A): the decoder twin checks and writes these fields as
+  // the RTL does; segment_prep prepares them as a PROFILE segment.
   bool prof = false;
   uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;
   uint32_t decel_at = 0;
@@ -103,6 +103,10 @@ struct Segment {  // segment_prep -> segment_executor (valid from the delay's ed
   uint8_t power = 0xFF;
   bool v2 = false;
   bool dir_fast = false;
+  // Kind PROFILE (LINE_PROFILE): total = period = tmn = 0 and dir_fast = 0 (as segment_prep sends
+  // them); the executor runs the profile (run_profile) and the segment lasts its J ticks.
+  bool prof = false;
+  ProfileParams profile{};
 };
 // segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
 // address kDirWrite: DIR load of `dir` on the delay's edge; read (TLM_READ_COMMAND) fills the

@@ -50,6 +50,26 @@ inline std::vector<uint8_t> line_payload(uint8_t code, uint8_t power, uint32_t t
   }
   return p;
 }
+// LINE_PROFILE (docs/protocol.md): flags, power, V_entry, V_cruise, V_exit (u48), A, D (u32),
+// steps per axis (int16 with SHORT, else int32).
+inline std::vector<uint8_t> line_profile_payload(uint8_t code, uint8_t power,
+                                                 const ProfileParams& pr,
+                                                 std::span<const int32_t> steps, bool short_steps) {
+  std::vector<uint8_t> p{static_cast<uint8_t>((code & 3) | (short_steps ? 0x80 : 0)), power};
+  for (uint64_t v : {pr.v_entry, pr.v_cruise, pr.v_exit}) {
+    put16(p, static_cast<uint32_t>(v >> 32));
+    put32(p, static_cast<uint32_t>(v));
+  }
+  put32(p, pr.accel);
+  put32(p, pr.decel_at);
+  for (int32_t s : steps) {
+    if (short_steps)
+      put16(p, static_cast<uint16_t>(static_cast<int16_t>(s)));
+    else
+      put32(p, static_cast<uint32_t>(s));
+  }
+  return p;
+}
 inline std::vector<uint8_t> config_axis_payload(uint8_t axis, const AxisTiming& t) {
   std::vector<uint8_t> p{axis};
   for (uint32_t v : {t.high, t.low, t.setup, t.hold}) put16(p, v);
