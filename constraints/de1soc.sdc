@@ -2,7 +2,12 @@
 create_clock -name clk -period 20.000 [get_ports {clk}]
 derive_clock_uncertainty
 # Asynchronous inputs: the reset button and the UART line pass two-flop synchronizers.
-set_false_path -from [get_ports {rst_n rx}]
+set_false_path -from [get_ports {rst_n rx estop_n ADC_SDO}]
+# estop_n and ADC_SDO also pass two-flop synchronizers; the LTC2308 master (rtl/ltc2308_spi.v)
+# samples the synchronized SDO SCK_DIV (5) clocks after the chip shifts it, so no I/O timing on it.
 # Outputs drive stepper drivers, a laser, LEDs and displays: microsecond timing, no I/O timing
 # requirement beyond the clock domain.
 set_false_path -to [get_ports {tx step_x dir_x step_y dir_y laser LEDR[*] HEX0[*] HEX1[*] HEX2[*] HEX3[*] HEX4[*] HEX5[*]}]
+# Heater MOSFET gates (PWM at ~10 Hz) and the ADC's CONVST/SCK/SDI: registered outputs changing at
+# most every SCK_DIV (5) clocks (SCK 5 MHz), far slower than any I/O delay.
+set_false_path -to [get_ports {heater_hotend heater_bed ADC_CONVST ADC_SCK ADC_SDI}]

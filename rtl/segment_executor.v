@@ -517,6 +517,7 @@ module segment_executor #(
   // ARC segments reverse X/Y inside the arc (at the quadrant points); there a step too close to its
   // DIR change is reported as a timing violation, not delayed (docs/motion.md, Arcs): not covered.
   always @(*) if (s_axis_tvalid) assume (s_axis_kind != K_ARC);
+  always @(*) if (f_past_valid && !rst) assert (kind_reg != K_ARC);  // induction invariant
   // No STEP timing violation (a step requested before the previous pulse's high + low time; the
   // prep's clamp T >= n_dom * min_period prevents it, a violation is counted and latched as a
   // fault): step_pulse assumes it never holds a pending step under FORMAL_DIR.
