@@ -351,8 +351,10 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
             static_cast<uint8_t>(pick(g, 0, 5)),
             AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
       } else {
+        // 0x14 (unknown), not 0x13: the decoder twin does not model ARC frames yet (the RTL's
+        // ARC path is checked against the reference walk by tb/test_arc_core).
         const uint8_t types[] = {kHello, kStatusQuery, kFaultClear, kRelease, 0x12,
-                                 0x13,   0x25,         0x2F,        0x07,     0x83};
+                                 0x14,   0x25,         0x2F,        0x07,     0x83};
         type = types[pick(g, 0, 9)];
       }
       if (pick(g, 0, 19) == 0) p.resize(pick(g, 0, 20));  // wrong length for the type
