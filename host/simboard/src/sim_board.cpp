@@ -438,7 +438,24 @@ uint64_t SimBoard::run_chunk(uint64_t max_cycles) {
   return run_cycles(*model_->core_trace, *model_, max_cycles, kQuietCycles);
 }
 
+// Lock for calls from other threads: announces the wait so that step_loop() yields mu_.
+class SimBoard::OtherThreadLock {
+ public:
+  explicit OtherThreadLock(const SimBoard& b) : b_(b) {
+    b_.waiting_.fetch_add(1, std::memory_order_acq_rel);
+    b_.mu_.lock();
+    b_.waiting_.fetch_sub(1, std::memory_order_acq_rel);
+  }
+  ~OtherThreadLock() { b_.mu_.unlock(); }
+  OtherThreadLock(const OtherThreadLock&) = delete;
+  OtherThreadLock& operator=(const OtherThreadLock&) = delete;
+
+ private:
+  const SimBoard& b_;
+};
+
 void SimBoard::step_loop(int block_ms) {
+  while (waiting_.load(std::memory_order_acquire) > 0) std::this_thread::yield();
   bool quiet;
   {
     std::lock_guard<std::mutex> l(mu_);
@@ -540,7 +557,7 @@ bool SimBoard::wait_quiet(std::chrono::milliseconds timeout) const {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     {
-      std::lock_guard<std::mutex> l(mu_);
+      OtherThreadLock l(*this);
       if (quiet_locked()) return true;
     }
     if (std::chrono::steady_clock::now() >= deadline) return false;
@@ -549,7 +566,7 @@ bool SimBoard::wait_quiet(std::chrono::milliseconds timeout) const {
 }
 
 BoardStats SimBoard::stats() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   BoardStats st;
   const Model& s = *model_;
   st.cycles = s.cycle;
@@ -572,37 +589,37 @@ BoardStats SimBoard::stats() const {
 }
 
 uint64_t SimBoard::cycle() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return model_->cycle;
 }
 
 std::vector<Edge> SimBoard::edges() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return model_->rec.edges();
 }
 
 std::vector<uint64_t> SimBoard::move_done_cycles() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return model_->rec.move_done_cycles();
 }
 
 std::vector<RxFrameRecord> SimBoard::rx_line_log() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return model_->line.rx_log();
 }
 
 std::vector<TxByteRecord> SimBoard::tx_line_log() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return model_->line.tx_log();
 }
 
 std::array<int64_t, kBoardAxes> SimBoard::net_steps() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return model_->rec.net_steps();
 }
 
 void SimBoard::write_edges_csv(const std::string& path) const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   model_->rec.write_csv(path, opt_.clk_hz);
 }
 
@@ -623,7 +640,7 @@ namespace fpgacnc::simboard {
 // ---- Heaters (issue 7) ----
 
 ThermalStats SimBoard::thermal() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   const ThermalWorld& h = model_->heat;
   ThermalStats t;
   t.ticks = h.ticks;
@@ -636,22 +653,22 @@ ThermalStats SimBoard::thermal() const {
 }
 
 double SimBoard::plant_seconds() const {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   return static_cast<double>(model_->cycle) / static_cast<double>(kSampleClks);
 }
 
 void SimBoard::inject_sensor(int channel, SensorFault f) {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   model_->heat.sensor.at(static_cast<size_t>(channel)) = f;
 }
 
 void SimBoard::disconnect_heater(int channel, bool disconnected) {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   model_->heat.cut.at(static_cast<size_t>(channel)) = disconnected;
 }
 
 void SimBoard::set_estop(bool pressed) {
-  std::lock_guard<std::mutex> l(mu_);
+  OtherThreadLock l(*this);
   if (model_->core) model_->core->estop = pressed;
   if (model_->core_trace) model_->core_trace->estop = pressed;
 }

@@ -158,12 +158,11 @@ AutotuneLinkResult run_relay_test(link::Link& lk, const config::MachineConfig& c
       const auto h = s.status(n_axes, [&] { t_query = plant_now(); });
       const auto& hs = h.heaters.at(o.channel);
       const double t = t_query - p0;
-      if (hs.faults || (h.faults & (v2::kFaultWatchdog | v2::kFaultEstop))) {
-        throw link::Error(fmt::format(
-            "{}: autotune stopped after {:.0f} s: {} heater fault {} at {:.1f} degC (device faults "
-            "0x{:02X})",
-            lk.name(), t, kChannelNames[o.channel], v2::heater_fault_names(hs.faults), hs.temp_c(),
-            h.faults));
+      const uint8_t bad =
+          h.faults & (v2::kFaultWatchdog | v2::kFaultEstop | v2::kFaultHotend | v2::kFaultBed);
+      if (hs.faults || bad) {
+        throw link::Error(fmt::format("{}: autotune stopped after {:.0f} s: {}", lk.name(), t,
+                                      describe_faults(h, bad)));
       }
       RelaySample smp{t, hs.temp_c(), hs.duty() * hc.supply_v};
       r.samples.push_back(smp);

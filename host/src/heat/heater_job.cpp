@@ -221,4 +221,29 @@ std::string format_heaters(const v2::Status& s) {
   return out;
 }
 
+std::string describe_faults(const protocol::v2::Status& stt, uint8_t bad) {
+  namespace v2 = protocol::v2;
+  std::string what;
+  auto add = [&what](const std::string& x) { what += (what.empty() ? "" : "; ") + x; };
+  for (size_t c = 0; c < stt.heaters.size() && c < kChannels; ++c) {
+    const auto& h = stt.heaters[c];
+    if (!h.faults) continue;
+    std::string hint;
+    if (h.faults & v2::kHeaterMinTemp) hint += ", below min_temp_c: sensor open or unplugged?";
+    if (h.faults & v2::kHeaterMaxTemp) hint += ", above max_temp_c: overheating or sensor short?";
+    if (h.faults & v2::kHeaterRunaway)
+      hint += ", left the setpoint while holding (thermal runaway)";
+    if (h.faults & v2::kHeaterHeating)
+      hint += ", did not rise after the setpoint increase: heater disconnected?";
+    add(fmt::format("{} heater fault {} at {:.1f} degC (setpoint {:.1f}){}", kChannelNames[c],
+                    v2::heater_fault_names(h.faults), h.temp_c(), h.setpoint_c(), hint));
+  }
+  if ((bad & (v2::kFaultHotend | v2::kFaultBed)) && what.empty()) {
+    add(fmt::format("heater fault bits 0x{:02X}", bad & (v2::kFaultHotend | v2::kFaultBed)));
+  }
+  if (bad & v2::kFaultWatchdog) add("heater watchdog: the device heard no frame for too long");
+  if (bad & v2::kFaultEstop) add("e-stop: motion stopped, FIFO flushed, heaters off");
+  return what;
+}
+
 }  // namespace fpgacnc::heat

@@ -476,27 +476,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     const uint8_t bad =
         stt.faults & (v2::kFaultEstop | v2::kFaultWatchdog | v2::kFaultHotend | v2::kFaultBed);
     if (!bad) return;
-    std::string what;
-    auto add = [&what](const std::string& x) { what += (what.empty() ? "" : "; ") + x; };
-    for (size_t c = 0; c < stt.heaters.size() && c < heat::kChannels; ++c) {
-      const auto& h = stt.heaters[c];
-      if (!h.faults) continue;
-      std::string hint;
-      if (h.faults & v2::kHeaterMinTemp) hint += ", below min_temp_c: sensor open or unplugged?";
-      if (h.faults & v2::kHeaterMaxTemp) hint += ", above max_temp_c: overheating or sensor short?";
-      if (h.faults & v2::kHeaterRunaway)
-        hint += ", left the setpoint while holding (thermal runaway)";
-      if (h.faults & v2::kHeaterHeating)
-        hint += ", did not rise after the setpoint increase: heater disconnected?";
-      add(fmt::format("{} heater fault {} at {:.1f} degC (setpoint {:.1f}){}",
-                      heat::kChannelNames[c], v2::heater_fault_names(h.faults), h.temp_c(),
-                      h.setpoint_c(), hint));
-    }
-    if ((bad & (v2::kFaultHotend | v2::kFaultBed)) && what.empty()) {
-      add(fmt::format("heater fault bits 0x{:02X}", bad & (v2::kFaultHotend | v2::kFaultBed)));
-    }
-    if (bad & v2::kFaultWatchdog) add("heater watchdog: the device heard no frame for too long");
-    if (bad & v2::kFaultEstop) add("e-stop: motion stopped, FIFO flushed, heaters off");
+    const std::string what = heat::describe_faults(stt, bad);
     throw Error(
         fmt::format("{}: job stopped at G-code line {}: {} (the device switched the heaters "
                     "off and latched the fault; the next job clears it)",

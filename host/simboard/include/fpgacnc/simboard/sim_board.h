@@ -207,6 +207,11 @@ class SimBoard {
   std::unique_ptr<Model> model_;
 
   mutable std::mutex mu_;  // guards the model state and the recorder between chunks
+  // Callers from other threads (the host side, tests) waiting for mu_: the board thread lets
+  // them in between chunks (std::mutex is not fair; without this a reader could wait seconds
+  // while the board thread re-locks chunk after chunk).
+  mutable std::atomic<int> waiting_{0};
+  class OtherThreadLock;
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<bool> paused_{false};
