@@ -141,14 +141,30 @@ module segment_executor #(
   reg [15:0] setup_cnt_reg;
   reg [15:0] settle_reg;  // after an abort: clocks before a segment is accepted from IDLE again
   reg [15:0] setup_max_reg;  // the largest DIR setup setting of all axes (registered)
+  // The largest setting, one compare deep: every pair of axes compared in parallel, the axis that
+  // is >= every lower-numbered axis and > every higher-numbered one wins (exactly one), an AND-OR
+  // selects it (a compare chain over the axes was the iCE40 critical path).
   reg [15:0] setup_max_w;
-  integer sm_i;
+  reg [N_AXES-1:0] sm_win;
+  reg sm_zero;
+  integer sm_i, sm_j;
   always @(*) begin
+    sm_win = {N_AXES{1'b1}};
+    sm_zero = 1'b1;
+    for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1) begin
+      for (sm_j = 0; sm_j < N_AXES; sm_j = sm_j + 1) begin
+        if (sm_j < sm_i && !(cfg_dir_setup[16*sm_i+:16] > cfg_dir_setup[16*sm_j+:16]))
+          sm_win[sm_i] = 1'b0;
+        if (sm_j > sm_i && !(cfg_dir_setup[16*sm_i+:16] >= cfg_dir_setup[16*sm_j+:16]))
+          sm_win[sm_i] = 1'b0;
+      end
+      if (cfg_dir_setup[16*sm_i+:16] != 16'd0) sm_zero = 1'b0;
+    end
     setup_max_w = 16'd0;
     for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1)
-      if (cfg_dir_setup[16*sm_i+:16] > setup_max_w) setup_max_w = cfg_dir_setup[16*sm_i+:16];
+      setup_max_w = setup_max_w | (cfg_dir_setup[16*sm_i+:16] & {16{sm_win[sm_i]}});
   end
-  always @(posedge clk) setup_max_reg <= (setup_max_w == 16'd0) ? 16'd1 : setup_max_w;
+  always @(posedge clk) setup_max_reg <= sm_zero ? 16'd1 : setup_max_w;
   reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
   reg [63:0] left_reg;  // ticks left including the current one
   reg last_reg;  // the current tick is the last (left_reg == 1)
