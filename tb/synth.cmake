@@ -9,8 +9,8 @@ add_test(NAME synth_report
 set_tests_properties(synth_report PROPERTIES LABELS synth TIMEOUT 600)
 
 # ice40_timing: Yosys synth_ice40 + nextpnr-ice40 (HX8K ct256) of cnc_core's lean 2-axis build at
-#   50 MHz, seed 1; fails below 50 MHz (docs/synthesis.md has every configuration's Fmax; `make
-#   synth` runs the lean 2- and 4-axis builds). ~50 s.
+#   50 MHz, seed 1; fails below 50 MHz (docs/synthesis.md has every configuration's Fmax and
+#   margin over seeds). ~50 s.
 add_test(NAME ice40_timing
          COMMAND ${CMAKE_COMMAND} -E env CONFIGS=lean2
                  ${CMAKE_SOURCE_DIR}/scripts/ice40_timing.sh ${CMAKE_BINARY_DIR}/synth
