@@ -6,3 +6,7 @@ fpgacnc_verilated(vcore_lean TOP cnc_core PREFIX Vcnc_core_lean
                   ARGS -GN_AXES=2 -GPROTO_V2=0)
 fpgacnc_bench(test_cnc_core_lean LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core_lean.cpp LIBS vcore_lean fmt::fmt)
+# The v2 build without profiles, arcs and heaters (2 axes): their frames are unknown types.
+fpgacnc_verilated(vcore_lines TOP cnc_core PREFIX Vcnc_core_lines SOURCES ${FPGACNC_CORE_RTL}
+                  ARGS -GN_AXES=2 -GPROFILES=0 -GARCS=0 -GHEATERS=0)
+target_link_libraries(test_cnc_core_lean PRIVATE vcore_lines)

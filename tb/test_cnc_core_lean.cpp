@@ -9,10 +9,13 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "Vcnc_core_lean.h"
+#include "Vcnc_core_lines.h"
 #include "common/core_pins.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
@@ -220,6 +223,62 @@ TEST(CncCoreLean, V2FrameIsNotUnderstood) {
   EXPECT_EQ(b.position(0), 5);
   EXPECT_EQ(b.position(1), -3);
   EXPECT_EQ(b.dut().segments_done, 0u);
+}
+
+// v2 build with LINE/DWELL only: LINE_PROFILE, ARC and heater frames are unknown types.
+TEST(CncCoreLean, LinesOnlyBuildAnswersUnknownType) {
+  namespace v2 = fpgacnc::tb::v2;
+  fpgacnc::tb::PinHarness<Vcnc_core_lines> b(kAxes, fpgacnc::tb::core_pins<Vcnc_core_lines>());
+  b.dut().estop = 0;
+  b.dut().adc_sdo = 0;
+  fpgacnc::tb::reset_core(b);
+  v2::DeviceParser parser;
+  size_t parsed = 0;
+  // Runs until the next device frame (or v1 byte) is complete; nullopt after `limit` clocks.
+  auto next_msg = [&](uint64_t limit) -> std::optional<v2::DeviceMsg> {
+    const uint64_t end = b.cycle() + limit;
+    while (b.cycle() < end) {
+      while (parsed < b.tx_bytes().size()) {
+        const auto& t = b.tx_bytes()[parsed++];
+        if (auto m = parser.push(t.value, t.start_cycle)) return m;
+      }
+      b.tick();
+    }
+    return std::nullopt;
+  };
+  // type, payload length (the length each type requires when it is built)
+  const std::pair<uint8_t, size_t> off[] = {{0x12, 36}, {0x13, 63}, {0x20, 20}, {0x21, 3},
+                                            {0x22, 4},  {0x23, 13}, {0x24, 2}};
+  uint16_t unknown = 0;
+  for (const auto& [type, len] : off) {
+    b.send(v2::frame(type, 0, std::vector<uint8_t>(len, 0)));
+    const auto m = next_msg(200'000);
+    ASSERT_TRUE(m.has_value()) << "no answer to type 0x" << std::hex << int(type);
+    EXPECT_TRUE(m->crc_ok);
+    ASSERT_EQ(m->type, v2::kNak) << "type 0x" << std::hex << int(type) << " answered 0x"
+                                 << int(m->type);
+    EXPECT_EQ(m->u8(0), 0u) << "NAK SEQ, type 0x" << std::hex << int(type);
+    EXPECT_EQ(m->u8(1), v2::kUnknownType) << "NAK reason, type 0x" << std::hex << int(type);
+    EXPECT_EQ(m->u8(2), 0u) << "next_seq moved, type 0x" << std::hex << int(type);
+    ++unknown;
+    EXPECT_EQ(b.dut().unknown_types, unknown);
+  }
+  EXPECT_EQ(b.dut().next_seq, 0u);
+  EXPECT_EQ(b.dut().fifo_level, 0u);
+  EXPECT_EQ(b.dut().heater, 0u);
+  EXPECT_EQ(b.dut().faults, 0u);
+  // A LINE (seq 0) is accepted and runs: ACK, then DONE, exact net steps.
+  b.send(v2::line(0, 1, 200, 20'000, {40, -25}, true));
+  const auto ack = next_msg(200'000);
+  ASSERT_TRUE(ack.has_value());
+  EXPECT_EQ(ack->type, v2::kAck);
+  const auto done = next_msg(400'000);
+  ASSERT_TRUE(done.has_value());
+  EXPECT_EQ(done->type, v2::kDone);
+  EXPECT_EQ(b.mon().axis(0).position, 40);
+  EXPECT_EQ(b.mon().axis(1).position, -25);
+  EXPECT_EQ(b.dut().next_seq, 1u);
+  EXPECT_EQ(b.dut().violations, 0u);
 }
 
 }  // namespace
