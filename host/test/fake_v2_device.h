@@ -245,6 +245,14 @@ class FakeV2Device : public link::Link {
     if (f.type == static_cast<uint8_t>(v2::Type::Line)) {
       const auto l = v2::decode_line(f, o_.n_axes);
       for (size_t a = 0; a < l.steps.size(); ++a) position_[a] += l.steps[a];
+    } else if (f.type == static_cast<uint8_t>(v2::Type::LineProfile)) {
+      const auto l = v2::decode_line_profile(f, o_.n_axes);
+      for (size_t a = 0; a < l.steps.size(); ++a) position_[a] += l.steps[a];
+    } else if (f.type == static_cast<uint8_t>(v2::Type::Arc)) {
+      const auto a = v2::decode_arc(f);
+      position_[0] += a.dx;
+      position_[1] += a.dy;
+      position_[2] += a.dz;
     }
     ++done_;
     pend_done_ = o_.send_done;

@@ -229,6 +229,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   rep.total_t = job.total_t;
   rep.target = job.target;
   rep.lines = job.lines;
+  rep.profiles = job.profiles;
+  rep.arcs = job.arcs;
   rep.dwells = job.dwells;
   rep.fifo_frames = job.frames.size();
   const auto t0 = clock_type::now();
@@ -565,10 +567,25 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           }
           if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
               acked < n && k.seq == seq_of(acked) && ++fatal_nak_count >= 3) {
+            std::string hint;
+            if (k.reason == v2::NakReason::UnknownType) {
+              const auto t = static_cast<v2::Type>(items[acked].frame.type);
+              if (t == v2::Type::LineProfile) {
+                hint =
+                    " (a device built without trapezoid profiles: set motion = \"constant\" "
+                    "in the machine configuration)";
+              } else if (t == v2::Type::Arc) {
+                hint =
+                    " (a device built without the circular DDA: set native_arcs = false in "
+                    "the machine configuration)";
+              } else if (items[acked].heater) {
+                hint = " (a device built without heaters: remove the heater M-codes)";
+              }
+            }
             throw Error(
-                fmt::format("{}: device refuses {} (seq {}): NAK {}", name,
+                fmt::format("{}: device refuses {} (seq {}): NAK {}{}", name,
                             frame_name(items[acked].frame, items[acked].jf, items[acked].heater),
-                            k.seq, v2::nak_reason_name(static_cast<uint8_t>(k.reason))));
+                            k.seq, v2::nak_reason_name(static_cast<uint8_t>(k.reason)), hint));
           }
           if (acked < n) {
             go_back();
@@ -715,10 +732,10 @@ std::string format_report(const StreamV2Report& r) {
                    r.ident.n_axes, r.ident.fifo_depth, r.ident.clk_hz, r.ident.baud,
                    r.ident.build_id);
   s += fmt::format(
-      "frames: {} sequenced ({} FIFO: {} LINE, {} DWELL), {} written in all, {} "
-      "retransmitted, {} go-backs, {} retransmission timeouts, {} status polls\n",
-      r.sequenced_frames, r.fifo_frames, r.lines, r.dwells, r.frames_sent, r.retransmissions,
-      r.go_backs, r.timeouts, r.status_polls);
+      "frames: {} sequenced ({} FIFO: {} LINE, {} LINE_PROFILE, {} ARC, {} DWELL), {} written in "
+      "all, {} retransmitted, {} go-backs, {} retransmission timeouts, {} status polls\n",
+      r.sequenced_frames, r.fifo_frames, r.lines, r.profiles, r.arcs, r.dwells, r.frames_sent,
+      r.retransmissions, r.go_backs, r.timeouts, r.status_polls);
   s += "NAKs:";
   size_t total = 0;
   for (uint8_t k = 1; k <= 7; ++k) {
@@ -752,7 +769,9 @@ std::string format_report(const StreamV2Report& r) {
     s += fmt::format(" {} {}", a < 4 ? config::kAxisNames[a] : '?', r.moved[a]);
   }
   s += fmt::format(" steps: {}\n", r.position_ok ? "matches the plan" : "DOES NOT match the plan");
-  if (r.heater_frames || !r.status_end.heaters.empty()) {  // issue 7
+  bool heaters_used = r.heater_frames > 0;
+  for (const auto& h : r.status_end.heaters) heaters_used |= h.enabled() || h.faults;
+  if (heaters_used) {  // issue 7
     s += fmt::format("heaters: {} heater frames", r.heater_frames);
     const std::string h = heat::format_heaters(r.status_end);
     if (!h.empty()) s += "; at the end " + h;
