@@ -422,9 +422,10 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
         const auto* jf = items[acked].jf;
         throw Error(fmt::format(
             "{}: {} (seq {}) refused {} times without progress (NAKs: {} BAD_CRC, {} "
-            "BAD_LENGTH, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL)",
+            "BAD_LENGTH, {} UNKNOWN_TYPE, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL, {} BAD_FIELD)",
             name, frame_name(items[acked].frame, jf, items[acked].heater), seq_of(acked),
-            goback_same, rep.naks[1], rep.naks[2], rep.naks[4], rep.naks[5], rep.naks[6]));
+            goback_same, rep.naks[1], rep.naks[2], rep.naks[3], rep.naks[4], rep.naks[5],
+            rep.naks[6], rep.naks[7]));
       }
     }
     sent = acked;
@@ -558,13 +559,9 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           const v2::Nak k = v2::decode_nak(*f);
           ++rep.naks[static_cast<size_t>(k.reason)];
           if (!update(k.next_seq, k.free, std::nullopt)) break;
-          if (goback_at && acked == *goback_at) {
-            // The device is still where we went back to: NAKs of the copies sent before the
-            // go-back (out of order, or corrupted on the way) until the new copies arrive. A
-            // lost new copy is recovered by the retransmission timeout.
-            ++rep.naks_ignored;
-            break;
-          }
+          // A refusal of the frame's content (BAD_FIELD, UNKNOWN_TYPE) is the same for every
+          // copy, including those sent before a go-back: three of them for the oldest unacked
+          // frame end the job.
           if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
               acked < n && k.seq == seq_of(acked) && ++fatal_nak_count >= 3) {
             std::string hint;
@@ -586,6 +583,13 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
                 fmt::format("{}: device refuses {} (seq {}): NAK {}{}", name,
                             frame_name(items[acked].frame, items[acked].jf, items[acked].heater),
                             k.seq, v2::nak_reason_name(static_cast<uint8_t>(k.reason)), hint));
+          }
+          if (goback_at && acked == *goback_at) {
+            // The device is still where we went back to: NAKs of the copies sent before the
+            // go-back (out of order, or corrupted on the way) until the new copies arrive. A
+            // lost new copy is recovered by the retransmission timeout.
+            ++rep.naks_ignored;
+            break;
           }
           if (acked < n) {
             go_back();
