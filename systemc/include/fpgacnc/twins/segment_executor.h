@@ -26,6 +26,10 @@
 //   the k-th step of an axis in tick j is a step request on edge R + j, sent straight to the
 //   axis's step_pulse. dir_fast is 0, so a reversing axis always takes HOLD/SETUP. Everything
 //   else (accept edges, zero gap, laser, seg_done) as for a segment of T = J.
+//   Kind ARC (Segment::arc, from an ARC frame): run_arc below (arc::Dda clock by clock, an event of
+//   walk clock c a step request on edge R + c + 2, in-arc DIR writes and DIR-setup violations,
+//   arc error); the segment lasts c_last + 1 ticks. dir_fast is 0; otherwise as a segment of that
+//   T. Not modelled: abort (e-stop).
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
