@@ -88,6 +88,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     arc_violation_cycles.clear();
     last_wr_.fill(kLongAgo);
     arc_req_.fill(kLongAgo);
+    arc_window_ = idle_window_ = -1;
   }
   uint64_t segments_run = 0;
   uint64_t profiled = 0;                // PROFILE segments (LINE_PROFILE)
@@ -119,6 +120,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   void on_status(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     payload<ExecIdle>(gp).edge = idle_edge(clk_.at(delay));
+    payload<ExecIdle>(gp).window = idle_window_;
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
   }
 
@@ -196,6 +198,11 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
       const arc::Event ev = dda.clock();
       const Cycle e = t + 2;
+      if (dda.done()) {  // the executor is idle in the clock after the arc (when nothing follows)
+        Cycle busy = -1;
+        for (int a = 0; a < kAxes; ++a) busy = std::max(busy, pulse_state(a, t).idle_from);
+        arc_window_ = busy <= t + 1 ? t + 1 : -1;
+      }
       bool viol = false;
       const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
       for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) {
@@ -294,7 +301,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     // T = 0 completes at once; accepted on a last tick it passes one clock in ZERO.
     Cycle end = on_last_tick ? accept + 1 : accept;
     running_ = s.total != 0;
+    idle_window_ = -1;
     if (s.arc) s.total = static_cast<uint64_t>(run_arc(s, run));
+    if (s.arc) idle_window_ = arc_window_;
     if (s.total != 0) {
       seg_start_cycles.push_back(run);
       if (s.code != 0 && s.power != 0) {
@@ -329,6 +338,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   bool running_ = false;                // the last segment accepted has T > 0
   std::array<Cycle, kAxes> last_wr_{};  // edge of the last DIR write per axis (since_wr_reg)
   std::array<Cycle, kAxes> arc_req_{};  // edge of the last arc step request per axis
+  Cycle arc_window_ = -1, idle_window_ = -1;  // ExecIdle::window after the last segment
   tlm::tlm_generic_payload gp_;
 };
 
