@@ -80,7 +80,6 @@ demo: build
 
 # Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz.
 synth: deps
-	./scripts/synth_smoke.sh $(BUILD)/synth
 	./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth
 

@@ -32,6 +32,28 @@
 // Status outputs: the v1 ones, plus the v2 counters that STATUS reports (16 bits, wrapping).
 //   packet_count counts v1 packets queued and v2 frames that passed every check.
 // rst is synchronous, active high; the board top synchronizes its reset button.
+//
+// Build options (Verilog parameters; the defaults 1 build everything, as the board top and every
+// bench use it; docs/synthesis.md has the resource figures of each configuration):
+//   PROTO_V2 = 0  protocol v1 only, as the original controller: packet_decoder_v1 (any first
+//                 byte other than 0xFF starts an 11-byte motion packet, 0xFF a 9-byte init; the
+//                 100 ms watchdog) hands its one-entry output register straight to segment_prep
+//                 (no frame_decoder, no CRC, no command FIFO, no response_encoder: uart_tx sends
+//                 one 0xAA per completed v1 move from a counter). A v1 packet completing while the
+//                 previous one is still waiting for segment_prep is dropped (overruns). The v2-only
+//                 status outputs are 0 (fifo_level is 1 while a decoded packet waits), the runtime
+//                 configuration is the cfg port only, and a latched fault (STEP timing violation,
+//                 e-stop) clears only at reset (v1 has no FAULT_CLEAR). PROTO_V2 = 0 implies
+//                 PROFILES = ARCS = HEATERS = 0 (v1 cannot carry them).
+//   PROFILES = 0  no trapezoidal profiles: LINE_PROFILE (0x12) frames are answered NAK
+//                 UNKNOWN_TYPE; no profile_gen / dda_profile / profile products in prep and
+//                 executor; the FIFO entry drops the profile fields (177 bits).
+//   ARCS = 0      no circular DDA: ARC (0x13) frames are answered NAK UNKNOWN_TYPE; no arc_dda,
+//                 no ARC arithmetic in segment_prep; the FIFO entry drops the ARC fields (489
+//                 bits; with PROFILES = 0 as well the entry is 45 + 32 * N_AXES bits).
+//   HEATERS = 0   no heater_block: the heater frames (0x20..0x24) are answered NAK UNKNOWN_TYPE,
+//                 heater and adc_* outputs are low, adc_sdo is ignored, STATUS still carries its
+//                 16 heater bytes (all 0: heaters idle, no faults).
 `default_nettype none
 
 module cnc_core #(
@@ -49,7 +71,11 @@ module cnc_core #(
     parameter BUILD_ID          = 32'h2026_0005,       // reported by IDENT
     parameter SAMPLE_CLKS       = CLK_HZ,              // heater sample tick (1 s)
     parameter HEAT_PWM_BITS     = 10,
-    parameter HEAT_PWM_DIV      = 4883                 // heater PWM 10 Hz at 50 MHz
+    parameter HEAT_PWM_DIV      = 4883,                // heater PWM 10 Hz at 50 MHz
+    parameter PROTO_V2          = 1,                   // build options (header comment)
+    parameter PROFILES          = 1,
+    parameter ARCS              = 1,
+    parameter HEATERS           = 1
 ) (
     input wire clk,
     input wire rst,
@@ -105,12 +131,21 @@ module cnc_core #(
 
   // FIFO entry (segment_prep header, LINE_PROFILE and ARC fields): 839 bits for 4 axes
   localparam ENTRY_W = 711 + 32 * N_AXES;
+  // build options in effect (v1 carries no profiles, arcs or heater frames)
+  localparam integer V2_EN = (PROTO_V2 != 0) ? 1 : 0;
+  localparam integer PROF_EN = (V2_EN != 0 && PROFILES != 0) ? 1 : 0;
+  localparam integer ARC_EN = (V2_EN != 0 && ARCS != 0) ? 1 : 0;
+  localparam integer HEAT_EN = (V2_EN != 0 && HEATERS != 0) ? 1 : 0;
+  // the FIFO holds only the fields of the kinds built: header 45 + 32 * N_AXES, + 177 profile
+  // fields, + 489 ARC fields (segment_prep's entry layout; the bits above are 0)
+  localparam integer FIFO_W = (ARC_EN != 0) ? ENTRY_W : (PROF_EN != 0) ? 222 + 32 * N_AXES
+                                                                      : 45 + 32 * N_AXES;
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;
   wire rx_tvalid, rx_tready, rx_frame_error, rx_overrun;
   /* verilator lint_off UNUSEDSIGNAL */
-  wire rx_busy, tx_busy, enc_frame_start, dec_release;  // not needed here
+  wire rx_busy, tx_busy;  // not needed here
   /* verilator lint_on UNUSEDSIGNAL */
 
   uart_rx #(
@@ -128,60 +163,158 @@ module cnc_core #(
       .overrun_error(rx_overrun)
   );
 
-  // ---------------------------------------------------------------- decoder
-  wire [ENTRY_W-1:0] dec_tdata;
-  wire dec_tvalid, fifo_s_tready;
+  // ---------------------------------------------------------------- decoder, command FIFO
+  // Common to both protocol builds: the decoder's configuration, heater and fault-clear requests,
+  // its status strobes, and the entry stream into segment_prep (cmd_*).
   wire dec_cfg_wr;
   wire [7:0] dec_cfg_axis;
   wire [63:0] dec_cfg_data;
   wire dec_heat_wr;
   wire [7:0] dec_heat_type, dec_heat_len;
   wire [159:0] dec_heat_data;
-  wire dec_fault_clear, dec_hello, dec_status, dec_ack, dec_nak;
-  wire [7:0] dec_nak_seq, dec_nak_reason, dec_next_seq;
+  wire dec_fault_clear, dec_nak;
+  wire [7:0] dec_next_seq;
   wire dec_v2_mode, dec_frame_ok, dec_crc_error, dec_length_error, dec_unknown_type;
   wire dec_timeout, dec_noise, dec_v1_packet, dec_v1_overrun;
+  wire [ENTRY_W-1:0] cmd_tdata;
+  wire cmd_tvalid, cmd_tready;
+  wire [15:0] fifo_level_w, fifo_free_w;
+  wire dec_hello, dec_status, dec_ack;  // requests to response_encoder (v2 only)
+  wire [7:0] dec_nak_seq, dec_nak_reason;
+  wire estop_stop;  // e-stop active or latched (below)
 
-  frame_decoder #(
-      .N_AXES       (N_AXES),
-      .WATCHDOG_CLKS(WATCHDOG_CLKS),
-      .MAX_PAYLOAD  (64)
-  ) u_dec (
-      .clk          (clk),
-      .rst          (rst),
-      .s_axis_tdata (rx_tdata),
-      .s_axis_tvalid(rx_tvalid),
-      .s_axis_tready(rx_tready),
-      .m_axis_tdata (dec_tdata),
-      .m_axis_tvalid(dec_tvalid),
-      .m_axis_tready(fifo_s_tready),
-      .cfg_wr       (dec_cfg_wr),
-      .cfg_axis     (dec_cfg_axis),
-      .cfg_data     (dec_cfg_data),
-      .heat_wr      (dec_heat_wr),
-      .heat_type    (dec_heat_type),
-      .heat_len     (dec_heat_len),
-      .heat_data    (dec_heat_data),
-      .fault_clear  (dec_fault_clear),
-      .release_req  (dec_release),
-      .hello        (dec_hello),
-      .status_req   (dec_status),
-      .ack_req      (dec_ack),
-      .nak          (dec_nak),
-      .nak_seq      (dec_nak_seq),
-      .nak_reason   (dec_nak_reason),
-      .next_seq     (dec_next_seq),
-      .v2_mode      (dec_v2_mode),
-      .partial      (rx_partial),
-      .frame_ok     (dec_frame_ok),
-      .crc_error    (dec_crc_error),
-      .length_error (dec_length_error),
-      .unknown_type (dec_unknown_type),
-      .timeout      (dec_timeout),
-      .noise        (dec_noise),
-      .v1_packet    (dec_v1_packet),
-      .v1_overrun   (dec_v1_overrun)
-  );
+  generate
+    if (V2_EN != 0) begin : g_v2
+      wire [ENTRY_W-1:0] dec_tdata;
+      wire dec_tvalid, fifo_s_tready;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire dec_release;  // not needed here
+      /* verilator lint_on UNUSEDSIGNAL */
+
+      frame_decoder #(
+          .N_AXES       (N_AXES),
+          .WATCHDOG_CLKS(WATCHDOG_CLKS),
+          .MAX_PAYLOAD  (64),
+          .PROFILES     (PROF_EN),
+          .ARCS         (ARC_EN),
+          .HEATERS      (HEAT_EN)
+      ) u_dec (
+          .clk          (clk),
+          .rst          (rst),
+          .s_axis_tdata (rx_tdata),
+          .s_axis_tvalid(rx_tvalid),
+          .s_axis_tready(rx_tready),
+          .m_axis_tdata (dec_tdata),
+          .m_axis_tvalid(dec_tvalid),
+          .m_axis_tready(fifo_s_tready),
+          .cfg_wr       (dec_cfg_wr),
+          .cfg_axis     (dec_cfg_axis),
+          .cfg_data     (dec_cfg_data),
+          .heat_wr      (dec_heat_wr),
+          .heat_type    (dec_heat_type),
+          .heat_len     (dec_heat_len),
+          .heat_data    (dec_heat_data),
+          .fault_clear  (dec_fault_clear),
+          .release_req  (dec_release),
+          .hello        (dec_hello),
+          .status_req   (dec_status),
+          .ack_req      (dec_ack),
+          .nak          (dec_nak),
+          .nak_seq      (dec_nak_seq),
+          .nak_reason   (dec_nak_reason),
+          .next_seq     (dec_next_seq),
+          .v2_mode      (dec_v2_mode),
+          .partial      (rx_partial),
+          .frame_ok     (dec_frame_ok),
+          .crc_error    (dec_crc_error),
+          .length_error (dec_length_error),
+          .unknown_type (dec_unknown_type),
+          .timeout      (dec_timeout),
+          .noise        (dec_noise),
+          .v1_packet    (dec_v1_packet),
+          .v1_overrun   (dec_v1_overrun)
+      );
+
+      // command FIFO: only the entry fields of the kinds built are stored
+      wire [FIFO_W-1:0] fifo_out;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire [ENTRY_W-1:0] dec_tdata_nc = dec_tdata;  // bits above FIFO_W are 0 in a lean build
+      /* verilator lint_on UNUSEDSIGNAL */
+
+      segment_fifo #(
+          .WIDTH(FIFO_W),
+          .DEPTH(FIFO_DEPTH)
+      ) u_fifo (
+          .clk          (clk),
+          .rst          (rst),
+          .flush        (estop_stop),
+          .s_axis_tdata (dec_tdata[FIFO_W-1:0]),
+          .s_axis_tvalid(dec_tvalid),
+          .s_axis_tready(fifo_s_tready),
+          .m_axis_tdata (fifo_out),
+          .m_axis_tvalid(cmd_tvalid),
+          .m_axis_tready(cmd_tready),
+          .level        (fifo_level_w),
+          .free         (fifo_free_w)
+      );
+      if (FIFO_W < ENTRY_W) begin : g_pad
+        assign cmd_tdata = {{(ENTRY_W - FIFO_W) {1'b0}}, fifo_out};
+      end else begin : g_nopad
+        assign cmd_tdata = fifo_out;
+      end
+    end else begin : g_v1
+      // protocol v1 only: the original's decoder, its output register is the only queue
+      wire [81:0] v1_tdata;
+      wire v1_init;
+      packet_decoder_v1 #(
+          .WATCHDOG_CLKS(WATCHDOG_CLKS)
+      ) u_dec (
+          .clk          (clk),
+          .rst          (rst),
+          .s_axis_tdata (rx_tdata),
+          .s_axis_tvalid(rx_tvalid),
+          .s_axis_tready(rx_tready),
+          .m_axis_tdata (v1_tdata),
+          .m_axis_tuser (v1_init),
+          .m_axis_tvalid(cmd_tvalid),
+          .m_axis_tready(cmd_tready),
+          .timeout      (dec_timeout),
+          .overrun      (dec_v1_overrun),
+          .packet_done  (dec_v1_packet),
+          .partial      (rx_partial)
+      );
+      // segment_prep's entry (as frame_decoder writes a v1 packet): motion {v2 0, kind 0, code,
+      // power 0xFF, t = feed, steps X, Y}; init {v2 0, kind 1, NUMERATOR_X, NUMERATOR_Y}
+      wire [32*N_AXES-1:0] v1_two = {{32 * (N_AXES - 2) {1'b0}}, v1_tdata[47:16], v1_tdata[79:48]};
+      assign cmd_tdata = {{(ENTRY_W - 45 - 32 * N_AXES) {1'b0}}, 1'b0,
+                          v1_init ? 2'd1 : 2'd0, v1_init ? 2'd0 : v1_tdata[81:80],
+                          v1_init ? 8'd0 : 8'hFF, v1_init ? 16'd0 : 16'd0,
+                          v1_init ? 16'd0 : v1_tdata[15:0], v1_two};
+      assign fifo_level_w     = {15'd0, cmd_tvalid};
+      assign fifo_free_w      = {15'd0, !cmd_tvalid};
+      assign dec_hello        = 1'b0;
+      assign dec_status       = 1'b0;
+      assign dec_ack          = 1'b0;
+      assign dec_nak_seq      = 8'd0;
+      assign dec_nak_reason   = 8'd0;
+      assign dec_cfg_wr       = 1'b0;
+      assign dec_cfg_axis     = 8'd0;
+      assign dec_cfg_data     = 64'd0;
+      assign dec_heat_wr      = 1'b0;
+      assign dec_heat_type    = 8'd0;
+      assign dec_heat_len     = 8'd0;
+      assign dec_heat_data    = 160'd0;
+      assign dec_fault_clear  = 1'b0;
+      assign dec_nak          = 1'b0;
+      assign dec_next_seq     = 8'd0;
+      assign dec_v2_mode      = 1'b0;
+      assign dec_frame_ok     = 1'b0;
+      assign dec_crc_error    = 1'b0;
+      assign dec_length_error = 1'b0;
+      assign dec_unknown_type = 1'b0;
+      assign dec_noise        = 1'b0;
+    end
+  endgenerate
 
   // ---------------------------------------------------------------- e-stop
   reg estop_s1_reg, estop_s2_reg, estop_latch_reg;
@@ -196,29 +329,7 @@ module cnc_core #(
       estop_latch_reg <= 1'b0;
     end
   end
-  wire estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
-
-  // ---------------------------------------------------------------- command FIFO
-  wire [ENTRY_W-1:0] cmd_tdata;
-  wire cmd_tvalid, cmd_tready;
-  wire [15:0] fifo_level_w, fifo_free_w;
-
-  segment_fifo #(
-      .WIDTH(ENTRY_W),
-      .DEPTH(FIFO_DEPTH)
-  ) u_fifo (
-      .clk          (clk),
-      .rst          (rst),
-      .flush        (estop_stop),
-      .s_axis_tdata (dec_tdata),
-      .s_axis_tvalid(dec_tvalid),
-      .s_axis_tready(fifo_s_tready),
-      .m_axis_tdata (cmd_tdata),
-      .m_axis_tvalid(cmd_tvalid),
-      .m_axis_tready(cmd_tready),
-      .level        (fifo_level_w),
-      .free         (fifo_free_w)
-  );
+  assign estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
 
   // ---------------------------------------------------------------- configuration
   reg [16*N_AXES-1:0] shadow_high_reg, shadow_low_reg, shadow_setup_reg, shadow_hold_reg;
@@ -259,7 +370,7 @@ module cnc_core #(
       shadow_setup_reg[16*dec_ax+:16] <= dec_cfg_data[31:16];
       shadow_hold_reg[16*dec_ax+:16]  <= dec_cfg_data[15:0];
     end
-    if (cfg_wr && cfg_addr[7:2] < N_AXES) begin
+    if (cfg_wr && {2'b00, cfg_addr[7:2]} < NAX8) begin
       case (cfg_addr[1:0])
         2'd0: shadow_high_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
         2'd1: shadow_low_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
@@ -321,6 +432,8 @@ module cnc_core #(
 
   segment_prep #(
       .N_AXES           (N_AXES),
+      .PROFILES         (PROF_EN),
+      .ARCS             (ARC_EN),
       .FEED0_PERIOD     (FEED0_PERIOD),
       .DEFAULT_NUMERATOR(DEFAULT_NUMERATOR)
   ) u_prep (
@@ -376,7 +489,9 @@ module cnc_core #(
   assign laser = exec_laser && !estop_stop;  // also low at once (the executor's own is registered)
 
   segment_executor #(
-      .N_AXES(N_AXES)
+      .N_AXES  (N_AXES),
+      .PROFILES(PROF_EN),
+      .ARCS    (ARC_EN)
   ) u_exec (
       .clk            (clk),
       .rst            (rst),
@@ -489,79 +604,121 @@ module cnc_core #(
   wire [127:0] heat_status;
   wire [7:0] heat_faults0, heat_faults1;
   wire heat_wd_fault;
-  /* verilator lint_off UNUSEDSIGNAL */
-  wire heat_tick, heat_done;
-  /* verilator lint_on UNUSEDSIGNAL */
-  heater_block #(
-      .SAMPLE_CLKS(SAMPLE_CLKS),
-      .PWM_BITS   (HEAT_PWM_BITS),
-      .PWM_DIV    (HEAT_PWM_DIV)
-  ) u_heat (
-      .clk        (clk),
-      .rst        (rst),
-      .frame_wr   (dec_heat_wr),
-      .frame_type (dec_heat_type),
-      .frame_len  (dec_heat_len),
-      .frame_data (dec_heat_data),
-      .frame_ok   (dec_frame_ok),
-      .fault_clear(dec_fault_clear),
-      .estop      (estop_stop),
-      .heater     (heater),
-      .heat_status(heat_status),
-      .faults0    (heat_faults0),
-      .faults1    (heat_faults1),
-      .wd_fault   (heat_wd_fault),
-      .tick       (heat_tick),
-      .sample_done(heat_done),
-      .adc_convst (adc_convst),
-      .adc_sck    (adc_sck),
-      .adc_sdi    (adc_sdi),
-      .adc_sdo    (adc_sdo)
-  );
+  generate
+    if (HEAT_EN != 0) begin : g_heat
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire heat_tick, heat_done;
+      /* verilator lint_on UNUSEDSIGNAL */
+      heater_block #(
+          .SAMPLE_CLKS(SAMPLE_CLKS),
+          .PWM_BITS   (HEAT_PWM_BITS),
+          .PWM_DIV    (HEAT_PWM_DIV)
+      ) u_heat (
+          .clk        (clk),
+          .rst        (rst),
+          .frame_wr   (dec_heat_wr),
+          .frame_type (dec_heat_type),
+          .frame_len  (dec_heat_len),
+          .frame_data (dec_heat_data),
+          .frame_ok   (dec_frame_ok),
+          .fault_clear(dec_fault_clear),
+          .estop      (estop_stop),
+          .heater     (heater),
+          .heat_status(heat_status),
+          .faults0    (heat_faults0),
+          .faults1    (heat_faults1),
+          .wd_fault   (heat_wd_fault),
+          .tick       (heat_tick),
+          .sample_done(heat_done),
+          .adc_convst (adc_convst),
+          .adc_sck    (adc_sck),
+          .adc_sdi    (adc_sdi),
+          .adc_sdo    (adc_sdo)
+      );
+    end else begin : g_noheat
+      assign heater       = 2'b00;
+      assign adc_convst   = 1'b0;
+      assign adc_sck      = 1'b0;
+      assign adc_sdi      = 1'b0;
+      assign heat_status  = 128'd0;
+      assign heat_faults0 = 8'd0;
+      assign heat_faults1 = 8'd0;
+      assign heat_wd_fault = 1'b0;
+      // inputs of the heater path not used without heaters
+      wire unused_heat = &{1'b0, adc_sdo, dec_heat_wr, dec_heat_type, dec_heat_len, dec_heat_data};
+    end
+  endgenerate
 
   // ---------------------------------------------------------------- answers
   wire [7:0] enc_tdata;
   wire enc_tvalid, tx_tready;
   wire [7:0] faults_w = {heat_faults1 != 8'd0, heat_faults0 != 8'd0, heat_wd_fault, estop_latch_reg,
                          2'd0, fault_arc_reg, fault_step_reg};
-  wire [7:0] state_w = {4'd0, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
-  wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
-                                unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,
-                                noise_bytes_reg, clamped_reg};
 
-  response_encoder #(
-      .N_AXES     (N_AXES),
-      .FIFO_DEPTH (FIFO_DEPTH),
-      .CLK_HZ     (CLK_HZ),
-      .BAUD       (BAUD),
-      .BUILD_ID   (BUILD_ID),
-      .MAX_PAYLOAD(64),
-      .HEAT_BYTES (16)
-  ) u_enc (
-      .clk          (clk),
-      .rst          (rst),
-      .ident_req    (dec_hello),
-      .status_req   (dec_status),
-      .nak_req      (dec_nak),
-      .nak_seq      (dec_nak_seq),
-      .nak_reason   (dec_nak_reason),
-      .ack_req      (dec_ack),
-      .done_evt     (v2_seg_done || v2_init_done),
-      .v1_ack       (v1_move_done),
-      .next_seq     (dec_next_seq),
-      .fifo_free    (fifo_free_w),
-      .fifo_level   (fifo_level_w),
-      .segments_done(segments_done_reg),
-      .state        (state_w),
-      .faults       (faults_w),
-      .position     (position),
-      .counters     (counters_w),
-      .heat_status  (heat_status),
-      .m_axis_tdata (enc_tdata),
-      .m_axis_tvalid(enc_tvalid),
-      .m_axis_tready(tx_tready),
-      .frame_start  (enc_frame_start)
-  );
+  generate
+    if (V2_EN != 0) begin : g_enc
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire enc_frame_start;  // not needed here
+      /* verilator lint_on UNUSEDSIGNAL */
+      wire [7:0] state_w = {4'd0, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
+      wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
+                                    unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,
+                                    noise_bytes_reg, clamped_reg};
+
+      response_encoder #(
+          .N_AXES     (N_AXES),
+          .FIFO_DEPTH (FIFO_DEPTH),
+          .CLK_HZ     (CLK_HZ),
+          .BAUD       (BAUD),
+          .BUILD_ID   (BUILD_ID),
+          .MAX_PAYLOAD(64),
+          .HEAT_BYTES (16)
+      ) u_enc (
+          .clk          (clk),
+          .rst          (rst),
+          .ident_req    (dec_hello),
+          .status_req   (dec_status),
+          .nak_req      (dec_nak),
+          .nak_seq      (dec_nak_seq),
+          .nak_reason   (dec_nak_reason),
+          .ack_req      (dec_ack),
+          .done_evt     (v2_seg_done || v2_init_done),
+          .v1_ack       (v1_move_done),
+          .next_seq     (dec_next_seq),
+          .fifo_free    (fifo_free_w),
+          .fifo_level   (fifo_level_w),
+          .segments_done(segments_done_reg),
+          .state        (state_w),
+          .faults       (faults_w),
+          .position     (position),
+          .counters     (counters_w),
+          .heat_status  (heat_status),
+          .m_axis_tdata (enc_tdata),
+          .m_axis_tvalid(enc_tvalid),
+          .m_axis_tready(tx_tready),
+          .frame_start  (enc_frame_start)
+      );
+    end else begin : g_aa
+      // v1: one 0xAA per completed v1 move (a counter, as response_encoder keeps it)
+      reg [7:0] aa_cnt_reg;
+      wire aa_take = enc_tvalid && tx_tready;
+      always @(posedge clk) begin
+        case ({v1_move_done, aa_take})
+          2'b10:   aa_cnt_reg <= aa_cnt_reg + 8'd1;
+          2'b01:   aa_cnt_reg <= aa_cnt_reg - 8'd1;
+          default: aa_cnt_reg <= aa_cnt_reg;
+        endcase
+        if (rst) aa_cnt_reg <= 8'd0;
+      end
+      assign enc_tdata  = 8'hAA;
+      assign enc_tvalid = (aa_cnt_reg != 8'd0);
+      // v2-only status and requests, unused in a v1 build
+      wire unused_v2 = &{1'b0, dec_hello, dec_status, dec_ack, dec_nak, dec_nak_seq, dec_nak_reason,
+                         fifo_free_w, segments_done_reg, heat_status, v2_seg_done, v2_init_done,
+                         frames_ok_reg, crc_errors_reg, length_errors_reg, unknown_types_reg,
+                         noise_bytes_reg, clamped_reg};
+    end
+  endgenerate
 
   uart_tx #(
       .CLK_HZ(CLK_HZ),

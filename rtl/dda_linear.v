@@ -4,9 +4,15 @@
 // remainder r (0 <= r < T, cleared by load), each tick does
 //     if (r + n >= T) { step; r = r + n - T } else { r = r + n }
 // so after t ticks exactly floor(t * n / T) steps have been emitted: the k-th step falls on tick
-// ceil(k * T / n), within one tick of its ideal time k * T / n, and the last one on tick T. The
-// two candidate updates (r - (T - n) and r + n) are computed in parallel from registers, the
-// compare is the borrow of the first one: one 64-bit add deep.
+// ceil(k * T / n), within one tick of its ideal time k * T / n, and the last one on tick T.
+// Implementation (same ticks, same steps): the register holds s = r - (T - n) = r + n - T, a
+// 65-bit two's-complement value in [n - T, n), instead of r. The step condition r + n >= T is
+// then s >= 0, the sign bit of a register (no carry chain between the registers and `step`, so
+// nothing follows a 64-bit compare into step_pulse or the position counters), and the update is
+//     s >= 0 (step):  r' = s      ->  s' = s - (T - n)
+//     s <  0:         r' = r + n  ->  s' = s + n        (= r + n - T + n)
+// two 65-bit candidates computed in parallel from registers, selected by the sign bit: one
+// 65-bit add deep, ending at the register. load sets s = -(T - n) (r = 0).
 // The executor gives one tick per clock for constant-rate segments; a rate generator can gate
 // `tick` to follow a speed profile, the arithmetic stays exact (the oversampled DDA of system.md).
 // load: takes steps (n) and tmn = T - n (load wins over a tick on the same edge: the executor loads
@@ -28,31 +34,33 @@ module dda_linear (
     output wire step  // this tick emits a step
 );
 
-  reg [63:0] rem_reg;
+  reg [64:0] s_reg;  // r + n - T (two's complement; see above)
   reg [31:0] n_reg;
   reg [63:0] tmn_reg;
   reg [31:0] left_reg;
 
-  wire [64:0] diff = {1'b0, rem_reg} - {1'b0, tmn_reg};  // r + n - T
-  wire        wrap = !diff[64];                           // r + n >= T
+  wire        wrap = !s_reg[64];                          // r + n >= T
   wire        active = tick && (left_reg != 32'd0);
+  wire [64:0] s_wrap = s_reg - {1'b0, tmn_reg};           // s - (T - n)
+  wire [64:0] s_next = s_reg + {33'd0, n_reg};            // s + n
+  wire [64:0] s_load = 65'd0 - {1'b0, tmn};               // -(T - n): r = 0
 
   always @(posedge clk) begin
     if (load) begin
-      rem_reg  <= 64'd0;
+      s_reg    <= s_load;
       n_reg    <= steps;
       tmn_reg  <= tmn;
       left_reg <= steps;
     end else if (active) begin
       if (wrap) begin
-        rem_reg  <= diff[63:0];
+        s_reg    <= s_wrap;
         left_reg <= left_reg - 32'd1;
       end else begin
-        rem_reg <= rem_reg + {32'd0, n_reg};
+        s_reg <= s_next;
       end
     end
     if (rst) begin
-      rem_reg  <= 64'd0;
+      s_reg    <= 65'd0;
       n_reg    <= 32'd0;
       tmn_reg  <= 64'd0;
       left_reg <= 32'd0;

@@ -70,13 +70,19 @@
 //   and the decoder hunts again; the strobe is high in the clock WATCHDOG_CLKS clocks after the
 //   last byte's clock.
 // Requires N_AXES >= 2 (v1 and NUMERATORS carry two axes), MAX_PAYLOAD <= 127.
+// Build options (cnc_core passes them): PROFILES = 0, ARCS = 0, HEATERS = 0 make LINE_PROFILE,
+// ARC, resp. the heater frames (0x20..0x24) unknown types (NAK UNKNOWN_TYPE, unknown_type strobe,
+// like any other unknown TYPE); their entry fields / heat_* outputs are then constant 0.
 // rst is synchronous, active high (auto mode, next_seq = 0).
 `default_nettype none
 
 module frame_decoder #(
     parameter N_AXES        = 4,
     parameter WATCHDOG_CLKS = 5_000_000,  // 100 ms at 50 MHz
-    parameter MAX_PAYLOAD   = 64
+    parameter MAX_PAYLOAD   = 64,
+    parameter PROFILES      = 1,  // 0: LINE_PROFILE (0x12) is an unknown type
+    parameter ARCS          = 1,  // 0: ARC (0x13) is an unknown type
+    parameter HEATERS       = 1   // 0: heater frames (0x20..0x24) are unknown types
 ) (
     input wire clk,
     input wire rst,
@@ -324,10 +330,10 @@ module frame_decoder #(
   wire t_htab = (type_reg == T_HTAB);
   wire t_hsaf = (type_reg == T_HSAF);
   wire t_hwd = (type_reg == T_HWD);
-  wire t_heat = t_hcfg || t_hset || t_htab || t_hsaf || t_hwd;
-  wire heat_len_ok = (t_hcfg && len_reg == 8'd20) || (t_hset && len_reg == 8'd3) ||
+  wire t_heat = (HEATERS != 0) && (t_hcfg || t_hset || t_htab || t_hsaf || t_hwd);
+  wire heat_len_ok = t_heat && ((t_hcfg && len_reg == 8'd20) || (t_hset && len_reg == 8'd3) ||
                      (t_htab && len_reg >= 8'd4 && len_reg <= 8'd18 && !len_reg[0]) ||
-                     (t_hsaf && len_reg == 8'd13) || (t_hwd && len_reg == 8'd2);
+                     (t_hsaf && len_reg == 8'd13) || (t_hwd && len_reg == 8'd2));
   wire [15:0] h_umax = {pb(pay_reg, 14), pb(pay_reg, 15)};
   wire [15:0] h_manual = {pb(pay_reg, 18), pb(pay_reg, 19)};
   wire signed [15:0] h_tmin = {pb(pay_reg, 1), pb(pay_reg, 2)};
@@ -339,8 +345,8 @@ module frame_decoder #(
                        !(t_htab && (pb(pay_reg, 1) > 8'd64 || h_tab_end > 8'd65)) &&
                        !(t_hsaf && h_tmin >= h_tmax);
 
-  wire t_lprof = (type_reg == T_LPROF);
-  wire t_arc = (type_reg == T_ARC);
+  wire t_lprof = (PROFILES != 0) && (type_reg == T_LPROF);
+  wire t_arc = (ARCS != 0) && (type_reg == T_ARC);
   wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
                t_lprof || t_arc || t_heat;
   wire len0 = (len_reg == 8'd0);

@@ -35,7 +35,8 @@ module packet_decoder_v1 #(
 
     output wire timeout,      // 1-clock strobe: partial packet dropped by the watchdog
     output wire overrun,      // 1-clock strobe: complete packet dropped, output still full
-    output wire packet_done   // 1-clock strobe: a complete packet was decoded and queued
+    output wire packet_done,  // 1-clock strobe: a complete packet was decoded and queued
+    output wire partial       // a packet has started and is not complete yet
 );
 
   localparam WD_W = $clog2(WATCHDOG_CLKS + 1);
@@ -122,6 +123,7 @@ module packet_decoder_v1 #(
   assign timeout       = timeout_reg;
   assign overrun       = overrun_reg;
   assign packet_done   = done_reg;
+  assign partial       = (count_reg != 4'd0);
 
 `ifdef FORMAL
   // Formal properties (scripts/formal.sh, k-induction with a small WATCHDOG_CLKS override).

@@ -63,10 +63,15 @@
 // Laser: high after edge R until edge R + T for a segment with code != 0 and power != 0; between
 // two such segments run back to back it stays high; low in HOLD, SETUP, ZERO and idle.
 // position: signed step count per axis, updated on the edge STEP rises.
+// Build options (cnc_core passes them): PROFILES = 0 leaves profile_gen and the dda_profile per
+// axis out, ARCS = 0 leaves arc_dda and the in-arc DIR checks out; a segment of a kind left out is
+// run as LINE (segment_prep never sends one: the decoder answers those frames as unknown types).
 `default_nettype none
 
 module segment_executor #(
-    parameter N_AXES = 4
+    parameter N_AXES   = 4,
+    parameter PROFILES = 1,  // 0: no PROFILE kind (no profile_gen / dda_profile)
+    parameter ARCS     = 1   // 0: no ARC kind (no arc_dda)
 ) (
     input wire clk,
     input wire rst,
@@ -136,14 +141,30 @@ module segment_executor #(
   reg [15:0] setup_cnt_reg;
   reg [15:0] settle_reg;  // after an abort: clocks before a segment is accepted from IDLE again
   reg [15:0] setup_max_reg;  // the largest DIR setup setting of all axes (registered)
+  // The largest setting, one compare deep: every pair of axes compared in parallel, the axis that
+  // is >= every lower-numbered axis and > every higher-numbered one wins (exactly one), an AND-OR
+  // selects it (a compare chain over the axes was the iCE40 critical path).
   reg [15:0] setup_max_w;
-  integer sm_i;
+  reg [N_AXES-1:0] sm_win;
+  reg sm_zero;
+  integer sm_i, sm_j;
   always @(*) begin
+    sm_win = {N_AXES{1'b1}};
+    sm_zero = 1'b1;
+    for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1) begin
+      for (sm_j = 0; sm_j < N_AXES; sm_j = sm_j + 1) begin
+        if (sm_j < sm_i && !(cfg_dir_setup[16*sm_i+:16] > cfg_dir_setup[16*sm_j+:16]))
+          sm_win[sm_i] = 1'b0;
+        if (sm_j > sm_i && !(cfg_dir_setup[16*sm_i+:16] >= cfg_dir_setup[16*sm_j+:16]))
+          sm_win[sm_i] = 1'b0;
+      end
+      if (cfg_dir_setup[16*sm_i+:16] != 16'd0) sm_zero = 1'b0;
+    end
     setup_max_w = 16'd0;
     for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1)
-      if (cfg_dir_setup[16*sm_i+:16] > setup_max_w) setup_max_w = cfg_dir_setup[16*sm_i+:16];
+      setup_max_w = setup_max_w | (cfg_dir_setup[16*sm_i+:16] & {16{sm_win[sm_i]}});
   end
-  always @(posedge clk) setup_max_reg <= (setup_max_w == 16'd0) ? 16'd1 : setup_max_w;
+  always @(posedge clk) setup_max_reg <= sm_zero ? 16'd1 : setup_max_w;
   reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
   reg [63:0] left_reg;  // ticks left including the current one
   reg last_reg;  // the current tick is the last (left_reg == 1)
@@ -170,8 +191,8 @@ module segment_executor #(
                            (kind_reg == K_ARC) ? arc_ending : last_reg);
   wire ready = !abort && (((state_reg == S_IDLE) && (settle_reg == 16'd0)) || run_last);
   wire accept = ready && s_axis_tvalid;
-  wire prof_in = (s_axis_kind == K_PROFILE);
-  wire arc_in = (s_axis_kind == K_ARC);
+  wire prof_in = (PROFILES != 0) && (s_axis_kind == K_PROFILE);
+  wire arc_in = (ARCS != 0) && (s_axis_kind == K_ARC);
   wire [N_AXES-1:0] rev = (s_axis_dir ^ dir_tgt_reg) & moving;
   wire zero_len = !prof_in && !arc_in && (s_axis_total == 64'd0);
   wire cutting = (s_axis_code != 2'd0) && (s_axis_power != 8'd0);
@@ -199,24 +220,37 @@ module segment_executor #(
   wire [N_AXES-1:0] setup_ok;
   wire [N_AXES-1:0] step_req;
 
-  profile_gen u_prof (
-      .clk     (clk),
-      .rst     (rst),
-      .load    (accept && prof_in),
-      .u1      (s_axis_prof_u1),
-      .v1      (s_axis_prof_v1),
-      .op1     (s_axis_prof_op1),
-      .accel   (s_axis_prof_accel),
-      .vcruise (s_axis_prof_vcruise),
-      .vexit   (s_axis_prof_vexit),
-      .vcma    (s_axis_prof_vcma),
-      .vxpa    (s_axis_prof_vxpa),
-      .decel_at(s_axis_prof_decel_at),
-      .n_dom   (s_axis_prof_n_dom),
-      .tick    (prof_tick),
-      .last    (prof_last),
-      .op      (prof_op)
-  );
+  generate
+    if (PROFILES != 0) begin : g_prof
+    profile_gen u_prof (
+        .clk     (clk),
+        .rst     (rst),
+        .load    (accept && prof_in),
+        .u1      (s_axis_prof_u1),
+        .v1      (s_axis_prof_v1),
+        .op1     (s_axis_prof_op1),
+        .accel   (s_axis_prof_accel),
+        .vcruise (s_axis_prof_vcruise),
+        .vexit   (s_axis_prof_vexit),
+        .vcma    (s_axis_prof_vcma),
+        .vxpa    (s_axis_prof_vxpa),
+        .decel_at(s_axis_prof_decel_at),
+        .n_dom   (s_axis_prof_n_dom),
+        .tick    (prof_tick),
+        .last    (prof_last),
+        .op      (prof_op)
+    );
+    end else begin : g_noprof
+      assign prof_last = 1'b0;
+      assign prof_op   = 2'd0;
+      // the profile fields are not used without profiles
+      wire unused_prof = &{1'b0, s_axis_prof_u1, s_axis_prof_v1, s_axis_prof_op1,
+                           s_axis_prof_accel, s_axis_prof_vcruise, s_axis_prof_vexit,
+                           s_axis_prof_vcma, s_axis_prof_vxpa, s_axis_prof_decel_at,
+                           s_axis_prof_n_dom, s_axis_prof_v0, s_axis_prof_vc, s_axis_prof_vx,
+                           s_axis_prof_acc, prof_op, prof_tick};
+    end
+  endgenerate
 
   // arc_dda outputs the executor does not use (DIR comes from nx_dir / ny_dir and the prep's
   // start directions; last / err / late are the bench's)
@@ -226,47 +260,68 @@ module segment_executor #(
   wire [1:0] arc_sd;  // the direction of the arc's X / Y step on arc_req (1: +)
   /* verilator lint_off UNUSEDSIGNAL */
   /* verilator lint_on UNUSEDSIGNAL */
-  arc_dda u_arc (
-      .clk      (clk),
-      .rst      (rst),
-      .load     (accept && arc_in),
-      .run      (arc_tick),
-      .stop     (abort),
-      .ccw      (s_axis_arc[0]),
-      .i_in     (s_axis_arc[1+:24]),
-      .j_in     (s_axis_arc[25+:24]),
-      .dx_in    (s_axis_arc[49+:24]),
-      .dy_in    (s_axis_arc[73+:24]),
-      .dz_in    (s_axis_arc[97+:32]),
-      .n_ramp   (s_axis_arc[129+:24]),
-      .dt_q     (s_axis_arc[153+:48]),
-      .dt_r     (s_axis_arc[201+:24]),
-      .c_total  (s_axis_arc[225+:48]),
-      .v_entry  (s_axis_arc[273+:64]),
-      .v_cruise (s_axis_arc[337+:64]),
-      .v_exit   (s_axis_arc[401+:64]),
-      .acc_a    (s_axis_arc[465+:48]),
-      .dec_d    (s_axis_arc[513+:48]),
-      .vz_entry (s_axis_arc[561+:96]),
-      .vz_cruise(s_axis_arc[657+:96]),
-      .vz_exit  (s_axis_arc[753+:96]),
-      .az       (s_axis_arc[849+:96]),
-      .busy     (arc_busy_nc),
-      .ending   (arc_ending),
-      .end_err  (arc_end_err),
-      .x_step   (arc_xs),
-      .x_dir    (arc_sd[0]),
-      .y_step   (arc_ys),
-      .y_dir    (arc_sd[1]),
-      .z_step   (arc_zs),
-      .z_dir    (arc_zd_nc),
-      .last     (arc_last_nc),
-      .err      (arc_errs_nc),
-      .late     (arc_late_nc),
-      .dir_valid(arc_dvalid),
-      .nx_dir   (arc_nx),
-      .ny_dir   (arc_ny)
-  );
+  generate
+    if (ARCS != 0) begin : g_arc
+    arc_dda u_arc (
+        .clk      (clk),
+        .rst      (rst),
+        .load     (accept && arc_in),
+        .run      (arc_tick),
+        .stop     (abort),
+        .ccw      (s_axis_arc[0]),
+        .i_in     (s_axis_arc[1+:24]),
+        .j_in     (s_axis_arc[25+:24]),
+        .dx_in    (s_axis_arc[49+:24]),
+        .dy_in    (s_axis_arc[73+:24]),
+        .dz_in    (s_axis_arc[97+:32]),
+        .n_ramp   (s_axis_arc[129+:24]),
+        .dt_q     (s_axis_arc[153+:48]),
+        .dt_r     (s_axis_arc[201+:24]),
+        .c_total  (s_axis_arc[225+:48]),
+        .v_entry  (s_axis_arc[273+:64]),
+        .v_cruise (s_axis_arc[337+:64]),
+        .v_exit   (s_axis_arc[401+:64]),
+        .acc_a    (s_axis_arc[465+:48]),
+        .dec_d    (s_axis_arc[513+:48]),
+        .vz_entry (s_axis_arc[561+:96]),
+        .vz_cruise(s_axis_arc[657+:96]),
+        .vz_exit  (s_axis_arc[753+:96]),
+        .az       (s_axis_arc[849+:96]),
+        .busy     (arc_busy_nc),
+        .ending   (arc_ending),
+        .end_err  (arc_end_err),
+        .x_step   (arc_xs),
+        .x_dir    (arc_sd[0]),
+        .y_step   (arc_ys),
+        .y_dir    (arc_sd[1]),
+        .z_step   (arc_zs),
+        .z_dir    (arc_zd_nc),
+        .last     (arc_last_nc),
+        .err      (arc_errs_nc),
+        .late     (arc_late_nc),
+        .dir_valid(arc_dvalid),
+        .nx_dir   (arc_nx),
+        .ny_dir   (arc_ny)
+    );
+    end else begin : g_noarc
+      assign arc_busy_nc = 1'b0;
+      assign arc_ending  = 1'b0;
+      assign arc_end_err = 1'b0;
+      assign arc_xs      = 1'b0;
+      assign arc_sd      = 2'd0;
+      assign arc_ys      = 1'b0;
+      assign arc_zs      = 1'b0;
+      assign arc_zd_nc   = 1'b0;
+      assign arc_last_nc = 1'b0;
+      assign arc_errs_nc = 1'b0;
+      assign arc_late_nc = 1'b0;
+      assign arc_dvalid  = 1'b0;
+      assign arc_nx      = 1'b0;
+      assign arc_ny      = 1'b0;
+      // the arc's load fields are not used without arcs
+      wire unused_arc = &{1'b0, s_axis_arc};
+    end
+  endgenerate
 
   // arc step requests per axis: X, Y, and Z (axis 2) when there is one
   assign arc_req[0] = arc_xs;
@@ -307,19 +362,23 @@ module segment_executor #(
           .step (dda_step[a])
       );
 
-      dda_profile u_pdda (
-          .clk  (clk),
-          .rst  (rst),
-          .load (accept && prof_in),
-          .n_dom(s_axis_prof_n_dom),
-          .v0   (s_axis_prof_v0[71*a+:71]),
-          .vc   (s_axis_prof_vc[71*a+:71]),
-          .vx   (s_axis_prof_vx[71*a+:71]),
-          .acc  (s_axis_prof_acc[56*a+:56]),
-          .tick (prof_tick),
-          .op   (prof_op),
-          .step (prof_step[a])
-      );
+      if (PROFILES != 0) begin : g_pdda
+          dda_profile u_pdda (
+              .clk  (clk),
+              .rst  (rst),
+              .load (accept && prof_in),
+              .n_dom(s_axis_prof_n_dom),
+              .v0   (s_axis_prof_v0[71*a+:71]),
+              .vc   (s_axis_prof_vc[71*a+:71]),
+              .vx   (s_axis_prof_vx[71*a+:71]),
+              .acc  (s_axis_prof_acc[56*a+:56]),
+              .tick (prof_tick),
+              .op   (prof_op),
+              .step (prof_step[a])
+          );
+      end else begin : g_nopdda
+        assign prof_step[a] = 1'b0;
+      end
 
       step_pulse u_pulse (
           .clk      (clk),

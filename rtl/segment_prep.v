@@ -62,10 +62,16 @@
 // final X / Y directions are not known here: dir_fast is 0 for the next segment that moves X or Y
 // until each has moved in a prepared non-arc segment (unk_reg).
 // Output (m_axis_*): one prepared segment, held until accepted.
+// Build options (cnc_core passes them): PROFILES = 0 / ARCS = 0 never take the PROFILE / ARC
+// path (the prof / arc entry bits are ignored, their registers and states are not generated in
+// synthesis: they stay constant and are optimized away); cnc_core then stores neither field in
+// the FIFO and the decoder answers LINE_PROFILE / ARC frames as unknown types.
 `default_nettype none
 
 module segment_prep #(
     parameter N_AXES            = 4,
+    parameter PROFILES          = 1,      // 0: no LINE_PROFILE entries (prepared as LINE if any)
+    parameter ARCS              = 1,      // 0: no ARC entries (prepared as LINE if any)
     parameter FEED0_PERIOD      = 62_500,
     parameter DEFAULT_NUMERATOR = 18_750_000   // CLK_HZ * 60 / 160 steps/mm at 50 MHz
 ) (
@@ -139,12 +145,12 @@ module segment_prep #(
   wire [1:0] in_kind = s_axis_tdata[SW+43:SW+42];
   wire in_v2 = s_axis_tdata[SW+44];
   wire in_v1_motion = (in_kind == K_MOTION) && !in_v2;
-  wire in_prof = s_axis_tdata[SW+45] && (in_kind == K_MOTION) && in_v2;
+  wire in_prof = (PROFILES != 0) && s_axis_tdata[SW+45] && (in_kind == K_MOTION) && in_v2;
   wire [46:0] in_ve = s_axis_tdata[SW+46+:47];
   wire [46:0] in_vc = s_axis_tdata[SW+94+:47];
   wire [46:0] in_vx = s_axis_tdata[SW+142+:47];
   wire [31:0] in_d = s_axis_tdata[SW+190+:32];
-  wire in_arc = s_axis_tdata[SW+222] && (in_kind == K_MOTION) && in_v2;
+  wire in_arc = (ARCS != 0) && s_axis_tdata[SW+222] && (in_kind == K_MOTION) && in_v2;
   wire [487:0] in_arc_raw = s_axis_tdata[SW+223+:488];
 
   // ARC registers: the raw frame fields (big-endian order, I first) and the derived values

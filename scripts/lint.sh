@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # RTL lint: every file in rtl/ must be clean under
 #   verilator --lint-only -Wall, iverilog -g2005, and Yosys (read, hierarchy, proc, check)
-# with the file's own module as top. Exit non-zero on any warning or error.
+# with the file's own module as top, and cnc_core's build options (lean configurations, see
+# rtl/cnc_core.v) elaborated the same three ways. Exit non-zero on any warning or error.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 fail=0
@@ -21,7 +22,32 @@ for f in "${files[@]}"; do
     echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
   fi
 done
+# cnc_core build options: "name param=value ..." (the default build is checked above).
+configs=(
+  "lean N_AXES=2 PROTO_V2=0"
+  "lean4 N_AXES=4 PROTO_V2=0"
+  "v2-lines N_AXES=2 PROFILES=0 ARCS=0 HEATERS=0"
+  "v2-noarc N_AXES=4 ARCS=0"
+  "v2-noprof N_AXES=4 PROFILES=0 HEATERS=0"
+)
+for c in "${configs[@]}"; do
+  read -r name params <<<"$c"
+  vg=() ig=() yg=""
+  for pv in $params; do
+    vg+=("-G$pv"); ig+=("-Pcnc_core.$pv"); yg="$yg -set ${pv%=*} ${pv#*=}"
+  done
+  if ! verilator --lint-only -Wall -Irtl --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+    echo "FAIL verilator: cnc_core $name ($params)"; cat "$log"; fail=1
+  fi
+  if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+    echo "FAIL iverilog: cnc_core $name ($params)"; cat "$log"; fail=1
+  fi
+  if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; chparam$yg cnc_core; hierarchy -check -top cnc_core; proc; check -assert" >/dev/null 2>&1 \
+      || grep -qi "warning" "$log"; then
+    echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
+  fi
+done
 if [ $fail -eq 0 ]; then
-  echo "lint: ${#files[@]} files clean (verilator -Wall, iverilog -g2005, yosys check)"
+  echo "lint: ${#files[@]} files clean (verilator -Wall, iverilog -g2005, yosys check), and cnc_core in ${#configs[@]} build-option configurations"
 fi
 exit $fail

@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # Open-tool resource report for Cyclone V (Yosys synth_intel_alm -family cyclonev), checked against
-# constraints/resource_budget.txt. Two configurations:
-#   v1  de1soc_top, the DE1-SoC board (cnc_core with N_AXES=2)
+# constraints/resource_budget.txt. Three configurations:
+#   lean  cnc_core with N_AXES=2 PROTO_V2=0 (chparam; protocol v1 only: no frame decoder, FIFO,
+#         response encoder, profiles, arcs or heaters; the build options in rtl/cnc_core.v), the
+#         configuration to compare with the original controller (2 axes, v1, no FIFO)
+#   v1    de1soc_top, the DE1-SoC board (cnc_core with N_AXES=2, every feature built)
 #   full  cnc_core with N_AXES=4 (chparam), every status output a top-level port
+# Every run also fails on a Yosys warning (the former synth_smoke check; ABC's notes excepted).
 # For each: LUTs (MISTRAL_ALUT* cells), an ALM estimate, registers (MISTRAL_FF), DSP blocks
 # (MISTRAL_MUL*), RAM blocks and bits (MISTRAL_M10K 10240 bits, MISTRAL_MLAB 640 bits per block),
 # and the longest combinational path in cells (Yosys ltp -noff on the flattened mapped netlist with
@@ -11,7 +15,7 @@
 #   ALMs = max( ALUT6 + ceil((ALUT2..5 + NOT) / 2) + ceil(ALUT_ARITH / 2), ceil(FF / 4) )
 # (an ALM holds one 6-input LUT, or two smaller LUTs, or two adder bits, and four registers; the
 # fitter packs better or worse than this, Quartus' figure is the authority).
-# Exits 1 when a figure exceeds its budget, 2 when Yosys fails.
+# Exits 1 when a figure exceeds its budget, 2 when Yosys fails or prints a warning.
 # Usage: scripts/synth_report.sh [OUT_DIR]     env: BUDGET_FILE (default constraints/resource_budget.txt)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,6 +41,9 @@ run() {
     echo "synth_report: Yosys failed for $cfg (see $log)"; exit 2
   fi
   R[$cfg.seconds]=$((SECONDS - t0))
+  if grep -i "^warning" "$log" | grep -v -i "ABC: "; then
+    echo "synth_report: Yosys printed warnings for $cfg (above; log $log)"; exit 2
+  fi
   local a2 a3 a4 a5 a6 arith nots ff
   a2=$(cells "$stat" MISTRAL_ALUT2); a3=$(cells "$stat" MISTRAL_ALUT3)
   a4=$(cells "$stat" MISTRAL_ALUT4); a5=$(cells "$stat" MISTRAL_ALUT5)
@@ -57,8 +64,10 @@ run() {
   R[$cfg.ltp_to]=$(awk '/^ *[0-9]+: / {l=$0} END {sub(/^ *[0-9]+: */, "", l); print l}' "$ltp")
 }
 
+run lean cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 cnc_core;"
 run v1 de1soc_top ""
 run full cnc_core "chparam -set N_AXES 4 cnc_core;"
+cfgs="lean v1 full"
 
 keys="luts alms registers dsp m10k mlab ram_bits ltp_cells"
 declare -A LABEL=([luts]="LUTs (MISTRAL_ALUT*)" [alms]="ALMs (estimate)" [registers]="registers (MISTRAL_FF)"
@@ -66,20 +75,21 @@ declare -A LABEL=([luts]="LUTs (MISTRAL_ALUT*)" [alms]="ALMs (estimate)" [regist
   [ram_bits]="RAM bits total" [ltp_cells]="longest comb. path (cells)")
 
 echo "Cyclone V (Yosys $(yosys -V | awk '{print $2}') synth_intel_alm -family cyclonev), budgets from $budget_file"
-printf '%-28s %10s %14s %8s %14s %8s\n' "" "original" "ours 2-axis v1" "budget" "ours 4-axis" "budget"
-printf '%-28s %10s %14s %8s %14s %8s\n' "" "(2 axes)" "de1soc_top" "" "cnc_core" ""
+fmt='%-28s %10s %12s %7s %12s %7s %12s %7s\n'
+printf "$fmt" "" "original" "lean 2-axis" "budget" "2-axis full" "budget" "4-axis full" "budget"
+printf "$fmt" "" "(2 axes)" "v1 only" "" "de1soc_top" "" "cnc_core" ""
 fail=0
 for k in $keys; do
   ref=$(budget "ref.$k"); ref=${ref:--}
   row=()
-  for cfg in v1 full; do
+  for cfg in $cfgs; do
     v=${R[$cfg.$k]}; b=$(budget "$cfg.$k"); mark=""
     if [ -n "$b" ] && [ "$v" -gt "$b" ]; then mark=" OVER"; fail=1; fi
     row+=("$v$mark" "${b:--}")
   done
-  printf '%-28s %10s %14s %8s %14s %8s\n' "${LABEL[$k]}" "$ref" "${row[@]}"
+  printf "$fmt" "${LABEL[$k]}" "$ref" "${row[@]}"
 done
-for cfg in v1 full; do
+for cfg in $cfgs; do
   echo "$cfg: ${R[$cfg.not]} MISTRAL_NOT cells besides the LUTs; Yosys ${R[$cfg.seconds]} s"
   echo "$cfg: longest path ${R[$cfg.ltp_cells]} cells, from ${R[$cfg.ltp_from]}"
   echo "$cfg:   to ${R[$cfg.ltp_to]}"
