@@ -38,7 +38,8 @@ soak: build
 	$(BUILD)/host/simboard/simboard_tests --gtest_filter='SimBoardCorpus.*'
 	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v1 --config examples/demo-machine.toml
 	$(BUILD)/host/fpgacnc sim $(CORPUS)/Circle_Diamond_Square_Calibration.gcode --model both --protocol v1 --config systemc/cosim/corpus-fast-mill.toml
-	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v2 --config examples/demo-machine.toml
+	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v2 --config systemc/cosim/jsdc-constant.toml
+	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v2 --config systemc/cosim/jsdc-profile.toml
 	$(MAKE) fuzz-soak
 	$(MAKE) soak-part-heaters
 

@@ -41,7 +41,7 @@
 //   v1 MOTION       : 68            (DIV 33, CLAMP 1, MUL 33, SUB 1)
 //   v2 LINE, DWELL, kind 3: 67 + N_AXES (MAX N_AXES - 1, then as v1; the multiplier always runs)
 //   LINE_PROFILE    : 25 + N_AXES  (MAX N_AXES - 1, PMUL 25, PINIT 1)
-//   ARC             : 81            (AMUL 32, ADIV 47, AFIX 1)
+//   ARC             : 80            (AMUL 32, ADIV 47, AFIX 1)
 // The next entry is accepted on the edge after the executor takes the prepared segment.
 // PROFILE arithmetic (m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
 // exact products V_entry*n_a, V_cruise*n_a, V_exit*n_a (71 bits) and A*n_a (56 bits) by a

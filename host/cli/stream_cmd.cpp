@@ -193,9 +193,10 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     }
     write_heater_plot();
     fmt::print(
-        "streamed {} over {} with protocol v2: {} segments as {} LINE and {} DWELL frames, {} "
-        "bytes in {:.2f} s\n",
-        a.input, lk->name(), job2->segments, r.lines, r.dwells, r.bytes_written, r.elapsed.count());
+        "streamed {} over {} with protocol v2: {} segments as {} LINE, {} LINE_PROFILE, {} ARC "
+        "and {} DWELL frames, {} bytes in {:.2f} s\n",
+        a.input, lk->name(), job2->segments, r.lines, r.profiles, r.arcs, r.dwells, r.bytes_written,
+        r.elapsed.count());
     fmt::print("{}", link::format_report(r));
     if (r.skipped_heater) fmt::print("{} heater commands not sent\n", r.skipped_heater);
     if (r.t_raised) {

@@ -78,6 +78,8 @@ class FakeV2Device : public link::Link {
     uint8_t inject_fault = 0;
     uint8_t inject_channel = 1;
     std::chrono::microseconds inject_after{0};
+    // Frame types this device does not know (a device built without them): NAK UNKNOWN_TYPE.
+    std::vector<uint8_t> unknown_types;
   };
   // A sequenced non-FIFO heater frame as accepted, with the device state at that moment.
   struct HeaterEvent {
@@ -245,6 +247,14 @@ class FakeV2Device : public link::Link {
     if (f.type == static_cast<uint8_t>(v2::Type::Line)) {
       const auto l = v2::decode_line(f, o_.n_axes);
       for (size_t a = 0; a < l.steps.size(); ++a) position_[a] += l.steps[a];
+    } else if (f.type == static_cast<uint8_t>(v2::Type::LineProfile)) {
+      const auto l = v2::decode_line_profile(f, o_.n_axes);
+      for (size_t a = 0; a < l.steps.size(); ++a) position_[a] += l.steps[a];
+    } else if (f.type == static_cast<uint8_t>(v2::Type::Arc)) {
+      const auto a = v2::decode_arc(f);
+      position_[0] += a.dx;
+      position_[1] += a.dy;
+      position_[2] += a.dz;
     }
     ++done_;
     pend_done_ = o_.send_done;
@@ -291,6 +301,11 @@ class FakeV2Device : public link::Link {
     if (const auto r = v2::check_host_frame(f, o_.n_axes)) {
       if (*r == v2::NakReason::BadLength) ++st_.length_errors;
       nak(f.seq, *r);
+      return;
+    }
+    if (std::find(o_.unknown_types.begin(), o_.unknown_types.end(), f.type) !=
+        o_.unknown_types.end()) {
+      nak(f.seq, v2::NakReason::UnknownType);
       return;
     }
     ++st_.frames_ok;

@@ -12,12 +12,7 @@
 #include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
-#if __has_include("fpgacnc/twins/arc_walk.h")
 #include "fpgacnc/twins/arc_walk.h"
-#define TEST_HAVE_ARC_WALK 1
-#else
-#define TEST_HAVE_ARC_WALK 0
-#endif
 
 namespace pl = fpgacnc::plan;
 namespace v2 = fpgacnc::protocol::v2;
@@ -471,7 +466,7 @@ TEST(Packer, ProfileJobFromCorpusFiles) {
       ++profile_frames;
       EXPECT_LE(jf.frame.payload.size(), v2::kMaxPayload);
     }
-    EXPECT_EQ(profile_frames, job.profiles) << name;
+    EXPECT_EQ(profile_frames, job.profiles + job.arcs) << name;
     c.motion = "constant";
     const auto jc = v2::pack_job(plan, c);
     c.motion = "profile";
@@ -514,6 +509,7 @@ TEST(MotionConfig, KeysParseValidateAndExampleEqualsDefaults) {
 TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
   // motion = "constant" still packs LINE frames (same T as before this change: length/feed).
   MachineConfig c;
+  c.motion = "constant";
   c.laser_requires_m3 = false;
   const auto plan =
       pl::plan_program(fpgacnc::gcode::parse_string("G1 X2 Y-1 F1341.64\nG4 P0.001\n"), c, {});
@@ -672,7 +668,6 @@ TEST(Lookahead, ArcsThatCannotGoNativeStayChords) {
   EXPECT_EQ(x, plan.final_steps[0]);
 }
 
-#if TEST_HAVE_ARC_WALK
 namespace {
 // The ARC block of a profile through the arc helper's clock-exact model (arc_walk.h run()).
 fpgacnc::twins::arc::RunResult run_arc(const pl::Profile& p) {
@@ -690,12 +685,8 @@ fpgacnc::twins::arc::RunResult run_arc(const pl::Profile& p) {
   return ta::run(fr, p.clocks + 1000);
 }
 }  // namespace
-#endif
 
 TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
-  if (!pl::have_reference_arc_walk()) {
-    GTEST_SKIP() << "fpgacnc/twins/arc_walk.h not in the tree (arc helper): arcs stay chords";
-  }
   MachineConfig c;
   c.motion = "profile";
   c.native_arcs = true;
@@ -708,7 +699,6 @@ TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
     EXPECT_EQ(job.target, plan.final_steps) << name;
     EXPECT_EQ(job.profile_stats.exit_overshoot, 0u) << name;
     arcs += job.arcs;
-#if TEST_HAVE_ARC_WALK
     // Every ARC frame's N_RAMP / C_TOTAL: the reference walk lands on the end point with that
     // total (what the device's guard checks).
     auto lim = pl::motion_limits(c);
@@ -722,7 +712,6 @@ TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
       EXPECT_TRUE(w.reached) << name << " line " << p.source_line;
       EXPECT_EQ(w.c_total, p.arc_fields.c_total) << name << " line " << p.source_line;
     }
-#endif
     std::printf("%s: %zu ARC frames, %zu LINE_PROFILE, %llu arcs as chords, %.3f s\n", name,
                 job.arcs, job.profiles,
                 static_cast<unsigned long long>(job.profile_stats.arcs_as_chords),
@@ -731,7 +720,6 @@ TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
   EXPECT_GT(arcs, 0u);
 }
 
-#if TEST_HAVE_ARC_WALK
 TEST(Lookahead, ReferenceWalkArcsRunClockExact) {
   // Small fast arcs (incl. a full helical circle and a tiny radius) through the arc helper's
   // clock-exact block model: end point and Z exact, no guard, no late move, and the block ends
@@ -760,7 +748,6 @@ TEST(Lookahead, ReferenceWalkArcsRunClockExact) {
     EXPECT_EQ(run.end_clock, p.clocks) << "line " << p.source_line;
   }
 }
-#endif
 
 TEST(Packer, ProfileJobTimeCountsReversalPauses) {
   // The job of the simulated-board check (docs/motion.md, "Time model against the RTL"): the

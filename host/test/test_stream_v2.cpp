@@ -296,6 +296,42 @@ TEST(StreamV2, RefusesAJobWithMoreAxesThanTheDevice) {
   EXPECT_EQ(dev.configs().size(), 2u) << "CONFIG_AXIS only for the device's axes";
 }
 
+TEST(StreamV2, DeviceWithoutProfilesOrArcsNamesTheConfigKey) {
+  // A device built without LINE_PROFILE (or ARC) NAKs them UNKNOWN_TYPE: the job stops at that
+  // frame with an error naming the key to change, nothing after it runs; with the key changed the
+  // same job runs.
+  auto cfg = test_cfg();
+  cfg.laser_requires_m3 = false;
+  const std::string g = "G1 X1 Y1 F600\nG2 X2 Y0 I1 J0\nG1 X0 Y0\n";
+  struct Case {
+    uint8_t type;
+    const char* key;
+  };
+  for (const Case& c : {Case{0x12, "motion = \"constant\""}, Case{0x13, "native_arcs = false"}}) {
+    FakeV2Device::Options o;
+    o.unknown_types = {c.type};
+    FakeV2Device dev(o);
+    const auto plan = plan_of(g, cfg);
+    const auto job = v2::pack_job(plan, cfg);
+    ASSERT_GT(c.type == 0x12 ? job.profiles : job.arcs, 0u);
+    try {
+      lk::stream_v2(dev, plan, cfg, fast_options());
+      FAIL() << "type 0x" << std::hex << int{c.type} << " was refused but the job completed";
+    } catch (const lk::Error& e) {
+      std::printf("%s\n", e.what());
+      EXPECT_NE(std::string(e.what()).find(c.key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("UNKNOWN_TYPE"), std::string::npos) << e.what();
+    }
+    for (const auto& f : dev.executed()) EXPECT_NE(f.type, c.type);
+    auto fixed = cfg;
+    if (c.type == 0x12) fixed.motion = "constant";
+    if (c.type == 0x13) fixed.native_arcs = false;
+    FakeV2Device dev2(o);
+    const auto r = lk::stream_v2(dev2, plan_of(g, fixed), fixed, fast_options());
+    EXPECT_TRUE(r.position_ok) << c.key;
+  }
+}
+
 TEST(StreamV2, RefusesAJobPlannedForAnotherClock) {
   auto cfg = test_cfg();
   cfg.clk_hz = 100'000'000;

@@ -457,6 +457,7 @@ std::vector<v2::Line> lines_of(const v2::Job& job) {
 
 TEST(V2Packer, WorkedExampleMoveIsTheDocsLineFrame) {
   fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";  // the LINE packer
   cfg.laser_requires_m3 = false;
   // 2 mm x -1 mm at 600 * sqrt(5) mm/min: 0.1 s = 5 000 000 clocks.
   const auto plan = plan_str("G1 X2 Y-1 F1341.6407865\n", cfg);
@@ -479,6 +480,7 @@ TEST(V2Packer, WorkedExampleMoveIsTheDocsLineFrame) {
 
 TEST(V2Packer, AxesPowerAndRapids) {
   fpgacnc::config::MachineConfig cfg;  // laser_requires_m3 = true, laser_s_max = 1000
+  cfg.motion = "constant";             // the LINE packer
   const auto plan =
       plan_str("G0 X1\nM3 S500\nG1 X2 F600\nG1 Z1\nG1 E5\nS1\nG1 X300\nM5\nG1 X0\n", cfg);
   const auto job = v2::pack_job(plan, cfg);
@@ -504,6 +506,7 @@ TEST(V2Packer, AxesPowerAndRapids) {
 
 TEST(V2Packer, TooFastIsRaisedToTheStepRate) {
   fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";  // the LINE packer
   cfg.laser_requires_m3 = false;
   cfg.max_feed_mm_min = {1e7, 1e7, 1e7, 1e7};
   // 100 mm at 1e6 mm/min: 300 000 clocks for 16 000 steps: below 16 000 * 200.
@@ -519,6 +522,7 @@ TEST(V2Packer, TooFastIsRaisedToTheStepRate) {
 
 TEST(V2Packer, LongMovesAndDwellsAreSplitExactly) {
   fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";  // the LINE packer
   cfg.laser_requires_m3 = false;
   // 100 mm at 1 mm/min: 6000 s = 3e11 clocks -> 70 LINE frames of at most UINT32_MAX.
   const auto plan = plan_str("G1 X100 Y-33.3 F1\nG4 P100\nG4 P0\nG4 P1.5\n", cfg);
@@ -554,6 +558,7 @@ TEST(V2Packer, LongMovesAndDwellsAreSplitExactly) {
 TEST(V2Packer, StepFileSegmentsKeepV1Timing) {
   // The v1 worked example as a step file: feed 1200 -> P = 15 625, T = 5 000 000.
   fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";  // the LINE packer
   fpgacnc::plan::Plan p;
   p.numerator = {18'750'000, 18'750'000};
   fpgacnc::plan::Segment s;
@@ -568,6 +573,7 @@ TEST(V2Packer, StepFileSegmentsKeepV1Timing) {
 
 TEST(V2Packer, RejectsWhatV2CannotCarry) {
   fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";  // the LINE packer
   fpgacnc::plan::Plan p;
   fpgacnc::plan::Segment s;
   s.code = 4;
@@ -580,6 +586,7 @@ TEST(V2Packer, RejectsWhatV2CannotCarry) {
 
 TEST(V2Packer, SessionFramesCarryConsecutiveSequenceNumbers) {
   fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";  // the LINE packer
   const auto job = v2::pack_job(plan_str("G1 X1 F600\nG1 Y1\n", cfg), cfg);
   const auto frames = v2::session_frames(job, 254, 2);
   ASSERT_EQ(frames.size(), 2u + job.frames.size() + 1u);

@@ -53,6 +53,47 @@ struct FrameJob {
 inline constexpr uint64_t kEvWrite = 1ull << 60, kEvReq = 2ull << 60, kEvState = 3ull << 60,
                           kEvCfg = 4ull << 60, kEvV1 = 5ull << 60;
 
+// A wide bit vector (LSB first) in 64-bit words: the FIFO entry above its first 173 bits (the
+// LINE_PROFILE and ARC fields) and segment_prep's m_axis_arc are compared whole.
+struct Bits {
+  std::vector<uint64_t> w;
+  explicit Bits(int width) : w(static_cast<size_t>((width + 63) / 64), 0) {}
+  void put(int lsb, unsigned __int128 v, int width) {
+    for (int b = 0; b < width; ++b)
+      if ((v >> b) & 1u) w[static_cast<size_t>((lsb + b) / 64)] |= 1ull << ((lsb + b) % 64);
+  }
+  bool bit(int i) const { return (w[static_cast<size_t>(i / 64)] >> (i % 64)) & 1u; }
+  // bits [from, from + width) as words (LSB first)
+  std::vector<uint64_t> slice(int from, int width) const {
+    Bits o(width);
+    for (int i = 0; i < width; ++i)
+      if (bit(from + i)) o.w[static_cast<size_t>(i / 64)] |= 1ull << (i % 64);
+    return o.w;
+  }
+};
+// Verilator's wide port (32-bit words) as Bits.
+template <class W>
+Bits bits_of(const W& words, int width) {
+  Bits b(width);
+  for (int i = 0; i < width; ++i)
+    if ((words[static_cast<size_t>(i / 32)] >> (i % 32)) & 1u)
+      b.w[static_cast<size_t>(i / 64)] |= 1ull << (i % 64);
+  return b;
+}
+// Words as events at edge c: (kEvWide | tag << 8 | k, five words each).
+inline constexpr uint64_t kEvWide = 7ull << 60;
+inline void wide_events(std::vector<BlockEvent>& out, Cycle c, uint64_t tag,
+                        const std::vector<uint64_t>& w) {
+  for (size_t k = 0; k * 5 < w.size(); ++k) {
+    BlockEvent e{c, {kEvWide | tag << 8 | k, 0, 0, 0, 0, 0}};
+    for (size_t i = 0; i < 5 && k * 5 + i < w.size(); ++i) e.v[1 + i] = w[k * 5 + i];
+    out.push_back(e);
+  }
+}
+inline constexpr int kEntryBits = 711 + 32 * kAxes;  // 839: the FIFO entry
+inline constexpr int kEntryLow = 45 + 32 * kAxes;    // 173: the fields of the kEvWrite event
+inline constexpr int kArcBits = 945;                 // segment_prep's m_axis_arc
+
 // segment_prep: FIFO entry k valid from (previous accept, or 0) + gap; segment j taken
 // `accept_delay[j]` edges late; exec_idle low from its accept edge A_j until after edge
 // A_j + busy[j] (the executor running it), so a numerators entry waits. Events: accepts (edge,
@@ -67,6 +108,8 @@ struct PrepCommand {
   int64_t gap;
   bool prof = false;  // LINE_PROFILE (kind 0, v2, t = A) with these fields
   ProfileParams profile{};
+  bool arc = false;  // ARC (kind 0, v2, code 2 / 3): payload bytes 2..62
+  std::array<uint8_t, 61> arc_raw{};
 };
 // A PROFILE segment's outputs (m_axis_prof_*) as events at its valid edge, after its segment
 // event: (kEvProf | op1 | n_dom << 8, U(1), V(1), V_cruise - A, V_exit + A, A | D << 32),

@@ -33,6 +33,156 @@ uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
   return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
 }
 
+// The whole FIFO entry as frame_decoder.v lays it out (blocks_job.h kEntryBits).
+Bits entry_bits(const FifoEntry& e) {
+  Bits b(kEntryBits);
+  for (int a = 0; a < kAxes; ++a) b.put(32 * a, e.steps[static_cast<size_t>(a)], 32);
+  const int o = 32 * kAxes;
+  b.put(o, e.t, 32);
+  b.put(o + 32, e.power, 8);
+  b.put(o + 40, e.code, 2);
+  b.put(o + 42, e.kind, 2);
+  b.put(o + 44, e.v2, 1);
+  b.put(o + 45, e.prof, 1);
+  b.put(o + 46, e.v_entry, 48);
+  b.put(o + 94, e.v_cruise, 48);
+  b.put(o + 142, e.v_exit, 48);
+  b.put(o + 190, e.decel_at, 32);
+  b.put(o + 222, e.arc, 1);
+  for (int k = 0; k < 61; ++k) b.put(o + 223 + 8 * (60 - k), e.arc_raw[static_cast<size_t>(k)], 8);
+  return b;
+}
+
+// segment_prep's m_axis_arc for an ARC segment (rtl/segment_prep.v: arc_dda's load inputs, LSB
+// first), from the twin's frame and arc::derive.
+Bits arc_bits(const arc::Frame& f) {
+  const arc::Derived d = arc::derive(f);
+  Bits b(kArcBits);
+  const auto u = [](int64_t v, int w) {
+    return static_cast<unsigned __int128>(static_cast<uint64_t>(v) & ((~0ull) >> (64 - w)));
+  };
+  b.put(0, f.g.ccw, 1);
+  b.put(1, u(f.g.i, 24), 24);
+  b.put(25, u(f.g.j, 24), 24);
+  b.put(49, u(f.g.dx, 24), 24);
+  b.put(73, u(f.g.dy, 24), 24);
+  b.put(97, u(f.dz, 32), 32);
+  b.put(129, f.n_ramp, 24);
+  b.put(153, u(d.dt_q, 48), 48);
+  b.put(201, u(d.dt_r, 24), 24);
+  b.put(225, f.c_total, 48);
+  b.put(273, f.v_entry, 64);
+  b.put(337, f.v_cruise, 64);
+  b.put(401, f.v_exit, 64);
+  b.put(465, f.a, 48);
+  b.put(513, f.d, 48);
+  b.put(561, d.vz_entry, 96);
+  b.put(657, d.vz_cruise, 96);
+  b.put(753, d.vz_exit, 96);
+  b.put(849, d.az, 96);
+  return b;
+}
+
+// Random ARC fields within the frame rules (docs/protocol.md "ARC"); `bad` in 1..17 breaks one
+// rule (BAD_FIELD), 0 keeps them all. Geometry is not walked: the decoder and prep only check and
+// derive. Returns the flags byte.
+uint8_t random_arc(std::mt19937_64& g, arc::Frame& f, uint32_t bad) {
+  const int32_t lim = (1 << 22) - 1;
+  auto coord = [&]() -> int32_t {
+    const uint32_t k = pick(g, 0, 9);
+    const int32_t m = k == 0  ? lim
+                      : k < 3 ? static_cast<int32_t>(pick(g, 0, lim))
+                              : static_cast<int32_t>(pick(g, 0, 5000));
+    return pick(g, 0, 1) ? -m : m;
+  };
+  do {
+    f.g.i = coord();
+    f.g.j = coord();
+  } while (f.g.i == 0 && f.g.j == 0);
+  int32_t x1, y1;
+  do {
+    x1 = coord();
+    y1 = coord();
+  } while (x1 == 0 && y1 == 0);
+  f.g.dx = x1 + f.g.i;
+  f.g.dy = y1 + f.g.j;
+  auto u64 = [&](uint64_t hi) {
+    return std::uniform_int_distribution<uint64_t>(0, hi)(g) >> pick(g, 0, 50);
+  };
+  f.dz = pick(g, 0, 2) == 0 ? 0 : static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)) >> pick(g, 0, 31);
+  if (f.dz == INT32_MIN) f.dz = INT32_MIN + 1;
+  f.n_ramp = pick(g, 1, (1u << 24) - 1) >> pick(g, 0, 23);
+  if (f.n_ramp == 0) f.n_ramp = 1;
+  f.c_total = std::max<uint64_t>(1, u64((1ull << 46) - 1));
+  f.v_cruise = pick(g, 0, 9) == 0 ? (1ull << 63) - 1 : u64((1ull << 63) - 1);
+  f.v_entry = pick(g, 0, 3) == 0 ? f.v_cruise : u64(f.v_cruise);
+  f.v_exit = std::max<uint64_t>(1, pick(g, 0, 3) == 0 ? f.v_cruise : u64(f.v_cruise));
+  f.v_cruise = std::max(f.v_cruise, f.v_exit);
+  f.a = u64((1ull << 48) - 1);
+  if (f.a == 0 && f.v_entry == 0) f.a = 1;
+  f.d = u64((1ull << 48) - 1);
+  uint8_t flags = static_cast<uint8_t>(pick(g, 2, 3));
+  switch (bad) {
+    case 1:
+      flags = static_cast<uint8_t>(pick(g, 0, 1));
+      break;
+    case 2:
+      flags = static_cast<uint8_t>(flags | 4u << pick(g, 0, 5));
+      break;
+    case 3:
+      f.g.i = f.g.j = 0;
+      break;
+    case 4:
+      f.g.dx = f.g.i;
+      f.g.dy = f.g.j;
+      break;
+    case 5:
+      f.g.i = pick(g, 0, 1) ? 1 << 22 : -(1 << 22);
+      break;
+    case 6:
+      f.g.j = pick(g, 0, 1) ? 1 << 22 : -(1 << 22);
+      break;
+    case 7:
+      f.g.dx = f.g.i + (pick(g, 0, 1) ? 1 << 22 : -(1 << 22));
+      break;
+    case 8:
+      f.g.dy = f.g.j + (pick(g, 0, 1) ? 1 << 22 : -(1 << 22));
+      break;
+    case 9:
+      f.dz = INT32_MIN;
+      break;
+    case 10:
+      f.n_ramp = 0;
+      break;
+    case 11:
+      f.c_total = 0;
+      break;
+    case 12:
+      f.c_total = (1ull << 46) | u64((1ull << 48) - 1);
+      break;
+    case 13:
+      f.v_cruise |= 1ull << 63;
+      break;
+    case 14:
+      f.v_entry = f.v_cruise + 1 + u64(~0ull - f.v_cruise - 1);
+      break;
+    case 15:
+      f.v_exit = f.v_cruise + 1 + u64(~0ull - f.v_cruise - 1);
+      break;
+    case 16:
+      f.v_exit = 0;
+      break;
+    case 17:
+      f.a = 0;
+      f.v_entry = 0;
+      break;
+    default:
+      break;
+  }
+  f.g.ccw = (flags & 1) != 0;
+  return flags;
+}
+
 CoreParams params(uint64_t baud) {
   CoreParams p;
   p.baud = baud;
@@ -63,6 +213,7 @@ SC_MODULE(BlockBench) {
   const std::vector<int64_t>* busy = nullptr;
   size_t delay_index = 0;
   Cycle exec_idle_after = -1;
+  uint64_t arc_fifo_writes = 0;  // ARC entries the decoder twin wrote
   std::function<void()> body;
 
   SC_CTOR(BlockBench)
@@ -131,12 +282,14 @@ SC_MODULE(BlockBench) {
       payload<FifoLevel>(g).level = frame_job->full_at(c) ? v2::kFifoDepth : 0;
     } else {
       const FifoEntry& e = payload<FifoEntry>(g);
+      arc_fifo_writes += e.arc;
       out->events.push_back(
           BlockEvent{c,
                      {kEvWrite | (e.v2 ? 1u << 12 : 0u) | static_cast<uint64_t>(e.kind) << 10 |
                           static_cast<uint64_t>(e.code) << 8 | e.power,
                       e.t, e.steps[0] | static_cast<uint64_t>(e.steps[1]) << 32,
                       e.steps[2] | static_cast<uint64_t>(e.steps[3]) << 32, 0, 0}});
+      wide_events(out->events, c, 1, entry_bits(e).slice(kEntryLow, kEntryBits - kEntryLow));
     }
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
@@ -207,6 +360,7 @@ SC_MODULE(BlockBench) {
       pr.v_entry = 0;  // (not an m_axis port: it is U(1))
       profile_events(out->events, v, prepare_profile(s.profile, s.steps), pr);
     }
+    if (s.arc) wide_events(out->events, v, 2, arc_bits(s.arc_frame).w);
     // The executor takes it `accept_delay` edges late and is busy `busy` edges after that.
     const size_t j = delay_index;
     const Cycle accept = v + 1 + next_delay();
@@ -326,7 +480,7 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
       const uint8_t s = sk < 15   ? seq
                         : sk < 18 ? static_cast<uint8_t>(seq - pick(g, 1, 130))
                                   : static_cast<uint8_t>(seq + pick(g, 1, 126));
-      const uint32_t ty = pick(g, 0, 29);
+      const uint32_t ty = pick(g, 0, 35);
       std::vector<uint8_t> p;
       uint8_t type;
       if (ty < 12) {
@@ -350,9 +504,13 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
         p = config_axis_payload(
             static_cast<uint8_t>(pick(g, 0, 5)),
             AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
+      } else if (ty >= 30) {  // ARC: good, or one field rule broken (BAD_FIELD)
+        type = kArc;
+        arc::Frame f;
+        const uint8_t flags = random_arc(g, f, pick(g, 0, 1) ? 0 : pick(g, 1, 17));
+        p = arc_payload(flags, static_cast<uint8_t>(pick(g, 0, 255)), f);
       } else {
-        // 0x14 (unknown), not 0x13: the decoder twin does not model ARC frames yet (the RTL's
-        // ARC path is checked against the reference walk by tb/test_arc_core).
+        // 0x14 is an unknown type (0x13 is ARC, above)
         const uint8_t types[] = {kHello, kStatusQuery, kFaultClear, kRelease, 0x12,
                                  0x14,   0x25,         0x2F,        0x07,     0x83};
         type = types[pick(g, 0, 9)];
@@ -471,6 +629,15 @@ PrepJob prep_job(std::mt19937_64& g, size_t n) {
       if (c.t == 0 && pr.v_entry == 0) c.t = 1;
       pr.accel = c.t;
       pr.decel_at = pick(g, 0, 3) == 0 ? 0 : pick(g, 0, 0xFFFF'FFFFu) >> pick(g, 0, 31);
+    }
+    if (c.kind == kEntryMotion && !c.prof && pick(g, 0, 4) == 0) {  // ARC within the frame rules
+      c.v2 = c.arc = true;
+      c.t = 0;
+      c.steps = {};
+      arc::Frame f;
+      c.code = random_arc(g, f, 0);
+      const auto raw = v2::arc_payload(c.code, c.power, f);
+      std::copy(raw.begin() + 2, raw.end(), c.arc_raw.begin());
     }
     c.gap = pick(g, 0, 1) ? 0 : pick(g, 0, 200);
     j.commands.push_back(c);
@@ -619,6 +786,8 @@ int sc_main(int argc, char* argv[]) {
             cmd.v_cruise = p.profile.v_cruise;
             cmd.v_exit = p.profile.v_exit;
             cmd.decel_at = p.profile.decel_at;
+            cmd.arc = p.arc;
+            cmd.arc_raw = p.arc_raw;
             accept = transport(b.to_prep, b.gp, b.clk, cmd, accept + p.gap);
             c.twin.events.push_back(BlockEvent{accept, {k, 0, 0, 0}});
           }
@@ -639,7 +808,7 @@ int sc_main(int argc, char* argv[]) {
   };
   sc_core::sc_start();
   int bad = 0;
-  size_t events = 0, prof_segments = 0;
+  size_t events = 0, prof_segments = 0, arc_segments = 0;
   for (Case& c : cases) {
     BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
                  : c.kind == 1 ? rtl_uart_tx(c.tx)
@@ -650,6 +819,7 @@ int sc_main(int argc, char* argv[]) {
     for (const auto& e : r.events)
       prof_segments +=
           c.kind == 3 && (e.v[0] >> 60) == (kEvProf >> 60) && (e.v[0] >> 40 & 0xff) == 0;
+    for (const auto& e : r.events) arc_segments += c.kind == 3 && e.v[0] == (kEvWide | 2ull << 8);
     const std::string d = compare(r, c.twin);
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       sort_events(r);
@@ -672,7 +842,10 @@ int sc_main(int argc, char* argv[]) {
       fmt::print("FAIL {}: first difference: {}\n", c.name, d);
     }
   }
-  fmt::print("cosim_blocks: {} block jobs, {} events ({} prepared PROFILE segments): {}\n",
-             cases.size(), events, prof_segments, bad ? "DIFFER" : "all identical");
+  fmt::print(
+      "cosim_blocks: {} block jobs, {} events ({} prepared PROFILE segments, {} ARC FIFO writes, "
+      "{} prepared ARC segments): {}\n",
+      cases.size(), events, prof_segments, b.arc_fifo_writes, arc_segments,
+      bad ? "DIFFER" : "all identical");
   return bad ? 1 : 0;
 }

@@ -116,12 +116,14 @@ BlockRun rtl_frame_decoder(const FrameJob& j) {
     const bool write = m->m_axis_tvalid && m->m_axis_tready;
     std::array<uint32_t, 6> d{};
     for (int w = 0; w < 6; ++w) d[w] = m->m_axis_tdata[w];
+    const Bits entry = write ? bits_of(m->m_axis_tdata, kEntryBits) : Bits(0);
     clock_once(*m);
     if (write) {
       r.events.push_back(
           BlockEvent{c,
                      {kEvWrite | (d[5] & 0x1fffu), d[4], d[0] | static_cast<uint64_t>(d[1]) << 32,
                       d[2] | static_cast<uint64_t>(d[3]) << 32, 0, 0}});
+      wide_events(r.events, c, 1, entry.slice(kEntryLow, kEntryBits - kEntryLow));
     }
     // Counters count the strobes of the previous clock (cnc_core's registers).
     counters[0] += pend[0] | pend[1] << 16 | pend[2] << 32 | pend[3] << 48;
@@ -214,7 +216,12 @@ BlockRun rtl_prep(const PrepJob& j) {
                            static_cast<uint32_t>(p.kind & 3) << 10 | (p.v2 ? 1u << 12 : 0u);
       // LINE_PROFILE fields above: prof at 173, V_entry 174.., V_cruise 222.., V_exit 270..,
       // D 318.. (48-bit fields, top bit 0).
-      for (int w = 6; w < 11; ++w) m->s_axis_tdata[w] = 0;
+      for (int w = 6; w < 27; ++w) m->s_axis_tdata[w] = 0;
+      if (p.arc) {  // arc at 350, payload bytes 2..62 at 351.. (byte 2 in the top bits)
+        put_bits(m->s_axis_tdata, 350, 1, 1);
+        for (int b = 0; b < 61; ++b)
+          put_bits(m->s_axis_tdata, 351 + 8 * (60 - b), p.arc_raw[static_cast<size_t>(b)], 8);
+      }
       if (p.prof) {
         put_bits(m->s_axis_tdata, 173, 1, 1);
         put_bits(m->s_axis_tdata, 174, p.profile.v_entry, 48);
@@ -269,6 +276,7 @@ BlockRun rtl_prep(const PrepJob& j) {
                                m->m_axis_prof_accel, m->m_axis_prof_decel_at};
         profile_events(r.events, c, pp, pr);
       }
+      if (m->m_axis_kind == 2) wide_events(r.events, c, 2, bits_of(m->m_axis_arc, kArcBits).w);
       accept_at = c + 1 + (seg < j.accept_delay.size() ? j.accept_delay[seg] : 0);
       ++seg;
     }

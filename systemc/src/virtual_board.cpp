@@ -133,6 +133,12 @@ void VirtualBoard::on_state(tlm::tlm_generic_payload& gp, sc_core::sc_time& dela
     for (Cycle v : pulse_[a]->violation_cycles)
       if (v <= t && v > enc_.fault_clear_at) s.fault = true;
   }
+  // An arc's DIR violation strobe after edge v latches faults bit 0 on v + 1, an inconsistent arc
+  // latches bit 1 on its edge; a FAULT_CLEAR strobe after edge f clears on f + 1 (a set wins).
+  for (Cycle v : exec_.arc_violation_cycles)
+    if (v + 1 <= t && v >= enc_.fault_clear_at) s.fault = true;
+  for (Cycle v : exec_.arc_err_cycles)
+    if (v <= t && v > enc_.fault_clear_at) s.faults |= 2;
   s.frame_errors = static_cast<uint16_t>(rx_.frame_errors);
   const auto& cl = prep_.clamp_cycles;
   s.clamped = static_cast<uint16_t>(std::upper_bound(cl.begin(), cl.end(), t) - cl.begin());
@@ -212,10 +218,16 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   r.end_cycle = host->ready();
   if (!r.edges.empty())
     r.end_cycle = std::max<Cycle>(r.end_cycle, static_cast<Cycle>(r.edges.back().cycle));
+  // cnc_core counts the clocks with a `violation` strobe (any axis, or an arc's DIR check)
+  std::vector<Cycle> strobes = exec_.arc_violation_cycles;
   for (int a = 0; a < kAxes; ++a) {
     r.position[a] = pulse_[a]->position;
-    r.violations += pulse_[a]->violations;
+    strobes.insert(strobes.end(), pulse_[a]->violation_strobes.begin(),
+                   pulse_[a]->violation_strobes.end());
   }
+  std::sort(strobes.begin(), strobes.end());
+  r.violations =
+      static_cast<uint64_t>(std::unique(strobes.begin(), strobes.end()) - strobes.begin());
   const DecoderState& d = dec_.current();
   r.moves_done = enc_.moves_done;
   r.packets = dec_.packets;

@@ -1,4 +1,5 @@
 #include "fpgacnc/simboard/plot.h"
+#include "fpgacnc/svg.h"
 
 #include <fmt/format.h>
 #include <sys/wait.h>
@@ -74,30 +75,6 @@ std::vector<Run> executed_runs(std::span<const Edge> edges, std::array<double, 2
   }
   if (x != kx || y != ky) keep();
   return runs;
-}
-
-double nice_step(double range, int target_ticks) {
-  const double raw = range / target_ticks;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0}) {
-    if (m * p >= raw) return m * p;
-  }
-  return 10.0 * p;
-}
-
-std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '<')
-      o += "&lt;";
-    else if (c == '>')
-      o += "&gt;";
-    else if (c == '&')
-      o += "&amp;";
-    else
-      o += c;
-  }
-  return o;
 }
 
 bool on_path(const std::string& exe) {
@@ -180,14 +157,14 @@ void write_plot_svg(const std::string& path, std::span<const Edge> edges,
                  "viewBox=\"0 0 {0} {1}\" font-family=\"sans-serif\" font-size=\"12\">\n"
                  "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
                  "<text x=\"{2}\" y=\"24\" font-size=\"16\">{3}</text>\n",
-                 o.width_px, height_px, ml, esc(o.title));
+                 o.width_px, height_px, ml, svg::escape(o.title));
   // Axes with ticks in mm.
   const double ax0 = X(b.x0), ax1 = X(b.x1), ay0 = Y(b.y0), ay1 = Y(b.y1);
   fmt::format_to(out,
                  "<g stroke=\"#888\" stroke-width=\"1\" fill=\"none\">"
                  "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\"/></g>\n",
                  ax0, ay1, ax1 - ax0, ay0 - ay1);
-  const double step = nice_step(std::max(wx, wy), 8);
+  const double step = svg::nice_step(std::max(wx, wy), 8);
   s += "<g stroke=\"#ddd\" stroke-width=\"0.5\">\n";
   std::string labels;
   for (double v = std::ceil(b.x0 / step) * step; v <= b.x1 + 1e-9; v += step) {

@@ -22,7 +22,9 @@ int main() {
     const char* python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
     std::string script = PYSERIAL_SCRIPT;
     std::string path = board.path();
-    char* argv[] = {const_cast<char*>(python), script.data(), path.data(), nullptr};
+    // 60 s of wall time for the 5 million clocks the move takes (0.8-2 M clocks/s here).
+    std::string timeout = "60";
+    char* argv[] = {const_cast<char*>(python), script.data(), path.data(), timeout.data(), nullptr};
     pid_t pid = 0;
     if (::posix_spawnp(&pid, python, nullptr, nullptr, argv, environ) != 0) {
       fmt::print(stderr, "cannot run {}\n", python);

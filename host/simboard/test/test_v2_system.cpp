@@ -149,6 +149,7 @@ TEST(V2System, CutFrameOnIdleBoardIsNakedWithTimeout) {
 TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
   const size_t n = env_size("FPGACNC_V2_SEGMENTS", 1000);
   cfgns::MachineConfig cfg;
+  cfg.motion = "constant";  // LINE frames: constant feed, the gap-free join at full speed
   const plan::Plan p = plan_of(spiral_gcode(n), cfg);
   const v2::Job job = v2::pack_job(p, cfg);
   ASSERT_EQ(job.lines, n);
@@ -242,6 +243,9 @@ TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
   const uint64_t seed = env_size("FPGACNC_SEED", 5);
   std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
   cfgns::MachineConfig cfg;
+  // LINE frames: the link layer under test does not depend on the frame type, and the
+  // constant-feed job is the shorter one to simulate (planned trapezoids: about twice as long).
+  cfg.motion = "constant";
   const plan::Plan p = plan_of(spiral_gcode(n, 50), cfg);
   const v2::Job job = v2::pack_job(p, cfg);
   std::array<uint64_t, 4> pulses_want{};

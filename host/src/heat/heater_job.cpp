@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 
 #include "fpgacnc/gcode/interpreter.h"
@@ -213,6 +214,8 @@ std::string format_heaters(const v2::Status& s) {
     if (h.enabled() || h.setpoint_q4 > 0) {
       out += fmt::format("{} {:.1f}/{:.0f}C {:.0f}%", kChannelNames[c], h.temp_c(), h.setpoint_c(),
                          h.duty() * 100.0);
+    } else if (h.temp_q4 == INT16_MIN) {  // 0x8000: no thermistor table loaded
+      out += fmt::format("{} off (no table)", kChannelNames[c]);
     } else {
       out += fmt::format("{} {:.1f}C off", kChannelNames[c], h.temp_c());
     }

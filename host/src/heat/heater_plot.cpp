@@ -1,4 +1,5 @@
 #include "fpgacnc/heat/heater_plot.h"
+#include "fpgacnc/svg.h"
 
 #include <fmt/format.h>
 
@@ -8,34 +9,6 @@
 #include <stdexcept>
 
 namespace fpgacnc::heat {
-namespace {
-
-// A "nice" tick step for a range: 1, 2 or 5 times a power of ten, about n ticks.
-double tick_step(double range, int n) {
-  const double raw = range / n;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0}) {
-    if (raw <= m * p) return m * p;
-  }
-  return 10.0 * p;
-}
-
-std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '<')
-      o += "&lt;";
-    else if (c == '>')
-      o += "&gt;";
-    else if (c == '&')
-      o += "&amp;";
-    else
-      o += c;
-  }
-  return o;
-}
-
-}  // namespace
 
 void write_heater_svg(const std::string& path, const std::vector<HeaterTrace>& traces,
                       const std::string& title, const std::string& subtitle) {
@@ -65,10 +38,10 @@ void write_heater_svg(const std::string& path, const std::vector<HeaterTrace>& t
       "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
       "fill=\"white\"/>\n",
       W, H);
-  s += fmt::format("<text x=\"{}\" y=\"22\" font-size=\"16\">{}</text>\n", L, esc(title));
-  s += fmt::format("<text x=\"{}\" y=\"40\" fill=\"#555\">{}</text>\n", L, esc(subtitle));
+  s += fmt::format("<text x=\"{}\" y=\"22\" font-size=\"16\">{}</text>\n", L, svg::escape(title));
+  s += fmt::format("<text x=\"{}\" y=\"40\" fill=\"#555\">{}</text>\n", L, svg::escape(subtitle));
   // Axes and grid.
-  const double ts = tick_step(t_max, 10);
+  const double ts = svg::nice_step(t_max, 10);
   for (double t = 0; t <= t_max + 1e-9; t += ts) {
     s += fmt::format(
         "<line x1=\"{0:.1f}\" y1=\"{1}\" x2=\"{0:.1f}\" y2=\"{2}\" stroke=\"#eee\"/>"
@@ -76,7 +49,7 @@ void write_heater_svg(const std::string& path, const std::vector<HeaterTrace>& t
         "<text x=\"{0:.1f}\" y=\"{5}\" text-anchor=\"middle\">{6:g}</text>\n",
         X(t), T1, T1 + H1, T2, T2 + H2, T2 + H2 + 16, t);
   }
-  const double ys = tick_step(y_max - y_min, 8);
+  const double ys = svg::nice_step(y_max - y_min, 8);
   for (double c = y_min; c <= y_max + 1e-9; c += ys) {
     s += fmt::format(
         "<line x1=\"{0}\" y1=\"{1:.1f}\" x2=\"{2}\" y2=\"{1:.1f}\" stroke=\"#eee\"/>"
@@ -130,7 +103,7 @@ void write_heater_svg(const std::string& path, const std::vector<HeaterTrace>& t
     s += fmt::format(
         "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" stroke-width=\"2\"/>"
         "<text x=\"{4}\" y=\"{5}\">{6} temperature (dashed: setpoint)</text>\n",
-        L + 10, T1 + 16 + 16 * k, L + 34, col, L + 40, T1 + 20 + 16 * k, esc(tr.name));
+        L + 10, T1 + 16 + 16 * k, L + 34, col, L + 40, T1 + 20 + 16 * k, svg::escape(tr.name));
   }
   s += "</svg>\n";
   std::ofstream f(path);

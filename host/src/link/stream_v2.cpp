@@ -229,6 +229,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   rep.total_t = job.total_t;
   rep.target = job.target;
   rep.lines = job.lines;
+  rep.profiles = job.profiles;
+  rep.arcs = job.arcs;
   rep.dwells = job.dwells;
   rep.fifo_frames = job.frames.size();
   const auto t0 = clock_type::now();
@@ -420,9 +422,10 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
         const auto* jf = items[acked].jf;
         throw Error(fmt::format(
             "{}: {} (seq {}) refused {} times without progress (NAKs: {} BAD_CRC, {} "
-            "BAD_LENGTH, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL)",
+            "BAD_LENGTH, {} UNKNOWN_TYPE, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL, {} BAD_FIELD)",
             name, frame_name(items[acked].frame, jf, items[acked].heater), seq_of(acked),
-            goback_same, rep.naks[1], rep.naks[2], rep.naks[4], rep.naks[5], rep.naks[6]));
+            goback_same, rep.naks[1], rep.naks[2], rep.naks[3], rep.naks[4], rep.naks[5],
+            rep.naks[6], rep.naks[7]));
       }
     }
     sent = acked;
@@ -556,19 +559,37 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
           const v2::Nak k = v2::decode_nak(*f);
           ++rep.naks[static_cast<size_t>(k.reason)];
           if (!update(k.next_seq, k.free, std::nullopt)) break;
+          // A refusal of the frame's content (BAD_FIELD, UNKNOWN_TYPE) is the same for every
+          // copy, including those sent before a go-back: three of them for the oldest unacked
+          // frame end the job.
+          if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
+              acked < n && k.seq == seq_of(acked) && ++fatal_nak_count >= 3) {
+            std::string hint;
+            if (k.reason == v2::NakReason::UnknownType) {
+              const auto t = static_cast<v2::Type>(items[acked].frame.type);
+              if (t == v2::Type::LineProfile) {
+                hint =
+                    " (a device built without trapezoid profiles: set motion = \"constant\" "
+                    "in the machine configuration)";
+              } else if (t == v2::Type::Arc) {
+                hint =
+                    " (a device built without the circular DDA: set native_arcs = false in "
+                    "the machine configuration)";
+              } else if (items[acked].heater) {
+                hint = " (a device built without heaters: remove the heater M-codes)";
+              }
+            }
+            throw Error(
+                fmt::format("{}: device refuses {} (seq {}): NAK {}{}", name,
+                            frame_name(items[acked].frame, items[acked].jf, items[acked].heater),
+                            k.seq, v2::nak_reason_name(static_cast<uint8_t>(k.reason)), hint));
+          }
           if (goback_at && acked == *goback_at) {
             // The device is still where we went back to: NAKs of the copies sent before the
             // go-back (out of order, or corrupted on the way) until the new copies arrive. A
             // lost new copy is recovered by the retransmission timeout.
             ++rep.naks_ignored;
             break;
-          }
-          if ((k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::UnknownType) &&
-              acked < n && k.seq == seq_of(acked) && ++fatal_nak_count >= 3) {
-            throw Error(
-                fmt::format("{}: device refuses {} (seq {}): NAK {}", name,
-                            frame_name(items[acked].frame, items[acked].jf, items[acked].heater),
-                            k.seq, v2::nak_reason_name(static_cast<uint8_t>(k.reason))));
           }
           if (acked < n) {
             go_back();
@@ -715,10 +736,10 @@ std::string format_report(const StreamV2Report& r) {
                    r.ident.n_axes, r.ident.fifo_depth, r.ident.clk_hz, r.ident.baud,
                    r.ident.build_id);
   s += fmt::format(
-      "frames: {} sequenced ({} FIFO: {} LINE, {} DWELL), {} written in all, {} "
-      "retransmitted, {} go-backs, {} retransmission timeouts, {} status polls\n",
-      r.sequenced_frames, r.fifo_frames, r.lines, r.dwells, r.frames_sent, r.retransmissions,
-      r.go_backs, r.timeouts, r.status_polls);
+      "frames: {} sequenced ({} FIFO: {} LINE, {} LINE_PROFILE, {} ARC, {} DWELL), {} written in "
+      "all, {} retransmitted, {} go-backs, {} retransmission timeouts, {} status polls\n",
+      r.sequenced_frames, r.fifo_frames, r.lines, r.profiles, r.arcs, r.dwells, r.frames_sent,
+      r.retransmissions, r.go_backs, r.timeouts, r.status_polls);
   s += "NAKs:";
   size_t total = 0;
   for (uint8_t k = 1; k <= 7; ++k) {
@@ -752,7 +773,9 @@ std::string format_report(const StreamV2Report& r) {
     s += fmt::format(" {} {}", a < 4 ? config::kAxisNames[a] : '?', r.moved[a]);
   }
   s += fmt::format(" steps: {}\n", r.position_ok ? "matches the plan" : "DOES NOT match the plan");
-  if (r.heater_frames || !r.status_end.heaters.empty()) {  // issue 7
+  bool heaters_used = r.heater_frames > 0;
+  for (const auto& h : r.status_end.heaters) heaters_used |= h.enabled() || h.faults;
+  if (heaters_used) {  // issue 7
     s += fmt::format("heaters: {} heater frames", r.heater_frames);
     const std::string h = heat::format_heaters(r.status_end);
     if (!h.empty()) s += "; at the end " + h;

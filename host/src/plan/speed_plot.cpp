@@ -1,4 +1,5 @@
 #include "fpgacnc/plan/speed_plot.h"
+#include "fpgacnc/svg.h"
 
 #include <fmt/format.h>
 
@@ -39,27 +40,18 @@ struct Panel {
   double py(double v) const { return y + h - v / vmax * h; }
 };
 
-double nice_step(double range, int ticks) {
-  const double raw = range / ticks;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (const double m : {1.0, 2.0, 5.0, 10.0}) {
-    if (m * p >= raw) return m * p;
-  }
-  return 10 * p;
-}
-
 void axes(std::string& out, const Panel& p, const std::string& label) {
   out += fmt::format(
       "<rect x='{:.1f}' y='{:.1f}' width='{:.1f}' height='{:.1f}' fill='none' stroke='#444'/>\n",
       p.x, p.y, p.w, p.h);
-  const double ts = nice_step(p.t1 - p.t0, 8);
+  const double ts = svg::nice_step(p.t1 - p.t0, 8);
   for (double t = std::ceil(p.t0 / ts) * ts; t <= p.t1 + 1e-9; t += ts) {
     out += fmt::format(
         "<line x1='{0:.1f}' y1='{1:.1f}' x2='{0:.1f}' y2='{2:.1f}' stroke='#ddd'/>"
         "<text x='{0:.1f}' y='{3:.1f}' font-size='11' text-anchor='middle'>{4:g}</text>\n",
         p.px(t), p.y, p.y + p.h, p.y + p.h + 14, std::round(t / ts) * ts);
   }
-  const double vs = nice_step(p.vmax, 5);
+  const double vs = svg::nice_step(p.vmax, 5);
   for (double v = 0; v <= p.vmax + 1e-9; v += vs) {
     out += fmt::format(
         "<line x1='{0:.1f}' y1='{1:.1f}' x2='{2:.1f}' y2='{1:.1f}' stroke='#ddd'/>"

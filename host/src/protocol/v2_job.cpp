@@ -62,6 +62,30 @@ uint16_t u16_timing(uint32_t v, const char* what) {
 }
 
 // The k of a segment: axes up to the last moving one, at least 2 (X, Y).
+// A G4 dwell as DWELL frames of at most kMaxT clocks each (split when longer).
+std::vector<JobFrame> dwell_frames(const plan::Dwell& d, uint32_t clk_hz, size_t segment_index) {
+  const double clocks = std::round(d.seconds * static_cast<double>(clk_hz));
+  if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
+    throw std::invalid_argument(
+        fmt::format("dwell (line {}): {} s out of range", d.source_line, d.seconds));
+  }
+  std::vector<JobFrame> out;
+  uint64_t left = static_cast<uint64_t>(clocks);
+  const bool split = left > kMaxT;
+  while (left > 0) {
+    const uint64_t t = std::min(left, kMaxT);
+    JobFrame jf;
+    jf.frame = dwell(0, static_cast<uint32_t>(t));
+    jf.segment_index = segment_index;
+    jf.source_line = d.source_line;
+    jf.t = static_cast<uint32_t>(t);
+    jf.split = split;
+    out.push_back(std::move(jf));
+    left -= t;
+  }
+  return out;
+}
+
 size_t frame_axes(const plan::Steps4& steps) {
   size_t k = 2;
   for (size_t a = 0; a < 4; ++a) {
@@ -177,26 +201,11 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       }
       push(std::move(jf));
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      const double clocks = std::round(d->seconds * static_cast<double>(cfg.clk_hz));
-      if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
-        throw std::invalid_argument(
-            fmt::format("dwell (line {}): {} s out of range", d->source_line, d->seconds));
-      }
-      uint64_t left = static_cast<uint64_t>(clocks);
-      const bool split = left > kMaxT;
-      while (left > 0) {
-        const uint64_t t = std::min(left, kMaxT);
-        JobFrame jf;
-        jf.frame = dwell(0, static_cast<uint32_t>(t));
-        jf.segment_index = seg_seen;
-        jf.source_line = d->source_line;
-        jf.t = static_cast<uint32_t>(t);
-        jf.split = split;
-        job.total_t += t;
-        advance(plan::Steps4{}, t, false);
+      for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_seen)) {
+        job.total_t += jf.t;
+        advance(plan::Steps4{}, jf.t, false);
         ++job.dwells;
         push(std::move(jf));
-        left -= t;
       }
     } else {
       ++job.skipped_heater;
@@ -358,25 +367,10 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
       ++job.segments;
       ++seg_index;
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      const double clocks = std::round(d->seconds * static_cast<double>(cfg.clk_hz));
-      if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
-        throw std::invalid_argument(
-            fmt::format("dwell (line {}): {} s out of range", d->source_line, d->seconds));
-      }
-      uint64_t left = static_cast<uint64_t>(clocks);
-      const bool split = left > kMaxT;
-      while (left > 0) {
-        const uint64_t t = std::min(left, kMaxT);
-        JobFrame jf;
-        jf.frame = dwell(0, static_cast<uint32_t>(t));
-        jf.segment_index = seg_index;
-        jf.source_line = d->source_line;
-        jf.t = static_cast<uint32_t>(t);
-        jf.split = split;
-        job.total_t += t;
+      for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_index)) {
+        job.total_t += jf.t;
         ++job.dwells;
         push(std::move(jf));
-        left -= t;
       }
     } else {
       ++job.skipped_heater;

@@ -48,10 +48,10 @@ struct MachineConfig {
   uint32_t lookahead_segments = 64;     // planner window W (>= 1); 64 = device FIFO depth
   // v2 motion: "profile" (LINE_PROFILE frames, look-ahead planned trapezoids) or "constant"
   // (LINE frames, constant feed per segment, no acceleration). v1 always moves at constant feed.
-  std::string motion = "constant";
-  // motion = "profile": send G2/G3 in XY as ARC frames (the device must have the circular DDA
-  // and the host the arc helper's reference walk); false: chords.
-  bool native_arcs = false;
+  std::string motion = "profile";
+  // motion = "profile": send G2/G3 in XY as ARC frames (the device's circular DDA) where the
+  // arc qualifies (docs/motion.md "Native arcs on the host"), chords otherwise; false: chords.
+  bool native_arcs = true;
   // [heater.hotend], [heater.bed]: heater channels (issue 7; fpgacnc/heat/heater_config.h).
   heat::HeaterSet heaters;
 };

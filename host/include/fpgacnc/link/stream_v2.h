@@ -88,6 +88,8 @@ struct StreamV2Report {
   size_t sequenced_frames = 0;  // distinct sequenced frames of the session (config + FIFO)
   size_t fifo_frames = 0;       // NUMERATORS + LINE + DWELL
   size_t lines = 0;
+  size_t profiles = 0;  // LINE_PROFILE frames
+  size_t arcs = 0;      // ARC frames
   size_t dwells = 0;
   size_t retransmissions = 0;    // sequenced frames written more than once (each resend)
   size_t go_backs = 0;           // times the window went back (NAK or timeout)

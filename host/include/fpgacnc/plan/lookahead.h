@@ -196,9 +196,8 @@ ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg);
 // ARC blocks where push_arc accepts them (counted in stats.arcs; else chords, arcs_as_chords).
 ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim);
 
-// The arc helper's reference walk (fpgacnc/twins/arc_walk.h, arc::plan) as an arc_walk, when
-// the header is in the tree at build time; else an empty function (arcs stay chords).
-bool have_reference_arc_walk();
+// The integer reference walk of the circular DDA (fpgacnc/twins/arc_walk.h, arc::plan) as an
+// arc_walk.
 decltype(MotionLimits::arc_walk) reference_arc_walk();
 
 // Junction speed limit (mm/s) between two unit directions under junction deviation delta and

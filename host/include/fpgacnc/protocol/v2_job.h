@@ -40,7 +40,7 @@ struct JobFrame {
   uint32_t t = 0;        // LINE / DWELL length in clocks
   uint8_t axes = 0;      // LINE: k
   bool split = false;    // part of a split move or dwell
-  bool profile = false;  // LINE_PROFILE
+  bool profile = false;  // planned motion: LINE_PROFILE or ARC
 };
 
 struct Job {

@@ -86,6 +86,7 @@ struct Walker {
   int64_t x = 0, y = 0, f = 0;
   int64_t q = 0, r = 0, n_ramp = 1, acc = 0, m = 0;
   int s = 1;
+  int last_a = 0, last_b = 0;  // the tangent signs a, b of the last move returned by next()
 
   Walker(const Geometry& g, uint32_t nramp) {
     x = -int64_t{g.i};
@@ -103,6 +104,8 @@ struct Walker {
     const int64_t tx = -s * y, ty = s * x;
     const int a = tx != 0 ? sgn(tx) : -sgn(x);
     const int b = ty != 0 ? sgn(ty) : -sgn(y);
+    last_a = a;
+    last_b = b;
     const int64_t fa = f + 2 * a * x + 1;
     const int64_t fb = f + 2 * b * y + 1;
     const int64_t fd = f + 2 * a * x + 2 * b * y + 2;
@@ -320,6 +323,8 @@ class Dda {
     nz_ = static_cast<uint64_t>(f.dz < 0 ? -int64_t{f.dz} : int64_t{f.dz});
     zdir_ = f.dz < 0 ? -1 : 1;
     pending_ = w_.next();
+    pa_ = w_.last_a;
+    pb_ = w_.last_b;
     c_next_ = pending_.cost;
     v_ = f.v_entry;
     vz_ = dv_.vz_entry;
@@ -329,6 +334,12 @@ class Dda {
   bool err() const { return err_; }
   bool late() const { return late_; }
   uint64_t next_clock() const { return c_; }
+  // rtl/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before clock()): the
+  // walk has chosen the tangent signs of the next move from the second clock of its preparation
+  // (W1) on: valid unless the clock is the move's first (W0, clock r_k - 3).
+  bool dir_valid() const { return c_ + (WALK_CLOCKS - 1) != ready_; }
+  bool next_x_pos() const { return pa_ > 0; }
+  bool next_y_pos() const { return pb_ > 0; }
 
   // Clock c (0, 1, ... after the load): its event. Call only while !done().
   Event clock() {
@@ -351,6 +362,8 @@ class Dda {
         return ev;
       }
       pending_ = w_.next();
+      pa_ = w_.last_a;
+      pb_ = w_.last_b;
       c_next_ += pending_.cost;
       ready_ = c_ + WALK_CLOCKS;
     }
@@ -391,6 +404,7 @@ class Dda {
   uint64_t nz_ = 0, zc_ = 0;
   int zdir_ = 1;
   Move pending_;
+  int pa_ = 0, pb_ = 0;  // tangent signs of pending_ (the directions arc_dda announces)
   uint64_t c_next_ = 0, ready_ = WALK_CLOCKS - 1, c_ = 0;
   u128 u_ = 0, v_ = 0, vz_ = 0, rz_ = 0;
   bool z_due_ = false, done_ = false, err_ = false, late_ = false;

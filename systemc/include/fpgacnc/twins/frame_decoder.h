@@ -12,11 +12,13 @@
 //   LEN > MAX_PAYLOAD: NAK BAD_LENGTH at the LEN byte, the frame abandoned at once;
 //   CRC mismatch: NAK BAD_CRC; a good CRC switches to v2 mode;
 //   then TYPE unknown: NAK UNKNOWN_TYPE; LEN wrong for TYPE: NAK BAD_LENGTH; reserved LINE
-//   flag bits or an axis >= N_AXES: NAK BAD_FIELD;
+//   flag bits, an axis >= N_AXES, a LINE_PROFILE or ARC field rule broken, a heater field out
+//   of range: NAK BAD_FIELD;
 //   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
-//   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS written to the FIFO,
+//   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS / LINE_PROFILE / ARC
+//   (payload bytes 2..62 as received, FifoEntry::arc_raw) written to the FIFO,
 //   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR acts; RELEASE, accepted or a duplicate, returns to
 //   auto mode.
 // Initiators: `fifo` (FIFO write; level read before a write), `resp` (requests to the response
@@ -29,6 +31,7 @@
 #include <functional>
 
 #include "fpgacnc/twins/tlm_common.h"
+#include "fpgacnc/twins/v2_frames.h"
 
 namespace fpgacnc::twins {
 
@@ -228,6 +231,24 @@ class FrameDecoderTwin : public sc_core::sc_module {
            (acc != 0 || ve != 0);
   }
 
+  // ARC field rules (docs/protocol.md "ARC", as frame_decoder.v checks them): code 2 or 3 and
+  // flag bits 7:2 zero; start and end not at the centre; |I|, |J|, |DX - I|, |DY - J| < 2^22;
+  // DZ != -2^31 (0 with fewer than 3 axes); N_RAMP >= 1; 1 <= C_TOTAL < 2^46; V_cruise < 2^63;
+  // V_entry, V_exit <= V_cruise; V_exit >= 1; A >= 1 or V_entry >= 1.
+  bool arc_fields_ok() const {
+    std::array<uint8_t, 61> raw{};
+    std::copy(payload_.begin() + 2, payload_.begin() + 63, raw.begin());
+    const arc::Frame f = v2::arc_frame_from_raw(raw, true);
+    const int64_t x1 = int64_t{f.g.dx} - f.g.i, y1 = int64_t{f.g.dy} - f.g.j;
+    const auto c22 = [](int64_t v) { return v > -(int64_t{1} << 22) && v < (int64_t{1} << 22); };
+    return (payload_[0] & 0xFC) == 0 && (payload_[0] & 2) != 0 && (f.g.i != 0 || f.g.j != 0) &&
+           (x1 != 0 || y1 != 0) && c22(f.g.i) && c22(f.g.j) && c22(x1) && c22(y1) &&
+           f.dz != INT32_MIN && (kAxes >= 3 || f.dz == 0) && f.n_ramp != 0 && f.c_total != 0 &&
+           f.c_total < (uint64_t{1} << 46) && f.v_cruise < (uint64_t{1} << 63) &&
+           f.v_entry <= f.v_cruise && f.v_exit <= f.v_cruise && f.v_exit != 0 &&
+           (f.a != 0 || f.v_entry != 0);
+  }
+
   void v1_packet(Cycle take) {
     const bool init = kind_ == Kind::V1Init;
     count_ = 0;
@@ -311,12 +332,14 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return -2;
       case v2::kLineProfile:
         return -3;
+      case v2::kArc:
+        return 63;
       case 0x20:  // heater frames (docs/protocol.md "Heater frames")
         return 20;
       case 0x21:
         return 3;
       case 0x22:
-        return -3;  // THERMISTOR_TABLE: 4..18, even
+        return -4;  // THERMISTOR_TABLE: 4..18, even
       case 0x23:
         return 13;
       case 0x24:
@@ -361,7 +384,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return;
       }
       axes = rest / width;
-    } else if (want == -3) {
+    } else if (want == -4) {
       if (len_ < 4 || len_ > 18 || (len_ & 1)) {
         ++s_.length_errors;
         commit_check(take);
@@ -376,7 +399,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
     if (((type_ == v2::kLine || type_ == v2::kLineProfile) && (payload_[0] & 0x7C) != 0) ||
         (type_ == v2::kConfigAxis && payload_[0] >= kAxes) ||
-        (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) || !heater_fields_ok()) {
+        (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) ||
+        (type_ == v2::kArc && !arc_fields_ok()) || !heater_fields_ok()) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;
@@ -403,10 +427,16 @@ class FrameDecoderTwin : public sc_core::sc_module {
       return;
     }
     if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators ||
-        type_ == v2::kLineProfile) {
+        type_ == v2::kLineProfile || type_ == v2::kArc) {
       FifoEntry e{};
       e.v2 = true;
-      if (type_ == v2::kLineProfile) {
+      if (type_ == v2::kArc) {  // payload bytes 2..62 as received
+        e.kind = kEntryMotion;
+        e.arc = true;
+        e.code = payload_[0] & 3;
+        e.power = payload_[1];
+        std::copy(payload_.begin() + 2, payload_.begin() + 63, e.arc_raw.begin());
+      } else if (type_ == v2::kLineProfile) {
         e.kind = kEntryMotion;
         e.prof = true;
         e.code = payload_[0] & 3;

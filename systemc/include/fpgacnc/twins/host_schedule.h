@@ -139,8 +139,8 @@ struct V2Item {
   std::vector<uint8_t> pre{};
   int64_t pre_gap = 1;
   bool fifo() const {
-    return type == v2::kLine || type == v2::kLineProfile || type == v2::kDwell ||
-           type == v2::kNumerators;
+    return type == v2::kLine || type == v2::kLineProfile || type == v2::kArc ||
+           type == v2::kDwell || type == v2::kNumerators;
   }
 };
 struct V2Script {
@@ -277,6 +277,7 @@ class V2StreamHost : public Host {
       if (f.type == v2::kDone) ++dones;
       credit(f.u8(0), f.u16(1));
       done_ = f.u32(3);
+
       if (phase_ == Phase::Release && acked_ == s_.items.size()) phase_ = Phase::Done;
     } else if (f.type == v2::kNak && f.payload.size() == 5) {
       ++naks;

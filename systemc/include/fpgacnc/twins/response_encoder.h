@@ -35,7 +35,8 @@ struct StatusSnapshot {  // the live state a frame is filled in from (cnc_core s
   DecoderState dec;
   uint32_t fifo_level = 0;
   bool busy = false;
-  bool fault = false;
+  bool fault = false;  // STEP timing violation latched (faults bit 0)
+  uint8_t faults = 0;  // other latched fault bits (bit 1: arc error); OR-ed with `fault`
   std::array<int32_t, kAxes> position{};
   uint16_t frame_errors = 0, clamped = 0;
 };
@@ -225,9 +226,10 @@ class ResponseEncoderTwin : public sc_core::sc_module {
       } else if (pend_.status) {
         pend_.status = false;
         type = v2::kStatus;
-        pl.push_back(
-            static_cast<uint8_t>((s.busy ? 1 : 0) | (s.dec.v2_mode ? 2 : 0) | (s.fault ? 4 : 0)));
-        pl.push_back(s.fault ? 1 : 0);
+        const uint8_t faults = static_cast<uint8_t>(s.faults | (s.fault ? 1 : 0));
+        pl.push_back(static_cast<uint8_t>((s.busy ? 1 : 0) | (s.dec.v2_mode ? 2 : 0) |
+                                          (faults != 0 ? 4 : 0)));
+        pl.push_back(faults);
         put16(pl, s.fifo_level);
         pl.push_back(s.dec.next_seq);
         put32(pl, static_cast<uint32_t>(segments_done));

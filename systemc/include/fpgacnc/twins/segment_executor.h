@@ -26,10 +26,15 @@
 //   the k-th step of an axis in tick j is a step request on edge R + j, sent straight to the
 //   axis's step_pulse. dir_fast is 0, so a reversing axis always takes HOLD/SETUP. Everything
 //   else (accept edges, zero gap, laser, seg_done) as for a segment of T = J.
+//   Kind ARC (Segment::arc, from an ARC frame): run_arc below (arc::Dda clock by clock, an event of
+//   walk clock c a step request on edge R + c + 2, in-arc DIR writes and DIR-setup violations,
+//   arc error); the segment lasts c_last + 1 ticks. dir_fast is 0; otherwise as a segment of that
+//   T. Not modelled: abort (e-stop).
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
 #include <array>
+#include <deque>
 #include <memory>
 
 #include "fpgacnc/twins/dda_linear.h"
@@ -58,6 +63,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         clk_(clk),
         p_(p),
         pins_(pins) {
+    last_wr_.fill(kLongAgo);
+    arc_req_.fill(kLongAgo);
     segments.register_b_transport(this, &SegmentExecutorTwin::on_segment);
     status.register_b_transport(this, &SegmentExecutorTwin::on_status);
     for (int a = 0; a < kAxes; ++a) {
@@ -75,7 +82,13 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     segments_run = 0;
     profiled = profiled_zero_gap = profiled_reversing = profiled_triangles = 0;
     zero_gap = fast_reversals = zero_len_on_last_tick = hold_on_last_tick = 0;
+    arcs = arc_errors = arc_dir_writes = 0;
     seg_start_cycles.clear();
+    arc_err_cycles.clear();
+    arc_violation_cycles.clear();
+    last_wr_.fill(kLongAgo);
+    arc_req_.fill(kLongAgo);
+    arc_window_ = idle_window_ = -1;
   }
   uint64_t segments_run = 0;
   uint64_t profiled = 0;                // PROFILE segments (LINE_PROFILE)
@@ -87,6 +100,13 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   uint64_t zero_len_on_last_tick = 0;   // T = 0 taken on a last tick (one clock in ZERO)
   uint64_t hold_on_last_tick = 0;       // taken on a last tick, then HOLD / SETUP
   std::vector<Cycle> seg_start_cycles;  // edges after which seg_start is high
+  uint64_t arcs = 0;                    // ARC segments
+  uint64_t arc_errors = 0;              // of those, ended inconsistently (arc error)
+  uint64_t arc_dir_writes = 0;          // DIR writes of X / Y inside arcs (quadrant points)
+  std::vector<Cycle> arc_err_cycles;    // edges on which `arc error` (faults bit 1) is latched
+  // edges after which an arc's `violation` strobe (a step within DIR setup of its DIR change, or
+  // before its DIR is on the pin) is high
+  std::vector<Cycle> arc_violation_cycles;
   // When set: the edge after which each segment stops keeping the executor busy (R + T; its
   // accept edge for T = 0, + 1 when taken on a last tick), in order (cnc_core busy).
   std::vector<Cycle>* entry_ends = nullptr;
@@ -100,6 +120,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   void on_status(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     payload<ExecIdle>(gp).edge = idle_edge(clk_.at(delay));
+    payload<ExecIdle>(gp).window = idle_window_;
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
   }
 
@@ -112,9 +133,112 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   }
 
  private:
+  static constexpr Cycle kLongAgo = -1'000'000'000;
+
+  // A DIR write of axis a landing on edge e (the executor's dir_wr in the clock before e).
+  void dir_write(int a, bool d, Cycle e) {
+    PulseCmd c{d};
+    transport(*pulse[a], gp_, clk_, c, e, tlm::TLM_WRITE_COMMAND, kDirWrite);
+    last_wr_[static_cast<size_t>(a)] = e;
+  }
+  // No DIR write lands on edge e when an arc's step request of axis a is high in the clock before
+  // it (the arc's last step, in flight in the next segment's first clock, counts as a STEP rise).
+  Cycle after_arc_req(int a, Cycle e) const {
+    return arc_req_[static_cast<size_t>(a)] == e ? e + 1 : e;
+  }
+
+  // Kind ARC from edge R (the walk's clock c is the clock after edge R + c): arc::Dda clock by
+  // clock (rtl/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
+  // request on edge R + c + 2. X / Y reverse inside the arc: from the walk's W1 clock on the
+  // executor knows the next move's direction (Dda::next_x_pos / next_y_pos); when it differs from
+  // the DIR target the write becomes pending and lands on the first edge after a clock in which
+  // the axis's DIR hold since its last STEP rise has elapsed and no arc step request of that axis
+  // is high. An X / Y step whose direction is not on the pin yet, or that comes less than DIR
+  // setup after the last DIR write of its axis, strobes `violation` (not delayed). Returns the
+  // number of ticks (last move's clock + 1): the segment's last edge is R + ticks.
+  Cycle run_arc(const Segment& s, Cycle r) {
+    arc::Dda dda(s.arc_frame);
+    std::array<bool, 2> tgt{s.dir[0], s.dir[1]}, pend{};
+    std::array<bool, 2> pin{};
+    std::array<Cycle, 2> last_rise{};
+    std::array<Cycle, 3> req{kLongAgo, kLongAgo, kLongAgo};
+    std::array<std::deque<Cycle>, 2> rises;  // rise edges not yet reached
+    for (size_t k = 0; k < 2; ++k) {
+      const PulseState st = pulse_state(static_cast<int>(k), r);
+      pin[k] = st.dir;
+      last_rise[k] = st.last_rise;
+    }
+    // the first clock with a DIR write possible for a pending axis k, at or after clock t
+    auto write_if_ok = [&](size_t k, Cycle t) {
+      while (!rises[k].empty() && rises[k].front() <= t) {
+        last_rise[k] = rises[k].front();
+        rises[k].pop_front();
+      }
+      const Cycle hold = p_.timing[k].hold;
+      if (t + 1 >= last_rise[k] + hold && req[k] != t + 1) {
+        dir_write(static_cast<int>(k), tgt[k], t + 1);
+        pin[k] = tgt[k];
+        pend[k] = false;
+        ++arc_dir_writes;
+      }
+    };
+    Cycle last = 0;
+    while (!dda.done()) {
+      const auto c = static_cast<Cycle>(dda.next_clock());
+      const Cycle t = r + c;
+      for (size_t k = 0; k < 2; ++k)
+        if (pend[k]) write_if_ok(k, t);
+      if (dda.dir_valid()) {
+        const std::array<bool, 2> nd{dda.next_x_pos(), dda.next_y_pos()};
+        for (size_t k = 0; k < 2; ++k)
+          if (nd[k] != tgt[k]) {
+            tgt[k] = nd[k];
+            pend[k] = true;
+          }
+      }
+      const arc::Event ev = dda.clock();
+      const Cycle e = t + 2;
+      if (dda.done()) {  // the executor is idle in the clock after the arc (when nothing follows)
+        Cycle busy = -1;
+        for (int a = 0; a < kAxes; ++a) busy = std::max(busy, pulse_state(a, t).idle_from);
+        arc_window_ = busy <= t + 1 ? t + 1 : -1;
+      }
+      bool viol = false;
+      const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
+      for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) {
+        if (d[k] == 0) continue;
+        const bool dir = d[k] > 0;
+        if (k < 2) {
+          if (dir != pin[k] || e - last_wr_[k] < static_cast<Cycle>(p_.timing[k].setup))
+            viol = true;
+        }
+        PulseCmd cmd{dir};
+        const Cycle rise = transport(*pulse[k], gp_, clk_, cmd, e);
+        if (k < 2) rises[k].push_back(rise);
+        req[k] = e;
+      }
+      if (viol) arc_violation_cycles.push_back(e);
+      last = c;
+    }
+    const Cycle ticks = last + 1;
+    // A write still pending at the end (only when the arc outran its DIR timing) lands as in IDLE
+    // or in the next segment's run.
+    for (size_t k = 0; k < 2; ++k)
+      for (Cycle t = r + ticks; pend[k]; ++t) write_if_ok(k, t);
+    for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) arc_req_[k] = req[k];
+    ++arcs;
+    if (dda.err()) {
+      ++arc_errors;
+      arc_err_cycles.push_back(r + ticks + 1);
+    }
+    return ticks;
+  }
+
   void on_segment(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     Segment s = payload<Segment>(gp);
     const Cycle valid = clk_.at(delay);
+    // ARC: never zero-length; its length is known once the walk has run (below).
+    if (s.arc) s.total = 1;
     // PROFILE: the run in exact integers (profile_gen + dda_profile); the segment lasts J ticks
     // and is never zero-length (n_dom >= 1), so below it is handled as a segment of T = J.
     ProfileRun prof;
@@ -148,10 +272,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (change) ++fast_reversals;
       for (int a = 0; a < kAxes; ++a) {
         if (!flip[a]) continue;
-        PulseCmd c{s.dir[a]};
-        const Cycle d =
-            std::max<Cycle>(run_end_ + kFastDirDelay, st[a].last_rise + p_.timing[a].hold);
-        transport(*pulse[a], gp_, clk_, c, d, tlm::TLM_WRITE_COMMAND, kDirWrite);
+        const Cycle d = after_arc_req(
+            a, std::max<Cycle>(run_end_ + kFastDirDelay, st[a].last_rise + p_.timing[a].hold));
+        dir_write(a, s.dir[a], d);
       }
     } else {
       accept = on_last_tick ? run_end_ : std::max(valid + 1, idle_after_ + 1);
@@ -167,11 +290,10 @@ class SegmentExecutorTwin : public sc_core::sc_module {
           dir_edge = std::max(dir_edge, now.last_rise + p_.timing[a].hold);
           setup = std::max(setup, p_.timing[a].setup);
         }
-        for (int a = 0; a < kAxes; ++a) {
-          if (!flip[a]) continue;
-          PulseCmd c{s.dir[a]};
-          transport(*pulse[a], gp_, clk_, c, dir_edge, tlm::TLM_WRITE_COMMAND, kDirWrite);
-        }
+        for (int a = 0; a < kAxes; ++a)
+          if (flip[a]) dir_edge = after_arc_req(a, dir_edge);
+        for (int a = 0; a < kAxes; ++a)
+          if (flip[a]) dir_write(a, s.dir[a], dir_edge);
         run = dir_edge + std::max<uint32_t>(setup, 1);
       }
     }
@@ -179,13 +301,16 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     // T = 0 completes at once; accepted on a last tick it passes one clock in ZERO.
     Cycle end = on_last_tick ? accept + 1 : accept;
     running_ = s.total != 0;
+    idle_window_ = -1;
+    if (s.arc) s.total = static_cast<uint64_t>(run_arc(s, run));
+    if (s.arc) idle_window_ = arc_window_;
     if (s.total != 0) {
       seg_start_cycles.push_back(run);
       if (s.code != 0 && s.power != 0) {
         pins_.add(run, simboard::kLaser, 1);
         pins_.add(run + static_cast<Cycle>(s.total), simboard::kLaser, 0);
       }
-      for (int a = 0; a < kAxes; ++a) {
+      for (int a = 0; a < kAxes && !s.arc; ++a) {
         if (s.steps[a] == 0) continue;
         if (s.prof) {  // a step in tick j: step request on edge R + j (STEP rises there)
           PulseCmd none{false};
@@ -208,9 +333,12 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   const CycleClock& clk_;
   const CoreParams& p_;
   PinRecorder& pins_;
-  Cycle idle_after_ = -1;  // state IDLE after this edge
-  Cycle run_end_ = -1;     // edge of the last tick of the last segment with T > 0
-  bool running_ = false;   // the last segment accepted has T > 0
+  Cycle idle_after_ = -1;               // state IDLE after this edge
+  Cycle run_end_ = -1;                  // edge of the last tick of the last segment with T > 0
+  bool running_ = false;                // the last segment accepted has T > 0
+  std::array<Cycle, kAxes> last_wr_{};  // edge of the last DIR write per axis (since_wr_reg)
+  std::array<Cycle, kAxes> arc_req_{};  // edge of the last arc step request per axis
+  Cycle arc_window_ = -1, idle_window_ = -1;  // ExecIdle::window after the last segment
   tlm::tlm_generic_payload gp_;
 };
 

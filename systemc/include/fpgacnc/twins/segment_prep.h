@@ -18,6 +18,13 @@
 //     V_exit, A, D) and |steps|; total = period = tmn = 0, dir_fast = 0 (a reversing axis always
 //     takes the executor's HOLD/SETUP path); valid kPrepLatencyProfile (25 + N_AXES) edges after
 //     acceptance. The executor twin derives the RTL's products from the fields (prepare_profile).
+//   ARC (arc): a segment of kind ARC carrying the frame's fields (Segment::arc_frame; the executor
+//     runs arc::Dda, which derives dt_q, dt_r and the Z products as the prep's shift-add squares,
+//     divider and multipliers do); steps X = Y = 1 and Z = |DZ|, DIR X / Y the tangent signs at
+//     the start point (a zero component inward), Z the sign of DZ; total = period = tmn = 0,
+//     dir_fast = 0; valid kPrepLatencyArc (80) edges after acceptance. The arc's last X / Y
+//     directions are not tracked: dir_fast is 0 for later segments moving X or Y until that axis
+//     has moved in a non-arc segment (unk_reg).
 
 // DIR per axis is the sign of the entry's steps field (1 for 0) whatever the kind.
 // tmn[a] = T - |steps_a|. The prepared segment carries DIR per axis and dir_fast: the block
@@ -30,6 +37,7 @@
 #include <stdexcept>
 
 #include "fpgacnc/twins/tlm_common.h"
+#include "fpgacnc/twins/v2_frames.h"
 
 namespace fpgacnc::twins {
 
@@ -42,9 +50,14 @@ inline constexpr Cycle kPrepClampStrobe = kAxes + 33;  // `clamped`: scan, divid
 inline constexpr Cycle kPrepLatencyDwell = 67 + kAxes;
 // LINE_PROFILE: the scan (N_AXES - 1), a 25-clock shift-add multiplier, the first master update.
 inline constexpr Cycle kPrepLatencyProfile = 25 + kAxes;
+// ARC: squares and Z products (AMUL, 32 clocks), the restoring divider (ADIV, 47), AFIX (1).
+inline constexpr Cycle kPrepLatencyArc = 80;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
   Cycle edge;
+  // Also idle in the one clock after edge `window` (-1: none): an arc ended on `window` with its
+  // last step request still in flight (rtl/segment_executor.v `idle` does not see it yet).
+  Cycle window = -1;
 };
 struct Applied {  // segment_prep -> response side: a v2 NUMERATORS entry applied on the edge
   bool v2;
@@ -75,6 +88,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
     last_feed = 0;
     last_code = 0;
     dir_track_ = {};
+    unknown_ = {};
     clamped = 0;
     clamp_cycles.clear();
     applied_cycles.clear();
@@ -96,7 +110,8 @@ class SegmentPrepTwin : public sc_core::sc_module {
     if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};
       transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
-      accept = std::max(accept, idle.edge + 1);
+      accept = idle.window >= 0 && accept <= idle.window + 1 ? idle.window + 1
+                                                             : std::max(accept, idle.edge + 1);
       num_x = c.steps[0];
       num_y = c.steps[1];
       free_from_ = accept + 1;
@@ -115,7 +130,27 @@ class SegmentPrepTwin : public sc_core::sc_module {
         abs[a] = v < 0 ? 0u - c.steps[a] : c.steps[a];
         s.dir[a] = v >= 0;
       }
-      if (c.prof && c.kind == kEntryMotion && c.v2) {  // LINE_PROFILE: kind PROFILE
+      if (c.arc && c.kind == kEntryMotion && c.v2) {  // ARC: kind ARC
+        s.code = c.code;
+        s.power = c.power;
+        s.v2 = true;
+        s.arc = true;
+        s.arc_frame = v2::arc_frame_from_raw(c.arc_raw, (c.code & 1) != 0);
+        const arc::Frame& f = s.arc_frame;
+        // X, Y: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
+        const int64_t x0 = -int64_t{f.g.i}, y0 = -int64_t{f.g.j}, sg = f.g.ccw ? 1 : -1;
+        const int64_t tx = -sg * y0, ty = sg * x0;
+        abs = {};
+        abs[0] = abs[1] = 1;
+        s.dir = {};
+        s.dir[0] = tx != 0 ? tx > 0 : x0 < 0;
+        s.dir[1] = ty != 0 ? ty > 0 : y0 < 0;
+        if (kAxes >= 3) {
+          abs[2] = f.dz < 0 ? 0u - static_cast<uint32_t>(f.dz) : static_cast<uint32_t>(f.dz);
+          s.dir[2] = f.dz >= 0;
+        }
+        latency = kPrepLatencyArc;
+      } else if (c.prof && c.kind == kEntryMotion && c.v2) {  // LINE_PROFILE: kind PROFILE
         s.code = c.code;
         s.power = c.power;
         s.v2 = true;
@@ -155,17 +190,24 @@ class SegmentPrepTwin : public sc_core::sc_module {
         latency = kPrepLatencyDwell;
       }
       s.steps = abs;
-      for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.prof ? 0 : s.total - s.steps[a];
+      for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.prof || s.arc ? 0 : s.total - s.steps[a];
       // DIR at the start of this segment, and whether its reversals fit in its first period.
       std::array<bool, kAxes> rev{};
+      bool unknown_moves = false;
       for (int a = 0; a < kAxes; ++a) {
         if (abs[a] == 0) continue;
         rev[a] = dir_track_[a] != s.dir[a];
         dir_track_[a] = s.dir[a];
+        unknown_moves = unknown_moves || unknown_[a];
+        if (!s.arc) unknown_[a] = false;
       }
       uint32_t n_dom = 0;
       for (uint32_t n : abs) n_dom = std::max(n_dom, n);
-      s.dir_fast = !s.prof && (n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom));
+      s.dir_fast = !s.prof && !s.arc && !unknown_moves &&
+                   (n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom));
+      // After an arc prep does not know the X / Y DIR levels: no dir_fast for a segment moving X
+      // or Y until that axis has moved in a prepared non-arc segment.
+      if (s.arc) unknown_[0] = unknown_[1] = true;
       const Cycle taken = transport(segments, gp_, clk_, s, accept + latency);
       free_from_ = taken + 1;
       last_period = s.period;
@@ -179,6 +221,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
   const CoreParams& p_;
   Cycle free_from_ = 0;  // first edge on which a command can be accepted
   std::array<bool, kAxes> dir_track_{};
+  std::array<bool, kAxes> unknown_{};  // DIR unknown after an arc (unk_reg)
   tlm::tlm_generic_payload gp_;
 };
 

@@ -45,6 +45,7 @@ class StepPulseTwin : public sc_core::sc_module {
     history_.clear();
     base_position_ = 0;
     violation_cycles.clear();
+    violation_strobes.clear();
   }
   int64_t position = 0;
   uint64_t pulses = 0, violations = 0;
@@ -55,8 +56,9 @@ class StepPulseTwin : public sc_core::sc_module {
     }
     return base_position_;
   }
-  std::vector<Cycle> violation_cycles;  // rise edges of late (violating) pulses
-  bool keep_history = false;            // answer position reads (the board's STATUS)
+  std::vector<Cycle> violation_cycles;   // rise edges of late (violating) pulses
+  std::vector<Cycle> violation_strobes;  // their request edges (the `violation` strobe after it)
+  bool keep_history = false;             // answer position reads (the board's STATUS)
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
@@ -77,6 +79,7 @@ class StepPulseTwin : public sc_core::sc_module {
     if (rise != e) {
       ++violations;
       violation_cycles.push_back(rise);
+      violation_strobes.push_back(e);
     }
     pins_.add(rise, simboard::step_signal(axis_), 1);
     pins_.add(rise + high, simboard::step_signal(axis_), 0);

@@ -134,7 +134,7 @@ inline constexpr uint32_t kBuildId = 0x2026'0005;
 // Host -> device types.
 inline constexpr uint8_t kHello = 0x01, kStatusQuery = 0x02, kFaultClear = 0x03, kConfigAxis = 0x04,
                          kNumerators = 0x05, kRelease = 0x06, kLine = 0x10, kDwell = 0x11,
-                         kLineProfile = 0x12;
+                         kLineProfile = 0x12, kArc = 0x13;
 // Device -> host types.
 inline constexpr uint8_t kAck = 0x80, kNak = 0x81, kDone = 0x82, kStatus = 0x83, kIdent = 0x84;
 // NAK reasons.

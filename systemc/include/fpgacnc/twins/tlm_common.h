@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/twins/arc_walk.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins {
@@ -86,6 +87,11 @@ struct FifoEntry {
   bool prof = false;
   uint64_t v_entry = 0, v_cruise = 0, v_exit = 0;
   uint32_t decel_at = 0;
+  // ARC (arc, kind 0, v2, code 2/3, power; t, steps and the profile fields 0): the payload bytes
+  // 2..62 as received (I, J, DX, DY int24, DZ int32, N_RAMP u24, C_TOTAL u48, V_entry, V_cruise,
+  // V_exit u64, A u48, D u48, big-endian), the entry's arc_raw[487:0] with byte 2 in the top bits.
+  bool arc = false;
+  std::array<uint8_t, 61> arc_raw{};
 };
 // frame_decoder -> segment_fifo: write on the delay's edge. Read (TLM_READ_COMMAND): the level
 // after the delay's edge.
@@ -107,6 +113,11 @@ struct Segment {  // segment_prep -> segment_executor (valid from the delay's ed
   // them); the executor runs the profile (run_profile) and the segment lasts its J ticks.
   bool prof = false;
   ProfileParams profile{};
+  // Kind ARC (ARC frame): the frame's fields (arc_walk.h; the executor runs arc::Dda, which derives
+  // prep's products itself); steps X = Y = 1, Z = |DZ|, dir X / Y the tangent signs at the start,
+  // Z the sign of DZ; total = period = tmn = 0, dir_fast = 0.
+  bool arc = false;
+  arc::Frame arc_frame{};
 };
 // segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
 // address kDirWrite: DIR load of `dir` on the delay's edge; read (TLM_READ_COMMAND) fills the

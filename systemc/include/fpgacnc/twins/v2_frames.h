@@ -3,12 +3,14 @@
 // from the protocol tables (the host library has its own codec).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
 #include <stdexcept>
 #include <vector>
 
+#include "fpgacnc/twins/arc_walk.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins::v2 {
@@ -69,6 +71,55 @@ inline std::vector<uint8_t> line_profile_payload(uint8_t code, uint8_t power,
       put32(p, static_cast<uint32_t>(s));
   }
   return p;
+}
+// ARC (docs/protocol.md, 63 bytes): flags (as given: code 2 / 3 in bits 1:0, bits 7:2 reserved),
+// power, I, J, DX, DY int24, DZ int32, N_RAMP u24, C_TOTAL u48, V_entry, V_cruise, V_exit u64,
+// A u48, D u48 (big-endian; fields wider than their slot are cut to it).
+inline std::vector<uint8_t> arc_payload(uint8_t flags, uint8_t power, const arc::Frame& f) {
+  std::vector<uint8_t> p{flags, power};
+  auto put = [&p](uint64_t v, int bytes) {
+    for (int b = bytes - 1; b >= 0; --b) p.push_back(static_cast<uint8_t>(v >> (8 * b)));
+  };
+  put(static_cast<uint32_t>(f.g.i), 3);
+  put(static_cast<uint32_t>(f.g.j), 3);
+  put(static_cast<uint32_t>(f.g.dx), 3);
+  put(static_cast<uint32_t>(f.g.dy), 3);
+  put(static_cast<uint32_t>(f.dz), 4);
+  put(f.n_ramp, 3);
+  put(f.c_total, 6);
+  put(f.v_entry, 8);
+  put(f.v_cruise, 8);
+  put(f.v_exit, 8);
+  put(f.a, 6);
+  put(f.d, 6);
+  return p;
+}
+// The entry's arc_raw (payload bytes 2..62) as an arc::Frame (int24 fields sign-extended).
+inline arc::Frame arc_frame_from_raw(const std::array<uint8_t, 61>& r, bool ccw) {
+  auto get = [&r](int at, int bytes) {
+    uint64_t v = 0;
+    for (int b = 0; b < bytes; ++b) v = v << 8 | r[static_cast<size_t>(at + b)];
+    return v;
+  };
+  auto s24 = [&](int at) {
+    const auto v = static_cast<uint32_t>(get(at, 3));
+    return static_cast<int32_t>(v << 8) >> 8;
+  };
+  arc::Frame f;
+  f.g.i = s24(0);
+  f.g.j = s24(3);
+  f.g.dx = s24(6);
+  f.g.dy = s24(9);
+  f.g.ccw = ccw;
+  f.dz = static_cast<int32_t>(static_cast<uint32_t>(get(12, 4)));
+  f.n_ramp = static_cast<uint32_t>(get(16, 3));
+  f.c_total = get(19, 6);
+  f.v_entry = get(25, 8);
+  f.v_cruise = get(33, 8);
+  f.v_exit = get(41, 8);
+  f.a = get(49, 6);
+  f.d = get(55, 6);
+  return f;
 }
 inline std::vector<uint8_t> config_axis_payload(uint8_t axis, const AxisTiming& t) {
   std::vector<uint8_t> p{axis};
