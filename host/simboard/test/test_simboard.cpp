@@ -58,8 +58,9 @@ TEST(SimBoard, PtyRoundTripOriginalExample) {
   link.write(kInit);
   link.write(kMotion);
   const auto t0 = std::chrono::steady_clock::now();
-  const auto b = link.read_byte(5000ms);
-  ASSERT_TRUE(b.has_value()) << "no ACK within 5 s";
+  // The move is ~5 M clocks: 4-5 s of simulation alone, more on a loaded 2-core CI machine.
+  const auto b = link.read_byte(60000ms);
+  ASSERT_TRUE(b.has_value()) << "no ACK within 60 s: " << board.stats_line();
   EXPECT_EQ(*b, 0xAA);
   ASSERT_TRUE(board.wait_quiet(2000ms));
   board.stop();
@@ -159,8 +160,10 @@ TEST(SimBoard, RunUntilInCallerThread) {
   std::vector<uint8_t> bytes = kInit;
   bytes.insert(bytes.end(), kMotion.begin(), kMotion.end());
   ASSERT_EQ(::write(fd, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
+  // ~5 M clocks to the ACK (see PtyRoundTripOriginalExample): a generous wall-clock limit.
   EXPECT_TRUE(
-      board.run_until([](const sb::SimBoard& b) { return b.stats().bytes_out >= 1; }, 10000ms));
+      board.run_until([](const sb::SimBoard& b) { return b.stats().bytes_out >= 1; }, 60000ms))
+      << board.stats_line();
   pollfd p{fd, POLLIN, 0};
   ASSERT_EQ(::poll(&p, 1, 2000), 1);
   uint8_t ack = 0;
