@@ -7,6 +7,11 @@
 // step timing per job. The RTL is the Verilated C++ model `vexec` (tb/core.cmake), clocked by the
 // harness; the twins run in SystemC. Each job compares STEP/DIR/LASER edges, seg_start,
 // seg_done, seg_done_v2 and positions; the first difference is printed with its cycle.
+// Aborts (e-stop, `--abort-pct` of the jobs, `--aborts` each): the bench runs the twins first and
+// aims each abort, in turn, at a random clock of a chosen phase of a segment that the twins
+// (with the earlier aborts) show: the run of a LINE, a LINE_PROFILE, a dwell, the HOLD and SETUP
+// waits before a run, a zero-length entry in ZERO, or anywhere; 1..N clocks long (N random per
+// abort: 1, 8 or 300), the offer waiting during it held. Later segments run after it.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -41,6 +46,34 @@ using Job = ExecJob;
 // Share of the segments that are profiled (LINE_PROFILE as segment_prep prepares them), percent.
 uint64_t g_profile_pct = 40;
 uint64_t g_max_ticks = 40'000;  // J bound: max(this, 6 * n_dom * cruise period) (RTL run time)
+uint64_t g_abort_pct = 50;      // share of the jobs with aborts, percent
+uint64_t g_aborts = 4;          // aborts per such job
+
+// What an abort hit (the twin's trace of the final run), for the summary.
+enum AbortHit {
+  kHitLine,
+  kHitProfile,
+  kHitDwell,
+  kHitHold,
+  kHitSetup,
+  kHitZero,
+  kHitFastDir,
+  kHitIdle,
+  kHits
+};
+constexpr std::array<const char*, kHits> kHitNames{
+    "LINE", "LINE_PROFILE", "dwell", "HOLD", "SETUP", "ZERO", "fast DIR write pending", "idle"};
+AbortHit classify(const std::vector<SegmentExecutorTwin::SegTrace>& tr, Cycle x) {
+  for (const auto& t : tr) {
+    if (!(t.accept < x && x <= t.end) && t.cut != x) continue;
+    if (t.kind == 'Z') return kHitZero;
+    if (t.dir_edge >= 0 && x <= t.dir_edge) return kHitHold;
+    if (x <= t.run) return kHitSetup;
+    if (x <= t.fast_dir) return kHitFastDir;
+    return t.kind == 'P' ? kHitProfile : t.kind == 'D' ? kHitDwell : kHitLine;
+  }
+  return kHitIdle;
+}
 
 uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
   return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
@@ -219,7 +252,11 @@ SC_MODULE(ExecBench) {
   tlm_utils::simple_initiator_socket<ExecBench> seg;
   tlm_utils::simple_target_socket<ExecBench> done;
   tlm_utils::simple_initiator_socket<ExecBench> status;  // (segment_prep's idle query; unused)
+  tlm_utils::simple_initiator_socket<ExecBench> abort;
   std::vector<Job>* jobs = nullptr;
+  std::vector<uint64_t> seeds;         // per job (the aborts' random stream)
+  std::array<uint64_t, kHits> hits{};  // aborts by what they hit
+  uint64_t aborts = 0, dropped = 0, abort_jobs = 0;
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
   std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
@@ -227,9 +264,14 @@ SC_MODULE(ExecBench) {
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
-      : exec("segment_executor", clk, p, pins), seg("seg"), done("done"), status("status") {
+      : exec("segment_executor", clk, p, pins),
+        seg("seg"),
+        done("done"),
+        status("status"),
+        abort("abort") {
     seg.bind(exec.segments);
     status.bind(exec.status);
+    abort.bind(exec.abort);
     exec.done.bind(done);
     done.register_b_transport(this, &ExecBench::on_done);
     make_axis_twins(exec, clk, p, pins, dda, pulse);
@@ -240,25 +282,81 @@ SC_MODULE(ExecBench) {
     if (payload<SegDone>(g).v2) seg_done_v2.push_back(clk.at(d));
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
+  // One run of the twins on job j (from cycle 0 of the current base).
+  void run_twins(const Job& j) {
+    p.timing = j.timing;
+    pins.clear();
+    exec.reset();
+    for (auto& x : pulse) x->reset();
+    seg_done.clear();
+    seg_done_v2.clear();
+    for (const ExecAbort& a : j.aborts) {
+      AbortSpan s{a.first, a.last};
+      transport(abort, gp, clk, s, a.first);
+    }
+    Cycle accept = 0;
+    for (size_t i = 0; i < j.offers.size(); ++i) {
+      const ExecSegment& e = j.offers[i].seg;
+      Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
+      s.prof = e.prof;
+      s.profile = e.profile;
+      accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
+    }
+  }
+  // Aims the job's aborts one by one (each after the previous one's settle time) with the twins'
+  // trace of the run with the aborts so far.
+  void aim_aborts(Job & j, uint64_t seed) {
+    std::mt19937_64 g(seed * 0x9E3779B97F4A7C15ull + 0xAB0127);
+    if (pick(g, 0, 99) >= g_abort_pct) return;
+    ++abort_jobs;
+    Cycle after = 0;
+    for (uint64_t k = 0; k < g_aborts; ++k) {
+      run_twins(j);
+      const auto& tr = exec.trace;
+      // a phase to hit: 0 LINE run, 1 PROFILE run, 2 dwell, 3 HOLD, 4 SETUP, 5 ZERO, 6 anywhere,
+      // 7 a zero-gap reversal's DIR write pending
+      const uint32_t want = pick(g, 0, 7);
+      std::vector<std::pair<Cycle, Cycle>> win;  // candidate windows (lo, hi]: abort edge in it
+      for (const auto& t : tr) {
+        if (t.accept <= after || t.cut >= 0) continue;
+        const char kinds[] = {'L', 'P', 'D'};
+        if (want < 3 && t.kind == kinds[want] && t.end > t.run) win.emplace_back(t.run, t.end);
+        if (want == 3 && t.dir_edge >= 0) win.emplace_back(t.accept, t.dir_edge);
+        if (want == 4 && t.dir_edge >= 0 && t.run > t.dir_edge) win.emplace_back(t.dir_edge, t.run);
+        if (want == 5 && t.kind == 'Z' && t.end > t.accept) win.emplace_back(t.accept, t.end);
+        if (want == 6) win.emplace_back(t.accept - 5, t.end + 5);
+        if (want == 7 && t.fast_dir > t.accept) win.emplace_back(t.accept, t.fast_dir);
+      }
+      if (win.empty())  // none of that phase left: any later segment
+        for (const auto& t : tr)
+          if (t.accept > after && t.cut < 0 && t.end > t.accept) win.emplace_back(t.accept, t.end);
+      if (win.empty()) break;
+      // spread the aborts over the job: one of the first 1/(aborts left) of the candidates
+      const size_t band = std::max<size_t>(1, win.size() / (g_aborts - k));
+      const auto w = win[pick(g, 0, static_cast<uint32_t>(band - 1))];
+      const auto span = static_cast<uint64_t>(w.second - w.first - 1);
+      const Cycle first = std::max(
+          after + 1,
+          w.first + 1 + static_cast<Cycle>(std::uniform_int_distribution<uint64_t>(0, span)(g)));
+      const uint32_t n = std::array<uint32_t, 3>{1, 8, 300}[pick(g, 0, 2)];
+      const Cycle last = first + pick(g, 0, n - 1);
+      j.aborts.push_back(ExecAbort{first, last});
+      after = last + 1;
+    }
+  }
   void run() {
-    for (const Job& j : *jobs) {
+    for (size_t ji = 0; ji < jobs->size(); ++ji) {
+      Job& j = (*jobs)[ji];
       wait(sc_core::sc_time(1, sc_core::SC_US));
       const uint64_t per = clk.period_ps(), now = sc_core::sc_time_stamp().value();
       clk.set_base(sc_core::sc_time::from_value((now + per - 1) / per * per));
-      p.timing = j.timing;
-      pins.clear();
-      exec.reset();
-      for (auto& x : pulse) x->reset();
-      seg_done.clear();
-      seg_done_v2.clear();
-      Cycle accept = 0;
-      for (size_t i = 0; i < j.offers.size(); ++i) {
-        const ExecSegment& e = j.offers[i].seg;
-        Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
-        s.prof = e.prof;
-        s.profile = e.profile;
-        accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
+      if (g_aborts != 0 && g_abort_pct != 0) aim_aborts(j, seeds[ji]);
+      run_twins(j);
+      for (const ExecAbort& a : j.aborts) {
+        ++aborts;
+        ++hits[classify(exec.trace, a.first)];
       }
+      dropped += exec.aborted;
       RunResult r;
       r.edges = pins.take_sorted();
       r.seg_start = exec.seg_start_cycles;
@@ -307,9 +405,14 @@ std::string where(const Job& j, const RunResult& rtl, const RunResult& twin) {
   const std::string axis = sig < 4   ? fmt::format("STEP axis {}", sig)
                            : sig < 8 ? fmt::format("DIR axis {}", sig - 4)
                                      : std::string("LASER");
-  return fmt::format(" [segment #{} ({}), {}, clock {}]", seg == 0 ? 0 : idx,
+  std::string ab;
+  for (size_t a = 0; a < j.aborts.size(); ++a)
+    if (j.aborts[a].first <= c)
+      ab = fmt::format("; abort #{} on edges {}..{} before it", a, j.aborts[a].first,
+                       j.aborts[a].last);
+  return fmt::format(" [segment #{} ({}), {}, clock {}{}]", seg == 0 ? 0 : idx,
                      idx < j.offers.size() && j.offers[idx].seg.prof ? "PROFILE" : "LINE/DWELL",
-                     axis, c);
+                     axis, c, ab);
 }
 
 }  // namespace
@@ -321,12 +424,14 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
   opts.size("--segments", &segments);
   opts.u64("--profile-pct", &g_profile_pct).u64("--max-ticks", &g_max_ticks);
+  opts.u64("--abort-pct", &g_abort_pct).u64("--aborts", &g_aborts);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
   std::vector<Job> jobs;
   for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
   ExecBench bench("bench");
   bench.jobs = &jobs;
+  for (uint64_t s = 0; s < seeds; ++s) bench.seeds.push_back(seed + s);
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   sc_core::sc_start();
@@ -397,6 +502,13 @@ int sc_main(int argc, char* argv[]) {
       "cosim_executor: profiled {}: {} zero-gap joins, {} with a reversing axis (HOLD/SETUP), {} "
       "never at cruise (triangles), {} with A <= 2000\n",
       profiled, bench.pstats[0], bench.pstats[1], bench.pstats[2], tiny_a);
+  std::string hit;
+  for (int h = 0; h < kHits; ++h)
+    hit += fmt::format("{}{} {}", h ? ", " : "", bench.hits[static_cast<size_t>(h)],
+                       kHitNames[static_cast<size_t>(h)]);
+  fmt::print(
+      "cosim_executor: {} aborts in {} jobs (hit: {}); {} segments dropped by them (no seg_done)\n",
+      bench.aborts, bench.abort_jobs, hit, bench.dropped);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

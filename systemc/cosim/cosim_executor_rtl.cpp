@@ -71,6 +71,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
   m->cfg_dir_setup = pack16(j.timing, &AxisTiming::setup);
   m->cfg_dir_hold = pack16(j.timing, &AxisTiming::hold);
   m->s_axis_tvalid = 0;
+  m->__SYM__abort = 0;
   m->rst = 1;
   m->clk = 0;
   m->eval();
@@ -82,6 +83,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
   Cycle c = 0, valid_from = j.offers.empty() ? -1 : j.offers[0].gap;
   size_t next = 0, prof_set = SIZE_MAX;  // offer whose profile inputs are on the ports
   Cycle quiet = 0;
+  size_t next_abort = 0;
   while (true) {
     // Inputs for edge c + 1: the next offer is valid once edge valid_from has passed.
     const bool offering = next < j.offers.size() && c >= valid_from;
@@ -106,6 +108,12 @@ RunResult run_executor_rtl(const ExecJob& j) {
       }
     }
     m->s_axis_tvalid = offering ? 1 : 0;
+    while (next_abort < j.aborts.size() && j.aborts[next_abort].last < c + 1) ++next_abort;
+    const bool abort = next_abort < j.aborts.size() && j.aborts[next_abort].first <= c + 1;
+    if (abort || m->__SYM__abort) {  // (Verilator's name of the port `abort`, a C++ word)
+      m->__SYM__abort = abort ? 1 : 0;
+      m->eval();  // s_axis_tready and laser depend on it combinationally
+    }
     const bool accepted = offering && m->s_axis_tready;
     ++c;
     clock_once(*m);
@@ -124,7 +132,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (m->seg_start) r.seg_start.push_back(c);
     if (m->seg_done) r.seg_done.push_back(c);
     if (m->seg_done && m->seg_done_v2) r.seg_done_v2.push_back(c);
-    if (next >= j.offers.size() && m->idle && !m->step) {
+    if (next >= j.offers.size() && next_abort >= j.aborts.size() && m->idle && !m->step) {
       if (++quiet > 2) break;
     } else {
       quiet = 0;

@@ -28,9 +28,16 @@ struct ExecOffer {
   int64_t gap;  // valid from `gap` edges after the previous accept (first: after cycle 0)
 };
 
+// The abort (e-stop) input is high in the clocks before edges first..last (in time order, not
+// overlapping). An offer waiting during an abort is held (taken once the executor is ready).
+struct ExecAbort {
+  Cycle first, last;
+};
+
 struct ExecJob {
   std::array<AxisTiming, kAxes> timing;
   std::vector<ExecOffer> offers;
+  std::vector<ExecAbort> aborts;
 };
 
 RunResult run_executor_rtl(const ExecJob& j);
