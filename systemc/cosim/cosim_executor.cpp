@@ -21,6 +21,7 @@
 #include <random>
 #include <systemc>
 
+#include "arc_stimulus.h"
 #include "cosim_args.h"
 
 #include "executor_job.h"
@@ -46,6 +47,7 @@ using Job = ExecJob;
 // Share of the segments that are profiled (LINE_PROFILE as segment_prep prepares them), percent.
 uint64_t g_profile_pct = 40;
 uint64_t g_max_ticks = 40'000;  // J bound: max(this, 6 * n_dom * cruise period) (RTL run time)
+uint64_t g_arc_pct = 5;         // share of the moving segments that are ARCs, percent
 uint64_t g_abort_pct = 50;      // share of the jobs with aborts, percent
 uint64_t g_aborts = 4;          // aborts per such job
 
@@ -58,11 +60,13 @@ enum AbortHit {
   kHitSetup,
   kHitZero,
   kHitFastDir,
+  kHitArc,
   kHitIdle,
   kHits
 };
 constexpr std::array<const char*, kHits> kHitNames{
-    "LINE", "LINE_PROFILE", "dwell", "HOLD", "SETUP", "ZERO", "fast DIR write pending", "idle"};
+    "LINE", "LINE_PROFILE",           "dwell", "HOLD", "SETUP",
+    "ZERO", "fast DIR write pending", "ARC",   "idle"};
 AbortHit classify(const std::vector<SegmentExecutorTwin::SegTrace>& tr, Cycle x) {
   for (const auto& t : tr) {
     if (!(t.accept < x && x <= t.end) && t.cut != x) continue;
@@ -70,7 +74,10 @@ AbortHit classify(const std::vector<SegmentExecutorTwin::SegTrace>& tr, Cycle x)
     if (t.dir_edge >= 0 && x <= t.dir_edge) return kHitHold;
     if (x <= t.run) return kHitSetup;
     if (x <= t.fast_dir) return kHitFastDir;
-    return t.kind == 'P' ? kHitProfile : t.kind == 'D' ? kHitDwell : kHitLine;
+    return t.kind == 'P'   ? kHitProfile
+           : t.kind == 'D' ? kHitDwell
+           : t.kind == 'A' ? kHitArc
+                           : kHitLine;
   }
   return kHitIdle;
 }
@@ -165,7 +172,9 @@ Job random_job(uint64_t seed, size_t segments) {
   uint32_t fast_p = 0;  // a period that makes every reversal fast
   for (const auto& t : j.timing)
     fast_p = std::max(fast_p, std::max(t.hold, 1u) + std::max(t.setup, 1u));
-  std::array<bool, kAxes> track{};  // DIR at the start of the next segment (reset: low)
+  std::array<bool, kAxes> track{};    // DIR at the start of the next segment (reset: low)
+  std::array<bool, kAxes> unknown{};  // DIR unknown after an arc: no dir_fast (prep's unk_reg)
+  std::mt19937_64 ga(seed * 0x2545F4914F6CDD1Dull + 0xA4C);  // the arcs' own stream
   uint64_t prev_t = 0;
   for (size_t i = 0; i < segments; ++i) {
     ExecSegment s{};
@@ -184,6 +193,35 @@ Job random_job(uint64_t seed, size_t segments) {
       s.steps = {0, 0, 0, 0};
       n = 0;
     }
+    if (kind > 2 && pick(ga, 0, 99) < g_arc_pct) {  // ARC, as segment_prep prepares it
+      ArcStimulus o;
+      o.r_span = 10;
+      o.cps_lo = std::max<uint32_t>(minp, 16);
+      o.cps_hi = 2 * o.cps_lo;
+      s.arc = true;
+      s.arc_frame = random_arc_frame(ga, o);
+      s.code = s.arc_frame.g.ccw ? 3 : 2;
+      s.v2 = true;
+      s.steps = {1, 1, 0, 0};
+      s.dir = {};
+      const std::array<bool, 2> d0 = arc::start_dirs(s.arc_frame.g);
+      s.dir[0] = d0[0];
+      s.dir[1] = d0[1];
+      const int32_t dz = s.arc_frame.dz;
+      s.steps[2] = dz < 0 ? 0u - static_cast<uint32_t>(dz) : static_cast<uint32_t>(dz);
+      s.dir[2] = dz >= 0;
+      s.total = 0;
+      s.period = 0;
+      s.tmn = {0, 0, 0, 0};
+      track[0] = d0[0];
+      track[1] = d0[1];
+      if (dz != 0) track[2] = dz >= 0;
+      unknown[0] = unknown[1] = true;
+      s.dir_fast = false;
+      j.offers.push_back(ExecOffer{s, pick(g, 0, 9) == 0 ? pick(g, 0, 400) : pick(g, 0, 2)});
+      prev_t = 0;
+      continue;
+    }
     if (kind > 2 && pick(g, 0, 99) < g_profile_pct) {  // profiled: n_a on 1..4 axes, n_a = 1 too
       const uint32_t pbig = pick(g, 0, 15) == 0 ? 3000 : pick(g, 0, 3) == 0 ? 3 : 60;
       const uint32_t axes = pick(g, 1, kAxes);
@@ -201,7 +239,7 @@ Job random_job(uint64_t seed, size_t segments) {
       s.period = 0;
       s.tmn = {0, 0, 0, 0};
       for (int a = 0; a < kAxes; ++a)
-        if (s.steps[a] != 0) track[a] = s.dir[a];
+        if (s.steps[a] != 0) track[a] = s.dir[a], unknown[a] = false;
       s.dir_fast = false;  // a reversing axis takes HOLD/SETUP
       const uint32_t when = pick(g, 0, 9);
       int64_t gap = pick(g, 0, 2);
@@ -225,12 +263,15 @@ Job random_job(uint64_t seed, size_t segments) {
     }
     for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.total - s.steps[a];
     std::array<bool, kAxes> rev{};
+    bool unk = false;
     for (int a = 0; a < kAxes; ++a) {
       if (s.steps[a] == 0) continue;
       rev[a] = track[a] != s.dir[a];
       track[a] = s.dir[a];
+      unk = unk || unknown[a];
+      unknown[a] = false;
     }
-    s.dir_fast = n == 0 || dir_fast(rev, j.timing, s.total / n);
+    s.dir_fast = n == 0 || (!unk && dir_fast(rev, j.timing, s.total / n));
     const uint32_t when = pick(g, 0, 9);
     int64_t gap = pick(g, 0, 2);
     if (when == 0) gap = pick(g, 0, 400);
@@ -300,6 +341,8 @@ SC_MODULE(ExecBench) {
       Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
       s.prof = e.prof;
       s.profile = e.profile;
+      s.arc = e.arc;
+      s.arc_frame = e.arc_frame;
       accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
     }
   }
@@ -314,8 +357,8 @@ SC_MODULE(ExecBench) {
       run_twins(j);
       const auto& tr = exec.trace;
       // a phase to hit: 0 LINE run, 1 PROFILE run, 2 dwell, 3 HOLD, 4 SETUP, 5 ZERO, 6 anywhere,
-      // 7 a zero-gap reversal's DIR write pending
-      const uint32_t want = pick(g, 0, 7);
+      // 7 a zero-gap reversal's DIR write pending, 8 ARC run
+      const uint32_t want = pick(g, 0, 8);
       std::vector<std::pair<Cycle, Cycle>> win;  // candidate windows (lo, hi]: abort edge in it
       for (const auto& t : tr) {
         if (t.accept <= after || t.cut >= 0) continue;
@@ -326,6 +369,7 @@ SC_MODULE(ExecBench) {
         if (want == 5 && t.kind == 'Z' && t.end > t.accept) win.emplace_back(t.accept, t.end);
         if (want == 6) win.emplace_back(t.accept - 5, t.end + 5);
         if (want == 7 && t.fast_dir > t.accept) win.emplace_back(t.accept, t.fast_dir);
+        if (want == 8 && t.kind == 'A' && t.end > t.run) win.emplace_back(t.run, t.end);
       }
       if (win.empty())  // none of that phase left: any later segment
         for (const auto& t : tr)
@@ -398,7 +442,7 @@ std::string where(const Job& j, const RunResult& rtl, const RunResult& twin) {
   size_t ran = 0, idx = 0;
   for (; idx < j.offers.size(); ++idx) {
     const auto& o = j.offers[idx].seg;
-    if (o.prof || o.total != 0) ++ran;
+    if (o.prof || o.arc || o.total != 0) ++ran;
     if (ran == seg) break;
   }
   const int sig = e.signal;
@@ -411,7 +455,10 @@ std::string where(const Job& j, const RunResult& rtl, const RunResult& twin) {
       ab = fmt::format("; abort #{} on edges {}..{} before it", a, j.aborts[a].first,
                        j.aborts[a].last);
   return fmt::format(" [segment #{} ({}), {}, clock {}{}]", seg == 0 ? 0 : idx,
-                     idx < j.offers.size() && j.offers[idx].seg.prof ? "PROFILE" : "LINE/DWELL",
+                     idx >= j.offers.size()   ? "?"
+                     : j.offers[idx].seg.prof ? "PROFILE"
+                     : j.offers[idx].seg.arc  ? "ARC"
+                                              : "LINE/DWELL",
                      axis, c, ab);
 }
 
@@ -424,7 +471,7 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
   opts.size("--segments", &segments);
   opts.u64("--profile-pct", &g_profile_pct).u64("--max-ticks", &g_max_ticks);
-  opts.u64("--abort-pct", &g_abort_pct).u64("--aborts", &g_aborts);
+  opts.u64("--abort-pct", &g_abort_pct).u64("--aborts", &g_aborts).u64("--arc-pct", &g_arc_pct);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
   std::vector<Job> jobs;
@@ -438,10 +485,11 @@ int sc_main(int argc, char* argv[]) {
   const double twin_s = std::chrono::duration<double>(clock::now() - t0).count();
   double rtl_s = 0;
   int bad = 0;
-  uint64_t edges = 0, clocks = 0, profiled = 0, tiny_a = 0;
+  uint64_t edges = 0, clocks = 0, profiled = 0, tiny_a = 0, arcs = 0;
   for (const Job& j : jobs)
     for (const auto& o : j.offers) {
       profiled += o.seg.prof ? 1 : 0;
+      arcs += o.seg.arc ? 1 : 0;
       tiny_a += o.seg.prof && o.seg.profile.accel <= 2000 ? 1 : 0;
     }
   for (size_t i = 0; i < jobs.size(); ++i) {
@@ -507,8 +555,9 @@ int sc_main(int argc, char* argv[]) {
     hit += fmt::format("{}{} {}", h ? ", " : "", bench.hits[static_cast<size_t>(h)],
                        kHitNames[static_cast<size_t>(h)]);
   fmt::print(
-      "cosim_executor: {} aborts in {} jobs (hit: {}); {} segments dropped by them (no seg_done)\n",
-      bench.aborts, bench.abort_jobs, hit, bench.dropped);
+      "cosim_executor: {} ARC segments; {} aborts in {} jobs (hit: {}); {} segments dropped by "
+      "them (no seg_done)\n",
+      arcs, bench.aborts, bench.abort_jobs, hit, bench.dropped);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

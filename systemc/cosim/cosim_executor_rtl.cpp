@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "Vsegment_executor.h"
+#include "arc_stimulus.h"
 #include "executor_job.h"
 #include "fpgacnc/simboard/edges.h"
 #include "verilated.h"
@@ -40,7 +41,10 @@ void put_bits(W& w, int lsb, unsigned __int128 v, int width) {
 // The PROFILE inputs as segment_prep makes them (prepare_profile, checked against the Verilated
 // segment_prep by cosim_blocks).
 void put_profile(Vsegment_executor& m, const ExecSegment& s) {
-  m.s_axis_kind = s.prof ? 1 : 0;
+  m.s_axis_kind = s.prof ? 1 : s.arc ? 2 : 0;
+  if (s.arc)
+    put_arc_load(s.arc_frame,
+                 [&m](int lsb, unsigned __int128 v, int w) { put_bits(m.s_axis_arc, lsb, v, w); });
   if (!s.prof) return;
   const ProfilePrepared pp = prepare_profile(s.profile, s.steps);
   m.s_axis_prof_u1 = pp.u1;

@@ -375,12 +375,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     running_ = s.total != 0;
     idle_window_ = -1;
     bool dropped = s.total != 0 ? run >= cut : end >= cut;  // HOLD / SETUP, or in ZERO
-    if (s.arc && !dropped) {
+    if (s.arc && !dropped) {  // an arc the abort stops runs until edge `cut` (dropped there)
       const Cycle ticks = run_arc(s, run, cut);
-      if (ticks < 0)
-        dropped = true;
-      else
-        s.total = static_cast<uint64_t>(ticks);
+      s.total = static_cast<uint64_t>(ticks < 0 ? cut - run : ticks);
       idle_window_ = arc_window_;
     }
     if (s.total != 0 && !dropped) {
