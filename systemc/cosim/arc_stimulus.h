@@ -1,7 +1,7 @@
 // ARC stimulus shared by the co-simulations (SystemC-free: the RTL sides include it too):
 // random_arc_frame, the random ARC frame within the host's rules (cosim's v2 sessions,
-// cosim_executor's ARC segments), and put_arc_load, segment_prep's m_axis_arc / the executor's
-// s_axis_arc (arc_dda's load inputs, LSB first) from a frame and arc::derive.
+// cosim_executor's ARC segments, arc_twin_rtl's arcs), and put_arc_load, segment_prep's m_axis_arc
+// / the executor's s_axis_arc (arc_dda's load inputs, LSB first) from a frame and arc::derive.
 #pragma once
 
 #include <algorithm>
@@ -15,6 +15,7 @@ namespace fpgacnc::twins {
 
 struct ArcStimulus {
   double r_min = 2, r_span = 28;          // radius r_min .. r_min + r_span steps
+  double r_log_max = 0;                   // > 0: radius log-uniform in 1 .. r_log_max instead
   uint32_t cps_lo = 1201, cps_hi = 2400;  // tangential cruise, clocks per step
   uint32_t bad_in = 10;                   // one in bad_in has C_TOTAL + 1 (0: none)
 };
@@ -33,7 +34,8 @@ inline arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus& o = {}
   };
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   for (;;) {
-    const double r = o.r_min + o.r_span * u01(g);
+    const double u = u01(g);
+    const double r = o.r_log_max > 0 ? std::exp(u * std::log(o.r_log_max)) : o.r_min + o.r_span * u;
     const double cx = u01(g) - 0.5, cy = u01(g) - 0.5, a0 = u01(g) * 2 * M_PI;
     const bool full = u01(g) < 0.2;
     arc::Frame f;
