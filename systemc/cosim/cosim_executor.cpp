@@ -297,7 +297,7 @@ SC_MODULE(ExecBench) {
   std::vector<Job>* jobs = nullptr;
   std::vector<uint64_t> seeds;         // per job (the aborts' random stream)
   std::array<uint64_t, kHits> hits{};  // aborts by what they hit
-  uint64_t aborts = 0, dropped = 0, abort_jobs = 0;
+  uint64_t aborts = 0, dropped = 0, abort_jobs = 0, arc_errs = 0;
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
   std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
@@ -406,6 +406,8 @@ SC_MODULE(ExecBench) {
       r.seg_start = exec.seg_start_cycles;
       r.seg_done = seg_done;
       r.seg_done_v2 = seg_done_v2;
+      r.arc_err = exec.arc_err_cycles;
+      arc_errs += exec.arc_err_cycles.size();
       stats[0] += exec.zero_gap;
       stats[1] += exec.fast_reversals;
       stats[2] += exec.zero_len_on_last_tick;
@@ -555,9 +557,10 @@ int sc_main(int argc, char* argv[]) {
     hit += fmt::format("{}{} {}", h ? ", " : "", bench.hits[static_cast<size_t>(h)],
                        kHitNames[static_cast<size_t>(h)]);
   fmt::print(
-      "cosim_executor: {} ARC segments; {} aborts in {} jobs (hit: {}); {} segments dropped by "
+      "cosim_executor: {} ARC segments ({} arc errors); {} aborts in {} jobs (hit: {}); {} "
+      "segments dropped by "
       "them (no seg_done)\n",
-      arcs, bench.aborts, bench.abort_jobs, hit, bench.dropped);
+      arcs, bench.arc_errs, bench.aborts, bench.abort_jobs, hit, bench.dropped);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

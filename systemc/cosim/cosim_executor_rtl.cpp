@@ -136,6 +136,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (m->seg_start) r.seg_start.push_back(c);
     if (m->seg_done) r.seg_done.push_back(c);
     if (m->seg_done && m->seg_done_v2) r.seg_done_v2.push_back(c);
+    if (m->arc_err) r.arc_err.push_back(c + 1);  // (strobe after edge c, latched on c + 1)
     if (next >= j.offers.size() && next_abort >= j.aborts.size() && m->idle && !m->step) {
       if (++quiet > 2) break;
     } else {
