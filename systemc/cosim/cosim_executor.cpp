@@ -502,6 +502,27 @@ int sc_main(int argc, char* argv[]) {
     const std::string d =
         i < bench.results.size() ? compare_runs(rtl, bench.results[i]) : "not run";
     edges += rtl.edges.size();
+    {  // DIR setup at the RTL's pins: a STEP rise less than max(setup, 1) after its axis's DIR edge
+      std::array<int64_t, kAxes> last_dir;
+      last_dir.fill(INT64_MIN / 2);
+      uint64_t n = 0;
+      Cycle first = -1;
+      for (const auto& e : rtl.edges) {
+        if (e.signal >= 4 && e.signal < 8) last_dir[e.signal - 4] = static_cast<int64_t>(e.cycle);
+        if (e.signal < 4 && e.value == 1 &&
+            static_cast<int64_t>(e.cycle) - last_dir[e.signal] <
+                std::max<int64_t>(jobs[i].timing[e.signal].setup, 1)) {
+          if (n++ == 0) first = static_cast<Cycle>(e.cycle);
+        }
+      }
+      const bool has_arc = std::any_of(jobs[i].offers.begin(), jobs[i].offers.end(),
+                                       [](const ExecOffer& o) { return o.seg.arc; });
+      if (n != 0 && !has_arc)
+        fmt::print(
+            "cosim_executor seed {}: {} STEP rises within DIR setup of a DIR edge{} (first "
+            "on cycle {})\n",
+            seed + i, n, jobs[i].aborts.empty() ? "" : " (a job with aborts)", first);
+    }
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       const auto& t = bench.results[i];
       size_t k = 0;
