@@ -195,9 +195,12 @@ Job random_job(uint64_t seed, size_t segments) {
     }
     if (kind > 2 && pick(ga, 0, 99) < g_arc_pct) {  // ARC, as segment_prep prepares it
       ArcStimulus o;
-      o.r_span = 10;
-      o.cps_lo = std::max<uint32_t>(minp, 16);
-      o.cps_hi = 2 * o.cps_lo;
+      // cruise at 2..3 minimum periods per step: the walk's moves are not evenly spaced (a
+      // faster X or Y step is a STEP low-time violation, outside the twins' contract: see
+      // docs/systemc.md Findings)
+      o.r_span = 8;
+      o.cps_lo = std::max<uint32_t>(2 * minp, 16);
+      o.cps_hi = std::max<uint32_t>(3 * minp, 24);
       s.arc = true;
       s.arc_frame = random_arc_frame(ga, o);
       s.code = s.arc_frame.g.ccw ? 3 : 2;
