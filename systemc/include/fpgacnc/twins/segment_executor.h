@@ -40,7 +40,8 @@
 //   last tick) or run edge R is >= X is dropped at X: no seg_start (R >= X), no seg_done, laser low
 //   from edge X, the executor idle after X. No segment is accepted on an abort edge, and from IDLE
 //   only from edge last + max(largest DIR setup, 1) + 1 (settle_reg). An offer held through the
-//   abort is accepted then (the block bench); segment_prep drops it instead (the board).
+//   abort is accepted then (the block bench); in cnc_core segment_prep drops it (the prep twin
+//   and the virtual board do not model the abort yet).
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
