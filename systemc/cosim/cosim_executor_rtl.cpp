@@ -137,6 +137,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (m->seg_done) r.seg_done.push_back(c);
     if (m->seg_done && m->seg_done_v2) r.seg_done_v2.push_back(c);
     if (m->arc_err) r.arc_err.push_back(c + 1);  // (strobe after edge c, latched on c + 1)
+    if (m->violation) ++r.violations;            // STEP timing (or arc DIR setup) violation strobes
     if (next >= j.offers.size() && next_abort >= j.aborts.size() && m->idle && !m->step) {
       if (++quiet > 2) break;
     } else {
@@ -144,7 +145,6 @@ RunResult run_executor_rtl(const ExecJob& j) {
     }
   }
   for (int a = 0; a < kAxes; ++a) r.position[a] = static_cast<int32_t>(m->position[a]);
-  r.violations = 0;
   r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
   m->final();
   return r;
