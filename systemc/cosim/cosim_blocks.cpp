@@ -14,6 +14,7 @@
 #include <random>
 #include <systemc>
 
+#include "arc_stimulus.h"
 #include "cosim_args.h"
 
 #include "blocks_job.h"
@@ -53,33 +54,10 @@ Bits entry_bits(const FifoEntry& e) {
   return b;
 }
 
-// segment_prep's m_axis_arc for an ARC segment (rtl/segment_prep.v: arc_dda's load inputs, LSB
-// first), from the twin's frame and arc::derive.
+// segment_prep's m_axis_arc for an ARC segment, from the twin's frame (arc_stimulus.h).
 Bits arc_bits(const arc::Frame& f) {
-  const arc::Derived d = arc::derive(f);
   Bits b(kArcBits);
-  const auto u = [](int64_t v, int w) {
-    return static_cast<unsigned __int128>(static_cast<uint64_t>(v) & ((~0ull) >> (64 - w)));
-  };
-  b.put(0, f.g.ccw, 1);
-  b.put(1, u(f.g.i, 24), 24);
-  b.put(25, u(f.g.j, 24), 24);
-  b.put(49, u(f.g.dx, 24), 24);
-  b.put(73, u(f.g.dy, 24), 24);
-  b.put(97, u(f.dz, 32), 32);
-  b.put(129, f.n_ramp, 24);
-  b.put(153, u(d.dt_q, 48), 48);
-  b.put(201, u(d.dt_r, 24), 24);
-  b.put(225, f.c_total, 48);
-  b.put(273, f.v_entry, 64);
-  b.put(337, f.v_cruise, 64);
-  b.put(401, f.v_exit, 64);
-  b.put(465, f.a, 48);
-  b.put(513, f.d, 48);
-  b.put(561, d.vz_entry, 96);
-  b.put(657, d.vz_cruise, 96);
-  b.put(753, d.vz_exit, 96);
-  b.put(849, d.az, 96);
+  put_arc_load(f, [&b](int lsb, unsigned __int128 v, int w) { b.put(lsb, v, w); });
   return b;
 }
 

@@ -7,6 +7,11 @@
 // step timing per job. The RTL is the Verilated C++ model `vexec` (tb/core.cmake), clocked by the
 // harness; the twins run in SystemC. Each job compares STEP/DIR/LASER edges, seg_start,
 // seg_done, seg_done_v2 and positions; the first difference is printed with its cycle.
+// Aborts (e-stop, `--abort-pct` of the jobs, `--aborts` each): the bench runs the twins first and
+// aims each abort, in turn, at a random clock of a chosen phase of a segment that the twins
+// (with the earlier aborts) show: the run of a LINE, a LINE_PROFILE, a dwell, the HOLD and SETUP
+// waits before a run, a zero-length entry in ZERO, or anywhere; 1..N clocks long (N random per
+// abort: 1, 8 or 300), the offer waiting during it held. Later segments run after it.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -16,6 +21,7 @@
 #include <random>
 #include <systemc>
 
+#include "arc_stimulus.h"
 #include "cosim_args.h"
 
 #include "executor_job.h"
@@ -41,6 +47,41 @@ using Job = ExecJob;
 // Share of the segments that are profiled (LINE_PROFILE as segment_prep prepares them), percent.
 uint64_t g_profile_pct = 40;
 uint64_t g_max_ticks = 40'000;  // J bound: max(this, 6 * n_dom * cruise period) (RTL run time)
+bool g_arc_dwell = true;        // a dwell of 1..8 ticks after each arc (see random_job)
+uint64_t g_arc_pct = 5;         // share of the moving segments that are ARCs, percent
+uint64_t g_abort_pct = 50;      // share of the jobs with aborts, percent
+uint64_t g_aborts = 4;          // aborts per such job
+
+// What an abort hit (the twin's trace of the final run), for the summary.
+enum AbortHit {
+  kHitLine,
+  kHitProfile,
+  kHitDwell,
+  kHitHold,
+  kHitSetup,
+  kHitZero,
+  kHitFastDir,
+  kHitArc,
+  kHitIdle,
+  kHits
+};
+constexpr std::array<const char*, kHits> kHitNames{
+    "LINE", "LINE_PROFILE",           "dwell", "HOLD", "SETUP",
+    "ZERO", "fast DIR write pending", "ARC",   "idle"};
+AbortHit classify(const std::vector<SegmentExecutorTwin::SegTrace>& tr, Cycle x) {
+  for (const auto& t : tr) {
+    if (!(t.accept < x && x <= t.end) && t.cut != x) continue;
+    if (t.kind == 'Z') return kHitZero;
+    if (t.dir_edge >= 0 && x <= t.dir_edge) return kHitHold;
+    if (x <= t.run) return kHitSetup;
+    if (x <= t.fast_dir) return kHitFastDir;
+    return t.kind == 'P'   ? kHitProfile
+           : t.kind == 'D' ? kHitDwell
+           : t.kind == 'A' ? kHitArc
+                           : kHitLine;
+  }
+  return kHitIdle;
+}
 
 uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
   return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
@@ -132,7 +173,9 @@ Job random_job(uint64_t seed, size_t segments) {
   uint32_t fast_p = 0;  // a period that makes every reversal fast
   for (const auto& t : j.timing)
     fast_p = std::max(fast_p, std::max(t.hold, 1u) + std::max(t.setup, 1u));
-  std::array<bool, kAxes> track{};  // DIR at the start of the next segment (reset: low)
+  std::array<bool, kAxes> track{};    // DIR at the start of the next segment (reset: low)
+  std::array<bool, kAxes> unknown{};  // DIR unknown after an arc: no dir_fast (prep's unk_reg)
+  std::mt19937_64 ga(seed * 0x2545F4914F6CDD1Dull + 0xA4C);  // the arcs' own stream
   uint64_t prev_t = 0;
   for (size_t i = 0; i < segments; ++i) {
     ExecSegment s{};
@@ -151,6 +194,52 @@ Job random_job(uint64_t seed, size_t segments) {
       s.steps = {0, 0, 0, 0};
       n = 0;
     }
+    if (kind > 2 && pick(ga, 0, 99) < g_arc_pct) {  // ARC, as segment_prep prepares it
+      ArcStimulus o;
+      // cruise at 2..3 minimum periods per step and at least 200 clocks: the walk's moves are
+      // not evenly spaced and take a few clocks each (a faster X or Y step is a STEP low-time
+      // violation, outside the twins' contract: see docs/systemc.md Findings)
+      o.r_span = 8;
+      o.cps_lo = std::max<uint32_t>(2 * minp, 200);
+      o.cps_hi = std::max<uint32_t>(3 * minp, 300);
+      s.arc = true;
+      s.arc_frame = random_arc_frame(ga, o);
+      s.code = s.arc_frame.g.ccw ? 3 : 2;
+      s.v2 = true;
+      s.steps = {1, 1, 0, 0};
+      s.dir = {};
+      const std::array<bool, 2> d0 = arc::start_dirs(s.arc_frame.g);
+      s.dir[0] = d0[0];
+      s.dir[1] = d0[1];
+      const int32_t dz = s.arc_frame.dz;
+      s.steps[2] = dz < 0 ? 0u - static_cast<uint32_t>(dz) : static_cast<uint32_t>(dz);
+      s.dir[2] = dz >= 0;
+      s.total = 0;
+      s.period = 0;
+      s.tmn = {0, 0, 0, 0};
+      track[0] = d0[0];
+      track[1] = d0[1];
+      if (dz != 0) track[2] = dz >= 0;
+      unknown[0] = unknown[1] = true;
+      s.dir_fast = false;
+      j.offers.push_back(ExecOffer{s, pick(g, 0, 9) == 0 ? pick(g, 0, 400) : pick(g, 0, 2)});
+      // A dwell of 1..8 ticks after each arc: the arc's last STEP rises one clock after its last
+      // tick, so a next segment at the minimum period would step one clock early (an RTL STEP
+      // timing violation: docs/systemc.md Findings, outside the twins' contract).
+      if (!g_arc_dwell) {
+        prev_t = 0;
+        continue;
+      }
+      ExecSegment d{};
+      d.v2 = true;
+      d.dir = {true, true, true, true};
+      d.total = pick(ga, 1, 8);
+      d.tmn = {d.total, d.total, d.total, d.total};
+      d.dir_fast = true;
+      j.offers.push_back(ExecOffer{d, 0});
+      prev_t = d.total;
+      continue;
+    }
     if (kind > 2 && pick(g, 0, 99) < g_profile_pct) {  // profiled: n_a on 1..4 axes, n_a = 1 too
       const uint32_t pbig = pick(g, 0, 15) == 0 ? 3000 : pick(g, 0, 3) == 0 ? 3 : 60;
       const uint32_t axes = pick(g, 1, kAxes);
@@ -168,7 +257,7 @@ Job random_job(uint64_t seed, size_t segments) {
       s.period = 0;
       s.tmn = {0, 0, 0, 0};
       for (int a = 0; a < kAxes; ++a)
-        if (s.steps[a] != 0) track[a] = s.dir[a];
+        if (s.steps[a] != 0) track[a] = s.dir[a], unknown[a] = false;
       s.dir_fast = false;  // a reversing axis takes HOLD/SETUP
       const uint32_t when = pick(g, 0, 9);
       int64_t gap = pick(g, 0, 2);
@@ -192,12 +281,15 @@ Job random_job(uint64_t seed, size_t segments) {
     }
     for (int a = 0; a < kAxes; ++a) s.tmn[a] = s.total - s.steps[a];
     std::array<bool, kAxes> rev{};
+    bool unk = false;
     for (int a = 0; a < kAxes; ++a) {
       if (s.steps[a] == 0) continue;
       rev[a] = track[a] != s.dir[a];
       track[a] = s.dir[a];
+      unk = unk || unknown[a];
+      unknown[a] = false;
     }
-    s.dir_fast = n == 0 || dir_fast(rev, j.timing, s.total / n);
+    s.dir_fast = n == 0 || (!unk && dir_fast(rev, j.timing, s.total / n));
     const uint32_t when = pick(g, 0, 9);
     int64_t gap = pick(g, 0, 2);
     if (when == 0) gap = pick(g, 0, 400);
@@ -219,7 +311,11 @@ SC_MODULE(ExecBench) {
   tlm_utils::simple_initiator_socket<ExecBench> seg;
   tlm_utils::simple_target_socket<ExecBench> done;
   tlm_utils::simple_initiator_socket<ExecBench> status;  // (segment_prep's idle query; unused)
+  tlm_utils::simple_initiator_socket<ExecBench> abort;
   std::vector<Job>* jobs = nullptr;
+  std::vector<uint64_t> seeds;         // per job (the aborts' random stream)
+  std::array<uint64_t, kHits> hits{};  // aborts by what they hit
+  uint64_t aborts = 0, dropped = 0, abort_jobs = 0, arc_errs = 0;
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
   std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
@@ -227,9 +323,14 @@ SC_MODULE(ExecBench) {
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
-      : exec("segment_executor", clk, p, pins), seg("seg"), done("done"), status("status") {
+      : exec("segment_executor", clk, p, pins),
+        seg("seg"),
+        done("done"),
+        status("status"),
+        abort("abort") {
     seg.bind(exec.segments);
     status.bind(exec.status);
+    abort.bind(exec.abort);
     exec.done.bind(done);
     done.register_b_transport(this, &ExecBench::on_done);
     make_axis_twins(exec, clk, p, pins, dda, pulse);
@@ -240,30 +341,99 @@ SC_MODULE(ExecBench) {
     if (payload<SegDone>(g).v2) seg_done_v2.push_back(clk.at(d));
     g.set_response_status(tlm::TLM_OK_RESPONSE);
   }
+  // One run of the twins on job j (from cycle 0 of the current base).
+  void run_twins(const Job& j) {
+    p.timing = j.timing;
+    pins.clear();
+    exec.reset();
+    for (auto& x : pulse) x->reset();
+    seg_done.clear();
+    seg_done_v2.clear();
+    for (const ExecAbort& a : j.aborts) {
+      AbortSpan s{a.first, a.last};
+      transport(abort, gp, clk, s, a.first);
+    }
+    Cycle accept = 0;
+    for (size_t i = 0; i < j.offers.size(); ++i) {
+      const ExecSegment& e = j.offers[i].seg;
+      Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
+      s.prof = e.prof;
+      s.profile = e.profile;
+      s.arc = e.arc;
+      s.arc_frame = e.arc_frame;
+      accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
+    }
+  }
+  // Aims the job's aborts one by one (each after the previous one's settle time) with the twins'
+  // trace of the run with the aborts so far.
+  void aim_aborts(Job & j, uint64_t seed) {
+    std::mt19937_64 g(seed * 0x9E3779B97F4A7C15ull + 0xAB0127);
+    if (pick(g, 0, 99) >= g_abort_pct) return;
+    ++abort_jobs;
+    Cycle after = 0;
+    for (uint64_t k = 0; k < g_aborts; ++k) {
+      run_twins(j);
+      const auto& tr = exec.trace;
+      // a phase to hit: 0 LINE run, 1 PROFILE run, 2 dwell, 3 HOLD, 4 SETUP, 5 ZERO, 6 anywhere,
+      // 7 a zero-gap reversal's DIR write pending, 8 ARC run
+      const uint32_t want = pick(g, 0, 8);
+      std::vector<std::pair<Cycle, Cycle>> win;  // candidate windows (lo, hi]: abort edge in it
+      for (const auto& t : tr) {
+        if (t.accept <= after || t.cut >= 0) continue;
+        const char kinds[] = {'L', 'P', 'D'};
+        if (want < 3 && t.kind == kinds[want] && t.end > t.run) win.emplace_back(t.run, t.end);
+        if (want == 3 && t.dir_edge >= 0) win.emplace_back(t.accept, t.dir_edge);
+        if (want == 4 && t.dir_edge >= 0 && t.run > t.dir_edge) win.emplace_back(t.dir_edge, t.run);
+        if (want == 5 && t.kind == 'Z' && t.end > t.accept) win.emplace_back(t.accept, t.end);
+        if (want == 6) win.emplace_back(t.accept - 5, t.end + 5);
+        if (want == 7 && t.fast_dir > t.accept) win.emplace_back(t.accept, t.fast_dir);
+        if (want == 8 && t.kind == 'A' && t.end > t.run) win.emplace_back(t.run, t.end);
+      }
+      if (win.empty())  // none of that phase left: any later segment
+        for (const auto& t : tr)
+          if (t.accept > after && t.cut < 0 && t.end > t.accept) win.emplace_back(t.accept, t.end);
+      if (win.empty()) break;
+      // spread the aborts over the job: one of the first 1/(aborts left) of the candidates
+      const size_t band = std::max<size_t>(1, win.size() / (g_aborts - k));
+      const auto w = win[pick(g, 0, static_cast<uint32_t>(band - 1))];
+      const auto span = static_cast<uint64_t>(w.second - w.first - 1);
+      const Cycle first = std::max(
+          after + 1,
+          w.first + 1 + static_cast<Cycle>(std::uniform_int_distribution<uint64_t>(0, span)(g)));
+      const uint32_t n = std::array<uint32_t, 3>{1, 8, 300}[pick(g, 0, 2)];
+      const Cycle last = first + pick(g, 0, n - 1);
+      j.aborts.push_back(ExecAbort{first, last});
+      after = last + 1;
+    }
+  }
   void run() {
-    for (const Job& j : *jobs) {
+    for (size_t ji = 0; ji < jobs->size(); ++ji) {
+      Job& j = (*jobs)[ji];
       wait(sc_core::sc_time(1, sc_core::SC_US));
       const uint64_t per = clk.period_ps(), now = sc_core::sc_time_stamp().value();
       clk.set_base(sc_core::sc_time::from_value((now + per - 1) / per * per));
-      p.timing = j.timing;
-      pins.clear();
-      exec.reset();
-      for (auto& x : pulse) x->reset();
-      seg_done.clear();
-      seg_done_v2.clear();
-      Cycle accept = 0;
-      for (size_t i = 0; i < j.offers.size(); ++i) {
-        const ExecSegment& e = j.offers[i].seg;
-        Segment s{e.code, e.dir, e.steps, e.tmn, e.total, e.period, 0, e.power, e.v2, e.dir_fast};
-        s.prof = e.prof;
-        s.profile = e.profile;
-        accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
+      if (g_aborts != 0 && g_abort_pct != 0) aim_aborts(j, seeds[ji]);
+      run_twins(j);
+      for (const ExecAbort& a : j.aborts) {
+        ++aborts;
+        ++hits[classify(exec.trace, a.first)];
       }
+      dropped += exec.aborted;
       RunResult r;
       r.edges = pins.take_sorted();
       r.seg_start = exec.seg_start_cycles;
       r.seg_done = seg_done;
       r.seg_done_v2 = seg_done_v2;
+      r.arc_err = exec.arc_err_cycles;
+      {  // `violation` strobes: step_pulse's (on the request edge) and the arcs' DIR ones, per
+         // clock
+        std::vector<Cycle> v = exec.arc_violation_cycles;
+        for (const auto& x : pulse)
+          v.insert(v.end(), x->violation_strobes.begin(), x->violation_strobes.end());
+        std::sort(v.begin(), v.end());
+        r.violations = static_cast<uint64_t>(std::unique(v.begin(), v.end()) - v.begin());
+      }
+      arc_errs += exec.arc_err_cycles.size();
       stats[0] += exec.zero_gap;
       stats[1] += exec.fast_reversals;
       stats[2] += exec.zero_len_on_last_tick;
@@ -300,16 +470,24 @@ std::string where(const Job& j, const RunResult& rtl, const RunResult& twin) {
   size_t ran = 0, idx = 0;
   for (; idx < j.offers.size(); ++idx) {
     const auto& o = j.offers[idx].seg;
-    if (o.prof || o.total != 0) ++ran;
+    if (o.prof || o.arc || o.total != 0) ++ran;
     if (ran == seg) break;
   }
   const int sig = e.signal;
   const std::string axis = sig < 4   ? fmt::format("STEP axis {}", sig)
                            : sig < 8 ? fmt::format("DIR axis {}", sig - 4)
                                      : std::string("LASER");
-  return fmt::format(" [segment #{} ({}), {}, clock {}]", seg == 0 ? 0 : idx,
-                     idx < j.offers.size() && j.offers[idx].seg.prof ? "PROFILE" : "LINE/DWELL",
-                     axis, c);
+  std::string ab;
+  for (size_t a = 0; a < j.aborts.size(); ++a)
+    if (j.aborts[a].first <= c)
+      ab = fmt::format("; abort #{} on edges {}..{} before it", a, j.aborts[a].first,
+                       j.aborts[a].last);
+  return fmt::format(" [segment #{} ({}), {}, clock {}{}]", seg == 0 ? 0 : idx,
+                     idx >= j.offers.size()   ? "?"
+                     : j.offers[idx].seg.prof ? "PROFILE"
+                     : j.offers[idx].seg.arc  ? "ARC"
+                                              : "LINE/DWELL",
+                     axis, c, ab);
 }
 
 }  // namespace
@@ -321,22 +499,27 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);
   opts.size("--segments", &segments);
   opts.u64("--profile-pct", &g_profile_pct).u64("--max-ticks", &g_max_ticks);
+  opts.flag("--arc-dwell", &g_arc_dwell);
+  opts.u64("--abort-pct", &g_abort_pct).u64("--aborts", &g_aborts).u64("--arc-pct", &g_arc_pct);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
   std::vector<Job> jobs;
   for (uint64_t s = 0; s < seeds; ++s) jobs.push_back(random_job(seed + s, segments));
   ExecBench bench("bench");
   bench.jobs = &jobs;
+  for (uint64_t s = 0; s < seeds; ++s) bench.seeds.push_back(seed + s);
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   sc_core::sc_start();
   const double twin_s = std::chrono::duration<double>(clock::now() - t0).count();
   double rtl_s = 0;
   int bad = 0;
-  uint64_t edges = 0, clocks = 0, profiled = 0, tiny_a = 0;
+  uint64_t edges = 0, clocks = 0, profiled = 0, tiny_a = 0, arcs = 0, offers = 0;
   for (const Job& j : jobs)
     for (const auto& o : j.offers) {
       profiled += o.seg.prof ? 1 : 0;
+      arcs += o.seg.arc ? 1 : 0;
+      ++offers;
       tiny_a += o.seg.prof && o.seg.profile.accel <= 2000 ? 1 : 0;
     }
   for (size_t i = 0; i < jobs.size(); ++i) {
@@ -347,6 +530,27 @@ int sc_main(int argc, char* argv[]) {
     const std::string d =
         i < bench.results.size() ? compare_runs(rtl, bench.results[i]) : "not run";
     edges += rtl.edges.size();
+    {  // DIR setup at the RTL's pins: a STEP rise less than max(setup, 1) after its axis's DIR edge
+      std::array<int64_t, kAxes> last_dir;
+      last_dir.fill(INT64_MIN / 2);
+      uint64_t n = 0;
+      Cycle first = -1;
+      for (const auto& e : rtl.edges) {
+        if (e.signal >= 4 && e.signal < 8) last_dir[e.signal - 4] = static_cast<int64_t>(e.cycle);
+        if (e.signal < 4 && e.value == 1 &&
+            static_cast<int64_t>(e.cycle) - last_dir[e.signal] <
+                std::max<int64_t>(jobs[i].timing[e.signal].setup, 1)) {
+          if (n++ == 0) first = static_cast<Cycle>(e.cycle);
+        }
+      }
+      const bool has_arc = std::any_of(jobs[i].offers.begin(), jobs[i].offers.end(),
+                                       [](const ExecOffer& o) { return o.seg.arc; });
+      if (n != 0 && !has_arc)
+        fmt::print(
+            "cosim_executor seed {}: {} STEP rises within DIR setup of a DIR edge{} (first "
+            "on cycle {})\n",
+            seed + i, n, jobs[i].aborts.empty() ? "" : " (a job with aborts)", first);
+    }
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       const auto& t = bench.results[i];
       size_t k = 0;
@@ -367,10 +571,15 @@ int sc_main(int argc, char* argv[]) {
           break;
         }
       const auto& j = jobs[i];
-      for (size_t x = 0; x < j.offers.size() && x < 4; ++x) {
+      const size_t from = std::getenv("COSIM_DEBUG_OFFER")
+                              ? std::strtoull(std::getenv("COSIM_DEBUG_OFFER"), nullptr, 10)
+                              : 0;  // first offer printed
+      for (size_t x = from; x < j.offers.size() && x < from + 4; ++x) {
         const auto& o = j.offers[x].seg;
-        fmt::print("  offer {}: prof {} steps {} {} {} {} total {} gap {}", x, o.prof, o.steps[0],
-                   o.steps[1], o.steps[2], o.steps[3], o.total, j.offers[x].gap);
+        fmt::print(
+            "  offer {}: prof {} arc {} steps {} {} {} {} dir {}{}{}{} fast {} total {} gap {}", x,
+            o.prof, o.arc, o.steps[0], o.steps[1], o.steps[2], o.steps[3], +o.dir[0], +o.dir[1],
+            +o.dir[2], +o.dir[3], o.dir_fast, o.total, j.offers[x].gap);
         if (o.prof)
           fmt::print(" ve {} vc {} vx {} A {} D {} J {}", o.profile.v_entry, o.profile.v_cruise,
                      o.profile.v_exit, o.profile.accel, o.profile.decel_at,
@@ -383,20 +592,34 @@ int sc_main(int argc, char* argv[]) {
     }
     if (!d.empty()) {
       ++bad;
-      fmt::print("FAIL segment_executor seed {}: first difference: {}{}\n", seed + i, d,
-                 i < bench.results.size() ? where(jobs[i], rtl, bench.results[i]) : "");
+      fmt::print("FAIL segment_executor seed {}: first difference: {}{}{}\n", seed + i, d,
+                 i < bench.results.size() ? where(jobs[i], rtl, bench.results[i]) : "",
+                 rtl.violations == 0
+                     ? ""
+                     : fmt::format(" (the RTL strobed `violation` {} times: a STEP timing "
+                                   "violation is outside the twins' contract)",
+                                   rtl.violations));
     }
   }
   fmt::print(
       "cosim_executor: {} jobs, {} segments ({} profiled; {} started with zero gap, {} of them "
       "reversing with dir_fast; {} zero-length and {} HOLD-path segments taken on a last tick), "
       "{} edges over {} clocks: {}\n",
-      jobs.size(), jobs.size() * segments, profiled, bench.stats[0], bench.stats[1], bench.stats[2],
-      bench.stats[3], edges, clocks, bad ? "DIFFER" : "all identical");
+      jobs.size(), offers, profiled, bench.stats[0], bench.stats[1], bench.stats[2], bench.stats[3],
+      edges, clocks, bad ? "DIFFER" : "all identical");
   fmt::print(
       "cosim_executor: profiled {}: {} zero-gap joins, {} with a reversing axis (HOLD/SETUP), {} "
       "never at cruise (triangles), {} with A <= 2000\n",
       profiled, bench.pstats[0], bench.pstats[1], bench.pstats[2], tiny_a);
+  std::string hit;
+  for (int h = 0; h < kHits; ++h)
+    hit += fmt::format("{}{} {}", h ? ", " : "", bench.hits[static_cast<size_t>(h)],
+                       kHitNames[static_cast<size_t>(h)]);
+  fmt::print(
+      "cosim_executor: {} ARC segments ({} arc errors); {} aborts in {} jobs (hit: {}); {} "
+      "segments dropped by "
+      "them (no seg_done)\n",
+      arcs, bench.arc_errs, bench.aborts, bench.abort_jobs, hit, bench.dropped);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

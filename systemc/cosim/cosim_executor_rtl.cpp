@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "Vsegment_executor.h"
+#include "arc_stimulus.h"
 #include "executor_job.h"
 #include "fpgacnc/simboard/edges.h"
 #include "verilated.h"
@@ -40,7 +41,10 @@ void put_bits(W& w, int lsb, unsigned __int128 v, int width) {
 // The PROFILE inputs as segment_prep makes them (prepare_profile, checked against the Verilated
 // segment_prep by cosim_blocks).
 void put_profile(Vsegment_executor& m, const ExecSegment& s) {
-  m.s_axis_kind = s.prof ? 1 : 0;
+  m.s_axis_kind = s.prof ? 1 : s.arc ? 2 : 0;
+  if (s.arc)
+    put_arc_load(s.arc_frame,
+                 [&m](int lsb, unsigned __int128 v, int w) { put_bits(m.s_axis_arc, lsb, v, w); });
   if (!s.prof) return;
   const ProfilePrepared pp = prepare_profile(s.profile, s.steps);
   m.s_axis_prof_u1 = pp.u1;
@@ -71,6 +75,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
   m->cfg_dir_setup = pack16(j.timing, &AxisTiming::setup);
   m->cfg_dir_hold = pack16(j.timing, &AxisTiming::hold);
   m->s_axis_tvalid = 0;
+  m->__SYM__abort = 0;
   m->rst = 1;
   m->clk = 0;
   m->eval();
@@ -82,6 +87,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
   Cycle c = 0, valid_from = j.offers.empty() ? -1 : j.offers[0].gap;
   size_t next = 0, prof_set = SIZE_MAX;  // offer whose profile inputs are on the ports
   Cycle quiet = 0;
+  size_t next_abort = 0;
   while (true) {
     // Inputs for edge c + 1: the next offer is valid once edge valid_from has passed.
     const bool offering = next < j.offers.size() && c >= valid_from;
@@ -106,6 +112,12 @@ RunResult run_executor_rtl(const ExecJob& j) {
       }
     }
     m->s_axis_tvalid = offering ? 1 : 0;
+    while (next_abort < j.aborts.size() && j.aborts[next_abort].last < c + 1) ++next_abort;
+    const bool abort = next_abort < j.aborts.size() && j.aborts[next_abort].first <= c + 1;
+    if (abort || m->__SYM__abort) {  // (Verilator's name of the port `abort`, a C++ word)
+      m->__SYM__abort = abort ? 1 : 0;
+      m->eval();  // s_axis_tready and laser depend on it combinationally
+    }
     const bool accepted = offering && m->s_axis_tready;
     ++c;
     clock_once(*m);
@@ -124,14 +136,15 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (m->seg_start) r.seg_start.push_back(c);
     if (m->seg_done) r.seg_done.push_back(c);
     if (m->seg_done && m->seg_done_v2) r.seg_done_v2.push_back(c);
-    if (next >= j.offers.size() && m->idle && !m->step) {
+    if (m->arc_err) r.arc_err.push_back(c + 1);  // (strobe after edge c, latched on c + 1)
+    if (m->violation) ++r.violations;            // STEP timing (or arc DIR setup) violation strobes
+    if (next >= j.offers.size() && next_abort >= j.aborts.size() && m->idle && !m->step) {
       if (++quiet > 2) break;
     } else {
       quiet = 0;
     }
   }
   for (int a = 0; a < kAxes; ++a) r.position[a] = static_cast<int32_t>(m->position[a]);
-  r.violations = 0;
   r.end_cycle = r.edges.empty() ? 0 : static_cast<Cycle>(r.edges.back().cycle);
   m->final();
   return r;

@@ -22,6 +22,7 @@
 #include <string>
 #include <systemc>
 
+#include "arc_stimulus.h"
 #include "cosim_args.h"
 
 #include "Vcnc_core_sc.h"
@@ -259,59 +260,14 @@ uint64_t g_v2_profile_frames = 0;  // how many were generated
 bool g_v2_arcs = true;             // ARC frames in the random v2 sessions
 uint64_t g_v2_arc_frames = 0, g_v2_bad_arcs = 0;
 
-// An ARC frame within the host's rules: R = 2..30 steps (full circles too, both directions, a
-// helix of up to L/2 Z steps), N_RAMP and C_TOTAL from arc::plan, tangential cruise at 1 201..2 400
-// clocks per step (1/8 step per clock and the STEP timing of random_timing hold; tiny radii may
-// still reverse X / Y faster than DIR hold + setup: those steps are reported violations, as on the
-// device), a trapezoid in cost units (entry / exit from cruise/8, A reaching cruise within 1..2
-// C_TOTAL, D by the stopping rule or random). One in ten has C_TOTAL + 1: the walk reaches its end
-// point first, `arc error` (faults bit 1).
+// An ARC frame within the host's rules (arc_stimulus.h, defaults: R = 2..30 steps, cruise at
+// 1 201..2 400 clocks per step, one in ten with C_TOTAL + 1).
 std::vector<uint8_t> random_arc_payload(std::mt19937_64& g, uint8_t power) {
-  std::uniform_real_distribution<double> u01(0.0, 1.0);
-  for (;;) {
-    const double r = 2 + 28 * u01(g);
-    const double cx = u01(g) - 0.5, cy = u01(g) - 0.5, a0 = u01(g) * 2 * M_PI;
-    const bool full = u01(g) < 0.2;
-    arc::Frame f;
-    f.g.ccw = u01(g) < 0.5;
-    const int64_t sx = std::llround(cx + r * std::cos(a0)),
-                  sy = std::llround(cy + r * std::sin(a0));
-    f.g.i = static_cast<int32_t>(std::llround(cx) - sx);
-    f.g.j = static_cast<int32_t>(std::llround(cy) - sy);
-    if (f.g.i == 0 && f.g.j == 0) continue;
-    if (!full) {
-      const double a1 = a0 + (f.g.ccw ? 1 : -1) * (0.1 + u01(g) * 6.1);
-      f.g.dx = static_cast<int32_t>(std::llround(cx + r * std::cos(a1)) - sx);
-      f.g.dy = static_cast<int32_t>(std::llround(cy + r * std::sin(a1)) - sy);
-      if ((f.g.dx == 0 && f.g.dy == 0) || (f.g.dx == f.g.i && f.g.dy == f.g.j)) continue;
-    }
-    const double r0 = std::hypot(double(f.g.i), double(f.g.j));
-    const double r1 = std::hypot(double(f.g.dx) - f.g.i, double(f.g.dy) - f.g.j);
-    if (std::fabs(r1 - r0) > 2.0) continue;
-    const arc::Plan pl = arc::plan(f.g);
-    if (!pl.ok) continue;
-    f.n_ramp = pl.n_ramp;
-    f.c_total = pl.c_total;
-    const double len = arc::ideal_length(f.g), k = double(f.c_total) / len;
-    const double two48 = std::ldexp(1.0, 48), n = double(f.c_total);
-    f.v_cruise = static_cast<uint64_t>(k * two48 / pick(g, 1201, 2400));
-    auto from8 = [&] { return f.v_cruise / 8 + pick(g, 0, 7) * (f.v_cruise / 8); };
-    f.v_entry = pick(g, 0, 2) == 0 ? f.v_cruise : std::min(f.v_cruise, from8());
-    f.v_exit = pick(g, 0, 2) == 0 ? f.v_cruise : std::min(f.v_cruise, from8());
-    const double vc = double(f.v_cruise), vx = double(f.v_exit);
-    const double l = std::ldexp(n * (0.05 + 2 * u01(g)), 48);
-    f.a = std::max<uint64_t>(1, static_cast<uint64_t>(vc * vc / (2 * l)));
-    const double stop = (vc * vc - vx * vx) / (2.0 * double(f.a)) / two48;
-    f.d = pick(g, 0, 3) == 0 ? static_cast<uint64_t>(n * u01(g))
-                             : static_cast<uint64_t>(std::max(0.0, n - std::ceil(stop)));
-    if (pick(g, 0, 2) == 0) f.dz = static_cast<int32_t>((u01(g) - 0.5) * len);
-    if (pick(g, 0, 9) == 0) {
-      f.c_total += 1;
-      ++g_v2_bad_arcs;
-    }
-    ++g_v2_arc_frames;
-    return v2::arc_payload(f.g.ccw ? 3 : 2, power, f);
-  }
+  bool bad = false;
+  const arc::Frame f = random_arc_frame(g, ArcStimulus{}, &bad);
+  if (bad) ++g_v2_bad_arcs;
+  ++g_v2_arc_frames;
+  return v2::arc_payload(f.g.ccw ? 3 : 2, power, f);
 }
 
 Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {

@@ -5,6 +5,7 @@
 #include <array>
 #include <vector>
 
+#include "fpgacnc/twins/arc_walk.h"
 #include "fpgacnc/twins/run_result.h"
 #include "fpgacnc/twins/timing.h"
 
@@ -22,15 +23,24 @@ struct ExecSegment {
   bool dir_fast = false;
   bool prof = false;  // kind PROFILE: total, tmn, period 0 and dir_fast 0, as segment_prep sends
   ProfileParams profile{};
+  bool arc = false;  // kind ARC: steps X = Y = 1, Z = |DZ|, the start directions, as prep sends
+  arc::Frame arc_frame{};
 };
 struct ExecOffer {
   ExecSegment seg;
   int64_t gap;  // valid from `gap` edges after the previous accept (first: after cycle 0)
 };
 
+// The abort (e-stop) input is high in the clocks before edges first..last (in time order, not
+// overlapping). An offer waiting during an abort is held (taken once the executor is ready).
+struct ExecAbort {
+  Cycle first, last;
+};
+
 struct ExecJob {
   std::array<AxisTiming, kAxes> timing;
   std::vector<ExecOffer> offers;
+  std::vector<ExecAbort> aborts;
 };
 
 RunResult run_executor_rtl(const ExecJob& j);

@@ -43,12 +43,12 @@ std::string compare_runs(const RunResult& rtl, const RunResult& twin) {
                        twin.edges.size(), more_rtl ? "rtl" : "twin",
                        edge_text(more_rtl ? rtl.edges[n] : twin.edges[n]));
   }
-  for (auto s :
-       {compare_cycles("ACK", rtl.acks, twin.acks),
-        compare_cycles("decoder packet_done", rtl.packet_done, twin.packet_done),
-        compare_cycles("segment_executor seg_start", rtl.seg_start, twin.seg_start),
-        compare_cycles("segment_executor seg_done", rtl.seg_done, twin.seg_done),
-        compare_cycles("segment_executor seg_done_v2", rtl.seg_done_v2, twin.seg_done_v2)}) {
+  for (auto s : {compare_cycles("ACK", rtl.acks, twin.acks),
+                 compare_cycles("decoder packet_done", rtl.packet_done, twin.packet_done),
+                 compare_cycles("segment_executor seg_start", rtl.seg_start, twin.seg_start),
+                 compare_cycles("segment_executor seg_done", rtl.seg_done, twin.seg_done),
+                 compare_cycles("segment_executor seg_done_v2", rtl.seg_done_v2, twin.seg_done_v2),
+                 compare_cycles("segment_executor arc_err", rtl.arc_err, twin.arc_err)}) {
     if (!s.empty()) return s;
   }
   if (rtl.position != twin.position)

@@ -43,7 +43,8 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
       host_pin_("host_pin"),
       host_line_("host_line"),
       cfg_("cfg"),
-      state_("state") {
+      state_("state"),
+      abort_("abort") {
   pins_.record_tx = record_tx;
   host_pin_.bind(rx_.pin);
   rx_.bytes.bind(dec_.bytes);
@@ -53,6 +54,7 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   fifo_.out.bind(prep_.commands);
   prep_.segments.bind(exec_.segments);
   prep_.exec_status.bind(exec_.status);
+  abort_.bind(exec_.abort);
   prep_.applied.bind(enc_.applied);
   prep_.report_applied = true;
   prep_.entry_ends = &entry_ends_;

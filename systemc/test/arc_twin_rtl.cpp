@@ -18,6 +18,7 @@
 #include <systemc>
 #include <vector>
 
+#include "../cosim/arc_stimulus.h"
 #include "fpgacnc/twins/arc_dda.h"
 
 namespace {
@@ -62,44 +63,16 @@ SC_MODULE(ArcBench) {
   }
 };
 
+// The random arcs (arc_stimulus.h, shared with cosim and cosim_executor): radius log-uniform in
+// 1..2000 steps, full circles and any sweep, both directions, helices, cruise at 8..100 clocks per
+// step (the executor's STEP timing plays no part here), all consistent (no C_TOTAL + 1).
 arc::Frame random_frame(std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u01(0.0, 1.0);
-  for (;;) {
-    const double r = std::exp(u01(rng) * std::log(2000.0));
-    const double cx = u01(rng) - 0.5, cy = u01(rng) - 0.5, a0 = u01(rng) * 2 * M_PI;
-    const bool full = u01(rng) < 0.2;
-    const double sw = full ? 2 * M_PI : 0.05 + u01(rng) * 6.2;
-    arc::Frame f;
-    f.g.ccw = u01(rng) < 0.5;
-    const int64_t sx = std::llround(cx + r * std::cos(a0)),
-                  sy = std::llround(cy + r * std::sin(a0));
-    f.g.i = static_cast<int32_t>(std::llround(cx) - sx);
-    f.g.j = static_cast<int32_t>(std::llround(cy) - sy);
-    if (f.g.i == 0 && f.g.j == 0) continue;
-    if (!full) {
-      const double a1 = a0 + (f.g.ccw ? sw : -sw);
-      f.g.dx = static_cast<int32_t>(std::llround(cx + r * std::cos(a1)) - sx);
-      f.g.dy = static_cast<int32_t>(std::llround(cy + r * std::sin(a1)) - sy);
-      if ((f.g.dx == 0 && f.g.dy == 0) || (f.g.dx == f.g.i && f.g.dy == f.g.j)) continue;
-    }
-    const double r0 = std::hypot(double(f.g.i), double(f.g.j));
-    const double r1 = std::hypot(double(f.g.dx) - f.g.i, double(f.g.dy) - f.g.j);
-    if (std::fabs(r1 - r0) > 2.0) continue;
-    const arc::Plan p = arc::plan(f.g);
-    if (!p.ok) continue;
-    f.n_ramp = p.n_ramp;
-    f.c_total = p.c_total;
-    const double len = 0.5 * (r0 + r1) * arc::sweep(f.g);
-    const double k = double(f.c_total) / len, two48 = std::ldexp(1.0, 48);
-    const double v = std::min(0.01 + 0.11 * u01(rng), len / 100);
-    f.v_cruise = static_cast<uint64_t>(v * k * two48) + 1;
-    f.v_entry = 1 + static_cast<uint64_t>(double(f.v_cruise - 1) * u01(rng));
-    f.v_exit = 1 + static_cast<uint64_t>(double(f.v_cruise - 1) * u01(rng));
-    f.a = 1 + static_cast<uint64_t>(v * v / (len * (0.1 + u01(rng))) * k * two48);
-    f.d = static_cast<uint64_t>(double(f.c_total) * (0.3 + 0.7 * u01(rng)));
-    if (u01(rng) < 0.4) f.dz = static_cast<int32_t>((u01(rng) - 0.5) * len);
-    return f;
-  }
+  ArcStimulus o;
+  o.r_log_max = 2000;
+  o.cps_lo = 8;
+  o.cps_hi = 100;
+  o.bad_in = 0;
+  return random_arc_frame(rng, o);
 }
 
 }  // namespace

@@ -469,15 +469,20 @@ SC_MODULE(ExecBench) {
   SegmentExecutorTwin exec;
   std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda;
   std::array<std::unique_ptr<StepPulseTwin>, kAxes> pulse;
-  tlm_utils::simple_initiator_socket<ExecBench> seg, status;
+  tlm_utils::simple_initiator_socket<ExecBench> seg, status, abort;
   tlm_utils::simple_target_socket<ExecBench> done;
   std::vector<std::pair<Cycle, bool>> seg_done;
   tlm::tlm_generic_payload gp;
 
   SC_CTOR(ExecBench)
-      : exec("segment_executor", clk, p, pins), seg("seg"), status("status"), done("done") {
+      : exec("segment_executor", clk, p, pins),
+        seg("seg"),
+        status("status"),
+        abort("abort"),
+        done("done") {
     seg.bind(exec.segments);
     status.bind(exec.status);
+    abort.bind(exec.abort);
     exec.done.bind(done);
     done.register_b_transport(this, &ExecBench::on_done);
     make_axis_twins(exec, clk, p, pins, dda, pulse);
@@ -511,6 +516,41 @@ SC_MODULE(ExecBench) {
     return transport(seg, gp, clk, s, valid);
   }
 };
+
+// Abort (e-stop) on edges 537..539 in the run of X +10 over 1000 ticks (R = 37, X steps on edges
+// 137, 237, ...): the 5th step (on 537) and later are cut, the laser falls on 537, no seg_done;
+// the next segment (offered on 540, no reversal) is accepted after the settle time, 539 + max DIR
+// setup (30) + 1 = 570, and runs from there.
+void executor_abort_tests(ExecBench& b) {
+  b.p.timing[0] = AxisTiming{5, 5, 30, 20};
+  for (int a = 1; a < kAxes; ++a) b.p.timing[a] = AxisTiming{5, 5, 10, 20};
+  b.reset();
+  AbortSpan span{537, 539};
+  transport(b.abort, b.gp, b.clk, span, 537);
+  b.offer(ExecBench::make({10, 0, 0, 0}, 1000, 1, 255, false), 5);
+  const Cycle a2 = b.offer(ExecBench::make({2, 0, 0, 0}, 100, 0, 0, false), 540);
+  check_eq(a2, 570, "abort: next accept after max DIR setup");
+  check_eq(b.exec.seg_start_cycles.size(), 2u, "abort: two runs");
+  if (b.exec.seg_start_cycles.size() == 2)
+    check_eq(b.exec.seg_start_cycles[1], 570, "R after abort");
+  check_eq(b.seg_done.size(), 1u, "abort: no seg_done for the dropped segment");
+  if (!b.seg_done.empty()) check_eq(b.seg_done[0].first, 670, "seg_done of the next segment");
+  check_eq(b.pulse[0]->position, 6, "abort: 4 steps before it, 2 after");
+  check_eq(b.exec.aborted, 1u, "abort: one segment dropped");
+  const auto edges = b.pins.take_sorted();
+  std::vector<uint64_t> laser, rises;
+  for (const auto& e : edges) {
+    if (e.signal == fpgacnc::simboard::kLaser) laser.push_back(e.cycle);
+    if (e.signal == fpgacnc::simboard::step_signal(0) && e.value == 1) rises.push_back(e.cycle);
+  }
+  check_eq(laser.size(), 2u, "abort: laser rise and fall");
+  if (laser.size() == 2) check_eq(laser[1], 537u, "abort: laser low from the abort edge");
+  check_eq(rises.size(), 6u, "abort: X STEP rises");
+  if (rises.size() == 6) {
+    check_eq(rises[3], 437u, "last rise before the abort");
+    check_eq(rises[4], 620u, "first rise after it: 570 + 50");
+  }
+}
 
 void executor_tests(ExecBench& b) {
   b.p.timing[0] = AxisTiming{5, 5, 30, 20};
@@ -824,6 +864,7 @@ int sc_main(int, char*[]) {
       decoder_tests(d);
       encoder_tests(e);
       executor_tests(x);
+      executor_abort_tests(x);
     }
   } blocks("blocks", dec_bench, enc_bench, exec_bench);
   sc_core::sc_start();

@@ -31,6 +31,7 @@
 //   Output pins (rtl/arc_dda.v) show an event of clock c on clock c + 1.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -283,6 +284,14 @@ struct Derived {
   int64_t dt_r = 0;                                       // dT - q N_RAMP
   u128 vz_entry = 0, vz_cruise = 0, vz_exit = 0, az = 0;  // V * |DZ|, A * |DZ|
 };
+
+// The first move's X / Y directions (true: +), prep's m_axis_dir for an ARC segment: the tangent
+// signs at the start (-I, -J), a zero component inward (arc_dda's rule).
+inline std::array<bool, 2> start_dirs(const Geometry& g) {
+  const int64_t x0 = -int64_t{g.i}, y0 = -int64_t{g.j}, sg = g.ccw ? 1 : -1;
+  const int64_t tx = -sg * y0, ty = sg * x0;
+  return {tx != 0 ? tx > 0 : x0 < 0, ty != 0 ? ty > 0 : y0 < 0};
+}
 
 inline Derived derive(const Frame& f) {
   Derived d;

@@ -3,8 +3,11 @@
 // Target `load`: a DdaLoad (n steps over T ticks), the delay naming the run-start edge R; tick
 // c of the segment is edge R + c. The k-th step (k = 1..n) falls on tick ceil(k * T / n) (128-bit
 // product): the twin computes each step time instead of ticking, and sends one step request
-// per step on initiator `step` (to the axis's step_pulse), delay = R + tick.
+// per step on initiator `step` (to the axis's step_pulse), delay = R + tick. DdaLoad::cut (an
+// abort edge, from the executor): requests on that edge or later are not sent.
 #pragma once
+
+#include <limits>
 
 #include "fpgacnc/twins/tlm_common.h"
 
@@ -13,6 +16,7 @@ namespace fpgacnc::twins {
 struct DdaLoad {
   uint32_t steps;
   uint64_t total;
+  Cycle cut = std::numeric_limits<Cycle>::max();  // abort: no step request on this edge or later
 };
 
 class DdaLinearTwin : public sc_core::sc_module {
@@ -31,8 +35,11 @@ class DdaLinearTwin : public sc_core::sc_module {
     const Cycle r = clk_.at(delay);
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
     PulseCmd none{false};
-    for (uint64_t k = 1; k <= l.steps; ++k)
-      transport(step, gp_, clk_, none, r + dda_tick(k, l.steps, l.total));
+    for (uint64_t k = 1; k <= l.steps; ++k) {
+      const Cycle e = r + static_cast<Cycle>(dda_tick(k, l.steps, l.total));
+      if (e >= l.cut) break;  // the executor gates step_req from the abort edge on
+      transport(step, gp_, clk_, none, e);
+    }
   }
 
   const CycleClock& clk_;

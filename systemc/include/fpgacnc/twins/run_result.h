@@ -19,6 +19,7 @@ struct RunResult {
   std::vector<Cycle> seg_start;       // executor: edge after which seg_start is high
   std::vector<Cycle> seg_done;        // executor: edge after which seg_done is high
   std::vector<Cycle> seg_done_v2;     // the same for v2 segments (seg_done_v2; block level)
+  std::vector<Cycle> arc_err;         // executor: edge on which arc_err is latched (block level)
   Cycle end_cycle = 0;                // job duration: last ACK's end or last edge, the later
   std::array<int64_t, 4> position{};  // position counters of the core
   uint64_t moves_done = 0, packets = 0, timeouts = 0, overruns = 0, frame_errors = 0,

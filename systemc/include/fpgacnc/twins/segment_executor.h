@@ -29,12 +29,26 @@
 //   Kind ARC (Segment::arc, from an ARC frame): run_arc below (arc::Dda clock by clock, an event of
 //   walk clock c a step request on edge R + c + 2, in-arc DIR writes and DIR-setup violations,
 //   arc error); the segment lasts c_last + 1 ticks. dir_fast is 0; otherwise as a segment of that
-//   T. Not modelled: abort (e-stop).
+//   T.
+// Target `abort` (write, AbortSpan): the e-stop input high on edges first..last (rtl `abort`),
+//   sent before any segment that can reach it. With X = the first abort edge after a segment's
+//   accept edge A: no step request on an edge >= X (DDA, profile and arc requests are cut there;
+//   a STEP already high finishes its high time, its low time still counts: step_pulse sees
+//   nothing new), no DIR write on an edge >= X (a pending write is cancelled; DIR keeps its level
+//   and the next segment is compared with it), the arc walk stops, no arc error or arc DIR
+//   violation from X on. A segment whose end edge (R + T; A + 1 for a zero-length one taken on a
+//   last tick) or run edge R is >= X is dropped at X: no seg_start (R >= X), no seg_done, laser low
+//   from edge X, the executor idle after X. No segment is accepted on an abort edge, and from IDLE
+//   only from edge last + max(largest DIR setup, 1) + 1 (settle_reg). An offer held through the
+//   abort is accepted then (the block bench); in cnc_core segment_prep drops it (the prep twin
+//   and the virtual board do not model the abort yet).
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <deque>
+#include <limits>
 #include <memory>
 
 #include "fpgacnc/twins/dda_linear.h"
@@ -49,6 +63,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
  public:
   tlm_utils::simple_target_socket<SegmentExecutorTwin> segments;
   tlm_utils::simple_target_socket<SegmentExecutorTwin> status;
+  tlm_utils::simple_target_socket<SegmentExecutorTwin> abort;
   tlm_utils::simple_initiator_socket<SegmentExecutorTwin> done;
   // One DDA load socket and one step_pulse socket (DIR write, state read) per axis.
   std::array<std::unique_ptr<tlm_utils::simple_initiator_socket<SegmentExecutorTwin>>, kAxes> dda,
@@ -59,6 +74,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       : sc_module(name),
         segments("segments"),
         status("status"),
+        abort("abort"),
         done("done"),
         clk_(clk),
         p_(p),
@@ -67,6 +83,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     arc_req_.fill(kLongAgo);
     segments.register_b_transport(this, &SegmentExecutorTwin::on_segment);
     status.register_b_transport(this, &SegmentExecutorTwin::on_status);
+    abort.register_b_transport(this, &SegmentExecutorTwin::on_abort);
     for (int a = 0; a < kAxes; ++a) {
       dda[a] = std::make_unique<tlm_utils::simple_initiator_socket<SegmentExecutorTwin>>(
           sc_core::sc_gen_unique_name("dda"));
@@ -89,6 +106,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     last_wr_.fill(kLongAgo);
     arc_req_.fill(kLongAgo);
     arc_window_ = idle_window_ = -1;
+    aborts_.clear();
+    trace.clear();
+    aborted = 0;
   }
   uint64_t segments_run = 0;
   uint64_t profiled = 0;                // PROFILE segments (LINE_PROFILE)
@@ -107,6 +127,15 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // edges after which an arc's `violation` strobe (a step within DIR setup of its DIR change, or
   // before its DIR is on the pin) is high
   std::vector<Cycle> arc_violation_cycles;
+  uint64_t aborted = 0;  // segments dropped by an abort (no seg_done)
+  // Per accepted segment (the benches aim aborts with it): accept edge, DIR write edge of the
+  // HOLD path (-1: none), last DIR write edge of a zero-gap reversal (-1: none), run edge R, end
+  // edge, the abort edge that dropped it (-1: none), kind.
+  struct SegTrace {
+    Cycle accept, dir_edge, fast_dir, run, end, cut;
+    char kind;  // 'L' line, 'D' dwell / no steps, 'P' profile, 'A' arc, 'Z' zero-length
+  };
+  std::vector<SegTrace> trace;
   // When set: the edge after which each segment stops keeping the executor busy (R + T; its
   // accept edge for T = 0, + 1 when taken on a last tick), in order (cnc_core busy).
   std::vector<Cycle>* entry_ends = nullptr;
@@ -116,6 +145,30 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     PulseState s{};
     transport(*pulse[a], gp_, clk_, s, now, tlm::TLM_READ_COMMAND);
     return s;
+  }
+
+  void on_abort(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
+    AbortSpan a = payload<AbortSpan>(gp);
+    a.first = clk_.at(delay);
+    aborts_.push_back(a);
+    gp.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  static constexpr Cycle kNever = std::numeric_limits<Cycle>::max();
+  // The first abort edge after edge e (kNever: none).
+  Cycle abort_after(Cycle e) const {
+    for (const AbortSpan& a : aborts_)
+      if (a.last > e) return std::max(a.first, e + 1);
+    return kNever;
+  }
+  // The first edge >= e on which the executor may accept from IDLE: not an abort edge and at least
+  // max(largest DIR setup, 1) edges after the last one (settle_reg).
+  Cycle ready_from(Cycle e) const {
+    uint32_t settle = 1;
+    for (const auto& t : p_.timing) settle = std::max(settle, t.setup);
+    for (const AbortSpan& a : aborts_)
+      if (e >= a.first && e <= a.last + static_cast<Cycle>(settle))
+        e = a.last + static_cast<Cycle>(settle) + 1;
+    return e;
   }
 
   void on_status(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
@@ -156,7 +209,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // is high. An X / Y step whose direction is not on the pin yet, or that comes less than DIR
   // setup after the last DIR write of its axis, strobes `violation` (not delayed). Returns the
   // number of ticks (last move's clock + 1): the segment's last edge is R + ticks.
-  Cycle run_arc(const Segment& s, Cycle r) {
+  // Abort: nothing lands on an edge >= cut (the walk stops; returns -1 when the arc's end edge
+  // R + ticks is >= cut: the segment is dropped).
+  Cycle run_arc(const Segment& s, Cycle r, Cycle cut) {
     arc::Dda dda(s.arc_frame);
     std::array<bool, 2> tgt{s.dir[0], s.dir[1]}, pend{};
     std::array<bool, 2> pin{};
@@ -186,6 +241,11 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     while (!dda.done()) {
       const auto c = static_cast<Cycle>(dda.next_clock());
       const Cycle t = r + c;
+      if (t + 1 >= cut) {  // aborted: nothing of this clock or later lands
+        ++arcs;
+        arc_window_ = -1;
+        return -1;
+      }
       for (size_t k = 0; k < 2; ++k)
         if (pend[k]) write_if_ok(k, t);
       if (dda.dir_valid()) {
@@ -206,7 +266,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       bool viol = false;
       const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
       for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) {
-        if (d[k] == 0) continue;
+        if (d[k] == 0 || e >= cut) continue;  // (a request in flight on the abort edge: gated)
         const bool dir = d[k] > 0;
         if (k < 2) {
           if (dir != pin[k] || e - last_wr_[k] < static_cast<Cycle>(p_.timing[k].setup))
@@ -224,7 +284,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     // A write still pending at the end (only when the arc outran its DIR timing) lands as in IDLE
     // or in the next segment's run.
     for (size_t k = 0; k < 2; ++k)
-      for (Cycle t = r + ticks; pend[k]; ++t) write_if_ok(k, t);
+      for (Cycle t = r + ticks; pend[k] && t + 1 < cut; ++t) write_if_ok(k, t);
     for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) arc_req_[k] = req[k];
     ++arcs;
     if (dda.err()) {
@@ -260,13 +320,17 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (st[a].dir == s.dir[a]) continue;
       flip[a] = change = true;
     }
-    // Offered while the last tick of a running segment is issued: accepted on its last edge.
+    // Offered while the last tick of a running segment is issued: accepted on its last edge (a
+    // running segment that an abort dropped is not running: running_ is false then).
     const bool on_last_tick = running_ && valid < run_end_;
     const bool queued = on_last_tick && s.total != 0 && (!change || s.dir_fast);
     Cycle accept, run;
+    Cycle cut = kNever;  // the first abort edge after the accept edge
+    Cycle dir_edge = -1, fast_dir = -1;
     if (s.prof && change) ++profiled_reversing;
     if (queued) {
       accept = run = run_end_;
+      cut = abort_after(accept);
       ++zero_gap;
       if (s.prof) ++profiled_zero_gap;
       if (change) ++fast_reversals;
@@ -274,15 +338,17 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         if (!flip[a]) continue;
         const Cycle d = after_arc_req(
             a, std::max<Cycle>(run_end_ + kFastDirDelay, st[a].last_rise + p_.timing[a].hold));
-        dir_write(a, s.dir[a], d);
+        fast_dir = std::max(fast_dir, d);
+        if (d < cut) dir_write(a, s.dir[a], d);  // else cancelled by the abort (pend_reg)
       }
     } else {
-      accept = on_last_tick ? run_end_ : std::max(valid + 1, idle_after_ + 1);
+      accept = on_last_tick ? run_end_ : ready_from(std::max(valid + 1, idle_after_ + 1));
+      cut = abort_after(accept);
       if (on_last_tick && s.total == 0) ++zero_len_on_last_tick;
       if (on_last_tick && s.total != 0) ++hold_on_last_tick;
       run = accept;
       if (change) {
-        Cycle dir_edge = accept + 1;
+        dir_edge = accept + 1;
         uint32_t setup = 0;
         for (int a = 0; a < kAxes; ++a) {
           if (!flip[a]) continue;
@@ -292,37 +358,60 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         }
         for (int a = 0; a < kAxes; ++a)
           if (flip[a]) dir_edge = after_arc_req(a, dir_edge);
-        for (int a = 0; a < kAxes; ++a)
-          if (flip[a]) dir_write(a, s.dir[a], dir_edge);
+        if (dir_edge < cut)  // an abort in HOLD cancels the write
+          for (int a = 0; a < kAxes; ++a)
+            if (flip[a]) dir_write(a, s.dir[a], dir_edge);
         run = dir_edge + std::max<uint32_t>(setup, 1);
       }
     }
     delay = clk_.delay_to(accept);
     // T = 0 completes at once; accepted on a last tick it passes one clock in ZERO.
     Cycle end = on_last_tick ? accept + 1 : accept;
+    const char kind =
+        s.arc                                                                            ? 'A'
+        : s.prof                                                                         ? 'P'
+        : s.total == 0                                                                   ? 'Z'
+        : std::all_of(s.steps.begin(), s.steps.end(), [](uint32_t n) { return n == 0; }) ? 'D'
+                                                                                         : 'L';
     running_ = s.total != 0;
     idle_window_ = -1;
-    if (s.arc) s.total = static_cast<uint64_t>(run_arc(s, run));
-    if (s.arc) idle_window_ = arc_window_;
-    if (s.total != 0) {
+    bool dropped = s.total != 0 ? run >= cut : end >= cut;  // HOLD / SETUP, or in ZERO
+    if (s.arc && !dropped) {  // an arc the abort stops runs until edge `cut` (dropped there)
+      const Cycle ticks = run_arc(s, run, cut);
+      s.total = static_cast<uint64_t>(ticks < 0 ? cut - run : ticks);
+      idle_window_ = arc_window_;
+    }
+    if (s.total != 0 && !dropped) {
       seg_start_cycles.push_back(run);
-      if (s.code != 0 && s.power != 0) {
+      end = run + static_cast<Cycle>(s.total);
+      dropped = end >= cut;
+      if (s.code != 0 && s.power != 0) {  // laser low from the abort edge (combinational gate)
         pins_.add(run, simboard::kLaser, 1);
-        pins_.add(run + static_cast<Cycle>(s.total), simboard::kLaser, 0);
+        pins_.add(std::min(end, cut), simboard::kLaser, 0);
       }
       for (int a = 0; a < kAxes && !s.arc; ++a) {
         if (s.steps[a] == 0) continue;
         if (s.prof) {  // a step in tick j: step request on edge R + j (STEP rises there)
           PulseCmd none{false};
-          for (uint64_t j : prof.ticks[a])
+          for (uint64_t j : prof.ticks[a]) {
+            if (run + static_cast<Cycle>(j) >= cut) break;
             transport(*pulse[a], gp_, clk_, none, run + static_cast<Cycle>(j));
+          }
           continue;
         }
-        DdaLoad l{s.steps[a], s.total};
+        DdaLoad l{s.steps[a], s.total, cut};
         transport(*dda[a], gp_, clk_, l, run);
       }
-      end = run + static_cast<Cycle>(s.total);
       run_end_ = end;
+    }
+    trace.push_back(SegTrace{accept, dir_edge, fast_dir, run, end, dropped ? cut : -1, kind});
+    if (dropped) {  // idle after the abort edge, no seg_done
+      ++aborted;
+      running_ = false;
+      idle_window_ = -1;
+      idle_after_ = cut;
+      if (entry_ends) entry_ends->push_back(cut);
+      return;
     }
     idle_after_ = end;
     if (entry_ends) entry_ends->push_back(end);
@@ -339,6 +428,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   std::array<Cycle, kAxes> last_wr_{};  // edge of the last DIR write per axis (since_wr_reg)
   std::array<Cycle, kAxes> arc_req_{};  // edge of the last arc step request per axis
   Cycle arc_window_ = -1, idle_window_ = -1;  // ExecIdle::window after the last segment
+  std::vector<AbortSpan> aborts_;             // abort spans, in time order
   tlm::tlm_generic_payload gp_;
 };
 

@@ -138,13 +138,12 @@ class SegmentPrepTwin : public sc_core::sc_module {
         s.arc_frame = v2::arc_frame_from_raw(c.arc_raw, (c.code & 1) != 0);
         const arc::Frame& f = s.arc_frame;
         // X, Y: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
-        const int64_t x0 = -int64_t{f.g.i}, y0 = -int64_t{f.g.j}, sg = f.g.ccw ? 1 : -1;
-        const int64_t tx = -sg * y0, ty = sg * x0;
+        const std::array<bool, 2> d0 = arc::start_dirs(f.g);
         abs = {};
         abs[0] = abs[1] = 1;
         s.dir = {};
-        s.dir[0] = tx != 0 ? tx > 0 : x0 < 0;
-        s.dir[1] = ty != 0 ? ty > 0 : y0 < 0;
+        s.dir[0] = d0[0];
+        s.dir[1] = d0[1];
         if (kAxes >= 3) {
           abs[2] = f.dz < 0 ? 0u - static_cast<uint32_t>(f.dz) : static_cast<uint32_t>(f.dz);
           s.dir[2] = f.dz >= 0;

@@ -10,6 +10,10 @@
 // position_after(t): the position counter after edge t (the STATUS frame's snapshot, asked in
 // time order: rises up to the last edge asked for are folded into a base value).
 // Pins go to the PinRecorder; the position counter follows every rise (+1 with DIR high).
+// Abort (e-stop) needs nothing here: the executor and the DDA send no request or DIR write from
+// the abort edge on, so a pulse already high finishes its high time, its low time still counts,
+// and a request made before the abort that waits for its low time still rises (as the RTL's
+// pending_reg, which the abort does not clear).
 #pragma once
 
 #include <deque>

@@ -130,6 +130,14 @@ struct PulseState {
   Cycle idle_from;  // first edge after which STEP is low and its low time elapsed
   bool dir;
 };
+// -> segment_executor (and segment_prep): the abort (e-stop) input is high in the clocks before
+// edges first..last (the delay names `first`). The twins compute a segment's events when they
+// accept it, so an abort is sent before any segment that could run into it (the stimulus knows
+// its aborts up front); spans arrive in time order and do not overlap.
+struct AbortSpan {
+  Cycle first;
+  Cycle last;
+};
 struct SegDone {    // segment_executor -> status/ACK: seg_done strobe after the delay's edge
   bool v2 = false;  // seg_done_v2
 };

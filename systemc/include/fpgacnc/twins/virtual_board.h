@@ -78,6 +78,8 @@ class VirtualBoard : public sc_core::sc_module {
   tlm_utils::simple_target_socket<VirtualBoard> host_line_;
   tlm_utils::simple_target_socket<VirtualBoard> cfg_;
   tlm_utils::simple_target_socket<VirtualBoard> state_;
+  // The executor's abort input (AbortSpan). Not driven yet: the board has no e-stop input.
+  tlm_utils::simple_initiator_socket<VirtualBoard> abort_;
   tlm::tlm_generic_payload gp_;
   std::vector<TwinJob> jobs_;
   Host* host_ = nullptr;
