@@ -60,7 +60,8 @@
 // axes the arc may move), m_axis_dir: X / Y the tangent signs at the start (arc_dda's first-move
 // rule), Z the sign of DZ: the executor's HOLD/SETUP rule applies at the arc's start. The arc's
 // final X / Y directions are not known here: dir_fast is 0 for the next segment that moves X or Y
-// until each has moved in a prepared non-arc segment (unk_reg).
+// until each has moved in a prepared non-arc segment (unk_reg). The same holds for every axis
+// after an abort (e-stop), which drops segments whose DIR was already tracked.
 // Output (m_axis_*): one prepared segment, held until accepted.
 // Build options (cnc_core passes them): PROFILES = 0 / ARCS = 0 never take the PROFILE / ARC
 // path (the prof / arc entry bits are ignored, their registers and states are not generated in
@@ -564,7 +565,13 @@ module segment_prep #(
       default: state_reg <= S_IDLE;
     endcase
 
-    if (abort) state_reg <= S_IDLE;
+    // An abort drops segments whose DIR this block already tracked (prepared, waiting or running):
+    // the pins' DIR is unknown again, so no segment gets dir_fast before each axis has moved in
+    // a prepared non-arc segment (the executor's HOLD/SETUP path compares the real pins).
+    if (abort) begin
+      state_reg <= S_IDLE;
+      unk_reg   <= {N_AXES{1'b1}};
+    end
 
     if (rst) begin
       state_reg        <= S_IDLE;

@@ -1,13 +1,14 @@
-// Reproducer (built, not a CTest test: `cmake --build build --target repro_prep_abort_dir`, then
-// build/systemc/repro_prep_abort_dir): segment_prep's DIR tracking after an abort.
+// Regression test (CTest prep_abort_dir; found as a reproducer in session 5): segment_prep's DIR
+// tracking after an abort.
 // Verilated segment_prep + segment_executor chained as in cnc_core (tb/test_profile.cpp's bench),
 // DIR setup 3, DIR hold 2, STEP 1/1 (min period 2) on every axis.
 // Entries: DWELL T=1000; A: X +10 over T=10000 (prepared while the dwell runs, waits in S_OUT);
 // abort (one clock) during the dwell: A dropped after prep tracked X as +, the X pin stays low;
 // B: Y +5 over T=100 (from idle, HOLD/SETUP); C: X +10 over T=20 (P = 2) queued on B's last tick.
-// Output: a DIR setup violation at X only with the abort (prep keeps tracking X as + after the
-// abort dropped A, so C gets dir_fast 1 although X reverses at the pins with P = 2 < hold + setup).
-// Reported to the RTL owner (session 5); rtl/ is not changed here.
+// The bug it caught: a DIR setup violation at X only with the abort (prep kept tracking X as +
+// after the abort dropped A, so C got dir_fast 1 although X reverses at the pins with P = 2 <
+// hold + setup). Fixed: an abort marks every axis's DIR unknown in segment_prep (unk_reg), so C
+// takes the executor's HOLD/SETUP path. Exits 1 on any DIR setup violation at X.
 #include <cstdio>
 #include <memory>
 #include <vector>
@@ -113,5 +114,5 @@ int main() {
   std::printf("with an abort on cycle 600:\n");
   const int b = run(true);
   std::printf("DIR setup violations at X: %d without abort, %d with\n", a, b);
-  return 0;
+  return (a == 0 && b == 0) ? 0 : 1;
 }
