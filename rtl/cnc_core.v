@@ -56,7 +56,8 @@
 //                 16 heater bytes (all 0: heaters idle, no faults).
 //   LEAN_TRIM = 1 (used only with PROTO_V2 = 0): segment_prep is built for v1 entries only
 //                 (V1_ONLY: narrower divider and multiplier, no v2 paths) and the executor's DDAs
-//                 compute T - n themselves (TMN_FROM_TOTAL): same pins on every clock, fewer
+//                 compute T - n themselves and keep no steps-left counter (LEAN_DDA): same pins
+//                 on every clock, fewer
 //                 registers and LUTs. LEAN_TRIM = 0 keeps the general datapath (the bench
 //                 test_cnc_core_lean runs both in lockstep).
 //   STEP_CFG = 0  (used only with PROTO_V2 = 0): the step timing is fixed at STEP_HIGH, STEP_LOW,
@@ -148,7 +149,7 @@ module cnc_core #(
   localparam integer PROF_EN = (V2_EN != 0 && PROFILES != 0) ? 1 : 0;
   localparam integer ARC_EN = (V2_EN != 0 && ARCS != 0) ? 1 : 0;
   localparam integer HEAT_EN = (V2_EN != 0 && HEATERS != 0) ? 1 : 0;
-  // v1-only datapath trims (segment_prep V1_ONLY, executor TMN_FROM_TOTAL)
+  // v1-only datapath trims (segment_prep V1_ONLY, executor LEAN_DDA)
   localparam integer TRIM_EN = (V2_EN == 0 && LEAN_TRIM != 0) ? 1 : 0;
   // v1 build with the step timing fixed at STEP_HIGH / STEP_LOW / DIR_SETUP / DIR_HOLD
   localparam integer FIXED_EN = (V2_EN == 0 && STEP_CFG == 0) ? 1 : 0;
@@ -534,7 +535,7 @@ module cnc_core #(
       .N_AXES        (N_AXES),
       .PROFILES      (PROF_EN),
       .ARCS          (ARC_EN),
-      .TMN_FROM_TOTAL(TRIM_EN)
+      .LEAN_DDA      (TRIM_EN)
   ) u_exec (
       .clk            (clk),
       .rst            (rst),

@@ -23,10 +23,14 @@
 // TMN_FROM_TOTAL = 1 (cnc_core's protocol-v1 build, whose segment_prep holds no T - n): load takes
 // T from `total` instead of `tmn` and computes T - n (tmn_reg) and n - T (s) itself, two 65-bit
 // subtracts in parallel from the inputs; the registers get the same values as with tmn = T - n.
+// STEP_GUARD = 0: no steps-left counter (left_reg). It only guards against more than n steps,
+// which cannot happen within the T ticks a load is given (floor(t * n / T) <= n for t <= T); the
+// caller must tick at most T times per load (segment_executor's tick counter does).
 `default_nettype none
 
 module dda_linear #(
-    parameter TMN_FROM_TOTAL = 0  // 1: T from `total` (tmn unused), 0: T - n from `tmn` (total unused)
+    parameter TMN_FROM_TOTAL = 0,  // 1: T from `total` (tmn unused), 0: T - n from `tmn` (total unused)
+    parameter STEP_GUARD     = 1   // 0: no steps-left counter (at most T ticks per load)
 ) (
     input wire clk,
     input wire rst,
@@ -48,7 +52,7 @@ module dda_linear #(
   reg [31:0] left_reg;
 
   wire        wrap = !s_reg[64];                          // r + n >= T
-  wire        active = tick && (left_reg != 32'd0);
+  wire        active = tick && (STEP_GUARD == 0 || left_reg != 32'd0);
   wire [64:0] s_wrap = s_reg - {1'b0, tmn_reg};           // s - (T - n)
   wire [64:0] s_next = s_reg + {33'd0, n_reg};            // s + n
   wire [64:0] s_load = (TMN_FROM_TOTAL != 0) ? {33'd0, steps} - {1'b0, total}  // n - T: r = 0

@@ -72,7 +72,8 @@ module segment_executor #(
     parameter N_AXES   = 4,
     parameter PROFILES = 1,  // 0: no PROFILE kind (no profile_gen / dda_profile)
     parameter ARCS     = 1,  // 0: no ARC kind (no arc_dda)
-    parameter TMN_FROM_TOTAL = 0  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused)
+    parameter LEAN_DDA = 0  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused) and
+                            //    keep no steps-left counter (cnc_core's v1 build)
 ) (
     input wire clk,
     input wire rst,
@@ -347,7 +348,7 @@ module segment_executor #(
   reg arc_err_reg;
 
   generate
-    if (TMN_FROM_TOTAL != 0) begin : g_no_tmn
+    if (LEAN_DDA != 0) begin : g_no_tmn
       wire unused_tmn = &{1'b0, s_axis_tmn};  // the DDAs compute T - n from s_axis_total
     end
   endgenerate
@@ -360,7 +361,8 @@ module segment_executor #(
       assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
       dda_linear #(
-          .TMN_FROM_TOTAL(TMN_FROM_TOTAL)
+          .TMN_FROM_TOTAL(LEAN_DDA),
+          .STEP_GUARD    ((LEAN_DDA != 0) ? 0 : 1)
       ) u_dda (
           .clk  (clk),
           .rst  (rst),

@@ -73,8 +73,8 @@
 // (16-bit remainder, no divisor register); the multiplier shifts the product right through
 // total_reg (the multiplier n_dom in its low half, a 33-bit add of P into the high half: no
 // multiplier and 64-bit multiplicand registers, no 64-bit adder); no S_MAX scan, v2 clamp or DWELL
-// path; m_axis_tmn is 0 (the executor is built with TMN_FROM_TOTAL and computes T - n itself
-// from m_axis_total and m_axis_steps).
+// path; m_axis_tmn is 0 (the executor is built with LEAN_DDA and computes T - n itself from
+// m_axis_total and m_axis_steps).
 `default_nettype none
 
 module segment_prep #(
@@ -286,7 +286,11 @@ module segment_prep #(
   // One comparator finds the dominant axis: n_dom_reg starts as |X| and takes each next axis that
   // is strictly larger (X wins a tie). v1 does one step (Y) in the first DIV clock.
   wire [31:0] scan_val = abs_reg[32*scan_idx_reg+:32];
-  wire scan_gt = (scan_val > n_dom_reg);
+  // V1_ONLY: n_dom is |X| or |Y| by dom_y_reg (no n_dom register); Y wins only if strictly larger
+  wire [31:0] abs_x = abs_reg[31:0];
+  wire [31:0] abs_y = abs_reg[32*(N_AXES>1?1:0)+:32];
+  wire scan_gt = (V1_ONLY != 0) ? (abs_y > abs_x) : (scan_val > n_dom_reg);
+  wire [31:0] n_dom = (V1_ONLY != 0) ? (dom_y_reg ? abs_y : abs_x) : n_dom_reg;
 
   // dir_fast: the axes are checked one per clock during the multiplier's iterations (two stages:
   // hold' + setup' of axis scan_idx_reg into chk_hs_reg, then the compare with P).
@@ -491,7 +495,6 @@ module segment_prep #(
         if (iter_reg == 6'd0) begin
           if (V1_ONLY != 0) begin
             dom_y_reg <= scan_gt;
-            if (scan_gt) n_dom_reg <= scan_val;
           end else if (path_v1_reg) begin
             dividend_reg <= scan_gt ? num_y_reg : num_x_reg;
             divisor_reg  <= feed32[DW-1:0];
@@ -513,7 +516,7 @@ module segment_prep #(
         // T = P * n_dom + total_reg: v1 and a clamped v2 start from 0; an unclamped v2 from the
         // remainder (P * n_dom + rem = the T given; with n_dom = 0 the remainder is T itself).
         mplier_reg <= n_dom_reg;
-        total_reg  <= (V1_ONLY != 0) ? {32'd0, n_dom_reg} : 64'd0;
+        total_reg  <= (V1_ONLY != 0) ? {32'd0, n_dom} : 64'd0;
         if (path_v1_reg || V1_ONLY != 0) begin
           if (feed_reg == 16'd0)
             quot_reg <= (FEED0_PERIOD < min_period) ? min_period : FEED0_PERIOD;

@@ -497,7 +497,7 @@ void lockstep_test(const char* name, uint64_t fallback_seed, bool cfg) {
   ASSERT_TRUE(ls.mismatch().empty()) << ls.mismatch() << " (seed " << seed << ")";
   std::printf(
       "%s: %llu clocks, %llu moves, %llu inits, %llu partial packets, %llu huge moves "
-      "(e-stop + reset), %llu cfg writes; %llu STEP rises, %llu DIR changes, %u packets "
+      "(e-stop + reset), %llu cfg writes; %llu STEP rises, %llu DIR changes, %u "
       "packets since the last reset, %u timeouts, %u overruns\n",
       name, static_cast<unsigned long long>(ls.cycle()), static_cast<unsigned long long>(st.moves),
       static_cast<unsigned long long>(st.inits), static_cast<unsigned long long>(st.partials),
@@ -506,8 +506,8 @@ void lockstep_test(const char* name, uint64_t fallback_seed, bool cfg) {
       static_cast<unsigned long long>(ls.dir_changes()), static_cast<unsigned>(ls.a().packet_count),
       static_cast<unsigned>(ls.a().timeouts), static_cast<unsigned>(ls.a().overruns));
   // the session did what it is meant to (else the comparison proves little)
-  EXPECT_GT(ls.step_rises(), 5'000u);
-  EXPECT_GT(ls.dir_changes(), 100u);
+  EXPECT_GT(ls.step_rises(), 2'000u);
+  EXPECT_GT(ls.dir_changes(), 50u);
   EXPECT_GT(st.huge, 0u);
   EXPECT_GT(st.partials, 0u);
   if (cfg) {
