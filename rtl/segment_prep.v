@@ -69,7 +69,7 @@
 // V1_ONLY = 1 (cnc_core's protocol-v1 build; needs PROFILES = ARCS = 0): the entries are v1
 // MOTION and NUMERATORS only (v2 = 0, kind 0 / 1), so only the v1 arithmetic is built, narrower,
 // with the same results on the same clocks (same latency, same outputs): the divider reads the
-// dividend bit of the selected numerator by index (no shifted copy) and divides by feed_reg
+// dividend bit of the selected numerator by index, one clock ahead (no shifted copy), and divides by feed_reg
 // (16-bit remainder, no divisor register); the multiplier shifts the product right through
 // total_reg (the multiplier n_dom in its low half, a 33-bit add of P into the high half: no
 // multiplier and 64-bit multiplicand registers, no 64-bit adder); no S_MAX scan, v2 clamp or DWELL
@@ -249,6 +249,7 @@ module segment_prep #(
   reg [DW-1:0] divisor_reg;  // (not used with V1_ONLY: feed_reg)
   reg [DW-1:0] rem_reg;  // remainder < divisor
   reg dom_y_reg;  // V1_ONLY: Y is the dominant axis (its numerator is the dividend)
+  reg div_bit_reg;  // V1_ONLY: the dividend bit of the current iteration
   reg [31:0] quot_reg;
   reg [5:0] iter_reg;
 
@@ -299,10 +300,11 @@ module segment_prep #(
   wire [16:0] chk_hs = {1'b0, (chk_hold == 16'd0) ? 16'd1 : chk_hold} +
                        {1'b0, (chk_setup == 16'd0) ? 16'd1 : chk_setup};
 
-  // V1_ONLY: dividend bit 32 - iter of the dominant numerator (iterations 1..32, MSB first)
+  // V1_ONLY: iteration k (1..32) takes dividend bit 32 - k of the dominant numerator, selected
+  // one clock ahead into div_bit_reg (the select does not precede the subtract)
   wire [31:0] v1_num = dom_y_reg ? num_y_reg : num_x_reg;
-  wire [4:0] v1_bit = 5'd0 - iter_reg[4:0];  // 32 - iter, mod 32
-  wire div_in = (V1_ONLY != 0) ? v1_num[v1_bit] : dividend_reg[31];
+  wire [4:0] v1_bit_next = 5'd31 - iter_reg[4:0];  // in iteration k: the bit of iteration k + 1
+  wire div_in = (V1_ONLY != 0) ? div_bit_reg : dividend_reg[31];
   /* verilator lint_off UNUSEDSIGNAL */
   wire [31:0] feed32 = {16'd0, feed_reg};  // V1_ONLY uses the low 16 bits
   /* verilator lint_on UNUSEDSIGNAL */
@@ -494,7 +496,8 @@ module segment_prep #(
       S_DIV: begin
         if (iter_reg == 6'd0) begin
           if (V1_ONLY != 0) begin
-            dom_y_reg <= scan_gt;
+            dom_y_reg   <= scan_gt;
+            div_bit_reg <= scan_gt ? num_y_reg[31] : num_x_reg[31];
           end else if (path_v1_reg) begin
             dividend_reg <= scan_gt ? num_y_reg : num_x_reg;
             divisor_reg  <= feed32[DW-1:0];
@@ -505,6 +508,7 @@ module segment_prep #(
           iter_reg <= 6'd1;
         end else begin
           if (V1_ONLY == 0) dividend_reg <= {dividend_reg[30:0], 1'b0};
+          else div_bit_reg <= v1_num[v1_bit_next];
           rem_reg      <= rem_ge ? rem_diff[DW-1:0] : rem_shift[DW-1:0];
           quot_reg     <= {quot_reg[30:0], rem_ge};
           iter_reg     <= iter_reg + 6'd1;
@@ -619,6 +623,7 @@ module segment_prep #(
       divisor_reg      <= {DW{1'b0}};
       rem_reg          <= {DW{1'b0}};
       dom_y_reg        <= 1'b0;
+      div_bit_reg      <= 1'b0;
       quot_reg         <= 32'd0;
       iter_reg         <= 6'd0;
       mplier_reg       <= 32'd0;
