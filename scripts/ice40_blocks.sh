@@ -7,8 +7,10 @@
 # except clk / rst comes from a shift register loaded from one pin (so the inputs are registers, as
 # in cnc_core, and the synthesizer cannot treat them as constants), every output is captured into a
 # load/shift register read out on one pin (one LUT level per bit, keeps all output logic alive).
-# Reports the post-route Fmax per block and, below 50 MHz, the critical path's ends.
-# Usage: scripts/ice40_blocks.sh [OUT_DIR]   env: BLOCKS="arc_dda profile_gen ..." FREQ=50 SEED=1
+# Reports the post-route Fmax per block and, below 50 MHz, the critical path's ends (whole path in
+# OUT_DIR/ice40_blk_<name>.critical.txt). A report: exits 0 when a block is below FREQ (the known
+# ones are in docs/synthesis.md) unless STRICT=1; exits non-zero when the flow fails.
+# Usage: scripts/ice40_blocks.sh [OUT_DIR]   env: BLOCKS="arc_dda profile_gen ..." FREQ=50 SEED=1 STRICT=0
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/synth}
@@ -43,7 +45,7 @@ for b in $blocks; do
   pre=""
   [ -n "$chp" ] && pre="chparam $chp $b;"
   # the block's ports (after parameters) -> wrapper
-  yosys -q -p "read_verilog $files; $pre hierarchy -top $b; write_json $out/$tag.ports.json" >/dev/null
+  yosys -q -p "read_verilog $files; $pre hierarchy -top $b; proc; write_json $out/$tag.ports.json" >/dev/null
   python3 - "$out/$tag.ports.json" "$b" "$chp" >"$out/$tag.v" <<'PYEOF'
 import json, sys
 d = json.load(open(sys.argv[1])); name = sys.argv[2]; chp = sys.argv[3].split()
@@ -95,7 +97,10 @@ PYEOF
   fmax=$(grep "Max frequency for clock" "$out/$tag.nextpnr.log" | tail -1 | sed -E 's/.*: *([0-9.]+) MHz.*/\1/')
   lcs=$(grep -E "ICESTORM_LC:" "$out/$tag.nextpnr.log" | tail -1 | sed -E 's/.*ICESTORM_LC: *//')
   verdict=PASS
-  if awk -v f="$fmax" -v r="$freq" 'BEGIN { exit !(f < r) }'; then verdict=FAIL; status=1; fi
+  if awk -v f="$fmax" -v r="$freq" 'BEGIN { exit !(f < r) }'; then
+    verdict=FAIL
+    [ "${STRICT:-0}" = 1 ] && status=1
+  fi
   summary+=("$(printf '  %-18s Fmax %7s MHz (%s)  LCs %s  time: yosys %ds, nextpnr %ds' \
     "$b" "$fmax" "$verdict" "$lcs" $((t1 - t0)) $((t2 - t1)))")
   awk '/Critical path report for clock/ {buf=""; p=1} p {buf = buf $0 "\n"} p && /ns logic/ {p=0; last=buf}
