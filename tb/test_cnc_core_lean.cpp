@@ -3,7 +3,9 @@
 // the 0xAA ACKs decoded from tx, STEP/DIR recorded every clock. Checks a seeded v1 job with the
 // host's handshake (exact STEP schedule R + ceil(k*T/n), DIR, laser, ACK after the move,
 // positions), packets sent without waiting (run back to back, one ACK each), and that a v2 frame is
-// not understood (no answer, cut by the 100 ms watchdog like any partial v1 packet).
+// not understood (no answer, cut by the 100 ms watchdog like any partial v1 packet). Lockstep:
+// the trimmed lean datapath (LEAN_TRIM = 1) and the fixed step timing (STEP_CFG = 0) against the
+// general lean build, every output on every clock of a random v1 session.
 #include <gtest/gtest.h>
 
 #include <algorithm>
