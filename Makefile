@@ -80,8 +80,9 @@ demo: build
 
 # Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz.
 synth: deps
-	./scripts/synth_report.sh $(BUILD)/synth
+	EXTRA=fixed ./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth
+	./scripts/ice40_blocks.sh $(BUILD)/synth
 
 # Formal proofs of the `ifdef FORMAL` properties (Yosys + yosys-smtbmc + Z3); prints a table.
 # A separate step from `make test` (about 2-3 minutes on 2 cores).

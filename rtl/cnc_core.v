@@ -54,6 +54,17 @@
 //   HEATERS = 0   no heater_block: the heater frames (0x20..0x24) are answered NAK UNKNOWN_TYPE,
 //                 heater and adc_* outputs are low, adc_sdo is ignored, STATUS still carries its
 //                 16 heater bytes (all 0: heaters idle, no faults).
+//   LEAN_TRIM = 1 (used only with PROTO_V2 = 0): segment_prep is built for v1 entries only
+//                 (V1_ONLY: narrower divider and multiplier, no v2 paths) and the executor's DDAs
+//                 compute T - n themselves and keep no steps-left counter (LEAN_DDA): same pins
+//                 on every clock, fewer
+//                 registers and LUTs. LEAN_TRIM = 0 keeps the general datapath (the bench
+//                 test_cnc_core_lean runs both in lockstep).
+//   STEP_CFG = 0  (used only with PROTO_V2 = 0): the step timing is fixed at STEP_HIGH, STEP_LOW,
+//                 DIR_SETUP, DIR_HOLD on every axis, as on the original controller (the board top
+//                 ties cfg_wr low too): no shadow and active sets, no minimum-period scanner, and
+//                 the cfg_* port is not read. With cfg_wr held low the pins are the same on every
+//                 clock as with STEP_CFG = 1.
 `default_nettype none
 
 module cnc_core #(
@@ -75,7 +86,9 @@ module cnc_core #(
     parameter PROTO_V2          = 1,                   // build options (header comment)
     parameter PROFILES          = 1,
     parameter ARCS              = 1,
-    parameter HEATERS           = 1
+    parameter HEATERS           = 1,
+    parameter LEAN_TRIM         = 1,                   // PROTO_V2 = 0 only (header comment)
+    parameter STEP_CFG          = 1                    // PROTO_V2 = 0 only (header comment)
 ) (
     input wire clk,
     input wire rst,
@@ -136,6 +149,10 @@ module cnc_core #(
   localparam integer PROF_EN = (V2_EN != 0 && PROFILES != 0) ? 1 : 0;
   localparam integer ARC_EN = (V2_EN != 0 && ARCS != 0) ? 1 : 0;
   localparam integer HEAT_EN = (V2_EN != 0 && HEATERS != 0) ? 1 : 0;
+  // v1-only datapath trims (segment_prep V1_ONLY, executor LEAN_DDA)
+  localparam integer TRIM_EN = (V2_EN == 0 && LEAN_TRIM != 0) ? 1 : 0;
+  // v1 build with the step timing fixed at STEP_HIGH / STEP_LOW / DIR_SETUP / DIR_HOLD
+  localparam integer FIXED_EN = (V2_EN == 0 && STEP_CFG == 0) ? 1 : 0;
   // the FIFO holds only the fields of the kinds built: header 45 + 32 * N_AXES, + 177 profile
   // fields, + 489 ARC fields (segment_prep's entry layout; the bits above are 0)
   localparam integer FIFO_W = (ARC_EN != 0) ? ENTRY_W : (PROF_EN != 0) ? 222 + 32 * N_AXES
@@ -332,9 +349,9 @@ module cnc_core #(
   assign estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
 
   // ---------------------------------------------------------------- configuration
-  reg [16*N_AXES-1:0] shadow_high_reg, shadow_low_reg, shadow_setup_reg, shadow_hold_reg;
-  reg [16*N_AXES-1:0] cfg_high_reg, cfg_low_reg, cfg_setup_reg, cfg_hold_reg;
-  reg [31:0] min_period_reg;
+  // active step timing (all axes) and the minimum dominant period, as used by prep and executor
+  wire [16*N_AXES-1:0] cfg_high, cfg_low, cfg_setup, cfg_hold;
+  wire [31:0] min_period;
 
   wire exec_idle;
   wire prep_busy;
@@ -349,6 +366,17 @@ module cnc_core #(
   localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
   localparam integer AX_LAST_I = N_AXES - 1;
   localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
+  localparam integer NAX_I = N_AXES;
+  localparam [7:0] NAX8 = NAX_I[7:0];
+  // fixed timing (STEP_CFG = 0, v1 build): a setting of 0 counts as 1 clock, as in step_pulse
+  localparam integer FIX_PERIOD_I = ((STEP_HIGH == 0) ? 1 : STEP_HIGH) + ((STEP_LOW == 0) ? 1 : STEP_LOW);
+  localparam [31:0] FIX_PERIOD = FIX_PERIOD_I;
+
+  generate
+  if (FIXED_EN == 0) begin : g_cfg
+  reg [16*N_AXES-1:0] shadow_high_reg, shadow_low_reg, shadow_setup_reg, shadow_hold_reg;
+  reg [16*N_AXES-1:0] cfg_high_reg, cfg_low_reg, cfg_setup_reg, cfg_hold_reg;
+  reg [31:0] min_period_reg;
   reg [AXW-1:0] pm_idx_reg, pm_idx_d_reg;
   reg [16:0] pm_sum_reg, pm_run_reg;
   // step_pulse treats a setting of 0 as 1 clock: count it so here too.
@@ -359,8 +387,6 @@ module cnc_core #(
   wire [16:0] pm_cand = (pm_idx_d_reg == {AXW{1'b0}} || pm_sum_reg > pm_run_reg) ? pm_sum_reg
                                                                                  : pm_run_reg;
 
-  localparam integer NAX_I = N_AXES;
-  localparam [7:0] NAX8 = NAX_I[7:0];
   wire [AXW-1:0] dec_ax = dec_cfg_axis[AXW-1:0];
 
   always @(posedge clk) begin
@@ -406,6 +432,22 @@ module cnc_core #(
       pm_run_reg       <= 17'd0;
     end
   end
+  assign cfg_high   = cfg_high_reg;
+  assign cfg_low    = cfg_low_reg;
+  assign cfg_setup  = cfg_setup_reg;
+  assign cfg_hold   = cfg_hold_reg;
+  assign min_period = min_period_reg;
+  end else begin : g_fixed
+    // the defaults, constant: no shadow or active set, no scanner; the cfg port is not read
+    assign cfg_high   = {N_AXES{STEP_HIGH[15:0]}};
+    assign cfg_low    = {N_AXES{STEP_LOW[15:0]}};
+    assign cfg_setup  = {N_AXES{DIR_SETUP[15:0]}};
+    assign cfg_hold   = {N_AXES{DIR_HOLD[15:0]}};
+    assign min_period = FIX_PERIOD;
+    wire unused_cfg = &{1'b0, cfg_wr, cfg_addr, cfg_wdata, dec_cfg_wr, dec_cfg_axis, dec_cfg_data,
+                        quiet};
+  end
+  endgenerate
 
   // ---------------------------------------------------------------- preparation
   wire [1:0] seg_code;
@@ -434,6 +476,7 @@ module cnc_core #(
       .N_AXES           (N_AXES),
       .PROFILES         (PROF_EN),
       .ARCS             (ARC_EN),
+      .V1_ONLY          (TRIM_EN),
       .FEED0_PERIOD     (FEED0_PERIOD),
       .DEFAULT_NUMERATOR(DEFAULT_NUMERATOR)
   ) u_prep (
@@ -444,9 +487,9 @@ module cnc_core #(
       .s_axis_tvalid  (cmd_tvalid),
       .s_axis_tready  (cmd_tready),
       .exec_idle      (exec_idle),
-      .min_period     (min_period_reg),
-      .cfg_dir_setup  (cfg_setup_reg),
-      .cfg_dir_hold   (cfg_hold_reg),
+      .min_period     (min_period),
+      .cfg_dir_setup  (cfg_setup),
+      .cfg_dir_hold   (cfg_hold),
       .m_axis_code    (seg_code),
       .m_axis_power   (seg_power),
       .m_axis_v2      (seg_v2),
@@ -489,9 +532,10 @@ module cnc_core #(
   assign laser = exec_laser && !estop_stop;  // also low at once (the executor's own is registered)
 
   segment_executor #(
-      .N_AXES  (N_AXES),
-      .PROFILES(PROF_EN),
-      .ARCS    (ARC_EN)
+      .N_AXES        (N_AXES),
+      .PROFILES      (PROF_EN),
+      .ARCS          (ARC_EN),
+      .LEAN_DDA      (TRIM_EN)
   ) u_exec (
       .clk            (clk),
       .rst            (rst),
@@ -521,10 +565,10 @@ module cnc_core #(
       .s_axis_arc          (seg_arc),
       .s_axis_tvalid  (seg_tvalid),
       .s_axis_tready  (seg_tready),
-      .cfg_step_high  (cfg_high_reg),
-      .cfg_step_low   (cfg_low_reg),
-      .cfg_dir_setup  (cfg_setup_reg),
-      .cfg_dir_hold   (cfg_hold_reg),
+      .cfg_step_high  (cfg_high),
+      .cfg_step_low   (cfg_low),
+      .cfg_dir_setup  (cfg_setup),
+      .cfg_dir_hold   (cfg_hold),
       .abort          (motion_abort),
       .step           (step),
       .dir            (dir),

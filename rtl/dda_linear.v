@@ -20,15 +20,27 @@
 // still issued, being combinational). step is combinational from the registers and tick.
 // The end of a segment is counted by the executor (a tick counter), not derived from `step`, so no
 // logic follows the 64-bit compare into a register enable.
+// TMN_FROM_TOTAL = 1 (cnc_core's protocol-v1 build, whose segment_prep holds no T - n): load takes
+// T from `total` instead of `tmn` and computes T - n (tmn_reg) and n - T (s) itself, two 65-bit
+// subtracts in parallel from the inputs; the registers get the same values as with tmn = T - n.
+// STEP_GUARD = 0: no steps-left counter (left_reg). It only guards against more than n steps,
+// which cannot happen within the T ticks a load is given (floor(t * n / T) <= n for t <= T); the
+// caller must tick at most T times per load (segment_executor's tick counter does).
 `default_nettype none
 
-module dda_linear (
+module dda_linear #(
+    parameter TMN_FROM_TOTAL = 0,  // 1: T from `total` (tmn unused), 0: T - n from `tmn` (total unused)
+    parameter STEP_GUARD     = 1   // 0: no steps-left counter (at most T ticks per load)
+) (
     input wire clk,
     input wire rst,
 
     input wire        load,
     input wire [31:0] steps,
-    input wire [63:0] tmn,
+    /* verilator lint_off UNUSEDSIGNAL */
+    input wire [63:0] tmn,    // T - n (TMN_FROM_TOTAL = 0)
+    input wire [63:0] total,  // T (TMN_FROM_TOTAL = 1)
+    /* verilator lint_on UNUSEDSIGNAL */
     input wire        tick,
 
     output wire step  // this tick emits a step
@@ -40,16 +52,18 @@ module dda_linear (
   reg [31:0] left_reg;
 
   wire        wrap = !s_reg[64];                          // r + n >= T
-  wire        active = tick && (left_reg != 32'd0);
+  wire        active = tick && (STEP_GUARD == 0 || left_reg != 32'd0);
   wire [64:0] s_wrap = s_reg - {1'b0, tmn_reg};           // s - (T - n)
   wire [64:0] s_next = s_reg + {33'd0, n_reg};            // s + n
-  wire [64:0] s_load = 65'd0 - {1'b0, tmn};               // -(T - n): r = 0
+  wire [64:0] s_load = (TMN_FROM_TOTAL != 0) ? {33'd0, steps} - {1'b0, total}  // n - T: r = 0
+                                              : 65'd0 - {1'b0, tmn};          // -(T - n)
+  wire [63:0] tmn_load = (TMN_FROM_TOTAL != 0) ? total - {32'd0, steps} : tmn;
 
   always @(posedge clk) begin
     if (load) begin
       s_reg    <= s_load;
       n_reg    <= steps;
-      tmn_reg  <= tmn;
+      tmn_reg  <= tmn_load;
       left_reg <= steps;
     end else if (active) begin
       if (wrap) begin

@@ -354,7 +354,12 @@ module frame_decoder #(
                 (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
                 (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok) ||
                 (t_lprof && prof_len_ok) || (t_arc && len_reg == 8'd63) || heat_len_ok;
-  wire field_ok = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8) &&
+  // The field rules are registered: the payload and type are complete at least two clocks before
+  // the CHECK clock (the two CRC bytes follow them), so field_ok_reg holds the rules of the frame
+  // being checked (the wide ARC / LINE_PROFILE compares end at a register, not in the accept).
+  reg field_ok_reg;
+  wire field_ok = field_ok_reg;
+  wire field_ok_w = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8) &&
                   !(t_lprof && !prof_field_ok) && !(t_arc && !arc_field_ok) &&
                   (!t_heat || heat_field_ok);
   wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
@@ -400,6 +405,7 @@ module frame_decoder #(
     v1_packet_reg    <= 1'b0;
     v1_overrun_reg   <= 1'b0;
     chk_reg          <= 1'b0;
+    field_ok_reg     <= field_ok_w;
 
     // CHECK of the packet/frame completed on the previous edge.
     if (chk_reg) begin
@@ -527,6 +533,7 @@ module frame_decoder #(
       pay_reg          <= {8 * PB{1'b0}};
       idle_reg         <= {WD_W{1'b0}};
       chk_reg          <= 1'b0;
+      field_ok_reg     <= 1'b0;
       chk_v1_reg       <= 1'b0;
       v2_mode_reg      <= 1'b0;
       next_seq_reg     <= 8'd0;

@@ -71,7 +71,9 @@
 module segment_executor #(
     parameter N_AXES   = 4,
     parameter PROFILES = 1,  // 0: no PROFILE kind (no profile_gen / dda_profile)
-    parameter ARCS     = 1   // 0: no ARC kind (no arc_dda)
+    parameter ARCS     = 1,  // 0: no ARC kind (no arc_dda)
+    parameter LEAN_DDA = 0  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused) and
+                            //    keep no steps-left counter (cnc_core's v1 build)
 ) (
     input wire clk,
     input wire rst,
@@ -345,6 +347,12 @@ module segment_executor #(
   reg arc_dir_viol_reg;
   reg arc_err_reg;
 
+  generate
+    if (LEAN_DDA != 0) begin : g_no_tmn
+      wire unused_tmn = &{1'b0, s_axis_tmn};  // the DDAs compute T - n from s_axis_total
+    end
+  endgenerate
+
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
@@ -352,12 +360,16 @@ module segment_executor #(
       assign step_req[a] = (dda_step[a] || prof_step[a] || arc_req[a]) && !abort;
       assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
-      dda_linear u_dda (
+      dda_linear #(
+          .TMN_FROM_TOTAL(LEAN_DDA),
+          .STEP_GUARD    ((LEAN_DDA != 0) ? 0 : 1)
+      ) u_dda (
           .clk  (clk),
           .rst  (rst),
           .load (accept),
           .steps(s_axis_steps[32*a+:32]),
           .tmn  (s_axis_tmn[64*a+:64]),
+          .total(s_axis_total),
           .tick (line_tick),
           .step (dda_step[a])
       );

@@ -67,12 +67,22 @@
 // path (the prof / arc entry bits are ignored, their registers and states are not generated in
 // synthesis: they stay constant and are optimized away); cnc_core then stores neither field in
 // the FIFO and the decoder answers LINE_PROFILE / ARC frames as unknown types.
+// V1_ONLY = 1 (cnc_core's protocol-v1 build; needs PROFILES = ARCS = 0): the entries are v1
+// MOTION and NUMERATORS only (v2 = 0, kind 0 / 1), so only the v1 arithmetic is built, narrower,
+// with the same results on the same clocks (same latency, same outputs): the divider reads the
+// dividend bit of the selected numerator by index, one clock ahead (no shifted copy), and divides by feed_reg
+// (16-bit remainder, no divisor register); the multiplier shifts the product right through
+// total_reg (the multiplier n_dom in its low half, a 33-bit add of P into the high half: no
+// multiplier and 64-bit multiplicand registers, no 64-bit adder); no S_MAX scan, v2 clamp or DWELL
+// path; m_axis_tmn is 0 (the executor is built with LEAN_DDA and computes T - n itself from
+// m_axis_total and m_axis_steps).
 `default_nettype none
 
 module segment_prep #(
     parameter N_AXES            = 4,
     parameter PROFILES          = 1,      // 0: no LINE_PROFILE entries (prepared as LINE if any)
     parameter ARCS              = 1,      // 0: no ARC entries (prepared as LINE if any)
+    parameter V1_ONLY           = 0,      // 1: only v1 MOTION / NUMERATORS entries (see below)
     parameter FEED0_PERIOD      = 62_500,
     parameter DEFAULT_NUMERATOR = 18_750_000   // CLK_HZ * 60 / 160 steps/mm at 50 MHz
 ) (
@@ -234,10 +244,13 @@ module segment_prep #(
   reg [31:0] n_dom_reg;
   reg [AXW-1:0] scan_idx_reg;
 
-  // restoring divider
-  reg [31:0] dividend_reg;  // shifts left; its MSB enters the remainder
-  reg [31:0] divisor_reg;
-  reg [31:0] rem_reg;  // remainder < divisor
+  // restoring divider (V1_ONLY: the divisor is feed, 16 bits; the remainder is below it)
+  localparam integer DW = (V1_ONLY != 0) ? 16 : 32;
+  reg [31:0] dividend_reg;  // shifts left; its MSB enters the remainder (not used with V1_ONLY)
+  reg [DW-1:0] divisor_reg;  // (not used with V1_ONLY: feed_reg)
+  reg [DW-1:0] rem_reg;  // remainder < divisor
+  reg dom_y_reg;  // V1_ONLY: Y is the dominant axis (its numerator is the dividend)
+  reg div_bit_reg;  // V1_ONLY: the dividend bit of the current iteration
   reg [31:0] quot_reg;
   reg [5:0] iter_reg;
 
@@ -275,7 +288,11 @@ module segment_prep #(
   // One comparator finds the dominant axis: n_dom_reg starts as |X| and takes each next axis that
   // is strictly larger (X wins a tie). v1 does one step (Y) in the first DIV clock.
   wire [31:0] scan_val = abs_reg[32*scan_idx_reg+:32];
-  wire scan_gt = (scan_val > n_dom_reg);
+  // V1_ONLY: n_dom is |X| or |Y| by dom_y_reg (no n_dom register); Y wins only if strictly larger
+  wire [31:0] abs_x = abs_reg[31:0];
+  wire [31:0] abs_y = abs_reg[32*(N_AXES>1?1:0)+:32];
+  wire scan_gt = (V1_ONLY != 0) ? (abs_y > abs_x) : (scan_val > n_dom_reg);
+  wire [31:0] n_dom = (V1_ONLY != 0) ? (dom_y_reg ? abs_y : abs_x) : n_dom_reg;
 
   // dir_fast: the axes are checked one per clock during the multiplier's iterations (two stages:
   // hold' + setup' of axis scan_idx_reg into chk_hs_reg, then the compare with P).
@@ -284,9 +301,20 @@ module segment_prep #(
   wire [16:0] chk_hs = {1'b0, (chk_hold == 16'd0) ? 16'd1 : chk_hold} +
                        {1'b0, (chk_setup == 16'd0) ? 16'd1 : chk_setup};
 
-  wire [32:0] rem_shift = {rem_reg, dividend_reg[31]};
-  wire [32:0] rem_diff = rem_shift - {1'b0, divisor_reg};
-  wire rem_ge = !rem_diff[32];  // rem_shift >= divisor
+  // V1_ONLY: iteration k (1..32) takes dividend bit 32 - k of the dominant numerator, selected
+  // one clock ahead into div_bit_reg (the select does not precede the subtract)
+  wire [31:0] v1_num = dom_y_reg ? num_y_reg : num_x_reg;
+  wire [4:0] v1_bit_next = 5'd31 - iter_reg[4:0];  // in iteration k: the bit of iteration k + 1
+  wire div_in = (V1_ONLY != 0) ? div_bit_reg : dividend_reg[31];
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [31:0] feed32 = {16'd0, feed_reg};  // V1_ONLY uses the low 16 bits
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [DW-1:0] divisor = (V1_ONLY != 0) ? feed32[DW-1:0] : divisor_reg;
+  wire [DW:0] rem_shift = {rem_reg, div_in};
+  wire [DW:0] rem_diff = rem_shift - {1'b0, divisor};
+  wire rem_ge = !rem_diff[DW];  // rem_shift >= divisor
+  // V1_ONLY multiplier step: total_reg = {high half, multiplier bits not yet used}
+  wire [32:0] mul_hi = {1'b0, total_reg[63:32]} + (total_reg[0] ? {1'b0, quot_reg} : 33'd0);
 
   wire idle_state = (state_reg == S_IDLE);
   wire accept_init = idle_state && (in_kind == K_NUMERATORS) && exec_idle && !abort;
@@ -325,11 +353,11 @@ module segment_prep #(
           d_reg        <= in_d;
           n_dom_reg    <= abs_in[31:0];
           scan_idx_reg <= {{(AXW - 1) {1'b0}}, 1'b1};
-          rem_reg      <= 32'd0;
+          rem_reg      <= {DW{1'b0}};
           quot_reg     <= 32'd0;
           iter_reg     <= 6'd0;
           // v1: the dominant axis (X or Y) is chosen one clock later; v2: scan the other axes first
-          state_reg    <= in_arc ? S_AMUL : in_v1_motion ? S_DIV : S_MAX;
+          state_reg    <= in_arc ? S_AMUL : (in_v1_motion || V1_ONLY != 0) ? S_DIV : S_MAX;
           iter_reg     <= 6'd0;
         end
       end
@@ -468,17 +496,21 @@ module segment_prep #(
       end
       S_DIV: begin
         if (iter_reg == 6'd0) begin
-          if (path_v1_reg) begin
+          if (V1_ONLY != 0) begin
+            dom_y_reg   <= scan_gt;
+            div_bit_reg <= scan_gt ? num_y_reg[31] : num_x_reg[31];
+          end else if (path_v1_reg) begin
             dividend_reg <= scan_gt ? num_y_reg : num_x_reg;
-            divisor_reg  <= {16'd0, feed_reg};
+            divisor_reg  <= feed32[DW-1:0];
             if (scan_gt) n_dom_reg <= scan_val;
           end else begin
-            divisor_reg <= n_dom_reg;
+            divisor_reg <= n_dom_reg[DW-1:0];
           end
           iter_reg <= 6'd1;
         end else begin
-          dividend_reg <= {dividend_reg[30:0], 1'b0};
-          rem_reg      <= rem_ge ? rem_diff[31:0] : rem_shift[31:0];
+          if (V1_ONLY == 0) dividend_reg <= {dividend_reg[30:0], 1'b0};
+          else div_bit_reg <= v1_num[v1_bit_next];
+          rem_reg      <= rem_ge ? rem_diff[DW-1:0] : rem_shift[DW-1:0];
           quot_reg     <= {quot_reg[30:0], rem_ge};
           iter_reg     <= iter_reg + 6'd1;
           if (iter_reg == 6'd32) state_reg <= S_CLAMP;
@@ -489,19 +521,19 @@ module segment_prep #(
         // T = P * n_dom + total_reg: v1 and a clamped v2 start from 0; an unclamped v2 from the
         // remainder (P * n_dom + rem = the T given; with n_dom = 0 the remainder is T itself).
         mplier_reg <= n_dom_reg;
-        total_reg  <= 64'd0;
-        if (path_v1_reg) begin
+        total_reg  <= (V1_ONLY != 0) ? {32'd0, n_dom} : 64'd0;
+        if (path_v1_reg || V1_ONLY != 0) begin
           if (feed_reg == 16'd0)
             quot_reg <= (FEED0_PERIOD < min_period) ? min_period : FEED0_PERIOD;
           else if (quot_reg < min_period) quot_reg <= min_period;
         end else if (n_dom_reg == 32'd0) begin
           quot_reg  <= 32'd0;
-          total_reg <= {32'd0, rem_reg};
+          total_reg <= {{(64 - DW) {1'b0}}, rem_reg};
         end else if (quot_reg < min_period) begin
           quot_reg    <= min_period;
           clamped_reg <= 1'b1;
         end else begin
-          total_reg <= {32'd0, rem_reg};
+          total_reg <= {{(64 - DW) {1'b0}}, rem_reg};
         end
         state_reg <= S_MUL;
         iter_reg  <= 6'd0;
@@ -515,9 +547,13 @@ module segment_prep #(
           fast_reg     <= 1'b1;
           chk_rev_reg  <= 1'b0;
         end else begin
-          if (mplier_reg[0]) total_reg <= total_reg + mcand_reg;
-          mplier_reg <= {1'b0, mplier_reg[31:1]};
-          mcand_reg  <= {mcand_reg[62:0], 1'b0};
+          if (V1_ONLY != 0) begin
+            total_reg <= {mul_hi, total_reg[31:1]};
+          end else begin
+            if (mplier_reg[0]) total_reg <= total_reg + mcand_reg;
+            mplier_reg <= {1'b0, mplier_reg[31:1]};
+            mcand_reg  <= {mcand_reg[62:0], 1'b0};
+          end
           iter_reg   <= iter_reg + 6'd1;
           // axis k: sum in iteration k + 1, compare in k + 2 (the last axis repeats harmlessly)
           chk_hs_reg  <= chk_hs;
@@ -529,7 +565,8 @@ module segment_prep #(
       end
       S_SUB: begin
         for (i = 0; i < N_AXES; i = i + 1)
-          tmn_reg[64*i+:64] <= prof_reg ? 64'd0 : total_reg - {32'd0, abs_reg[32*i+:32]};
+          tmn_reg[64*i+:64] <= (prof_reg || V1_ONLY != 0) ? 64'd0
+                                                            : total_reg - {32'd0, abs_reg[32*i+:32]};
         dir_fast_reg  <= fast_reg && !prof_reg && ((moving & unk_reg) == {N_AXES{1'b0}});
         unk_reg       <= unk_reg & ~moving;
         if (prof_reg) begin
@@ -590,8 +627,10 @@ module segment_prep #(
       n_dom_reg        <= 32'd0;
       scan_idx_reg     <= {AXW{1'b0}};
       dividend_reg     <= 32'd0;
-      divisor_reg      <= 32'd0;
-      rem_reg          <= 32'd0;
+      divisor_reg      <= {DW{1'b0}};
+      rem_reg          <= {DW{1'b0}};
+      dom_y_reg        <= 1'b0;
+      div_bit_reg      <= 1'b0;
       quot_reg         <= 32'd0;
       iter_reg         <= 6'd0;
       mplier_reg       <= 32'd0;

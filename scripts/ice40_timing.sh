@@ -28,6 +28,8 @@ placer=${PLACER:-heap}
 declare -A CFG=(
   [lean2]="N_AXES 2 PROTO_V2 0"                        # 2 axes, protocol v1 only
   [lean4]="N_AXES 4 PROTO_V2 0"                        # 4 axes, protocol v1 only
+  [lean2f]="N_AXES 2 PROTO_V2 0 STEP_CFG 0"            # lean2, step timing fixed (no cfg port)
+  [lean4f]="N_AXES 4 PROTO_V2 0 STEP_CFG 0"            # lean4, step timing fixed (no cfg port)
   [lines2]="N_AXES 2 PROFILES 0 ARCS 0 HEATERS 0"      # v1 + v2 with LINE/DWELL only
   [full2]="N_AXES 2"                                   # everything, 2 axes (the board's core)
   [full4]="N_AXES 4"                                   # everything, 4 axes
@@ -46,7 +48,8 @@ module ice40_cnc_top #(
     parameter PROTO_V2 = 1,
     parameter PROFILES = 1,
     parameter ARCS     = 1,
-    parameter HEATERS  = 1
+    parameter HEATERS  = 1,
+    parameter STEP_CFG = 1
 ) (
     input  wire              clk,
     input  wire              rst,
@@ -80,7 +83,8 @@ module ice40_cnc_top #(
   wire v2_mode, rx_partial;
   wire [31:0] segments_done;
   cnc_core #(
-      .N_AXES(N_AXES), .PROTO_V2(PROTO_V2), .PROFILES(PROFILES), .ARCS(ARCS), .HEATERS(HEATERS)
+      .N_AXES(N_AXES), .PROTO_V2(PROTO_V2), .PROFILES(PROFILES), .ARCS(ARCS), .HEATERS(HEATERS),
+      .STEP_CFG(STEP_CFG)
   ) u_core (
       .clk(clk), .rst(rst), .rx(rx), .tx(tx), .step(step), .dir(dir), .laser(laser),
       .estop(estop), .heater(heater), .adc_convst(adc_convst), .adc_sck(adc_sck),

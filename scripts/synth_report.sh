@@ -6,6 +6,9 @@
 #         configuration to compare with the original controller (2 axes, v1, no FIFO)
 #   v1    de1soc_top, the DE1-SoC board (cnc_core with N_AXES=2, every feature built)
 #   full  cnc_core with N_AXES=4 (chparam), every status output a top-level port
+# and, when EXTRA="fixed" (make synth sets it; CTest does not, to save ~15 s):
+#   fixed cnc_core with N_AXES=2 PROTO_V2=0 STEP_CFG=0: the lean build with the step timing fixed
+#         at the defaults (no cfg port), the original controller's feature set
 # Every run also fails on a Yosys warning (the former synth_smoke check; ABC's notes excepted).
 # For each: LUTs (MISTRAL_ALUT* cells), an ALM estimate, registers (MISTRAL_FF), DSP blocks
 # (MISTRAL_MUL*), RAM blocks and bits (MISTRAL_M10K 10240 bits, MISTRAL_MLAB 640 bits per block),
@@ -16,7 +19,8 @@
 # (an ALM holds one 6-input LUT, or two smaller LUTs, or two adder bits, and four registers; the
 # fitter packs better or worse than this, Quartus' figure is the authority).
 # Exits 1 when a figure exceeds its budget, 2 when Yosys fails or prints a warning.
-# Usage: scripts/synth_report.sh [OUT_DIR]     env: BUDGET_FILE (default constraints/resource_budget.txt)
+# Usage: scripts/synth_report.sh [OUT_DIR]     env: BUDGET_FILE (default constraints/resource_budget.txt),
+#                                                   EXTRA="fixed" (the fourth configuration)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/synth}
@@ -68,6 +72,10 @@ run lean cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 cnc_core;"
 run v1 de1soc_top ""
 run full cnc_core "chparam -set N_AXES 4 cnc_core;"
 cfgs="lean v1 full"
+if [[ " ${EXTRA:-} " == *" fixed "* ]]; then
+  run fixed cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 -set STEP_CFG 0 cnc_core;"
+  cfgs="$cfgs fixed"
+fi
 
 keys="luts alms registers dsp m10k mlab ram_bits ltp_cells"
 declare -A LABEL=([luts]="LUTs (MISTRAL_ALUT*)" [alms]="ALMs (estimate)" [registers]="registers (MISTRAL_FF)"
@@ -75,9 +83,16 @@ declare -A LABEL=([luts]="LUTs (MISTRAL_ALUT*)" [alms]="ALMs (estimate)" [regist
   [ram_bits]="RAM bits total" [ltp_cells]="longest comb. path (cells)")
 
 echo "Cyclone V (Yosys $(yosys -V | awk '{print $2}') synth_intel_alm -family cyclonev), budgets from $budget_file"
-fmt='%-28s %10s %12s %7s %12s %7s %12s %7s\n'
-printf "$fmt" "" "original" "lean 2-axis" "budget" "2-axis full" "budget" "4-axis full" "budget"
-printf "$fmt" "" "(2 axes)" "v1 only" "" "de1soc_top" "" "cnc_core" ""
+fmt='%-28s %10s %12s %7s %12s %7s %12s %7s'
+h1=("" "original" "lean 2-axis" "budget" "2-axis full" "budget" "4-axis full" "budget")
+h2=("" "(2 axes)" "v1 only" "" "de1soc_top" "" "cnc_core" "")
+if [[ " $cfgs " == *" fixed "* ]]; then
+  fmt="$fmt %12s %7s"
+  h1+=("lean 2-axis" "budget"); h2+=("fixed timing" "")
+fi
+fmt="$fmt\n"
+printf "$fmt" "${h1[@]}"
+printf "$fmt" "${h2[@]}"
 fail=0
 for k in $keys; do
   ref=$(budget "ref.$k"); ref=${ref:--}

@@ -3,22 +3,31 @@
 // the 0xAA ACKs decoded from tx, STEP/DIR recorded every clock. Checks a seeded v1 job with the
 // host's handshake (exact STEP schedule R + ceil(k*T/n), DIR, laser, ACK after the move,
 // positions), packets sent without waiting (run back to back, one ACK each), and that a v2 frame is
-// not understood (no answer, cut by the 100 ms watchdog like any partial v1 packet).
+// not understood (no answer, cut by the 100 ms watchdog like any partial v1 packet). Lockstep:
+// the trimmed lean datapath (LEAN_TRIM = 1) and the fixed step timing (STEP_CFG = 0) against the
+// general lean build, every output on every clock of a random v1 session.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "Vcnc_core_lean.h"
+#include "Vcnc_core_lean_fast.h"
+#include "Vcnc_core_lean_fixed.h"
+#include "Vcnc_core_lean_ref.h"
 #include "Vcnc_core_lines.h"
 #include "common/core_pins.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
+#include "common/uart_bits.h"
 #include "common/v1_packets.h"
 #include "common/v2_frames.h"
 
@@ -27,6 +36,7 @@ namespace {
 using fpgacnc::tb::AxisTiming;
 using fpgacnc::tb::init_packet;
 using fpgacnc::tb::motion_packet;
+using fpgacnc::tb::UartDriver;
 
 constexpr int kAxes = 2;
 constexpr uint32_t kDefaultNumerator = 18'750'000;
@@ -279,6 +289,244 @@ TEST(CncCoreLean, LinesOnlyBuildAnswersUnknownType) {
   EXPECT_EQ(b.mon().axis(1).position, -25);
   EXPECT_EQ(b.dut().next_seq, 1u);
   EXPECT_EQ(b.dut().violations, 0u);
+}
+
+// ---------------------------------------------------------------- lockstep (LEAN_TRIM, STEP_CFG)
+// Two lean builds driven with the same pins every clock; every output compared every clock. The
+// models (tb/lean.cmake) have a 2.5 Mbaud UART, a 20 000-clock watchdog and STEP high 3 / low 2,
+// DIR setup 6 / hold 4, so one random v1 session holds hundreds of moves.
+constexpr double kFastBaud = 2.5e6;
+constexpr uint64_t kFastByte = 200;  // 10 bits of 20 clocks
+
+template <class A, class B>
+class Lockstep {
+ public:
+  Lockstep()
+      : ca_(std::make_unique<VerilatedContext>()),
+        cb_(std::make_unique<VerilatedContext>()),
+        a_(std::make_unique<A>(ca_.get())),
+        b_(std::make_unique<B>(cb_.get())),
+        drv_(50e6, kFastBaud) {
+    set([](auto& m) {
+      m.rx = 1;
+      m.estop = 0;
+      m.adc_sdo = 0;
+      m.cfg_wr = 0;
+      m.cfg_addr = 0;
+      m.cfg_wdata = 0;
+      m.rst = 1;
+    });
+    for (int i = 0; i < 4; ++i) tick();
+    set([](auto& m) { m.rst = 0; });
+  }
+  ~Lockstep() {
+    a_->final();
+    b_->final();
+  }
+  template <class F>
+  void set(F f) {
+    f(*a_);
+    f(*b_);
+  }
+  A& a() { return *a_; }
+  UartDriver& uart() { return drv_; }
+  uint64_t cycle() const { return cycle_; }
+  const std::string& mismatch() const { return mismatch_; }
+  uint64_t step_rises() const { return step_rises_; }
+  uint64_t dir_changes() const { return dir_changes_; }
+
+  // One clock; false (and mismatch() set) when an output differs.
+  bool tick() {
+    const int rx = drv_.tick();
+    set([rx](auto& m) {
+      m.rx = rx;
+      m.clk = 0;
+      m.eval();
+      m.clk = 1;
+      m.eval();
+    });
+    ++cycle_;
+    const A& x = *a_;
+    const B& y = *b_;
+#define LOCKSTEP_CMP(f)                                                                  \
+  if (x.f != y.f) {                                                                      \
+    mismatch_ = std::string(#f) + " differs at cycle " + std::to_string(cycle_) +        \
+                ": expected (reference) " + std::to_string(static_cast<uint64_t>(y.f)) + \
+                ", got " + std::to_string(static_cast<uint64_t>(x.f));                   \
+    return false;                                                                        \
+  }
+    LOCKSTEP_CMP(tx)
+    LOCKSTEP_CMP(step)
+    LOCKSTEP_CMP(dir)
+    LOCKSTEP_CMP(laser)
+    LOCKSTEP_CMP(heater)
+    LOCKSTEP_CMP(adc_convst)
+    LOCKSTEP_CMP(adc_sck)
+    LOCKSTEP_CMP(adc_sdi)
+    LOCKSTEP_CMP(busy)
+    LOCKSTEP_CMP(running)
+    LOCKSTEP_CMP(seg_start)
+    LOCKSTEP_CMP(seg_done)
+    LOCKSTEP_CMP(position)
+    LOCKSTEP_CMP(last_code)
+    LOCKSTEP_CMP(last_feed)
+    LOCKSTEP_CMP(last_period)
+    LOCKSTEP_CMP(packet_count)
+    LOCKSTEP_CMP(frame_errors)
+    LOCKSTEP_CMP(timeouts)
+    LOCKSTEP_CMP(overruns)
+    LOCKSTEP_CMP(violations)
+    LOCKSTEP_CMP(numerator_x)
+    LOCKSTEP_CMP(numerator_y)
+    LOCKSTEP_CMP(fifo_level)
+    LOCKSTEP_CMP(rx_partial)
+    LOCKSTEP_CMP(faults)
+#undef LOCKSTEP_CMP
+    step_rises_ += __builtin_popcount(static_cast<unsigned>(x.step & ~step_prev_));
+    dir_changes_ += __builtin_popcount(static_cast<unsigned>(x.dir ^ dir_prev_));
+    step_prev_ = x.step;
+    dir_prev_ = x.dir;
+    return true;
+  }
+
+ private:
+  std::unique_ptr<VerilatedContext> ca_, cb_;
+  std::unique_ptr<A> a_;
+  std::unique_ptr<B> b_;
+  UartDriver drv_;
+  uint64_t cycle_ = 0, step_rises_ = 0, dir_changes_ = 0;
+  uint32_t step_prev_ = 0, dir_prev_ = 0;
+  std::string mismatch_;
+};
+
+struct SessionStats {
+  uint64_t moves = 0, inits = 0, partials = 0, huge = 0, estops = 0, cfg_writes = 0;
+};
+
+// A random v1 session: motion packets (small moves at periods near the minimum and above, zero-step
+// moves, feed 0, packets sent ahead of the ACK), init packets, partial packets cut by the watchdog,
+// huge moves (|steps| up to 2^31, numerators up to 2^32 - 1: 64-bit T) stopped by an e-stop and a
+// reset, and (cfg = true) random cfg port writes at any time.
+template <class A, class B>
+SessionStats run_session(Lockstep<A, B>& ls, uint64_t seed, uint64_t clocks, bool cfg) {
+  std::mt19937_64 rng(seed);
+  auto uni = [&](int64_t lo, int64_t hi) {
+    return std::uniform_int_distribution<int64_t>(lo, hi)(rng);
+  };
+  SessionStats st;
+  uint32_t num = 150'000;
+  auto run = [&](uint64_t n) {
+    for (uint64_t i = 0; i < n; ++i) {
+      if (cfg && uni(0, 999) == 0) {
+        const auto addr = static_cast<uint8_t>(uni(0, 9));  // 8, 9: no such axis
+        const auto val = static_cast<uint16_t>(uni(0, 7));
+        ls.set([&](auto& m) {
+          m.cfg_wr = 1;
+          m.cfg_addr = addr;
+          m.cfg_wdata = val;
+        });
+        ++st.cfg_writes;
+      } else {
+        ls.set([](auto& m) { m.cfg_wr = 0; });
+      }
+      if (!ls.tick()) return false;
+    }
+    return true;
+  };
+  auto send = [&](const std::vector<uint8_t>& bytes) {
+    for (uint8_t v : bytes) ls.uart().push(v);
+  };
+  while (ls.cycle() < clocks) {
+    const int64_t ev = uni(0, 99);
+    uint64_t wait = 0;
+    if (ev < 72) {
+      int32_t sx = static_cast<int32_t>(uni(-40, 40)), sy = static_cast<int32_t>(uni(-40, 40));
+      if (uni(0, 9) == 0) sx = sy = 0;
+      uint16_t feed = static_cast<uint16_t>(std::clamp<int64_t>(num / uni(3, 120), 0, 65535));
+      if (uni(0, 29) == 0) feed = 0;  // FEED0_PERIOD
+      send(motion_packet(static_cast<uint8_t>(uni(0, 3)), sx, sy, feed));
+      ++st.moves;
+      const uint64_t p = feed == 0 ? 700 : std::max<uint64_t>(num / feed, 5);
+      const uint64_t t = p * std::max(mag(sx), mag(sy));
+      wait = uni(0, 3) == 0 ? uni(0, 3000) : 11 * kFastByte + uni(0, static_cast<int64_t>(t + 50));
+    } else if (ev < 80) {
+      num = static_cast<uint32_t>(uni(20'000, 400'000));
+      send(init_packet(num, static_cast<uint32_t>(uni(20'000, 400'000))));
+      ++st.inits;
+      wait = 9 * kFastByte + uni(0, 2000);
+    } else if (ev < 84) {
+      const int n = static_cast<int>(uni(1, 10));
+      for (int i = 0; i < n; ++i) ls.uart().push(static_cast<uint8_t>(uni(0, 255)));
+      ++st.partials;
+      wait = n * kFastByte + 20'000 + uni(0, 50);
+    } else if (ev < 87) {
+      // a huge move: 64-bit T; runs a while, then e-stop (latched in v1) and reset
+      const uint32_t n2 = static_cast<uint32_t>(uni(1, std::numeric_limits<uint32_t>::max()));
+      send(init_packet(n2, n2));
+      const auto big = [&]() {
+        const int64_t k = uni(0, 3);
+        return k == 0 ? std::numeric_limits<int32_t>::min()
+                      : static_cast<int32_t>(uni(std::numeric_limits<int32_t>::min() + 1,
+                                                 std::numeric_limits<int32_t>::max()));
+      };
+      send(motion_packet(static_cast<uint8_t>(uni(0, 3)), big(), big(),
+                         static_cast<uint16_t>(uni(1, 65535))));
+      ++st.huge;
+      if (!run(20 * kFastByte + uni(0, 20'000))) return st;
+      ls.set([](auto& m) { m.estop = 1; });
+      if (!run(uni(3, 50))) return st;
+      ls.set([](auto& m) { m.estop = 0; });
+      if (!run(uni(0, 300))) return st;
+      ls.set([](auto& m) { m.rst = 1; });
+      if (!run(3)) return st;
+      ls.set([](auto& m) { m.rst = 0; });
+      num = 150'000;
+      ++st.estops;
+      continue;
+    } else {
+      wait = uni(0, 5000);
+    }
+    if (!run(wait)) return st;
+  }
+  return st;
+}
+
+template <class A, class B>
+void lockstep_test(const char* name, uint64_t fallback_seed, bool cfg) {
+  const uint64_t seed = fpgacnc::tb::test_seed(fallback_seed, name);
+  Lockstep<A, B> ls;
+  const SessionStats st = run_session(ls, seed, 1'200'000, cfg);
+  ASSERT_TRUE(ls.mismatch().empty()) << ls.mismatch() << " (seed " << seed << ")";
+  std::printf(
+      "%s: %llu clocks, %llu moves, %llu inits, %llu partial packets, %llu huge moves "
+      "(e-stop + reset), %llu cfg writes; %llu STEP rises, %llu DIR changes, %u "
+      "packets since the last reset, %u timeouts, %u overruns\n",
+      name, static_cast<unsigned long long>(ls.cycle()), static_cast<unsigned long long>(st.moves),
+      static_cast<unsigned long long>(st.inits), static_cast<unsigned long long>(st.partials),
+      static_cast<unsigned long long>(st.huge), static_cast<unsigned long long>(st.cfg_writes),
+      static_cast<unsigned long long>(ls.step_rises()),
+      static_cast<unsigned long long>(ls.dir_changes()), static_cast<unsigned>(ls.a().packet_count),
+      static_cast<unsigned>(ls.a().timeouts), static_cast<unsigned>(ls.a().overruns));
+  // the session did what it is meant to (else the comparison proves little)
+  EXPECT_GT(ls.step_rises(), 2'000u);
+  EXPECT_GT(ls.dir_changes(), 50u);
+  EXPECT_GT(st.huge, 0u);
+  EXPECT_GT(st.partials, 0u);
+  if (cfg) {
+    EXPECT_GT(st.cfg_writes, 50u);
+  }
+}
+
+// LEAN_TRIM = 1 (segment_prep V1_ONLY, executor TMN_FROM_TOTAL) against LEAN_TRIM = 0, cfg port
+// writes included.
+TEST(CncCoreLean, TrimmedDatapathMatchesGeneralInLockstep) {
+  lockstep_test<Vcnc_core_lean_fast, Vcnc_core_lean_ref>("lean trim lockstep", 20261123, true);
+}
+
+// STEP_CFG = 0 (fixed step timing) against the general lean build with the cfg port idle.
+TEST(CncCoreLean, FixedStepTimingMatchesIdleCfgPortInLockstep) {
+  lockstep_test<Vcnc_core_lean_fixed, Vcnc_core_lean_ref>("lean fixed-timing lockstep", 20261124,
+                                                          false);
 }
 
 }  // namespace
