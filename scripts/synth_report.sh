@@ -20,7 +20,9 @@
 # fitter packs better or worse than this, Quartus' figure is the authority).
 # Exits 1 when a figure exceeds its budget, 2 when Yosys fails or prints a warning.
 # Usage: scripts/synth_report.sh [OUT_DIR]     env: BUDGET_FILE (default constraints/resource_budget.txt),
-#                                                   EXTRA="fixed" (the fourth configuration)
+#                                                   EXTRA="fixed" (the fourth configuration),
+#                                                   CONFIGS (default "lean v1 full"; CTest runs
+#                                                   "lean v1": the 4-axis build is make synth's)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/synth}
@@ -68,10 +70,16 @@ run() {
   R[$cfg.ltp_to]=$(awk '/^ *[0-9]+: / {l=$0} END {sub(/^ *[0-9]+: */, "", l); print l}' "$ltp")
 }
 
-run lean cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 cnc_core;"
-run v1 de1soc_top ""
-run full cnc_core "chparam -set N_AXES 4 cnc_core;"
-cfgs="lean v1 full"
+cfgs=""
+for cfg in ${CONFIGS:-lean v1 full}; do
+  case $cfg in
+    lean) run lean cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 cnc_core;" ;;
+    v1) run v1 de1soc_top "" ;;
+    full) run full cnc_core "chparam -set N_AXES 4 cnc_core;" ;;
+    *) echo "synth_report: unknown configuration '$cfg' (lean, v1, full)"; exit 2 ;;
+  esac
+  cfgs="$cfgs $cfg"
+done
 if [[ " ${EXTRA:-} " == *" fixed "* ]]; then
   run fixed cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 -set STEP_CFG 0 cnc_core;"
   cfgs="$cfgs fixed"
@@ -83,9 +91,17 @@ declare -A LABEL=([luts]="LUTs (MISTRAL_ALUT*)" [alms]="ALMs (estimate)" [regist
   [ram_bits]="RAM bits total" [ltp_cells]="longest comb. path (cells)")
 
 echo "Cyclone V (Yosys $(yosys -V | awk '{print $2}') synth_intel_alm -family cyclonev), budgets from $budget_file"
-fmt='%-28s %10s %12s %7s %12s %7s %12s %7s'
-h1=("" "original" "lean 2-axis" "budget" "2-axis full" "budget" "4-axis full" "budget")
-h2=("" "(2 axes)" "v1 only" "" "de1soc_top" "" "cnc_core" "")
+fmt='%-28s %10s'
+h1=("" "original")
+h2=("" "(2 axes)")
+declare -A H1=([lean]="lean 2-axis" [v1]="2-axis full" [full]="4-axis full")
+declare -A H2=([lean]="v1 only" [v1]="de1soc_top" [full]="cnc_core")
+for cfg in $cfgs; do
+  [ "$cfg" = fixed ] && continue
+  fmt="$fmt %12s %7s"
+  h1+=("${H1[$cfg]}" "budget")
+  h2+=("${H2[$cfg]}" "")
+done
 if [[ " $cfgs " == *" fixed "* ]]; then
   fmt="$fmt %12s %7s"
   h1+=("lean 2-axis" "budget"); h2+=("fixed timing" "")
