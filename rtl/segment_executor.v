@@ -7,9 +7,11 @@
 //   0 LINE: constant rate, T clocks (below). Also DWELL and zero-length segments.
 //   2 ARC: s_axis_arc from segment_prep: arc_dda (loaded on accept, advancing only in RUN: the
 //     arc's clock 0 is tick 1). An arc event of clock c raises STEP at edge R + c + 2 (arc_dda's
-//     output register, then step_pulse's). The segment's last tick is the clock of the arc's
-//     last move (arc_dda `ending`); a next segment accepted then starts on the next clock (zero
-//     gap) while the arc's last STEP rises one edge later. DIR: at the start the usual rules with
+//     output register, then step_pulse's). The segment lasts c_last + 2 ticks (c_last: the clock
+//     of the arc's last move, arc_dda `ending`): its last tick is the clock after the ending one
+//     (arc_end_reg), in which only the last move's step request is issued, so, as for every other
+//     kind, the arc's last STEP rises on the segment's last edge and a next segment accepted on
+//     that tick (zero gap) starts after it. DIR: at the start the usual rules with
 //     prep's first-move directions (an arc never uses dir_fast); inside the arc X and Y reverse at
 //     the quadrant points: the direction arc_dda announces for the next move is written when the
 //     axis's DIR hold has elapsed (see arc_ann); a STEP within DIR setup of that write strobes
@@ -189,8 +191,11 @@ module segment_executor #(
   /* verilator lint_off UNUSEDSIGNAL */
   wire arc_zs;  // unused with N_AXES < 3 (the decoder NAKs an ARC with DZ != 0 then)
   /* verilator lint_on UNUSEDSIGNAL */
+  // ARC: the clock after arc_dda's ending clock is the segment's last tick (the last move's step
+  // request, registered in arc_dda, is issued in it); arc_dda is idle then.
+  reg arc_end_reg;
   wire run_last = tick && ((kind_reg == K_PROFILE) ? prof_last :
-                           (kind_reg == K_ARC) ? arc_ending : last_reg);
+                           (kind_reg == K_ARC) ? arc_end_reg : last_reg);
   wire ready = !abort && (((state_reg == S_IDLE) && (settle_reg == 16'd0)) || run_last);
   wire accept = ready && s_axis_tvalid;
   wire prof_in = (PROFILES != 0) && (s_axis_kind == K_PROFILE);
@@ -200,8 +205,8 @@ module segment_executor #(
   wire cutting = (s_axis_code != 2'd0) && (s_axis_power != 8'd0);
   wire [N_AXES-1:0] arc_ann;  // ARC: the next X / Y move's direction differs from dir_tgt_reg
   wire [N_AXES-1:0] arc_req;  // ARC: step requests of arc_dda
-  // a step request in flight (the arc's registered last step, issued in the next segment's first
-  // clock) counts as a STEP rise: no DIR write in that clock
+  // an arc step request (registered in arc_dda, not yet seen by step_pulse's hold_ok) counts as a
+  // STEP rise: no DIR write of that axis in its clock (an in-arc reversal at a quadrant point)
   wire [N_AXES-1:0] hold_ok = pulse_hold_ok & ~arc_req;
   wire hold_clear = ((pend_reg & ~hold_ok) == {N_AXES{1'b0}});
   // DIR writes: in HOLD all pending axes together once every hold has elapsed; otherwise (a write
@@ -423,6 +428,7 @@ module segment_executor #(
     pend_reg      <= (pend_reg & ~dir_wr) | (accept ? rev : arc_ann);
     if (!accept) dir_tgt_reg <= dir_tgt_reg ^ arc_ann;
     arc_err_reg      <= arc_tick && arc_ending && arc_end_err && !abort;
+    arc_end_reg      <= arc_tick && arc_ending && !abort;
     arc_dir_viol_reg <= 1'b0;
     for (k = 0; k < 2; k = k + 1) begin
       if (dir_wr[k]) since_wr_reg[16*k+:16] <= 16'd1;
@@ -541,6 +547,7 @@ module segment_executor #(
       since_wr_reg[16*1+:16] <= 16'hFFFF;
       arc_dir_viol_reg <= 1'b0;
       arc_err_reg     <= 1'b0;
+      arc_end_reg     <= 1'b0;
     end
   end
 

@@ -3,8 +3,9 @@
 // Every arc's STEP edges (time and DIR level at the rise) equal the integer reference walk
 // (systemc/include/fpgacnc/twins/arc_walk.h) at a fixed latency of 2 clocks from the arc's first
 // clock (seg_start); zero gap where the directions continue (LINE -> ARC, ARC -> ARC, ARC ->
-// LINE_PROFILE); end positions exact; no STEP/DIR timing violation; BAD_FIELD / BAD_LENGTH NAKs and
-// the arc error fault (an inconsistent C_TOTAL) latched in STATUS faults bit 1.
+// LINE_PROFILE, ARC -> LINE at the minimum STEP period), an arc segment lasting c_last + 2 clocks
+// (its last STEP on its last edge); end positions exact; no STEP/DIR timing violation; BAD_FIELD /
+// BAD_LENGTH NAKs and the arc error fault (an inconsistent C_TOTAL) latched in STATUS faults bit 1.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -216,7 +217,18 @@ TEST(ArcCore, ArcFramesThroughThePins) {
     s.zero_gap_after = true;
     segs.push_back(s);
   }
-  segs.back().zero_gap_after = false;
+  {
+    // A LINE queued behind the last arc (zero gap, the arc's end tangent (-, +)) with X and Y at
+    // the minimum period (STEP high + low = 4): its first steps come 4 clocks after its start, so
+    // the arc's last STEP must rise by the arc segment's last edge (it rose one edge later before
+    // issue 6's fix: a STEP timing violation).
+    Seg l;
+    l.kind = Seg::kLine;
+    l.steps[0] = -8;
+    l.steps[1] = 8;
+    l.ticks = 8 * (kTiming.high + kTiming.low);
+    segs.push_back(l);
+  }
 
   // reference walks, and the frames
   std::vector<std::vector<uint8_t>> frames;
@@ -254,7 +266,7 @@ TEST(ArcCore, ArcFramesThroughThePins) {
         s.steps[1] = s.ref.y;
         s.steps[2] = s.ref.z;
         frames.push_back(v2::frame(0x13, seq++, arc_payload(s.f, 255)));
-        motion_clocks += s.ref.end_clock + 1;
+        motion_clocks += s.ref.end_clock + 2;  // the segment: c_last + 2 ticks
         break;
     }
   }
@@ -309,7 +321,8 @@ TEST(ArcCore, ArcFramesThroughThePins) {
       }
     }
     if (i + 1 < segs.size()) {
-      const uint64_t len = s.kind == Seg::kArc ? s.ref.end_clock + 1 : s.ticks;
+      // an arc segment lasts c_last + 2 ticks: its last STEP rises on its last edge
+      const uint64_t len = s.kind == Seg::kArc ? s.ref.end_clock + 2 : s.ticks;
       if (s.zero_gap_after) {
         EXPECT_EQ(b.starts[i + 1] - st, len) << "zero gap after segment " << i;
         zero_gaps += 1;

@@ -98,6 +98,10 @@ void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
   for (int i = bytes - 1; i >= 0; --i) p.push_back(static_cast<uint8_t>(v >> (8 * i)));
 }
 
+// An ARC segment lasts the walk's last-move clock c_last (Profile::clocks) + 2 ticks
+// (docs/timing.md).
+constexpr uint64_t kArcExtraTicks = 2;
+
 void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job& job,
                    const std::function<void(JobFrame)>& push,
                    const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
@@ -156,16 +160,20 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       s.code = p->code;
       s.spindle_s = p->spindle_s;
       if (p->arc) {
+        // The ARC segment lasts c_last + 2 clocks (p->clocks is c_last, the clock of the walk's
+        // last move: rtl/segment_executor.v issues its step request one clock after it, on the
+        // segment's last tick, and the last STEP rises on the segment's last edge).
+        const uint64_t arc_ticks = p->clocks + kArcExtraTicks;
         JobFrame jf;
         jf.frame = arc_frame(0, laser_power(s, cfg), p->arc_fields, p->rec);
         jf.segment_index = p->segment_index;
         jf.source_line = p->source_line;
-        jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
+        jf.t = static_cast<uint32_t>(std::min<uint64_t>(arc_ticks, kMaxT));
         jf.axes = 3;
         jf.profile = true;
         for (size_t a = 0; a < 3; ++a) job.target[a] += p->steps[a];
-        job.total_t += p->clocks;
-        advance(p->steps, p->clocks, true);
+        job.total_t += arc_ticks;
+        advance(p->steps, arc_ticks, true);
         ++job.arcs;
         job.max_axes = std::max<size_t>(job.max_axes, p->steps[2] != 0 ? 3 : 2);
         if (p->segment_index != last_seg) {

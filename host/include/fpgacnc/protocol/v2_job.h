@@ -3,7 +3,8 @@
 // - cfg.motion == "profile": the plan goes through the look-ahead planner
 //   (plan::plan_profiles, docs/motion.md) and every block becomes a LINE_PROFILE frame (TYPE
 //   0x12, docs/protocol.md; SHORT and k as for LINE); its JobFrame.t is the exact clock count of
-//   the hardware recurrence (saturated at UINT32_MAX; total_t sums the exact counts and the DIR
+//   the hardware recurrence (an ARC frame's: the walk's last-move clock + 2, the segment's length;
+//   saturated at UINT32_MAX; total_t sums the exact counts and the DIR
 //   hold/setup pauses at reversals, reversal_gap_clocks). The rest of
 //   this list is the "constant" mode.
 // - Every planned segment becomes a LINE frame: SHORT (int16 steps) when every count fits,

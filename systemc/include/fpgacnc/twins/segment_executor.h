@@ -28,8 +28,9 @@
 //   else (accept edges, zero gap, laser, seg_done) as for a segment of T = J.
 //   Kind ARC (Segment::arc, from an ARC frame): run_arc below (arc::Dda clock by clock, an event of
 //   walk clock c a step request on edge R + c + 2, in-arc DIR writes and DIR-setup violations,
-//   arc error); the segment lasts c_last + 1 ticks. dir_fast is 0; otherwise as a segment of that
-//   T.
+//   arc error); the segment lasts c_last + 2 ticks (c_last: the clock of the last move), so the
+//   last move's step request lands on the segment's last edge as for every other kind. dir_fast
+//   is 0; otherwise as a segment of that T.
 // Target `abort` (write, AbortSpan): the e-stop input high on edges first..last (rtl `abort`),
 //   sent before any segment that can reach it. With X = the first abort edge after a segment's
 //   accept edge A: no step request on an edge >= X (DDA, profile and arc requests are cut there;
@@ -80,7 +81,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         p_(p),
         pins_(pins) {
     last_wr_.fill(kLongAgo);
-    arc_req_.fill(kLongAgo);
     segments.register_b_transport(this, &SegmentExecutorTwin::on_segment);
     status.register_b_transport(this, &SegmentExecutorTwin::on_status);
     abort.register_b_transport(this, &SegmentExecutorTwin::on_abort);
@@ -104,8 +104,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     arc_err_cycles.clear();
     arc_violation_cycles.clear();
     last_wr_.fill(kLongAgo);
-    arc_req_.fill(kLongAgo);
-    arc_window_ = idle_window_ = -1;
     aborts_.clear();
     trace.clear();
     aborted = 0;
@@ -173,7 +171,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   void on_status(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     payload<ExecIdle>(gp).edge = idle_edge(clk_.at(delay));
-    payload<ExecIdle>(gp).window = idle_window_;
+    payload<ExecIdle>(gp).window = -1;  // (an arc's last step is inside its segment)
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
   }
 
@@ -194,11 +192,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     transport(*pulse[a], gp_, clk_, c, e, tlm::TLM_WRITE_COMMAND, kDirWrite);
     last_wr_[static_cast<size_t>(a)] = e;
   }
-  // No DIR write lands on edge e when an arc's step request of axis a is high in the clock before
-  // it (the arc's last step, in flight in the next segment's first clock, counts as a STEP rise).
-  Cycle after_arc_req(int a, Cycle e) const {
-    return arc_req_[static_cast<size_t>(a)] == e ? e + 1 : e;
-  }
 
   // Kind ARC from edge R (the walk's clock c is the clock after edge R + c): arc::Dda clock by
   // clock (rtl/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
@@ -208,7 +201,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // the axis's DIR hold since its last STEP rise has elapsed and no arc step request of that axis
   // is high. An X / Y step whose direction is not on the pin yet, or that comes less than DIR
   // setup after the last DIR write of its axis, strobes `violation` (not delayed). Returns the
-  // number of ticks (last move's clock + 1): the segment's last edge is R + ticks.
+  // number of ticks (last move's clock + 2): the segment's last edge is R + ticks, the edge of the
+  // last move's step request.
   // Abort: nothing lands on an edge >= cut (the walk stops; returns -1 when the arc's end edge
   // R + ticks is >= cut: the segment is dropped).
   Cycle run_arc(const Segment& s, Cycle r, Cycle cut) {
@@ -243,7 +237,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       const Cycle t = r + c;
       if (t + 1 >= cut) {  // aborted: nothing of this clock or later lands
         ++arcs;
-        arc_window_ = -1;
         return -1;
       }
       for (size_t k = 0; k < 2; ++k)
@@ -258,11 +251,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
       const arc::Event ev = dda.clock();
       const Cycle e = t + 2;
-      if (dda.done()) {  // the executor is idle in the clock after the arc (when nothing follows)
-        Cycle busy = -1;
-        for (int a = 0; a < kAxes; ++a) busy = std::max(busy, pulse_state(a, t).idle_from);
-        arc_window_ = busy <= t + 1 ? t + 1 : -1;
-      }
       bool viol = false;
       const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
       for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) {
@@ -280,16 +268,16 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (viol) arc_violation_cycles.push_back(e);
       last = c;
     }
-    const Cycle ticks = last + 1;
-    // A write still pending at the end (only when the arc outran its DIR timing) lands as in IDLE
-    // or in the next segment's run.
+    const Cycle ticks = last + 2;
+    // A write still pending at the end (only when the arc outran its DIR timing) lands from the
+    // segment's last tick on (not with the last step request of its axis), as in IDLE or in the
+    // next segment's run.
     for (size_t k = 0; k < 2; ++k)
-      for (Cycle t = r + ticks; pend[k] && t + 1 < cut; ++t) write_if_ok(k, t);
-    for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) arc_req_[k] = req[k];
+      for (Cycle t = r + last + 1; pend[k] && t + 1 < cut; ++t) write_if_ok(k, t);
     ++arcs;
     if (dda.err()) {
       ++arc_errors;
-      arc_err_cycles.push_back(r + ticks + 1);
+      arc_err_cycles.push_back(r + last + 2);
     }
     return ticks;
   }
@@ -336,8 +324,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (change) ++fast_reversals;
       for (int a = 0; a < kAxes; ++a) {
         if (!flip[a]) continue;
-        const Cycle d = after_arc_req(
-            a, std::max<Cycle>(run_end_ + kFastDirDelay, st[a].last_rise + p_.timing[a].hold));
+        const Cycle d =
+            std::max<Cycle>(run_end_ + kFastDirDelay, st[a].last_rise + p_.timing[a].hold);
         fast_dir = std::max(fast_dir, d);
         if (d < cut) dir_write(a, s.dir[a], d);  // else cancelled by the abort (pend_reg)
       }
@@ -356,8 +344,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
           dir_edge = std::max(dir_edge, now.last_rise + p_.timing[a].hold);
           setup = std::max(setup, p_.timing[a].setup);
         }
-        for (int a = 0; a < kAxes; ++a)
-          if (flip[a]) dir_edge = after_arc_req(a, dir_edge);
         if (dir_edge < cut)  // an abort in HOLD cancels the write
           for (int a = 0; a < kAxes; ++a)
             if (flip[a]) dir_write(a, s.dir[a], dir_edge);
@@ -374,12 +360,10 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         : std::all_of(s.steps.begin(), s.steps.end(), [](uint32_t n) { return n == 0; }) ? 'D'
                                                                                          : 'L';
     running_ = s.total != 0;
-    idle_window_ = -1;
     bool dropped = s.total != 0 ? run >= cut : end >= cut;  // HOLD / SETUP, or in ZERO
     if (s.arc && !dropped) {  // an arc the abort stops runs until edge `cut` (dropped there)
       const Cycle ticks = run_arc(s, run, cut);
       s.total = static_cast<uint64_t>(ticks < 0 ? cut - run : ticks);
-      idle_window_ = arc_window_;
     }
     if (s.total != 0 && !dropped) {
       seg_start_cycles.push_back(run);
@@ -408,7 +392,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     if (dropped) {  // idle after the abort edge, no seg_done
       ++aborted;
       running_ = false;
-      idle_window_ = -1;
       idle_after_ = cut;
       if (entry_ends) entry_ends->push_back(cut);
       return;
@@ -426,9 +409,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   Cycle run_end_ = -1;                  // edge of the last tick of the last segment with T > 0
   bool running_ = false;                // the last segment accepted has T > 0
   std::array<Cycle, kAxes> last_wr_{};  // edge of the last DIR write per axis (since_wr_reg)
-  std::array<Cycle, kAxes> arc_req_{};  // edge of the last arc step request per axis
-  Cycle arc_window_ = -1, idle_window_ = -1;  // ExecIdle::window after the last segment
-  std::vector<AbortSpan> aborts_;             // abort spans, in time order
+  std::vector<AbortSpan> aborts_;       // abort spans, in time order
   tlm::tlm_generic_payload gp_;
 };
 
