@@ -57,7 +57,7 @@ heater-plot: build
 	$(BUILD)/host/fpgacnc stream examples/bed-warmup.gcode --config examples/bed-warmup.toml --heater-plot docs/images/bed-warmup.svg
 
 # libFuzzer targets (clang, ASan + UBSan; separate tree $(BUILD)/fuzz): `make fuzz` runs each
-# FUZZ_TIME seconds (the fuzz_smoke test of `make test` runs 30 s each), `make fuzz-soak`
+# FUZZ_TIME seconds (the fuzz_smoke test of `make test` runs 20 s each), `make fuzz-soak`
 # FUZZ_SOAK_TIME seconds each, keeping the working corpus between runs.
 FUZZ_TIME ?= 30
 FUZZ_SOAK_TIME ?= 600
