@@ -31,9 +31,12 @@
 // DIR from them ahead of the step (at the quadrant points, where an axis reverses). Outputs: *_step are one-clock pulses, registered: an event of clock c is
 // on the pins on clock c + 1 (fixed latency 1); *_dir are valid with the step and held. `last`
 // comes with the final move's step. err / late are sticky until the next load.
-// Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz; 64-bit V; 48-bit F and cost
-// sums (x3). Longest paths: 96-bit add -> 96-bit compare -> mux (Rz), 96-bit add -> 48-bit compare
-// -> mux (V / Vz update), 48-bit compare -> fire -> state registers.
+// Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz, each a 48-bit fraction add
+// with carry-select integer parts; 64-bit V; 48-bit F and cost sums (x3). No carry chain feeds
+// another: every compare against a sum is one carry-save three-operand sum (add3), and the W2
+// compares of the selected cost are made for all three candidates. Longest path: 48-bit compare
+// -> fire -> take -> the load enables (about 1 000 registers); 45.8 MHz alone on an iCE40 HX8K
+// (scripts/ice40_blocks.sh), routing two thirds of it.
 `default_nettype none
 
 module arc_dda (
@@ -151,23 +154,71 @@ module arc_dda (
   wire               sel_d = (!va_reg || md_reg <= ma_reg) && (!vb_reg || md_reg <= mb_reg);
   wire               sel_a = !sel_d && va_reg && (!vb_reg || ma_reg <= mb_reg);
   wire        [47:0] s_sel = sel_d ? sd_reg : (sel_a ? sa_reg : sb_reg);
+  // the compares of the selected cost are made for all three candidates, in parallel with the
+  // selection (not after it)
+  wire        [47:0] u_int = u_reg[95:48];
+  wire               late_sel = sel_d ? (u_int >= sd_reg) : (sel_a ? (u_int >= sa_reg) : (u_int >= sb_reg));
+  wire               guard_sel = sel_d ? (sd_reg >= ctot_reg) :
+                                         (sel_a ? (sa_reg >= ctot_reg) : (sb_reg >= ctot_reg));
+  wire               exact_sel = sel_d ? (sd_reg == ctot_reg) :
+                                         (sel_a ? (sa_reg == ctot_reg) : (sb_reg == ctot_reg));
   wire               mx_sel = sel_d || sel_a;
   wire               my_sel = sel_d || !sel_a;
   wire               ex_sel = mx_sel ? exa_reg : ex0_reg;
   wire               ey_sel = my_sel ? eyb_reg : ey0_reg;
 
   // ---------------- pacing ----------------
-  wire        [95:0] u_next = u_reg + {32'd0, v_reg};
-  wire               decel = (u_next[95:48] >= d_reg);
-  wire        [64:0] vxa = {1'b0, vex_reg} + {17'd0, a_reg};
-  wire               dec_ok = ({1'b0, v_reg} >= vxa);
-  wire        [64:0] v_plus = {1'b0, v_reg} + {17'd0, a_reg};
-  wire               acc_ok = (v_plus <= {1'b0, vcr_reg});
-  wire        [95:0] rz_next = rz_reg + vz_reg;
-  wire        [96:0] rz_sub = {1'b0, rz_next} - {1'b0, ctot_reg, 48'd0};
-  wire               z_go = !rz_sub[96] && (zc_reg != nz_reg);
+  // Every compare against a sum of registers is the sign of one three-operand sum (add3: carry-save,
+  // then a single carry chain); the compares of U(c+1) and Rz(c+1) with D*2^48 and C_TOTAL*2^48
+  // are made from the integer parts for carry 0 and 1 out of the 48-bit fraction add, in parallel
+  // with it, and that carry picks one (the integer parts are carry-select adds as well). The
+  // integer-part compares are not cut at 48 bits: U and Rz stay far below that (U < 2^45 for any
+  // arc, Rz < (C_TOTAL + 2^48) 2^48), so this is the same as comparing the 96-bit sums.
+  function [65:0] add3;  // p + q + r + c mod 2^66
+    input [65:0] p, q, r;
+    input [1:0] c;
+    reg [65:0] s1, k1, s2, k2, cc;
+    begin
+      cc   = {64'd0, c};
+      s1   = p ^ q ^ r;
+      k1   = {(p[64:0] & q[64:0]) | (p[64:0] & r[64:0]) | (q[64:0] & r[64:0]), 1'b0};
+      s2   = s1 ^ k1 ^ cc;
+      k2   = {(s1[64:0] & k1[64:0]) | (s1[64:0] & cc[64:0]) | (k1[64:0] & cc[64:0]), 1'b0};
+      add3 = s2 + k2;
+    end
+  endfunction
+  localparam [65:0] ZERO66 = 66'd0;
+  // 48-bit fields in 66 bits; a sum of them with one negated field is a 50-bit signed value,
+  // so bit 49 is its sign and [47:0] its value mod 2^48 (the upper bits are not read)
+  wire        [65:0] u_i66 = {18'd0, u_int};
+  wire        [65:0] v_i66 = {50'd0, v_reg[63:48]};
+  wire        [65:0] rz_i66 = {18'd0, rz_reg[95:48]};
+  wire        [65:0] vz_i66 = {18'd0, vz_reg[95:48]};
+  wire        [48:0] u_frac = {1'b0, u_reg[47:0]} + {1'b0, v_reg[47:0]};
+  wire        [65:0] u_hi0 = add3(u_i66, v_i66, ZERO66, 2'd0);
+  wire        [65:0] u_hi1 = add3(u_i66, v_i66, ZERO66, 2'd1);
+  wire        [95:0] u_next = {u_frac[48] ? u_hi1[47:0] : u_hi0[47:0], u_frac[47:0]};
+  wire        [65:0] dec_x0 = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd1);  // U_int + V_int - D
+  wire        [65:0] dec_x1 = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd2);  // ... + 1
+  wire               decel = u_frac[48] ? !dec_x1[49] : !dec_x0[49];
+  wire        [65:0] dec_k = add3({2'd0, v_reg}, ~{2'd0, vex_reg}, ~{18'd0, a_reg}, 2'd2);
+  wire               dec_ok = !dec_k[65];  // V - V_exit - A >= 0
+  wire        [63:0] v_plus = v_reg + {16'd0, a_reg};
+  wire        [65:0] acc_k = add3({2'd0, vcr_reg}, ~{2'd0, v_reg}, ~{18'd0, a_reg}, 2'd2);
+  wire               acc_ok = !acc_k[65];  // V_cruise - V - A >= 0
+  wire        [48:0] rz_frac = {1'b0, rz_reg[47:0]} + {1'b0, vz_reg[47:0]};
+  wire        [65:0] rz_hi0 = add3(rz_i66, vz_i66, ZERO66, 2'd0);
+  wire        [65:0] rz_hi1 = add3(rz_i66, vz_i66, ZERO66, 2'd1);
+  wire        [65:0] rz_x0 = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd1);  // Rz_int + Vz_int - C
+  wire        [65:0] rz_x1 = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd2);  // ... + 1
+  wire        [95:0] rz_next = {rz_frac[48] ? rz_hi1[47:0] : rz_hi0[47:0], rz_frac[47:0]};
+  wire        [95:0] rz_sub = {rz_frac[48] ? rz_x1[47:0] : rz_x0[47:0], rz_frac[47:0]};
+  wire               z_go = (rz_frac[48] ? !rz_x1[49] : !rz_x0[49]) && (zc_reg != nz_reg);
+  wire unused_sums = &{1'b0, u_hi0[65:48], u_hi1[65:48], dec_x0[65:50], dec_x0[48:0],
+                       dec_x1[65:50], dec_x1[48:0], dec_k[64:0], acc_k[64:0], rz_hi0[65:48],
+                       rz_hi1[65:48], rz_x0[65:48], rz_x1[65:48]};
 
-  wire               fire = busy_reg && run && (st_reg == READY) && (u_reg[95:48] >= cnext_reg);
+  wire               fire = busy_reg && run && (st_reg == READY) && (u_int >= cnext_reg);
   wire               end_w = fire && (pend_end_reg || guard_reg);
   wire               take = load && !stop && (!busy_reg || end_w);
 
@@ -183,7 +234,7 @@ module arc_dda (
       if (z_due_reg) zd_reg <= zdir_reg;  // with the step: a chained load may change zdir_reg
       z_due_reg <= z_go;
       if (z_go) begin
-        rz_reg <= rz_sub[95:0];
+        rz_reg <= rz_sub;
         zc_reg <= zc_reg + 32'd1;
       end else begin
         rz_reg <= rz_next;
@@ -199,7 +250,7 @@ module arc_dda (
         end
       end else begin
         if (acc_ok) begin
-          v_reg  <= v_plus[63:0];
+          v_reg  <= v_plus;
           vz_reg <= vz_reg + az_reg;
         end else begin
           v_reg  <= vcr_reg;
@@ -251,9 +302,9 @@ module arc_dda (
           end
           cnext_reg <= s_sel;
           pend_end_reg <= ex_sel && ey_sel;
-          guard_reg <= (s_sel >= ctot_reg);
-          exact_reg <= (s_sel == ctot_reg);
-          if (u_reg[95:48] >= s_sel) late_reg <= 1'b1;
+          guard_reg <= guard_sel;
+          exact_reg <= exact_sel;
+          if (late_sel) late_reg <= 1'b1;
           st_reg <= READY;
         end
         default: begin  // READY

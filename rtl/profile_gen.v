@@ -15,7 +15,8 @@
 // last = U(j) >= n_dom*2^48 (registers only: a 24-bit compare): tick j is the segment's last; the
 // axes reach their exact counts in it.
 // Precomputed by segment_prep: vcma = V_cruise - A (signed 48 bits; negative: never INC) and
-// vxpa = V_exit + A. Per tick: one 72-bit add, a 32-bit compare of its integer part with D, and a
+// vxpa = V_exit + A. Per tick: one 72-bit add, the compare of its integer part with D (made from
+// U(c)'s integer part for carry 0 and 1, in parallel with the add's 48-bit fraction), and a
 // 4-way mux of V (the compares of V with vcma / vxpa are from registers, in parallel).
 `default_nettype none
 
@@ -52,8 +53,15 @@ module profile_gen (
   reg [31:0] d_reg;
   reg [23:0] n_reg;
 
-  wire [71:0] u_next = u_reg + {25'd0, v_reg};
-  wire        dec = ({8'd0, u_next[71:48]} >= d_reg);
+  // U(c+1)'s integer part is U(c)'s or one more (V < 2^47): the decel compare is made for both
+  // from registers, in parallel with the 48-bit fraction add, and its carry picks one (the same
+  // result as comparing U(c+1) after the whole 72-bit add, without the add and compare in series).
+  wire [48:0] frac_sum = {1'b0, u_reg[47:0]} + {2'b0, v_reg};
+  wire [71:0] u_next = {u_reg[71:48] + {23'd0, frac_sum[48]}, frac_sum[47:0]};
+  wire [23:0] u_int1 = u_reg[71:48] + 24'd1;
+  wire        dec0 = ({8'd0, u_reg[71:48]} >= d_reg);
+  wire        dec1 = ({8'd0, u_int1} >= d_reg);
+  wire        dec = frac_sum[48] ? dec1 : dec0;
   wire        can_dec = ({1'b0, v_reg} >= vxpa_reg);
   wire        can_inc = !vcma_reg[47] && ({1'b0, v_reg} <= vcma_reg);
 

@@ -3,10 +3,13 @@
 # in the full 2-axis build) placed and routed on an iCE40 HX8K (ct256) at 50 MHz with nextpnr-ice40.
 # The full design does not fit an HX8K; a block that meets 50 MHz on the slower iCE40 fabric is
 # strong evidence for the Cyclone V (Quartus decides).
-# The placed top is a generated wrapper (OUT_DIR/ice40_blk_<name>.v): every input of the block
-# except clk / rst comes from a shift register loaded from one pin (so the inputs are registers, as
-# in cnc_core, and the synthesizer cannot treat them as constants), every output is captured into a
-# load/shift register read out on one pin (one LUT level per bit, keeps all output logic alive).
+# The placed top is a generated wrapper (OUT_DIR/ice40_blk_<name>.v): every input bit of the block
+# except clk / rst comes from a 97-bit shift register loaded from one pin (bit i from stage i mod 97:
+# the inputs are registers, as in cnc_core, and the synthesizer cannot treat them as constants),
+# every output is captured into a load/shift register read out on one pin (one LUT level per bit,
+# keeps all output logic alive). The block keeps its hierarchy (synth_ice40 -noflatten), so inputs
+# that share a stage are not merged inside it; a one-flop-per-input wrapper would fill a third of
+# the part for arc_dda (948 input bits) and make the proxy measure congestion.
 # Reports the post-route Fmax per block and, below 50 MHz, the critical path's ends (whole path in
 # OUT_DIR/ice40_blk_<name>.critical.txt). A report: exits 0 when a block is below FREQ (the known
 # ones are in docs/synthesis.md) unless STRICT=1; exits non-zero when the flow fails.
@@ -61,11 +64,13 @@ print("// outputs into a load/shift register).")
 print("`default_nettype none")
 print("module ice40_blk_top (input wire clk, input wire rst, input wire scan_in, input wire scan_load,")
 print("                      output wire scan_out);")
-print("  reg [%d:0] in_reg = %d'd0;" % (max(wi, 2) - 1, max(wi, 2)))
-print("  always @(posedge clk) in_reg <= {in_reg[%d:0], scan_in};" % (max(wi, 2) - 2))
+ws = max(min(wi, 97), 2)
+print("  reg [%d:0] in_reg = %d'd0;" % (ws - 1, ws))
+print("  always @(posedge clk) in_reg <= {in_reg[%d:0], scan_in};" % (ws - 2))
 off = 0
 for p, w in ins:
-    print("  wire [%d:0] i_%s = in_reg[%d:%d];" % (w - 1, p, off + w - 1, off)); off += w
+    bits = ", ".join("in_reg[%d]" % ((off + k) % ws) for k in reversed(range(w)))
+    print("  wire [%d:0] i_%s = {%s};" % (w - 1, p, bits)); off += w
 for p, w in outs:
     print("  wire [%d:0] o_%s;" % (w - 1, p))
 pstr = ", ".join(".%s(%s)" % (k, v) for k, v in params)
@@ -82,7 +87,7 @@ print("endmodule")
 PYEOF
   t0=$(date +%s)
   if ! yosys -q -l "$out/$tag.yosys.log" -p "read_verilog $files $out/$tag.v; \
-      synth_ice40 -top ice40_blk_top -json $out/$tag.json" >/dev/null; then
+      synth_ice40 -noflatten -top ice40_blk_top -json $out/$tag.json" >/dev/null; then
     echo "ice40_blocks: Yosys failed for $b (see $out/$tag.yosys.log)"; status=1; continue
   fi
   t1=$(date +%s)
