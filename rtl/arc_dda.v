@@ -25,7 +25,8 @@
 //
 // Interface: `load` is taken when !busy or ending; its clock is the segment's clock -1 (clock 0 is
 // the first busy clock in which `run` is high: while `run` is low the block is frozen (the
-// executor holds a loaded arc through DIR hold/setup); `stop` (e-stop) makes it idle at once).
+// executor holds a loaded arc through DIR hold/setup); `stop` (e-stop) makes it idle at once:
+// nothing of a stop clock is registered, so no step of a move firing in it reaches the pins).
 // nx_dir / ny_dir: the direction of the next X / Y move (the tangent signs of the walk's current
 // point), valid while dir_valid (busy, from the second clock of each move); the executor writes
 // DIR from them ahead of the step (at the quadrant points, where an axis reverses). Outputs: *_step are one-clock pulses, registered: an event of clock c is
@@ -228,7 +229,7 @@ module arc_dda (
     ys_reg   <= 1'b0;
     zs_reg   <= 1'b0;
     last_reg <= 1'b0;
-    if (busy_reg && run) begin
+    if (busy_reg && run && !stop) begin  // a stop clock registers nothing (no step after it)
       // Z and U/V for the next clock
       zs_reg <= z_due_reg;
       if (z_due_reg) zd_reg <= zdir_reg;  // with the step: a chained load may change zdir_reg

@@ -309,7 +309,8 @@ TEST(ArcDda, ZeroGapChains) {
       f.c_total = p.c_total;
       const Ideal id = ideal_of(f.g);
       random_profile(rng, f, id.len(id.th));
-      if (u01(rng) < 0.5) f.dz = static_cast<int32_t>((1 + u01(rng) * 20) * (u01(rng) < 0.5 ? -1 : 1));
+      if (u01(rng) < 0.5)
+        f.dz = static_cast<int32_t>((1 + u01(rng) * 20) * (u01(rng) < 0.5 ? -1 : 1));
       fs.push_back(f);
     }
     const std::vector<arc::RunResult> got = rtl.run_chain(fs, 1u << 26);
@@ -374,6 +375,44 @@ TEST(ArcDda, GuardAndLate) {
     expect_same(arc::run(bad), got[0], "chained inconsistent arc");
     expect_same(arc::run(good), got[1], "the arc after it");
   }
+}
+
+// E-stop: `stop` high in clock c (one clock, or held) and nothing of clock c or later reaches the
+// pins, also when c is the clock in which a move fires (its step would be registered on the stop
+// edge and show one clock later, after the e-stop). The events before c are the reference's.
+TEST(ArcDda, StopInAnyClockEndsTheWalkAtOnce) {
+  ArcRtl rtl;
+  arc::Frame f = planned(arc::Geometry{-150, 40, -230, 200, false}, 0.05);
+  f.dz = 37;  // Z steps as well
+  const arc::RunResult ref = arc::run(f);
+  ASSERT_FALSE(ref.err);
+  ASSERT_GT(ref.events.size(), 40u);
+  int checked = 0;
+  for (size_t k = 0; k < ref.events.size(); k += 7) {
+    const uint64_t fire = ref.events[k].clock;
+    for (uint64_t c : {fire - 1, fire, fire + 1}) {
+      for (uint64_t len : {uint64_t{1}, uint64_t{5}}) {
+        const ArcRtl::Stopped got = rtl.run_stopped(f, c, len, c + 64);
+        size_t before = 0;
+        while (before < ref.events.size() && ref.events[before].clock < c) ++before;
+        const std::string what = "stop in clock " + std::to_string(c) + " for " +
+                                 std::to_string(len) + " (move " + std::to_string(k) +
+                                 " fires in clock " + std::to_string(fire) + ")";
+        ASSERT_FALSE(got.busy_after) << what;
+        for (const arc::Event& e : got.events)
+          ASSERT_LT(e.clock, c) << what << ": pins show an event of clock " << e.clock;
+        ASSERT_EQ(got.events.size(), before) << what;
+        for (size_t i = 0; i < before; ++i) {
+          const arc::Event &a = ref.events[i], &b = got.events[i];
+          ASSERT_TRUE(a.clock == b.clock && a.dx == b.dx && a.dy == b.dy && a.dz == b.dz)
+              << what << ": event " << i;
+        }
+        ++checked;
+      }
+    }
+  }
+  std::printf("[arc] %d stops around %zu moves: nothing after the stop clock\n", checked,
+              (ref.events.size() + 6) / 7);
 }
 
 // The RTL against the reference, edge for edge, with geometry, speed and Z checks.

@@ -315,6 +315,7 @@ SC_MODULE(ExecBench) {
   std::vector<uint64_t> seeds;         // per job (the aborts' random stream)
   std::array<uint64_t, kHits> hits{};  // aborts by what they hit
   uint64_t aborts = 0, dropped = 0, abort_jobs = 0, arc_errs = 0;
+  uint64_t fire_aborts = 0;  // aimed at the clock in which an arc move fires
   std::vector<RunResult> results;
   std::vector<Cycle> seg_done, seg_done_v2;
   std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
@@ -374,8 +375,9 @@ SC_MODULE(ExecBench) {
       run_twins(j);
       const auto& tr = exec.trace;
       // a phase to hit: 0 LINE run, 1 PROFILE run, 2 dwell, 3 HOLD, 4 SETUP, 5 ZERO, 6 anywhere,
-      // 7 a zero-gap reversal's DIR write pending, 8 ARC run
-      const uint32_t want = pick(g, 0, 8);
+      // 7 a zero-gap reversal's DIR write pending, 8 ARC run, 9 the clock in which an arc move
+      // fires (its step request is on the next edge)
+      const uint32_t want = pick(g, 0, 9);
       std::vector<std::pair<Cycle, Cycle>> win;  // candidate windows (lo, hi]: abort edge in it
       for (const auto& t : tr) {
         if (t.accept <= after || t.cut >= 0) continue;
@@ -388,6 +390,10 @@ SC_MODULE(ExecBench) {
         if (want == 7 && t.fast_dir > t.accept) win.emplace_back(t.accept, t.fast_dir);
         if (want == 8 && t.kind == 'A' && t.end > t.run) win.emplace_back(t.run, t.end);
       }
+      if (want == 9)
+        for (Cycle e : exec.arc_step_edges)
+          if (e - 2 > after) win.emplace_back(e - 2, e - 1);  // abort edge e - 1
+      const bool at_fire = want == 9 && !win.empty();
       if (win.empty())  // none of that phase left: any later segment
         for (const auto& t : tr)
           if (t.accept > after && t.cut < 0 && t.end > t.accept) win.emplace_back(t.accept, t.end);
@@ -402,6 +408,7 @@ SC_MODULE(ExecBench) {
       const uint32_t n = std::array<uint32_t, 3>{1, 8, 300}[pick(g, 0, 2)];
       const Cycle last = first + pick(g, 0, n - 1);
       j.aborts.push_back(ExecAbort{first, last});
+      if (at_fire) ++fire_aborts;
       after = last + 1;
     }
   }
@@ -615,10 +622,9 @@ int sc_main(int argc, char* argv[]) {
     hit += fmt::format("{}{} {}", h ? ", " : "", bench.hits[static_cast<size_t>(h)],
                        kHitNames[static_cast<size_t>(h)]);
   fmt::print(
-      "cosim_executor: {} ARC segments ({} arc errors); {} aborts in {} jobs (hit: {}); {} "
-      "segments dropped by "
-      "them (no seg_done)\n",
-      arcs, bench.arc_errs, bench.aborts, bench.abort_jobs, hit, bench.dropped);
+      "cosim_executor: {} ARC segments ({} arc errors); {} aborts in {} jobs (hit: {}; {} on the "
+      "clock an arc move fires in); {} segments dropped by them (no seg_done)\n",
+      arcs, bench.arc_errs, bench.aborts, bench.abort_jobs, hit, bench.fire_aborts, bench.dropped);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

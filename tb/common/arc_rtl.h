@@ -42,6 +42,36 @@ class ArcRtl {
     return run_chain({f}, max_clocks).front();
   }
 
+  // Loads the frame and raises `stop` (e-stop) in clocks stop_clock .. stop_clock + stop_len - 1
+  // (the reference's numbering); runs max_clocks clocks. Events as run()'s; busy_after: busy on
+  // the last clock.
+  struct Stopped {
+    std::vector<arc::Event> events;
+    bool busy_after = true;
+  };
+  Stopped run_stopped(const arc::Frame& f, uint64_t stop_clock, uint64_t stop_len,
+                      uint64_t max_clocks) {
+    Stopped out;
+    apply(f);
+    m_->load = 1;
+    tick();
+    m_->load = 0;
+    for (uint64_t c = 0; c < max_clocks; ++c) {
+      m_->stop = c >= stop_clock && c < stop_clock + stop_len;
+      tick();
+      arc::Event ev;
+      ev.clock = c;
+      if (m_->x_step) ev.dx = m_->x_dir ? 1 : -1;
+      if (m_->y_step) ev.dy = m_->y_dir ? 1 : -1;
+      if (m_->z_step) ev.dz = m_->z_dir ? 1 : -1;
+      ev.last = m_->last;
+      if (ev.dx || ev.dy || ev.dz || ev.last) out.events.push_back(ev);
+    }
+    m_->stop = 0;
+    out.busy_after = m_->busy;
+    return out;
+  }
+
   // Arcs back to back: each next arc is loaded on the edge of the previous one's last move (the
   // block's `ending` output), so its clock 0 follows that edge (zero gap). Events of each arc in
   // its own clock numbering.

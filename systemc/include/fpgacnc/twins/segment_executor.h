@@ -103,6 +103,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     seg_start_cycles.clear();
     arc_err_cycles.clear();
     arc_violation_cycles.clear();
+    arc_step_edges.clear();
     last_wr_.fill(kLongAgo);
     aborts_.clear();
     trace.clear();
@@ -125,7 +126,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // edges after which an arc's `violation` strobe (a step within DIR setup of its DIR change, or
   // before its DIR is on the pin) is high
   std::vector<Cycle> arc_violation_cycles;
-  uint64_t aborted = 0;  // segments dropped by an abort (no seg_done)
+  std::vector<Cycle> arc_step_edges;  // edges of arc step requests (the benches aim aborts at them)
+  uint64_t aborted = 0;               // segments dropped by an abort (no seg_done)
   // Per accepted segment (the benches aim aborts with it): accept edge, DIR write edge of the
   // HOLD path (-1: none), last DIR write edge of a zero-gap reversal (-1: none), run edge R, end
   // edge, the abort edge that dropped it (-1: none), kind.
@@ -264,6 +266,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         const Cycle rise = transport(*pulse[k], gp_, clk_, cmd, e);
         if (k < 2) rises[k].push_back(rise);
         req[k] = e;
+        arc_step_edges.push_back(e);
       }
       if (viol) arc_violation_cycles.push_back(e);
       last = c;
