@@ -16,8 +16,14 @@ deps:
 configure: deps
 	@if [ ! -f $(BUILD)/CMakeCache.txt ]; then cmake -S . -B $(BUILD) $(CMAKE_FLAGS); fi
 
+# After an RTL edit Verilator may regenerate a model under new (hash-named DepSet) file names;
+# CMake reads the new list only when it re-runs, at the next build, so that build can fail to link
+# stale objects. On a failure the build goes on past errors (-k: every model is regenerated), then
+# runs once more with the lists re-read; a real error fails all three.
 build: configure
-	cmake --build $(BUILD) -j $(JOBS)
+	@cmake --build $(BUILD) -j $(JOBS) || { \
+	  echo "make build: failed; building again (Verilator renames generated files after some RTL edits)"; \
+	  cmake --build $(BUILD) -j $(JOBS) -- -k >/dev/null 2>&1; cmake --build $(BUILD) -j $(JOBS); }
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 1200

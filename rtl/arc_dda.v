@@ -104,7 +104,8 @@ module arc_dda (
   reg carry_reg;
   reg [23:0] accn_reg;
   // W1 -> W2
-  reg [47:0] ma_reg, mb_reg, md_reg;
+  reg le_da_reg, le_db_reg, le_ab_reg;  // |F_D| <= |F_A|, |F_D| <= |F_B|, |F_A| <= |F_B|
+  reg e_neg_reg, e_zero_reg;  // W0 -> W1: F_B - F_A = 2 (b y - a x) < 0, = 0
   reg signed [47:0] fa2_reg, fb2_reg, fd2_reg;
   reg [47:0] sa_reg, sb_reg, sd_reg;
   reg exa_reg, ex0_reg, eyb_reg, ey0_reg;
@@ -141,6 +142,12 @@ module arc_dda (
   wire signed [47:0] fd_w = f_reg + ax2 + by2 + 48'sd2;
   wire        [23:0] absx = x_neg ? -x_reg : x_reg;
   wire        [23:0] absy = y_neg ? -y_reg : y_reg;
+  // b y - a x (F_B - F_A = 2 (b y - a x)): y - x or y + x, negated when b = -1
+  wire        [24:0] ymx = {y_reg[23], y_reg} - {x_reg[23], x_reg};
+  wire        [24:0] ypx = {y_reg[23], y_reg} + {x_reg[23], x_reg};
+  wire        [24:0] e_src = (apos == bpos) ? ymx : ypx;
+  wire               e_zero = (e_src == 25'd0);
+  wire               e_neg = bpos ? e_src[24] : (!e_src[24] && !e_zero);
   wire        [24:0] acc_sum = {1'b0, acc_reg} + {1'b0, r_reg};
   wire               carry_w = (acc_sum >= {1'b0, n_reg});
   wire        [23:0] acc_wrap = acc_sum[23:0] - n_reg;  // < n_reg when taken: fits
@@ -149,11 +156,29 @@ module arc_dda (
   wire signed [47:0] step_w = carry_reg ? qp1_reg : q_reg;
   wire               ramp = (m_reg < n_reg);
   wire signed [23:0] xa_w = apos_reg ? x_reg + 24'sd1 : x_reg - 24'sd1;
+  // |p| <= |q| for the candidates' F, without taking magnitudes: by the signs sp, sq; with equal
+  // signs by the sign of q - p (dneg, dzero), known without a wide subtract: F_A - F_D = -(2 b y
+  // + 1), F_B - F_D = -(2 a x + 1), F_B - F_A = 2 (b y - a x) (W0); with opposite signs by
+  // S = p + q (sneg, szero; no overflow). Zero test of a sum without its carries: p + q = 0 (mod
+  // 2^48) iff p ^ q == (p | q) << 1.
+  function mag_le;
+    input sp, sq, dneg, dzero, sneg, szero;
+    mag_le = (sp == sq) ? (sp ? (dneg || dzero) : !dneg) : (sp ? !sneg : (sneg || szero));
+  endfunction
+  wire               by2_neg = bpos_reg ? y_neg : (!y_neg && !y_zero);  // 2 b y < 0
+  wire               ax2_neg = apos_reg ? x_neg : (!x_neg && !x_zero);  // 2 a x < 0
+  wire        [47:0] s_da = fd_reg + fa_reg;
+  wire        [47:0] s_db = fd_reg + fb_reg;
+  wire        [47:0] s_ab = fa_reg + fb_reg;
+  wire               z_da = ((fd_reg ^ fa_reg) == {(fd_reg[46:0] | fa_reg[46:0]), 1'b0});
+  wire               z_db = ((fd_reg ^ fb_reg) == {(fd_reg[46:0] | fb_reg[46:0]), 1'b0});
+  wire               z_ab = ((fa_reg ^ fb_reg) == {(fa_reg[46:0] | fb_reg[46:0]), 1'b0});
+  wire unused_s = &{1'b0, s_da[46:0], s_db[46:0], s_ab[46:0]};  // only the signs are read
   wire signed [23:0] yb_w = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
 
   // ---------------- W2: select ----------------
-  wire               sel_d = (!va_reg || md_reg <= ma_reg) && (!vb_reg || md_reg <= mb_reg);
-  wire               sel_a = !sel_d && va_reg && (!vb_reg || ma_reg <= mb_reg);
+  wire               sel_d = (!va_reg || le_da_reg) && (!vb_reg || le_db_reg);
+  wire               sel_a = !sel_d && va_reg && (!vb_reg || le_ab_reg);
   wire        [47:0] s_sel = sel_d ? sd_reg : (sel_a ? sa_reg : sb_reg);
   // the compares of the selected cost are made for all three candidates, in parallel with the
   // selection (not after it)
@@ -272,13 +297,15 @@ module arc_dda (
           ay_reg    <= absy;
           axy_reg   <= absx + absy;
           carry_reg <= carry_w;
+          e_neg_reg <= e_neg;
+          e_zero_reg <= e_zero;
           accn_reg  <= carry_w ? acc_wrap : acc_sum[23:0];
           st_reg    <= W1;
         end
         W1: begin
-          ma_reg  <= fa_reg[47] ? -fa_reg : fa_reg;
-          mb_reg  <= fb_reg[47] ? -fb_reg : fb_reg;
-          md_reg  <= fd_reg[47] ? -fd_reg : fd_reg;
+          le_da_reg <= mag_le(fd_reg[47], fa_reg[47], !by2_neg, 1'b0, s_da[47], z_da);
+          le_db_reg <= mag_le(fd_reg[47], fb_reg[47], !ax2_neg, 1'b0, s_db[47], z_db);
+          le_ab_reg <= mag_le(fa_reg[47], fb_reg[47], e_neg_reg, e_zero_reg, s_ab[47], z_ab);
           fa2_reg <= ramp ? fa_reg - step_w : fa_reg;
           fb2_reg <= ramp ? fb_reg - step_w : fb_reg;
           fd2_reg <= ramp ? fd_reg - step_w : fd_reg;
