@@ -34,10 +34,10 @@
 // comes with the final move's step. err / late are sticky until the next load.
 // Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz, each a 48-bit fraction add
 // with carry-select integer parts; 64-bit V; 48-bit F and cost sums (x3). No carry chain feeds
-// another: every compare against a sum is one carry-save three-operand sum (add3), and the W2
-// compares of the selected cost are made for all three candidates. Longest path: 48-bit compare
-// -> fire -> take -> the load enables (about 1 000 registers); 45.8 MHz alone on an iCE40 HX8K
-// (scripts/ice40_blocks.sh), routing two thirds of it.
+// another: every compare against a sum is one carry-save three-operand sum (add3), the W2
+// compares of the selected cost are made for all three candidates, and the candidates' magnitude
+// compares are registered in W1. Longest path: the 50-bit decel chain (U_int + V_int - D) -> the
+// V select; 47-50 MHz alone on an iCE40 HX8K (scripts/ice40_blocks.sh), routing over half of it.
 `default_nettype none
 
 module arc_dda (
@@ -421,5 +421,22 @@ module arc_dda (
   assign dir_valid = busy_reg && (st_reg != W0);
   assign nx_dir = apos_reg;
   assign ny_dir = bpos_reg;
+
+`ifdef FORMAL
+  // E-stop: after a stop clock no step (and no `last`) leaves the block until the next load, even
+  // when a move fired in the stop clock itself (scripts/formal/arc_stop.ys, k-induction).
+  reg f_past_valid = 1'b0;
+  reg f_quiet = 1'b0;  // a stop since the last load (as of this clock)
+  always @(posedge clk) begin
+    f_past_valid <= 1'b1;
+    f_quiet      <= (f_quiet || stop) && !take;
+    if (rst) f_quiet <= 1'b0;
+  end
+  always @(*)
+    if (f_past_valid && f_quiet) begin
+      assert (!x_step && !y_step && !z_step && !last);
+      assert (!busy_reg);  // induction invariant: only a load makes the block busy again
+    end
+`endif
 
 endmodule

@@ -33,6 +33,7 @@ JOBS=(
   "executor_dir        sat     12"
   "segment_fifo        prove   8"
   "heater_channel      sat     6"
+  "arc_stop            sat     4"
 )
 
 want=("$@")
