@@ -173,7 +173,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   void on_status(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     payload<ExecIdle>(gp).edge = idle_edge(clk_.at(delay));
-    payload<ExecIdle>(gp).window = -1;  // (an arc's last step is inside its segment)
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
   }
 

@@ -55,9 +55,6 @@ inline constexpr Cycle kPrepLatencyArc = 80;
 
 struct ExecIdle {  // segment_executor status read: idle (and every STEP pulse done) after `edge`
   Cycle edge;
-  // Also idle in the one clock after edge `window` (-1: none): an arc ended on `window` with its
-  // last step request still in flight (rtl/segment_executor.v `idle` does not see it yet).
-  Cycle window = -1;
 };
 struct Applied {  // segment_prep -> response side: a v2 NUMERATORS entry applied on the edge
   bool v2;
@@ -110,8 +107,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
     if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};
       transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
-      accept = idle.window >= 0 && accept <= idle.window + 1 ? idle.window + 1
-                                                             : std::max(accept, idle.edge + 1);
+      accept = std::max(accept, idle.edge + 1);
       num_x = c.steps[0];
       num_y = c.steps[1];
       free_from_ = accept + 1;
