@@ -26,6 +26,8 @@ done
 configs=(
   "lean N_AXES=2 PROTO_V2=0"
   "lean4 N_AXES=4 PROTO_V2=0"
+  "lean-fixed N_AXES=2 PROTO_V2=0 STEP_CFG=0"
+  "lean-untrimmed N_AXES=2 PROTO_V2=0 LEAN_TRIM=0"
   "v2-lines N_AXES=2 PROFILES=0 ARCS=0 HEATERS=0"
   "v2-noarc N_AXES=4 ARCS=0"
   "v2-noprof N_AXES=4 PROFILES=0 HEATERS=0"
