@@ -14,13 +14,8 @@
 # OUT_DIR/ice40_blk_<name>.critical.txt). A report: exits 0 when a block is below FREQ (the known
 # ones are in docs/synthesis.md) unless STRICT=1; exits non-zero when the flow fails.
 # Usage: scripts/ice40_blocks.sh [OUT_DIR]   env: BLOCKS="arc_dda profile_gen ..." FREQ=50 SEED=1 STRICT=0
-set -euo pipefail
-cd "$(dirname "$0")/.."
-out=${1:-build/synth}
-mkdir -p "$out"
-out=$(cd "$out" && pwd)
-freq=${FREQ:-50}
-seed=${SEED:-1}
+# shellcheck source=scripts/ice40_env.sh
+source "$(dirname "$0")/ice40_env.sh" "$@"
 # block -> "file(s)|chparam" (parameters as cnc_core's full 2-axis build passes them)
 declare -A BLK=(
   [arc_dda]="rtl/arc_dda.v|"

@@ -14,13 +14,8 @@
 # (--pcf-allow-unconstrained).
 #
 # Usage: scripts/ice40_timing.sh [OUT_DIR]     env: CONFIGS="lean2" FREQ=50 SEED=1 PLACER=heap|sa
-set -euo pipefail
-cd "$(dirname "$0")/.."
-out=${1:-build/synth}
-mkdir -p "$out"
-out=$(cd "$out" && pwd)
-freq=${FREQ:-50}
-seed=${SEED:-1}
+# shellcheck source=scripts/ice40_env.sh
+source "$(dirname "$0")/ice40_env.sh" "$@"
 configs=${CONFIGS:-"lean2"}
 placer=${PLACER:-heap}
 
