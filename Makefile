@@ -52,7 +52,7 @@ soak: build
 # part.gcode end to end on the simulated board with heaters (issue 7): printer start sequence
 # (M140/M104/M190/M109), the whole file (44 305 lines), heaters off; hours of simulation (the
 # motion runs in real board time at 50 MHz).
-CORPUS ?= ../shared/gcode-corpus
+CORPUS ?= corpus/cncjs
 .PHONY: soak-part-heaters heater-plot
 soak-part-heaters: build
 	cat examples/printer-start.gcode $(CORPUS)/part.gcode examples/printer-end.gcode > $(BUILD)/part-heaters.gcode

@@ -25,7 +25,7 @@ if [ -x "$build/tb/bench_protocol" ]; then
   "$build/tb/bench_protocol" "${PROTOCOL_MOVES:-1000}" || status=1
 fi
 
-part="$root/../shared/gcode-corpus/part.gcode"
+part="$root/corpus/cncjs/part.gcode"
 if [ -x "$build/host/host_plan_bench" ]; then
   echo "== host_plan_bench $part"
   "$build/host/host_plan_bench" "$part" || status=1
@@ -59,7 +59,7 @@ if [ -x "$fpgacnc" ]; then
   tlm=$(echo "$out" | sed -n 's/^simulated board (tlm): \([0-9]*\) cycles.* \([0-9.]*\) M clocks\/s.*/\1 \2/p')
   echo "$rtl $tlm" | awk '{ if ($2 > 0) printf "bench: virtual platform %.0f M clocks/s, Verilated RTL %.2f M clocks/s on the same %d clocks: %.0fx\n", $4, $2, $1, $4 / $2 }'
   for f in octocat part; do
-    g="$root/../shared/gcode-corpus/$f.gcode"
+    g="$root/corpus/cncjs/$f.gcode"
     [ -f "$g" ] || continue
     t0=$(date +%s.%N)
     out=$("$fpgacnc" sim "$g" --model tlm 2>&1) || status=1
