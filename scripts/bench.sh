@@ -5,6 +5,8 @@
 #   BUILD_DIR/host/host_plan_bench   host planner throughput on the corpus part (if built)
 #   the make demo job (jsdc-laser, demo-machine.toml) split into host planning time and board
 #   simulation time (the stream report's figures)
+#   the virtual platform on octocat.gcode and part.gcode at their real feeds (wall, max RSS)
+#   a fresh clone's `make demo` and `make test` (BENCH_FRESH=0 skips them)
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -60,14 +62,29 @@ if [ -x "$fpgacnc" ]; then
   echo "$rtl $tlm" | awk '{ if ($2 > 0) printf "bench: virtual platform %.0f M clocks/s, Verilated RTL %.2f M clocks/s on the same %d clocks: %.0fx\n", $4, $2, $1, $4 / $2 }'
   for f in octocat part; do
     g="$root/corpus/cncjs/$f.gcode"
-    [ -f "$g" ] || continue
-    t0=$(date +%s.%N)
-    out=$("$fpgacnc" sim "$g" --model tlm 2>&1) || status=1
-    t1=$(date +%s.%N)
+    echo "== virtual platform, whole job at its real feeds: fpgacnc sim corpus/cncjs/$f.gcode --model tlm"
+    out=$(/usr/bin/time -f "time: %e s wall, %M KB max RSS" "$fpgacnc" sim "$g" --model tlm 2>&1) || status=1
     line=$(echo "$out" | grep "^simulated board (tlm)")
     echo "$line"
-    echo "$line" | awk -v p="$t0" -v q="$t1" -v f="$f.gcode" '{
-      printf "bench: %s on the virtual platform: %s clocks (%s s of machine time), %.2f s wall including planning\n", f, $4, substr($6, 2), q - p }'
+    echo "$out" | grep "^time:" | tail -1 | awk -v f="$f.gcode" '{
+      printf "bench: %s on the virtual platform: %.2f s wall including planning (bar <= 5 s), %.0f MB max RSS (bar <= 1024 MB)\n", f, $2, $5 / 1024 }'
+  done
+fi
+# The README's two commands on a fresh clone of this repository's HEAD (BENCH_FRESH=0 skips this
+# section; it takes as long as a first `make demo` plus a first `make test`): each in its own clone,
+# so each builds from nothing.
+if [ "${BENCH_FRESH:-1}" = 1 ]; then
+  tmp=$(mktemp -d)
+  for target in demo test; do
+    git clone -q "$root" "$tmp/$target"
+    echo "== fresh clone: git clone $root && make $target (log: $tmp/$target.log)"
+    t0=$(date +%s.%N)
+    if (cd "$tmp/$target" && make "$target") >"$tmp/$target.log" 2>&1; then verdict=passed; else verdict=FAILED; status=1; fi
+    t1=$(date +%s.%N)
+    awk -v p="$t0" -v q="$t1" -v t="$target" -v v="$verdict" 'BEGIN {
+      bar = t == "test" ? " (bar <= 600 s on 2 cores)" : ""
+      printf "bench: fresh clone make %s: %.0f s wall, build included%s, %s\n", t, q - p, bar, v }'
+    if [ "$target" = test ]; then grep -E "tests passed|tests failed" "$tmp/$target.log" | tail -1; fi
   done
 fi
 exit $status

@@ -10,7 +10,7 @@ PKGS=(
   libgtest-dev googletest
   yosys iverilog nextpnr-ice40 z3
   libserialport-dev libcli11-dev libfmt-dev libtoml11-dev
-  python3 python3-serial librsvg2-bin
+  python3 python3-serial librsvg2-bin time
 )
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then
