@@ -1,7 +1,7 @@
 // The twin board behind its pseudo-terminal (label system).
 //
-// Equivalence: the same jobs (v1 packets and v2 sessions of examples/jsdc-laser.gcode, planned and
-// packed by the host) go through the pty into the Verilated SimBoard and into the TwinBoard with
+// Equivalence: the same jobs (v1 packets and v2 sessions of examples/jsdc-laser.gcode, and
+// corpus/cncjs/circle.gcode as native ARC frames, planned and packed by the host) go through the pty into the Verilated SimBoard and into the TwinBoard with
 // the lockstep host (pty_lockstep.h: a batch written when the board is idle for the host, so the
 // time policy makes every start clock deterministic); the edge lists (STEP/DIR/LASER and TX, so
 // every answer bit at its clock), the answer bytes with their start clocks and the bytes the host
@@ -84,7 +84,8 @@ plan::Plan job_plan(const cfgns::MachineConfig& cfg) {
   return plan::plan_program(fpgacnc::gcode::parse_string(g, path), cfg, po);
 }
 
-void expect_same(const tw::HostScript& script, const cfgns::MachineConfig& cfg) {
+void expect_same(const tw::HostScript& script, const cfgns::MachineConfig& cfg,
+                 size_t min_answers) {
   sb::BoardOptions ro = sb::SimBoard::options_from_config(cfg);
   ro.record_tx = true;
   sb::SimBoard rtl(ro);
@@ -102,7 +103,7 @@ void expect_same(const tw::HostScript& script, const cfgns::MachineConfig& cfg) 
   const std::string d = tw::compare_lockstep(a, b, static_cast<double>(cfg.clk_hz), cfg.baud);
   EXPECT_EQ(d, "") << "rtl and tlm boards differ behind the pty";
   // The comparison is not vacuous: answers and motion were there.
-  EXPECT_GE(a.received.size(), moves() / 2);
+  EXPECT_GE(a.received.size(), min_answers);
   EXPECT_GT(sb::step_pulses(a.edges)[0] + sb::step_pulses(a.edges)[1], 1000u);
   EXPECT_EQ(a.stats.cycles, b.stats.cycles) << "board time at the end";
   EXPECT_EQ(a.stats.moves_done, b.stats.moves_done);
@@ -117,7 +118,7 @@ TEST(TwinBoardPty, V1SameAsVerilatedBoard) {
   const auto p = job_plan(cfg);
   tw::HostScript s;
   s.v1 = tw::job_packets(fpgacnc::protocol::v1::pack_job(p), cfg.clk_hz, moves() / 2);
-  expect_same(s, cfg);
+  expect_same(s, cfg, moves() / 2);
 }
 
 TEST(TwinBoardPty, V2SameAsVerilatedBoard) {
@@ -126,7 +127,24 @@ TEST(TwinBoardPty, V2SameAsVerilatedBoard) {
   tw::HostScript s;
   s.v2 = tw::job_script(fpgacnc::protocol::v2::pack_job(p, cfg), moves());
   s.v2->status_at_end = false;
-  expect_same(s, cfg);
+  expect_same(s, cfg, moves());
+}
+
+// Native arcs: corpus/cncjs/circle.gcode as ARC frames (systemc/cosim/circle-arcs.toml: four
+// quarter circles, a Z move, a rapid; 100 times faster than written).
+TEST(TwinBoardPty, V2ArcsSameAsVerilatedBoard) {
+  const auto cfg = cfgns::load_machine_config(std::string(FPGACNC_COSIM_DIR) + "/circle-arcs.toml");
+  plan::PlanOptions po;
+  po.feed_override_pct = cfg.feed_override_pct;
+  const auto p = plan::plan_input_file(std::string(FPGACNC_CORPUS_DIR) + "/circle.gcode", cfg, po);
+  const auto job = fpgacnc::protocol::v2::pack_job(p, cfg);
+  tw::HostScript s;
+  s.v2 = tw::job_script(job);
+  s.v2->status_at_end = false;
+  size_t arcs = 0;
+  for (const auto& f : job.frames) arcs += f.frame.type == tw::v2::kArc ? 1 : 0;
+  EXPECT_EQ(arcs, 4u) << "the four quarter circles as ARC frames";
+  expect_same(s, cfg, 4);
 }
 
 TEST(TwinBoardPty, CorpusJobNetStepsMatchPlan) {
