@@ -517,6 +517,13 @@ void TwinBoard::session(VirtualBoard& vb) {
   publish(true);
   std::lock_guard<std::mutex> l(mu_);
   st_.violations = static_cast<uint16_t>(viol);
+  // The edges in order, laser pairs of back-to-back cutting segments dropped across the batches
+  // they were drained in: the count is that of edges(), whatever the batches were.
+  sort_edges(edges_);
+  st_.edges = static_cast<uint64_t>(
+      std::upper_bound(edges_.begin(), edges_.end(), static_cast<uint64_t>(now),
+                       [](uint64_t c, const simboard::Edge& e) { return c < e.cycle; }) -
+      edges_.begin());
 }
 
 }  // namespace fpgacnc::twins

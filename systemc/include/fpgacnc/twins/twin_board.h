@@ -101,7 +101,9 @@ class TwinBoard : public simboard::Board {
 
   mutable std::mutex mu_;  // guards the published figures below
   simboard::BoardStats st_{};
-  std::vector<simboard::Edge> edges_;  // recorded so far, in batches (sorted on request)
+  // Recorded so far, in drained batches (sorted on request and at the session's end); while the
+  // board runs, stats().edges counts the batches (a laser pair split over two batches counts).
+  std::vector<simboard::Edge> edges_;
   std::string error_;
   bool running_ = false;
   std::atomic<bool> stop_{false};
