@@ -33,6 +33,11 @@ struct SimOutputOptions {
   std::string fst_path;
   std::string edges_csv;
   std::vector<std::pair<std::string, std::string>> line_faults;
+  // Which simulated board: "tlm" (the SystemC twins, twins::TwinBoard), "rtl" (the Verilated
+  // cnc_core, SimBoard; also what "" means), "both" (stream: the lockstep comparison).
+  std::string model;
+  bool realtime = false;        // tlm: simulated time follows the wall clock
+  size_t max_moves = SIZE_MAX;  // --model both: the first N moves (v2: motion frames)
   bool any() const {
     return !plot_path.empty() || !fst_path.empty() || !edges_csv.empty() || !line_faults.empty();
   }
@@ -50,7 +55,12 @@ using AddSimOptions = std::function<void(CLI::App&, SimOutputOptions&)>;
 // Heaters (issue 7): adjusts the v2 options for a default link (the simulated board gives its
 // plant clock and a faster STATUS poll; host/simboard scales thermal time).
 using ConfigureDefaultV2 = std::function<void(link::Link&, link::StreamV2Options&)>;
+// `stream --model both`: the job (the first max_moves moves) through the pty into the twin board
+// and into the Verilated board with the lockstep host; throws when they differ.
+using CompareBoards =
+    std::function<void(const plan::Plan&, const config::MachineConfig&, const SimOutputOptions&)>;
 struct StreamHooks {
+  CompareBoards compare_boards;
   OpenDefaultLink open_default_link;
   AfterDefaultStream after_default_stream;
   AddSimOptions add_sim_options;
@@ -61,7 +71,8 @@ StreamHooks default_stream_hooks();
 StreamHooks simboard_stream_hooks();
 void register_stream(CLI::App& app, StreamHooks hooks);
 
-// fpgacnc board [--config F] [--fst F] [--edges F.csv]: the simulated board alone on a pty.
+// fpgacnc board [--model tlm|rtl] [--realtime] [--config F] [--fst F] [--edges F.csv]: the
+// simulated board alone on a pty.
 void register_board(CLI::App& app);
 
 // fpgacnc sim FILE [--model tlm|rtl|both]: a whole job on the twins or the Verilated RTL

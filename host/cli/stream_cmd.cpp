@@ -1,7 +1,13 @@
 // fpgacnc stream FILE [--port DEV] [--config F] [--protocol auto|v1|v2] [--baud N] [--timeout S]
 //                     [--retransmit-timeout S] [--feed-override PCT]
+//                     [--model tlm|rtl|both] [--realtime] [--max-moves N]
 //                     [--plot OUT.svg] [--fst OUT.fst] [--edges OUT.csv] [--line-* ...]
 //                     [--heater-plot OUT.svg]
+//
+// Without --port the job goes through a pseudo-terminal into a simulated board: `tlm` (default)
+// the SystemC twins (twins::TwinBoard), `rtl` the Verilated cnc_core (SimBoard); `both` streams
+// the first --max-moves moves with the lockstep host into both and fails unless their edges,
+// answer bytes and answer clocks are identical.
 //
 // Protocol: auto (default) sends HELLO and uses v2 when an IDENT comes back within 300 ms, else
 // waits 150 ms more (the device watchdog drops the HELLO bytes) and uses v1.
@@ -93,10 +99,15 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   if (!a.protocol.empty()) cfg.protocol = a.protocol;
   config::validate(cfg, "command line");
   std::string port = a.port.empty() ? cfg.port : a.port;
-  if (!port.empty() && a.sim.any()) {
+  if (!port.empty() && (a.sim.any() || !a.sim.model.empty() || a.sim.realtime)) {
     throw link::Error(
-        "--plot, --fst, --edges and --line-* need the simulated board: give no --port (and no "
-        "port in the configuration)");
+        "--plot, --fst, --edges, --line-*, --model and --realtime need the simulated board: give "
+        "no --port (and no port in the configuration)");
+  }
+  SimOutputOptions sim = a.sim;
+  if (sim.model.empty()) sim.model = "tlm";
+  if (sim.max_moves != SIZE_MAX && sim.model != "both") {
+    throw std::invalid_argument("--max-moves is for --model both");
   }
 
   if (port.empty() && cfg.heaters.watchdog_s > 0.0 && cfg.heaters.watchdog_s < 60.0) {
@@ -108,6 +119,11 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   po.feed_override_pct = cfg.feed_override_pct;
   // Plan and pack the whole job before opening anything: an error writes no byte.
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
+  if (port.empty() && sim.model == "both") {
+    if (!hooks.compare_boards) throw link::Error("--model both: no simulated boards built in");
+    hooks.compare_boards(p, cfg, sim);
+    return;
+  }
   std::optional<protocol::v2::Job> job2;
   std::optional<heat::HeaterJob> heaters;
   std::optional<protocol::v1::Job> job1;
@@ -126,9 +142,15 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     }
   }
 
+  if (port.empty() && sim.model == "tlm" && heaters && heaters->any()) {
+    throw std::invalid_argument(fmt::format(
+        "{}: heater commands (M104/M109/M140/M190) need the Verilated board with its heater "
+        "plants: --model rtl (the tlm board has no heaters)",
+        a.input));
+  }
   std::unique_ptr<link::Link> lk;
   if (port.empty()) {
-    lk = hooks.open_default_link(cfg, a.sim);
+    lk = hooks.open_default_link(cfg, sim);
   } else {
     lk = std::make_unique<link::SerialLink>(port, cfg.baud);
   }
@@ -203,7 +225,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       fmt::print("{} segments faster than the STEP timing allows: slowed to it\n", r.t_raised);
     }
     print_final(p);
-    if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, a.sim);
+    if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, sim);
     if (!r.position_ok) {
       throw link::Error(fmt::format(
           "{}: the device position changed by other than the plan's target (see 'device "
@@ -227,7 +249,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   if (r.skipped_heater) fmt::print("{} heater commands not sent (v1 has none)\n", r.skipped_heater);
   if (r.ze_only) fmt::print("{} Z/E-only moves not driven by v1 (sent as 0,0 steps)\n", r.ze_only);
   print_final(p);
-  if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, a.sim);
+  if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, sim);
 }
 
 }  // namespace
@@ -263,6 +285,17 @@ void register_stream(CLI::App& app, StreamHooks hooks) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
+  sub->add_option("--model", args->sim.model,
+                  "simulated board (no --port): tlm (default) the SystemC twins of cnc_core, "
+                  "event-driven and edge-for-edge equal to the RTL (no heaters, no --line-*, no "
+                  "--fst); rtl the Verilated cnc_core (about 1.6 M clocks/s); both: the first "
+                  "--max-moves moves into both with the lockstep host, compared")
+      ->check(CLI::IsMember({"tlm", "rtl", "both"}));
+  sub->add_flag("--realtime", args->sim.realtime,
+                "tlm: simulated time follows the wall clock while the board is busy (a 5-minute "
+                "job takes 5 minutes)");
+  sub->add_option("--max-moves", args->sim.max_moves,
+                  "--model both: only the first N moves (v2: motion frames)");
   sub->add_option("--plot", args->sim.plot_path,
                   "simulated board: plot of the executed vs commanded path (.svg, or .png with "
                   "rsvg-convert)");

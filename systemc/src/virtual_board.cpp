@@ -7,6 +7,11 @@
 namespace fpgacnc::twins {
 
 std::vector<Edge> PinRecorder::take_sorted() {
+  sort_edges(edges_);
+  return std::move(edges_);
+}
+
+void sort_edges(std::vector<Edge>& edges_) {
   std::sort(edges_.begin(), edges_.end(), [](const Edge& a, const Edge& b) {
     if (a.cycle != b.cycle) return a.cycle < b.cycle;
     if (a.signal != b.signal) return a.signal < b.signal;
@@ -25,7 +30,6 @@ std::vector<Edge> PinRecorder::take_sorted() {
     edges_[w++] = e;
   }
   edges_.resize(w);
-  return std::move(edges_);
 }
 
 VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bool record_tx)
@@ -257,6 +261,7 @@ void VirtualBoard::host_thread() {
     RunResult r = run_job(job);
     if (job.done) job.done(std::move(r));
   }
+  if (live) live(*this);
 }
 
 RunResult run_on_twins(const CoreParams& p, HostScript script, bool record_tx) {

@@ -15,13 +15,7 @@
 namespace fpgacnc::simboard {
 namespace {
 
-void print_figures(const SimBoard& b) {
-  const BoardStats s = b.stats();
-  fmt::print(
-      "simulated board: {} cycles ({:.3f} s of machine time), {:.2f} M clocks/s ({:.2f} s "
-      "simulating, {:.2f} s wall), {} bytes in, {} bytes out, {} edges, {} moves done\n",
-      s.cycles, static_cast<double>(s.cycles) / b.options().clk_hz, s.clocks_per_s / 1e6,
-      s.sim_wall_s, s.wall_s, s.bytes_in, s.bytes_out, s.edges, s.moves_done);
+void print_sim_extras(const SimBoard& b, const BoardStats& s) {
   if (b.options().line_faults.any()) {
     fmt::print("simulated board: line faults ({}): {}\n", b.options().line_faults.describe(),
                describe(s.line));
@@ -33,11 +27,6 @@ void print_figures(const SimBoard& b) {
         "{:.1f} degC, bed {:.1f} degC; ADC timing violations {}{}\n",
         t.ticks, t.ticks, SimBoard::kSampleClks, t.plant_c[0], t.plant_c[1], t.adc_violations,
         t.adc_violations ? " (" + t.adc_first_violation + ")" : std::string());
-  }
-  if (s.frame_errors || s.timeouts || s.violations) {
-    fmt::print(
-        "simulated board: {} framing errors, {} packet timeouts, {} step timing violations\n",
-        s.frame_errors, s.timeouts, s.violations);
   }
 }
 
@@ -78,6 +67,21 @@ double parse_probability(std::string_view name, std::string_view v) {
 }
 
 }  // namespace
+
+void print_board_figures(const Board& b) {
+  const BoardStats s = b.stats();
+  fmt::print(
+      "simulated board ({}): {} cycles ({:.3f} s of machine time), {:.2f} M clocks/s ({:.2f} s "
+      "simulating, {:.2f} s wall), {} bytes in, {} bytes out, {} edges, {} moves done\n",
+      b.model(), s.cycles, static_cast<double>(s.cycles) / b.clk_hz(), s.clocks_per_s / 1e6,
+      s.sim_wall_s, s.wall_s, s.bytes_in, s.bytes_out, s.edges, s.moves_done);
+  if (const auto* sim = dynamic_cast<const SimBoard*>(&b)) print_sim_extras(*sim, s);
+  if (s.frame_errors || s.timeouts || s.violations) {
+    fmt::print(
+        "simulated board: {} framing errors, {} packet timeouts, {} step timing violations\n",
+        s.frame_errors, s.timeouts, s.violations);
+  }
+}
 
 std::span<const LineFaultOption> line_fault_options() {
   return kLineFaultOptions;
@@ -120,12 +124,7 @@ bool parse_line_fault_option(std::string_view name, std::string_view value, Line
   return true;
 }
 
-int run_board_command(const BoardCommandArgs& args) {
-  config::MachineConfig cfg;
-  if (!args.config_path.empty()) cfg = config::load_machine_config(args.config_path);
-  BoardOptions o = SimBoard::options_from_config(cfg);
-  o.fst_path = args.fst_path;
-  o.line_faults = args.line_faults;
+int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud) {
   // SIGINT/SIGTERM are taken with sigwait() here; block them before the board thread starts so
   // that it inherits the mask and the signal always reaches this thread.
   sigset_t set;
@@ -133,22 +132,22 @@ int run_board_command(const BoardCommandArgs& args) {
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  SimBoard board(o);
   board.start();
-  fmt::print("simulated board on {} ({} baud)\n", board.path(), o.baud);
-  if (!o.fst_path.empty()) fmt::print("FST waveform: {}\n", o.fst_path);
-  if (o.line_faults.any()) fmt::print("line faults: {}\n", o.line_faults.describe());
+  fmt::print("simulated board ({}) on {} ({} baud)\n", board.model(), board.path(), baud);
+  if (!args.fst_path.empty()) fmt::print("FST waveform: {}\n", args.fst_path);
+  if (args.line_faults.any()) fmt::print("line faults: {}\n", args.line_faults.describe());
   fmt::print("Ctrl-C (SIGINT) or SIGTERM stops it\n");
   std::fflush(stdout);
   int sig = 0;
   sigwait(&set, &sig);
   board.stop();
   fmt::print("\nstopped by {}\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
-  print_figures(board);
-  const auto n = board.net_steps();
+  print_board_figures(board);
+  const auto edges = board.edges();
+  const auto n = net_steps(edges);
   fmt::print("net steps from the edges: X {} Y {} Z {} E {}\n", n[0], n[1], n[2], n[3]);
   if (!args.edges_csv.empty()) {
-    board.write_edges_csv(args.edges_csv);
+    write_edges_csv(args.edges_csv, edges, board.clk_hz());
     fmt::print("edges written to {}\n", args.edges_csv);
   }
   pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
@@ -162,33 +161,43 @@ std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
   BoardOptions o = SimBoard::options_from_config(cfg);
   o.fst_path = outputs.fst_path;
   o.line_faults = line_faults;
-  auto lk = std::make_unique<BoardLink>(o);
-  fmt::print("simulated board on {} ({} baud)\n", lk->board().path(), o.baud);
   if (o.line_faults.any()) fmt::print("line faults: {}\n", o.line_faults.describe());
+  return make_board_link(std::make_unique<SimBoard>(o), o.baud, outputs);
+}
+
+std::unique_ptr<link::Link> make_board_link(std::unique_ptr<Board> board, uint32_t baud,
+                                            const SimOutputs& outputs) {
+  if (!outputs.plot_path.empty()) check_plot_path(outputs.plot_path);
+  auto lk = std::make_unique<BoardLink>(std::move(board), baud);
+  fmt::print("simulated board ({}) on {} ({} baud)\n", lk->any_board().model(),
+             lk->any_board().path(), baud);
   std::fflush(stdout);
   return lk;
 }
 
-std::function<double()> plant_clock(link::Link& lk) {
+Board* any_board_of(link::Link& lk) {
   auto* bl = dynamic_cast<BoardLink*>(&lk);
-  if (!bl) return {};
-  SimBoard* b = &bl->board();
+  return bl ? &bl->any_board() : nullptr;
+}
+
+std::function<double()> plant_clock(link::Link& lk) {
+  SimBoard* b = board_of(lk);
+  if (!b) return {};
   return [b] { return b->plant_seconds(); };
 }
 
 SimBoard* board_of(link::Link& lk) {
-  auto* bl = dynamic_cast<BoardLink*>(&lk);
-  return bl ? &bl->board() : nullptr;
+  return dynamic_cast<SimBoard*>(any_board_of(lk));
 }
 
 bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::MachineConfig& cfg,
                       const SimOutputs& outputs) {
-  auto* bl = dynamic_cast<BoardLink*>(&lk);
-  if (!bl) return false;
-  SimBoard& b = bl->board();
+  Board* bp = any_board_of(lk);
+  if (!bp) return false;
+  Board& b = *bp;
   b.wait_quiet(std::chrono::milliseconds(2000));
   b.stop();
-  print_figures(b);
+  print_board_figures(b);
   const auto edges = b.edges();
   const auto n = net_steps(edges);
   // v2 drives all four axes; v1 carries X and Y only, so Z/E that never stepped while the plan
@@ -209,13 +218,13 @@ bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::Mach
   if (!outputs.plot_path.empty()) {
     PlotOptions po;
     po.steps_per_mm = {cfg.steps_per_mm[0], cfg.steps_per_mm[1]};
-    po.title = fmt::format("{} on the simulated board", plan.source);
+    po.title = fmt::format("{} on the simulated board ({})", plan.source, b.model());
     write_plot_svg(outputs.plot_path, edges, commanded_path(plan, cfg), po);
     fmt::print("plot written to {}\n", outputs.plot_path);
   }
   if (!outputs.fst_path.empty()) fmt::print("FST waveform written to {}\n", outputs.fst_path);
   if (!outputs.edges_csv.empty()) {
-    write_edges_csv(outputs.edges_csv, edges, b.options().clk_hz);
+    write_edges_csv(outputs.edges_csv, edges, b.clk_hz());
     fmt::print("edges written to {}\n", outputs.edges_csv);
   }
   return true;

@@ -3,9 +3,21 @@
 namespace fpgacnc::simboard {
 
 BoardLink::BoardLink(BoardOptions options)
-    : board_(std::make_unique<SimBoard>(std::move(options))) {
+    : BoardLink(std::make_unique<SimBoard>(options), options.baud) {}
+
+BoardLink::BoardLink(std::unique_ptr<Board> board, uint32_t baud) : board_(std::move(board)) {
   board_->start();
-  serial_ = std::make_unique<link::SerialLink>(board_->path(), board_->options().baud);
+  serial_ = std::make_unique<link::SerialLink>(board_->path(), baud);
+}
+
+SimBoard& BoardLink::board() {
+  auto* b = dynamic_cast<SimBoard*>(board_.get());
+  if (!b) throw BoardError("BoardLink: the board is not the Verilated SimBoard");
+  return *b;
+}
+
+const SimBoard& BoardLink::board() const {
+  return const_cast<BoardLink*>(this)->board();
 }
 
 BoardLink::~BoardLink() {

@@ -102,6 +102,9 @@ class FrameDecoderTwin : public sc_core::sc_module {
   void advance(Cycle h) {
     if (count_ > 0 && last_take_ + wd_ < h) expire();
   }
+  // The edge after which the watchdog of a started packet or frame fires (advance() past it
+  // fires it); -1 when no packet is started (cnc_core `rx_partial` low).
+  Cycle watchdog_edge() const { return count_ > 0 ? last_take_ + wd_ : -1; }
   const DecoderState& current() const { return s_; }
   DecoderState state_after(Cycle t) {
     while (history_.size() > 1 && history_[1].first <= t) history_.pop_front();

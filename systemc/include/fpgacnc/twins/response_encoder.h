@@ -112,6 +112,13 @@ class ResponseEncoderTwin : public sc_core::sc_module {
     return true;
   }
   bool idle() const { return !any_pending() && events_.empty(); }
+  // The edge step() would decide the next frame on if no input arrives before it; -1 when
+  // nothing is pending or queued.
+  Cycle next_decision() const {
+    if (any_pending()) return free_at_;
+    if (events_.empty()) return -1;
+    return std::max(free_at_, events_.top().edge + kRespStart);
+  }
 
   uint64_t segments_done = 0;  // v2 FIFO entries completed (the ACK / DONE field)
   uint64_t moves_done = 0;     // seg_done strobes (v1 and v2)

@@ -41,6 +41,12 @@ struct TwinJob {
   std::function<void(RunResult&&)> done;  // called in the host thread at the job's end
 };
 
+class TwinBoard;
+
+// Sorts edges by (cycle, signal, value) and drops the laser fall/rise pairs on one edge of
+// back-to-back cutting segments (the pin stays high), as the RTL recorder sees them.
+void sort_edges(std::vector<Edge>& edges);
+
 class VirtualBoard : public sc_core::sc_module {
  public:
   SC_HAS_PROCESS(VirtualBoard);
@@ -50,8 +56,11 @@ class VirtualBoard : public sc_core::sc_module {
   // sc_time quantum of the host's quantum keeper (default 1 ms).
   void set_quantum(const sc_core::sc_time& q) { quantum_ = q; }
   const CoreParams& params() const { return p_; }
+  // Called in the host thread after the jobs: a TwinBoard's pty sessions (twin_board.h).
+  std::function<void(VirtualBoard&)> live;
 
  private:
+  friend class TwinBoard;
   void host_thread();
   void on_line(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);
   void on_cfg(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);

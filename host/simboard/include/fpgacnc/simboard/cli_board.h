@@ -1,7 +1,9 @@
-// Command-line glue for the simulated board, called by the fpgacnc tool (host/cli):
-//   fpgacnc board [--config F] [--fst F] [--edges F.csv]
-//   fpgacnc stream FILE (no --port) [--plot out.svg|.png] [--fst out.fst] [--edges out.csv]
-// and, for both, the line fault options (parse_line_fault_option).
+// Command-line glue for the simulated boards (any simboard::Board: the Verilated SimBoard or the
+// twins' TwinBoard, chosen by host/cli), called by the fpgacnc tool:
+//   fpgacnc board [--model tlm|rtl] [--config F] [--fst F] [--edges F.csv]
+//   fpgacnc stream FILE (no --port) [--model tlm|rtl] [--plot out.svg|.png] [--fst out.fst]
+//                  [--edges out.csv]
+// and, for the Verilated board, the line fault options (parse_line_fault_option).
 #pragma once
 
 #include <functional>
@@ -14,6 +16,7 @@
 #include "fpgacnc/link/link.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/simboard/line_faults.h"
+#include "fpgacnc/simboard/sim_board.h"
 
 namespace fpgacnc::simboard {
 
@@ -45,10 +48,13 @@ std::span<const LineFaultOption> line_fault_options();
 // value (not a number, probability outside [0, 1], stall of 0 clocks).
 bool parse_line_fault_option(std::string_view name, std::string_view value, LineFaults& faults);
 
-// `fpgacnc board`: starts the simulated board in its own thread, prints
-// "simulated board on /dev/pts/N (115200 baud)", serves any serial client until SIGINT or
-// SIGTERM, then prints its figures (and writes the edge list). Returns the exit status.
-int run_board_command(const BoardCommandArgs& args);
+// `fpgacnc board`: starts `board` (not started yet) in its own thread, prints
+// "simulated board (MODEL) on /dev/pts/N (115200 baud)", serves any serial client until SIGINT
+// or SIGTERM, then prints its figures (and writes the edge list). Returns the exit status.
+int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud);
+// The figures of a board (cycles, machine time, clocks/s, bytes, edges, moves; line faults and
+// heaters for the Verilated board).
+void print_board_figures(const Board& board);
 
 // Outputs of a stream to the in-process board.
 struct SimOutputs {
@@ -64,18 +70,23 @@ struct SimOutputs {
 std::unique_ptr<link::Link> make_default_link(const config::MachineConfig& cfg,
                                               const SimOutputs& outputs,
                                               const LineFaults& line_faults = {});
+// The same for any board (not started yet; started here): a BoardLink on its pty.
+std::unique_ptr<link::Link> make_board_link(std::unique_ptr<Board> board, uint32_t baud,
+                                            const SimOutputs& outputs);
 
-// After a stream over a link made by make_default_link: stops the board, prints its figures
-// (cycles, clocks/s, edges, injected line faults, net steps per axis from the edges vs the plan's
-// final target) and writes the requested outputs. Returns false (and does nothing) for any other
-// link.
+// After a stream over a link made by make_default_link or make_board_link: stops the board, prints
+// its figures (cycles, clocks/s, edges, injected line faults, net steps per axis from the edges vs
+// the plan's final target) and writes the requested outputs. Returns false (and does nothing) for
+// any other link.
 bool report_board_run(link::Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
                       const SimOutputs& outputs);
 
-// Heaters (issue 7): for a link made by make_default_link, the board's plant clock (plant
-// seconds, SimBoard::plant_seconds) and the board itself; empty / null for any other link.
+// Heaters (issue 7): for a link to a Verilated SimBoard, the board's plant clock (plant
+// seconds, SimBoard::plant_seconds) and the board itself; empty / null for any other link
+// (the twin board has no heaters).
 std::function<double()> plant_clock(link::Link& link);
-class SimBoard;
 SimBoard* board_of(link::Link& link);
+// The board behind a link made by make_default_link / make_board_link; null for any other link.
+Board* any_board_of(link::Link& link);
 
 }  // namespace fpgacnc::simboard

@@ -20,6 +20,8 @@ namespace fpgacnc::simboard {
 class BoardLink : public link::Link {
  public:
   explicit BoardLink(BoardOptions options);
+  // Any board behind a pty (SimBoard, twins::TwinBoard); the SerialLink is opened at `baud`.
+  BoardLink(std::unique_ptr<Board> board, uint32_t baud);
   ~BoardLink() override;
   void write(std::span<const uint8_t> bytes) override { serial_->write(bytes); }
   std::optional<uint8_t> read_byte(std::chrono::milliseconds timeout) override {
@@ -27,11 +29,14 @@ class BoardLink : public link::Link {
   }
   void flush_input() override { serial_->flush_input(); }
   std::string name() const override { return serial_->name(); }
-  SimBoard& board() { return *board_; }
-  const SimBoard& board() const { return *board_; }
+  // The SimBoard (BoardError when the board is another model: use any_board()).
+  SimBoard& board();
+  const SimBoard& board() const;
+  Board& any_board() { return *board_; }
+  const Board& any_board() const { return *board_; }
 
  private:
-  std::unique_ptr<SimBoard> board_;
+  std::unique_ptr<Board> board_;
   std::unique_ptr<link::SerialLink> serial_;
 };
 

@@ -127,7 +127,31 @@ struct BoardStats {
   LineFaultStats line;                         // injected line faults (all 0 when off)
 };
 
-class SimBoard {
+// A simulated board behind a pseudo-terminal, whatever model runs behind it: SimBoard (the
+// Verilated cnc_core) or twins::TwinBoard (the SystemC twins, systemc/). Both serve the same
+// pty protocol with the same time policy (see SimBoard above) and record the same edges.
+class Board {
+ public:
+  virtual ~Board() = default;
+  virtual const std::string& path() const = 0;  // slave side of the pty (/dev/pts/N)
+  virtual void start() = 0;                     // own thread; throws BoardError if running
+  virtual void stop() = 0;                      // joins the thread; the pty stays open
+  virtual uint64_t cycle() const = 0;           // clocks since reset release
+  virtual double clk_hz() const = 0;
+  virtual BoardStats stats() const = 0;
+  virtual std::vector<Edge> edges() const = 0;  // sorted by (cycle, signal)
+  virtual std::array<int64_t, kBoardAxes> net_steps() const = 0;
+  virtual void set_estop(bool pressed) = 0;  // throws BoardError when the model has no e-stop
+  // Nothing in flight and every answer byte already written to the pty: nothing more comes
+  // until the host writes (bytes the host wrote that the board has not read yet count as
+  // written only once stats().bytes_in counts them).
+  virtual bool idle_for_host() const = 0;
+  // Blocks until the board is quiet (idle for the host) or `timeout` passes.
+  virtual bool wait_quiet(std::chrono::milliseconds timeout) const = 0;
+  virtual std::string model() const = 0;  // "rtl" (Verilated cnc_core) or "tlm" (twins)
+};
+
+class SimBoard : public Board {
  public:
   // Clock cycles of inactivity after which the board counts as quiet.
   static constexpr uint64_t kQuietCycles = 32;
@@ -139,16 +163,16 @@ class SimBoard {
   explicit SimBoard(BoardOptions options = {});
   // Convenience: clock, baud and step timing (all axes) from a machine configuration.
   static BoardOptions options_from_config(const config::MachineConfig& cfg);
-  ~SimBoard();
+  ~SimBoard() override;
   SimBoard(const SimBoard&) = delete;
   SimBoard& operator=(const SimBoard&) = delete;
 
   // Slave side of the pseudo-terminal, e.g. /dev/pts/7 (raw mode).
-  const std::string& path() const { return path_; }
+  const std::string& path() const override { return path_; }
   const BoardOptions& options() const { return opt_; }
 
-  void start();  // own thread; throws if already running
-  void stop();   // joins the thread (the pty stays open until destruction)
+  void start() override;  // own thread; throws if already running
+  void stop() override;   // joins the thread (the pty stays open until destruction)
   bool running() const { return thread_.joinable(); }
   void pause();  // freeze: no clocks, no bytes read or answered
   void resume();
@@ -162,17 +186,20 @@ class SimBoard {
   // Runs until quiet (nothing in flight) in the caller's thread, at most `max_cycles`.
   void run_cycles_until_quiet(uint64_t max_cycles);
   // Blocks until the board thread is quiet (nothing in flight, all output flushed) or timeout.
-  bool wait_quiet(std::chrono::milliseconds timeout) const;
+  bool wait_quiet(std::chrono::milliseconds timeout) const override;
+  bool idle_for_host() const override { return wait_quiet(std::chrono::milliseconds(0)); }
+  double clk_hz() const override { return opt_.clk_hz; }
+  std::string model() const override { return "rtl"; }
 
-  BoardStats stats() const;
-  uint64_t cycle() const;
-  std::vector<Edge> edges() const;                 // copy
+  BoardStats stats() const override;
+  uint64_t cycle() const override;
+  std::vector<Edge> edges() const override;        // copy
   std::vector<uint64_t> move_done_cycles() const;  // copy
   // Line logs (copies; empty unless line_faults.log): every frame put on the rx line, every
   // byte decoded from tx with what was delivered.
   std::vector<RxFrameRecord> rx_line_log() const;
   std::vector<TxByteRecord> tx_line_log() const;
-  std::array<int64_t, kBoardAxes> net_steps() const;
+  std::array<int64_t, kBoardAxes> net_steps() const override;
   void write_edges_csv(const std::string& path) const;
   // One-line summary of stats() for reports.
   std::string stats_line() const;
@@ -183,7 +210,7 @@ class SimBoard {
   double plant_seconds() const;
   void inject_sensor(int channel, SensorFault f);
   void disconnect_heater(int channel, bool disconnected);
-  void set_estop(bool pressed);
+  void set_estop(bool pressed) override;
 
   // Implementation detail (model, UART driver/monitor, recorder), defined in sim_board.cpp.
   struct Model;

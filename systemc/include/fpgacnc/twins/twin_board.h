@@ -1,0 +1,115 @@
+// TwinBoard: the SystemC twins of cnc_core (VirtualBoard) behind a pseudo-terminal, a drop-in for
+// simboard::SimBoard (the Verilated core) that runs thousands of times faster.
+//
+// Serial side: any client opens path() (/dev/pts/N, raw). Bytes written to the pty enter the
+// twin uart_rx as 8N1 frames at simulated clocks; every byte the twin uart_tx sends is written
+// back to the pty. STEP/DIR/LASER edges (and TX when asked) are recorded with their clocks
+// (simboard::Edge), with the same cycle numbering as SimBoard (cycle 0 = the last settle edge
+// after the step timing writes; the first host byte starts on cycle 1).
+//
+// Time policy: SimBoard's (sim_board.h). A quiet board (nothing in flight: no rx bytes on the
+// line, no entry queued, prepared or running, no STEP pulse high, no tx byte, no packet started,
+// and 32 clocks past the last activity) does not advance; bytes arriving while quiet start on
+// the next clock; bytes arriving during the 32-clock quiet tail start after it; bytes arriving
+// while busy start on the next clock of the board's time (back to back after host bytes still
+// on the line). Activity is counted exactly as SimBoard counts it (the rx line until its stop
+// bit ends, cnc_core `busy`, STEP high, tx low or being decoded until the end of its stop bit),
+// so a host that writes only when the board is idle_for_host() gets the same bytes at the same
+// clocks from both boards. The answers are written to the pty when they are decoded: the middle
+// of their stop bit, as SimBoard's UART monitor decodes them.
+//
+// Without realtime the board jumps from event to event (an answer's decision, a byte decoded, the
+// end of activity) with no per-clock work. So that a host keeps up as with SimBoard (which needs
+// about 2.7 ms of wall time per UART byte), it holds its time (a) before its time passes the end
+// of the host's bytes on the line, until `host_grace` after the host's last write, and (b) after
+// the last byte of an answer, at the clock SimBoard would write it (the first inactive clock, at
+// most one poll interval later), until the client has read every answer byte and then
+// `host_grace` has passed without a write. With realtime, simulated time follows the wall clock
+// (50 M clocks per second at 50 MHz) while the board is busy; no holds.
+//
+// No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
+// e-stop input (set_estop throws BoardError). The SystemC kernel runs in a thread of its own, one
+// per process, elaborated by the first TwinBoard; later TwinBoards run as further sessions in it
+// (one at a time, with the same clock, baud and watchdog).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/simboard/sim_board.h"
+
+namespace fpgacnc::twins {
+
+class VirtualBoard;
+
+struct TwinBoardOptions {
+  uint64_t clk_hz = 50'000'000;  // must divide 1e12 (whole ps per clock)
+  uint32_t baud = 115200;
+  // Step timing per axis; unset: the RTL defaults (100/100/200/200 clocks).
+  std::optional<std::array<config::StepTiming, simboard::kBoardAxes>> step_timing;
+  bool realtime = false;   // pace simulated time to the wall clock while busy
+  bool record_tx = false;  // also record TX pin edges
+  std::chrono::microseconds host_grace{300};
+  uint32_t poll_interval_cycles = 1024;  // SimBoard's: the latest clock an answer is written
+};
+
+class TwinBoard : public simboard::Board {
+ public:
+  // Clock, baud and step timing from a machine configuration (as SimBoard::options_from_config).
+  static TwinBoardOptions options_from_config(const config::MachineConfig& cfg);
+  // Creates the pty. Throws simboard::BoardError (pty failure, bad clock or step timing).
+  explicit TwinBoard(TwinBoardOptions options = {});
+  ~TwinBoard() override;
+  TwinBoard(const TwinBoard&) = delete;
+  TwinBoard& operator=(const TwinBoard&) = delete;
+
+  const std::string& path() const override { return path_; }
+  const TwinBoardOptions& options() const { return opt_; }
+  // Starts a session in the process's SystemC thread (resetting the twins); throws BoardError
+  // when running, when another TwinBoard's session runs, or for a clock/baud other than the
+  // first TwinBoard's.
+  void start() override;
+  void stop() override;
+  uint64_t cycle() const override;
+  double clk_hz() const override { return static_cast<double>(opt_.clk_hz); }
+  simboard::BoardStats stats() const override;
+  std::vector<simboard::Edge> edges() const override;
+  std::array<int64_t, simboard::kBoardAxes> net_steps() const override;
+  void set_estop(bool pressed) override;
+  bool idle_for_host() const override;
+  bool wait_quiet(std::chrono::milliseconds timeout) const override;
+  std::string model() const override { return "tlm"; }
+  // An error that ended the session (a twin's logic error), "" when none.
+  std::string error() const;
+
+ private:
+  void session(VirtualBoard& vb);
+  void open_pty();
+  void wake() const;
+
+  TwinBoardOptions opt_;
+  std::string path_;
+  int master_ = -1, slave_ = -1, wake_ = -1;
+
+  mutable std::mutex mu_;  // guards the published figures below
+  simboard::BoardStats st_{};
+  // Recorded so far, in drained batches (sorted on request and at the session's end); while the
+  // board runs, stats().edges counts the batches (a laser pair split over two batches counts).
+  std::vector<simboard::Edge> edges_;
+  std::string error_;
+  bool running_ = false;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> quiet_{true};
+  std::atomic<bool> session_done_{true};
+  std::chrono::steady_clock::time_point t_start_{};
+};
+
+}  // namespace fpgacnc::twins

@@ -1,0 +1,205 @@
+// The twin board behind its pseudo-terminal (label system).
+//
+// Equivalence: the same jobs (v1 packets and v2 sessions of examples/jsdc-laser.gcode, and
+// corpus/cncjs/circle.gcode as native ARC frames, planned and packed by the host) go through the pty into the Verilated SimBoard and into the TwinBoard with
+// the lockstep host (pty_lockstep.h: a batch written when the board is idle for the host, so the
+// time policy makes every start clock deterministic); the edge lists (STEP/DIR/LASER and TX, so
+// every answer bit at its clock), the answer bytes with their start clocks and the bytes the host
+// read must be identical; a difference names the first differing edge or byte and its cycle.
+// The v2 sessions end without STATUS_QUERY: the twins report idle heaters in STATUS, the
+// Verilated board its heater plants. No line faults: the twin board has no fault injector.
+// FPGACNC_TWIN_PTY_MOVES sets the number of v2 motion frames (default 30) and twice the number of
+// v1 moves (the Verilated side is the slow one: about 20 M clocks for both).
+//
+// Corpus: a whole corpus job (jsdc-laser.gcode, about 5 minutes of machine time) at its real feeds
+// through the pty into the twin board with the host's own v2 streamer (protocol selection, sliding
+// window); net steps from the edges equal the plan's final target, and every motion frame ran
+// once.
+//
+// Any client: pyserial (python3-serial) drives the twin board with the original controller's
+// example and gets the ACK.
+#include <gtest/gtest.h>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/link/serial_link.h"
+#include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
+#include "fpgacnc/simboard/sim_board.h"
+#include "fpgacnc/twins/pty_lockstep.h"
+#include "fpgacnc/twins/twin_board.h"
+
+extern char** environ;
+
+namespace sb = fpgacnc::simboard;
+namespace tw = fpgacnc::twins;
+namespace cfgns = fpgacnc::config;
+namespace plan = fpgacnc::plan;
+using namespace std::chrono_literals;
+
+// libsystemc's main() calls sc_main(); gtest_main provides main(), so this only links.
+extern "C" int sc_main(int, char*[]) {
+  return 1;
+}
+
+namespace {
+
+size_t moves() {
+  const char* e = std::getenv("FPGACNC_TWIN_PTY_MOVES");
+  return e ? static_cast<size_t>(std::strtoull(e, nullptr, 10)) : 30;
+}
+
+// The demo job 25 times faster than written (examples/demo-machine.toml: feed override 2500 %,
+// rapids at 20 000 mm/min, accelerations 625 times the defaults): short moves, many answers per
+// second of board time, so that the Verilated side stays short.
+cfgns::MachineConfig job_config() {
+  cfgns::MachineConfig cfg;
+  cfg.feed_override_pct = 2500.0;
+  cfg.rapid_feed_mm_min = 20000.0;
+  cfg.max_feed_mm_min[0] = cfg.max_feed_mm_min[1] = 60000.0;
+  cfg.max_accel_mm_s2 = {625000.0, 625000.0, 62500.0, 625000.0};
+  return cfg;
+}
+
+// The job without its dwells (G4 P0.5 after the laser comes on: 25 M clocks of waiting that
+// would only make the Verilated side longer).
+plan::Plan job_plan(const cfgns::MachineConfig& cfg) {
+  const std::string path = std::string(FPGACNC_EXAMPLES_DIR) + "/jsdc-laser.gcode";
+  std::ifstream in(path);
+  std::string line, g;
+  while (std::getline(in, line)) {
+    if (!line.starts_with("G4")) g += line + "\n";
+  }
+  plan::PlanOptions po;
+  po.feed_override_pct = cfg.feed_override_pct;
+  return plan::plan_program(fpgacnc::gcode::parse_string(g, path), cfg, po);
+}
+
+void expect_same(const tw::HostScript& script, const cfgns::MachineConfig& cfg,
+                 size_t min_answers) {
+  sb::BoardOptions ro = sb::SimBoard::options_from_config(cfg);
+  ro.record_tx = true;
+  sb::SimBoard rtl(ro);
+  tw::TwinBoardOptions to = tw::TwinBoard::options_from_config(cfg);
+  to.record_tx = true;
+  tw::TwinBoard tlm(to);
+  // Liveness only (a board that never goes idle): generous, the verdict counts board clocks.
+  const auto b = tw::run_lockstep(tlm, script, cfg.clk_hz, cfg.baud, 600s);
+  ASSERT_EQ(tlm.error(), "");
+  ASSERT_EQ(b.error, "");
+  const auto a = tw::run_lockstep(rtl, script, cfg.clk_hz, cfg.baud, 600s);
+  ASSERT_EQ(a.error, "");
+  ASSERT_EQ(b.error, "");
+  ASSERT_EQ(tlm.error(), "");
+  const std::string d = tw::compare_lockstep(a, b, static_cast<double>(cfg.clk_hz), cfg.baud);
+  EXPECT_EQ(d, "") << "rtl and tlm boards differ behind the pty";
+  // The comparison is not vacuous: answers and motion were there.
+  EXPECT_GE(a.received.size(), min_answers);
+  EXPECT_GT(sb::step_pulses(a.edges)[0] + sb::step_pulses(a.edges)[1], 1000u);
+  EXPECT_EQ(a.stats.cycles, b.stats.cycles) << "board time at the end";
+  EXPECT_EQ(a.stats.moves_done, b.stats.moves_done);
+  std::printf(
+      "%zu batches, %zu answer bytes, %zu edges, %llu cycles; wall: rtl %.2f s, tlm %.3f s\n",
+      a.batches, a.received.size(), a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
+      a.wall_s, b.wall_s);
+}
+
+TEST(TwinBoardPty, V1SameAsVerilatedBoard) {
+  const auto cfg = job_config();
+  const auto p = job_plan(cfg);
+  tw::HostScript s;
+  s.v1 = tw::job_packets(fpgacnc::protocol::v1::pack_job(p), cfg.clk_hz, moves() / 2);
+  expect_same(s, cfg, moves() / 2);
+}
+
+TEST(TwinBoardPty, V2SameAsVerilatedBoard) {
+  const auto cfg = job_config();
+  const auto p = job_plan(cfg);
+  tw::HostScript s;
+  s.v2 = tw::job_script(fpgacnc::protocol::v2::pack_job(p, cfg), moves());
+  s.v2->status_at_end = false;
+  expect_same(s, cfg, moves());
+}
+
+// Native arcs: corpus/cncjs/circle.gcode as ARC frames (systemc/cosim/circle-arcs.toml: four
+// quarter circles, a Z move, a rapid; 100 times faster than written).
+TEST(TwinBoardPty, V2ArcsSameAsVerilatedBoard) {
+  const auto cfg = cfgns::load_machine_config(std::string(FPGACNC_COSIM_DIR) + "/circle-arcs.toml");
+  plan::PlanOptions po;
+  po.feed_override_pct = cfg.feed_override_pct;
+  const auto p = plan::plan_input_file(std::string(FPGACNC_CORPUS_DIR) + "/circle.gcode", cfg, po);
+  const auto job = fpgacnc::protocol::v2::pack_job(p, cfg);
+  tw::HostScript s;
+  s.v2 = tw::job_script(job);
+  s.v2->status_at_end = false;
+  size_t arcs = 0;
+  for (const auto& f : job.frames) arcs += f.frame.type == tw::v2::kArc ? 1 : 0;
+  EXPECT_EQ(arcs, 4u) << "the four quarter circles as ARC frames";
+  expect_same(s, cfg, 4);
+}
+
+TEST(TwinBoardPty, CorpusJobNetStepsMatchPlan) {
+  cfgns::MachineConfig cfg;
+  plan::PlanOptions po;
+  const auto p =
+      plan::plan_input_file(std::string(FPGACNC_CORPUS_DIR) + "/jsdc-laser.gcode", cfg, po);
+  tw::TwinBoard board(tw::TwinBoard::options_from_config(cfg));
+  board.start();
+  uint64_t motion_frames = 0;
+  {
+    fpgacnc::link::SerialLink lk(board.path(), cfg.baud);
+    auto o2 = fpgacnc::link::stream_v2_options(cfg);
+    const auto choice = fpgacnc::link::select_protocol(lk, "auto", o2);
+    ASSERT_EQ(choice.protocol, "v2");
+    const auto job = fpgacnc::protocol::v2::pack_job(p, cfg);
+    const auto rep = fpgacnc::link::stream_v2_job(lk, job, o2, choice.ident);
+    EXPECT_TRUE(rep.position_ok);
+    motion_frames = rep.lines + rep.profiles + rep.arcs + rep.dwells;
+  }
+  ASSERT_TRUE(board.wait_quiet(5000ms));
+  board.stop();
+  ASSERT_EQ(board.error(), "");
+  const auto n = board.net_steps();
+  for (int a = 0; a < sb::kBoardAxes; ++a) {
+    EXPECT_EQ(n[static_cast<size_t>(a)], p.final_steps[static_cast<size_t>(a)]) << "axis " << a;
+  }
+  const auto st = board.stats();
+  EXPECT_GT(st.cycles, 10'000'000'000u) << "the job at its real feeds: about 300 s of board time";
+  EXPECT_EQ(st.moves_done, motion_frames) << "every LINE/LINE_PROFILE/ARC/DWELL frame ran once";
+  std::printf("%s: %llu cycles (%.1f s of machine time) in %.2f s wall, %.0f M clocks/s\n",
+              p.source.c_str(), static_cast<unsigned long long>(st.cycles),
+              static_cast<double>(st.cycles) / cfg.clk_hz, st.wall_s, st.clocks_per_s / 1e6);
+}
+
+// Any serial program: pyserial (Debian python3-serial) writes the original controller's example
+// (init and one move, protocol v1) to the twin board's pty and must read the ACK; the board moved
+// exactly the example's steps.
+TEST(TwinBoardPty, PyserialClientGetsTheAck) {
+  const char* python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+  tw::TwinBoard board;
+  board.start();
+  std::string script = PYSERIAL_SCRIPT, path = board.path(), timeout = "60";
+  char* argv[] = {const_cast<char*>(python), script.data(), path.data(), timeout.data(), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawnp(&pid, python, nullptr, nullptr, argv, environ), 0) << python;
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "pyserial_drive.py on " << path;
+  ASSERT_TRUE(board.wait_quiet(5000ms));
+  board.stop();
+  const auto n = board.net_steps();
+  EXPECT_EQ(n[0], 320);  // the example's X +320, Y -160 steps (docs/protocol-v1.md)
+  EXPECT_EQ(n[1], -160);
+  EXPECT_EQ(board.stats().moves_done, 1u);
+}
+
+}  // namespace
