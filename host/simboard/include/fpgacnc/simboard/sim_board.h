@@ -150,7 +150,9 @@ class SimBoard {
   void start();  // own thread; throws if already running
   void stop();   // joins the thread (the pty stays open until destruction)
   bool running() const { return thread_.joinable(); }
-  void pause();  // freeze: no clocks, no bytes read or answered
+  // Freeze: no clocks, no bytes read or answered; on return the chunk of clocks in progress has
+  // ended and no other runs until resume().
+  void pause();
   void resume();
   bool paused() const { return paused_.load(); }
 
@@ -165,7 +167,24 @@ class SimBoard {
   bool wait_quiet(std::chrono::milliseconds timeout) const;
 
   BoardStats stats() const;
-  uint64_t cycle() const;
+  // Clocks simulated since reset release, as of the end of the last chunk of clocks; every byte
+  // decoded from tx up to that cycle has been written to the pty (or is held because the pty is
+  // full). Lock-free.
+  uint64_t cycle() const { return pub_cycle_.load(std::memory_order_acquire); }
+
+  // ---- For host timers on board clocks (BoardLink, link::Link::now()) ----
+  double clk_hz() const { return opt_.clk_hz; }
+  // True when nothing more can reach the host until it writes again: the board is quiet
+  // (nothing in flight: see the time policy above) and every byte decoded from tx has been
+  // written to the pty; or the board is frozen (paused, or not running its thread), so that
+  // nothing can come at all. Bytes the host wrote to the pty that the board has not read yet
+  // are not seen here: compare bytes_from_host() with what the host wrote.
+  bool idle_for_host() const;
+  // Bytes read from the pty (host -> board, before line faults) and written to it
+  // (board -> host, after line faults) since construction. Lock-free; bytes_from_host() counts
+  // a byte only once the board has taken it into its line queue (idle_for_host() sees it).
+  uint64_t bytes_from_host() const { return pub_from_host_.load(std::memory_order_acquire); }
+  uint64_t bytes_to_host() const { return pub_to_host_.load(std::memory_order_acquire); }
   std::vector<Edge> edges() const;                 // copy
   std::vector<uint64_t> move_done_cycles() const;  // copy
   // Line logs (copies; empty unless line_faults.log): every frame put on the rx line, every
@@ -198,6 +217,7 @@ class SimBoard {
   void admit_inbox();
   void flush_out();
   bool quiet_locked() const;
+  void publish_locked();  // cycle and byte counts for the lock-free accessors
 
   BoardOptions opt_;
   std::string path_;
@@ -216,6 +236,10 @@ class SimBoard {
   std::atomic<bool> stop_{false};
   std::atomic<bool> paused_{false};
   std::atomic<bool> quiet_{true};
+  std::atomic<bool> thread_live_{false};  // start() .. stop() joined
+  std::atomic<uint64_t> pub_cycle_{0};
+  std::atomic<uint64_t> pub_from_host_{0};
+  std::atomic<uint64_t> pub_to_host_{0};
   std::chrono::steady_clock::time_point t_start_{};
   bool started_clock_ = false;
   double sim_wall_s_ = 0.0;
