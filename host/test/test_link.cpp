@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -112,6 +113,26 @@ TEST(SerialLink, OpensAPtyAndExchangesBytes) {
   }
 }
 
+// A real port has no board clock: link time is the wall clock, and a wait of T blocks for T of
+// wall time (lower bounds only: a loaded machine can only make the waits longer).
+TEST(SerialLink, TimersRunOnTheWallClock) {
+  using namespace std::chrono_literals;
+  FakeDevice dev;  // answers only after an init packet: silent here
+  lk::SerialLink link(dev.path(), 115200);
+  EXPECT_FALSE(link.board_clock().has_value());
+  const auto w0 = std::chrono::steady_clock::now();
+  const lk::Link::Time t0 = link.now();
+  EXPECT_FALSE(link.read_byte_until(t0 + 100ms).has_value());
+  EXPECT_GE(std::chrono::steady_clock::now() - w0, 100ms);
+  EXPECT_GE(link.now() - t0, 100ms);
+  const auto w1 = std::chrono::steady_clock::now();
+  link.wait_until(link.now() + 50ms);
+  EXPECT_GE(std::chrono::steady_clock::now() - w1, 50ms);
+  const auto w2 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(link.read_byte(30ms).has_value());
+  EXPECT_GE(std::chrono::steady_clock::now() - w2, 30ms);
+}
+
 TEST(SerialLink, MissingPortIsAClearError) {
   try {
     lk::SerialLink link("/dev/does-not-exist-fpgacnc", 115200);
@@ -149,11 +170,15 @@ TEST(StreamV1, TimeoutNamesLastAcknowledgedMove) {
   lk::SerialLink link(dev.path(), 115200);
   lk::StreamOptions o;
   o.ack_timeout = std::chrono::milliseconds(200);
+  const auto w0 = std::chrono::steady_clock::now();
   try {
     lk::stream_v1(link, small_plan(), o);
     FAIL();
   } catch (const lk::Error& e) {
     const std::string w = e.what();
+    // Wall-clock timer on a port: at least the 200 ms, and not called board time.
+    EXPECT_GE(std::chrono::steady_clock::now() - w0, std::chrono::milliseconds(200));
+    EXPECT_NE(w.find("within 0.2 s for"), std::string::npos) << w;
     // Third move (segment 2, line 4) times out; last acknowledged: segment 1 (line 2).
     EXPECT_NE(w.find("segment 2 (line 4)"), std::string::npos) << w;
     EXPECT_NE(w.find("last acknowledged move: segment 1 (line 2)"), std::string::npos) << w;

@@ -262,6 +262,21 @@ bool TwinBoard::idle_for_host() const {
   return ::poll(&p, 1, 0) == 0;
 }
 
+uint64_t TwinBoard::bytes_from_host() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return st_.bytes_in;
+}
+
+uint64_t TwinBoard::bytes_to_host() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return st_.bytes_out;
+}
+
+bool TwinBoard::frozen() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return !running_ || session_done_.load();
+}
+
 bool TwinBoard::wait_quiet(std::chrono::milliseconds timeout) const {
   const auto deadline = wall_clock::now() + timeout;
   for (;;) {

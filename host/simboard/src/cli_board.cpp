@@ -192,10 +192,12 @@ SimBoard* board_of(link::Link& lk) {
 
 bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::MachineConfig& cfg,
                       const SimOutputs& outputs) {
-  Board* bp = any_board_of(lk);
-  if (!bp) return false;
-  Board& b = *bp;
-  b.wait_quiet(std::chrono::milliseconds(2000));
+  auto* bl = dynamic_cast<BoardLink*>(&lk);
+  if (!bl) return false;
+  Board& b = bl->any_board();
+  // The last answer has reached the host; the board goes idle within a few clocks after it.
+  if (!bl->wait_idle(std::chrono::milliseconds(1000)))
+    fmt::print("simulated board: not idle 1 s of board time after the last answer\n");
   b.stop();
   print_board_figures(b);
   const auto edges = b.edges();

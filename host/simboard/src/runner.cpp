@@ -1,6 +1,19 @@
 #include "fpgacnc/simboard/runner.h"
 
+#include <fmt/format.h>
+
+#include <thread>
+
 namespace fpgacnc::simboard {
+
+namespace {
+// Wall-time slice between looks at the board while a wait runs (the board thread advances
+// meanwhile; the deadline is decided on the board's cycle count, not on these slices).
+constexpr std::chrono::milliseconds kSlice{1};
+// Safety net (wall time) for bytes the board has written to the pty that do not arrive: the
+// kernel delivers them within microseconds; this only names a broken pty instead of hanging.
+constexpr std::chrono::seconds kInFlightLimit{30};
+}  // namespace
 
 BoardLink::BoardLink(BoardOptions options)
     : BoardLink(std::make_unique<SimBoard>(options), options.baud) {}
@@ -25,6 +38,99 @@ BoardLink::~BoardLink() {
   board_->stop();
 }
 
+void BoardLink::write(std::span<const uint8_t> bytes) {
+  serial_->write(bytes);
+  written_ += bytes.size();
+}
+
+link::Link::Time BoardLink::board_time(uint64_t cycle) const {
+  return Time(static_cast<int64_t>(static_cast<double>(cycle) * 1e9 / board_->clk_hz()));
+}
+
+link::Link::Time BoardLink::now() const {
+  return board_time(board_->cycle()) + skipped_;
+}
+
+std::optional<link::BoardClock> BoardLink::board_clock() const {
+  return link::BoardClock{board_->cycle(), board_->clk_hz(), idle()};
+}
+
+bool BoardLink::idle() const {
+  // Order matters: the host's bytes taken by the board (before), then the board quiet (after
+  // that), then every byte it wrote read here (nothing more is written while it is idle).
+  const bool frozen = board_->frozen();
+  const bool taken = frozen || board_->bytes_from_host() == written_;
+  return taken && board_->idle_for_host() && board_->bytes_to_host() == consumed_;
+}
+
+std::optional<uint8_t> BoardLink::take(std::chrono::milliseconds wall) {
+  auto b = serial_->read_byte(wall);
+  if (b) ++consumed_;
+  return b;
+}
+
+std::optional<uint8_t> BoardLink::take_in_flight(uint64_t upto) {
+  const auto give_up = std::chrono::steady_clock::now() + kInFlightLimit;
+  while (upto > consumed_) {
+    if (auto b = take(kSlice)) return b;
+    if (std::chrono::steady_clock::now() > give_up) {
+      throw link::Error(fmt::format(
+          "{}: {} bytes written by the simulated board did not arrive on the pty within {} s",
+          name(), upto - consumed_, kInFlightLimit.count()));
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
+  for (;;) {
+    if (auto b = take(std::chrono::milliseconds(0))) return b;
+    // The cycle first: every answer byte decoded up to it is counted in bytes_to_host() by now.
+    const uint64_t cycle = board_->cycle();
+    if (auto b = take_in_flight(board_->bytes_to_host())) return b;
+    const Time t = board_time(cycle) + skipped_;
+    if (t >= deadline) return std::nullopt;
+    if (idle()) {
+      skipped_ += deadline - t;  // nothing can arrive before the host writes: skip the rest
+      return std::nullopt;
+    }
+    if (auto b = take(kSlice)) return b;
+  }
+}
+
+void BoardLink::wait_until(Time deadline) {
+  for (;;) {
+    const Time t = now();
+    if (t >= deadline) return;
+    // Bytes still on their way to the host do not make the board busy: only the board's own
+    // state and the host's bytes count while nothing is read.
+    const bool frozen = board_->frozen();
+    if ((frozen || board_->bytes_from_host() == written_) && board_->idle_for_host()) {
+      skipped_ += deadline - now();
+      return;
+    }
+    std::this_thread::sleep_for(kSlice);
+  }
+}
+
+bool BoardLink::wait_idle(std::chrono::milliseconds timeout) {
+  const Time deadline = now() + timeout;
+  for (;;) {
+    const bool frozen = board_->frozen();
+    if ((frozen || board_->bytes_from_host() == written_) && board_->idle_for_host()) return true;
+    if (now() >= deadline) return false;
+    std::this_thread::sleep_for(kSlice);
+  }
+}
+
+void BoardLink::flush_input() {
+  // Exactly what the board has written so far, wherever it is on its way: deterministic, where
+  // tcflush() would race with bytes still inside the pty.
+  const uint64_t upto = board_->bytes_to_host();
+  while (take_in_flight(upto)) {
+  }
+}
+
 BoardRunResult run_plan_on_board(const plan::Plan& plan, const BoardOptions& board,
                                  const BoardRunOptions& options) {
   BoardLink lk(board);
@@ -39,8 +145,13 @@ BoardRunResult run_plan_on_board(const plan::Plan& plan, const BoardOptions& boa
   r.port = lk.name();
   r.report = link::stream_v1(lk, plan, so);
   // The last ACK has reached the host: every STEP edge is recorded by then. Let the board go
-  // quiet (end of the ACK frame) before reading its figures.
-  lk.board().wait_quiet(std::chrono::milliseconds(2000));
+  // quiet (end of the ACK frame: a few clocks) before reading its figures.
+  if (!lk.wait_idle(std::chrono::milliseconds(1000))) {
+    throw link::Error(
+        fmt::format("{}: the simulated board is not idle 1 s of board time after "
+                    "the last ACK: {}",
+                    lk.name(), lk.board().stats_line()));
+  }
   lk.board().stop();
   r.stats = lk.board().stats();
   r.edges = lk.board().edges();

@@ -114,6 +114,7 @@ struct SimBoard::Model {
   std::vector<uint8_t> out;       // decoded tx bytes not yet written to the pty
   std::vector<LineFrame> frames;  // scratch: frames for one host byte
   uint64_t bytes_in = 0, bytes_out = 0;
+  uint64_t bytes_to_pty = 0;  // written to the pty master
   uint64_t trace_time = 0;
   ThermalWorld heat;
 
@@ -399,6 +400,7 @@ void SimBoard::flush_out() {
     const ssize_t n = ::write(master_, out.data() + done, out.size() - done);
     if (n > 0) {
       done += static_cast<size_t>(n);
+      model_->bytes_to_pty += static_cast<uint64_t>(n);
     } else if (n < 0 && errno == EINTR) {
       continue;
     } else {
@@ -406,6 +408,12 @@ void SimBoard::flush_out() {
     }
   }
   out.erase(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(done));
+}
+
+void SimBoard::publish_locked() {
+  pub_from_host_.store(model_->bytes_in, std::memory_order_release);
+  pub_to_host_.store(model_->bytes_to_pty, std::memory_order_release);
+  pub_cycle_.store(model_->cycle, std::memory_order_release);
 }
 
 bool SimBoard::quiet_locked() const {
@@ -464,6 +472,7 @@ void SimBoard::step_loop(int block_ms) {
       admit_inbox();
     }
     quiet = paused_ || quiet_locked();
+    publish_locked();
   }
   quiet_.store(quiet);
   if (quiet) {
@@ -484,12 +493,15 @@ void SimBoard::step_loop(int block_ms) {
     }
     std::lock_guard<std::mutex> l(mu_);
     if (!paused_) flush_out();
+    publish_locked();
     return;
   }
   const auto t0 = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> l(mu_);
+  if (paused_) return;  // paused since the check above: not one more clock
   run_chunk(opt_.poll_interval_cycles);
   flush_out();
+  publish_locked();
   sim_wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -500,6 +512,7 @@ void SimBoard::start() {
     t_start_ = std::chrono::steady_clock::now();
     started_clock_ = true;
   }
+  thread_live_ = true;
   thread_ = std::thread([this] {
     while (!stop_.load(std::memory_order_relaxed)) step_loop(100);
   });
@@ -511,12 +524,14 @@ void SimBoard::stop() {
   const uint64_t one = 1;
   [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
   thread_.join();
+  thread_live_ = false;
 }
 
 void SimBoard::pause() {
   paused_ = true;
   const uint64_t one = 1;
   [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  OtherThreadLock l(*this);  // the chunk in progress ends; none follows
 }
 
 void SimBoard::resume() {
@@ -551,6 +566,7 @@ void SimBoard::run_cycles_until_quiet(uint64_t max_cycles) {
     n += run_chunk(std::min<uint64_t>(opt_.poll_interval_cycles, max_cycles - n));
     flush_out();
   }
+  publish_locked();
 }
 
 bool SimBoard::wait_quiet(std::chrono::milliseconds timeout) const {
@@ -588,9 +604,9 @@ BoardStats SimBoard::stats() const {
   return st;
 }
 
-uint64_t SimBoard::cycle() const {
-  OtherThreadLock l(*this);
-  return model_->cycle;
+bool SimBoard::idle_for_host() const {
+  OtherThreadLock l(*this);  // after the chunk in progress (its bytes flushed)
+  return paused_.load() || !thread_live_.load() || quiet_locked();
 }
 
 std::vector<Edge> SimBoard::edges() const {

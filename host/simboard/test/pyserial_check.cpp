@@ -22,8 +22,10 @@ int main() {
     const char* python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
     std::string script = PYSERIAL_SCRIPT;
     std::string path = board.path();
-    // 60 s of wall time for the 5 million clocks the move takes (0.8-2 M clocks/s here).
-    std::string timeout = "60";
+    // The pyserial client is a plain serial client with a wall-clock timeout of its own (no
+    // board clock): 600 s for the 5 million clocks the move takes, a safety net far above the
+    // 2-7 s it needs at 0.7-2 M clocks/s.
+    std::string timeout = "600";
     char* argv[] = {const_cast<char*>(python), script.data(), path.data(), timeout.data(), nullptr};
     pid_t pid = 0;
     if (::posix_spawnp(&pid, python, nullptr, nullptr, argv, environ) != 0) {

@@ -51,10 +51,11 @@ std::string part_lines(size_t lines) {
   return out;
 }
 
+// Timers in board time (BoardLink, link.h): a heater poll every 5 ms of board time is one every
+// 2.4 plant seconds.
 lk::StreamV2Options board_options(sb::SimBoard& b) {
   lk::StreamV2Options o;
   o.retransmit_timeout = 1000ms;
-  o.answer_timeout = 20000ms;
   o.heater_poll = 5ms;
   o.plant_time = [&b] { return b.plant_seconds(); };
   return o;
@@ -62,7 +63,7 @@ lk::StreamV2Options board_options(sb::SimBoard& b) {
 
 fpgacnc::config::MachineConfig board_config() {
   fpgacnc::config::MachineConfig c;
-  c.heaters.watchdog_s = 60.0;  // plant seconds: the host's polls are paced by the wall clock
+  c.heaters.watchdog_s = 60.0;  // plant seconds; the host polls every 2.4 (board_options)
   return c;
 }
 
@@ -81,7 +82,7 @@ TEST(HeaterBoard, AutotuneBedCriticalPeriodNear53s) {
   o.relay.skip_cycles = 1;
   o.relay.cycles = 3;
   o.max_plant_s = 1200.0;
-  o.poll = 2ms;
+  o.poll = 2ms;  // board time: about one plant second
   o.plant_time = [&board] { return board.plant_seconds(); };
   const auto r = heat::run_relay_test(link, cfg, o);
   fmt::print("{}", heat::format_autotune(r.result, o.relay));

@@ -1,5 +1,7 @@
 // Simulated board tests (label system): the host's SerialLink and v1 streamer talk to the
-// Verilated cnc_core through the board's pseudo-terminal, exactly as to a real port.
+// Verilated cnc_core through the board's pseudo-terminal, exactly as to a real port. Every wait
+// on the board runs on its clock (BoardLink, link time: link.h), so no verdict depends on how
+// fast or loaded the machine is.
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -15,6 +17,7 @@
 #include <variant>
 
 #include "fpgacnc/link/serial_link.h"
+#include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/simboard/plot.h"
@@ -50,19 +53,18 @@ TEST(SimBoard, RejectsOtherClockAndBaud) {
 }
 
 TEST(SimBoard, PtyRoundTripOriginalExample) {
-  sb::SimBoard board;
+  sb::BoardLink link(sb::BoardOptions{});
+  auto& board = link.board();
   ASSERT_EQ(board.path().rfind("/dev/pts/", 0), 0u) << board.path();
-  board.start();
-  lk::SerialLink link(board.path(), 115200);
   link.flush_input();
   link.write(kInit);
   link.write(kMotion);
   const auto t0 = std::chrono::steady_clock::now();
-  // The move is ~5 M clocks: 4-5 s of simulation alone, more on a loaded 2-core CI machine.
-  const auto b = link.read_byte(60000ms);
-  ASSERT_TRUE(b.has_value()) << "no ACK within 60 s: " << board.stats_line();
+  // The move is ~5 M clocks (0.1 s of board time).
+  const auto b = link.read_byte(1000ms);
+  ASSERT_TRUE(b.has_value()) << "no ACK within 1 s of board time: " << board.stats_line();
   EXPECT_EQ(*b, 0xAA);
-  ASSERT_TRUE(board.wait_quiet(2000ms));
+  ASSERT_TRUE(link.wait_idle(100ms)) << board.stats_line();
   board.stop();
   const auto e = board.edges();
   // 320 X steps with DIR X high, 160 Y steps with DIR Y low.
@@ -92,6 +94,61 @@ TEST(SimBoard, PtyRoundTripOriginalExample) {
              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
+// ---- Host timers on the board's clock (BoardLink, link.h) ----
+
+// An idle board: a wait ends at once, link time jumps by exactly the wait, the board's clock
+// stays where it was.
+TEST(BoardLinkClock, IdleBoardSkipsTheWait) {
+  sb::BoardLink link(sb::BoardOptions{});
+  const auto clk = link.board_clock();
+  ASSERT_TRUE(clk.has_value());
+  EXPECT_EQ(clk->clk_hz, 50e6);
+  EXPECT_TRUE(clk->idle_for_host);
+  const uint64_t c0 = link.board().cycle();
+  const lk::Link::Time t0 = link.now();
+  EXPECT_FALSE(link.read_byte(300ms).has_value());
+  EXPECT_EQ(link.now() - t0, std::chrono::nanoseconds(300ms));
+  EXPECT_EQ(link.skipped(), std::chrono::nanoseconds(300ms));
+  link.wait_until(link.now() + 150ms);
+  EXPECT_EQ(link.now() - t0, std::chrono::nanoseconds(450ms));
+  EXPECT_EQ(link.board().cycle(), c0);
+}
+
+// A busy board: a wait of T ends after T of the board's own clocks (the move's ACK comes after
+// ~5 M clocks, 0.1 s), not after T of wall time; nothing is skipped while the board runs.
+TEST(BoardLinkClock, BusyBoardTimesOutOnItsOwnClocks) {
+  sb::BoardLink link(sb::BoardOptions{});
+  link.write(kInit);
+  link.write(kMotion);
+  const uint64_t c0 = link.board().cycle();
+  const lk::Link::Time t0 = link.now();
+  EXPECT_FALSE(link.read_byte(20ms).has_value()) << "an ACK within 20 ms of board time";
+  EXPECT_GE(link.board().cycle() - c0, 1'000'000u) << "the wait ended before 20 ms of clocks";
+  EXPECT_GE(link.now() - t0, std::chrono::nanoseconds(20ms));
+  EXPECT_EQ(link.skipped(), lk::Link::Time::zero()) << "skipped while the board was busy";
+  EXPECT_FALSE(link.board_clock()->idle_for_host);
+  const auto b = link.read_byte(1000ms);
+  ASSERT_TRUE(b.has_value()) << "no ACK within 1 s of board time: " << link.board().stats_line();
+  EXPECT_EQ(*b, 0xAA);
+  EXPECT_LT(link.now() - t0, std::chrono::nanoseconds(200ms));
+  EXPECT_EQ(link.skipped(), lk::Link::Time::zero());
+}
+
+// Bytes the host has just written and the board has not read yet: the board is quiet, but it is
+// not idle for the host; a short wait must see the answer. HELLO -> IDENT takes ~2.3 ms of board
+// time (6 + 20 bytes on the line); each probe waits 50 ms of board time, 30 times.
+TEST(BoardLinkClock, JustWrittenBytesAreNotMistakenForIdle) {
+  sb::BoardLink link(sb::BoardOptions{});
+  for (int i = 0; i < 30; ++i) {
+    const lk::Link::Time t0 = link.now();
+    const auto id = lk::probe_v2(link, 50ms);
+    ASSERT_TRUE(id.has_value()) << "probe " << i << ": no IDENT within 50 ms of board time";
+    EXPECT_LT(link.now() - t0, std::chrono::nanoseconds(10ms)) << "probe " << i;
+  }
+  EXPECT_EQ(link.skipped(), lk::Link::Time::zero());
+  EXPECT_EQ(link.board().bytes_from_host(), 30u * 6u);
+}
+
 // Time policy: clocks do not advance while the board waits for the host, so the same job gives
 // the same edge list, cycle for cycle, run after run; the traced model (FST) gives the same
 // edges as the untraced one. The streamer writes the init packet and the first move without
@@ -116,7 +173,7 @@ TEST(SimBoard, EdgesReproducibleAndFstSameAsUntraced) {
   }
   p.final_steps = pos;
   sb::BoardRunOptions ro;
-  ro.stream.ack_timeout = 5000ms;
+  ro.stream.ack_timeout = 5000ms;  // board time
   sb::BoardOptions o;
   const auto a = sb::run_plan_on_board(p, o, ro);
   const auto b = sb::run_plan_on_board(p, o, ro);
@@ -160,10 +217,12 @@ TEST(SimBoard, RunUntilInCallerThread) {
   std::vector<uint8_t> bytes = kInit;
   bytes.insert(bytes.end(), kMotion.begin(), kMotion.end());
   ASSERT_EQ(::write(fd, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
-  // ~5 M clocks to the ACK (see PtyRoundTripOriginalExample): a generous wall-clock limit.
-  EXPECT_TRUE(
-      board.run_until([](const sb::SimBoard& b) { return b.stats().bytes_out >= 1; }, 60000ms))
-      << board.stats_line();
+  // ~5 M clocks to the ACK (see PtyRoundTripOriginalExample); decided on board clocks (50 M at
+  // most), the wall-time limit is a safety net for a hung simulation only.
+  board.run_until(
+      [](const sb::SimBoard& b) { return b.stats().bytes_out >= 1 || b.cycle() >= 50'000'000; },
+      600s);
+  ASSERT_EQ(board.stats().bytes_out, 1u) << board.stats_line();
   pollfd p{fd, POLLIN, 0};
   ASSERT_EQ(::poll(&p, 1, 2000), 1);
   uint8_t ack = 0;
@@ -231,9 +290,7 @@ void run_corpus_job(const std::string& name, const cfgns::MachineConfig& cfg, lo
     if (const auto* s = std::get_if<plan::Segment>(&it)) segs.push_back(*s);
   }
   sb::BoardRunOptions ro;
-  // Generous: the Verilated core (heaters, profiles, arcs) runs at 1-3 M clocks/s on a loaded
-  // 2-core machine; the test is about every move being acknowledged, not about wall time.
-  ro.stream.ack_timeout = 60s;
+  ro.stream.ack_timeout = 10s;  // board time: no move of these jobs takes a second
   const auto t0 = std::chrono::steady_clock::now();
   const sb::BoardRunResult r = sb::run_plan_on_board(p, sb::SimBoard::options_from_config(cfg), ro);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -346,33 +403,37 @@ TEST(SimBoardCorpus, CircleDiamondSquare) {
   run_corpus_job("Circle_Diamond_Square_Calibration.gcode", fast_config(10000.0, 40000.0), 3);
 }
 
-// A board that stops answering in the middle of a job: the streamer fails within its ACK
-// timeout, naming the last acknowledged move.
+// A board that stops answering in the middle of a job (paused: no clocks, nothing read): the
+// streamer fails with its ACK timeout, naming the last acknowledged move. The frozen board ends
+// the wait at once, with link time advanced by exactly the timeout.
 TEST(SimBoardFailure, PausedBoardTimesOut) {
   cfgns::MachineConfig cfg = fast_config(2500.0, 20000.0);
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   const plan::Plan p =
       plan::plan_input_file(std::string(FPGACNC_CORPUS_DIR) + "/jsdc-laser.gcode", cfg, po);
-  sb::BoardRunOptions ro;
-  ro.stream.ack_timeout = 8000ms;  // > a move's wall time on a slow, loaded simulation
-  std::chrono::steady_clock::time_point paused_at{};
-  ro.on_ack = [&](sb::SimBoard& b, size_t done, size_t) {
+  sb::BoardLink link(sb::SimBoard::options_from_config(cfg));
+  lk::StreamOptions so;
+  so.ack_timeout = 8000ms;
+  lk::Link::Time paused_at{};
+  uint64_t paused_cycle = 0;
+  so.progress = [&](size_t done, size_t) {
     if (done == 5) {
-      b.pause();
-      paused_at = std::chrono::steady_clock::now();
+      link.board().pause();
+      EXPECT_TRUE(link.board().idle_for_host()) << "a paused board is frozen";
+      paused_at = link.now();
+      paused_cycle = link.board().cycle();
     }
   };
   std::string what;
   try {
-    sb::run_plan_on_board(p, sb::SimBoard::options_from_config(cfg), ro);
+    lk::stream_v1(link, p, so);
   } catch (const lk::Error& e) {
     what = e.what();
   }
-  const double waited =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - paused_at).count();
   ASSERT_FALSE(what.empty()) << "the stream did not fail";
-  fmt::print("failure after {:.2f} s: {}\n", waited, what);
+  const auto waited = link.now() - paused_at;
+  fmt::print("failure after {:.3f} s of link time: {}\n", lk::seconds(waited), what);
   // Moves 0..4 acknowledged; move 5 never is.
   std::vector<const plan::Segment*> segs;
   for (const auto& it : p.items) {
@@ -382,9 +443,9 @@ TEST(SimBoardFailure, PausedBoardTimesOut) {
       what.find(fmt::format("last acknowledged move: segment 4 (line {})", segs[4]->source_line)),
       std::string::npos)
       << what;
-  EXPECT_NE(what.find("no ACK"), std::string::npos) << what;
-  EXPECT_GE(waited, 7.9);  // the 8 s ACK timeout, measured from the pause
-  EXPECT_LT(waited, 9.5);
+  EXPECT_NE(what.find("no ACK (0xAA) within 8 s of board time"), std::string::npos) << what;
+  EXPECT_EQ(link.board().cycle(), paused_cycle) << "the paused board advanced";
+  EXPECT_EQ(waited, std::chrono::nanoseconds(8000ms)) << "the ACK timeout, from the pause";
 }
 
 // Same with stop(): the board thread ends (the pty stays open), the host times out.

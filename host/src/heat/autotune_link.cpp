@@ -4,14 +4,16 @@
 
 #include <cmath>
 #include <functional>
-#include <thread>
 
 #include "fpgacnc/heat/heater_job.h"
 #include "fpgacnc/link/stream_v2.h"
 
 namespace fpgacnc::heat {
 namespace v2 = protocol::v2;
+// Timers (answers, polls) run in link time (link::Link::now(): wall time on a port, board
+// clocks on a simulated board); wall_s is a report.
 using clock_type = std::chrono::steady_clock;
+using Time = link::Link::Time;
 using std::chrono::milliseconds;
 
 namespace {
@@ -21,13 +23,14 @@ class MiniSession {
  public:
   MiniSession(link::Link& l, milliseconds timeout) : l_(l), timeout_(timeout) {}
 
-  std::optional<v2::Frame> receive(milliseconds t) {
-    const auto deadline = clock_type::now() + t;
+  std::optional<v2::Frame> receive_until(Time deadline) {
     for (;;) {
       if (auto f = parser_.next()) return f;
-      const auto left = std::chrono::duration_cast<milliseconds>(deadline - clock_type::now());
-      if (left.count() <= 0) return std::nullopt;
-      if (auto b = l_.read_byte(std::min(left, milliseconds(20)))) parser_.feed(*b);
+      if (auto b = l_.read_byte_until(deadline)) {
+        parser_.feed(*b);
+      } else {
+        return std::nullopt;
+      }
     }
   }
   void write(const v2::Frame& f) { l_.write(v2::encode(f)); }
@@ -36,13 +39,13 @@ class MiniSession {
   // from its live state when the answer starts, a fixed few bytes later, while the host may read
   // the answer late (scheduling), so the time of the query is the better time stamp.
   v2::Status status(size_t n_axes, const std::function<void()>& stamp = {}) {
-    const auto give_up = clock_type::now() + timeout_;
-    while (clock_type::now() < give_up) {
+    const Time give_up = l_.now() + timeout_;
+    while (l_.now() < give_up) {
       if (stamp) stamp();
       write(v2::status_query());
-      const auto deadline = clock_type::now() + milliseconds(300);
-      while (clock_type::now() < deadline) {
-        const auto f = receive(milliseconds(300));
+      const Time deadline = l_.now() + kRetry;
+      for (;;) {
+        const auto f = receive_until(deadline);
         if (!f) break;
         if (f->type == static_cast<uint8_t>(v2::Type::Status)) {
           try {
@@ -52,18 +55,20 @@ class MiniSession {
         }
       }
     }
-    throw link::Error(fmt::format("{}: no STATUS answer", l_.name()));
+    throw link::Error(fmt::format("{}: autotune: no STATUS answer within {:.3g} s{}", l_.name(),
+                                  static_cast<double>(timeout_.count()) / 1000.0,
+                                  l_.board_clock() ? " of board time" : ""));
   }
 
   // Sends `f` with SEQ next_seq_ until an ACK moves next_seq past it.
   void send(v2::Frame f) {
     f.seq = next_seq_;
-    const auto give_up = clock_type::now() + timeout_;
-    while (clock_type::now() < give_up) {
+    const Time give_up = l_.now() + timeout_;
+    while (l_.now() < give_up) {
       write(f);
-      const auto deadline = clock_type::now() + milliseconds(300);
-      while (clock_type::now() < deadline) {
-        const auto r = receive(milliseconds(300));
+      const Time deadline = l_.now() + kRetry;
+      for (;;) {
+        const auto r = receive_until(deadline);
         if (!r) break;
         try {
           if (r->type == static_cast<uint8_t>(v2::Type::Ack)) {
@@ -85,11 +90,15 @@ class MiniSession {
         }
       }
     }
-    throw link::Error(fmt::format("{}: {} not acknowledged", l_.name(), v2::type_name(f.type)));
+    throw link::Error(fmt::format(
+        "{}: autotune: {} not acknowledged within {:.3g} s{}", l_.name(), v2::type_name(f.type),
+        static_cast<double>(timeout_.count()) / 1000.0, l_.board_clock() ? " of board time" : ""));
   }
   uint8_t next_seq_ = 0;
 
  private:
+  static constexpr milliseconds kRetry{300};  // resend after this long without the answer
+
   link::Link& l_;
   milliseconds timeout_;
   v2::FrameParser parser_;
@@ -111,9 +120,9 @@ AutotuneLinkResult run_relay_test(link::Link& lk, const config::MachineConfig& c
                                   o.relay.setpoint_c, hc.max_temp_c));
   }
   const auto t0 = clock_type::now();
+  const Time link_t0 = lk.now();
   auto plant_now = [&]() {
-    return o.plant_time ? o.plant_time()
-                        : std::chrono::duration<double>(clock_type::now() - t0).count();
+    return o.plant_time ? o.plant_time() : link::seconds(lk.now() - link_t0);
   };
   const auto ident = link::probe_v2(lk, milliseconds(300));
   if (!ident) throw link::Error(fmt::format("{}: no IDENT answer to HELLO (v2 needed)", lk.name()));
@@ -180,7 +189,7 @@ AutotuneLinkResult run_relay_test(link::Link& lk, const config::MachineConfig& c
         }
         break;
       }
-      std::this_thread::sleep_for(o.poll);
+      lk.wait_until(lk.now() + o.poll);
     }
   } catch (...) {
     try {

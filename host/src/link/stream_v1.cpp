@@ -2,8 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <thread>
-
 #include "fpgacnc/protocol/v1.h"
 
 namespace fpgacnc::link {
@@ -25,30 +23,28 @@ StreamReport stream_v1(Link& link, const plan::Plan& plan, const StreamOptions& 
   int last_acked_line = 0;
   for (const auto& st : job.steps) {
     if (st.is_dwell) {
-      std::this_thread::sleep_for(std::chrono::duration<double>(st.dwell_s));
+      // Link time: wall time on a port, board clocks on a simulated board (link.h).
+      link.wait_until(link.now() + std::chrono::duration_cast<Link::Time>(
+                                       std::chrono::duration<double>(st.dwell_s)));
       ++rep.dwells;
       continue;
     }
     link.write(st.packet);
     rep.bytes_written += st.packet.size();
     ++rep.moves;
-    auto deadline = std::chrono::steady_clock::now() + options.ack_timeout;
+    const Link::Time deadline = link.now() + options.ack_timeout;
     for (;;) {
-      const auto now = std::chrono::steady_clock::now();
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now);
-      std::optional<uint8_t> b;
-      if (left.count() > 0) b = link.read_byte(left);
+      const std::optional<uint8_t> b = link.read_byte_until(deadline);
       if (!b) {
-        if (std::chrono::steady_clock::now() < deadline) continue;
         const std::string last =
             last_acked_index < 0
                 ? std::string("none")
                 : fmt::format("segment {} (line {})", last_acked_index, last_acked_line);
         throw Error(fmt::format(
-            "{}: no ACK (0xAA) within {:.3g} s for segment {} (line {}); last acknowledged "
+            "{}: no ACK (0xAA) within {:.3g} s{} for segment {} (line {}); last acknowledged "
             "move: {}",
             link.name(), static_cast<double>(options.ack_timeout.count()) / 1000.0,
-            st.segment_index, st.source_line, last));
+            link.board_clock() ? " of board time" : "", st.segment_index, st.source_line, last));
       }
       if (*b == v1::kAck) break;
       ++rep.warnings;

@@ -4,29 +4,28 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
 namespace fpgacnc::link {
 namespace v2 = protocol::v2;
+// Reports (elapsed, wall_s, probe_time) are wall time; every timer runs in link time
+// (Link::now(): the wall clock on a port, board clocks on a simulated board; link.h).
 using clock_type = std::chrono::steady_clock;
+using Time = Link::Time;
 using std::chrono::milliseconds;
 
 namespace {
 
-// Silence after which a partial device frame at the head of the parser is given up (a LEN
-// corrupted upwards would otherwise hold back the frames behind it).
+// Silence (link time) after which a partial device frame at the head of the parser is given up
+// (a LEN corrupted upwards would otherwise hold back the frames behind it).
 constexpr milliseconds kPartialGiveUp{200};
-
-milliseconds until(clock_type::time_point deadline) {
-  const auto d = deadline - clock_type::now();
-  if (d <= clock_type::duration::zero()) return milliseconds(0);
-  return std::chrono::duration_cast<milliseconds>(d) + milliseconds(1);
-}
+// Longest single wait of the receive loop, so that partial frames are given up in time.
+constexpr milliseconds kReceiveSlice{20};
 
 // One v2 session over a link: reads device frames, writes host frames, keeps the counters.
 class Session {
  public:
-  Session(Link& link, StreamV2Report& rep) : link_(link), rep_(rep) {}
+  Session(Link& link, StreamV2Report& rep)
+      : link_(link), rep_(rep), last_rx_(link.now()), last_byte_(last_rx_) {}
 
   void send(const v2::Frame& f) {
     buf_.clear();
@@ -43,12 +42,12 @@ class Session {
     rep_.frames_sent += frames;
   }
 
-  // Next good device frame within `timeout` (nullopt on timeout). Duplicates are counted.
-  std::optional<v2::Frame> receive(milliseconds timeout) {
-    const auto deadline = clock_type::now() + timeout;
+  // Next good device frame by `deadline` (link time; nullopt when none). Duplicates are
+  // counted.
+  std::optional<v2::Frame> receive_until(Time deadline) {
     for (;;) {
       if (auto f = parser_.next()) {
-        last_rx_ = clock_type::now();
+        last_rx_ = link_.now();
         if (have_last_ && *f == last_frame_) {
           ++rep_.duplicates;
         }
@@ -56,28 +55,31 @@ class Session {
         have_last_ = true;
         return f;
       }
-      // Drain what is there without blocking, then block until the deadline.
-      auto b = link_.read_byte(milliseconds(0));
+      // Take what is there without waiting, then wait in slices until the deadline.
+      auto b = link_.read_byte_until(Time::zero());
       if (!b) {
-        const auto left = until(deadline);
-        if (left.count() == 0) {
+        const Time now = link_.now();
+        if (now >= deadline) {
           // Silence: a header whose LEN was corrupted upwards would wait forever.
-          if (clock_type::now() - last_byte_ > kPartialGiveUp) parser_.abandon_partial();
+          if (now - last_byte_ > kPartialGiveUp) parser_.abandon_partial();
           return std::nullopt;
         }
-        b = link_.read_byte(std::min(left, milliseconds(20)));
+        b = link_.read_byte_until(std::min(deadline, now + Time(kReceiveSlice)));
         if (!b) {
-          if (clock_type::now() - last_byte_ > kPartialGiveUp && parser_.abandon_partial()) {
-            continue;
-          }
-          if (clock_type::now() >= deadline) return std::nullopt;
+          const Time after = link_.now();
+          if (after - last_byte_ > kPartialGiveUp && parser_.abandon_partial()) continue;
+          if (after >= deadline) return std::nullopt;
           continue;
         }
       }
       ++rep_.bytes_read;
-      last_byte_ = clock_type::now();
+      last_byte_ = link_.now();
       parser_.feed(*b);
     }
+  }
+  // Same, within `timeout` of link time from now.
+  std::optional<v2::Frame> receive(milliseconds timeout) {
+    return receive_until(link_.now() + timeout);
   }
 
   void finish_counters() {
@@ -87,7 +89,7 @@ class Session {
     rep_.rx_abandoned = parser_.abandoned();
   }
 
-  clock_type::time_point last_rx() const { return last_rx_; }
+  Time last_rx() const { return last_rx_; }
   void reset_parser() { parser_.reset(); }
 
  private:
@@ -97,29 +99,26 @@ class Session {
   std::vector<uint8_t> buf_;
   v2::Frame last_frame_;
   bool have_last_ = false;
-  clock_type::time_point last_rx_ = clock_type::now();
-  clock_type::time_point last_byte_ = clock_type::now();
+  Time last_rx_;    // link time of the last good device frame
+  Time last_byte_;  // link time of the last byte read
 };
 
-// Waits for a frame of `type` (others ignored, undecodable ones counted); nullopt on timeout.
-std::optional<v2::Frame> await_type(Session& s, StreamV2Report& rep, v2::Type type,
-                                    milliseconds timeout) {
-  const auto deadline = clock_type::now() + timeout;
+// Waits for a frame of `type` until `deadline` (link time; others ignored); nullopt on timeout.
+std::optional<v2::Frame> await_type(Session& s, v2::Type type, Time deadline) {
   for (;;) {
-    const auto f = s.receive(until(deadline));
+    const auto f = s.receive_until(deadline);
     if (!f) return std::nullopt;
     if (f->type == static_cast<uint8_t>(type)) return f;
-    (void)rep;
   }
 }
 
-v2::Status query_status(Session& s, StreamV2Report& rep, size_t n_axes, const StreamV2Options& opt,
-                        const std::string& name, const char* when) {
-  const auto give_up = clock_type::now() + opt.answer_timeout;
-  while (clock_type::now() < give_up) {
+v2::Status query_status(Link& link, Session& s, StreamV2Report& rep, size_t n_axes,
+                        const StreamV2Options& opt, const std::string& name, const char* when) {
+  const Time give_up = link.now() + opt.answer_timeout;
+  while (link.now() < give_up) {
     s.send(v2::status_query());
     ++rep.status_polls;
-    const auto f = await_type(s, rep, v2::Type::Status, opt.retransmit_timeout);
+    const auto f = await_type(s, v2::Type::Status, link.now() + opt.retransmit_timeout);
     if (!f) continue;
     try {
       return v2::decode_status(*f, n_axes);
@@ -127,8 +126,10 @@ v2::Status query_status(Session& s, StreamV2Report& rep, size_t n_axes, const St
       ++rep.bad_device_frames;
     }
   }
-  throw Error(fmt::format("{}: no STATUS {} within {:.3g} s", name, when,
-                          static_cast<double>(opt.answer_timeout.count()) / 1000.0));
+  throw Error(fmt::format("{}: no STATUS {} within {:.3g} s{} (STATUS_QUERY every {} ms)", name,
+                          when, static_cast<double>(opt.answer_timeout.count()) / 1000.0,
+                          link.board_clock() ? " of board time" : "",
+                          opt.retransmit_timeout.count()));
 }
 
 std::string frame_name(const v2::Frame& f, const v2::JobFrame* jf,
@@ -150,9 +151,9 @@ std::optional<v2::Ident> probe_v2(Link& link, milliseconds timeout, uint64_t* by
   link.flush_input();
   s.send(v2::hello());
   if (bytes_written) *bytes_written += rep.bytes_written;
-  const auto deadline = clock_type::now() + timeout;
+  const Time deadline = link.now() + timeout;
   for (;;) {
-    const auto f = await_type(s, rep, v2::Type::Ident, until(deadline));
+    const auto f = await_type(s, v2::Type::Ident, deadline);
     if (!f) return std::nullopt;
     try {
       return v2::decode_ident(*f);
@@ -187,7 +188,7 @@ ProtocolChoice select_protocol(Link& link, const std::string& mode, const Stream
     } else {
       // The 6 HELLO bytes are a partial v1 packet for a v1-only device: its 100 ms watchdog
       // drops them. Wait past it, then start v1 from a clean line.
-      std::this_thread::sleep_for(v1_settle);
+      link.wait_until(link.now() + v1_settle);
       link.flush_input();
       c.protocol = "v1";
     }
@@ -274,16 +275,17 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   const size_t n_axes = ident->n_axes;
 
   // Wait until a previous job has drained (its DONEs would count into ours).
-  v2::Status st = query_status(s, rep, n_axes, opt, name, "at the start");
-  const auto busy_limit = clock_type::now() + opt.answer_timeout;
+  v2::Status st = query_status(link, s, rep, n_axes, opt, name, "at the start");
+  const Time busy_limit = link.now() + opt.answer_timeout;
   while (st.state & v2::kStateBusy) {
-    if (clock_type::now() > busy_limit) {
-      throw Error(fmt::format("{}: device still busy (FIFO level {}) after {:.3g} s", name,
+    if (link.now() > busy_limit) {
+      throw Error(fmt::format("{}: device still busy (FIFO level {}) after {:.3g} s{}", name,
                               st.fifo_level,
-                              static_cast<double>(opt.answer_timeout.count()) / 1000.0));
+                              static_cast<double>(opt.answer_timeout.count()) / 1000.0,
+                              link.board_clock() ? " of board time" : ""));
     }
-    std::this_thread::sleep_for(milliseconds(20));
-    st = query_status(s, rep, n_axes, opt, name, "at the start");
+    link.wait_until(link.now() + milliseconds(20));
+    st = query_status(link, s, rep, n_axes, opt, name, "at the start");
   }
   rep.status_start = st;
 
@@ -344,13 +346,13 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   std::optional<size_t> goback_at;  // index of the last go-back, while its old copies drain
   size_t goback_same = 0;
   size_t fatal_nak_count = 0;
-  auto last_progress = clock_type::now();
-  auto last_poll = clock_type::now();
+  Time last_progress = link.now();
+  Time last_poll = last_progress;
   // Retransmission timeout: at least opt.retransmit_timeout, and above the measured time from
   // sending a frame to its ACK (RFC 6298 estimator, Karn's rule: only frames sent once), so a
   // line with many bytes queued (a slow simulated board, a long window) is not mistaken for a
   // loss. Doubled on each timeout while nothing is acknowledged.
-  std::vector<clock_type::time_point> sent_at(n);
+  std::vector<Time> sent_at(n);
   std::vector<uint16_t> sends(n, 0);
   double srtt = 0.0, rttvar = 0.0;  // seconds
   bool have_rtt = false;
@@ -383,7 +385,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     if (delta > 0) {
       acked += delta;
       if (sent < acked) sent = acked;  // acknowledged beyond a go-back point
-      last_progress = clock_type::now();
+      last_progress = link.now();
       if (sends[acked - 1] == 1) {
         const double r = std::chrono::duration<double>(last_progress - sent_at[acked - 1]).count();
         if (!have_rtt) {
@@ -434,13 +436,14 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     ssthresh = std::max(2.0, cwnd / 2.0);
     cwnd = ssthresh;
     rep.min_window = std::min(rep.min_window, static_cast<size_t>(cwnd));
-    last_progress = clock_type::now();
+    last_progress = link.now();
   };
 
   // ---- Heaters (issue 7): M109/M190 gates, STATUS polling, faults ----
+  const Time link_t0 = link.now();
   const auto plant_now = [&]() -> double {
     if (opt.plant_time) return opt.plant_time();
-    return std::chrono::duration<double>(clock_type::now() - t0).count();
+    return seconds(link.now() - link_t0);
   };
   size_t next_wait = 0;  // index into `waits` of the wait in force
   // Items up to and including the pending wait's setpoint may be sent, nothing after it.
@@ -451,7 +454,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     double band_since = 0.0, start_plant = 0.0, start_c = 0.0;
     clock_type::time_point start_wall{};
   } ws;
-  auto last_heater_poll = clock_type::now();
+  Time last_heater_poll = link.now();
   bool status_outstanding = false;
   std::vector<size_t> fifo_item;  // item index of the k-th FIFO frame
   for (size_t i = 0; i < n; ++i) {
@@ -541,7 +544,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       rep.heater_waits.push_back(r);
       ++next_wait;
       ws = WaitState{};
-      last_progress = clock_type::now();
+      last_progress = link.now();
     }
   };
 
@@ -638,7 +641,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       v2::encode_to(f, batch);
       ++batch_frames;
       if (sent < high) ++rep.retransmissions;
-      sent_at[sent] = clock_type::now();
+      sent_at[sent] = link.now();
       if (sends[sent] < UINT16_MAX) ++sends[sent];
       ++sent;
       high = std::max(high, sent);
@@ -651,17 +654,17 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     while (const auto f = s.receive(milliseconds(0))) handle(*f);
     if (acked == n && done_count == total_fifo && next_wait == waits.size()) break;
 
-    // Timers.
-    const auto now = clock_type::now();
+    // Timers (link time).
+    const Time now = link.now();
     if (now - s.last_rx() > opt.answer_timeout) {
       const std::string last = acked == 0 ? std::string("none")
                                           : frame_name(items[acked - 1].frame, items[acked - 1].jf,
                                                        items[acked - 1].heater);
       throw Error(fmt::format(
-          "{}: no answer from the device for {:.3g} s ({} of {} frames acknowledged, {} of {} "
+          "{}: no answer from the device for {:.3g} s{} ({} of {} frames acknowledged, {} of {} "
           "FIFO frames done; last acknowledged: {})",
-          name, static_cast<double>(opt.answer_timeout.count()) / 1000.0, acked, n, done_count,
-          total_fifo, last));
+          name, static_cast<double>(opt.answer_timeout.count()) / 1000.0,
+          link.board_clock() ? " of board time" : "", acked, n, done_count, total_fifo, last));
     }
     // The timer runs from the later of the last progress and the (last) sending of the oldest
     // unacknowledged frame: a frame sent after a long credit wait starts a fresh timer.
@@ -694,7 +697,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   }
 
   // 4. Final status and release.
-  rep.status_end = query_status(s, rep, n_axes, opt, name, "at the end");
+  rep.status_end = query_status(link, s, rep, n_axes, opt, name, "at the end");
   rep.moved.resize(n_axes);
   rep.position_ok = true;
   for (size_t a = 0; a < n_axes; ++a) {
@@ -706,12 +709,12 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   }
   if (opt.release) {
     const uint8_t rseq = seq_of(n);
-    const auto give_up = clock_type::now() + opt.answer_timeout;
-    while (!rep.released && clock_type::now() < give_up) {
+    const Time give_up = link.now() + opt.answer_timeout;
+    while (!rep.released && link.now() < give_up) {
       s.send(v2::release(rseq));
-      const auto deadline = clock_type::now() + opt.retransmit_timeout;
+      const Time deadline = link.now() + opt.retransmit_timeout;
       while (!rep.released) {
-        const auto f = s.receive(until(deadline));
+        const auto f = s.receive_until(deadline);
         if (!f) break;
         try {
           if (f->type == static_cast<uint8_t>(v2::Type::Ack)) {

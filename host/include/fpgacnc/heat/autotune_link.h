@@ -21,9 +21,10 @@ struct AutotuneLinkOptions {
   uint8_t channel = 1;  // kBed
   RelayOptions relay;   // u_high in volts of the channel's supply; u_low must be 0 (ON_OFF mode)
   double max_plant_s = 3600.0;
-  std::chrono::milliseconds poll{50};  // STATUS_QUERY period (wall)
+  // Link time (link.h: wall time on a port, board time on a simulated board).
+  std::chrono::milliseconds poll{50};  // STATUS_QUERY period
   std::chrono::milliseconds answer_timeout{5000};
-  std::function<double()> plant_time;  // unset: wall seconds
+  std::function<double()> plant_time;  // unset: link time in seconds
   std::function<void(const RelaySample&, const protocol::v2::HeaterStatus&)> on_sample;
 };
 

@@ -16,6 +16,8 @@
 namespace fpgacnc::link {
 
 struct StreamOptions {
+  // Link time (link.h): wall time on a serial port, board time on a simulated board. Dwells
+  // (G4) wait in link time too.
   std::chrono::milliseconds ack_timeout{10'000};
   // Called after each acknowledged move: (moves done, moves total).
   std::function<void(size_t, size_t)> progress;
@@ -31,7 +33,7 @@ struct StreamReport {
   size_t skipped_heater = 0;  // heater commands v1 cannot carry
   size_t ze_only = 0;         // Z/E-only moves sent as 0,0 steps (not driven by v1)
   size_t bytes_written = 0;
-  std::chrono::duration<double> elapsed{0};
+  std::chrono::duration<double> elapsed{0};  // wall time
   plan::Steps4 final_steps{};
   std::array<double, 4> final_mm{};
 };

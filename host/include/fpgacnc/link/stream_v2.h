@@ -24,6 +24,9 @@
 // the temperature within the channel's tolerance for its settle time (plant seconds). While a job
 // uses heaters STATUS is polled every `heater_poll` (progress line, faults, device watchdog); a
 // heater, watchdog or e-stop fault stops the job with an Error naming the G-code line.
+// Timers: every timeout and period of StreamV2Options runs in link time (link.h): wall time on a
+// serial port, the board's clock on a simulated board (a wait there also ends at once when the
+// board is idle for the host). Reports (elapsed, wall_s, probe_time) are wall time.
 // Errors: link::Error when the device never answers (answer timeout), refuses a frame for a
 // reason a retransmission cannot fix, or cannot take the job (axes, payload, version).
 #pragma once
@@ -46,6 +49,7 @@
 namespace fpgacnc::link {
 
 struct StreamV2Options {
+  // Link time (see the file comment).
   std::chrono::milliseconds hello_timeout{300};       // IDENT after HELLO
   int hello_attempts = 3;                             // explicit v2 (auto probes once)
   std::chrono::milliseconds retransmit_timeout{300};  // go-back-N when nothing is acknowledged
@@ -62,7 +66,7 @@ struct StreamV2Options {
   const heat::HeaterJob* heaters = nullptr;
   std::chrono::milliseconds heater_poll{250};  // STATUS_QUERY period while heaters are in use
   // Plant time in seconds for M109/M190 settle times and timeouts (the simulated board runs its
-  // thermal time faster than the wall clock); unset: wall seconds.
+  // thermal time faster than its motion clock); unset: link time in seconds.
   std::function<double()> plant_time;
   // Every STATUS decoded during the job (progress line with temperatures).
   std::function<void(const protocol::v2::Status&)> on_status;
@@ -135,7 +139,8 @@ StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::Machi
                          const StreamV2Options& options,
                          std::optional<protocol::v2::Ident> ident = std::nullopt);
 
-// Flushes input, sends HELLO and waits `timeout` for an IDENT (other frames and bytes ignored).
+// Flushes input, sends HELLO and waits `timeout` (link time) for an IDENT (other frames and bytes
+// ignored).
 std::optional<protocol::v2::Ident> probe_v2(Link& link, std::chrono::milliseconds timeout,
                                             uint64_t* bytes_written = nullptr);
 
@@ -148,7 +153,7 @@ struct ProtocolChoice {
 // mode "v1": no probe. "v2": HELLO (options.hello_attempts tries), Error when no IDENT. "auto":
 // one HELLO; IDENT within options.hello_timeout (300 ms) -> v2; otherwise wait `v1_settle`
 // (150 ms: the device's 100 ms watchdog drops the 6 HELLO bytes as a partial v1 packet), flush
-// input -> v1.
+// input -> v1. Both waits are link time (on a simulated board: board time).
 ProtocolChoice select_protocol(
     Link& link, const std::string& mode, const StreamV2Options& options,
     std::chrono::milliseconds v1_settle = std::chrono::milliseconds(150));

@@ -86,6 +86,10 @@ class TwinBoard : public simboard::Board {
   void set_estop(bool pressed) override;
   bool idle_for_host() const override;
   bool wait_quiet(std::chrono::milliseconds timeout) const override;
+  // Published with the quiet state: while idle_for_host() is true they are current.
+  uint64_t bytes_from_host() const override;
+  uint64_t bytes_to_host() const override;
+  bool frozen() const override;
   std::string model() const override { return "tlm"; }
   // An error that ended the session (a twin's logic error), "" when none.
   std::string error() const;

@@ -148,6 +148,13 @@ class Board {
   virtual bool idle_for_host() const = 0;
   // Blocks until the board is quiet (idle for the host) or `timeout` passes.
   virtual bool wait_quiet(std::chrono::milliseconds timeout) const = 0;
+  // Bytes taken from the pty (host -> board) and written to it (board -> host) since the board
+  // was made. A host-side link compares them with its own counts: the board is idle for that
+  // host only once it has taken every byte the host wrote and the host has read every answer.
+  virtual uint64_t bytes_from_host() const = 0;
+  virtual uint64_t bytes_to_host() const = 0;
+  // Not serving the pty (stopped, or paused): nothing comes at all, whatever the host writes.
+  virtual bool frozen() const = 0;
   virtual std::string model() const = 0;  // "rtl" (Verilated cnc_core) or "tlm" (twins)
 };
 
@@ -174,7 +181,9 @@ class SimBoard : public Board {
   void start() override;  // own thread; throws if already running
   void stop() override;   // joins the thread (the pty stays open until destruction)
   bool running() const { return thread_.joinable(); }
-  void pause();  // freeze: no clocks, no bytes read or answered
+  // Freeze: no clocks, no bytes read or answered; on return the chunk of clocks in progress has
+  // ended and no other runs until resume().
+  void pause();
   void resume();
   bool paused() const { return paused_.load(); }
 
@@ -187,12 +196,28 @@ class SimBoard : public Board {
   void run_cycles_until_quiet(uint64_t max_cycles);
   // Blocks until the board thread is quiet (nothing in flight, all output flushed) or timeout.
   bool wait_quiet(std::chrono::milliseconds timeout) const override;
-  bool idle_for_host() const override { return wait_quiet(std::chrono::milliseconds(0)); }
   double clk_hz() const override { return opt_.clk_hz; }
   std::string model() const override { return "rtl"; }
 
   BoardStats stats() const override;
-  uint64_t cycle() const override;
+  // Clocks simulated since reset release, as of the end of the last chunk of clocks; every byte
+  // decoded from tx up to that cycle has been written to the pty (or is held because the pty is
+  // full). Lock-free.
+  uint64_t cycle() const override { return pub_cycle_.load(std::memory_order_acquire); }
+  // True when nothing more can reach the host until it writes again: the board is quiet
+  // (nothing in flight: see the time policy above) and every byte decoded from tx has been
+  // written to the pty; or the board is frozen (paused, or not running its thread), so that
+  // nothing can come at all. Bytes the host wrote to the pty that the board has not read yet
+  // are not seen here: compare bytes_from_host() with what the host wrote.
+  bool idle_for_host() const override;
+  // Bytes read from the pty (host -> board, before line faults) and written to it
+  // (board -> host, after line faults) since construction. Lock-free; bytes_from_host() counts
+  // a byte only once the board has taken it into its line queue (idle_for_host() sees it).
+  uint64_t bytes_from_host() const override {
+    return pub_from_host_.load(std::memory_order_acquire);
+  }
+  uint64_t bytes_to_host() const override { return pub_to_host_.load(std::memory_order_acquire); }
+  bool frozen() const override { return paused() || !running(); }
   std::vector<Edge> edges() const override;        // copy
   std::vector<uint64_t> move_done_cycles() const;  // copy
   // Line logs (copies; empty unless line_faults.log): every frame put on the rx line, every
@@ -225,6 +250,7 @@ class SimBoard : public Board {
   void admit_inbox();
   void flush_out();
   bool quiet_locked() const;
+  void publish_locked();  // cycle and byte counts for the lock-free accessors
 
   BoardOptions opt_;
   std::string path_;
@@ -243,6 +269,10 @@ class SimBoard : public Board {
   std::atomic<bool> stop_{false};
   std::atomic<bool> paused_{false};
   std::atomic<bool> quiet_{true};
+  std::atomic<bool> thread_live_{false};  // start() .. stop() joined
+  std::atomic<uint64_t> pub_cycle_{0};
+  std::atomic<uint64_t> pub_from_host_{0};
+  std::atomic<uint64_t> pub_to_host_{0};
   std::chrono::steady_clock::time_point t_start_{};
   bool started_clock_ = false;
   double sim_wall_s_ = 0.0;
