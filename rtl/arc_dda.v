@@ -215,46 +215,57 @@ module arc_dda (
   endfunction
   localparam [65:0] ZERO66 = 66'd0;
   // 48-bit fields in 66 bits; a sum of them with one negated field is a 50-bit signed value,
-  // so bit 49 is its sign and [47:0] its value mod 2^48 (the upper bits are not read)
-  wire        [65:0] u_i66 = {18'd0, u_int};
-  wire        [65:0] v_i66 = {50'd0, v_reg[63:48]};
-  wire        [65:0] rz_i66 = {18'd0, rz_reg[95:48]};
-  wire        [65:0] vz_i66 = {18'd0, vz_reg[95:48]};
-  wire        [48:0] u_frac = {1'b0, u_reg[47:0]} + {1'b0, v_reg[47:0]};
-  wire        [65:0] u_hi0 = add3(u_i66, v_i66, ZERO66, 2'd0);
-  wire        [65:0] u_hi1 = add3(u_i66, v_i66, ZERO66, 2'd1);
-  wire        [95:0] u_next = {u_frac[48] ? u_hi1[47:0] : u_hi0[47:0], u_frac[47:0]};
-  wire        [65:0] dec_x0 = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd1);  // U_int + V_int - D
-  wire        [65:0] dec_x1 = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd2);  // ... + 1
-  wire               decel = u_frac[48] ? !dec_x1[49] : !dec_x0[49];
-  wire        [65:0] dec_k = add3({2'd0, v_reg}, ~{2'd0, vex_reg}, ~{18'd0, a_reg}, 2'd2);
-  wire               dec_ok = !dec_k[65];  // V - V_exit - A >= 0
-  wire        [63:0] v_plus = v_reg + {16'd0, a_reg};
-  wire        [65:0] acc_k = add3({2'd0, vcr_reg}, ~{2'd0, v_reg}, ~{18'd0, a_reg}, 2'd2);
-  wire               acc_ok = !acc_k[65];  // V_cruise - V - A >= 0
-  wire        [48:0] rz_frac = {1'b0, rz_reg[47:0]} + {1'b0, vz_reg[47:0]};
-  wire        [65:0] rz_hi0 = add3(rz_i66, vz_i66, ZERO66, 2'd0);
-  wire        [65:0] rz_hi1 = add3(rz_i66, vz_i66, ZERO66, 2'd1);
-  wire        [65:0] rz_x0 = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd1);  // Rz_int + Vz_int - C
-  wire        [65:0] rz_x1 = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd2);  // ... + 1
-  wire        [95:0] rz_next = {rz_frac[48] ? rz_hi1[47:0] : rz_hi0[47:0], rz_frac[47:0]};
-  wire        [95:0] rz_sub = {rz_frac[48] ? rz_x1[47:0] : rz_x0[47:0], rz_frac[47:0]};
-  wire               z_go = (rz_frac[48] ? !rz_x1[49] : !rz_x0[49]) && (zc_reg != nz_reg);
-  wire unused_sums = &{1'b0, u_hi0[65:48], u_hi1[65:48], dec_x0[65:50], dec_x0[48:0],
-                       dec_x1[65:50], dec_x1[48:0], dec_k[64:0], acc_k[64:0], rz_hi0[65:48],
-                       rz_hi1[65:48], rz_x0[65:48], rz_x1[65:48]};
+  // so bit 49 is its sign and [47:0] its value mod 2^48 (the upper bits are not read). The sums
+  // are computed in the clocked block below, in the branch whose registers they feed (locals of
+  // that block: the same logic as continuous assignments, and a simulator evaluates them only on
+  // the clocks the branch runs).
 
   wire               fire = busy_reg && run && (st_reg == READY) && (u_int >= cnext_reg);
   wire               end_w = fire && (pend_end_reg || guard_reg);
   wire               take = load && !stop && (!busy_reg || end_w);
 
 
-  always @(posedge clk) begin
+  always @(posedge clk) begin : seq
+    // pacing sums (see above); only some bits of the 66-bit ones are read
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg [65:0] u_i66, v_i66, rz_i66, vz_i66;
+    reg [65:0] u_hi0, u_hi1, dec_x0, dec_x1, dec_k, acc_k, rz_hi0, rz_hi1, rz_x0, rz_x1;
+    /* verilator lint_on UNUSEDSIGNAL */
+    reg [48:0] u_frac, rz_frac;
+    reg [95:0] u_next, rz_next, rz_sub;
+    reg [63:0] v_plus;
+    reg decel, dec_ok, acc_ok, z_go;
+
     xs_reg   <= 1'b0;
     ys_reg   <= 1'b0;
     zs_reg   <= 1'b0;
     last_reg <= 1'b0;
     if (busy_reg && run && !stop) begin  // a stop clock registers nothing (no step after it)
+      u_i66   = {18'd0, u_int};
+      v_i66   = {50'd0, v_reg[63:48]};
+      rz_i66  = {18'd0, rz_reg[95:48]};
+      vz_i66  = {18'd0, vz_reg[95:48]};
+      u_frac  = {1'b0, u_reg[47:0]} + {1'b0, v_reg[47:0]};
+      u_hi0   = add3(u_i66, v_i66, ZERO66, 2'd0);
+      u_hi1   = add3(u_i66, v_i66, ZERO66, 2'd1);
+      u_next  = {u_frac[48] ? u_hi1[47:0] : u_hi0[47:0], u_frac[47:0]};
+      dec_x0  = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd1);  // U_int + V_int - D
+      dec_x1  = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd2);  // ... + 1
+      decel   = u_frac[48] ? !dec_x1[49] : !dec_x0[49];
+      dec_k   = add3({2'd0, v_reg}, ~{2'd0, vex_reg}, ~{18'd0, a_reg}, 2'd2);
+      dec_ok  = !dec_k[65];  // V - V_exit - A >= 0
+      v_plus  = v_reg + {16'd0, a_reg};
+      acc_k   = add3({2'd0, vcr_reg}, ~{2'd0, v_reg}, ~{18'd0, a_reg}, 2'd2);
+      acc_ok  = !acc_k[65];  // V_cruise - V - A >= 0
+      rz_frac = {1'b0, rz_reg[47:0]} + {1'b0, vz_reg[47:0]};
+      rz_hi0  = add3(rz_i66, vz_i66, ZERO66, 2'd0);
+      rz_hi1  = add3(rz_i66, vz_i66, ZERO66, 2'd1);
+      rz_x0   = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd1);  // Rz_int + Vz_int - C
+      rz_x1   = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd2);  // ... + 1
+      rz_next = {rz_frac[48] ? rz_hi1[47:0] : rz_hi0[47:0], rz_frac[47:0]};
+      rz_sub  = {rz_frac[48] ? rz_x1[47:0] : rz_x0[47:0], rz_frac[47:0]};
+      z_go    = (rz_frac[48] ? !rz_x1[49] : !rz_x0[49]) && (zc_reg != nz_reg);
+
       // Z and U/V for the next clock
       zs_reg <= z_due_reg;
       if (z_due_reg) zd_reg <= zdir_reg;  // with the step: a chained load may change zdir_reg

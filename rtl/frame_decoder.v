@@ -187,23 +187,24 @@ module frame_decoder #(
   );
 
   // ---------------------------------------------------------------- payload fields
+  // Payload byte i and the big-endian 32-bit field at byte i. They read pay_reg directly rather
+  // than take it as an argument: the same logic, and a simulator need not copy the whole payload
+  // register for every field.
   function [7:0] pb;
-    input [8*PB-1:0] p;
     input integer i;
     begin
-      pb = p[8*i+:8];
+      pb = pay_reg[8*i+:8];
     end
   endfunction
 
   function [31:0] be32;
-    input [8*PB-1:0] p;
     input integer i;
     begin
-      be32 = {p[8*i+:8], p[8*(i+1)+:8], p[8*(i+2)+:8], p[8*(i+3)+:8]};
+      be32 = {pay_reg[8*i+:8], pay_reg[8*(i+1)+:8], pay_reg[8*(i+2)+:8], pay_reg[8*(i+3)+:8]};
     end
   endfunction
 
-  wire [7:0] flags = pb(pay_reg, 0);
+  wire [7:0] flags = pb(0);
   wire       short_steps = flags[7];
   wire [7:0] len_m6 = len_reg - 8'd6;
   wire       line_len_ok = (len_reg >= 8'd6) &&
@@ -220,7 +221,7 @@ module frame_decoder #(
           line_steps[32*a+:32] = {{16{pay_reg[8*(6+2*a)+7]}}, pay_reg[8*(6+2*a)+:8],
                                   pay_reg[8*(7+2*a)+:8]};
       end else begin
-        if ({1'b0, len_reg} >= 9'd10 + 9'd4 * a[8:0]) line_steps[32*a+:32] = be32(pay_reg, 6 + 4 * a);
+        if ({1'b0, len_reg} >= 9'd10 + 9'd4 * a[8:0]) line_steps[32*a+:32] = be32(6 + 4 * a);
       end
     end
   end
@@ -239,15 +240,15 @@ module frame_decoder #(
           prof_steps[32*a+:32] = {{16{pay_reg[8*(28+2*a)+7]}}, pay_reg[8*(28+2*a)+:8],
                                   pay_reg[8*(29+2*a)+:8]};
       end else begin
-        if ({1'b0, len_reg} >= 9'd32 + 9'd4 * a[8:0]) prof_steps[32*a+:32] = be32(pay_reg, 28 + 4 * a);
+        if ({1'b0, len_reg} >= 9'd32 + 9'd4 * a[8:0]) prof_steps[32*a+:32] = be32(28 + 4 * a);
       end
     end
   end
-  wire [47:0] p_ve = {pb(pay_reg, 2), pb(pay_reg, 3), be32(pay_reg, 4)};
-  wire [47:0] p_vc = {pb(pay_reg, 8), pb(pay_reg, 9), be32(pay_reg, 10)};
-  wire [47:0] p_vx = {pb(pay_reg, 14), pb(pay_reg, 15), be32(pay_reg, 16)};
-  wire [31:0] p_a = be32(pay_reg, 20);
-  wire [31:0] p_d = be32(pay_reg, 24);
+  wire [47:0] p_ve = {pb(2), pb(3), be32(4)};
+  wire [47:0] p_vc = {pb(8), pb(9), be32(10)};
+  wire [47:0] p_vx = {pb(14), pb(15), be32(16)};
+  wire [31:0] p_a = be32(20);
+  wire [31:0] p_d = be32(24);
   // every axis |steps| < 2^24 and at least one axis moves
   reg prof_range_ok, prof_moves;
   always @(*) begin
@@ -299,20 +300,20 @@ module frame_decoder #(
                       !arc_vc[63] && (arc_ve <= arc_vc) && (arc_vx <= arc_vc) && (arc_vx != 64'd0) &&
                       (arc_a != 48'd0 || arc_ve != 64'd0);
 
-  wire [32*N_AXES-1:0] two_steps = {{32 * (N_AXES - 2) {1'b0}}, be32(pay_reg, 4), be32(pay_reg, 0)};
+  wire [32*N_AXES-1:0] two_steps = {{32 * (N_AXES - 2) {1'b0}}, be32(4), be32(0)};
 
   // v1 packet
-  wire [BASE_W-1:0] e_v1_motion = {1'b0, 2'd0, code_reg, 8'hFF, 16'd0, pb(pay_reg, 8),
-                                    pb(pay_reg, 9), two_steps};
+  wire [BASE_W-1:0] e_v1_motion = {1'b0, 2'd0, code_reg, 8'hFF, 16'd0, pb(8),
+                                    pb(9), two_steps};
   wire [BASE_W-1:0] e_v1_init = {1'b0, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
   // v2 frames
-  wire [BASE_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(pay_reg, 1), be32(pay_reg, 2), line_steps};
-  wire [BASE_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(pay_reg, 0), {32 * N_AXES{1'b0}}};
+  wire [BASE_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(1), be32(2), line_steps};
+  wire [BASE_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(0), {32 * N_AXES{1'b0}}};
   wire [BASE_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
   // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power; the arc fields above the profile
   wire [ENTRY_W-1:0] e_arc = {arc_raw, 1'b1, {(PROF_W - BASE_W) {1'b0}}, 1'b1, 2'd0, flags[1:0],
-                              pb(pay_reg, 1), {32 * (N_AXES + 1) {1'b0}}};
-  wire [PROF_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(pay_reg, 1),
+                              pb(1), {32 * (N_AXES + 1) {1'b0}}};
+  wire [PROF_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(1),
                                 p_a, prof_steps};
 
   // ---------------------------------------------------------------- CHECK
@@ -334,15 +335,15 @@ module frame_decoder #(
   wire heat_len_ok = t_heat && ((t_hcfg && len_reg == 8'd20) || (t_hset && len_reg == 8'd3) ||
                      (t_htab && len_reg >= 8'd4 && len_reg <= 8'd18 && !len_reg[0]) ||
                      (t_hsaf && len_reg == 8'd13) || (t_hwd && len_reg == 8'd2));
-  wire [15:0] h_umax = {pb(pay_reg, 14), pb(pay_reg, 15)};
-  wire [15:0] h_manual = {pb(pay_reg, 18), pb(pay_reg, 19)};
-  wire signed [15:0] h_tmin = {pb(pay_reg, 1), pb(pay_reg, 2)};
-  wire signed [15:0] h_tmax = {pb(pay_reg, 3), pb(pay_reg, 4)};
-  wire [7:0] h_tab_end = pb(pay_reg, 1) + {1'b0, len_reg[7:1]} - 8'd1;  // first + (LEN - 2) / 2
-  wire heat_field_ok = (pb(pay_reg, 0) <= 8'd1 || t_hwd) &&
-                       !(t_hcfg && (pb(pay_reg, 1) > 8'd4 || h_umax > 16'h8000 ||
+  wire [15:0] h_umax = {pb(14), pb(15)};
+  wire [15:0] h_manual = {pb(18), pb(19)};
+  wire signed [15:0] h_tmin = {pb(1), pb(2)};
+  wire signed [15:0] h_tmax = {pb(3), pb(4)};
+  wire [7:0] h_tab_end = pb(1) + {1'b0, len_reg[7:1]} - 8'd1;  // first + (LEN - 2) / 2
+  wire heat_field_ok = (pb(0) <= 8'd1 || t_hwd) &&
+                       !(t_hcfg && (pb(1) > 8'd4 || h_umax > 16'h8000 ||
                                     h_manual > 16'h8000)) &&
-                       !(t_htab && (pb(pay_reg, 1) > 8'd64 || h_tab_end > 8'd65)) &&
+                       !(t_htab && (pb(1) > 8'd64 || h_tab_end > 8'd65)) &&
                        !(t_hsaf && h_tmin >= h_tmax);
 
   wire t_lprof = (PROFILES != 0) && (type_reg == T_LPROF);
@@ -359,7 +360,7 @@ module frame_decoder #(
   // being checked (the wide ARC / LINE_PROFILE compares end at a register, not in the accept).
   reg field_ok_reg;
   wire field_ok = field_ok_reg;
-  wire field_ok_w = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(pay_reg, 0) >= NAX8) &&
+  wire field_ok_w = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(0) >= NAX8) &&
                   !(t_lprof && !prof_field_ok) && !(t_arc && !arc_field_ok) &&
                   (!t_heat || heat_field_ok);
   wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
@@ -569,9 +570,9 @@ module frame_decoder #(
       heat_type_reg <= type_reg;
       heat_len_reg  <= len_reg;
       heat_data_reg <= pay_reg[159:0];
-      cfg_axis_reg <= pb(pay_reg, 0);
-      cfg_data_reg <= {pb(pay_reg, 1), pb(pay_reg, 2), pb(pay_reg, 3), pb(pay_reg, 4),
-                       pb(pay_reg, 5), pb(pay_reg, 6), pb(pay_reg, 7), pb(pay_reg, 8)};
+      cfg_axis_reg <= pb(0);
+      cfg_data_reg <= {pb(1), pb(2), pb(3), pb(4),
+                       pb(5), pb(6), pb(7), pb(8)};
     end
   end
 

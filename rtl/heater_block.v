@@ -62,32 +62,32 @@ module heater_block #(
 );
 
   // ---------------------------------------------------------------- frame fields
+  // Byte i of frame_data and the big-endian 16 / 32-bit fields at byte i. They read frame_data
+  // directly rather than take it as an argument (same logic; a simulator need not copy it).
   function [7:0] fb;
-    input [159:0] d;
     input integer i;
     begin
-      fb = d[8*i+:8];
+      fb = frame_data[8*i+:8];
     end
   endfunction
   function [15:0] f16;
-    input [159:0] d;
     input integer i;
     begin
-      f16 = {d[8*i+:8], d[8*(i+1)+:8]};
+      f16 = {frame_data[8*i+:8], frame_data[8*(i+1)+:8]};
     end
   endfunction
   function [31:0] f32;
-    input [159:0] d;
     input integer i;
     begin
-      f32 = {d[8*i+:8], d[8*(i+1)+:8], d[8*(i+2)+:8], d[8*(i+3)+:8]};
+      f32 = {frame_data[8*i+:8], frame_data[8*(i+1)+:8], frame_data[8*(i+2)+:8],
+             frame_data[8*(i+3)+:8]};
     end
   endfunction
 
   /* verilator lint_off UNUSEDSIGNAL */
-  wire [7:0] ch_byte = fb(frame_data, 0);  // channel (0/1: the decoder rejects others)
-  wire [7:0] mode_byte = fb(frame_data, 1);  // mode 0..4
-  wire [7:0] first_byte = fb(frame_data, 1);  // first table index 0..64
+  wire [7:0] ch_byte = fb(0);  // channel (0/1: the decoder rejects others)
+  wire [7:0] mode_byte = fb(1);  // mode 0..4
+  wire [7:0] first_byte = fb(1);  // first table index 0..64
   /* verilator lint_on UNUSEDSIGNAL */
   wire t_cfg = frame_wr && frame_type == 8'h20;
   wire t_set = frame_wr && frame_type == 8'h21;
@@ -105,9 +105,9 @@ module heater_block #(
       tab_ch_reg   <= ch_byte[0];
       tab_idx_reg  <= first_byte[6:0];
       tab_left_reg <= frame_len[4:1] - 4'd1;  // (LEN - 2) / 2 entries
-      tab_data_reg <= {f16(frame_data, 2), f16(frame_data, 4), f16(frame_data, 6),
-                       f16(frame_data, 8), f16(frame_data, 10), f16(frame_data, 12),
-                       f16(frame_data, 14), f16(frame_data, 16)};
+      tab_data_reg <= {f16(2), f16(4), f16(6),
+                       f16(8), f16(10), f16(12),
+                       f16(14), f16(16)};
     end else if (tab_left_reg != 4'd0) begin
       tab_left_reg <= tab_left_reg - 4'd1;
       tab_idx_reg  <= tab_idx_reg + 7'd1;
@@ -224,7 +224,7 @@ module heater_block #(
   reg [15:0] wd_period_reg, wd_count_reg;
   reg wd_fault_reg;
   always @(posedge clk) begin
-    if (t_wd) wd_period_reg <= f16(frame_data, 0);
+    if (t_wd) wd_period_reg <= f16(0);
     if (frame_ok || t_wd) wd_count_reg <= 16'd0;
     else if (tick_reg && wd_period_reg != 16'd0 && wd_count_reg != 16'hFFFF)
       wd_count_reg <= wd_count_reg + 16'd1;
@@ -261,21 +261,21 @@ module heater_block #(
       .rst         (rst),
       .cfg_wr      (t_cfg && ch_byte[0] == 1'b0),
       .cfg_mode    (mode_byte[2:0]),
-      .cfg_kp      (f32(frame_data, 2)),
-      .cfg_ki      (f32(frame_data, 6)),
-      .cfg_kd      (f32(frame_data, 10)),
-      .cfg_umax    (f16(frame_data, 14)),
-      .cfg_hyst    (f16(frame_data, 16)),
-      .cfg_manual  (f16(frame_data, 18)),
+      .cfg_kp      (f32(2)),
+      .cfg_ki      (f32(6)),
+      .cfg_kd      (f32(10)),
+      .cfg_umax    (f16(14)),
+      .cfg_hyst    (f16(16)),
+      .cfg_manual  (f16(18)),
       .set_wr      (t_set && ch_byte[0] == 1'b0),
-      .set_value   (f16(frame_data, 1)),
+      .set_value   (f16(1)),
       .safe_wr     (t_saf && ch_byte[0] == 1'b0),
-      .safe_tmin   (f16(frame_data, 1)),
-      .safe_tmax   (f16(frame_data, 3)),
-      .safe_band   (f16(frame_data, 5)),
-      .safe_rperiod(f16(frame_data, 7)),
-      .safe_wrise  (f16(frame_data, 9)),
-      .safe_wperiod(f16(frame_data, 11)),
+      .safe_tmin   (f16(1)),
+      .safe_tmax   (f16(3)),
+      .safe_band   (f16(5)),
+      .safe_rperiod(f16(7)),
+      .safe_wrise  (f16(9)),
+      .safe_wperiod(f16(11)),
       .eval        (eval_reg),
       .temp        (t0_reg),
       .kill        (kill),
@@ -302,21 +302,21 @@ module heater_block #(
       .rst         (rst),
       .cfg_wr      (t_cfg && ch_byte[0] == 1'b1),
       .cfg_mode    (mode_byte[2:0]),
-      .cfg_kp      (f32(frame_data, 2)),
-      .cfg_ki      (f32(frame_data, 6)),
-      .cfg_kd      (f32(frame_data, 10)),
-      .cfg_umax    (f16(frame_data, 14)),
-      .cfg_hyst    (f16(frame_data, 16)),
-      .cfg_manual  (f16(frame_data, 18)),
+      .cfg_kp      (f32(2)),
+      .cfg_ki      (f32(6)),
+      .cfg_kd      (f32(10)),
+      .cfg_umax    (f16(14)),
+      .cfg_hyst    (f16(16)),
+      .cfg_manual  (f16(18)),
       .set_wr      (t_set && ch_byte[0] == 1'b1),
-      .set_value   (f16(frame_data, 1)),
+      .set_value   (f16(1)),
       .safe_wr     (t_saf && ch_byte[0] == 1'b1),
-      .safe_tmin   (f16(frame_data, 1)),
-      .safe_tmax   (f16(frame_data, 3)),
-      .safe_band   (f16(frame_data, 5)),
-      .safe_rperiod(f16(frame_data, 7)),
-      .safe_wrise  (f16(frame_data, 9)),
-      .safe_wperiod(f16(frame_data, 11)),
+      .safe_tmin   (f16(1)),
+      .safe_tmax   (f16(3)),
+      .safe_band   (f16(5)),
+      .safe_rperiod(f16(7)),
+      .safe_wrise  (f16(9)),
+      .safe_wperiod(f16(11)),
       .eval        (eval_reg),
       .temp        (t1_reg),
       .kill        (kill),

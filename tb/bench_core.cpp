@@ -6,12 +6,18 @@
 //       executing a long move received through the UART pins;
 //   (c) the maximum aggregate step rate with 1-clock settings: a segment with equal steps on all
 //       4 axes at period 2 on vexec (cnc_core's v1 packets carry only X and Y).
-// Lines start with "bench:". FPGACNC_SEED overrides the seed.
+// Lines start with "bench:". FPGACNC_SEED overrides the seed. Environment for short runs (e.g.
+// under valgrind --tool=callgrind, whose instruction counts per clock do not depend on the load):
+//   FPGACNC_BENCH_PARTS   which parts run, any of "accuracy", "speed", "maxrate" (default all);
+//   FPGACNC_BENCH_CLOCKS  clocks of (b)'s idle run and at most as many of its move (default
+//                         10 000 000 idle and the whole 12.5 M-clock move).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <random>
 #include <vector>
@@ -31,6 +37,18 @@ using fpgacnc::tb::Segment;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kAxes = fpgacnc::tb::kExecAxes;
+
+// The value of environment variable `name` as an unsigned number, or `fallback`.
+uint64_t env_u64(const char* name, uint64_t fallback) {
+  const char* v = std::getenv(name);
+  return v != nullptr && *v != '\0' ? std::strtoull(v, nullptr, 0) : fallback;
+}
+
+// True when FPGACNC_BENCH_PARTS is unset or names `part`.
+bool part_enabled(const char* part) {
+  const char* v = std::getenv("FPGACNC_BENCH_PARTS");
+  return v == nullptr || *v == '\0' || std::strstr(v, part) != nullptr;
+}
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -116,7 +134,8 @@ void bench_core_speed() {
   auto& m = h.dut();
   auto tick = [&]() { h.tick(); };
 
-  const uint64_t idle_clocks = 10'000'000;
+  const uint64_t idle_clocks = env_u64("FPGACNC_BENCH_CLOCKS", 10'000'000);
+  const uint64_t move_limit = env_u64("FPGACNC_BENCH_CLOCKS", UINT64_MAX);
   auto t0 = Clock::now();
   for (uint64_t i = 0; i < idle_clocks; ++i) tick();
   const double idle_rate = static_cast<double>(idle_clocks) / seconds_since(t0);
@@ -130,7 +149,7 @@ void bench_core_speed() {
   uint8_t prev_step = 0;
   const uint64_t c0 = h.cycle();
   t0 = Clock::now();
-  while (m.running) {
+  while (m.running && h.cycle() - c0 < move_limit) {
     tick();
     steps += static_cast<uint64_t>(__builtin_popcount(m.step & ~prev_step & 0xFu));
     prev_step = m.step;
@@ -190,9 +209,9 @@ int main(int argc, char** argv) {
   Verilated::commandArgs(argc, argv);
   const uint64_t seed = fpgacnc::tb::test_seed(20260503, "bench_core");
   const auto t0 = Clock::now();
-  bench_accuracy(seed);
-  bench_core_speed();
-  bench_max_rate();
+  if (part_enabled("accuracy")) bench_accuracy(seed);
+  if (part_enabled("speed")) bench_core_speed();
+  if (part_enabled("maxrate")) bench_max_rate();
   std::printf("bench: total wall time %.1f s\n", seconds_since(t0));
   return 0;
 }

@@ -17,7 +17,6 @@ fpgacnc_verilated(vcore TOP cnc_core SOURCES ${FPGACNC_CORE_RTL})
 # cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
 fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m SOURCES ${FPGACNC_CORE_RTL}
                   ARGS -GBAUD=3000000)
-fpgacnc_verilated(vcore_trace TRACE TOP cnc_core PREFIX Vcnc_core_trace SOURCES ${FPGACNC_CORE_RTL})
 fpgacnc_verilated(vde1soc TOP de1soc_top
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/hex7seg.v
                           ${FPGACNC_RTL_DIR}/de1soc_top.v
