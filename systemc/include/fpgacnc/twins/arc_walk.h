@@ -385,10 +385,8 @@ class Dda {
     const u128 target = decel ? cn : std::min(cn, dd);
     const bool z_live = zc_ < nz_;
     if (n_max == 0 || u_ >= target) return 0;
-    const uint64_t n = ramp::last_true(std::min(limit, n_max), [&](uint64_t i) {
-      return ramp::sum(u_, v_, step, falling, i) < target &&
-             (!z_live || ramp::sum(rz_, vz_, step_z, falling, i) < c2_);
-    });
+    uint64_t n = ramp::last_below(u_, v_, step, falling, target, std::min(limit, n_max));
+    if (z_live && n != 0) n = ramp::last_below(rz_, vz_, step_z, falling, c2_, n);
     if (n == 0) return 0;
     u_ = ramp::sum(u_, v_, step, falling, n);
     rz_ = ramp::sum(rz_, vz_, step_z, falling, n);  // saturates only once Z is done (unused then)

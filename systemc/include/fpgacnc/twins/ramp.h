@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace fpgacnc::twins::ramp {
@@ -15,9 +16,9 @@ using u128 = unsigned __int128;
 // value below kSat is the exact result.
 inline constexpr u128 kSat = static_cast<u128>(1) << 126;
 inline constexpr u128 sat_mul(u128 a, u128 b) {
-  if (a == 0 || b == 0) return 0;
-  if (a >= kSat || b >= kSat || a > kSat / b) return kSat;
-  return std::min(a * b, kSat);
+  u128 r = 0;
+  if (__builtin_mul_overflow(a, b, &r) || r > kSat) return kSat;
+  return r;
 }
 inline constexpr u128 sat_add(u128 a, u128 b) {
   return std::min(std::min(a, kSat) + std::min(b, kSat), kSat);
@@ -53,6 +54,35 @@ inline uint64_t last_true(uint64_t hi, Pred ok) {
     if (step <= hi - i && ok(i + step)) i += step;
   }
   return i;
+}
+
+// The largest i in [0, hi] (hi < 2^62) with sum(q, r, step, falling, i) < target, for q < target
+// (and r - hi step >= 0 when falling): a floating-point root of the quadratic as the first guess,
+// corrected exactly (last_true when the guess is off by more than a few).
+inline uint64_t last_below(u128 q, u128 r, u128 step, bool falling, u128 target, uint64_t hi) {
+  const auto ok = [&](uint64_t i) { return sum(q, r, step, falling, i) < target; };
+  const double rem = static_cast<double>(target - q), s = static_cast<double>(step),
+               v = static_cast<double>(r);
+  double x;  // real i at which the sum reaches target
+  if (step == 0) {
+    x = v > 0 ? rem / v : static_cast<double>(hi);
+  } else if (!falling) {
+    const double b = v - s / 2, root = std::sqrt(b * b + 2 * s * rem);
+    x = b >= 0 ? 2 * rem / (b + root) : (root - b) / s;
+  } else {
+    const double b = v + s / 2, disc = b * b - 2 * s * rem;
+    x = disc < 0 ? static_cast<double>(hi) : 2 * rem / (b + std::sqrt(disc));
+  }
+  uint64_t i = !(x > 1) ? 0 : x >= static_cast<double>(hi) ? hi : static_cast<uint64_t>(x);
+  for (int tries = 0; tries < 4; ++tries) {
+    if (ok(i)) {
+      if (i == hi || !ok(i + 1)) return i;
+      ++i;
+    } else {
+      --i;  // ok(0) holds: i > 0 here
+    }
+  }
+  return last_true(hi, ok);
 }
 
 }  // namespace fpgacnc::twins::ramp

@@ -288,12 +288,19 @@ inline ProfileRun run_profile(const ProfileParams& p,
   using u128 = unsigned __int128;
   const u128 m = static_cast<u128>(n_dom) << 48;
   const u128 d = static_cast<u128>(p.decel_at) << 48;
-  // Next step threshold of each axis: the k-th step when U*n_a >= k*M, i.e. U >= ceil(k*M/n_a).
-  std::array<u128, kAxes> next{};
+  // Next step threshold of each axis: the k-th step when U*n_a >= k*M, i.e. U >= ceil(k*M/n_a);
+  // k*M = quo[a]*n_a + rem[a] kept without dividing (M = step_q[a]*n_a + step_r[a]).
+  std::array<u128, kAxes> next{}, quo{}, step_q{};
+  std::array<uint64_t, kAxes> rem{}, step_r{};
   std::array<uint32_t, kAxes> k{};
   for (int a = 0; a < kAxes; ++a) {
     r.ticks[a].reserve(abs_steps[a]);
-    if (abs_steps[a] != 0) next[a] = (m + abs_steps[a] - 1) / abs_steps[a];
+    if (abs_steps[a] == 0) continue;
+    quo[a] = m / abs_steps[a];
+    rem[a] = static_cast<uint64_t>(m % abs_steps[a]);
+    step_q[a] = quo[a];
+    step_r[a] = rem[a];
+    next[a] = quo[a] + (rem[a] != 0);
   }
   const uint64_t acc = p.accel;
   constexpr uint64_t kNoLimit = uint64_t{1} << 62;
@@ -321,13 +328,7 @@ inline ProfileRun run_profile(const ProfileParams& p,
     for (int a = 0; a < kAxes; ++a)
       if (k[a] < abs_steps[a]) target = std::min(target, next[a]);
     if (limit != 0 && (step != 0 || v != 0) && u < target) {
-      uint64_t i;
-      if (step == 0) {
-        i = static_cast<uint64_t>(std::min<u128>((target - u - 1) / v, limit));
-      } else {
-        i = ramp::last_true(limit,
-                            [&](uint64_t n) { return ramp::sum(u, v, step, falling, n) < target; });
-      }
+      const uint64_t i = ramp::last_below(u, v, step, falling, target, limit);
       if (i != 0) {
         u = ramp::sum(u, v, step, falling, i);
         const uint64_t v_end = falling ? v - step * i : v + step * i;
@@ -350,7 +351,13 @@ inline ProfileRun run_profile(const ProfileParams& p,
       if (k[a] < abs_steps[a] && u >= next[a]) {
         r.ticks[a].push_back(j);
         ++k[a];
-        next[a] = (m * (k[a] + 1) + abs_steps[a] - 1) / abs_steps[a];
+        quo[a] += step_q[a];
+        rem[a] += step_r[a];
+        if (rem[a] >= abs_steps[a]) {
+          rem[a] -= abs_steps[a];
+          quo[a] += 1;
+        }
+        next[a] = quo[a] + (rem[a] != 0);
       }
     }
   }
