@@ -6,28 +6,6 @@
 
 namespace fpgacnc::twins {
 
-std::vector<Edge> PinRecorder::take_sorted() {
-  std::sort(edges_.begin(), edges_.end(), [](const Edge& a, const Edge& b) {
-    if (a.cycle != b.cycle) return a.cycle < b.cycle;
-    if (a.signal != b.signal) return a.signal < b.signal;
-    return a.value < b.value;
-  });
-  // Back-to-back cutting segments: the laser's fall at R + T and the next rise on the same edge
-  // cancel (the pin stays high). Compacted in place.
-  size_t w = 0;
-  for (size_t i = 0; i < edges_.size(); ++i) {
-    const Edge e = edges_[i];
-    if (e.signal == simboard::kLaser && i + 1 < edges_.size() && edges_[i + 1].cycle == e.cycle &&
-        edges_[i + 1].signal == e.signal && edges_[i + 1].value != e.value) {
-      ++i;
-      continue;
-    }
-    edges_[w++] = e;
-  }
-  edges_.resize(w);
-  return std::move(edges_);
-}
-
 VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bool record_tx)
     : sc_module(name),
       p_(p),
