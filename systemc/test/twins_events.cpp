@@ -1,8 +1,9 @@
 // The event-driven twins against their clock-by-clock references (clockwise_ref.h), bit for bit,
 // on random inputs and the edge cases (CTest label unit): run_profile (LINE_PROFILE: ticks of
 // every step, J, cruised) and arc::run / arc::Dda (ARC: every event, end clock, moves, position,
-// err, late), plus the closed-form helpers of ramp.h against direct sums. Fixed seeds; exit
-// status 1 on any difference. Options: --profiles N, --arcs N, --seed S.
+// err, late), the closed-form helpers of ramp.h against direct sums, and PinRecorder's merge
+// against a plain sort. Fixed seeds; exit status 1 on any difference. Options: --profiles N,
+// --arcs N, --seed S.
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -14,6 +15,7 @@
 #include "fpgacnc/twins/arc_walk.h"
 #include "fpgacnc/twins/ramp.h"
 #include "fpgacnc/twins/timing.h"
+#include "fpgacnc/twins/tlm_common.h"
 
 namespace {
 
@@ -280,9 +282,56 @@ void arcs(std::mt19937_64& g, int count) {
   }
 }
 
+// ---- PinRecorder --------------------------------------------------------------------------------
+
+// take_sorted() against a plain sort by (cycle, signal, value) with the laser's same-edge fall and
+// rise removed: per-signal streams mostly in time order (as the twins add them), some not, ties
+// across signals, chunk boundaries (streams longer than a chunk).
+void pin_recorder(std::mt19937_64& g) {
+  PinRecorder rec;
+  for (int round = 0; round < 60; ++round) {
+    rec.record_tx = pick(g, 0, 1) == 1;
+    std::vector<Edge> all;
+    const size_t n = round < 3 ? pick(g, 300'000, 600'000) : pick(g, 0, 3000);
+    std::array<uint64_t, fpgacnc::simboard::kSignalCount> t{};
+    const bool messy = pick(g, 0, 3) == 0;
+    for (size_t i = 0; i < n; ++i) {
+      const auto s = static_cast<uint8_t>(pick(g, 0, fpgacnc::simboard::kSignalCount - 1));
+      t[s] += pick(g, 0, 3);
+      const uint64_t c = messy && pick(g, 0, 9) == 0 ? pick(g, 0, t[s] + 10) : t[s];
+      const auto v = static_cast<uint8_t>(pick(g, 0, 1));
+      rec.add(static_cast<Cycle>(c), s, v);
+      if (s != fpgacnc::simboard::kTx || rec.record_tx) all.push_back(Edge{c, s, v});
+    }
+    std::sort(all.begin(), all.end(), [](const Edge& a, const Edge& b) {
+      if (a.cycle != b.cycle) return a.cycle < b.cycle;
+      if (a.signal != b.signal) return a.signal < b.signal;
+      return a.value < b.value;
+    });
+    std::vector<Edge> want;
+    for (size_t i = 0; i < all.size(); ++i) {
+      const Edge e = all[i];
+      if (e.signal == fpgacnc::simboard::kLaser && i + 1 < all.size() &&
+          all[i + 1].cycle == e.cycle && all[i + 1].signal == e.signal &&
+          all[i + 1].value != e.value) {
+        ++i;
+        continue;
+      }
+      want.push_back(e);
+    }
+    const std::vector<Edge> got = rec.take_sorted();
+    bool eq = got.size() == want.size();
+    for (size_t i = 0; eq && i < got.size(); ++i)
+      eq = got[i].cycle == want[i].cycle && got[i].signal == want[i].signal &&
+           got[i].value == want[i].value;
+    if (!eq) fail(fmt::format("PinRecorder round {} ({} edges, messy {})", round, n, messy));
+    if (rec.size() != 0) fail("PinRecorder not empty after take_sorted");
+  }
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
+int sc_main(int argc, char* argv[]) {
   int n_profiles = 20'000, n_arcs = 3'000;
   uint64_t seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -300,8 +349,11 @@ int main(int argc, char** argv) {
   profiles(g, n_profiles);
   const int f_prof = failures - f_ramp;
   arcs(g, n_arcs);
+  const int f_arcs = failures - f_ramp - f_prof;
+  pin_recorder(g);
   fmt::print(
-      "twins_events: ramp helpers {} failures; {} profiles, {} failures; {} arcs, {} failures\n",
-      f_ramp, n_profiles, f_prof, n_arcs, failures - f_ramp - f_prof);
+      "twins_events: ramp helpers {} failures; {} profiles, {} failures; {} arcs, {} failures; "
+      "PinRecorder {} failures\n",
+      f_ramp, n_profiles, f_prof, n_arcs, f_arcs, failures - f_ramp - f_prof - f_arcs);
   return failures == 0 ? 0 : 1;
 }
