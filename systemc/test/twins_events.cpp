@@ -75,6 +75,27 @@ void ramp_helpers(std::mt19937_64& g) {
   }
 }
 
+// ---- DdaTicks ----------------------------------------------------------------------------------
+
+void dda_ticks(std::mt19937_64& g) {
+  for (int i = 0; i < 20'000; ++i) {
+    const uint64_t n = pick(g, 0, 3) == 0 ? pick(g, 1, 5) : pick_log(g, 1, 1u << 16);
+    const uint64_t total = pick(g, 0, 2) == 0 ? n * pick(g, 1, 100'000) + pick(g, 0, n - 1)
+                                              : pick_log(g, 1, ~0ull >> 8);
+    DdaTicks t(n, total);
+    const uint64_t probe = std::min<uint64_t>(n, 2000);
+    for (uint64_t k = 1; k <= n; ++k) {
+      const uint64_t got = t.next();
+      if (k > probe && k < n - 2) continue;  // check the first 2000 and the last ones
+      if (static_cast<int64_t>(got) != dda_tick(k, n, total)) {
+        fail(fmt::format("DdaTicks n {} T {}: step {} at {}, dda_tick {}", n, total, k, got,
+                         dda_tick(k, n, total)));
+        break;
+      }
+    }
+  }
+}
+
 // ---- run_profile -------------------------------------------------------------------------------
 
 struct ProfileCase {
@@ -345,6 +366,7 @@ int sc_main(int argc, char* argv[]) {
   }
   std::mt19937_64 g(seed);
   ramp_helpers(g);
+  dda_ticks(g);
   const int f_ramp = failures;
   profiles(g, n_profiles);
   const int f_prof = failures - f_ramp;
@@ -352,7 +374,8 @@ int sc_main(int argc, char* argv[]) {
   const int f_arcs = failures - f_ramp - f_prof;
   pin_recorder(g);
   fmt::print(
-      "twins_events: ramp helpers {} failures; {} profiles, {} failures; {} arcs, {} failures; "
+      "twins_events: ramp helpers and DdaTicks {} failures; {} profiles, {} failures; {} arcs, {} "
+      "failures; "
       "PinRecorder {} failures\n",
       f_ramp, n_profiles, f_prof, n_arcs, f_arcs, failures - f_ramp - f_prof - f_arcs);
   return failures == 0 ? 0 : 1;

@@ -114,6 +114,24 @@ inline PreparedTiming prepare_timing(uint32_t abs_x, uint32_t abs_y, uint32_t nu
 inline int64_t dda_tick(uint64_t k, uint64_t n, uint64_t total) {
   return ceil_div(static_cast<__int128>(k) * total, n);
 }
+// The same ticks for k = 1, 2, ..., n in turn, without a division per step: k T = q n + r.
+class DdaTicks {
+ public:
+  DdaTicks(uint64_t n, uint64_t total)
+      : n_(n), qt_(n == 0 ? 0 : total / n), rt_(n == 0 ? 0 : total % n) {}
+  uint64_t next() {
+    q_ += qt_;
+    r_ += rt_;
+    if (r_ >= n_) {
+      r_ -= n_;
+      ++q_;
+    }
+    return q_ + (r_ != 0);
+  }
+
+ private:
+  uint64_t n_, qt_, rt_, q_ = 0, r_ = 0;
+};
 
 // ---- protocol v2 (docs/protocol.md "v2") -------------------------------------------------------
 
