@@ -78,6 +78,17 @@ void ramp_helpers(std::mt19937_64& g) {
 // ---- DdaTicks ----------------------------------------------------------------------------------
 
 void dda_ticks(std::mt19937_64& g) {
+  // ceil_div's 64-bit path against the 128-bit one
+  for (int i = 0; i < 200'000; ++i) {
+    const __int128 b = pick_log(g, 1, ~0ull >> 1);
+    const __int128 a = pick(g, 0, 2) == 0   ? static_cast<__int128>(pick(g, 0, 3)) * b
+                       : pick(g, 0, 9) == 0 ? -static_cast<__int128>(pick_log(g, 1, ~0ull >> 1))
+                                            : static_cast<__int128>(pick_log(g, 1, ~0ull >> 1));
+    const __int128 q = a / b, r = a % b;
+    const __int128 want = q + (r > 0 ? 1 : 0);
+    if (ceil_div(a, b) != static_cast<int64_t>(want))
+      fail(fmt::format("ceil_div({}, {})", static_cast<int64_t>(a), static_cast<int64_t>(b)));
+  }
   for (int i = 0; i < 20'000; ++i) {
     const uint64_t n = pick(g, 0, 3) == 0 ? pick(g, 1, 5) : pick_log(g, 1, 1u << 16);
     const uint64_t total = pick(g, 0, 2) == 0 ? n * pick(g, 1, 100'000) + pick(g, 0, n - 1)

@@ -20,6 +20,11 @@ inline constexpr int kAxes = 4;  // cnc_core N_AXES
 
 // ceil(a / b) for a >= 0 (or small negative a), b > 0, in 128 bits.
 inline constexpr int64_t ceil_div(__int128 a, __int128 b) {
+  constexpr __int128 k63 = static_cast<__int128>(1) << 63;
+  if (a > 0 && a < k63 && b < k63) {  // 64-bit division (the usual operands)
+    const auto ua = static_cast<uint64_t>(a), ub = static_cast<uint64_t>(b);
+    return static_cast<int64_t>(ua / ub + (ua % ub != 0));
+  }
   if (a <= 0) return static_cast<int64_t>(-((-a) / b));
   return static_cast<int64_t>((a + b - 1) / b);
 }
