@@ -6,11 +6,6 @@
 
 namespace fpgacnc::twins {
 
-std::vector<Edge> PinRecorder::take_sorted() {
-  sort_edges(edges_);
-  return std::move(edges_);
-}
-
 void sort_edges(std::vector<Edge>& edges_) {
   std::sort(edges_.begin(), edges_.end(), [](const Edge& a, const Edge& b) {
     if (a.cycle != b.cycle) return a.cycle < b.cycle;

@@ -3,7 +3,7 @@
 // Target `load`: an ArcLoad (the frame fields; prep's products are derived with arc::derive), the
 // delay naming the load edge L (the edge on which the RTL takes `load`); clock c of the arc is
 // the cycle after edge L + c, and its event is registered on edge L + c + 1. The twin runs the
-// integer reference (arc_walk.h, arc::Dda) clock by clock and sends one step request per axis
+// integer reference (arc_walk.h, arc::Dda) from event to event and sends one step request per axis
 // step on initiators x_step, y_step, z_step (PulseCmd{dir}), delay = edge L + c + 1; the answer
 // fills in the edge of the last move's register edge (`end_edge`: a next arc loaded on
 // end_edge starts with zero gap, as the RTL's `ending`) and err / late.
@@ -43,6 +43,7 @@ class ArcDdaTwin : public sc_core::sc_module {
     arc::Dda dda(l.frame);
     Cycle last = edge_l;
     while (!dda.done()) {
+      dda.skip_quiet(~uint64_t{0});
       const arc::Event ev = dda.clock();
       const Cycle e = edge_l + static_cast<Cycle>(ev.clock) + 1;
       if (ev.dx) send(x_step, ev.dx > 0, e);

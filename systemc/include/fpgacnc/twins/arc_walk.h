@@ -37,6 +37,8 @@
 #include <cstdlib>
 #include <vector>
 
+#include "fpgacnc/twins/ramp.h"
+
 namespace fpgacnc::twins::arc {
 
 using u128 = unsigned __int128;
@@ -320,7 +322,9 @@ struct RunResult {
   bool late = false;            // some move waited for the walk
 };
 
-// The block clock by clock (rtl/arc_dda.v's registers in exact integers).
+// The block (rtl/arc_dda.v's registers in exact integers): clock() runs one clock; skip_quiet()
+// jumps over the clocks in which nothing happens, in closed form (the cost of a run grows with its
+// moves and Z steps, not with its clocks).
 class Dda {
  public:
   explicit Dda(const Frame& f)
@@ -349,6 +353,48 @@ class Dda {
   bool dir_valid() const { return c_ + (WALK_CLOCKS - 1) != ready_; }
   bool next_x_pos() const { return pa_ > 0; }
   bool next_y_pos() const { return pb_ > 0; }
+
+  // Jumps over the next n <= limit clocks and returns n, as n calls of clock() would run them, when
+  // none of them has an event: no move, no Z step, no `late`, and dir_valid() true with the same
+  // next_x_pos() / next_y_pos() in each (skips only from the move's ready clock on: the clocks of
+  // the walk's preparation run one by one). n is the largest such count except that it stops
+  // before the clock in which U reaches the move's cost (one clock early at most), so a clock of
+  // interest is never skipped.
+  uint64_t skip_quiet(uint64_t limit) {
+    if (done_ || z_due_ || c_ < ready_ || limit == 0) return 0;
+    const u128 cn = u128{c_next_} << FRAC, dd = u128{f_.d} << FRAC;
+    const bool decel = u_ >= dd;
+    // the ramp from here: V (and VZ = V |DZ|) change by +A, -A or 0 per clock for at most n_max
+    // clocks before the update saturates them
+    constexpr uint64_t kNoLimit = uint64_t{1} << 62;
+    u128 step = f_.a, step_z = dv_.az;
+    bool falling = decel;
+    uint64_t n_max = 0;
+    if (!decel && v_ + f_.a <= f_.v_cruise) {
+      n_max = f_.a == 0
+                  ? kNoLimit
+                  : static_cast<uint64_t>(std::min<u128>(kNoLimit, (f_.v_cruise - v_) / f_.a));
+    } else if (decel && v_ >= u128{f_.v_exit} + f_.a) {
+      n_max = f_.a == 0 ? kNoLimit
+                        : static_cast<uint64_t>(std::min<u128>(kNoLimit, (v_ - f_.v_exit) / f_.a));
+    } else if (v_ == (decel ? f_.v_exit : f_.v_cruise)) {
+      step = step_z = 0;
+      falling = false;
+      n_max = kNoLimit;
+    }
+    const u128 target = decel ? cn : std::min(cn, dd);
+    const bool z_live = zc_ < nz_;
+    if (n_max == 0 || u_ >= target) return 0;
+    uint64_t n = ramp::last_below(u_, v_, step, falling, target, std::min(limit, n_max));
+    if (z_live && n != 0) n = ramp::last_below(rz_, vz_, step_z, falling, c2_, n);
+    if (n == 0) return 0;
+    u_ = ramp::sum(u_, v_, step, falling, n);
+    rz_ = ramp::sum(rz_, vz_, step_z, falling, n);  // saturates only once Z is done (unused then)
+    v_ = falling ? v_ - step * n : v_ + step * n;
+    vz_ = falling ? vz_ - step_z * n : vz_ + step_z * n;
+    c_ += n;
+    return n;
+  }
 
   // Clock c (0, 1, ... after the load): its event. Call only while !done().
   Event clock() {
@@ -424,6 +470,11 @@ inline RunResult run(const Frame& f, uint64_t max_clocks = 0) {
   RunResult res;
   Dda dda(f);
   while (!dda.done()) {
+    const uint64_t c = dda.next_clock();
+    if (max_clocks == 0)
+      dda.skip_quiet(~uint64_t{0});
+    else if (c < max_clocks)
+      dda.skip_quiet(max_clocks - c);
     const Event ev = dda.clock();
     if (ev.dx || ev.dy || ev.dz) res.events.push_back(ev);
     if (ev.dx || ev.dy) res.moves += 1;

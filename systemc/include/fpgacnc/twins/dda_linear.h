@@ -35,8 +35,9 @@ class DdaLinearTwin : public sc_core::sc_module {
     const Cycle r = clk_.at(delay);
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
     PulseCmd none{false};
+    DdaTicks ticks(l.steps, l.total);
     for (uint64_t k = 1; k <= l.steps; ++k) {
-      const Cycle e = r + static_cast<Cycle>(dda_tick(k, l.steps, l.total));
+      const Cycle e = r + static_cast<Cycle>(ticks.next());
       if (e >= l.cut) break;  // the executor gates step_req from the abort edge on
       transport(step, gp_, clk_, none, e);
     }

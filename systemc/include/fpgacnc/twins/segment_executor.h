@@ -26,7 +26,7 @@
 //   the k-th step of an axis in tick j is a step request on edge R + j, sent straight to the
 //   axis's step_pulse. dir_fast is 0, so a reversing axis always takes HOLD/SETUP. Everything
 //   else (accept edges, zero gap, laser, seg_done) as for a segment of T = J.
-//   Kind ARC (Segment::arc, from an ARC frame): run_arc below (arc::Dda clock by clock, an event of
+//   Kind ARC (Segment::arc, from an ARC frame): run_arc below (arc::Dda, an event of
 //   walk clock c a step request on edge R + c + 2, in-arc DIR writes and DIR-setup violations,
 //   arc error); the segment lasts c_last + 2 ticks (c_last: the clock of the last move), so the
 //   last move's step request lands on the segment's last edge as for every other kind. dir_fast
@@ -194,8 +194,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     last_wr_[static_cast<size_t>(a)] = e;
   }
 
-  // Kind ARC from edge R (the walk's clock c is the clock after edge R + c): arc::Dda clock by
-  // clock (rtl/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
+  // Kind ARC from edge R (the walk's clock c is the clock after edge R + c): arc::Dda from event to
+  // event (rtl/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
   // request on edge R + c + 2. X / Y reverse inside the arc: from the walk's W1 clock on the
   // executor knows the next move's direction (Dda::next_x_pos / next_y_pos); when it differs from
   // the DIR target the write becomes pending and lands on the first edge after a clock in which
@@ -232,8 +232,34 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         ++arc_dir_writes;
       }
     };
+    // The first clock >= t at which write_if_ok(k, ·) writes, with no new step request of axis k
+    // before it (the rises still queued are taken into account, none is consumed).
+    auto first_write = [&](size_t k, Cycle t) {
+      Cycle lr = last_rise[k];
+      size_t next_rise = 0;
+      const Cycle hold = p_.timing[k].hold;
+      for (;;) {
+        while (next_rise < rises[k].size() && rises[k][next_rise] <= t) lr = rises[k][next_rise++];
+        if (t + 1 < lr + hold) {
+          t = lr + hold - 1;
+        } else if (req[k] == t + 1) {
+          ++t;
+        } else {
+          return t;
+        }
+      }
+    };
     Cycle last = 0;
     while (!dda.done()) {
+      // Clocks in which neither the walk nor a pending DIR write does anything are skipped: the
+      // next clock run is the walk's next event, a pending write's landing clock or the abort's.
+      {
+        const auto c0 = static_cast<Cycle>(dda.next_clock());
+        Cycle stop = cut - 1 - r;  // clock c with r + c + 1 >= cut
+        for (size_t k = 0; k < 2; ++k)
+          if (pend[k]) stop = std::min(stop, first_write(k, r + c0) - r);
+        if (stop > c0) dda.skip_quiet(static_cast<uint64_t>(stop - c0));
+      }
       const auto c = static_cast<Cycle>(dda.next_clock());
       const Cycle t = r + c;
       if (t + 1 >= cut) {  // aborted: nothing of this clock or later lands
@@ -274,8 +300,11 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     // A write still pending at the end (only when the arc outran its DIR timing) lands from the
     // segment's last tick on (not with the last step request of its axis), as in IDLE or in the
     // next segment's run.
-    for (size_t k = 0; k < 2; ++k)
-      for (Cycle t = r + last + 1; pend[k] && t + 1 < cut; ++t) write_if_ok(k, t);
+    for (size_t k = 0; k < 2; ++k) {
+      if (!pend[k]) continue;
+      const Cycle t = first_write(k, r + last + 1);
+      if (t + 1 < cut) write_if_ok(k, t);
+    }
     ++arcs;
     if (dda.err()) {
       ++arc_errors;

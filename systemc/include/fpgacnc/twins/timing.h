@@ -11,6 +11,8 @@
 #include <numeric>
 #include <vector>
 
+#include "fpgacnc/twins/ramp.h"
+
 namespace fpgacnc::twins {
 
 using Cycle = int64_t;
@@ -18,6 +20,11 @@ inline constexpr int kAxes = 4;  // cnc_core N_AXES
 
 // ceil(a / b) for a >= 0 (or small negative a), b > 0, in 128 bits.
 inline constexpr int64_t ceil_div(__int128 a, __int128 b) {
+  constexpr __int128 k63 = static_cast<__int128>(1) << 63;
+  if (a > 0 && a < k63 && b < k63) {  // 64-bit division (the usual operands)
+    const auto ua = static_cast<uint64_t>(a), ub = static_cast<uint64_t>(b);
+    return static_cast<int64_t>(ua / ub + (ua % ub != 0));
+  }
   if (a <= 0) return static_cast<int64_t>(-((-a) / b));
   return static_cast<int64_t>((a + b - 1) / b);
 }
@@ -112,6 +119,24 @@ inline PreparedTiming prepare_timing(uint32_t abs_x, uint32_t abs_y, uint32_t nu
 inline int64_t dda_tick(uint64_t k, uint64_t n, uint64_t total) {
   return ceil_div(static_cast<__int128>(k) * total, n);
 }
+// The same ticks for k = 1, 2, ..., n in turn, without a division per step: k T = q n + r.
+class DdaTicks {
+ public:
+  DdaTicks(uint64_t n, uint64_t total)
+      : n_(n), qt_(n == 0 ? 0 : total / n), rt_(n == 0 ? 0 : total % n) {}
+  uint64_t next() {
+    q_ += qt_;
+    r_ += rt_;
+    if (r_ >= n_) {
+      r_ -= n_;
+      ++q_;
+    }
+    return q_ + (r_ != 0);
+  }
+
+ private:
+  uint64_t n_, qt_, rt_, q_ = 0, r_ = 0;
+};
 
 // ---- protocol v2 (docs/protocol.md "v2") -------------------------------------------------------
 
@@ -267,6 +292,11 @@ inline ProfilePrepared prepare_profile(const ProfileParams& p,
 // J = the first j with U(j) >= n_dom*2^48. Axis a (n_a steps) has made floor(U(j)*n_a / M) steps
 // after tick j (M = n_dom*2^48, products < 2^96): its k-th step is in the first tick j with
 // U(j)*n_a >= k*M, and at most one per tick (V < 2^47). `ticks[a]` lists the tick of every step.
+// Inputs as the decoder accepts them (V_cruise < 2^47, V_entry and V_exit <= V_cruise, V_exit >= 1,
+// A >= 1 or V_entry >= 1). The cost grows with the steps, not with J: the clocks between two events
+// (a step of any axis, the start of deceleration, V reaching V_cruise or V_exit, the end) form a
+// ramp (V changes by +A, -A or 0 per clock) whose U follows in closed form; the run jumps over
+// them and takes each event clock with the per-clock update.
 struct ProfileRun {
   uint64_t ticks_total = 0;  // J
   bool cruised = false;  // V reached V_cruise (false: a triangle, or a ramp that never gets there)
@@ -281,31 +311,59 @@ inline ProfileRun run_profile(const ProfileParams& p,
   using u128 = unsigned __int128;
   const u128 m = static_cast<u128>(n_dom) << 48;
   const u128 d = static_cast<u128>(p.decel_at) << 48;
-  // Next step threshold of each axis: the k-th step when U*n_a >= k*M, i.e. U >= ceil(k*M/n_a).
-  std::array<u128, kAxes> next{};
+  // Next step threshold of each axis: the k-th step when U*n_a >= k*M, i.e. U >= ceil(k*M/n_a);
+  // k*M = quo[a]*n_a + rem[a] kept without dividing (M = step_q[a]*n_a + step_r[a]).
+  std::array<u128, kAxes> next{}, quo{}, step_q{};
+  std::array<uint64_t, kAxes> rem{}, step_r{};
   std::array<uint32_t, kAxes> k{};
   for (int a = 0; a < kAxes; ++a) {
     r.ticks[a].reserve(abs_steps[a]);
-    if (abs_steps[a] != 0) next[a] = (m + abs_steps[a] - 1) / abs_steps[a];
+    if (abs_steps[a] == 0) continue;
+    quo[a] = m / abs_steps[a];
+    rem[a] = static_cast<uint64_t>(m % abs_steps[a]);
+    step_q[a] = quo[a];
+    step_r[a] = rem[a];
+    next[a] = quo[a] + (rem[a] != 0);
   }
+  const uint64_t acc = p.accel;
+  constexpr uint64_t kNoLimit = uint64_t{1} << 62;
   u128 u = 0;
   uint64_t v = p.v_entry;
   r.cruised = v == p.v_cruise;
   uint64_t j = 0;
   while (u < m) {
-    // Constant velocity (cruise, V_exit reached, A = 0): the ticks before the next event (a step,
-    // the start of deceleration, the end) change nothing but U; skip them in one go.
-    uint64_t vs = v;
-    profile_update(p, u >= d, vs);
-    if (vs == v && v != 0) {
-      u128 target = m;
-      if (u < d) target = std::min(target, d);
-      for (int a = 0; a < kAxes; ++a)
-        if (k[a] < abs_steps[a]) target = std::min(target, next[a]);
-      if (target > u + v) {
-        const u128 s = (target - u - 1) / v;  // u + s*v < target
-        u += s * v;
-        j += static_cast<uint64_t>(s);
+    // The ramp from here: V changes by `step` per clock (rising or falling) for at most `limit`
+    // clocks before profile_update saturates it; no ramp (limit 0) when the next clock saturates.
+    const bool decel = u >= d;
+    uint64_t step = acc, limit = 0;
+    bool falling = decel;
+    if (!decel && v + acc <= p.v_cruise) {
+      limit = acc == 0 ? kNoLimit : std::min(kNoLimit, (p.v_cruise - v) / acc);
+    } else if (decel && v >= p.v_exit + acc) {
+      limit = acc == 0 ? kNoLimit : std::min(kNoLimit, (v - p.v_exit) / acc);
+    } else if (v == (decel ? p.v_exit : p.v_cruise)) {  // saturated: constant velocity
+      step = 0;
+      falling = false;
+      limit = kNoLimit;
+    }
+    u128 target = m;  // the clocks skipped end with U below every event threshold
+    if (!decel) target = std::min(target, d);
+    for (int a = 0; a < kAxes; ++a)
+      if (k[a] < abs_steps[a]) target = std::min(target, next[a]);
+    if (limit != 0 && (step != 0 || v != 0) && u < target) {
+      const uint64_t i = ramp::last_below(u, v, step, falling, target, limit);
+      if (i != 0) {
+        u = ramp::sum(u, v, step, falling, i);
+        const uint64_t v_end = falling ? v - step * i : v + step * i;
+        // V passed V_cruise on one of the skipped clocks (only a start above V_cruise can do that
+        // while falling)
+        if (step == 0
+                ? v == p.v_cruise
+                : (falling ? p.v_cruise < v && p.v_cruise >= v_end && (v - p.v_cruise) % step == 0
+                           : p.v_cruise > v && p.v_cruise <= v_end && (p.v_cruise - v) % step == 0))
+          r.cruised = true;
+        v = v_end;
+        j += i;
       }
     }
     ++j;
@@ -316,7 +374,13 @@ inline ProfileRun run_profile(const ProfileParams& p,
       if (k[a] < abs_steps[a] && u >= next[a]) {
         r.ticks[a].push_back(j);
         ++k[a];
-        next[a] = (m * (k[a] + 1) + abs_steps[a] - 1) / abs_steps[a];
+        quo[a] += step_q[a];
+        rem[a] += step_r[a];
+        if (rem[a] >= abs_steps[a]) {
+          rem[a] -= abs_steps[a];
+          quo[a] += 1;
+        }
+        next[a] = quo[a] + (rem[a] != 0);
       }
     }
   }

@@ -14,6 +14,7 @@
 #include <systemc>
 #include <tlm>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <stdexcept>
@@ -174,22 +175,139 @@ T& payload(tlm::tlm_generic_payload& gp) {
 
 // The board's pins as an edge list (signal numbers of simboard/edges.h). Twins add edges out of
 // time order (a move's steps are computed when it is accepted); take_sorted() orders them by
-// (cycle, signal) as the RTL recorder sees them.
+// (cycle, signal, value) as the RTL recorder sees them, a laser fall and rise on the same edge
+// cancelling (back-to-back cutting segments keep the pin high).
+// Storage: 8 bytes per edge (cycle < 2^56), one stream per signal in chunks that are never
+// reallocated (no copy, no doubling of the resident size while a job records); take_sorted()
+// merges the streams into the result and frees each chunk once it is merged, so the peak is the
+// result plus a chunk per signal. Each signal's edges mostly arrive in time order; a stream that
+// does not is sorted before the merge.
 class PinRecorder {
  public:
   bool record_tx = false;
   void add(Cycle c, uint8_t signal, uint8_t value) {
     if (signal == simboard::kTx && !record_tx) return;
-    edges_.push_back(Edge{static_cast<uint64_t>(c), signal, value});
+    if (signal >= kSignals || c < 0 || c >= (Cycle{1} << 56))
+      throw std::logic_error("twins: pin edge out of range");
+    streams_[signal].push((static_cast<uint64_t>(c) << 8) | value);
+    ++size_;
   }
-  // Sorts in place and hands the list over (the recorder is empty afterwards).
-  std::vector<Edge> take_sorted();
-  size_t size() const { return edges_.size(); }
-  void clear() { edges_.clear(); }
-  void reserve(size_t n) { edges_.reserve(n); }
+  // Sorts and hands the list over (the recorder is empty afterwards).
+  std::vector<Edge> take_sorted() {
+    std::vector<Edge> out;
+    out.reserve(size_);
+    struct Head {
+      const uint64_t* p;  // next key of the current chunk
+      const uint64_t* end;
+      size_t chunk;
+    };
+    std::array<Head, kSignals> h{};
+    std::array<int, kSignals> live{};
+    int n_live = 0;
+    for (int s = 0; s < kSignals; ++s) {
+      Stream& st = streams_[static_cast<size_t>(s)];
+      if (st.size == 0) continue;
+      st.sort_if_needed();
+      h[static_cast<size_t>(s)] =
+          Head{st.chunks[0].data(), st.chunks[0].data() + st.chunks[0].size(), 0};
+      live[static_cast<size_t>(n_live++)] = s;
+    }
+    // (cycle, signal, value) order: the stream whose head has the smallest cycle, then signal
+    // (streams are scanned in signal order, ties keep the first), then value (within the stream).
+    while (n_live > 0) {
+      int best = 0;
+      uint64_t best_cycle = *h[static_cast<size_t>(live[0])].p >> 8;
+      for (int i = 1; i < n_live; ++i) {
+        const uint64_t c = *h[static_cast<size_t>(live[static_cast<size_t>(i)])].p >> 8;
+        if (c < best_cycle) {
+          best_cycle = c;
+          best = i;
+        }
+      }
+      const int s = live[static_cast<size_t>(best)];
+      Head& hd = h[static_cast<size_t>(s)];
+      Stream& st = streams_[static_cast<size_t>(s)];
+      // the run of this stream up to the next head's cycle (at least one edge)
+      uint64_t other = ~uint64_t{0};
+      for (int i = 0; i < n_live; ++i)
+        if (i != best) {
+          const int o = live[static_cast<size_t>(i)];
+          const uint64_t c = *h[static_cast<size_t>(o)].p >> 8;
+          // a later signal with the same cycle comes after this stream's edges of that cycle
+          other = std::min(other, o > s ? c + 1 : c);
+        }
+      do {
+        const uint64_t k = *hd.p++;
+        out.push_back(Edge{k >> 8, static_cast<uint8_t>(s), static_cast<uint8_t>(k & 0xff)});
+        if (hd.p == hd.end) {
+          std::vector<uint64_t>().swap(st.chunks[hd.chunk]);
+          if (++hd.chunk == st.chunks.size()) {
+            live[static_cast<size_t>(best)] = live[static_cast<size_t>(--n_live)];
+            // keep the live list in signal order (ties go to the lower signal)
+            std::sort(live.begin(), live.begin() + n_live);
+            break;
+          }
+          hd.p = st.chunks[hd.chunk].data();
+          hd.end = hd.p + st.chunks[hd.chunk].size();
+        }
+      } while ((*hd.p >> 8) < other);
+    }
+    clear();
+    // Back-to-back cutting segments: the laser's fall at R + T and the next rise on the same edge
+    // cancel (the pin stays high). Compacted in place.
+    size_t w = 0;
+    for (size_t i = 0; i < out.size(); ++i) {
+      const Edge e = out[i];
+      if (e.signal == simboard::kLaser && i + 1 < out.size() && out[i + 1].cycle == e.cycle &&
+          out[i + 1].signal == e.signal && out[i + 1].value != e.value) {
+        ++i;
+        continue;
+      }
+      out[w++] = e;
+    }
+    out.resize(w);
+    return out;
+  }
+  size_t size() const { return size_; }
+  void clear() {
+    for (Stream& s : streams_) s = Stream{};
+    size_ = 0;
+  }
 
  private:
-  std::vector<Edge> edges_;
+  static constexpr int kSignals = simboard::kSignalCount;
+  struct Stream {
+    std::vector<std::vector<uint64_t>> chunks;
+    size_t size = 0;
+    uint64_t last = 0;
+    bool sorted = true;
+    void push(uint64_t key) {
+      if (chunks.empty() || chunks.back().size() == chunks.back().capacity()) {
+        const size_t n =
+            chunks.empty() ? 1024 : std::min<size_t>(chunks.back().capacity() * 2, 1 << 22);
+        chunks.emplace_back().reserve(n);
+      }
+      if (size != 0 && key < last) sorted = false;
+      chunks.back().push_back(key);
+      last = key;
+      ++size;
+    }
+    void sort_if_needed() {
+      if (sorted) return;
+      std::vector<uint64_t> all;
+      all.reserve(size);
+      for (auto& c : chunks) {
+        all.insert(all.end(), c.begin(), c.end());
+        std::vector<uint64_t>().swap(c);
+      }
+      std::sort(all.begin(), all.end());
+      chunks.clear();
+      chunks.push_back(std::move(all));
+      sorted = true;
+    }
+  };
+  std::array<Stream, kSignals> streams_{};
+  size_t size_ = 0;
 };
 
 }  // namespace fpgacnc::twins
