@@ -45,6 +45,8 @@ soak: build
 	$(BUILD)/systemc/cosim_heater --seed $(SOAK_SEED) --seeds 20 --seconds 3600
 	$(BUILD)/systemc/arc_twin_rtl --seed $(SOAK_SEED) --arcs 20000
 	FPGACNC_V2_SEGMENTS=10000 $(BUILD)/host/simboard/simboard_v2_system_tests --gtest_filter='*ZeroGap*'
+	FPGACNC_V2_FAULT_SEGMENTS=2000 $(BUILD)/host/simboard/simboard_v2_system_tests --gtest_filter='*LineFaults*'
+	FPGACNC_EXEC_BATCHES=400 $(BUILD)/tb/test_segment_executor --gtest_filter='*RandomSegmentsExactTiming*'
 	$(BUILD)/host/simboard/simboard_tests --gtest_filter='SimBoardCorpus.*'
 	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v1 --config examples/demo-machine.toml
 	$(BUILD)/host/fpgacnc sim $(CORPUS)/Circle_Diamond_Square_Calibration.gcode --model both --protocol v1 --config systemc/cosim/corpus-fast-mill.toml

@@ -3,8 +3,8 @@
 #   BUILD_DIR/tb/bench_core          step timing accuracy, Verilator speed, maximum step rate
 #   BUILD_DIR/tb/bench_protocol      v1 against v2 through the pins: segments/s, bytes, line use
 #   BUILD_DIR/host/host_plan_bench   host planner throughput on the corpus part (if built)
-#   the make demo job (jsdc-laser, demo-machine.toml) split into host planning time and board
-#   simulation time (the stream report's figures)
+#   the make demo job: the whole jsdc-laser job at real feeds on the twin board (host planning and
+#   board simulation time), then its first 100 moves on both boards, compared
 #   the virtual platform on octocat.gcode and part.gcode at their real feeds (wall, max RSS)
 #   a fresh clone's `make demo` and `make test` (BENCH_FRESH=0 skips them)
 set -euo pipefail
@@ -35,17 +35,22 @@ fi
 fpgacnc="$build/host/fpgacnc"
 if [ -x "$fpgacnc" ]; then
   job="$root/examples/jsdc-laser.gcode"
-  cfg="$root/examples/demo-machine.toml"
-  echo "== make demo job: $job"
+  echo "== make demo, step 1: fpgacnc stream examples/jsdc-laser.gcode (real feeds, twin board behind the pty)"
   t0=$(date +%s.%N)
-  "$fpgacnc" plan "$job" --config "$cfg" -q >/dev/null || status=1
+  "$fpgacnc" plan "$job" -q >/dev/null || status=1
   t1=$(date +%s.%N)
-  out=$("$fpgacnc" stream "$job" --config "$cfg" 2>/dev/null) || status=1
+  out=$("$fpgacnc" stream "$job" 2>/dev/null) || status=1
   t2=$(date +%s.%N)
   echo "$out" | grep -E "^(streamed|simulated board)"
   sim=$(echo "$out" | sed -n 's/.*(\([0-9.]*\) s simulating.*/\1/p')
   awk -v p="$t0" -v q="$t1" -v r="$t2" -v s="$sim" 'BEGIN {
     printf "bench: demo job host planning %.3f s, stream wall %.2f s, of which board simulation %.2f s, host and link %.2f s\n", q - p, r - q, s, (r - q) - s }'
+  echo "== make demo, step 2: fpgacnc stream examples/jsdc-laser.gcode --model both --max-moves 100 --config examples/demo-machine.toml"
+  t3=$(date +%s.%N)
+  "$fpgacnc" stream "$job" --model both --max-moves 100 --config "$root/examples/demo-machine.toml" 2>/dev/null | grep -E "^(tlm board|rtl board|rtl vs tlm)" || status=1
+  t4=$(date +%s.%N)
+  awk -v p="$t1" -v q="$t4" -v r="$t3" 'BEGIN {
+    printf "bench: make demo after the build: %.1f s wall for both steps (bar <= 60 s), of which the twin/RTL comparison %.1f s\n", q - p, q - r }'
 fi
 # Virtual platform (SystemC twins, systemc/) against the Verilated RTL on the same job: the first
 # $VP_MOVES moves of the demo job with the same host schedule, simulated clocks per wall second

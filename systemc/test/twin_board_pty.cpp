@@ -1,15 +1,16 @@
 // The twin board behind its pseudo-terminal (label system).
 //
 // Equivalence: the same jobs (v1 packets and v2 sessions of examples/jsdc-laser.gcode, and
-// corpus/cncjs/circle.gcode as native ARC frames, planned and packed by the host) go through the pty into the Verilated SimBoard and into the TwinBoard with
-// the lockstep host (pty_lockstep.h: a batch written when the board is idle for the host, so the
-// time policy makes every start clock deterministic); the edge lists (STEP/DIR/LASER and TX, so
-// every answer bit at its clock), the answer bytes with their start clocks and the bytes the host
-// read must be identical; a difference names the first differing edge or byte and its cycle.
-// The v2 sessions end without STATUS_QUERY: the twins report idle heaters in STATUS, the
-// Verilated board its heater plants. No line faults: the twin board has no fault injector.
-// FPGACNC_TWIN_PTY_MOVES sets the number of v2 motion frames (default 30) and twice the number of
-// v1 moves (the Verilated side is the slow one: about 20 M clocks for both).
+// corpus/cncjs/circle.gcode as native ARC frames, planned and packed by the host) go through the
+// pty into the Verilated SimBoard and into the TwinBoard with the lockstep host (pty_lockstep.h: a
+// batch written when the board is idle for the host, so the time policy makes every start clock
+// deterministic); the edge lists (STEP/DIR/LASER and TX, so every answer bit at its clock), the
+// answer bytes with their start clocks and the bytes the host read must be identical; a difference
+// names the first differing edge or byte and its cycle. The v2 sessions end without STATUS_QUERY:
+// the twins report idle heaters in STATUS, the Verilated board its heater plants. No line faults:
+// the twin board has no fault injector. FPGACNC_TWIN_PTY_MOVES sets the number of v2 motion frames
+// (default 30) and twice the number of v1 moves (the Verilated side is the slow one: about 20 M
+// clocks for both).
 //
 // Corpus: a whole corpus job (jsdc-laser.gcode, about 5 minutes of machine time) at its real feeds
 // through the pty into the twin board with the host's own v2 streamer (protocol selection, sliding

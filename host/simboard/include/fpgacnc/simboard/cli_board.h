@@ -81,7 +81,7 @@ std::unique_ptr<link::Link> make_board_link(std::unique_ptr<Board> board, uint32
 bool report_board_run(link::Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
                       const SimOutputs& outputs);
 
-// Heaters (issue 7): for a link to a Verilated SimBoard, the board's plant clock (plant
+// Heaters: for a link to a Verilated SimBoard, the board's plant clock (plant
 // seconds, SimBoard::plant_seconds) and the board itself; empty / null for any other link
 // (the twin board has no heaters).
 std::function<double()> plant_clock(link::Link& link);
