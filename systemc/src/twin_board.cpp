@@ -1,12 +1,8 @@
 #include "fpgacnc/twins/twin_board.h"
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
-#include <stdlib.h>
-#include <sys/eventfd.h>
 #include <sys/ioctl.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -26,10 +22,6 @@ namespace {
 
 using simboard::BoardError;
 using wall_clock = std::chrono::steady_clock;
-
-[[noreturn]] void sys_fail(const std::string& what) {
-  throw BoardError(fmt::format("twin board: {}: {}", what, std::strerror(errno)));
-}
 
 // The process's SystemC kernel: elaborated once (one VirtualBoard), in a thread of its own; runs
 // the queued sessions one after the other until the process exits.
@@ -152,30 +144,11 @@ TwinBoard::~TwinBoard() {
 }
 
 void TwinBoard::open_pty() {
-  master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
-  if (master_ < 0) sys_fail("posix_openpt");
-  if (::grantpt(master_) != 0) sys_fail("grantpt");
-  if (::unlockpt(master_) != 0) sys_fail("unlockpt");
-  char name[128];
-  if (::ptsname_r(master_, name, sizeof name) != 0) sys_fail("ptsname");
-  path_ = name;
-  // A slave descriptor of our own: no hang-up between clients, raw mode, and FIONREAD tells
-  // how many answer bytes the client has not read yet.
-  slave_ = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
-  if (slave_ < 0) sys_fail(fmt::format("open {}", path_));
-  termios t{};
-  if (::tcgetattr(slave_, &t) != 0) sys_fail("tcgetattr");
-  ::cfmakeraw(&t);
-  ::cfsetispeed(&t, B115200);
-  ::cfsetospeed(&t, B115200);
-  t.c_cflag |= CLOCAL | CREAD;
-  t.c_cc[VMIN] = 1;
-  t.c_cc[VTIME] = 0;
-  if (::tcsetattr(slave_, TCSANOW, &t) != 0) sys_fail("tcsetattr");
-  const int fl = ::fcntl(master_, F_GETFL);
-  if (fl < 0 || ::fcntl(master_, F_SETFL, fl | O_NONBLOCK) != 0) sys_fail("fcntl O_NONBLOCK");
-  wake_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (wake_ < 0) sys_fail("eventfd");
+  const simboard::BoardPty p = simboard::open_board_pty();
+  master_ = p.master;
+  slave_ = p.slave;
+  wake_ = p.wake;
+  path_ = p.path;
 }
 
 void TwinBoard::wake() const {

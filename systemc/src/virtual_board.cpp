@@ -12,19 +12,7 @@ void sort_edges(std::vector<Edge>& edges_) {
     if (a.signal != b.signal) return a.signal < b.signal;
     return a.value < b.value;
   });
-  // Back-to-back cutting segments: the laser's fall at R + T and the next rise on the same edge
-  // cancel (the pin stays high). Compacted in place.
-  size_t w = 0;
-  for (size_t i = 0; i < edges_.size(); ++i) {
-    const Edge e = edges_[i];
-    if (e.signal == simboard::kLaser && i + 1 < edges_.size() && edges_[i + 1].cycle == e.cycle &&
-        edges_[i + 1].signal == e.signal && edges_[i + 1].value != e.value) {
-      ++i;
-      continue;
-    }
-    edges_[w++] = e;
-  }
-  edges_.resize(w);
+  drop_laser_pairs(edges_);
 }
 
 VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bool record_tx)

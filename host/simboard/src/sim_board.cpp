@@ -344,31 +344,39 @@ SimBoard::~SimBoard() {
   if (wake_ >= 0) ::close(wake_);
 }
 
-void SimBoard::open_pty() {
-  master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
-  if (master_ < 0) sys_fail("posix_openpt");
-  if (::grantpt(master_) != 0) sys_fail("grantpt");
-  if (::unlockpt(master_) != 0) sys_fail("unlockpt");
+BoardPty open_board_pty() {
+  BoardPty p;
+  p.master = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (p.master < 0) sys_fail("posix_openpt");
+  if (::grantpt(p.master) != 0) sys_fail("grantpt");
+  if (::unlockpt(p.master) != 0) sys_fail("unlockpt");
   char name[128];
-  if (::ptsname_r(master_, name, sizeof name) != 0) sys_fail("ptsname");
-  path_ = name;
-  // Keep a slave descriptor open so the master never sees a hang-up between clients, and set
-  // raw mode on it (no echo, no line editing, no CR/NL translation: 8-bit clean).
-  slave_ = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
-  if (slave_ < 0) sys_fail(fmt::format("open {}", path_));
+  if (::ptsname_r(p.master, name, sizeof name) != 0) sys_fail("ptsname");
+  p.path = name;
+  p.slave = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (p.slave < 0) sys_fail(fmt::format("open {}", p.path));
   termios t{};
-  if (::tcgetattr(slave_, &t) != 0) sys_fail("tcgetattr");
+  if (::tcgetattr(p.slave, &t) != 0) sys_fail("tcgetattr");
   ::cfmakeraw(&t);
   ::cfsetispeed(&t, B115200);
   ::cfsetospeed(&t, B115200);
   t.c_cflag |= CLOCAL | CREAD;
   t.c_cc[VMIN] = 1;
   t.c_cc[VTIME] = 0;
-  if (::tcsetattr(slave_, TCSANOW, &t) != 0) sys_fail("tcsetattr");
-  const int fl = ::fcntl(master_, F_GETFL);
-  if (fl < 0 || ::fcntl(master_, F_SETFL, fl | O_NONBLOCK) != 0) sys_fail("fcntl O_NONBLOCK");
-  wake_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (wake_ < 0) sys_fail("eventfd");
+  if (::tcsetattr(p.slave, TCSANOW, &t) != 0) sys_fail("tcsetattr");
+  const int fl = ::fcntl(p.master, F_GETFL);
+  if (fl < 0 || ::fcntl(p.master, F_SETFL, fl | O_NONBLOCK) != 0) sys_fail("fcntl O_NONBLOCK");
+  p.wake = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (p.wake < 0) sys_fail("eventfd");
+  return p;
+}
+
+void SimBoard::open_pty() {
+  const BoardPty p = open_board_pty();
+  master_ = p.master;
+  slave_ = p.slave;
+  wake_ = p.wake;
+  path_ = p.path;
 }
 
 void SimBoard::reset_and_configure() {

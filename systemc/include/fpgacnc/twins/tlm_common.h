@@ -182,6 +182,23 @@ T& payload(tlm::tlm_generic_payload& gp) {
 // merges the streams into the result and frees each chunk once it is merged, so the peak is the
 // result plus a chunk per signal. Each signal's edges mostly arrive in time order; a stream that
 // does not is sorted before the merge.
+
+// Back-to-back cutting segments: in edges sorted by (cycle, signal, value), a laser fall at R + T
+// and the next segment's rise on the same edge cancel (the pin stays high). Compacted in place.
+inline void drop_laser_pairs(std::vector<Edge>& edges) {
+  size_t w = 0;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    const Edge e = edges[i];
+    if (e.signal == simboard::kLaser && i + 1 < edges.size() && edges[i + 1].cycle == e.cycle &&
+        edges[i + 1].signal == e.signal && edges[i + 1].value != e.value) {
+      ++i;
+      continue;
+    }
+    edges[w++] = e;
+  }
+  edges.resize(w);
+}
+
 class PinRecorder {
  public:
   bool record_tx = false;
@@ -253,19 +270,7 @@ class PinRecorder {
       } while ((*hd.p >> 8) < other);
     }
     clear();
-    // Back-to-back cutting segments: the laser's fall at R + T and the next rise on the same edge
-    // cancel (the pin stays high). Compacted in place.
-    size_t w = 0;
-    for (size_t i = 0; i < out.size(); ++i) {
-      const Edge e = out[i];
-      if (e.signal == simboard::kLaser && i + 1 < out.size() && out[i + 1].cycle == e.cycle &&
-          out[i + 1].signal == e.signal && out[i + 1].value != e.value) {
-        ++i;
-        continue;
-      }
-      out[w++] = e;
-    }
-    out.resize(w);
+    drop_laser_pairs(out);
     return out;
   }
   size_t size() const { return size_; }

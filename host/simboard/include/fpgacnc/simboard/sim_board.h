@@ -127,6 +127,17 @@ struct BoardStats {
   LineFaultStats line;                         // injected line faults (all 0 when off)
 };
 
+// The pseudo-terminal of a simulated board: the master side (non-blocking) that the board reads
+// and writes, a slave descriptor of the board's own in raw mode at 115200 (8-bit clean; the
+// master never sees a hang-up between clients, and FIONREAD on it tells how many answer bytes
+// the client has not read yet), its path (/dev/pts/N), and an eventfd that wakes the board's
+// poll() for stop or pause. Throws BoardError naming the call that failed.
+struct BoardPty {
+  int master = -1, slave = -1, wake = -1;
+  std::string path;
+};
+BoardPty open_board_pty();
+
 // A simulated board behind a pseudo-terminal, whatever model runs behind it: SimBoard (the
 // Verilated cnc_core) or twins::TwinBoard (the SystemC twins, systemc/). Both serve the same
 // pty protocol with the same time policy (see SimBoard above) and record the same edges.
