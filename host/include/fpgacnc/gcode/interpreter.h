@@ -13,15 +13,9 @@
 #include <variant>
 #include <vector>
 
-#include "fpgacnc/error.h"
+#include "fpgacnc/gcode/interpreter_error.h"
 
 namespace fpgacnc::gcode {
-
-// what(): "FILE:LINE:COL: error: MESSAGE", column of the offending word (1-based).
-class Error : public SourceError {
- public:
-  using SourceError::SourceError;
-};
 
 using Vec4 = std::array<double, 4>;  // X Y Z E in mm, machine coordinates
 
