@@ -2,11 +2,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <fstream>
+#include <iterator>
+#include <map>
 #include <sstream>
+
+#include "fpgacnc/gcode/reader.h"
+#include "fpgacnc/gcode/tool_table.h"
 
 namespace fpgacnc {
 
@@ -26,538 +31,1190 @@ namespace fpgacnc::gcode {
 namespace {
 
 constexpr double kMaxValue = 1e6;  // |value| limit for every word (mm, mm/min, s)
-constexpr int kMaxWords = 64;
+constexpr int kCoordSystems = 9;   // G54 .. G59.3
+constexpr double kInch = 25.4;
 
-struct Word {
-  char letter = 0;
-  double value = 0.0;
-  int col = 0;
-  bool integer = true;  // no '.' in the number
-};
+// G and M codes are compared as ten times their value (G91.1 -> 911).
+int code10(const Word& w) { return static_cast<int>(std::lround(w.value * 10.0)); }
 
-struct LineWords {
-  std::array<Word, kMaxWords> words;
-  int count = 0;
-};
-
-bool is_space(char c) {
-  return c == ' ' || c == '\t' || c == '\r';
+bool is_code10_exact(const Word& w) {
+  return std::fabs(w.value * 10.0 - std::round(w.value * 10.0)) < 1e-6;
 }
-bool is_digit(char c) {
-  return c >= '0' && c <= '9';
+
+std::string gname(int c10) {
+  return c10 % 10 ? fmt::format("G{}.{}", c10 / 10, c10 % 10) : fmt::format("G{}", c10 / 10);
+}
+
+// Motion modes: the four moves and the canned cycles (G-code times ten; 800 = G80, none).
+constexpr int kCycleNone = 800;
+bool is_cycle(int m) { return m == 730 || (m >= 810 && m <= 890); }
+
+// Modal groups of G codes (rs274ngc table), for "two codes of one group" errors.
+int g_group(int c10) {
+  switch (c10) {
+    case 0: case 10: case 20: case 30: case 380: case 382: case 383: case 384: case 385:
+    case 730: case 800: case 810: case 820: case 830: case 840: case 850: case 860: case 870:
+    case 880: case 890: case 330: case 50: case 51: case 52:
+      return 1;
+    case 170: case 180: case 190:
+      return 2;
+    case 900: case 910:
+      return 3;
+    case 901: case 911:
+      return 4;
+    case 930: case 940: case 950:
+      return 5;
+    case 200: case 210:
+      return 6;
+    case 400: case 410: case 420:
+      return 7;
+    case 430: case 431: case 432: case 490:
+      return 8;
+    case 980: case 990:
+      return 10;
+    case 540: case 550: case 560: case 570: case 580: case 590: case 591: case 592: case 593:
+      return 12;
+    case 610: case 611: case 640:
+      return 13;
+    case 40: case 100: case 280: case 281: case 300: case 301: case 530: case 920: case 921:
+    case 922: case 923:
+      return 0;
+    default:
+      return -1;
+  }
+}
+
+// Known M codes that change nothing here, per dialect family; each is a warning once.
+struct Ignored {
+  int code;
+  const char* what;
+};
+constexpr Ignored kPrinterIgnored[] = {
+    {17, "M17 (motors on)"},
+    {105, "M105 (report temperatures)"},
+    {108, "M108 (break and continue)"},
+    {110, "M110 (set line number)"},
+    {113, "M113 (host keepalive)"},
+    {114, "M114 (report position)"},
+    {115, "M115 (firmware info)"},
+    {119, "M119 (endstop states)"},
+    {141, "M141 (chamber temperature: no chamber heater)"},
+    {191, "M191 (wait for chamber temperature: no chamber heater)"},
+    {155, "M155 (temperature auto-report)"},
+    {280, "M280 (servo)"},
+    {300, "M300 (beep)"},
+    {420, "M420 (bed levelling state)"},
+    {486, "M486 (object cancel labels)"},
+    {500, "M500 (save settings)"},
+    {501, "M501 (restore settings)"},
+    {502, "M502 (factory settings)"},
+    {503, "M503 (report settings)"},
+    {851, "M851 (probe offset)"},
+    {900, "M900 (linear advance)"},
+    {103, "M103 (extruder off, old RepRap)"},
+    {101, "M101 (extruder on, old RepRap)"},
+};
+
+const char* printer_ignored(int code) {
+  for (const auto& i : kPrinterIgnored)
+    if (i.code == code) return i.what;
+  return nullptr;
 }
 
 }  // namespace
 
-Interpreter::Interpreter(std::string file_name, Options options)
-    : file_(std::move(file_name)), opt_(options), feed_(options.default_feed_mm_min) {}
+struct Interpreter::Impl {
+  std::string file;
+  Options opt;
+  const DialectRules* rules;
+  Params* params;
+  Stats stats;
+  ToolTable tools;
 
-void Interpreter::parse_line(std::string_view text, int line_number, std::vector<Command>& out) {
-  ++stats_.lines;
-  auto fail = [&](int col, const std::string& msg) -> Error {
-    return Error(file_, line_number, col, msg);
+  Vec4 pos{};  // machine mm (E: the extruder's real position, after M221)
+  double e_prog = 0.0;  // E as programmed (machine frame, before M221 flow)
+  std::array<Vec4, kCoordSystems> g5x{};
+  int cs = 0;  // 0 = G54
+  Vec4 g92{};
+  Vec4 tlo{};  // tool length offset
+  double unit = 1.0;
+  bool absolute = true;
+  bool arc_absolute = false;  // G90.1
+  bool e_absolute = true;     // M82
+  int motion = -1;            // G code times ten; -1: none yet
+  Plane plane = Plane::kXY;
+  bool inverse_time = false;  // G93
+  double feed;                // mm/min as programmed
+  double feed_factor = 1.0;   // M220
+  double flow = 1.0;          // M221
+  bool spindle_on = false;
+  std::optional<double> spindle_s;
+  int tool = 0;
+  int next_tool = 0;
+  bool exact_stop = false;
+  double tolerance = 0.0;
+  bool retract_to_r = false;  // G99 (else G98)
+  double cycle_z = 0.0, cycle_r = 0.0, cycle_p = 0.0, cycle_q = 0.0;
+  bool cycle_z_set = false, cycle_r_set = false;
+  Vec4 g28_home{}, g30_home{};
+  double retract_mm, retract_feed, retract_zlift, recover_extra, recover_feed;
+  bool retracted = false;
+  bool produced = false;
+  std::map<std::string, size_t> warning_index;
+
+  Impl(std::string f, Options o, const DialectChoice& d, Params& p)
+      : file(std::move(f)),
+        opt(std::move(o)),
+        rules(&dialect_rules(d.dialect)),
+        params(&p),
+        feed(opt.default_feed_mm_min),
+        retract_mm(opt.retract_mm),
+        retract_feed(opt.retract_feed_mm_min),
+        retract_zlift(opt.retract_zlift_mm),
+        recover_extra(opt.recover_extra_mm),
+        recover_feed(opt.recover_feed_mm_min) {
+    stats.dialect = rules->name;
+    stats.dialect_reason = d.reason;
+    stats.generator = d.generator;
+    if (!opt.tool_table.empty()) tools = load_tool_table(opt.tool_table);
+    write_params();
+  }
+
+  void warn(const std::string& what, int line) {
+    auto [it, fresh] = warning_index.try_emplace(what, stats.warnings.size());
+    if (fresh) stats.warnings.push_back(Warning{what, line, 0});
+    ++stats.warnings[it->second].count;
+  }
+
+  // machine = program + offset(a) on X Y Z.
+  double offset(int a) const {
+    const auto i = static_cast<size_t>(a);
+    return g5x[static_cast<size_t>(cs)][i] + g92[i] + tlo[i];
+  }
+
+  // rs274ngc system parameters (LinuxCNC numbering) that programs read, in program units.
+  void write_params() {
+    Params& p = *params;
+    for (int a = 0; a < 3; ++a) {
+      const auto i = static_cast<size_t>(a);
+      p.set(5420 + a, (pos[i] - offset(a)) / unit);
+      p.set(5211 + a, g92[i] / unit);
+      p.set(5161 + a, g28_home[i] / unit);
+      p.set(5181 + a, g30_home[i] / unit);
+    }
+    p.set(5210, std::any_of(g92.begin(), g92.begin() + 3, [](double v) { return v != 0.0; }));
+    p.set(5220, cs + 1);
+    for (int s = 0; s < kCoordSystems; ++s)
+      for (int a = 0; a < 3; ++a)
+        p.set(5221 + 20 * s + a, g5x[static_cast<size_t>(s)][static_cast<size_t>(a)] / unit);
+    p.set(5400, tool);
+    p.set(5403, tlo[2] / unit);
+  }
+  void write_position() {
+    for (int a = 0; a < 3; ++a)
+      params->set(5420 + a, (pos[static_cast<size_t>(a)] - offset(a)) / unit);
+  }
+
+  Error fail(const Block& b, int col, const std::string& msg) const {
+    return Error(file, b.line, col, msg);
+  }
+
+  Move make_move(Motion m, const Vec4& end, int line, double feed_mm_min) const {
+    Move mv;
+    mv.motion = m;
+    mv.start = pos;
+    mv.end = end;
+    mv.feed_mm_min = feed_mm_min;
+    mv.spindle_on = spindle_on;
+    mv.spindle_s = spindle_s;
+    mv.exact_stop = exact_stop;
+    mv.path_tolerance_mm = tolerance;
+    mv.plane = plane;
+    mv.line = line;
+    return mv;
+  }
+  void push(std::vector<Command>& out, const Move& mv) {
+    pos = mv.end;
+    out.emplace_back(mv);
+    ++stats.moves;
+    produced = true;
+  }
+  void line_to(std::vector<Command>& out, Motion m, const Vec4& end, int line,
+               double feed_mm_min = -1.0) {
+    push(out, make_move(m, end, line, feed_mm_min > 0 ? feed_mm_min : feed * feed_factor));
+  }
+
+  bool execute(const Block& b, std::vector<Command>& out);
+  void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3],
+                    std::vector<Command>& out, int repeats, const Word* first_col);
+};
+
+namespace {
+
+// The words of one block, by letter; G and M codes by modal group.
+struct BlockWords {
+  const Word* letter[26] = {};
+  const Word* g[16] = {};  // index: modal group + 1
+  int mcodes[16] = {};
+  const Word* mwords[16] = {};
+  int mcount = 0;
+  const Word* get(char l) const { return letter[l - 'A']; }
+  const Word* m(int code) const {
+    for (int i = 0; i < mcount; ++i)
+      if (mcodes[i] == code) return mwords[i];
+    return nullptr;
+  }
+};
+
+constexpr char kAxisNames[4] = {'X', 'Y', 'Z', 'E'};
+
+}  // namespace
+
+bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
+  ++stats.lines;
+  if (b.block_delete && opt.block_delete) return true;
+  if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
+  if (b.kind == BlockKind::kSystem) {
+    const std::string& t = b.text;
+    if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
+      throw fail(b, b.text_col,
+                 "'$H' homing cycle: this controller has no homing yet; home the machine before "
+                 "the job and remove the line");
+    if (t.size() >= 2 && (t[1] == 'J' || t[1] == 'j'))
+      throw fail(b, b.text_col, "'$J=' jogging is not a job command");
+    warn(fmt::format("grbl system line '{}' ignored", t), b.line);
+    return true;
+  }
+
+  // Classify.
+  BlockWords w;
+  for (int i = 0; i < b.count; ++i) {
+    const Word& wd = b.words[static_cast<size_t>(i)];
+    const char l = wd.letter;
+    if (l == 'G') {
+      if (!is_code10_exact(wd) || wd.value < 0 || wd.value >= 1000)
+        throw fail(b, wd.col, fmt::format("G{} is not a G code", wd.value));
+      const int c = code10(wd);
+      const int grp = g_group(c);
+      if (grp < 0) {
+        std::string why = "not supported";
+        if (c == 410 || c == 420)
+          why = "cutter radius compensation is not supported (let the CAM program offset the path)";
+        else if (c == 330 || c == 331 || c == 760 || c == 950)
+          why = "needs a spindle encoder, which this machine does not have";
+        else if (c == 70 || c == 80)
+          why = "lathe diameter/radius mode is not supported";
+        else if (c == 520)
+          why = "G52 local offsets are not supported (use G92 or G10 L2)";
+        else if (c == 50 || c == 51 || c == 52 || c == 53)
+          why = "splines are not supported";
+        else if (c == 290 || c == 291 || c == 292 || c == 293)
+          why = "bed levelling needs a probe (not on this machine yet)";
+        throw fail(b, wd.col, fmt::format("{}: {}", gname(c), why));
+      }
+      if (w.g[grp + 1])
+        throw fail(b, wd.col,
+                   fmt::format("{} and {} on one line are in the same modal group",
+                               gname(code10(*w.g[grp + 1])), gname(c)));
+      w.g[grp + 1] = &wd;
+      continue;
+    }
+    if (l == 'M') {
+      if (!wd.integer && !(rules->dialect != Dialect::kLinuxCnc && is_code10_exact(wd)))
+        throw fail(b, wd.col, "M codes are integers");
+      const int c = static_cast<int>(std::floor(wd.value));
+      if (c < 0 || c > 9999) throw fail(b, wd.col, fmt::format("M{} out of range", wd.value));
+      auto group = [](int m) {
+        return (m == 0 || m == 1 || m == 2 || m == 30 || m == 60) ? 1
+               : (m >= 3 && m <= 5)                               ? 2
+               : m == 6                                           ? 3
+                                                                  : 0;
+      };
+      for (int k = 0; k < w.mcount; ++k)
+        if (group(c) && group(w.mcodes[k]) == group(c))
+          throw fail(b, wd.col,
+                     fmt::format("M{} and M{} on one line are in the same modal group", w.mcodes[k], c));
+      if (w.mcount == 16) throw fail(b, wd.col, "too many M codes on one line");
+      w.mcodes[w.mcount] = c;
+      w.mwords[w.mcount++] = &wd;
+      continue;
+    }
+    if (l == 'A' || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W') {
+      // Marlin's M-codes take some of these as parameters; the used-word check catches the rest.
+      bool m_param = rules->unknown_m_warns && w.mcount > 0;
+      if (!m_param)
+        throw fail(b, wd.col, fmt::format("no {} axis on this machine (its axes are X Y Z E)", l));
+    }
+    if (l == 'N') {
+      if (!wd.integer || wd.value < 0) throw fail(b, wd.col, "N must be a non-negative integer");
+      continue;
+    }
+    if (w.letter[l - 'A']) throw fail(b, wd.col, fmt::format("two '{}' words on one line", l));
+    if (std::fabs(wd.value) > kMaxValue)
+      throw fail(b, wd.col, fmt::format("value of '{}' out of range (|value| > 1e6)", l));
+    w.letter[l - 'A'] = &wd;
+  }
+  auto gw = [&](int grp) { return w.g[grp + 1]; };
+  bool used[26] = {};
+  auto word = [&](char l) {
+    used[l - 'A'] = true;
+    return w.get(l);
   };
-
-  // 1. Non-printable bytes (binary garbage), and locate a checksum '*' outside comments.
-  size_t star = std::string_view::npos;
-  {
-    bool in_paren = false, in_semi = false;
-    for (size_t i = 0; i < text.size(); ++i) {
-      const auto c = static_cast<unsigned char>(text[i]);
-      if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7F) {
-        throw fail(static_cast<int>(i) + 1, fmt::format("non-printable byte 0x{:02X}", c));
-      }
-      if (c >= 0x80 && !in_paren && !in_semi) {
-        throw fail(static_cast<int>(i) + 1, fmt::format("non-ASCII byte 0x{:02X}", c));
-      }
-      if (in_semi) continue;
-      if (in_paren) {
-        if (c == ')') in_paren = false;
-        continue;
-      }
-      if (c == '(') in_paren = true;
-      if (c == ';') in_semi = true;
-      if (c == '*' && star == std::string_view::npos) star = i;
-    }
-  }
-  if (star != std::string_view::npos) {
-    unsigned x = 0;
-    for (size_t i = 0; i < star; ++i) x ^= static_cast<unsigned char>(text[i]);
-    size_t i = star + 1;
-    unsigned given = 0;
-    size_t digits = 0;
-    while (i < text.size() && is_digit(text[i]) && digits < 4) {
-      given = given * 10 + static_cast<unsigned>(text[i] - '0');
-      ++i;
-      ++digits;
-    }
-    size_t rest = i;
-    while (rest < text.size() && is_space(text[rest])) ++rest;
-    if (digits == 0 || given > 255 || (rest < text.size() && text[rest] != ';')) {
-      throw fail(static_cast<int>(star) + 1, "malformed checksum (expected *0..255)");
-    }
-    if (given != x) {
-      throw fail(static_cast<int>(star) + 1,
-                 fmt::format("checksum mismatch: line says {}, computed {}", given, x));
-    }
-    text = text.substr(0, star);
-  }
-
-  // 2. '%' program delimiter lines.
-  {
-    size_t a = 0, b = text.size();
-    while (a < b && is_space(text[a])) ++a;
-    while (b > a && is_space(text[b - 1])) --b;
-    if (b - a == 1 && text[a] == '%') return;
-  }
-
-  // 3. Tokenize into words.
-  LineWords lw;
-  size_t i = 0;
-  while (i < text.size()) {
-    const char c = text[i];
-    if (is_space(c)) {
-      ++i;
-      continue;
-    }
-    if (c == ';') break;
-    if (c == '(') {
-      const size_t close = text.find(')', i);
-      if (close == std::string_view::npos) {
-        throw fail(static_cast<int>(i) + 1, "unterminated comment '('");
-      }
-      i = close + 1;
-      continue;
-    }
-    const int col = static_cast<int>(i) + 1;
-    char letter = c;
-    if (letter >= 'a' && letter <= 'z') letter = static_cast<char>(letter - 'a' + 'A');
-    if (letter < 'A' || letter > 'Z') {
-      throw fail(col, fmt::format("unexpected character '{}'", c));
-    }
-    ++i;
-    while (i < text.size() && is_space(text[i])) ++i;
-    bool neg = false;
-    if (i < text.size() && (text[i] == '+' || text[i] == '-')) {
-      neg = text[i] == '-';
-      ++i;
-    }
-    const size_t num_start = i;
-    size_t ndig = 0;
-    bool dot = false;
-    while (i < text.size() && (is_digit(text[i]) || (text[i] == '.' && !dot))) {
-      if (text[i] == '.') {
-        dot = true;
-      } else {
-        ++ndig;
-      }
-      ++i;
-    }
-    if (ndig == 0) {
-      throw fail(col, fmt::format("expected a number after '{}'", letter));
-    }
-    if (i < text.size() && (text[i] == '.' || text[i] == '+' || text[i] == '-')) {
-      throw fail(static_cast<int>(i) + 1, fmt::format("garbage in the number of '{}'", letter));
-    }
-    double v = 0.0;
-    const char* first = text.data() + num_start;
-    const char* last = text.data() + i;
-    if (*first == '.') {
-      // from_chars accepts ".5"; keep it explicit for clarity.
-    }
-    auto res = std::from_chars(first, last, v);
-    if (res.ec != std::errc() || res.ptr != last || !std::isfinite(v)) {
-      throw fail(col, fmt::format("invalid number for '{}'", letter));
-    }
-    if (neg) v = -v;
-    if (lw.count == kMaxWords) throw fail(col, "too many words on one line");
-    lw.words[static_cast<size_t>(lw.count++)] = Word{letter, v, col, !dot};
-  }
-  if (lw.count == 0) return;
-
-  // 4. Classify words.
-  const Word* letters[26] = {};
-  const Word* motion_word = nullptr;
-  const Word* nonmodal_word = nullptr;  // G4 / G28 / G92
-  std::optional<Motion> new_motion;
-  int nonmodal = 0;
-  std::optional<double> new_unit;
-  std::optional<bool> new_absolute;
-  int heater_m = 0;
-  const Word* heater_word = nullptr;
-  std::optional<bool> spindle;
-  std::optional<bool> e_abs;
-
-  for (int w = 0; w < lw.count; ++w) {
-    const Word& wd = lw.words[static_cast<size_t>(w)];
-    if (wd.letter == 'G' || wd.letter == 'M') {
-      if (!wd.integer || wd.value < 0 || wd.value > 1000) {
-        throw fail(wd.col, fmt::format("only integer {} codes are accepted", wd.letter));
-      }
-      const int code = static_cast<int>(wd.value);
-      if (wd.letter == 'G') {
-        switch (code) {
-          case 0:
-          case 1:
-          case 2:
-          case 3:
-            if (motion_word) throw fail(wd.col, "two motion G codes on one line");
-            motion_word = &wd;
-            new_motion = static_cast<Motion>(code);
-            break;
-          case 4:
-          case 28:
-          case 92:
-            if (nonmodal_word) throw fail(wd.col, "two of G4/G28/G92 on one line");
-            nonmodal_word = &wd;
-            nonmodal = code;
-            break;
-          case 17:
-          case 54:  // the only coordinate system
-          case 94:  // units per minute feed mode (the only one)
-            break;
-          case 18:
-          case 19:
-            throw fail(wd.col, fmt::format("G{} not supported: only the XY plane (G17)", code));
-          case 20:
-            new_unit = 25.4;
-            break;
-          case 21:
-            new_unit = 1.0;
-            break;
-          case 90:
-            new_absolute = true;
-            break;
-          case 91:
-            new_absolute = false;
-            break;
-          default:
-            throw fail(wd.col, fmt::format("unsupported G code G{}", code));
-        }
-      } else {
-        switch (code) {
-          case 3:
-          case 4:
-            spindle = true;
-            break;
-          case 5:
-            spindle = false;
-            break;
-          case 82:
-            e_abs = true;
-            break;
-          case 83:
-            e_abs = false;
-            break;
-          case 2:   // program end
-          case 30:  // program end
-          case 84:  // motors off
-            break;
-          case 104:
-          case 109:
-          case 140:
-          case 190:
-            if (heater_word) throw fail(wd.col, "two heater M codes on one line");
-            heater_word = &wd;
-            heater_m = code;
-            break;
-          default:
-            throw fail(wd.col, fmt::format("unsupported M code M{}", code));
-        }
-      }
-      continue;
-    }
-    switch (wd.letter) {
-      case 'N':
-        if (!wd.integer || wd.value < 0) throw fail(wd.col, "N must be a non-negative integer");
-        break;
-      case 'X':
-      case 'Y':
-      case 'Z':
-      case 'E':
-      case 'I':
-      case 'J':
-      case 'R':
-      case 'F':
-      case 'S':
-      case 'P':
-        break;
-      case 'K':
-        throw fail(wd.col, "K not supported: only the XY plane (G17)");
-      default:
-        throw fail(wd.col, fmt::format("unsupported word '{}'", wd.letter));
-    }
-    const int idx = wd.letter - 'A';
-    if (letters[idx]) {
-      throw fail(wd.col, fmt::format("two '{}' words on one line", wd.letter));
-    }
-    if (wd.letter != 'N' && std::fabs(wd.value) > kMaxValue) {
-      throw fail(wd.col, fmt::format("value of '{}' out of range (|value| > 1e6)", wd.letter));
-    }
-    letters[idx] = &wd;
-  }
-  auto word = [&](char l) { return letters[l - 'A']; };
-
-  // 5. Execute in RS274/NGC order: F, S, M3/4/5, heaters, dwell, units, distance, G28/G92,
-  // motion.
-  if (new_unit) unit_ = *new_unit;
-  auto to_mm = [&](const Word* w) {
-    const double v = w->value * unit_;
-    if (std::fabs(v) > kMaxValue) {
-      throw fail(w->col, fmt::format("value of '{}' out of range (|value| > 1e6 mm)", w->letter));
-    }
+  auto to_mm = [&](const Word* wd) {
+    const double v = wd->value * unit;
+    if (std::fabs(v) > kMaxValue)
+      throw fail(b, wd->col,
+                 fmt::format("value of '{}' out of range (|value| > 1e6 mm)", wd->letter));
     return v;
   };
-  bool did_command = false;
-  if (const Word* f = word('F')) {
-    if (f->value < 0) throw fail(f->col, "negative feed");
-    feed_ = to_mm(f);
-  }
-  if (const Word* s = word('S')) {
-    if (s->value < 0) throw fail(s->col, "negative S value");
-    if (!heater_word) spindle_s_ = s->value;
-  }
-  if (spindle) {
-    spindle_on_ = *spindle;
-    did_command = true;
-  }
-  if (e_abs) e_absolute_ = *e_abs;
-  if (heater_word) {
-    Heater h;
-    h.mcode = heater_m;
-    if (const Word* s = word('S')) h.s = s->value;
-    h.line = line_number;
-    out.emplace_back(h);
-    did_command = true;
-  }
-  if (const Word* p = word('P'); p && nonmodal != 4) {
-    throw fail(p->col, "P word without G4");
-  }
-  if (new_absolute) absolute_ = *new_absolute;
+  bool did = false;
 
-  const bool has_axis = word('X') || word('Y') || word('Z') || word('E');
-  auto target_of = [&](const Vec4& from) {
-    Vec4 t = from;
-    static constexpr char names[4] = {'X', 'Y', 'Z', 'E'};
-    for (int a = 0; a < 4; ++a) {
-      const Word* w = word(names[a]);
-      if (!w) continue;
-      const double v = to_mm(w);
-      const bool rel = !absolute_ || (a == 3 && !e_absolute_);
-      t[static_cast<size_t>(a)] =
-          rel ? from[static_cast<size_t>(a)] + v : v + offset_[static_cast<size_t>(a)];
-      if (std::fabs(t[static_cast<size_t>(a)]) > 1e9) {
-        throw fail(w->col, "position out of range");
+  // rs274ngc order of execution.
+  // 1. Messages.
+  if (b.message_kind == MessageKind::kMsg)
+    out.emplace_back(Message{Message::Kind::kDisplay, b.text, -1.0, b.line});
+  else if (b.message_kind == MessageKind::kDebug || b.message_kind == MessageKind::kPrint)
+    out.emplace_back(Message{Message::Kind::kDebug, b.text, -1.0, b.line});
+  // 2. Feed mode and units (F and all lengths are read in them).
+  if (const Word* g = gw(5)) {
+    if (code10(*g) == 950)
+      throw fail(b, g->col, "G95 feed per revolution needs a spindle encoder, which this machine does not have");
+    inverse_time = code10(*g) == 930;
+  }
+  if (const Word* g = gw(6)) unit = code10(*g) == 200 ? kInch : 1.0;
+  // 3. F.
+  const bool s_for_m = w.m(104) || w.m(109) || w.m(140) || w.m(190) || w.m(106) || w.m(220) ||
+                       w.m(221) || w.m(207) || w.m(208) || w.m(204) || w.m(205) || w.m(141) ||
+                       w.m(191) || w.m(73) || (gw(0) && code10(*gw(0)) == 40) ||
+                       (gw(0) && code10(*gw(0)) == 100);
+  const bool f_for_m = w.m(207) || w.m(208);
+  if (const Word* f = w.get('F'); f && !f_for_m) {
+    word('F');
+    if (f->value < 0) throw fail(b, f->col, "negative feed");
+    if (!inverse_time) feed = to_mm(f);
+  }
+  // 4. S.
+  if (const Word* s = w.get('S'); s && !s_for_m) {
+    word('S');
+    if (s->value < 0) throw fail(b, s->col, "negative S value");
+    spindle_s = s->value;
+  }
+  // 5. T.
+  if (const Word* t = word('T')) {
+    if (!t->integer || t->value < 0) throw fail(b, t->col, "T must be a non-negative integer");
+    if (rules->t_selects_extruder) {
+      if (t->value != 0 && !w.m(104) && !w.m(109))
+        throw fail(b, t->col, fmt::format("T{}: this machine has one extruder (T0)",
+                                          static_cast<int>(t->value)));
+    } else {
+      next_tool = static_cast<int>(t->value);
+    }
+    did = true;
+  }
+  // 6. M6.
+  if (w.m(6)) {
+    if (!rules->t_selects_extruder) {
+      ++stats.tool_changes;
+      if (opt.tool_change_pause && next_tool != tool) {
+        Pause p;
+        p.reason = Pause::Reason::kToolChange;
+        p.tool = next_tool;
+        const ToolEntry* e = tools.find(next_tool);
+        p.prompt = fmt::format("insert tool T{}{}", next_tool,
+                               e && !e->comment.empty() ? fmt::format(" ({})", e->comment) : "");
+        p.line = b.line;
+        out.emplace_back(p);
+        ++stats.pauses;
       }
+      tool = next_tool;
+    }
+    did = true;
+  }
+  // 7. Spindle.
+  for (int k = 0; k < w.mcount; ++k)
+    if (w.mcodes[k] >= 3 && w.mcodes[k] <= 5) {
+      spindle_on = w.mcodes[k] != 5;
+      did = true;
+    }
+  // 8. The other M codes, in the order written.
+  for (int k = 0; k < w.mcount; ++k) {
+    const int c = w.mcodes[k];
+    const Word& mw = *w.mwords[k];
+    auto output = [&](Output::Kind kind, int index, double value, bool immediate) {
+      out.emplace_back(Output{kind, index, value, immediate, b.line});
+      ++stats.outputs;
+      did = true;
+    };
+    switch (c) {
+      case 0: case 1: case 2: case 30: case 3: case 4: case 5: case 6:
+        break;  // in their own step
+      case 60:
+        throw fail(b, mw.col, "M60 pallet change: this machine has no pallet changer");
+      case 7: output(Output::Kind::kMist, 0, 1.0, false); break;
+      case 8: output(Output::Kind::kFlood, 0, 1.0, false); break;
+      case 9:
+        output(Output::Kind::kMist, 0, 0.0, false);
+        output(Output::Kind::kFlood, 0, 0.0, false);
+        break;
+      case 48: case 49: case 50: case 51: case 52: case 53:
+        word('P');
+        warn(fmt::format("M{} (override switches) ignored", c), b.line);
+        break;
+      case 62: case 63: case 64: case 65: {
+        const Word* p = word('P');
+        if (!p) throw fail(b, mw.col, fmt::format("M{} needs P (output number)", c));
+        if (!p->integer || p->value < 0 || p->value > 3)
+          throw fail(b, p->col, "digital output number P must be 0..3 (four outputs)");
+        output(Output::Kind::kDigital, static_cast<int>(p->value),
+               (c == 62 || c == 64) ? 1.0 : 0.0, c >= 64);
+        break;
+      }
+      case 66: throw fail(b, mw.col, "M66 wait on input: this machine has no inputs for it");
+      case 67: case 68:
+        throw fail(b, mw.col, fmt::format("M{} analog output: this machine has none", c));
+      case 82: e_absolute = true; did = true; break;
+      case 83: e_absolute = false; did = true; break;
+      case 18: case 84:
+        for (char l : {'X', 'Y', 'Z', 'E', 'S'}) word(l);
+        did = true;
+        break;
+      case 104: case 109: case 140: case 190: {
+        Heater h;
+        h.mcode = c;
+        if (const Word* s = word('S')) h.s = s->value;
+        if (const Word* r = word('R'); r && !h.s) h.s = r->value;
+        for (char l : {'T', 'B', 'F', 'D', 'I', 'P'}) word(l);
+        h.line = b.line;
+        out.emplace_back(h);
+        did = true;
+        produced = true;
+        break;
+      }
+      case 106: case 107: {
+        double duty = 0.0;
+        if (c == 106) {
+          const Word* s = word('S');
+          duty = s ? std::clamp(s->value / 255.0, 0.0, 1.0) : 1.0;
+        }
+        if (const Word* p = word('P'); p && p->value != 0)
+          throw fail(b, p->col, "this machine has one part-cooling fan (P0)");
+        output(Output::Kind::kFan, 0, duty, false);
+        break;
+      }
+      case 73: {
+        const Word* p = word('P');
+        for (char l : {'R', 'Q', 'S', 'C', 'D'}) word(l);
+        if (p) out.emplace_back(Message{Message::Kind::kProgress, "", p->value, b.line});
+        did = true;
+        break;
+      }
+      case 117: case 118:
+        for (char l = 'A'; l <= 'Z'; ++l) word(l);
+        out.emplace_back(Message{c == 117 ? Message::Kind::kDisplay : Message::Kind::kEcho,
+                                 b.text, -1.0, b.line});
+        did = true;
+        break;
+      case 400:
+        for (char l = 'A'; l <= 'Z'; ++l) word(l);
+        did = true;
+        break;  // wait for the moves: a streamed job is in order anyway
+      case 201: case 203: case 204: case 205: {
+        Limits lim;
+        lim.line = b.line;
+        for (int a = 0; a < 4; ++a) {
+          const Word* aw = word(kAxisNames[a]);
+          if (!aw || aw->value <= 0) continue;
+          const auto i = static_cast<size_t>(a);
+          if (c == 201) lim.accel_mm_s2[i] = aw->value * unit;
+          // Marlin's M203 is in units per second; RepRapFirmware's in units per minute.
+          if (c == 203)
+            lim.max_feed_mm_min[i] =
+                aw->value * unit * (rules->dialect == Dialect::kMarlin ? 60.0 : 1.0);
+        }
+        if (c == 204) {
+          const Word* p = word('P');
+          const Word* s = word('S');
+          if (!p) p = s;
+          if (p && p->value > 0) lim.path_accel_mm_s2 = p->value * unit;
+        }
+        if (c == 205) {
+          if (const Word* j = word('J'); j && j->value > 0) lim.junction_deviation_mm = j->value * unit;
+        }
+        for (char l = 'A'; l <= 'Z'; ++l) word(l);  // the rest: jerk, retract and travel
+        out.emplace_back(lim);
+        did = true;
+        break;
+      }
+      case 220: case 221: {
+        const Word* s = word('S');
+        for (char l : {'B', 'R', 'T', 'D'}) word(l);
+        if (s) {
+          if (s->value <= 0 || s->value > 1000) throw fail(b, s->col, "factor must be 1..1000 %");
+          (c == 220 ? feed_factor : flow) = s->value / 100.0;
+        }
+        did = true;
+        break;
+      }
+      case 207: case 208: {
+        if (const Word* s = word('S')) (c == 207 ? retract_mm : recover_extra) = s->value * unit;
+        if (const Word* f = word('F')) (c == 207 ? retract_feed : recover_feed) = f->value * unit;
+        if (const Word* z = word('Z'); z && c == 207) retract_zlift = z->value * unit;
+        word('R');
+        did = true;
+        break;
+      }
+      case 600: {
+        for (char l = 'A'; l <= 'Z'; ++l) word(l);
+        out.emplace_back(Pause{Pause::Reason::kFilamentChange, 0, "change the filament", b.line});
+        ++stats.pauses;
+        did = true;
+        break;
+      }
+      default: {
+        if (!rules->unknown_m_warns)
+          throw fail(b, mw.col, fmt::format("M{}: not supported in the {} dialect", c, rules->name));
+        const char* what = printer_ignored(c);
+        warn(what ? fmt::format("{} ignored", what)
+                  : fmt::format("M{} unknown here, ignored (as {} does)", c, rules->name),
+             b.line);
+        for (char l = 'A'; l <= 'Z'; ++l) word(l);  // its parameters belong to it
+        break;
+      }
+    }
+  }
+  // 9. Dwell.
+  const Word* nm = gw(0);
+  const int nmc = nm ? code10(*nm) : -1;
+  if (nmc == 40) {
+    const Word* p = word('P');
+    const Word* s = rules->dwell_p_ms ? word('S') : nullptr;
+    if (!p && !s)
+      throw fail(b, nm->col,
+                 rules->dwell_p_ms ? "G4 needs P (milliseconds) or S (seconds)"
+                                   : "G4 needs a P word (seconds)");
+    double secs = 0.0;
+    if (s) secs += s->value;
+    if (p) secs += rules->dwell_p_ms ? p->value / 1000.0 : p->value;
+    if (secs < 0) throw fail(b, (p ? p : s)->col, "negative dwell time");
+    out.emplace_back(Dwell{secs, b.line});
+    did = true;
+    produced = true;
+  }
+  // 10. Plane.
+  if (const Word* g = gw(2))
+    plane = code10(*g) == 170 ? Plane::kXY : code10(*g) == 180 ? Plane::kZX : Plane::kYZ;
+  // 11. Cutter compensation (G40 only).
+  if (const Word* g = gw(7); g && code10(*g) != 400)
+    throw fail(b, g->col,
+               fmt::format("{}: cutter radius compensation is not supported (let the CAM program "
+                           "offset the path)",
+                           gname(code10(*g))));
+  // 12. Tool length offset.
+  bool tlo_words = false;
+  if (const Word* g = gw(8)) {
+    const int c = code10(*g);
+    if (c == 490) {
+      tlo = {};
+    } else if (c == 430 || c == 432) {
+      const Word* h = word('H');
+      if (h && (!h->integer || h->value < 0)) throw fail(b, h->col, "H must be a tool number");
+      const int n = h ? static_cast<int>(h->value) : tool;
+      const ToolEntry* e = tools.find(n);
+      if (!e && n != 0)
+        throw fail(b, h ? h->col : g->col,
+                   opt.tool_table.empty()
+                       ? fmt::format("{}: no tool table to read tool {} from (give one with "
+                                     "--tool-table or tool_table in the machine configuration)",
+                                     gname(c), n)
+                       : fmt::format("{}: tool {} is not in the tool table {}", gname(c), n,
+                                     opt.tool_table));
+      Vec4 off{};
+      if (e)
+        for (size_t a = 0; a < 3; ++a) off[a] = e->offset[a];
+      if (c == 430) tlo = off;
+      else
+        for (size_t a = 0; a < 3; ++a) tlo[a] += off[a];
+    } else {  // G43.1: the axis words are the offsets
+      tlo = {};
+      for (int a = 0; a < 3; ++a)
+        if (const Word* aw = word(kAxisNames[a])) tlo[static_cast<size_t>(a)] = to_mm(aw);
+      tlo_words = true;
+    }
+    did = true;
+  }
+  // 13. Coordinate system.
+  if (const Word* g = gw(12)) {
+    const int c = code10(*g);
+    cs = c < 591 ? c / 10 - 54 : 6 + (c - 591);
+    did = true;
+  }
+  // 14. Path control.
+  if (const Word* g = gw(13)) {
+    const int c = code10(*g);
+    exact_stop = c != 640;
+    tolerance = 0.0;
+    if (c == 640) {
+      if (const Word* p = word('P')) tolerance = std::fabs(to_mm(p));
+      word('Q');  // the look-ahead does not merge collinear segments: Q has nothing to do
+    }
+    did = true;
+  }
+  // 15. Distance modes, retract mode.
+  if (const Word* g = gw(3)) absolute = code10(*g) == 900;
+  if (const Word* g = gw(4)) arc_absolute = code10(*g) == 901;
+  if (const Word* g = gw(10)) retract_to_r = code10(*g) == 990;
+  if (gw(2) || gw(3) || gw(4) || gw(5) || gw(6) || gw(7) || gw(10)) did = true;
+
+  bool has_axis = false;
+  for (char l : kAxisNames) has_axis = has_axis || w.get(l);
+  if (tlo_words) has_axis = false;
+  auto no_motion_word = [&](const char* what) {
+    if (gw(1))
+      throw fail(b, gw(1)->col, fmt::format("{} and a motion G code on the same line", what));
+  };
+  // Program E -> machine E (G92 E offset; relative under M83 or G91), then M221's flow.
+  auto e_target = [&](const Word* ew) {
+    const double v = to_mm(ew);
+    const double prog = (!e_absolute || !absolute) ? e_prog + v : v + g92[3];
+    return prog;
+  };
+  // Machine target of the axis words in the current modes (G53: machine coordinates).
+  auto target = [&](bool machine) {
+    Vec4 t = pos;
+    for (int a = 0; a < 3; ++a) {
+      const Word* aw = word(kAxisNames[a]);
+      if (!aw) continue;
+      const auto i = static_cast<size_t>(a);
+      const double v = to_mm(aw);
+      t[i] = machine ? v : absolute ? v + offset(a) : pos[i] + v;
+      if (std::fabs(t[i]) > 1e9) throw fail(b, aw->col, "position out of range");
     }
     return t;
   };
-  auto rapid_to = [&](const Vec4& t) {
-    Move m;
-    m.motion = Motion::kRapid;
-    m.start = pos_;
-    m.end = t;
-    m.feed_mm_min = feed_;
-    m.spindle_on = spindle_on_;
-    m.spindle_s = spindle_s_;
-    m.line = line_number;
-    out.emplace_back(m);
-    pos_ = t;
-    ++stats_.moves;
+  auto apply_e = [&](Vec4& t) {
+    if (const Word* ew = word('E')) {
+      const double prog = e_target(ew);
+      t[3] = pos[3] + (prog - e_prog) * flow;
+      e_prog = prog;
+    }
   };
 
-  if (nonmodal == 4) {
+  // 16. Non-modal codes.
+  if (nmc == 100) {  // G10
+    const Word* l = word('L');
+    if (!l) {
+      if (!rules->g10_retract)
+        throw fail(b, nm->col,
+                   fmt::format("G10 needs L (L2/L20 work offsets, L1 tool table) in the {} "
+                               "dialect",
+                               rules->name));
+      for (char c : {'P', 'S', 'R'}) word(c);
+      if (!retracted) {
+        Vec4 t = pos;
+        t[3] -= retract_mm;
+        e_prog -= retract_mm / flow;
+        line_to(out, Motion::kLinear, t, b.line, retract_feed);
+        if (retract_zlift > 0) {
+          t[2] += retract_zlift;
+          line_to(out, Motion::kRapid, t, b.line);
+        }
+        retracted = true;
+      }
+      write_position();
+      return true;
+    }
     const Word* p = word('P');
-    if (!p) throw fail(nonmodal_word->col, "G4 needs a P word (seconds)");
-    if (p->value < 0) throw fail(p->col, "negative dwell time");
-    out.emplace_back(Dwell{p->value, line_number});
-    did_command = true;
-  }
-  if (nonmodal == 28 || nonmodal == 92) {
-    if (motion_word) {
-      throw fail(motion_word->col,
-                 fmt::format("G{} and a motion G code on the same line", nonmodal));
-    }
-    for (char l : {'I', 'J', 'R'}) {
-      if (const Word* w = word(l)) {
-        throw fail(w->col, fmt::format("'{}' word not allowed with G{}", l, nonmodal));
+    const int lv = static_cast<int>(l->value);
+    no_motion_word("G10");
+    if (lv == 2 || lv == 20) {
+      if (const Word* r = word('R'))
+        throw fail(b, r->col, "G10 R: coordinate system rotation is not supported");
+      const int n = p ? static_cast<int>(p->value) : 0;
+      if (p && (!p->integer || n < 0 || n > 9)) throw fail(b, p->col, "G10 P must be 0..9");
+      const int s = n == 0 ? cs : n - 1;
+      for (int a = 0; a < 3; ++a) {
+        const Word* aw = word(kAxisNames[a]);
+        if (!aw) continue;
+        const auto i = static_cast<size_t>(a);
+        const double v = to_mm(aw);
+        // L20: the current position becomes v in that system.
+        g5x[static_cast<size_t>(s)][i] = lv == 2 ? v : pos[i] - g92[i] - tlo[i] - v;
       }
+      write_params();
+      ++stats.commands;
+      return true;
     }
+    if (lv == 1) {
+      if (!p || !p->integer || p->value < 0) throw fail(b, l->col, "G10 L1 needs P (tool number)");
+      ToolEntry e;
+      if (const ToolEntry* old = tools.find(static_cast<int>(p->value))) e = *old;
+      e.tool = static_cast<int>(p->value);
+      for (int a = 0; a < 3; ++a)
+        if (const Word* aw = word(kAxisNames[a])) e.offset[static_cast<size_t>(a)] = to_mm(aw);
+      if (const Word* r = word('R')) e.diameter = 2 * to_mm(r);
+      for (char c : {'I', 'J', 'Q'}) word(c);
+      tools.set(e);
+      ++stats.commands;
+      return true;
+    }
+    throw fail(b, l->col, fmt::format("G10 L{} is not supported (L1, L2 and L20 are)", lv));
   }
-  if (nonmodal == 92) {
-    if (!has_axis) throw fail(nonmodal_word->col, "G92 needs at least one axis word");
-    static constexpr char names[4] = {'X', 'Y', 'Z', 'E'};
-    for (int a = 0; a < 4; ++a) {
-      if (const Word* w = word(names[a])) {
-        offset_[static_cast<size_t>(a)] = pos_[static_cast<size_t>(a)] - to_mm(w);
+  if (nmc == 110) {  // G11
+    if (!rules->g10_retract)
+      throw fail(b, nm->col, fmt::format("G11 (firmware retraction) is not in the {} dialect", rules->name));
+    word('S');
+    if (retracted) {
+      Vec4 t = pos;
+      if (retract_zlift > 0) {
+        t[2] -= retract_zlift;
+        line_to(out, Motion::kRapid, t, b.line);
       }
+      t[3] += retract_mm + recover_extra;
+      e_prog += (retract_mm + recover_extra) / flow;
+      line_to(out, Motion::kLinear, t, b.line, recover_feed);
+      retracted = false;
     }
-    ++stats_.commands;
-    return;
+    write_position();
+    return true;
   }
-  if (nonmodal == 28) {
-    Vec4 home = pos_;
-    if (has_axis) {
-      const Vec4 via = target_of(pos_);
-      rapid_to(via);
-      static constexpr char names[4] = {'X', 'Y', 'Z', 'E'};
+  if (nmc >= 920 && nmc <= 923) {
+    no_motion_word(gname(nmc).c_str());
+    if (nmc == 920) {
+      if (!has_axis) throw fail(b, nm->col, "G92 needs at least one axis word");
       for (int a = 0; a < 4; ++a) {
-        if (word(names[a])) home[static_cast<size_t>(a)] = 0.0;
+        const Word* aw = word(kAxisNames[a]);
+        if (!aw) continue;
+        const auto i = static_cast<size_t>(a);
+        if (a == 3) g92[3] = e_prog - to_mm(aw);
+        else g92[i] = pos[i] - g5x[static_cast<size_t>(cs)][i] - tlo[i] - to_mm(aw);
       }
+    } else if (nmc == 923) {
+      throw fail(b, nm->col, "G92.3 (restore saved G92 offsets) is not supported");
     } else {
-      home[0] = home[1] = home[2] = 0.0;  // E has no origin to return to
+      g92 = {};
     }
-    rapid_to(home);
-    produced_ = true;
-    return;
+    write_params();
+    ++stats.commands;
+    return true;
   }
-
-  if (new_motion) motion_ = new_motion;
-  const Word* ij_word = word('I') ? word('I') : word('J');
-  const Word* r_word = word('R');
-  const bool arc_words = ij_word || r_word;
-  const bool wants_motion =
-      has_axis ||
-      (arc_words && motion_ && (*motion_ == Motion::kArcCw || *motion_ == Motion::kArcCcw));
-  if (!wants_motion) {
-    if (arc_words) {
-      throw fail((ij_word ? ij_word : r_word)->col, "I/J/R words without an arc (G2/G3)");
-    }
-    if (did_command || new_motion || new_unit || new_absolute || e_abs || word('F') || word('S')) {
-      ++stats_.commands;
-    }
-    if (did_command) produced_ = true;
-    return;
+  if (nmc == 281 || nmc == 301) {
+    (nmc == 281 ? g28_home : g30_home) = pos;
+    write_params();
+    return true;
   }
-  const int motion_col = motion_word ? motion_word->col : [&] {
-    for (int w = 0; w < lw.count; ++w) {
-      const char l = lw.words[static_cast<size_t>(w)].letter;
-      if (l == 'X' || l == 'Y' || l == 'Z' || l == 'E' || l == 'I' || l == 'J' || l == 'R') {
-        return lw.words[static_cast<size_t>(w)].col;
-      }
-    }
-    return 1;
-  }();
-  if (!motion_) throw fail(motion_col, "axis words with no motion mode (G0/G1/G2/G3) active");
-
-  Move m;
-  m.motion = *motion_;
-  m.start = pos_;
-  m.end = target_of(pos_);
-  m.feed_mm_min = feed_;
-  m.spindle_on = spindle_on_;
-  m.spindle_s = spindle_s_;
-  m.line = line_number;
-  if (m.motion != Motion::kRapid && feed_ <= 0.0) {
-    const Word* f = word('F');
-    throw fail(f ? f->col : motion_col, "feed is 0: a G1/G2/G3 move needs F > 0");
-  }
-  if (m.motion == Motion::kArcCw || m.motion == Motion::kArcCcw) {
-    if (!arc_words) {
-      if (motion_word) throw fail(motion_word->col, "arc without centre (no I, J or R)");
-      // Modal G2/G3 repeated with axis words only: run as a straight cutting line.
-      m.motion = Motion::kLinear;
-      ++stats_.modal_arc_as_line;
-    } else if (r_word) {
-      if (ij_word) throw fail(r_word->col, "R and I/J on the same arc");
-      const double r = to_mm(r_word);
-      const double x = m.end[0] - m.start[0];
-      const double y = m.end[1] - m.start[1];
-      const double d = std::hypot(x, y);
-      if (d < 1e-9) throw fail(r_word->col, "R-form arc with end point equal to start point");
-      double disc = 4.0 * r * r - x * x - y * y;
-      if (disc < 0.0) {
-        constexpr double kRTolerance = 1e-3;  // mm: rounding in the file's decimals
-        if (d / 2.0 - std::fabs(r) > kRTolerance) {
-          throw fail(r_word->col, fmt::format("impossible arc: radius {:.6g} mm is smaller than "
-                                              "half the chord ({:.6g} mm)",
-                                              std::fabs(r), d / 2.0));
+  if (nmc == 280 || nmc == 300) {
+    no_motion_word(gname(nmc).c_str());
+    if (rules->g28_homes && nmc == 280) {
+      // Marlin's G28 [X] [Y] [Z]: home the named axes (all when none): machine zero.
+      Vec4 t = pos;
+      bool any = false;
+      for (int a = 0; a < 3; ++a)
+        if (word(kAxisNames[a])) {
+          t[static_cast<size_t>(a)] = 0.0;
+          any = true;
         }
-        disc = 0.0;
-      }
-      double h = -std::sqrt(disc) / d;
-      if (m.motion == Motion::kArcCcw) h = -h;
-      if (r < 0) h = -h;
-      m.center = {m.start[0] + 0.5 * (x - y * h), m.start[1] + 0.5 * (y + x * h)};
+      if (!any) t[0] = t[1] = t[2] = 0.0;
+      for (char c : {'O', 'R', 'L'}) word(c);
+      line_to(out, Motion::kRapid, t, b.line);
+      write_position();
+      return true;
+    }
+    const Vec4& stored = nmc == 280 ? g28_home : g30_home;
+    Vec4 home = pos;
+    if (has_axis) {
+      const Vec4 via = target(false);
+      line_to(out, Motion::kRapid, via, b.line);
+      for (int a = 0; a < 3; ++a)
+        if (w.get(kAxisNames[a])) home[static_cast<size_t>(a)] = stored[static_cast<size_t>(a)];
     } else {
-      const double ci = word('I') ? to_mm(word('I')) : 0.0;
-      const double cj = word('J') ? to_mm(word('J')) : 0.0;
-      m.center = {m.start[0] + ci, m.start[1] + cj};
-      const double r0 = std::hypot(m.start[0] - m.center[0], m.start[1] - m.center[1]);
-      const double r1 = std::hypot(m.end[0] - m.center[0], m.end[1] - m.center[1]);
-      if (r0 < 1e-6) throw fail(ij_word->col, "arc with zero radius");
-      // Start and end radius differ: real files have this (Circle_Diamond_Square_Calibration
-      // line 624 differs by 5%). The planner blends the radius linearly (a spiral ending exactly
-      // at the programmed end) and it is counted as a warning; a gross mismatch is an error.
-      if (std::fabs(r1 - r0) > 0.005 && std::fabs(r1 - r0) > 0.001 * r0) {
-        if (std::fabs(r1 - r0) > 0.5 * r0) {
-          throw fail(motion_col,
-                     fmt::format("arc end point is not on the circle (start radius {:.6g} mm, "
-                                 "end radius {:.6g} mm)",
-                                 r0, r1));
-        }
-        ++stats_.arc_radius_mismatch;
-      }
-      m.full_circle = std::hypot(m.end[0] - m.start[0], m.end[1] - m.start[1]) < 1e-9;
+      for (size_t a = 0; a < 3; ++a) home[a] = stored[a];
     }
-  } else if (arc_words) {
-    throw fail((ij_word ? ij_word : r_word)->col, "I/J/R words on a G0/G1 move");
+    line_to(out, Motion::kRapid, home, b.line);
+    write_position();
+    return true;
   }
-  pos_ = m.end;
-  out.emplace_back(m);
-  ++stats_.moves;
-  produced_ = true;
+  const bool g53 = nmc == 530;
+
+  // 17. Motion.
+  if (const Word* g = gw(1)) {
+    const int c = code10(*g);
+    if (c >= 380 && c <= 385)
+      throw fail(b, g->col,
+                 fmt::format("{}: probing needs the probe input (not on this machine yet)", gname(c)));
+    if (c == 840 || c == 860 || c == 870 || c == 880)
+      throw fail(b, g->col,
+                 fmt::format("{}: this cycle needs spindle control (orient, stop or tapping) that "
+                             "this machine does not have",
+                             gname(c)));
+    if (c == 330)
+      throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
+    if (is_cycle(c) && motion != c) cycle_z_set = cycle_r_set = false;
+    motion = c;
+    did = true;
+  }
+  const bool cycle_mode = is_cycle(motion);
+  const PlaneAxes pa = plane_axes(plane);
+  static constexpr char kOffsetWord[3] = {'I', 'J', 'K'};  // centre offsets of X, Y, Z
+  const bool arc_mode = motion == 20 || motion == 30;
+  const Word* cu = arc_mode ? w.get(kOffsetWord[pa.u]) : nullptr;
+  const Word* cv = arc_mode ? w.get(kOffsetWord[pa.v]) : nullptr;
+  const Word* r_word = arc_mode ? w.get('R') : nullptr;
+  const bool arc_words = cu || cv || r_word;
+  if (cycle_mode) {
+    for (char l : {'Z', 'R', 'P', 'Q', 'L'}) word(l);
+    const PlaneAxes cpa = pa;
+    const char wl = kAxisNames[cpa.w];
+    const Word* zw = w.get(wl);
+    if (const Word* r = w.get('R')) {
+      cycle_r = to_mm(r);
+      cycle_r_set = true;
+    }
+    if (zw) {
+      cycle_z = to_mm(zw);
+      cycle_z_set = true;
+    }
+    if (const Word* p = w.get('P')) cycle_p = p->value;
+    if (const Word* q = w.get('Q')) {
+      if (q->value <= 0) throw fail(b, q->col, "Q (peck depth) must be > 0");
+      cycle_q = to_mm(q);
+    }
+    const bool pos_words = w.get(kAxisNames[cpa.u]) || w.get(kAxisNames[cpa.v]) || zw ||
+                           w.get('R') || gw(1);
+    if (pos_words) {
+      for (int a = 0; a < 3; ++a) word(kAxisNames[a]);
+      bool given[3] = {w.get('X') != nullptr, w.get('Y') != nullptr, w.get('Z') != nullptr};
+      Vec4 hole = pos;
+      for (int a = 0; a < 3; ++a)
+        if (given[a]) hole[static_cast<size_t>(a)] = to_mm(w.get(kAxisNames[a]));
+      int repeats = 1;
+      if (const Word* l = w.get('L')) {
+        if (!l->integer || l->value < 1) throw fail(b, l->col, "L (repeats) must be >= 1");
+        repeats = static_cast<int>(l->value);
+      }
+      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(kAxisNames[cpa.u]));
+    }
+    if (w.get('E')) throw fail(b, w.get('E')->col, "E in a canned cycle");
+  } else if (has_axis || (arc_mode && arc_words && (gw(1) || true) && (has_axis || arc_words))) {
+    const Word* first_axis = nullptr;
+    for (int i = 0; i < b.count && !first_axis; ++i) {
+      const char l = b.words[static_cast<size_t>(i)].letter;
+      if (l == 'X' || l == 'Y' || l == 'Z' || l == 'E' || l == 'I' || l == 'J' || l == 'K' ||
+          l == 'R')
+        first_axis = &b.words[static_cast<size_t>(i)];
+    }
+    const int motion_col = gw(1) ? gw(1)->col : first_axis ? first_axis->col : 1;
+    if (motion < 0 || motion == kCycleNone)
+      throw fail(b, motion_col, "axis words with no motion mode (G0/G1/G2/G3) active");
+    Vec4 t = target(g53);
+    if (g53 && (motion == 20 || motion == 30))
+      throw fail(b, nm->col, "G53 with an arc: only G0/G1 may use machine coordinates");
+    if (g53 && !absolute) throw fail(b, nm->col, "G53 needs G90 (absolute distance mode)");
+    apply_e(t);
+    Motion mo = static_cast<Motion>(motion / 10);
+    double f = feed * feed_factor;
+    if (inverse_time && mo != Motion::kRapid) {
+      const Word* fw = w.get('F');
+      if (!fw || fw->value <= 0)
+        throw fail(b, fw ? fw->col : motion_col, "G93 inverse time: each move needs F > 0");
+    }
+    if (mo != Motion::kRapid && !inverse_time && feed <= 0.0) {
+      const Word* fw = w.get('F');
+      throw fail(b, fw ? fw->col : motion_col, "feed is 0: a G1/G2/G3 move needs F > 0");
+    }
+    Move mv = make_move(mo, t, b.line, f);
+    if (mo == Motion::kArcCw || mo == Motion::kArcCcw) {
+      word(kOffsetWord[pa.u]);
+      word(kOffsetWord[pa.v]);
+      word('R');
+      const Word* pw = word('P');
+      if (!arc_words) {
+        if (gw(1)) throw fail(b, gw(1)->col, fmt::format("arc without centre (no {}, {} or R)", kOffsetWord[pa.u], kOffsetWord[pa.v]));
+        // A modal G2/G3 repeated with axis words only: a straight cutting line, as CNCjs does.
+        mv.motion = Motion::kLinear;
+        ++stats.modal_arc_as_line;
+      } else {
+        const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v);
+        const double su = pos[u], sv = pos[v], eu = t[u], ev = t[v];
+        if (pw) {
+          if (!pw->integer || pw->value < 1) throw fail(b, pw->col, "arc P (turns) must be an integer >= 1");
+          mv.extra_turns = static_cast<int>(pw->value) - 1;
+        }
+        if (r_word) {
+          if (cu || cv) throw fail(b, r_word->col, "R and I/J/K on the same arc");
+          const double r = to_mm(r_word);
+          const double x = eu - su, y = ev - sv;
+          const double d = std::hypot(x, y);
+          if (d < 1e-9) throw fail(b, r_word->col, "R-form arc with end point equal to start point");
+          double disc = 4.0 * r * r - x * x - y * y;
+          if (disc < 0.0) {
+            constexpr double kRTolerance = 1e-3;  // mm: rounding in the file's decimals
+            if (d / 2.0 - std::fabs(r) > kRTolerance)
+              throw fail(b, r_word->col,
+                         fmt::format("impossible arc: radius {:.6g} mm is smaller than half the "
+                                     "chord ({:.6g} mm)",
+                                     std::fabs(r), d / 2.0));
+            disc = 0.0;
+          }
+          double h = -std::sqrt(disc) / d;
+          if (mo == Motion::kArcCcw) h = -h;
+          if (r < 0) h = -h;
+          mv.center = {su + 0.5 * (x - y * h), sv + 0.5 * (y + x * h)};
+        } else {
+          auto centre = [&](const Word* cw, size_t axis, double start) {
+            if (!cw) return arc_absolute ? offset(static_cast<int>(axis)) : start;
+            const double c = to_mm(cw);
+            return arc_absolute ? c + offset(static_cast<int>(axis)) : start + c;
+          };
+          mv.center = {centre(cu, u, su), centre(cv, v, sv)};
+          const double r0 = std::hypot(su - mv.center[0], sv - mv.center[1]);
+          const double r1 = std::hypot(eu - mv.center[0], ev - mv.center[1]);
+          if (r0 < 1e-6) throw fail(b, (cu ? cu : cv)->col, "arc with zero radius");
+          if (std::fabs(r1 - r0) > 0.005 && std::fabs(r1 - r0) > 0.001 * r0) {
+            if (std::fabs(r1 - r0) > 0.5 * r0)
+              throw fail(b, motion_col,
+                         fmt::format("arc end point is not on the circle (start radius {:.6g} mm, "
+                                     "end radius {:.6g} mm)",
+                                     r0, r1));
+            ++stats.arc_radius_mismatch;
+          }
+          mv.full_circle = std::hypot(eu - su, ev - sv) < 1e-9;
+        }
+      }
+    } else if (arc_words || w.get('I') || w.get('J') || w.get('K')) {
+      const Word* a = w.get('R') ? w.get('R') : w.get('I') ? w.get('I') : w.get('J') ? w.get('J') : w.get('K');
+      throw fail(b, a->col, "I/J/K/R words on a G0/G1 move");
+    }
+    if (inverse_time && mo != Motion::kRapid) {
+      double len = 0;
+      for (size_t a = 0; a < 3; ++a) len += (t[a] - pos[a]) * (t[a] - pos[a]);
+      len = std::sqrt(len);
+      if (mv.motion == Motion::kArcCw || mv.motion == Motion::kArcCcw) {
+        const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v);
+        const double r = std::hypot(pos[u] - mv.center[0], pos[v] - mv.center[1]);
+        double a0 = std::atan2(pos[v] - mv.center[1], pos[u] - mv.center[0]);
+        double a1 = std::atan2(t[v] - mv.center[1], t[u] - mv.center[0]);
+        double sweep = a1 - a0;
+        const bool cw = mv.motion == Motion::kArcCw;
+        if (cw && sweep >= 0) sweep -= 2 * M_PI;
+        if (!cw && sweep <= 0) sweep += 2 * M_PI;
+        sweep = std::fabs(sweep) + 2 * M_PI * mv.extra_turns;
+        const double wlen = t[static_cast<size_t>(pa.w)] - pos[static_cast<size_t>(pa.w)];
+        len = std::hypot(r * sweep, wlen);
+      }
+      mv.feed_mm_min = len * w.get('F')->value * feed_factor;
+      if (mv.feed_mm_min <= 0) mv.feed_mm_min = feed;
+    }
+    push(out, mv);
+    write_position();
+  } else if (arc_words || w.get('I') || w.get('J') || w.get('K') || (!arc_mode && w.get('R'))) {
+    const Word* a = w.get('R') ? w.get('R') : w.get('I') ? w.get('I') : w.get('J') ? w.get('J') : w.get('K');
+    throw fail(b, a->col, "I/J/K/R words without an arc (G2/G3)");
+  }
+  if (g53 && !has_axis) throw fail(b, nm->col, "G53 needs axis words on the same line");
+
+  // Every word must have been used by something on the line.
+  for (int i = 0; i < b.count; ++i) {
+    const Word& wd = b.words[static_cast<size_t>(i)];
+    const char l = wd.letter;
+    if (l == 'G' || l == 'M' || l == 'N') continue;
+    if (!used[l - 'A'])
+      throw fail(b, wd.col, fmt::format("'{}' word with nothing on the line that uses it", l));
+  }
+  if (did && !has_axis) ++stats.commands;
+
+  // 18. Stops.
+  for (int k = 0; k < w.mcount; ++k) {
+    const int c = w.mcodes[k];
+    if (c == 0 || (c == 1 && rules->dialect != Dialect::kLinuxCnc && rules->unknown_m_warns)) {
+      out.emplace_back(Pause{Pause::Reason::kProgramPause, 0,
+                             b.message_kind == MessageKind::kText && !b.text.empty()
+                                 ? b.text
+                                 : "program paused (M0): resume to go on",
+                             b.line});
+      ++stats.pauses;
+      produced = true;
+    } else if (c == 1) {
+      if (opt.optional_stop) {
+        out.emplace_back(Pause{Pause::Reason::kOptionalStop, 0, "optional stop (M1): resume to go on", b.line});
+        ++stats.pauses;
+      }
+      produced = true;
+    } else if (c == 2 || c == 30) {
+      produced = true;
+      return false;
+    }
+  }
+  return true;
+}
+
+// Canned cycles G73, G81, G82, G83, G85, G89 as LinuxCNC runs them (docs/gcode.md, "Canned
+// cycles"): in the active plane, w the drilling axis. Preliminary move: if w is below R, up to R;
+// per hole: rapid to the hole at the current level, down to R, the cycle's moves, back to the
+// clear level (G98: the level before the cycle or R, whichever is higher; G99: R).
+void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool given[3],
+                                     std::vector<Command>& out, int repeats,
+                                     const Word* first_col) {
+  const PlaneAxes pa = plane_axes(plane);
+  const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v),
+             wa = static_cast<size_t>(pa.w);
+  const int col = first_col ? first_col->col : 1;
+  if (!cycle_z_set)
+    throw fail(b, col, fmt::format("{}: the cycle needs {} (the bottom)", gname(motion), kAxisNames[wa]));
+  if (!cycle_r_set) throw fail(b, col, fmt::format("{}: the cycle needs R (the retract level)", gname(motion)));
+  if ((motion == 730 || motion == 830) && cycle_q <= 0)
+    throw fail(b, col, fmt::format("{}: the cycle needs Q (the peck depth) > 0", gname(motion)));
+  if (feed <= 0 && !inverse_time) throw fail(b, col, "feed is 0: a canned cycle needs F > 0");
+  const double old_w = pos[wa];
+  // R and Z in program coordinates -> machine.
+  double r, bottom;
+  if (absolute) {
+    r = cycle_r + offset(pa.w);
+    bottom = cycle_z + offset(pa.w);
+  } else {
+    r = old_w + cycle_r;
+    bottom = r + cycle_z;
+  }
+  if (bottom > r + 1e-9)
+    throw fail(b, col, fmt::format("{}: the bottom ({}) is above R", gname(motion), kAxisNames[wa]));
+  const double clear = retract_to_r ? r : std::max(r, old_w);
+  const double f = feed * feed_factor;
+  const double rapid_delta = unit == 1.0 ? 0.254 : 0.010 * kInch;  // LinuxCNC's G73/G83 clearance
+  auto at = [&](double cu, double cv, double cw) {
+    Vec4 t = pos;
+    t[u] = cu;
+    t[v] = cv;
+    t[wa] = cw;
+    return t;
+  };
+  if (old_w < r) line_to(out, Motion::kRapid, at(pos[u], pos[v], r), b.line);
+  double hu = pos[u], hv = pos[v];
+  for (int k = 0; k < repeats; ++k) {
+    if (absolute) {
+      if (given[u]) hu = given_pos[u] + offset(pa.u);
+      if (given[v]) hv = given_pos[v] + offset(pa.v);
+    } else {
+      if (given[u]) hu += given_pos[u];
+      if (given[v]) hv += given_pos[v];
+    }
+    line_to(out, Motion::kRapid, at(hu, hv, pos[wa]), b.line);
+    line_to(out, Motion::kRapid, at(hu, hv, r), b.line);
+    switch (motion) {
+      case 810:
+        line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        break;
+      case 820:
+        line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        out.emplace_back(Dwell{cycle_p, b.line});
+        break;
+      case 830:
+      case 730: {
+        for (double depth = r - cycle_q; depth > bottom; depth -= cycle_q) {
+          line_to(out, Motion::kLinear, at(hu, hv, depth), b.line, f);
+          if (motion == 830) {
+            line_to(out, Motion::kRapid, at(hu, hv, r), b.line);
+            line_to(out, Motion::kRapid, at(hu, hv, depth + rapid_delta), b.line);
+          } else {
+            line_to(out, Motion::kRapid, at(hu, hv, depth + rapid_delta), b.line);
+          }
+        }
+        line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        break;
+      }
+      case 850:
+        line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        line_to(out, Motion::kLinear, at(hu, hv, r), b.line, f);
+        break;
+      case 890:
+        line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        out.emplace_back(Dwell{cycle_p, b.line});
+        line_to(out, Motion::kLinear, at(hu, hv, r), b.line, f);
+        break;
+      default:
+        throw fail(b, col, fmt::format("{}: not supported", gname(motion)));
+    }
+    if (pos[wa] != clear)
+      line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
+    ++stats.canned_cycles;
+  }
+}
+
+Interpreter::Interpreter(std::string file_name, Options options, const DialectChoice& dialect,
+                         Params& params)
+    : impl_(std::make_unique<Impl>(std::move(file_name), std::move(options), dialect, params)) {}
+Interpreter::~Interpreter() = default;
+
+bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
+  return impl_->execute(block, out);
 }
 
 void Interpreter::finish() {
-  if (!produced_) {
-    throw Error(file_, static_cast<int>(std::max<uint64_t>(stats_.lines, 1)), 1,
+  if (!impl_->produced)
+    throw Error(impl_->file, static_cast<int>(std::max<uint64_t>(impl_->stats.lines, 1)), 1,
                 "empty job (no motion and no commands)");
-  }
 }
+
+const Vec4& Interpreter::position() const { return impl_->pos; }
+const Stats& Interpreter::stats() const { return impl_->stats; }
+
+namespace {
+
+Stats run(std::string text, const std::string& file_name, const Options& options,
+          const std::function<void(const Command&)>& sink) {
+  const DialectChoice choice = detect_dialect(text, options.dialect, options.dialect_source);
+  Params params;
+  Interpreter interp(file_name, options, choice, params);
+  Reader reader(file_name, std::move(text), dialect_rules(choice.dialect).syntax, params);
+  Block block;
+  std::vector<Command> out;
+  int last_line = 0;
+  while (reader.next(block)) {
+    last_line = block.line;
+    out.clear();
+    const bool go_on = interp.execute(block, out);
+    for (const auto& c : out) sink(c);
+    if (!go_on) {
+      reader.end_program();
+      break;
+    }
+  }
+  (void)last_line;
+  interp.finish();
+  return interp.stats();
+}
+
+std::string slurp(std::istream& in, const std::string& file_name) {
+  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (in.bad()) throw Error(file_name, 0, 0, "read error");
+  return text;
+}
+
+}  // namespace
 
 Stats parse_stream(std::istream& in, const std::string& file_name, Options options,
                    const std::function<void(const Command&)>& sink) {
-  Interpreter interp(file_name, options);
-  std::string line;
-  std::vector<Command> out;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    out.clear();
-    interp.parse_line(line, n, out);
-    for (const auto& c : out) sink(c);
-  }
-  if (in.bad()) throw Error(file_name, n, 0, "read error");
-  interp.finish();
-  return interp.stats();
+  return run(slurp(in, file_name), file_name, options, sink);
 }
 
 Program parse_stream(std::istream& in, const std::string& file_name, Options options) {
   Program p;
   p.file_name = file_name;
-  Interpreter interp(file_name, options);
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    interp.parse_line(line, n, p.commands);
-  }
-  if (in.bad()) throw Error(file_name, n, 0, "read error");
-  interp.finish();
-  p.stats = interp.stats();
+  p.stats = run(slurp(in, file_name), file_name, options,
+                [&](const Command& c) { p.commands.push_back(c); });
   return p;
 }
 
 Program parse_file(const std::string& path, Options options) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, 0, 0, "cannot open file");
-  return parse_stream(f, path, options);
+  return parse_stream(f, path, std::move(options));
 }
 
 Program parse_string(std::string_view text, const std::string& file_name, Options options) {
-  std::istringstream s{std::string(text)};
-  return parse_stream(s, file_name, options);
+  Program p;
+  p.file_name = file_name;
+  p.stats = run(std::string(text), file_name, options,
+                [&](const Command& c) { p.commands.push_back(c); });
+  return p;
 }
 
 }  // namespace fpgacnc::gcode

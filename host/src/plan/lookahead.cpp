@@ -312,8 +312,15 @@ void Lookahead::push(const Segment& s, size_t segment_index) {
       if (p.steps[a] == 0) continue;
       const double r = std::fabs(d[a]) / len;  // axis speed / path speed
       vc = std::min(vc, lim_.v_max[a] / r);
-      acc = std::min(acc, lim_.a_max[a] / r);
+      const double a_axis =
+          s.accel_mm_s2[a] > 0.0 ? std::min(lim_.a_max[a], s.accel_mm_s2[a]) : lim_.a_max[a];
+      acc = std::min(acc, a_axis / r);
     }
+    if (s.path_accel_mm_s2 > 0.0) acc = std::min(acc, s.path_accel_mm_s2);
+    b.junction_deviation = s.junction_deviation_mm > 0.0
+                               ? std::min(s.junction_deviation_mm, lim_.junction_deviation)
+                               : lim_.junction_deviation;
+    b.exact_stop = s.exact_stop;
     const uint64_t v_cap =
         std::min<uint64_t>(kMaxVCruise, (uint64_t{1} << kFracBits) / lim_.min_period);
     set_block_rates(b, static_cast<double>(n), vc, acc, v_cap, kMaxA);
@@ -325,6 +332,7 @@ void Lookahead::push(const Segment& s, size_t segment_index) {
 bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chords,
                          size_t first_index) {
   if (!lim_.arc_walk || chords.empty()) return false;
+  if (m.plane != gcode::Plane::kXY) return false;  // ARC frames walk the XY plane
   const auto& spm = lim_.steps_per_mm;
   if (spm[0] != spm[1]) return false;  // a circle in mm is an ellipse on the step lattice
   const Segment& first = chords.front();
@@ -424,15 +432,19 @@ bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chord
 void Lookahead::add_block(Block b) {
   const std::array<double, 4>* prev_unit = nullptr;
   double prev_vc = 0.0;
+  bool prev_exact = false;
   if (!buf_.empty()) {
     prev_unit = &buf_.back().unit_out;
     prev_vc = buf_.back().p.v_cruise;
+    prev_exact = buf_.back().exact_stop;
   } else if (last_unit_) {
     prev_unit = &*last_unit_;
     prev_vc = last_vc_;
+    prev_exact = last_exact_;
   }
-  if (prev_unit) {
-    const double vj = junction_speed(*prev_unit, b.unit, lim_.junction_deviation, lim_.a_max);
+  if (prev_unit && !prev_exact) {
+    const double jd = b.junction_deviation > 0.0 ? b.junction_deviation : lim_.junction_deviation;
+    const double vj = junction_speed(*prev_unit, b.unit, jd, lim_.a_max);
     b.v_junction_max = std::min({vj, prev_vc, b.p.v_cruise});
   } else {
     b.v_junction_max = 0.0;
@@ -445,6 +457,7 @@ void Lookahead::add_block(Block b) {
     prev_exit_ = exits[0];
     last_unit_ = f.unit_out;
     last_vc_ = f.p.v_cruise;
+    last_exact_ = f.exact_stop;
     buf_.pop_front();
   }
 }
@@ -589,8 +602,19 @@ ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg) {
 ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim) {
   ProfilePlan out;
   Lookahead la(lim);
+  // Items that wait for the profiles of the segments before them: (first segment after, item).
+  std::deque<std::pair<size_t, ProfileItem>> held;
+  auto release = [&](size_t before_segment) {
+    while (!held.empty() && held.front().first <= before_segment) {
+      out.items.push_back(std::move(held.front().second));
+      held.pop_front();
+    }
+  };
   auto drain = [&] {
-    for (auto& p : la.take()) out.items.emplace_back(std::move(p));
+    for (auto& p : la.take()) {
+      release(p.segment_index);
+      out.items.emplace_back(std::move(p));
+    }
   };
   size_t seg_index = 0;
   uint64_t dwell_clocks = 0;
@@ -605,6 +629,12 @@ ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim) {
     }
     chords.clear();
     drain();
+  };
+  auto stop_here = [&] {
+    la.stop();
+    ++out.stats.forced_stops;
+    drain();
+    release(SIZE_MAX);
   };
   for (const auto& item : plan.items) {
     if (const auto* s = std::get_if<Segment>(&item)) {
@@ -626,24 +656,26 @@ ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim) {
     }
     flush_arc();
     if (const auto* d = std::get_if<Dwell>(&item)) {
-      la.stop();
-      ++out.stats.forced_stops;
-      drain();
+      stop_here();
       dwell_clocks +=
           static_cast<uint64_t>(std::llround(d->seconds * static_cast<double>(lim.clk_hz)));
       out.items.emplace_back(*d);
     } else if (const auto* h = std::get_if<HeaterCommand>(&item)) {
-      if (h->mcode == 109 || h->mcode == 190) {
-        la.stop();
-        ++out.stats.forced_stops;
-        drain();
-      }
-      out.items.emplace_back(*h);
+      if (h->mcode == 109 || h->mcode == 190) stop_here();
+      held.emplace_back(seg_index, *h);
+    } else if (const auto* p = std::get_if<gcode::Pause>(&item)) {
+      stop_here();  // the machine is at rest when the operator is asked
+      out.items.emplace_back(*p);
+    } else if (const auto* o = std::get_if<gcode::Output>(&item)) {
+      held.emplace_back(seg_index, *o);
+    } else if (const auto* m = std::get_if<gcode::Message>(&item)) {
+      held.emplace_back(seg_index, *m);
     }
   }
   flush_arc();
   la.stop();
   drain();
+  release(SIZE_MAX);
   const ProfileStats& ls = la.stats();
   out.stats.arcs = ls.arcs;
   out.stats.blocks = ls.blocks;

@@ -40,11 +40,13 @@ uint32_t v1_numerator(uint64_t clk_hz, double steps_per_mm) {
 }
 
 std::vector<gcode::Vec4> arc_chord_points(const gcode::Move& m, double tolerance_mm) {
+  const gcode::PlaneAxes pa = gcode::plane_axes(m.plane);
+  const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v);
   const double cx = m.center[0], cy = m.center[1];
-  const double r0 = std::hypot(m.start[0] - cx, m.start[1] - cy);
-  const double r1 = std::hypot(m.end[0] - cx, m.end[1] - cy);
-  const double a0 = std::atan2(m.start[1] - cy, m.start[0] - cx);
-  const double a1 = std::atan2(m.end[1] - cy, m.end[0] - cx);
+  const double r0 = std::hypot(m.start[u] - cx, m.start[v] - cy);
+  const double r1 = std::hypot(m.end[u] - cx, m.end[v] - cy);
+  const double a0 = std::atan2(m.start[v] - cy, m.start[u] - cx);
+  const double a1 = std::atan2(m.end[v] - cy, m.end[u] - cx);
   const bool cw = m.motion == gcode::Motion::kArcCw;
   constexpr double kTwoPi = 2.0 * std::numbers::pi;
   double sweep;
@@ -55,6 +57,7 @@ std::vector<gcode::Vec4> arc_chord_points(const gcode::Move& m, double tolerance
     if (cw && sweep >= 0.0) sweep -= kTwoPi;
     if (!cw && sweep <= 0.0) sweep += kTwoPi;
   }
+  sweep += (cw ? -kTwoPi : kTwoPi) * m.extra_turns;
   const double rmax = std::max(r0, r1);
   double max_angle = kTwoPi / 3.0;  // never fewer than 3 chords for a full circle
   if (tolerance_mm > 0.0 && tolerance_mm < rmax) {
@@ -72,10 +75,9 @@ std::vector<gcode::Vec4> arc_chord_points(const gcode::Move& m, double tolerance
     const double a = a0 + sweep * f;
     const double r = r0 + (r1 - r0) * f;
     gcode::Vec4 p;
-    p[0] = cx + r * std::cos(a);
-    p[1] = cy + r * std::sin(a);
-    p[2] = m.start[2] + (m.end[2] - m.start[2]) * f;
-    p[3] = m.start[3] + (m.end[3] - m.start[3]) * f;
+    for (size_t i = 0; i < 4; ++i) p[i] = m.start[i] + (m.end[i] - m.start[i]) * f;
+    p[u] = cx + r * std::cos(a);
+    p[v] = cy + r * std::sin(a);
     pts.push_back(p);
   }
   pts.push_back(m.end);
@@ -98,10 +100,40 @@ void Planner::add(const gcode::Command& command) {
     plan_.items.emplace_back(
         HeaterCommand{h->mcode, h->s.value_or(0.0), h->s.has_value(), h->line});
     ++plan_.stats.heater_commands;
+  } else if (const auto* p = std::get_if<gcode::Pause>(&command)) {
+    plan_.items.emplace_back(*p);
+    ++plan_.stats.pauses;
+  } else if (const auto* o = std::get_if<gcode::Output>(&command)) {
+    plan_.items.emplace_back(*o);
+    ++plan_.stats.outputs;
+  } else if (const auto* msg = std::get_if<gcode::Message>(&command)) {
+    plan_.items.emplace_back(*msg);
+    ++plan_.stats.messages;
+  } else if (const auto* l = std::get_if<gcode::Limits>(&command)) {
+    add_limits(*l);
   }
 }
 
+// M201/M203/M204/M205: for the rest of the job, never above the machine's limits.
+void Planner::add_limits(const gcode::Limits& l) {
+  auto lower = [&](double& slot, double value, double machine) {
+    if (value <= 0.0) return;
+    if (machine > 0.0 && value > machine) {
+      ++plan_.stats.limits_clamped;
+      value = machine;
+    }
+    slot = value;
+  };
+  for (size_t a = 0; a < 4; ++a) {
+    lower(job_accel_[a], l.accel_mm_s2[a], cfg_.max_accel_mm_s2[a]);
+    lower(job_max_feed_[a], l.max_feed_mm_min[a], cfg_.max_feed_mm_min[a]);
+  }
+  lower(job_path_accel_, l.path_accel_mm_s2, 0.0);
+  lower(job_jd_, l.junction_deviation_mm, cfg_.junction_deviation_mm);
+}
+
 void Planner::add_move(const gcode::Move& m) {
+  move_ = &m;
   const bool cutting = is_cutting(m, cfg_);
   const uint8_t code = cutting ? static_cast<uint8_t>(m.motion) : 0;
   const bool rapid = m.motion == gcode::Motion::kRapid;
@@ -112,11 +144,16 @@ void Planner::add_move(const gcode::Move& m) {
     plan_.stats.arc_chords += pts.size();
     plan_.arcs.push_back(m);
     arc_id_ = static_cast<uint32_t>(plan_.arcs.size());
-    for (const auto& p : pts) add_straight(p, code, feed, rapid, m.line, s_word);
+    for (size_t k = 0; k < pts.size(); ++k) {
+      last_piece_ = k + 1 == pts.size();
+      add_straight(pts[k], code, feed, rapid, m.line, s_word);
+    }
+    last_piece_ = true;
     arc_id_ = 0;
   } else {
     add_straight(m.end, code, feed, rapid, m.line, s_word);
   }
+  move_ = nullptr;
 }
 
 void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double feed, bool rapid,
@@ -144,8 +181,9 @@ void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double fe
     for (size_t a = 0; a < 3; ++a) {
       const double d = std::fabs(static_cast<double>(delta[a]) / cfg_.steps_per_mm[a]);
       const double comp = eff * d / len3;
-      if (comp > cfg_.max_feed_mm_min[a] * (1.0 + 1e-12)) {
-        eff *= cfg_.max_feed_mm_min[a] / comp;
+      const double cap = job_max_feed_[a] > 0.0 ? job_max_feed_[a] : cfg_.max_feed_mm_min[a];
+      if (comp > cap * (1.0 + 1e-12)) {
+        eff *= cap / comp;
         limited = true;
       }
     }
@@ -163,6 +201,15 @@ void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double fe
     s.exec_feed_mm_min = eff;
     s.spindle_s = spindle_s;
     s.arc_id = arc_id_;
+    s.accel_mm_s2 = job_accel_;
+    s.path_accel_mm_s2 = job_path_accel_;
+    s.junction_deviation_mm = job_jd_;
+    if (move_) {
+      if (move_->path_tolerance_mm > 0.0 &&
+          (s.junction_deviation_mm == 0.0 || move_->path_tolerance_mm < s.junction_deviation_mm))
+        s.junction_deviation_mm = std::min(move_->path_tolerance_mm, cfg_.junction_deviation_mm);
+      s.exact_stop = move_->exact_stop && k == parts && last_piece_;
+    }
     for (size_t a = 0; a < 4; ++a) {
       const auto part = static_cast<int64_t>(static_cast<__int128>(delta[a]) * k / parts);
       s.target[a] = origin[a] + part;

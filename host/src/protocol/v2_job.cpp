@@ -11,6 +11,25 @@
 namespace fpgacnc::protocol::v2 {
 namespace {
 
+// Pauses, messages and outputs keep their place in the frame list (Job::events).
+template <typename Item>
+bool record_event(Job& job, const Item& item) {
+  if (const auto* p = std::get_if<gcode::Pause>(&item)) {
+    job.events.push_back(JobEvent{job.frames.size(), *p});
+    ++job.pauses;
+  } else if (const auto* m = std::get_if<gcode::Message>(&item)) {
+    job.events.push_back(JobEvent{job.frames.size(), *m});
+    ++job.messages;
+  } else if (const auto* o = std::get_if<gcode::Output>(&item)) {
+    job.events.push_back(JobEvent{job.frames.size(), *o});
+    ++job.skipped_outputs;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+
 constexpr uint64_t kMaxT = std::numeric_limits<uint32_t>::max();
 constexpr int64_t kMaxSteps = std::numeric_limits<int32_t>::max();
 
@@ -215,7 +234,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         ++job.dwells;
         push(std::move(jf));
       }
-    } else {
+    } else if (!record_event(job, item)) {
       ++job.skipped_heater;
     }
   }
@@ -380,7 +399,7 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
         ++job.dwells;
         push(std::move(jf));
       }
-    } else {
+    } else if (!record_event(job, item)) {
       ++job.skipped_heater;
     }
   }

@@ -134,7 +134,10 @@ struct ProfileStats {
   uint64_t arcs_as_chords = 0;  // arcs that could not be sent natively (chords instead)
 };
 
-using ProfileItem = std::variant<Profile, Dwell, HeaterCommand>;
+// Pauses, outputs and messages come out in their place between the profiles: before the first
+// profile of the segment that followed them in the plan.
+using ProfileItem = std::variant<Profile, Dwell, HeaterCommand, gcode::Pause, gcode::Output,
+                                 gcode::Message>;
 
 struct ProfilePlan {
   std::vector<ProfileItem> items;
@@ -167,6 +170,8 @@ class Lookahead {
     double scale_v = 0.0;          // LSB per mm/s
     double l_eff = 0.0;            // length used for speed changes, mm (L minus a safety margin)
     double v_junction_max = 0.0;   // entry junction limit, mm/s
+    double junction_deviation = 0.0;  // mm at its entry junction (0: the machine's)
+    bool exact_stop = false;          // G61: plan a stop at its end
     std::array<double, 4> unit{};  // path direction at the start (XYZ, or E alone)
     std::array<double, 4> unit_out{};  // at the end (= unit for a line)
     uint64_t v_cap = 0;                // largest V field (LSB)
@@ -184,6 +189,7 @@ class Lookahead {
   std::deque<Block> buf_;
   std::optional<std::array<double, 4>> last_unit_;  // end direction of the last emitted block
   double last_vc_ = 0.0;
+  bool last_exact_ = false;
   double prev_exit_ = 0.0;  // planned exit speed of the last emitted block (mm/s path)
   std::vector<Profile> out_;
   ProfileStats stats_;

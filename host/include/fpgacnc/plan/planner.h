@@ -32,6 +32,12 @@ struct Segment {
   int source_line = 0;      // G-code (or step file) line
   Steps4 target{};          // absolute position in steps after the segment
   uint32_t arc_id = 0;      // chord of Plan::arcs[arc_id - 1] (0: not an arc chord)
+  // Job limits in force (M201/M204/M205, G61/G64; 0 = the machine's): the look-ahead takes the
+  // smaller of these and the machine's limits.
+  std::array<double, 4> accel_mm_s2{};  // per axis
+  double path_accel_mm_s2 = 0.0;
+  double junction_deviation_mm = 0.0;
+  bool exact_stop = false;  // G61: stop at the end of this segment
 };
 
 struct Dwell {
@@ -47,7 +53,10 @@ struct HeaterCommand {
   int source_line = 0;
 };
 
-using PlanItem = std::variant<Segment, Dwell, HeaterCommand>;
+// Pauses (M0/M1, M6, M600), outputs (M7-M9, M62-M65, M106/M107) and messages (M117, M118,
+// M73, (MSG,...)) keep their place between the segments.
+using PlanItem = std::variant<Segment, Dwell, HeaterCommand, gcode::Pause, gcode::Output,
+                              gcode::Message>;
 
 struct Stats {
   uint64_t segments = 0;
@@ -56,6 +65,10 @@ struct Stats {
   uint64_t arc_chords = 0;
   uint64_t dwells = 0;
   uint64_t heater_commands = 0;  // recorded, not sent by v1
+  uint64_t pauses = 0;
+  uint64_t outputs = 0;
+  uint64_t messages = 0;
+  uint64_t limits_clamped = 0;  // M201/M203/M204/M205 values above the machine's (lowered)
   uint64_t feed_clamped = 0;     // v1 feed outside [1, 65535] (warning)
   uint64_t feed_limited = 0;     // feed reduced to respect an axis max feed (warning)
   uint64_t split_moves = 0;      // moves split because |steps| > INT32_MAX
@@ -97,8 +110,16 @@ class Planner {
   void add_move(const gcode::Move& m);
   void add_straight(const gcode::Vec4& target_mm, uint8_t code, double feed, bool rapid, int line,
                     double spindle_s);
+  void add_limits(const gcode::Limits& l);
   config::MachineConfig cfg_;
   PlanOptions opt_;
+  // Job limits in force (0 = the machine's).
+  std::array<double, 4> job_max_feed_{};
+  std::array<double, 4> job_accel_{};
+  double job_path_accel_ = 0.0;
+  double job_jd_ = 0.0;
+  const gcode::Move* move_ = nullptr;  // the move being added
+  bool last_piece_ = true;             // its last chord (G61 stops there only)
   Plan plan_;
   Steps4 pos_{};         // absolute steps
   uint32_t arc_id_ = 0;  // arc whose chords are being added

@@ -24,6 +24,7 @@
 
 #include <array>
 #include <cstdint>
+#include <variant>
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
@@ -44,6 +45,13 @@ struct JobFrame {
   bool profile = false;  // planned motion: LINE_PROFILE or ARC
 };
 
+// A pause, a message or an output at its place in the frame list: it happens once every frame
+// before frames[before_frame] is sent (pauses: and done).
+struct JobEvent {
+  size_t before_frame = 0;
+  std::variant<gcode::Pause, gcode::Message, gcode::Output> what;
+};
+
 struct Job {
   // CONFIG_AXIS for axes 0..3 (the streamer sends those below the device's N_AXES).
   std::vector<Frame> config;
@@ -56,6 +64,12 @@ struct Job {
   size_t split_moves = 0;     // segments sent as more than one LINE
   size_t t_raised = 0;        // LINE frames whose T was raised to n_dom * min_period
   size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
+  // Pauses, messages and outputs in frame order. Outputs are not frames yet: the streamer
+  // reports them (skipped_outputs counts them).
+  std::vector<JobEvent> events;
+  size_t pauses = 0;
+  size_t messages = 0;
+  size_t skipped_outputs = 0;
   size_t profiles = 0;        // LINE_PROFILE frames (motion = "profile")
   size_t arcs = 0;            // ARC frames (motion = "profile" with an arc walk)
   // motion = "profile": DIR hold/setup pauses at reversals (HOLD/SETUP path), in total_t.
