@@ -26,6 +26,7 @@
 #include <map>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <string>
 #include <toml.hpp>
 #include <vector>
@@ -220,6 +221,34 @@ TEST_P(CorpusFile, OutcomeAsRecordedAndNetStepsEqualThePlan) {
     EXPECT_EQ(o.net[a], o.final_steps[a])
         << e.path << ": axis " << cfgns::kAxisNames[a]
         << ": net steps from the board's STEP/DIR edges differ from the plan's final target";
+}
+
+// The manifest itself: one entry per file, every G-code file of corpus/ has one, and every key
+// holds one of its documented values (corpus/manifest.toml's header).
+TEST(CorpusManifest, EveryFileHasOneWellFormedEntry) {
+  const std::set<std::string> kinds{"mill", "laser", "printer", "pcb", "lathe"};
+  const std::set<std::string> dialects{"grbl",    "linuxcnc", "marlin", "reprap",
+                                       "klipper", "makerbot", "generic"};
+  const std::set<std::string> configs{"mill", "laser", "printer"};
+  std::set<std::string> paths;
+  for (const Entry& e : entries()) {
+    EXPECT_TRUE(paths.insert(e.path).second) << e.path << ": two entries";
+    EXPECT_TRUE(std::filesystem::is_regular_file(kCorpus + "/" + e.path)) << e.path;
+    EXPECT_TRUE(kinds.count(e.kind)) << e.path << ": kind " << e.kind;
+    EXPECT_TRUE(dialects.count(e.dialect)) << e.path << ": dialect " << e.dialect;
+    EXPECT_TRUE(configs.count(e.config)) << e.path << ": config " << e.config;
+    EXPECT_EQ(e.source.rfind("https://github.com/", 0), 0u) << e.path << ": source " << e.source;
+    EXPECT_FALSE(e.licence.empty()) << e.path;
+    EXPECT_FALSE(e.program.empty()) << e.path;
+    EXPECT_EQ(e.expect == "refused", !e.error.empty())
+        << e.path << ": an error message goes with expect = \"refused\" only";
+  }
+  const std::set<std::string> gcode{".gcode", ".gco", ".nc", ".ngc", ".tap"};
+  for (const auto& f : std::filesystem::recursive_directory_iterator(kCorpus)) {
+    if (!f.is_regular_file() || !gcode.count(f.path().extension().string())) continue;
+    const std::string rel = std::filesystem::relative(f.path(), kCorpus).generic_string();
+    EXPECT_TRUE(paths.count(rel)) << rel << " has no entry in corpus/manifest.toml";
+  }
 }
 
 std::string test_name(const ::testing::TestParamInfo<Entry>& info) {
