@@ -19,7 +19,15 @@ namespace fpgacnc::cli {
 struct CommonOptions {
   std::string config_path;          // --config
   double feed_override_pct = -1.0;  // --feed-override (negative: from config)
+  std::string dialect;              // --dialect (empty: from config)
+  std::string tool_table;           // --tool-table (empty: from config)
 };
+
+// The interpreter's part of a report: dialect and why, pauses/outputs/messages, warnings.
+void print_gcode_report(const plan::Plan& p);
+
+// --dialect and --tool-table (the G-code options every command that reads G-code takes).
+void add_gcode_options(CLI::App* sub, CommonOptions& opt);
 
 // Loads the configuration (defaults when no --config) and applies command-line overrides.
 config::MachineConfig load_config(const CommonOptions& opt);

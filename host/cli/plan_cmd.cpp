@@ -49,6 +49,7 @@ void print_summary(const plan::Plan& p, const config::MachineConfig& cfg) {
       "warnings: {} feeds clamped to [1, 65535], {} feeds limited by axis max, {} moves "
       "split (> INT32_MAX steps), {} Z/E-only moves not driven by v1\n",
       s.feed_clamped, s.feed_limited, s.split_moves, s.ze_only_moves);
+  print_gcode_report(p);
   if (p.input.modal_arc_as_line || p.input.arc_radius_mismatch) {
     fmt::print(
         "input warnings: {} modal G2/G3 lines without I/J/R run as straight lines, {} arcs "
@@ -287,6 +288,7 @@ void register_plan(CLI::App& app) {
   sub->add_option("--v2-hex", args->v2_hex_out,
                   "write the v2 frames as hex, one frame a line (SEQ from 0: config, "
                   "NUMERATORS, LINE/DWELL, RELEASE)");
+  add_gcode_options(sub, args->common);
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
   sub->add_option("--motion", args->motion,

@@ -79,6 +79,7 @@ void run_sim(const SimArgs& a) {
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
+  print_gcode_report(p);
   std::string proto = a.protocol.empty() ? cfg.protocol : a.protocol;
   if (proto == "auto") proto = "v2";
   if (proto != "v1" && proto != "v2") throw std::invalid_argument("--protocol must be v1 or v2");
@@ -155,6 +156,7 @@ void register_sim(CLI::App& app) {
                   "v1 (stop-and-wait) or v2 (streaming; default, and what `auto` means here)")
       ->check(CLI::IsMember({"v1", "v2", "auto"}));
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
+  add_gcode_options(sub, args->common);
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
   sub->add_option("--plot", args->plot_path, "executed vs commanded path plot (.svg or .png)");

@@ -119,6 +119,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   po.feed_override_pct = cfg.feed_override_pct;
   // Plan and pack the whole job before opening anything: an error writes no byte.
   const plan::Plan p = plan::plan_input_file(a.input, cfg, po);
+  print_gcode_report(p);
   if (port.empty() && sim.model == "both") {
     if (!hooks.compare_boards) throw link::Error("--model both: no simulated boards built in");
     hooks.compare_boards(p, cfg, sim);
@@ -283,6 +284,7 @@ void register_stream(CLI::App& app, StreamHooks hooks) {
                   "v2: resend from the device's next_seq when nothing is acknowledged this long, "
                   "seconds (default 0.3)")
       ->check(CLI::PositiveNumber);
+  add_gcode_options(sub, args->common);
   sub->add_option("--feed-override", args->common.feed_override_pct, "feed override percent")
       ->check(CLI::Range(1.0, 1000.0));
   sub->add_option("--model", args->sim.model,

@@ -1,5 +1,7 @@
 #include "fpgacnc/config/machine.h"
 
+#include "fpgacnc/gcode/dialect.h"
+
 #include <fmt/format.h>
 
 #include <fstream>
@@ -122,6 +124,28 @@ class Reader {
             fail(tv, full, "unknown key");
           }
           if (clocks == 0) fail(tv, full, "must be >= 1 clock");
+        }
+      } else if (k == "gcode") {
+        if (!v.is_table()) fail(v, k, "expected a table");
+        for (const auto& [gk, gv] : v.as_table()) {
+          const std::string full = k + "." + gk;
+          if (gk == "dialect") {
+            c.gcode.dialect = string(gv, full);
+            if (c.gcode.dialect != "auto" && !gcode::parse_dialect(c.gcode.dialect))
+              fail(gv, full, "expected \"auto\", \"grbl\", \"linuxcnc\", \"marlin\" or \"reprap\"");
+          } else if (gk == "tool_table") {
+            c.gcode.tool_table = string(gv, full);
+          } else if (gk == "tool_change") {
+            const std::string t = string(gv, full);
+            if (t != "pause" && t != "ignore") fail(gv, full, "expected \"pause\" or \"ignore\"");
+            c.gcode.tool_change_pause = t == "pause";
+          } else if (gk == "optional_stop") {
+            c.gcode.optional_stop = boolean(gv, full);
+          } else if (gk == "block_delete") {
+            c.gcode.block_delete = boolean(gv, full);
+          } else {
+            fail(gv, full, "unknown key");
+          }
         }
       } else if (k == "heater") {  // issue 7: host/src/heat/heater_config.cpp
         heat::read_heater_toml(v, c.heaters, name_);

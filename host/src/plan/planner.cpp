@@ -251,6 +251,20 @@ Plan Planner::finish() {
   return std::move(plan_);
 }
 
+gcode::Options gcode_options(const config::MachineConfig& cfg) {
+  gcode::Options go;
+  go.default_feed_mm_min = cfg.default_feed_mm_min;
+  if (cfg.gcode.dialect != "auto") {
+    go.dialect = gcode::parse_dialect(cfg.gcode.dialect);
+    go.dialect_source = "configuration [gcode] dialect =";
+  }
+  go.tool_table = cfg.gcode.tool_table;
+  go.tool_change_pause = cfg.gcode.tool_change_pause;
+  go.optional_stop = cfg.gcode.optional_stop;
+  go.block_delete = cfg.gcode.block_delete;
+  return go;
+}
+
 Plan plan_program(const gcode::Program& program, const config::MachineConfig& cfg,
                   PlanOptions options) {
   Planner p(cfg, options);
@@ -266,8 +280,7 @@ Plan plan_gcode_file(const std::string& path, const config::MachineConfig& cfg,
   std::ifstream f(path, std::ios::binary);
   if (!f) throw gcode::Error(path, 0, 0, "cannot open file");
   Planner p(cfg, options);
-  gcode::Options go;
-  go.default_feed_mm_min = cfg.default_feed_mm_min;
+  const gcode::Options go = gcode_options(cfg);
   const gcode::Stats in =
       gcode::parse_stream(f, path, go, [&](const gcode::Command& c) { p.add(c); });
   Plan plan = p.finish();

@@ -52,6 +52,14 @@ struct MachineConfig {
   // motion = "profile": send G2/G3 in XY as ARC frames (the device's circular DDA) where the
   // arc qualifies (docs/motion.md "Native arcs on the host"), chords otherwise; false: chords.
   bool native_arcs = true;
+  // [gcode]: how G-code files are read (docs/gcode.md).
+  struct GCode {
+    std::string dialect = "auto";  // "auto" (detected per file), grbl, linuxcnc, marlin, reprap
+    std::string tool_table;        // LinuxCNC-format tool table for G43 H and M6 prompts
+    bool tool_change_pause = true;  // M6 stops at rest and asks for the tool
+    bool optional_stop = false;     // M1 pauses like M0
+    bool block_delete = false;      // lines starting with '/' are skipped
+  } gcode;
   // [heater.hotend], [heater.bed]: heater channels (issue 7; fpgacnc/heat/heater_config.h).
   heat::HeaterSet heaters;
 };

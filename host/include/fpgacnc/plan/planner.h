@@ -125,6 +125,9 @@ class Planner {
   uint32_t arc_id_ = 0;  // arc whose chords are being added
 };
 
+// The interpreter's options from the machine configuration ([gcode] and default feed).
+gcode::Options gcode_options(const config::MachineConfig& cfg);
+
 Plan plan_program(const gcode::Program& program, const config::MachineConfig& cfg,
                   PlanOptions options);
 // Parses and plans a G-code file in one streaming pass (no intermediate command list).
