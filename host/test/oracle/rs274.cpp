@@ -291,11 +291,16 @@ OracleRun run_rs274(const Rs274Setup& setup, const std::string& program) {
   std::vector<char*> argv;
   for (auto& s : argv_s) argv.push_back(s.data());
   argv.push_back(nullptr);
+  // HOME: rs274 keeps its tool table in $HOME/.tool.mmap; runs in parallel (CTest -j) must
+  // not share one.
   std::vector<std::string> env_s;
   for (char** e = environ; *e; ++e) {
-    if (std::strncmp(*e, "LD_PRELOAD=", 11) != 0) env_s.emplace_back(*e);
+    if (std::strncmp(*e, "LD_PRELOAD=", 11) != 0 && std::strncmp(*e, "HOME=", 5) != 0) {
+      env_s.emplace_back(*e);
+    }
   }
   env_s.push_back("LD_PRELOAD=" + setup.shim);
+  env_s.push_back("HOME=" + dir.string());
   std::vector<char*> envp;
   for (auto& s : env_s) envp.push_back(s.data());
   envp.push_back(nullptr);
