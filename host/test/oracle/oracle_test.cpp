@@ -69,10 +69,6 @@ OurRun run_ours(const std::string& path) {
   return r;
 }
 
-struct OurMove {
-  const gcode::Move* move;
-};
-
 std::vector<const gcode::Move*> our_moves(const gcode::Program& p) {
   std::vector<const gcode::Move*> v;
   for (const auto& c : p.commands) {
@@ -93,18 +89,13 @@ std::string xyz(const oracle::Xyz& p) {
   return fmt::format("({:.9g}, {:.9g}, {:.9g})", p[0], p[1], p[2]);
 }
 
+// (if, not switch: alternatives added to Motion later need no change here)
 const char* motion_name(gcode::Motion m) {
-  switch (m) {
-    case gcode::Motion::kRapid:
-      return "rapid";
-    case gcode::Motion::kLinear:
-      return "linear";
-    case gcode::Motion::kArcCw:
-      return "arc cw";
-    case gcode::Motion::kArcCcw:
-      return "arc ccw";
-  }
-  return "?";
+  if (m == gcode::Motion::kRapid) return "rapid";
+  if (m == gcode::Motion::kLinear) return "linear";
+  if (m == gcode::Motion::kArcCw) return "arc cw";
+  if (m == gcode::Motion::kArcCcw) return "arc ccw";
+  return "other motion";
 }
 
 // Every way the two runs of one accepted program differ; empty when they agree. Moves are
