@@ -18,6 +18,8 @@
 #include <variant>
 #include <vector>
 
+#include <toml.hpp>
+
 #include "fpgacnc/gcode/interpreter.h"
 #include "generator.h"
 #include "rs274.h"
@@ -234,24 +236,35 @@ std::vector<Program> edge_programs() {
   return v;
 }
 
-// Corpus files of the LinuxCNC dialect: every *.ngc file under corpus/ (LinuxCNC's own file
-// extension) and every file under a corpus directory named "linuxcnc".
+// Corpus files of the LinuxCNC dialect: the entries of corpus/manifest.toml with dialect
+// "linuxcnc"; without a manifest, every *.ngc file under corpus/ (LinuxCNC's own file
+// extension) and every file under a corpus directory named "linuxcnc". FPGACNC_ORACLE_CORPUS
+// names another corpus directory.
 std::vector<Program> corpus_programs() {
   std::vector<Program> v;
-  const fs::path root = fs::path(kSource) / "corpus";
+  const char* env = std::getenv("FPGACNC_ORACLE_CORPUS");
+  const fs::path root = env && *env ? fs::path(env) : fs::path(kSource) / "corpus";
   if (!fs::exists(root)) return v;
-  for (const auto& e : fs::recursive_directory_iterator(root)) {
-    if (!e.is_regular_file()) continue;
-    const fs::path rel = fs::relative(e.path(), root);
-    const bool ngc = e.path().extension() == ".ngc";
-    const bool in_linuxcnc = std::any_of(rel.begin(), rel.end(),
-                                         [](const fs::path& part) { return part == "linuxcnc"; });
-    const std::string fname = e.path().filename().string();
-    const bool data_file = !(fname == "README.md" || fname.rfind("LICENSE", 0) == 0 ||
-                             fname.rfind("COPYING", 0) == 0 || e.path().extension() == ".md" ||
-                             e.path().extension() == ".txt");
-    if ((ngc || in_linuxcnc) && data_file) {
-      v.push_back({"corpus/" + rel.string(), e.path().string()});
+  if (fs::exists(root / "manifest.toml")) {
+    const auto manifest = toml::parse((root / "manifest.toml").string());
+    for (const auto& f : toml::find<toml::array>(manifest, "file")) {
+      if (toml::find_or<std::string>(f, "dialect", "") != "linuxcnc") continue;
+      const auto rel = toml::find<std::string>(f, "path");
+      v.push_back({"corpus/" + rel, (root / rel).string()});
+    }
+  } else {
+    for (const auto& e : fs::recursive_directory_iterator(root)) {
+      if (!e.is_regular_file()) continue;
+      const fs::path rel = fs::relative(e.path(), root);
+      const bool ngc = e.path().extension() == ".ngc";
+      const bool in_linuxcnc = std::any_of(rel.begin(), rel.end(),
+                                           [](const fs::path& part) { return part == "linuxcnc"; });
+      const std::string fname = e.path().filename().string();
+      const bool data_file = !(fname.rfind("LICENSE", 0) == 0 || fname.rfind("COPYING", 0) == 0 ||
+                               e.path().extension() == ".md" || e.path().extension() == ".txt");
+      if ((ngc || in_linuxcnc) && data_file) {
+        v.push_back({"corpus/" + rel.string(), e.path().string()});
+      }
     }
   }
   std::sort(v.begin(), v.end(), [](const Program& a, const Program& b) { return a.name < b.name; });
