@@ -376,6 +376,7 @@ TEST(Oracle, CanonReader) {
       "    2 L3 N..... SET_G5X_OFFSET(2, 1, 2, 3, 0, 0, 0)\n"
       "    3 L4 N..... SET_G92_OFFSET(0.5, 0, 0, 0, 0, 0)\n"
       "    4 L5 N0010  USE_TOOL_LENGTH_OFFSET(0 0 2, 0 0 0, 0 0 0)\n"
+      " hello (1.000000)\n"  // a (PRINT, ...) comment's output: not a command
       "    5 L6 N..... STRAIGHT_FEED(1, 1, 1, 0, 0, 0)\n"
       "    6 L7 N..... SELECT_PLANE(CANON_PLANE_XZ)\n"
       "    7 L8 N..... ARC_FEED(4, 5, 6, 7, 1, 8, 0, 0, 0, 0, 0, 0)\n"

@@ -90,27 +90,36 @@ void parse_canon(std::string_view out, OracleRun& run) {
     if (eol == std::string_view::npos) eol = out.size();
     const std::string line(out.substr(pos, eol - pos));
     pos = eol + 1;
-    // "<counter> L<line> N..... NAME(args)"; a trailing fragment without a command (rs274
-    // prints the counter of a command it never finishes when it stops) is ignored.
-    const size_t open = line.find('(');
+    // A command: "<counter> L<line> N<number or .....> NAME(args)". Other lines are text the
+    // program printed itself ((PRINT, ...) comments), or the counter of a command rs274 never
+    // finished when it stopped on an error.
+    size_t i = line.find_first_not_of(' ');
+    if (i == std::string::npos || !std::isdigit(static_cast<unsigned char>(line[i]))) continue;
+    while (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) ++i;
+    if (i >= line.size() || line[i] != ' ') continue;
+    ++i;
+    if (i < line.size() && line[i] == 'N') {
+      throw std::runtime_error(
+          "rs274 output has no source line numbers: the precision library (LD_PRELOAD) was not "
+          "applied or does not match this rs274 (line: " +
+          line + ")");
+    }
+    if (i >= line.size() || line[i] != 'L') continue;
+    const size_t lstart = i;
+    while (i < line.size() && line[i] != ' ') ++i;
+    const std::string ltok = line.substr(lstart, i - lstart);
+    ++i;
+    if (i >= line.size() || line[i] != 'N') continue;
+    ++i;
+    while (i < line.size() &&
+           (line[i] == '.' || std::isdigit(static_cast<unsigned char>(line[i])))) {
+      ++i;
+    }
+    while (i < line.size() && line[i] == ' ') ++i;
+    const size_t open = line.find('(', i);
     const size_t close = line.rfind(')');
-    if (open == std::string::npos || close == std::string::npos || close < open) {
-      if (line.find_first_not_of(" \t") == std::string::npos) continue;
-      if (line.find(" L") != std::string::npos && line.find('N') != std::string::npos) continue;
-      throw std::runtime_error("rs274 output: unreadable line: " + line);
-    }
-    std::istringstream head(line.substr(0, open));
-    std::string counter, ltok, ntok, name;
-    head >> counter >> ltok >> ntok >> name;
-    if (ltok.size() < 2 || ltok[0] != 'L' || name.empty()) {
-      if (ltok.size() >= 1 && ltok[0] == 'N') {
-        throw std::runtime_error(
-            "rs274 output has no source line numbers: the precision library (LD_PRELOAD) was "
-            "not applied or does not match this rs274 (line: " +
-            line + ")");
-      }
-      throw std::runtime_error("rs274 output: unreadable line: " + line);
-    }
+    if (open == std::string::npos || close == std::string::npos || close < open) continue;
+    const std::string name = line.substr(i, open - i);
     const int src = std::atoi(ltok.c_str() + 1);
     if (src < 0) {
       throw std::runtime_error(
