@@ -54,7 +54,7 @@ struct Program {
 
 struct OurRun {
   bool refused = false;
-  std::string message;  // what() with the file name replaced by nothing: "LINE:COL: error: ..."
+  std::string message;  // what() without the file name: "LINE:COL: error: ..."
   gcode::Program program;
 };
 
@@ -64,8 +64,16 @@ OurRun run_ours(const std::string& path) {
     r.program = gcode::parse_file(path, our_options());
   } catch (const std::exception& e) {
     r.refused = true;
+    // Stable across checkouts and temporary directories: the leading "FILE:" goes, any other
+    // mention of the path becomes "<file>".
     std::string m = e.what();
-    if (m.rfind(path + ":", 0) == 0) m = m.substr(path.size() + 1);
+    const std::string base = fs::path(path).filename().string();
+    if (m.rfind(path + ":", 0) == 0) {
+      m = m.substr(path.size() + 1);
+    } else if (m.rfind(base + ":", 0) == 0) {
+      m = m.substr(base.size() + 1);
+    }
+    for (size_t at; (at = m.find(path)) != std::string::npos;) m.replace(at, path.size(), "<file>");
     r.message = m;
   }
   return r;
