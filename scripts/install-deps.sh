@@ -11,6 +11,7 @@ PKGS=(
   yosys iverilog nextpnr-ice40 z3
   libserialport-dev libcli11-dev libfmt-dev libtoml11-dev
   python3 python3-serial librsvg2-bin time
+  linuxcnc-uspace  # rs274, LinuxCNC's interpreter: the oracle test (docs/oracle.md)
 )
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then
