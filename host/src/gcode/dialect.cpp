@@ -34,11 +34,19 @@ constexpr Syntax kPrinterSyntax{.ngc = false,
                                 .bare_letters = true};
 
 // The table of meanings (docs/gcode.md, "Dialects").
-constexpr std::array<DialectRules, 4> kRules{{
-    {Dialect::kGrbl, "grbl", kCamSyntax, false, false, false, false, false},
-    {Dialect::kLinuxCnc, "linuxcnc", kNgcSyntax, false, false, false, false, false},
-    {Dialect::kMarlin, "marlin", kPrinterSyntax, true, true, true, true, true},
-    {Dialect::kRepRap, "reprap", kPrinterSyntax, true, true, true, true, true},
+// Columns: dwell P in ms, G10 retract, T = extruder, unknown M warns, G28 homes, E is an axis,
+// modal arc as line, feed required, A is the extruder, M100-M199 warn.
+constexpr std::array<DialectRules, 5> kRules{{
+    {Dialect::kGrbl, "grbl", kCamSyntax, false, false, false, false, false, true, true, false,
+     false, true},
+    {Dialect::kLinuxCnc, "linuxcnc", kNgcSyntax, false, false, false, false, false, false, false,
+     true, false, false},
+    {Dialect::kMarlin, "marlin", kPrinterSyntax, true, true, true, true, true, true, true, false,
+     false, true},
+    {Dialect::kRepRap, "reprap", kPrinterSyntax, true, true, true, true, true, true, true, false,
+     false, true},
+    {Dialect::kMakerbot, "makerbot", kPrinterSyntax, true, true, true, true, true, true, true,
+     false, true, true},
 }};
 
 std::string lower(std::string_view s) {
@@ -56,7 +64,10 @@ struct Generator {
 // Programs that name themselves in their first comments. Slicers write for printers (Marlin
 // unless the file says RepRap); CAM, laser and PCB programs for grbl-like controllers unless
 // they say LinuxCNC.
-constexpr std::array<Generator, 44> kGenerators{{
+constexpr std::array<Generator, 47> kGenerators{{
+    {"miracle-grue", "Miracle-Grue", Dialect::kMakerbot},
+    {"makerbot", "MakerBot", Dialect::kMakerbot},
+    {"replicatorg", "ReplicatorG", Dialect::kMakerbot},
     {"flavor:reprap", "Cura (RepRap flavour)", Dialect::kRepRap},
     {"reprapfirmware", "RepRapFirmware", Dialect::kRepRap},
     {"flavor:marlin", "Cura (Marlin flavour)", Dialect::kMarlin},
@@ -153,6 +164,8 @@ bool starts_with_word(std::string_view code, std::string_view word) {
 }  // namespace
 
 const DialectRules& dialect_rules(Dialect d) { return kRules[static_cast<size_t>(d)]; }
+
+const char* dialect_names() { return "grbl, linuxcnc, marlin, reprap, makerbot"; }
 
 std::optional<Dialect> parse_dialect(std::string_view name) {
   const std::string n = lower(name);

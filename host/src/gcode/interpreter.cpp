@@ -145,6 +145,7 @@ struct Interpreter::Impl {
   Plane plane = Plane::kXY;
   bool inverse_time = false;  // G93
   double feed;                // mm/min as programmed
+  bool feed_given = false;
   double feed_factor = 1.0;   // M220
   double flow = 1.0;          // M221
   bool spindle_on = false;
@@ -296,6 +297,13 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         throw fail(b, wd.col, fmt::format("G{} is not a G code", wd.value));
       const int c = code10(wd);
       const int grp = g_group(c);
+      if (grp < 0 && rules->unknown_m_warns && c >= 290 && c <= 299) {
+        warn(fmt::format("{} bed levelling skipped: no probe on this machine yet (the line is not "
+                         "run)",
+                         gname(c)),
+             b.line);
+        return true;
+      }
       if (grp < 0) {
         std::string why = "not supported";
         if (c == 410 || c == 420)
@@ -339,6 +347,14 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       w.mwords[w.mcount++] = &wd;
       continue;
     }
+    if (l == 'A' && rules->a_is_extruder) {
+      if (w.letter['E' - 'A']) throw fail(b, wd.col, "two extruder words (A/E) on one line");
+      w.letter['E' - 'A'] = &wd;
+      continue;
+    }
+    if (l == 'E' && !rules->e_is_axis)
+      throw fail(b, wd.col,
+                 fmt::format("'E' is not a word of the {} dialect (no extruder axis)", rules->name));
     if (l == 'A' || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W') {
       // Marlin's M-codes take some of these as parameters; the used-word check catches the rest.
       bool m_param = rules->unknown_m_warns && w.mcount > 0;
@@ -392,6 +408,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     word('F');
     if (f->value < 0) throw fail(b, f->col, "negative feed");
     if (!inverse_time) feed = to_mm(f);
+    feed_given = true;
   }
   // 4. S.
   if (const Word* s = w.get('S'); s && !s_for_m) {
@@ -496,8 +513,16 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           const Word* s = word('S');
           duty = s ? std::clamp(s->value / 255.0, 0.0, 1.0) : 1.0;
         }
-        if (const Word* p = word('P'); p && p->value != 0)
-          throw fail(b, p->col, "this machine has one part-cooling fan (P0)");
+        if (const Word* p = word('P'); p && p->value != 0) {
+          warn(fmt::format("M{} P{}: this machine has one part-cooling fan (P0); other fans "
+                           "ignored",
+                           c, p->value),
+               b.line);
+          for (char l : {'S', 'T'}) word(l);
+          did = true;
+          break;
+        }
+        for (char l : {'T', 'I'}) word(l);
         output(Output::Kind::kFan, 0, duty, false);
         break;
       }
@@ -571,6 +596,12 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         break;
       }
       default: {
+        if (rules->user_m_warns && c >= 100 && c <= 199 && !rules->unknown_m_warns) {
+          warn(fmt::format("M{} (a user or vendor M code) ignored: no such output here", c),
+               b.line);
+          for (char l = 'A'; l <= 'Z'; ++l) word(l);
+          break;
+        }
         if (!rules->unknown_m_warns)
           throw fail(b, mw.col, fmt::format("M{}: not supported in the {} dialect", c, rules->name));
         const char* what = printer_ignored(c);
@@ -917,6 +948,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (!fw || fw->value <= 0)
         throw fail(b, fw ? fw->col : motion_col, "G93 inverse time: each move needs F > 0");
     }
+    if (mo != Motion::kRapid && !inverse_time && rules->feed_required && !feed_given &&
+        !w.get('F'))
+      throw fail(b, motion_col, "no feed given yet: a G1/G2/G3 move needs F (LinuxCNC starts at F0)");
     if (mo != Motion::kRapid && !inverse_time && feed <= 0.0) {
       const Word* fw = w.get('F');
       throw fail(b, fw ? fw->col : motion_col, "feed is 0: a G1/G2/G3 move needs F > 0");
@@ -928,6 +962,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       word('R');
       const Word* pw = word('P');
       if (!arc_words) {
+        if (!rules->modal_arc_as_line && !gw(1))
+          throw fail(b, motion_col,
+                     fmt::format("arc without centre (no {}, {} or R) in the {} dialect",
+                                 kOffsetWord[pa.u], kOffsetWord[pa.v], rules->name));
         if (gw(1)) throw fail(b, gw(1)->col, fmt::format("arc without centre (no {}, {} or R)", kOffsetWord[pa.u], kOffsetWord[pa.v]));
         // A modal G2/G3 repeated with axis words only: a straight cutting line, as CNCjs does.
         mv.motion = Motion::kLinear;
@@ -1006,7 +1044,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     }
     push(out, mv);
     write_position();
-  } else if (arc_words || w.get('I') || w.get('J') || w.get('K') || (!arc_mode && w.get('R'))) {
+  } else if (arc_words || (!used['I' - 'A'] && w.get('I')) || (!used['J' - 'A'] && w.get('J')) ||
+             (!used['K' - 'A'] && w.get('K')) || (!arc_mode && !used['R' - 'A'] && w.get('R'))) {
     const Word* a = w.get('R') ? w.get('R') : w.get('I') ? w.get('I') : w.get('J') ? w.get('J') : w.get('K');
     throw fail(b, a->col, "I/J/K/R words without an arc (G2/G3)");
   }
@@ -1017,7 +1056,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     const Word& wd = b.words[static_cast<size_t>(i)];
     const char l = wd.letter;
     if (l == 'G' || l == 'M' || l == 'N') continue;
-    if (!used[l - 'A'])
+    const char as = (l == 'A' && rules->a_is_extruder) ? 'E' : l;
+    if (!used[as - 'A'])
       throw fail(b, wd.col, fmt::format("'{}' word with nothing on the line that uses it", l));
   }
   if (did && !has_axis) ++stats.commands;

@@ -16,6 +16,7 @@ enum class Dialect : uint8_t {
   kLinuxCnc,  // LinuxCNC's rs274ngc: parameters, expressions, O-words
   kMarlin,    // Marlin and the slicers that write for it (printers)
   kRepRap,    // RepRapFirmware (Duet) flavour of slicer output
+  kMakerbot,  // MakerBot / Miracle-Grue / Skeinforge for MakerBot: the extruder is the A axis
 };
 
 struct DialectRules {
@@ -29,10 +30,21 @@ struct DialectRules {
   // "Unknown command" and goes on); else it is an error.
   bool unknown_m_warns;
   bool g28_homes;  // G28 with bare axis letters homes those axes (Marlin); else rs274 G28
+  bool e_is_axis;  // E words move the extruder (4th axis); LinuxCNC has no E word
+  // A modal G2/G3 repeated with axis words but no centre runs as a straight cut (grbl senders
+  // do this); LinuxCNC refuses it.
+  bool modal_arc_as_line;
+  bool feed_required;  // a G1/G2/G3 before any F is an error (LinuxCNC); else the default feed
+  bool a_is_extruder;  // A words are the extruder (MakerBot)
+  // M100..M199 (LinuxCNC's user M codes, vendors' extensions such as Mr Beam's compressor):
+  // skipped with a warning; else an error like any unknown M code.
+  bool user_m_warns;
 };
 
 const DialectRules& dialect_rules(Dialect d);
 std::optional<Dialect> parse_dialect(std::string_view name);  // "grbl", "linuxcnc", ...
+// "grbl, linuxcnc, marlin, reprap, makerbot" for messages.
+const char* dialect_names();
 
 // The dialect a program is in and why: an override (the command line or the machine
 // configuration) wins; else the program's header comments name its generator (slicers, CAM and
