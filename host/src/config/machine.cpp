@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <toml.hpp>
@@ -190,7 +191,12 @@ bool valid_motion_name(const std::string& name) {
 MachineConfig load_machine_config(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, 0, 0, "cannot open configuration file");
-  return parse_stream(f, path);
+  MachineConfig c = parse_stream(f, path);
+  // Files the configuration names are relative to the configuration's folder.
+  if (!c.gcode.tool_table.empty() && std::filesystem::path(c.gcode.tool_table).is_relative())
+    c.gcode.tool_table =
+        (std::filesystem::path(path).parent_path() / c.gcode.tool_table).lexically_normal().string();
+  return c;
 }
 
 MachineConfig parse_machine_config(const std::string& text, const std::string& name) {
