@@ -17,7 +17,10 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <unistd.h>
+
 #include <chrono>
+#include <iostream>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -46,6 +49,7 @@ struct StreamArgs {
   CommonOptions common;
   SimOutputOptions sim;
   std::string heater_plot;  // temperature and duty against time (.svg)
+  std::string pause_mode = "auto";  // --pause: auto, prompt, continue, stop
 };
 
 // Progress bar on stderr (only when stderr is a terminal): moves done/total, rate, ETA.
@@ -68,6 +72,10 @@ class ProgressBar {
     done_ = done;
     total_ = total;
     if (done == total) fmt::print(stderr, "\n");
+  }
+  // Ends the bar's line before other output (a pause prompt, a message).
+  void finish_line() {
+    if (enabled_ && done_ != total_) fmt::print(stderr, "\n");
   }
   // Heaters: temperatures shown after the bar (issue 7), redrawn at most every 100 ms.
   void set_extra(std::string extra) {
@@ -168,6 +176,30 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     o2.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
     if (port.empty() && hooks.configure_v2) hooks.configure_v2(*lk, o2);
     o2.heaters = heaters ? &*heaters : nullptr;
+    // Pauses (M0/M1, M6, M600): at rest, ask the operator (a terminal), go on (a simulated
+    // board without a terminal) or stop (a real machine without a terminal).
+    std::string mode = a.pause_mode;
+    if (mode == "auto")
+      mode = isatty(STDIN_FILENO) ? "prompt" : port.empty() ? "continue" : "stop";
+    o2.on_pause = [&bar, mode](const gcode::Pause& pz) {
+      bar.finish_line();
+      if (mode == "continue") {
+        fmt::print("pause at line {}: {} (--pause continue: going on)\n", pz.line, pz.prompt);
+        return true;
+      }
+      if (mode == "stop") return false;
+      fmt::print("pause at line {}: {}. The machine is at rest. Enter: go on, q Enter: stop the job\n",
+                 pz.line, pz.prompt);
+      std::fflush(stdout);
+      std::string answer;
+      if (!std::getline(std::cin, answer)) return false;
+      return answer.empty() || (answer[0] != 'q' && answer[0] != 'Q');
+    };
+    o2.on_message = [&bar](const gcode::Message& m) {
+      if (m.kind == gcode::Message::Kind::kProgress) return;  // the progress bar shows it
+      bar.finish_line();
+      fmt::print("line {}: {}\n", m.line, m.text);
+    };
     // Heater samples for the progress line and --heater-plot (plant time).
     std::vector<heat::HeaterTrace> traces(heat::kChannels);
     for (size_t c = 0; c < heat::kChannels; ++c) traces[c].name = heat::kChannelNames[c];
@@ -222,6 +254,11 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
         r.elapsed.count());
     fmt::print("{}", link::format_report(r));
     if (r.skipped_heater) fmt::print("{} heater commands not sent\n", r.skipped_heater);
+    if (r.pauses) fmt::print("{} pauses\n", r.pauses);
+    if (r.skipped_outputs)
+      fmt::print("{} outputs (coolant, fan, digital) not sent: this board version has no output "
+                 "frames\n",
+                 r.skipped_outputs);
     if (r.t_raised) {
       fmt::print("{} segments faster than the STEP timing allows: slowed to it\n", r.t_raised);
     }
@@ -303,6 +340,10 @@ void register_stream(CLI::App& app, StreamHooks hooks) {
                   "rsvg-convert)");
   sub->add_option("--fst", args->sim.fst_path, "simulated board: FST waveform of the core");
   sub->add_option("--edges", args->sim.edges_csv, "simulated board: STEP/DIR/LASER edge list CSV");
+  sub->add_option("--pause", args->pause_mode,
+                  "at M0/M1/M6/M600: prompt (ask on the terminal), continue, stop, or auto "
+                  "(prompt on a terminal; else continue on a simulated board, stop on a port)")
+      ->check(CLI::IsMember({"auto", "prompt", "continue", "stop"}));
   sub->add_option("--heater-plot", args->heater_plot,
                   "v2 with heaters: temperature, setpoint and duty of the heaters used against "
                   "time as STATUS reports them (.svg)");

@@ -136,7 +136,9 @@ struct Interpreter::Impl {
   std::array<Vec4, kCoordSystems> g5x{};
   int cs = 0;  // 0 = G54
   Vec4 g92{};
+  Vec4 g92_saved{};  // parameters 5211-5213 (G92.2 clears the offsets, G92.3 restores them)
   Vec4 tlo{};  // tool length offset
+  Vec4 pos_tlo{};  // the tool length offset `pos` was reached with
   double unit = 1.0;
   bool absolute = true;
   bool arc_absolute = false;  // G90.1
@@ -157,6 +159,9 @@ struct Interpreter::Impl {
   bool retract_to_r = false;  // G99 (else G98)
   double cycle_z = 0.0, cycle_r = 0.0, cycle_p = 0.0, cycle_q = 0.0;
   bool cycle_z_set = false, cycle_r_set = false;
+  double cycle_il = 0.0;  // initial level of a series of cycle blocks (G98 returns there)
+  bool cycle_il_set = false;
+  bool cycle_positioned = false;  // the series' first positioning move is done
   Vec4 g28_home{}, g30_home{};
   double retract_mm, retract_feed, retract_zlift, recover_extra, recover_feed;
   bool retracted = false;
@@ -199,7 +204,7 @@ struct Interpreter::Impl {
     for (int a = 0; a < 3; ++a) {
       const auto i = static_cast<size_t>(a);
       p.set(5420 + a, (pos[i] - offset(a)) / unit);
-      p.set(5211 + a, g92[i] / unit);
+      p.set(5211 + a, g92_saved[i] / unit);
       p.set(5161 + a, g28_home[i] / unit);
       p.set(5181 + a, g30_home[i] / unit);
     }
@@ -236,6 +241,7 @@ struct Interpreter::Impl {
   }
   void push(std::vector<Command>& out, const Move& mv) {
     pos = mv.end;
+    pos_tlo = tlo;
     out.emplace_back(mv);
     ++stats.moves;
     produced = true;
@@ -401,8 +407,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   // 3. F.
   const bool s_for_m = w.m(104) || w.m(109) || w.m(140) || w.m(190) || w.m(106) || w.m(220) ||
                        w.m(221) || w.m(207) || w.m(208) || w.m(204) || w.m(205) || w.m(141) ||
-                       w.m(191) || w.m(73) || (gw(0) && code10(*gw(0)) == 40) ||
-                       (gw(0) && code10(*gw(0)) == 100);
+                       w.m(191) || w.m(73) ||
+                       (rules->dwell_p_ms && gw(0) && code10(*gw(0)) == 40) ||
+                       (rules->g10_retract && gw(0) && code10(*gw(0)) == 100);
   const bool f_for_m = w.m(207) || w.m(208);
   if (const Word* f = w.get('F'); f && !f_for_m) {
     word('F');
@@ -416,8 +423,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (s->value < 0) throw fail(b, s->col, "negative S value");
     spindle_s = s->value;
   }
-  // 5. T.
-  if (const Word* t = word('T')) {
+  // 5. T (in the printer dialects a T beside an M code is that code's tool parameter).
+  const Word* t_word = rules->t_selects_extruder && w.mcount > 0 ? nullptr : w.get('T');
+  if (const Word* t = t_word) {
+    word('T');
     if (!t->integer || t->value < 0) throw fail(b, t->col, "T must be a non-negative integer");
     if (rules->t_selects_extruder) {
       if (t->value != 0 && !w.m(104) && !w.m(109))
@@ -696,8 +705,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (const Word* g = gw(10)) retract_to_r = code10(*g) == 990;
   if (gw(2) || gw(3) || gw(4) || gw(5) || gw(6) || gw(7) || gw(10)) did = true;
 
-  bool has_axis = false;
-  for (char l : kAxisNames) has_axis = has_axis || w.get(l);
+  bool has_axis = false;  // axis words that no M code on the line took as its parameters
+  for (char l : kAxisNames) has_axis = has_axis || (w.get(l) && !used[l - 'A']);
   if (tlo_words) has_axis = false;
   auto no_motion_word = [&](const char* what) {
     if (gw(1))
@@ -710,14 +719,18 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     return prog;
   };
   // Machine target of the axis words in the current modes (G53: machine coordinates).
+  // A tool length offset changed since the last move applies to every axis of the next move
+  // (LinuxCNC keeps the program position, so the machine moves by the change).
   auto target = [&](bool machine) {
     Vec4 t = pos;
     for (int a = 0; a < 3; ++a) {
+      const auto i = static_cast<size_t>(a);
+      const double shift = tlo[i] - pos_tlo[i];
+      t[i] = pos[i] + shift;
       const Word* aw = word(kAxisNames[a]);
       if (!aw) continue;
-      const auto i = static_cast<size_t>(a);
       const double v = to_mm(aw);
-      t[i] = machine ? v : absolute ? v + offset(a) : pos[i] + v;
+      t[i] = machine ? v : absolute ? v + offset(a) : pos[i] + shift + v;
       if (std::fabs(t[i]) > 1e9) throw fail(b, aw->col, "position out of range");
     }
     return t;
@@ -819,9 +832,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         if (a == 3) g92[3] = e_prog - to_mm(aw);
         else g92[i] = pos[i] - g5x[static_cast<size_t>(cs)][i] - tlo[i] - to_mm(aw);
       }
+      g92_saved = g92;
     } else if (nmc == 923) {
-      throw fail(b, nm->col, "G92.3 (restore saved G92 offsets) is not supported");
+      g92 = g92_saved;  // G92.3: the offsets G92.2 put aside (LinuxCNC: parameters 5211-5219)
     } else {
+      if (nmc == 921) g92_saved = {};  // G92.1 also zeroes the parameters; G92.2 keeps them
       g92 = {};
     }
     write_params();
@@ -879,7 +894,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
                              gname(c)));
     if (c == 330)
       throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
-    if (is_cycle(c) && motion != c) cycle_z_set = cycle_r_set = false;
+    if (is_cycle(c) && motion != c) cycle_z_set = false;
+    if (!is_cycle(c)) cycle_il_set = false;
     motion = c;
     did = true;
   }
@@ -1104,8 +1120,15 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
   if ((motion == 730 || motion == 830) && cycle_q <= 0)
     throw fail(b, col, fmt::format("{}: the cycle needs Q (the peck depth) > 0", gname(motion)));
   if (feed <= 0 && !inverse_time) throw fail(b, col, "feed is 0: a canned cycle needs F > 0");
-  const double old_w = pos[wa];
-  // R and Z in program coordinates -> machine.
+  // LinuxCNC's levels: the initial level of the series (kept from its first block), the level at
+  // the start of this block, R and the bottom.
+  if (!cycle_il_set) {
+    cycle_il = pos[wa];
+    cycle_il_set = true;
+    cycle_positioned = false;
+  }
+  double old_w = cycle_il;
+  double current_w = pos[wa];
   double r, bottom;
   if (absolute) {
     r = cycle_r + offset(pa.w);
@@ -1116,9 +1139,8 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
   }
   if (bottom > r + 1e-9)
     throw fail(b, col, fmt::format("{}: the bottom ({}) is above R", gname(motion), kAxisNames[wa]));
-  const double clear = retract_to_r ? r : std::max(r, old_w);
   const double f = feed * feed_factor;
-  const double rapid_delta = unit == 1.0 ? 0.254 : 0.010 * kInch;  // LinuxCNC's G73/G83 clearance
+  const double rapid_delta = 0.010 * kInch;  // LinuxCNC's G73/G83 back-off (0.010 inch)
   auto at = [&](double cu, double cv, double cw) {
     Vec4 t = pos;
     t[u] = cu;
@@ -1126,54 +1148,58 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
     t[wa] = cw;
     return t;
   };
-  if (old_w < r) line_to(out, Motion::kRapid, at(pos[u], pos[v], r), b.line);
+  if (old_w < r) {  // below R: straight up to R first
+    line_to(out, Motion::kRapid, at(pos[u], pos[v], r), b.line);
+    old_w = r;
+    current_w = r;
+  }
+  const double clear = retract_to_r ? r : old_w;
   double hu = pos[u], hv = pos[v];
+  if (absolute) {
+    if (given[u]) hu = given_pos[u] + offset(pa.u);
+    if (given[v]) hv = given_pos[v] + offset(pa.v);
+  }
   for (int k = 0; k < repeats; ++k) {
-    if (absolute) {
-      if (given[u]) hu = given_pos[u] + offset(pa.u);
-      if (given[v]) hv = given_pos[v] + offset(pa.v);
-    } else {
+    if (!absolute) {
       if (given[u]) hu += given_pos[u];
       if (given[v]) hv += given_pos[v];
     }
-    line_to(out, Motion::kRapid, at(hu, hv, pos[wa]), b.line);
-    line_to(out, Motion::kRapid, at(hu, hv, r), b.line);
+    // The first positioning move of a series runs at the current level, every later one at the
+    // clear level (LinuxCNC's CYCLE_MACRO).
+    line_to(out, Motion::kRapid, at(hu, hv, cycle_positioned ? clear : current_w), b.line);
+    cycle_positioned = true;
+    if (old_w != r) line_to(out, Motion::kRapid, at(hu, hv, r), b.line);
     switch (motion) {
       case 810:
         line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
         break;
       case 820:
+      case 890:
         line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
         out.emplace_back(Dwell{cycle_p, b.line});
+        if (motion == 820) line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
+        else line_to(out, Motion::kLinear, at(hu, hv, clear), b.line, f);
         break;
       case 830:
       case 730: {
         for (double depth = r - cycle_q; depth > bottom; depth -= cycle_q) {
           line_to(out, Motion::kLinear, at(hu, hv, depth), b.line, f);
-          if (motion == 830) {
-            line_to(out, Motion::kRapid, at(hu, hv, r), b.line);
-            line_to(out, Motion::kRapid, at(hu, hv, depth + rapid_delta), b.line);
-          } else {
-            line_to(out, Motion::kRapid, at(hu, hv, depth + rapid_delta), b.line);
-          }
+          if (motion == 830) line_to(out, Motion::kRapid, at(hu, hv, r), b.line);
+          line_to(out, Motion::kRapid, at(hu, hv, depth + rapid_delta), b.line);
         }
         line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
+        line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
         break;
       }
       case 850:
         line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
         line_to(out, Motion::kLinear, at(hu, hv, r), b.line, f);
-        break;
-      case 890:
-        line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
-        out.emplace_back(Dwell{cycle_p, b.line});
-        line_to(out, Motion::kLinear, at(hu, hv, r), b.line, f);
+        line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
         break;
       default:
         throw fail(b, col, fmt::format("{}: not supported", gname(motion)));
     }
-    if (pos[wa] != clear)
-      line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
     ++stats.canned_cycles;
   }
 }

@@ -90,6 +90,8 @@ class Session {
   }
 
   Time last_rx() const { return last_rx_; }
+  // After an operator pause: the silence was ours, not the device's.
+  void restart_silence() { last_rx_ = link_.now(); }
   void reset_parser() { parser_.reset(); }
 
  private:
@@ -307,6 +309,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   }
   // Heaters: setup frames, then each setpoint before the FIFO frame it precedes in the program.
   std::vector<size_t> waits;  // item indices of M109/M190 setpoints
+  std::vector<size_t> frame_item;  // item index of job.frames[j]
   {
     size_t ai = 0;
     auto actions_before = [&](size_t frame) {
@@ -324,6 +327,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     }
     for (size_t j = 0; j < job.frames.size(); ++j) {
       actions_before(j);
+      frame_item.push_back(items.size());
       items.push_back({job.frames[j].frame, true, &job.frames[j]});
     }
     actions_before(SIZE_MAX);
@@ -447,7 +451,20 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   };
   size_t next_wait = 0;  // index into `waits` of the wait in force
   // Items up to and including the pending wait's setpoint may be sent, nothing after it.
-  auto gate = [&]() { return next_wait < waits.size() ? waits[next_wait] + 1 : n; };
+  // Pauses and messages: the item index they come before (n: after everything).
+  std::vector<std::pair<size_t, const gcode::Pause*>> pauses;
+  std::vector<std::pair<size_t, const gcode::Message*>> messages;
+  for (const auto& ev : job.events) {
+    const size_t at = ev.before_frame < frame_item.size() ? frame_item[ev.before_frame] : n;
+    if (const auto* p = std::get_if<gcode::Pause>(&ev.what)) pauses.emplace_back(at, p);
+    if (const auto* m = std::get_if<gcode::Message>(&ev.what)) messages.emplace_back(at, m);
+    if (std::holds_alternative<gcode::Output>(ev.what)) ++rep.skipped_outputs;
+  }
+  size_t next_pause = 0, next_message = 0;
+  auto gate = [&]() {
+    const size_t h = next_wait < waits.size() ? waits[next_wait] + 1 : n;
+    return next_pause < pauses.size() ? std::min(h, pauses[next_pause].first) : h;
+  };
   struct WaitState {
     bool started = false;  // setpoint accepted and FIFO drained
     bool in_band = false;
@@ -624,7 +641,9 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   std::vector<uint8_t> batch;
   for (;;) {
     // Complete?
-    if (acked == n && done_count == total_fifo && next_wait == waits.size()) break;
+    if (acked == n && done_count == total_fifo && next_wait == waits.size() &&
+        next_pause == pauses.size())
+      break;
 
     // Send what the window and the credit allow.
     batch.clear();
@@ -652,6 +671,25 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     // Answers already there (read before any timer: a host that was not scheduled for a while
     // must not take answers waiting in its input for a silence).
     while (const auto f = s.receive(milliseconds(0))) handle(*f);
+    // Messages whose frames before are done; a pause once the machine is at rest before it.
+    while (next_message < messages.size() && acked >= messages[next_message].first &&
+           done_count >= fifo_before[messages[next_message].first]) {
+      if (opt.on_message) opt.on_message(*messages[next_message].second);
+      ++next_message;
+    }
+    if (next_pause < pauses.size() && acked >= pauses[next_pause].first &&
+        done_count >= fifo_before[pauses[next_pause].first]) {
+      const gcode::Pause& pz = *pauses[next_pause].second;
+      ++rep.pauses;
+      if (opt.on_pause && !opt.on_pause(pz))
+        throw Error(fmt::format("{}: job stopped at the pause of line {} ({}): the machine is at "
+                                "rest there",
+                                name, pz.line, pz.prompt));
+      ++next_pause;
+      s.restart_silence();
+      last_progress = link.now();
+      continue;
+    }
     if (acked == n && done_count == total_fifo && next_wait == waits.size()) break;
 
     // Timers (link time).

@@ -179,17 +179,23 @@ std::vector<std::string> compare(const std::string& name, const OracleRun& o,
       }
     }
     if (a.kind == CanonMove::Kind::kArc && kind_ok) {
-      if (std::abs(a.rotation) > 1) {
-        why.push_back(
-            fmt::format("rs274 arc of {} turns: our Move has no turn count", std::abs(a.rotation)));
+      if (std::abs(a.rotation) != b.extra_turns + 1) {
+        why.push_back(fmt::format("rs274 arc of {} turns, ours {}", std::abs(a.rotation),
+                                  b.extra_turns + 1));
       }
-      if (a.plane == oracle::Plane::kXY) {
-        const double dev =
-            std::max(std::fabs(a.centre[0] - b.center[0]), std::fabs(a.centre[1] - b.center[1]));
-        if (dev > kTol) {
-          why.push_back(fmt::format("centre rs274 ({:.9g}, {:.9g}) ours ({:.9g}, {:.9g})",
-                                    a.centre[0], a.centre[1], b.center[0], b.center[1]));
-        }
+      // Our centre is (u, v) in the plane's axis order (gcode::plane_axes).
+      const gcode::PlaneAxes pa = gcode::plane_axes(b.plane);
+      const bool same_plane = (a.plane == oracle::Plane::kXY && b.plane == gcode::Plane::kXY) ||
+                              (a.plane == oracle::Plane::kXZ && b.plane == gcode::Plane::kZX) ||
+                              (a.plane == oracle::Plane::kYZ && b.plane == gcode::Plane::kYZ);
+      if (!same_plane) why.push_back("arc in another plane");
+      const double dev =
+          std::max(std::fabs(a.centre[static_cast<size_t>(pa.u)] - b.center[0]),
+                   std::fabs(a.centre[static_cast<size_t>(pa.v)] - b.center[1]));
+      if (dev > kTol) {
+        why.push_back(fmt::format("centre rs274 ({:.9g}, {:.9g}) ours ({:.9g}, {:.9g})",
+                                  a.centre[static_cast<size_t>(pa.u)],
+                                  a.centre[static_cast<size_t>(pa.v)], b.center[0], b.center[1]));
       }
     }
     if (a.line != b.line) {

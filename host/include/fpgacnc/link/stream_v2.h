@@ -70,6 +70,14 @@ struct StreamV2Options {
   std::function<double()> plant_time;
   // Every STATUS decoded during the job (progress line with temperatures).
   std::function<void(const protocol::v2::Status&)> on_status;
+  // ---- Pauses and messages (Job::events) ----
+  // A pause (M0, M1, M6, M600) holds every frame after it until the machine is at rest (every
+  // frame before it done); then this is called and the job goes on when it returns true, or stops
+  // there (link::Error "stopped at the pause") when it returns false. Unset: the job goes on at
+  // once (a simulated board has no operator).
+  std::function<bool(const gcode::Pause&)> on_pause;
+  // Each message (M117, M118, M73, (MSG,...)) once the frames before it are done.
+  std::function<void(const gcode::Message&)> on_message;
 };
 
 // One M109/M190 wait as it happened.
@@ -95,6 +103,8 @@ struct StreamV2Report {
   size_t profiles = 0;  // LINE_PROFILE frames
   size_t arcs = 0;      // ARC frames
   size_t dwells = 0;
+  size_t pauses = 0;            // pauses the job stopped at
+  size_t skipped_outputs = 0;   // outputs (M7-M9, M62-M65, M106/M107) the frames cannot carry
   size_t retransmissions = 0;    // sequenced frames written more than once (each resend)
   size_t go_backs = 0;           // times the window went back (NAK or timeout)
   size_t timeouts = 0;           // retransmission timeouts
