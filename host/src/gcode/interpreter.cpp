@@ -76,7 +76,7 @@ int g_group(int c10) {
       return 12;
     case 610: case 611: case 640:
       return 13;
-    case 40: case 100: case 280: case 281: case 300: case 301: case 530: case 920: case 921:
+    case 40: case 100: case 110: case 280: case 281: case 300: case 301: case 530: case 920: case 921:
     case 922: case 923:
       return 0;
     default:
