@@ -318,7 +318,12 @@ TEST(ReaderLex, BlockDelete) {
 }
 
 TEST(ReaderLex, Rs274ngcSyntaxRefusedInOtherDialects) {
-  EXPECT_EQ(error_of("G0 X#1", plain()), "t.ngc:1:4: error: expected a number after 'X'");
+  EXPECT_EQ(error_of("G0 X#1", plain()),
+            "t.ngc:1:5: error: '#' parameters are rs274ngc (LinuxCNC) syntax; this file's dialect "
+            "is grbl");
+  EXPECT_EQ(error_of("G0 X[1]", plain()),
+            "t.ngc:1:5: error: '[' expressions are rs274ngc (LinuxCNC) syntax; this file's "
+            "dialect is grbl");
   EXPECT_EQ(error_of("#1=2", plain()),
             "t.ngc:1:1: error: '#' parameters are rs274ngc (LinuxCNC) syntax; this file's dialect "
             "is grbl");
@@ -375,6 +380,9 @@ TEST(ReaderExpr, ModAlwaysNonNegative) {
   EXPECT_DOUBLE_EQ(eval("7.5 MOD 2"), 1.5);
   EXPECT_DOUBLE_EQ(eval("-7.5 MOD 2"), 0.5);
   EXPECT_DOUBLE_EQ(eval("-0.5 MOD 2"), 1.5);
+  // No negative zero (LinuxCNC's rs274 prints [-3 MOD 1.5] and [-0] as 0.000000).
+  EXPECT_FALSE(std::signbit(eval("-3 MOD 1.5")));
+  EXPECT_FALSE(std::signbit(eval("-0")));
 }
 
 TEST(ReaderExpr, RoundingFunctions) {

@@ -43,7 +43,7 @@ double Expr::real_value(int& i) {
   if (ch == '+' || ch == '-') {
     ++i;
     const double v = real_value(i);
-    return ch == '-' ? -v : v;
+    return ch == '-' ? 0.0 - v : v;  // 0 - v: no "-0" (LinuxCNC prints -[0] as 0)
   }
   if (is_digit(ch) || ch == '.') {
     const int start = i;
@@ -200,7 +200,7 @@ double Expr::apply(Op op, double a, double b, int op_col) const {
       break;
   }
   if (!std::isfinite(r)) c_.fail(op_col, "the result is not a finite number");
-  return r;
+  return r == 0.0 ? 0.0 : r;  // -0 (from fmod or a product) reads as 0
 }
 
 void Expr::named_param(int& i, std::string& name) {

@@ -706,7 +706,7 @@ struct Reader::Impl {
           w.integer = true;
         } else {
           if (i < n && (non_printable(static_cast<unsigned char>(p[i])) ||
-                        static_cast<unsigned char>(p[i]) >= 0x80)) {
+                        static_cast<unsigned char>(p[i]) >= 0x80 || p[i] == '#' || p[i] == '[')) {
             bad_char(i);
           }
           fail(wcol, fmt::format("expected a number after '{}'", letter));
