@@ -15,9 +15,9 @@ namespace fpgacnc::gcode {
 struct Word {
   char letter = 0;
   double value = 0.0;
-  int col = 0;           // 1-based column of the letter in the source line
-  bool integer = true;   // written as a plain number without '.', or an expression whose
-                         // value is within 1e-6 of an integer (LinuxCNC's rule for G/M codes)
+  int col = 0;             // 1-based column of the letter in the source line
+  bool integer = true;     // written as a plain number without '.', or an expression whose
+                           // value is within 1e-6 of an integer (LinuxCNC's rule for G/M codes)
   bool from_expr = false;  // the value came from a parameter or an expression
   bool bare = false;       // the letter had no number (Syntax::bare_letters); value is 0
 };
@@ -36,15 +36,15 @@ enum class MessageKind : uint8_t { kNone, kMsg, kDebug, kPrint, kText };
 
 struct Block {
   static constexpr int kMaxWords = 64;
-  int line = 0;                // 1-based line of the source file
+  int line = 0;  // 1-based line of the source file
   BlockKind kind = BlockKind::kWords;
-  bool block_delete = false;   // the line started with '/' (the interpreter decides to skip)
-  int count = 0;               // words[0..count)
+  bool block_delete = false;  // the line started with '/' (the interpreter decides to skip)
+  int count = 0;              // words[0..count)
   std::array<Word, kMaxWords> words{};
   MessageKind message_kind = MessageKind::kNone;
-  std::string text;            // message text (parameters substituted for DEBUG/PRINT) or the
-                               // '%' / '$' / '?' line's text
-  int text_col = 0;            // column of the message or text
+  std::string text;  // message text (parameters substituted for DEBUG/PRINT) or the
+                     // '%' / '$' / '?' line's text
+  int text_col = 0;  // column of the message or text
 
   const Word* find(char letter) const {
     for (int i = 0; i < count; ++i)
@@ -72,6 +72,9 @@ struct Syntax {
   // A letter followed by no number ('R' alone, 'G28 X Y' in Marlin) is kept with value 0 and
   // Word::col set; when false it is an error "expected a number after 'R'".
   bool bare_letters = false;
+  // The dialect's name for error messages ("'#' parameters are rs274ngc (LinuxCNC) syntax; this
+  // file's dialect is grbl"); empty: the messages say "not enabled for this file".
+  const char* dialect_name = "";
 };
 
 }  // namespace fpgacnc::gcode

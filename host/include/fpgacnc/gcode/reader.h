@@ -30,7 +30,7 @@ class Params {
  public:
   static constexpr int kCount = 5603;
   Params();
-  double get(int n) const;             // n in [1, kCount); caller checks the range
+  double get(int n) const;  // n in [1, kCount); caller checks the range
   void set(int n, double value);
   std::optional<double> named(std::string_view name) const;  // name lower case, without <>
   void set_named(std::string_view name, double value);
@@ -61,6 +61,15 @@ class Reader {
   // The interpreter calls this on M2/M30 (program end): the reader stops (next() returns false)
   // without reading the rest. Inside a subroutine this is still the end of the program.
   void end_program();
+
+  // Block delete switch (off by default): when on, lines starting with '/' are skipped whole
+  // (their words, assignments and O-words); when off they run and Block::block_delete is set.
+  void set_block_delete(bool on);
+
+  // Guard against endless O-word loops: a while, do or repeat loop that jumps back more than
+  // this many times without being left is an error naming the loop's line (never a silent stop).
+  static constexpr uint64_t kDefaultLoopLimit = 100'000'000;
+  void set_loop_limit(uint64_t iterations);
 
   const std::string& file_name() const;
 
