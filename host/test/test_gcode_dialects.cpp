@@ -99,16 +99,22 @@ TEST(GCode, OutputsMessagesAndPausesKeepTheirPlace) {
   const auto p = run(
       "G1 X1 F100\nM8\nM106 S128\nG1 X2\n(MSG,Layer 2)\nM0\nM62 P3\nM9\nM107\nG1 X3",
       gc::Dialect::kGrbl);
+  // grbl has no (MSG,...): the comment is only a comment there.
   std::vector<size_t> kinds;
   for (const auto& c : p.commands) kinds.push_back(c.index());
-  // Move, Output flood, Output fan, Move, Message, Pause, Output digital, 2x Output, Output, Move
-  EXPECT_EQ(kinds, (std::vector<size_t>{0, 4, 4, 0, 5, 3, 4, 4, 4, 4, 0}));
+  // Move, Output flood, Output fan, Move, Pause, Output digital, 2x Output, Output, Move
+  EXPECT_EQ(kinds, (std::vector<size_t>{0, 4, 4, 0, 3, 4, 4, 4, 4, 0}));
   const auto outs = all<gc::Output>(p);
   EXPECT_EQ(outs[1].kind, gc::Output::Kind::kFan);
   EXPECT_NEAR(outs[1].value, 128.0 / 255.0, 1e-12);
   EXPECT_EQ(outs[2].kind, gc::Output::Kind::kDigital);
   EXPECT_EQ(outs[2].index, 3);
-  EXPECT_EQ(all<gc::Message>(p)[0].text, "Layer 2");
+  const auto marlin = run("G1 X1 E1 F100\nM117 Layer 2\nM73 P40\nG1 X2 E2", gc::Dialect::kMarlin);
+  ASSERT_EQ(all<gc::Message>(marlin).size(), 2u);
+  EXPECT_EQ(all<gc::Message>(marlin)[0].text, "Layer 2");
+  EXPECT_DOUBLE_EQ(all<gc::Message>(marlin)[1].percent, 40.0);
+  const auto ngc = run("G1 X1 F100\n(MSG,Layer 2)\nG1 X2", gc::Dialect::kLinuxCnc);
+  EXPECT_EQ(all<gc::Message>(ngc).at(0).text, "Layer 2");
 
   // The look-ahead keeps outputs and messages between the segments they were between.
   fpgacnc::config::MachineConfig cfg;
@@ -116,8 +122,8 @@ TEST(GCode, OutputsMessagesAndPausesKeepTheirPlace) {
   const auto pp = fpgacnc::plan::plan_profiles(plan, cfg);
   std::vector<size_t> order;
   for (const auto& it : pp.items) order.push_back(it.index());
-  // Profile, flood, fan, Profile, message, pause, 4 outputs, Profile
-  EXPECT_EQ(order, (std::vector<size_t>{0, 4, 4, 0, 5, 3, 4, 4, 4, 4, 0}));
+  // Profile, flood, fan, Profile, pause, 4 outputs, Profile
+  EXPECT_EQ(order, (std::vector<size_t>{0, 4, 4, 0, 3, 4, 4, 4, 4, 0}));
 }
 
 TEST(GCode, FeedAndFlowFactors) {

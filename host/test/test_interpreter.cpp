@@ -235,7 +235,7 @@ TEST(Interpreter, ErrorsHaveLineAndColumn) {
   expect_error("G0 X0 Y0\nG2 X10 Y0 R4 F100", 2, 11, "impossible arc");
   expect_error("G1 Xnan F1", 1, 4, "expected a number");
   expect_error("G1 X1 Yinf F1", 1, 7, "expected a number");
-  expect_error("G1 X1.2.3 F1", 1, 8, "unexpected character '.'");
+  expect_error("G1 X1.2.3 F1", 1, 8, "garbage in the number of 'X'");
   expect_error("G1 X1 Y-- F1", 1, 7, "expected a number");
   expect_error("G1 X2000000 F1", 1, 4, "out of range");
   expect_error("G20 G1 X50000 F1", 1, 8, "out of range");

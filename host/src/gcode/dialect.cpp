@@ -210,8 +210,13 @@ DialectChoice detect_dialect(std::string_view text, std::optional<Dialect> overr
     return c;
   }
   if (ngc_line && !printer_generator) {
+    const bool cam = !c.generator.empty() && c.dialect == Dialect::kGrbl;
     c.dialect = Dialect::kLinuxCnc;
     c.reason = fmt::format("line {} uses rs274ngc parameters, expressions or O-words", ngc_line);
+    if (cam) {
+      c.nested_comments = true;
+      c.reason += fmt::format(" ({} writes them; its comments may nest)", c.generator);
+    }
     return c;
   }
   // Printer signs: extrusion mode, heaters, E words on moves.

@@ -76,6 +76,8 @@ int g_group(int c10) {
       return 12;
     case 610: case 611: case 640:
       return 13;
+    case 690:
+      return 14;  // rotation cancel: nothing is ever rotated here
     case 40: case 100: case 110: case 280: case 281: case 300: case 301: case 530: case 920: case 921:
     case 922: case 923:
       return 0;
@@ -318,6 +320,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           why = "needs a spindle encoder, which this machine does not have";
         else if (c == 70 || c == 80)
           why = "lathe diameter/radius mode is not supported";
+        else if (c == 680)
+          why = "coordinate system rotation is not supported";
         else if (c == 520)
           why = "G52 local offsets are not supported (use G92 or G10 L2)";
         else if (c == 50 || c == 51 || c == 52 || c == 53)
@@ -364,6 +368,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (l == 'A' || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W') {
       // Marlin's M-codes take some of these as parameters; the used-word check catches the rest.
       bool m_param = rules->unknown_m_warns && w.mcount > 0;
+      if (rules->g28_homes && w.g[1] && code10(*w.g[1]) == 280) {  // G28 U0: a second carriage
+        warn(fmt::format("G28 {}: no {} axis on this machine, ignored", l, l), b.line);
+        continue;
+      }
       if (!m_param)
         throw fail(b, wd.col, fmt::format("no {} axis on this machine (its axes are X Y Z E)", l));
     }
@@ -1229,7 +1237,9 @@ Stats run(std::string text, const std::string& file_name, const Options& options
   const DialectChoice choice = detect_dialect(text, options.dialect, options.dialect_source);
   Params params;
   Interpreter interp(file_name, options, choice, params);
-  Reader reader(file_name, std::move(text), dialect_rules(choice.dialect).syntax, params);
+  Syntax syntax = dialect_rules(choice.dialect).syntax;
+  if (choice.nested_comments) syntax.paren_in_comment = true;
+  Reader reader(file_name, std::move(text), syntax, params);
   Block block;
   std::vector<Command> out;
   int last_line = 0;

@@ -151,7 +151,9 @@ HeaterJob make_heater_job(const plan::Plan& plan, const v2::Job& job,
       if (std::round(d.seconds * static_cast<double>(cfg.clk_hz)) > 0) ++dwell;
       continue;
     }
-    const auto& h = std::get<plan::HeaterCommand>(item);
+    const auto* hp = std::get_if<plan::HeaterCommand>(&item);
+    if (!hp) continue;  // pauses, outputs and messages
+    const auto& h = *hp;
     HeaterAction a;
     a.mcode = h.mcode;
     a.source_line = h.source_line;

@@ -54,6 +54,9 @@ struct DialectChoice {
   Dialect dialect = Dialect::kGrbl;
   std::string reason;     // e.g. "line 1 names PrusaSlicer", "--dialect linuxcnc"
   std::string generator;  // the program named in the header, if any ("PrusaSlicer 2.7.1")
+  // A CAM program that writes rs274ngc subroutines also writes '(' inside comments (Estlcam):
+  // the linuxcnc dialect then keeps the CAM programs' comment rule.
+  bool nested_comments = false;
 };
 DialectChoice detect_dialect(std::string_view text, std::optional<Dialect> override_dialect,
                              std::string_view override_source);
