@@ -31,7 +31,8 @@ constexpr Syntax kPrinterSyntax{.ngc = false,
                                 .checksums = true,
                                 .text_mcodes = true,
                                 .dollar_lines = false,
-                                .bare_letters = true};
+                                .bare_letters = true,
+                                .macro_lines = true};
 
 // The table of meanings (docs/gcode.md, "Dialects").
 // Columns: dwell P in ms, G10 retract, T = extruder, unknown M warns, G28 homes, E is an axis,

@@ -283,6 +283,14 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   ++stats.lines;
   if (b.block_delete && opt.block_delete) return true;
   if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
+  if (b.kind == BlockKind::kMacro) {
+    std::string name = b.text.substr(0, b.text.find_first_of(" \t"));
+    warn(fmt::format("extended command '{}' skipped (a Klipper macro: Klipper runs it from its "
+                     "printer.cfg; nothing here moves for it)",
+                     name),
+         b.line);
+    return true;
+  }
   if (b.kind == BlockKind::kSystem) {
     const std::string& t = b.text;
     if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
@@ -297,9 +305,17 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
 
   // Classify.
   BlockWords w;
+  const Word* polar_r = nullptr;
+  const Word* polar_a = nullptr;
   for (int i = 0; i < b.count; ++i) {
     const Word& wd = b.words[static_cast<size_t>(i)];
     const char l = wd.letter;
+    if (l == kPolarRadius || l == kPolarAngle) {
+      const Word*& slot = l == kPolarRadius ? polar_r : polar_a;
+      if (slot) throw fail(b, wd.col, fmt::format("two '{}' words on one line", l));
+      slot = &wd;
+      continue;
+    }
     if (l == 'G') {
       if (!is_code10_exact(wd) || wd.value < 0 || wd.value >= 1000)
         throw fail(b, wd.col, fmt::format("G{} is not a G code", wd.value));
@@ -713,7 +729,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (const Word* g = gw(10)) retract_to_r = code10(*g) == 990;
   if (gw(2) || gw(3) || gw(4) || gw(5) || gw(6) || gw(7) || gw(10)) did = true;
 
-  bool has_axis = false;  // axis words that no M code on the line took as its parameters
+  bool has_axis = polar_r || polar_a;  // axis words no M code on the line took as its own
   for (char l : kAxisNames) has_axis = has_axis || (w.get(l) && !used[l - 'A']);
   if (tlo_words) has_axis = false;
   auto no_motion_word = [&](const char* what) {
@@ -742,6 +758,26 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (std::fabs(t[i]) > 1e9) throw fail(b, aw->col, "position out of range");
     }
     return t;
+  };
+  // LinuxCNC's polar coordinates in the XY plane: '@' distance and '^' angle (degrees) from the
+  // program origin; in G91 they add to the current point's distance and angle.
+  auto apply_polar = [&](Vec4& t) {
+    if (!polar_r && !polar_a) return;
+    const Word* pw = polar_r ? polar_r : polar_a;
+    if (w.get('X') || w.get('Y'))
+      throw fail(b, pw->col, "polar '@'/'^' and X/Y on the same line");
+    if (plane != Plane::kXY) throw fail(b, pw->col, "polar coordinates need the XY plane (G17)");
+    const double px = pos[0] - offset(0), py = pos[1] - offset(1);
+    double r = std::hypot(px, py), a = std::atan2(py, px);
+    if (!absolute && r == 0.0)
+      throw fail(b, pw->col, "incremental polar move from the origin is indeterminate");
+    if (polar_r) r = absolute ? to_mm(polar_r) : r + to_mm(polar_r);
+    if (polar_a) {
+      const double deg = polar_a->value * M_PI / 180.0;
+      a = absolute ? deg : a + deg;
+    }
+    t[0] = r * std::cos(a) + offset(0);
+    t[1] = r * std::sin(a) + offset(1);
   };
   auto apply_e = [&](Vec4& t) {
     if (const Word* ew = word('E')) {
@@ -961,6 +997,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (motion < 0 || motion == kCycleNone)
       throw fail(b, motion_col, "axis words with no motion mode (G0/G1/G2/G3) active");
     Vec4 t = target(g53);
+    apply_polar(t);
     if (g53 && (motion == 20 || motion == 30))
       throw fail(b, nm->col, "G53 with an arc: only G0/G1 may use machine coordinates");
     if (g53 && !absolute) throw fail(b, nm->col, "G53 needs G90 (absolute distance mode)");
@@ -1079,7 +1116,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   for (int i = 0; i < b.count; ++i) {
     const Word& wd = b.words[static_cast<size_t>(i)];
     const char l = wd.letter;
-    if (l == 'G' || l == 'M' || l == 'N') continue;
+    if (l == 'G' || l == 'M' || l == 'N' || l == kPolarRadius || l == kPolarAngle) continue;
     const char as = (l == 'A' && rules->a_is_extruder) ? 'E' : l;
     if (!used[as - 'A'])
       throw fail(b, wd.col, fmt::format("'{}' word with nothing on the line that uses it", l));
@@ -1239,6 +1276,7 @@ Stats run(std::string text, const std::string& file_name, const Options& options
   Interpreter interp(file_name, options, choice, params);
   Syntax syntax = dialect_rules(choice.dialect).syntax;
   if (choice.nested_comments) syntax.paren_in_comment = true;
+  syntax.dialect_name = dialect_rules(choice.dialect).name;
   Reader reader(file_name, std::move(text), syntax, params);
   Block block;
   std::vector<Command> out;

@@ -441,6 +441,15 @@ struct Reader::Impl {
     while (a < orig.size() && is_space(orig[a])) ++a;
     if (a >= orig.size()) return false;
     const char c = orig[a];
+    if (syn.macro_lines && is_alpha(c) && a + 1 < orig.size() &&
+        (is_alpha(orig[a + 1]) || orig[a + 1] == '_')) {
+      size_t b = orig.size();
+      while (b > a && is_space(orig[b - 1])) --b;
+      out.kind = BlockKind::kMacro;
+      out.text.assign(orig.substr(a, b - a));
+      out.text_col = static_cast<int>(a) + 1;
+      return true;
+    }
     if (c != '%' && c != '$' && c != '?') return false;
     size_t b = orig.size();
     while (b > a && is_space(orig[b - 1])) --b;
@@ -700,6 +709,13 @@ struct Reader::Impl {
           w.value = expr().real_value(i);
           w.from_expr = true;
           w.integer = std::fabs(w.value - std::round(w.value)) <= detail::kIntegerTolerance;
+        } else if (syn.macro_lines && i < n && p[i] == '"') {  // P "MK3S"
+          int j = i + 1;
+          while (j < n && p[j] != '"') ++j;
+          if (j >= n) fail(col(i), "unterminated string '\"'");
+          i = j + 1;
+          w.bare = true;
+          w.integer = true;
         } else if (syn.bare_letters && (i >= n || is_alpha(p[i]) || p[i] == '(' || p[i] == ';' ||
                                         p[i] == '*' || is_space(p[i]))) {
           w.bare = true;
@@ -723,6 +739,25 @@ struct Reader::Impl {
             break;
           }
         }
+        continue;
+      }
+      if ((c == '@' || c == '^') && syn.ngc) {
+        const int wcol = col(i);
+        ++i;
+        while (i < n && is_space(p[i])) ++i;
+        Word w;
+        w.letter = c;
+        w.col = wcol;
+        double v = 0.0;
+        bool dot = false;
+        if (plain_number(i, v, dot)) {
+          w.value = v;
+          w.integer = !dot;
+        } else {
+          w.value = expr().real_value(i);
+          w.from_expr = true;
+        }
+        push_word(out, w);
         continue;
       }
       if (c == '(') {

@@ -22,12 +22,19 @@ struct Word {
   bool bare = false;       // the letter had no number (Syntax::bare_letters); value is 0
 };
 
+// LinuxCNC's polar coordinates: '@' (distance) and '^' (angle, degrees) are words with these
+// letters (Word::letter '@' and '^'); only with Syntax::ngc.
+constexpr char kPolarRadius = '@';
+constexpr char kPolarAngle = '^';
+
 // What a line is, besides its words.
 enum class BlockKind : uint8_t {
   kWords,    // an ordinary block (possibly with zero words: a comment or an assignment only)
   kPercent,  // a '%' program delimiter line (text after it is kept in `text`)
   kSystem,   // a grbl '$' line (`text` holds it from the '$'); only when Syntax::dollar_lines
   kQuery,    // a grbl '?' line; only when Syntax::dollar_lines
+  kMacro,    // an extended command line ("START_PRINT", "EXCLUDE_OBJECT_DEFINE NAME=..."):
+             // Klipper's, written by slicers; only when Syntax::macro_lines (`text` holds it)
 };
 
 // A message for the operator: (MSG,...), (DEBUG,...), (PRINT,...) comments (rs274ngc) and the
@@ -75,6 +82,10 @@ struct Syntax {
   // The dialect's name for error messages ("'#' parameters are rs274ngc (LinuxCNC) syntax; this
   // file's dialect is grbl"); empty: the messages say "not enabled for this file".
   const char* dialect_name = "";
+  // A line that starts with a name of two or more letters, digits or '_' (Klipper's extended
+  // commands) is BlockKind::kMacro; a word whose value is a "quoted string" (Marlin's M862.3
+  // P "MK3S") is a bare word (Word::bare).
+  bool macro_lines = false;
 };
 
 }  // namespace fpgacnc::gcode
