@@ -733,6 +733,20 @@ TEST(ReaderO, WhileDoRepeatBreakContinue) {
             (V{"G0 X1", "G0 X1", "G0 X1", "G0 X4", "G0 X4", "G0 X4", "G0 X5", "G0 X5"}));
 }
 
+TEST(ReaderO, SkippedLinesHaveNoEffect) {
+  // A break in the body of a loop that never runs does not touch other loops: the do loop runs
+  // 3 passes both times. (LinuxCNC 2.9's rs274 runs it once the second time: a quirk of its
+  // skipping, not its documented semantics; likewise after a do loop's continue, its repeats
+  // can run too often.)
+  EXPECT_EQ(trace("o2 repeat [2]\n#116=0\no16 do\n#116=[#116+1]\nG0 X#116\n"
+                  "o16 while [#116 LT 3]\no17 while [0]\no17 break\no17 endwhile\no2 endrepeat\n"),
+            (V{"G0 X1", "G0 X2", "G0 X3", "G0 X1", "G0 X2", "G0 X3"}));
+  // A skipped if body with a repeat inside, then a repeat entered twice from a do/continue.
+  EXPECT_EQ(trace("#1=0\no1 do\n#1=[#1+1]\no3 if [#1 EQ 1]\no1 continue\no3 endif\n"
+                  "o4 repeat [2]\nG0 X#1\no4 endrepeat\no1 while [#1 LT 3]\n"),
+            (V{"G0 X2", "G0 X2", "G0 X3", "G0 X3"}));
+}
+
 TEST(ReaderO, NestedLoopsAndLoopsInSubroutines) {
   // 3 x 2 nested whiles; a repeat inside a subroutine called twice.
   const auto t = trace(
