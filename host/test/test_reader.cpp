@@ -830,6 +830,12 @@ TEST(ReaderO, LineErrors) {
   EXPECT_EQ(error_of("o1.5 sub\n"), "t.ngc:1:3: error: an O-word number must be an integer");
   EXPECT_EQ(error_of("o sub\n"),
             "t.ngc:1:1: error: expected a number, <name> or [expression] after 'O'");
+  EXPECT_EQ(error_of("o1 repeat [1e20]\no1 endrepeat\n"),
+            "t.ngc:1:13: error: unknown operator 'E'");
+  EXPECT_EQ(error_of("o1 repeat [10 ** 20]\no1 endrepeat\n"),
+            "t.ngc:1:4: error: o1 repeat: count 1e+20 out of range");
+  EXPECT_EQ(error_of("o[-1] call\n"),
+            "t.ngc:1:1: error: computed O-word number -1 is not a non-negative integer");
   EXPECT_EQ(error_of("o[1] if [1]\n"),
             "t.ngc:1:1: error: a computed O-word number ('o[...]') is only supported with call");
   // The condition's own errors name its column.
