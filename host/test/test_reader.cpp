@@ -733,6 +733,20 @@ TEST(ReaderO, WhileDoRepeatBreakContinue) {
             (V{"G0 X1", "G0 X1", "G0 X1", "G0 X4", "G0 X4", "G0 X4", "G0 X5", "G0 X5"}));
 }
 
+TEST(ReaderO, SkippedLinesHaveNoEffect) {
+  // A break in the body of a loop that never runs does not touch other loops: the do loop runs
+  // 3 passes both times. (LinuxCNC 2.9's rs274 runs it once the second time: a quirk of its
+  // skipping, not its documented semantics; likewise after a do loop's continue, its repeats
+  // can run too often.)
+  EXPECT_EQ(trace("o2 repeat [2]\n#116=0\no16 do\n#116=[#116+1]\nG0 X#116\n"
+                  "o16 while [#116 LT 3]\no17 while [0]\no17 break\no17 endwhile\no2 endrepeat\n"),
+            (V{"G0 X1", "G0 X2", "G0 X3", "G0 X1", "G0 X2", "G0 X3"}));
+  // A skipped if body with a repeat inside, then a repeat entered twice from a do/continue.
+  EXPECT_EQ(trace("#1=0\no1 do\n#1=[#1+1]\no3 if [#1 EQ 1]\no1 continue\no3 endif\n"
+                  "o4 repeat [2]\nG0 X#1\no4 endrepeat\no1 while [#1 LT 3]\n"),
+            (V{"G0 X2", "G0 X2", "G0 X3", "G0 X3"}));
+}
+
 TEST(ReaderO, NestedLoopsAndLoopsInSubroutines) {
   // 3 x 2 nested whiles; a repeat inside a subroutine called twice.
   const auto t = trace(
@@ -816,6 +830,12 @@ TEST(ReaderO, LineErrors) {
   EXPECT_EQ(error_of("o1.5 sub\n"), "t.ngc:1:3: error: an O-word number must be an integer");
   EXPECT_EQ(error_of("o sub\n"),
             "t.ngc:1:1: error: expected a number, <name> or [expression] after 'O'");
+  EXPECT_EQ(error_of("o1 repeat [1e20]\no1 endrepeat\n"),
+            "t.ngc:1:13: error: unknown operator 'E'");
+  EXPECT_EQ(error_of("o1 repeat [10 ** 20]\no1 endrepeat\n"),
+            "t.ngc:1:4: error: o1 repeat: count 1e+20 out of range");
+  EXPECT_EQ(error_of("o[-1] call\n"),
+            "t.ngc:1:1: error: computed O-word number -1 is not a non-negative integer");
   EXPECT_EQ(error_of("o[1] if [1]\n"),
             "t.ngc:1:1: error: a computed O-word number ('o[...]') is only supported with call");
   // The condition's own errors name its column.

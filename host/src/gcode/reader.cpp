@@ -728,8 +728,8 @@ struct Reader::Impl {
           fail(wcol, fmt::format("expected a number after '{}'", letter));
         }
         push_word(out, w);
-        if (letter == 'M' && syn.text_mcodes && w.integer && !w.bare &&
-            is_text_mcode(static_cast<int>(w.value))) {
+        if (letter == 'M' && syn.text_mcodes && w.integer && !w.bare && w.value >= 0 &&
+            w.value < 10000 && is_text_mcode(static_cast<int>(w.value))) {
           const int code = static_cast<int>(w.value);
           int k = i;
           while (k < n && is_space(p[k])) ++k;
@@ -943,7 +943,7 @@ struct Reader::Impl {
       i = j;
     } else if (i < n && (p[i] == '[' || p[i] == '#')) {
       const double v = expr().real_value(i);
-      if (std::fabs(v - std::round(v)) > detail::kIntegerTolerance || v < 0)
+      if (std::fabs(v - std::round(v)) > detail::kIntegerTolerance || v < 0 || v > 1e9)
         fail(ocol, fmt::format("computed O-word number {} is not a non-negative integer", v));
       o.label = fmt::format("o{}", static_cast<long long>(std::round(v)));
       o.kw = Kw::kUnknown;  // marks the label as computed (checked below)
@@ -1223,6 +1223,9 @@ struct Reader::Impl {
         const OEntry* end = find_after(lab, line0, {Kw::kEndrepeat});
         if (!end) missing("endrepeat");
         const double v = arg(o, 0);
+        if (std::fabs(v) > 1e15) {
+          fail(o.kw_col, fmt::format("{} repeat: count {} out of range", lab, v));
+        }
         const auto times = static_cast<int64_t>(std::llround(v));
         auto& reps = frames.back().repeats;
         std::erase_if(reps, [&](const auto& r) { return r.first == line0; });
