@@ -65,7 +65,9 @@ struct Generator {
 // Programs that name themselves in their first comments. Slicers write for printers (Marlin
 // unless the file says RepRap); CAM, laser and PCB programs for grbl-like controllers unless
 // they say LinuxCNC.
-constexpr std::array<Generator, 47> kGenerators{{
+constexpr std::array<Generator, 49> kGenerators{{
+    {"creality_print", "Creality Print", Dialect::kMarlin},
+    {"creality print", "Creality Print", Dialect::kMarlin},
     {"miracle-grue", "Miracle-Grue", Dialect::kMakerbot},
     {"makerbot", "MakerBot", Dialect::kMakerbot},
     {"replicatorg", "ReplicatorG", Dialect::kMakerbot},
@@ -195,7 +197,8 @@ DialectChoice detect_dialect(std::string_view text, std::optional<Dialect> overr
   }
   // rs274ngc programming in the text makes it LinuxCNC whatever wrote it.
   const int ngc_line = first_code_line(text, 1 << 30, [](std::string_view code) {
-    return code.find('#') != std::string_view::npos ||
+    return code.find('#') != std::string_view::npos || code.find('@') != std::string_view::npos ||
+           code.find('^') != std::string_view::npos ||
            code.find('[') != std::string_view::npos ||
            (code[0] == 'O' && code.size() > 1 &&
             (code[1] == '<' || std::isdigit(static_cast<unsigned char>(code[1])))) ||

@@ -217,10 +217,30 @@ struct Interpreter::Impl {
         p.set(5221 + 20 * s + a, g5x[static_cast<size_t>(s)][static_cast<size_t>(a)] / unit);
     p.set(5400, tool);
     p.set(5403, tlo[2] / unit);
+    if (rules->syntax.ngc) write_named();
   }
   void write_position() {
     for (int a = 0; a < 3; ++a)
       params->set(5420 + a, (pos[static_cast<size_t>(a)] - offset(a)) / unit);
+  }
+  // LinuxCNC's read-only named parameters that programs test (#<_x>, #<_metric>, #<_task>...).
+  void write_named() {
+    Params& p = *params;
+    static constexpr const char* kXyz[3] = {"_x", "_y", "_z"};
+    for (int a = 0; a < 3; ++a)
+      p.set_named(kXyz[a], (pos[static_cast<size_t>(a)] - offset(a)) / unit);
+    p.set_named("_metric", unit == 1.0);
+    p.set_named("_imperial", unit != 1.0);
+    p.set_named("_absolute", absolute);
+    p.set_named("_incremental", !absolute);
+    p.set_named("_feed", feed / unit);
+    p.set_named("_rpm", spindle_s.value_or(0.0));
+    p.set_named("_current_tool", tool);
+    p.set_named("_selected_tool", next_tool);
+    p.set_named("_plane", plane == Plane::kXY ? 170 : plane == Plane::kZX ? 180 : 190);
+    p.set_named("_coord_system", cs < 6 ? 540 + 10 * cs : 590 + (cs - 5));
+    p.set_named("_motion_mode", motion < 0 ? 800 : motion);
+    p.set_named("_task", 1);  // running a job, not a preview
   }
 
   Error fail(const Block& b, int col, const std::string& msg) const {
@@ -255,7 +275,8 @@ struct Interpreter::Impl {
 
   bool execute(const Block& b, std::vector<Command>& out);
   void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3],
-                    std::vector<Command>& out, int repeats, const Word* first_col);
+                    std::vector<Command>& out, int repeats, const Word* first_col,
+                    const Word* polar_r, const Word* polar_a);
 };
 
 namespace {
@@ -401,6 +422,13 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     w.letter[l - 'A'] = &wd;
   }
   auto gw = [&](int grp) { return w.g[grp + 1]; };
+  // A letter without a number is a parameter of an M code or Marlin's G28 X Y; nothing else.
+  if (w.mcount == 0 && !(w.g[1] && code10(*w.g[1]) == 280)) {
+    for (int i = 0; i < b.count; ++i) {
+      const Word& wd = b.words[static_cast<size_t>(i)];
+      if (wd.bare) throw fail(b, wd.col, fmt::format("expected a number after '{}'", wd.letter));
+    }
+  }
   bool used[26] = {};
   auto word = [&](char l) {
     used[l - 'A'] = true;
@@ -652,10 +680,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (nmc == 40) {
     const Word* p = word('P');
     const Word* s = rules->dwell_p_ms ? word('S') : nullptr;
-    if (!p && !s)
-      throw fail(b, nm->col,
-                 rules->dwell_p_ms ? "G4 needs P (milliseconds) or S (seconds)"
-                                   : "G4 needs a P word (seconds)");
+    if (!p && !s && !rules->dwell_p_ms) throw fail(b, nm->col, "G4 needs a P word (seconds)");
+    // Marlin: G4 alone waits for the moves to finish (a stop, no time).
     double secs = 0.0;
     if (s) secs += s->value;
     if (p) secs += rules->dwell_p_ms ? p->value / 1000.0 : p->value;
@@ -947,9 +973,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   const PlaneAxes pa = plane_axes(plane);
   static constexpr char kOffsetWord[3] = {'I', 'J', 'K'};  // centre offsets of X, Y, Z
   const bool arc_mode = motion == 20 || motion == 30;
-  const Word* cu = arc_mode ? w.get(kOffsetWord[pa.u]) : nullptr;
-  const Word* cv = arc_mode ? w.get(kOffsetWord[pa.v]) : nullptr;
-  const Word* r_word = arc_mode ? w.get('R') : nullptr;
+  auto unused = [&](char l) { return used[l - 'A'] ? nullptr : w.get(l); };
+  const Word* cu = arc_mode ? unused(kOffsetWord[pa.u]) : nullptr;
+  const Word* cv = arc_mode ? unused(kOffsetWord[pa.v]) : nullptr;
+  const Word* r_word = arc_mode ? unused('R') : nullptr;
   const bool arc_words = cu || cv || r_word;
   if (cycle_mode) {
     for (char l : {'Z', 'R', 'P', 'Q', 'L'}) word(l);
@@ -970,7 +997,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       cycle_q = to_mm(q);
     }
     const bool pos_words = w.get(kAxisNames[cpa.u]) || w.get(kAxisNames[cpa.v]) || zw ||
-                           w.get('R') || gw(1);
+                           w.get('R') || gw(1) || polar_r || polar_a;
     if (pos_words) {
       for (int a = 0; a < 3; ++a) word(kAxisNames[a]);
       bool given[3] = {w.get('X') != nullptr, w.get('Y') != nullptr, w.get('Z') != nullptr};
@@ -982,7 +1009,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         if (!l->integer || l->value < 1) throw fail(b, l->col, "L (repeats) must be >= 1");
         repeats = static_cast<int>(l->value);
       }
-      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(kAxisNames[cpa.u]));
+      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(kAxisNames[cpa.u]),
+                   polar_r, polar_a);
     }
     if (w.get('E')) throw fail(b, w.get('E')->col, "E in a canned cycle");
   } else if (has_axis || (arc_mode && arc_words && (gw(1) || true) && (has_axis || arc_words))) {
@@ -1154,7 +1182,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
 // clear level (G98: the level before the cycle or R, whichever is higher; G99: R).
 void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool given[3],
                                      std::vector<Command>& out, int repeats,
-                                     const Word* first_col) {
+                                     const Word* first_col, const Word* polar_r,
+                                     const Word* polar_a) {
   const PlaneAxes pa = plane_axes(plane);
   const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v),
              wa = static_cast<size_t>(pa.w);
@@ -1200,14 +1229,37 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
   }
   const double clear = retract_to_r ? r : old_w;
   double hu = pos[u], hv = pos[v];
+  const bool polar = polar_r || polar_a;
+  if (polar && plane != Plane::kXY)
+    throw fail(b, (polar_r ? polar_r : polar_a)->col, "polar coordinates need the XY plane (G17)");
+  // Polar: distance and angle about the program origin (G91: added per repeat).
+  const double d_r = polar_r ? polar_r->value * unit : 0.0;
+  const double d_a = polar_a ? polar_a->value * M_PI / 180.0 : 0.0;
   if (absolute) {
     if (given[u]) hu = given_pos[u] + offset(pa.u);
     if (given[v]) hv = given_pos[v] + offset(pa.v);
+    if (polar) {
+      const double px = hu - offset(0), py = hv - offset(1);
+      const double rr = polar_r ? d_r : std::hypot(px, py);
+      const double aa = polar_a ? d_a : std::atan2(py, px);
+      hu = rr * std::cos(aa) + offset(0);
+      hv = rr * std::sin(aa) + offset(1);
+    }
   }
   for (int k = 0; k < repeats; ++k) {
     if (!absolute) {
       if (given[u]) hu += given_pos[u];
       if (given[v]) hv += given_pos[v];
+      if (polar) {
+        const double px = hu - offset(0), py = hv - offset(1);
+        if (px == 0.0 && py == 0.0)
+          throw fail(b, (polar_r ? polar_r : polar_a)->col,
+                     "incremental polar move from the origin is indeterminate");
+        const double rr = std::hypot(px, py) + d_r;
+        const double aa = std::atan2(py, px) + d_a;
+        hu = rr * std::cos(aa) + offset(0);
+        hv = rr * std::sin(aa) + offset(1);
+      }
     }
     // The first positioning move of a series runs at the current level, every later one at the
     // clear level (LinuxCNC's CYCLE_MACRO).
@@ -1255,7 +1307,9 @@ Interpreter::Interpreter(std::string file_name, Options options, const DialectCh
 Interpreter::~Interpreter() = default;
 
 bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
-  return impl_->execute(block, out);
+  const bool go_on = impl_->execute(block, out);
+  if (impl_->rules->syntax.ngc) impl_->write_named();  // what the next line may read
+  return go_on;
 }
 
 void Interpreter::finish() {
@@ -1271,13 +1325,16 @@ namespace {
 
 Stats run(std::string text, const std::string& file_name, const Options& options,
           const std::function<void(const Command&)>& sink) {
+  bool reader_block_delete = false;
   const DialectChoice choice = detect_dialect(text, options.dialect, options.dialect_source);
   Params params;
   Interpreter interp(file_name, options, choice, params);
   Syntax syntax = dialect_rules(choice.dialect).syntax;
+  reader_block_delete = options.block_delete;
   if (choice.nested_comments) syntax.paren_in_comment = true;
   syntax.dialect_name = dialect_rules(choice.dialect).name;
   Reader reader(file_name, std::move(text), syntax, params);
+  reader.set_block_delete(reader_block_delete);
   Block block;
   std::vector<Command> out;
   int last_line = 0;

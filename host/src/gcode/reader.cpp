@@ -699,7 +699,14 @@ struct Reader::Impl {
         bool dot = false;
         if (plain_number(i, v, dot)) {
           if (i < n && (p[i] == '.' || p[i] == '+' || p[i] == '-')) {
-            fail(col(i), fmt::format("garbage in the number of '{}'", letter));
+            // Marlin: an M code's parameter may be a version string (M115 U6.3.0+10073).
+            bool after_m = false;
+            for (int k = 0; k < out.count; ++k)
+              after_m = after_m || out.words[static_cast<size_t>(k)].letter == 'M';
+            if (!syn.macro_lines || !after_m)
+              fail(col(i), fmt::format("garbage in the number of '{}'", letter));
+            while (i < n && !is_space(p[i]) && p[i] != ';') ++i;
+            w.bare = true;
           }
           w.value = v;
           w.integer = !dot;

@@ -343,7 +343,7 @@ void fam_subroutines(Gen& g) {
   }
 }
 
-// if/elseif/else, while, do-while, repeat, break, continue.
+// if/elseif/else, while, do-while, repeat, continue.
 void fam_control(Gen& g) {
   g.line("G21 G90 F1000");
   g.line(fmt::format("#<n> = {}", g.r.range(3, 9)));
@@ -364,9 +364,9 @@ void fam_control(Gen& g) {
   g.line("    o2 continue");
   g.line("  o3 endif");
   g.line(fmt::format("  G1 X[#<i> * {}] Y[#<i> * #<i> / 4]", n3(g.r.dec(1, 5))));
-  g.line(fmt::format("  o4 if [#<i> GT {}]", g.r.range(4, 8)));
-  g.line("    o2 break");
-  g.line("  o4 endif");
+  // No 'break' here: LinuxCNC 2.9 miscounts later do/repeat loops after a 'break' in a skipped
+  // body (docs/oracle.md); the reader's unit tests check break against the documented rules.
+  g.r.range(4, 8);  // keeps the seeds' programs otherwise as they were
   g.line("o2 endwhile");
   g.line("#<j> = 0");
   g.line("o5 do");
