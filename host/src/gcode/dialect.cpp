@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cstring>
 
 #include "fpgacnc/gcode/reader.h"
 
@@ -147,6 +148,64 @@ int first_code_line(std::string_view text, int max_lines, Pred pred) {
   return 0;
 }
 
+// True when text[at] is outside '(...)' and ';' comments of its line (line starts at `from`).
+bool outside_comment(std::string_view text, size_t from, size_t at) {
+  bool paren = false;
+  for (size_t i = from; i < at; ++i) {
+    const char c = text[i];
+    if (paren) {
+      paren = c != ')';
+    } else if (c == '(') {
+      paren = true;
+    } else if (c == ';') {
+      return false;
+    }
+  }
+  return !paren;
+}
+
+// First line with rs274ngc syntax outside comments ('#', '[', '@', '^', or an O-word: 'O' or
+// 'o' first on its line, after an optional N word, followed by a digit or '<'), or 0. It runs on
+// every file: memchr finds the candidates, only their lines are looked at.
+int first_ngc_line(std::string_view text) {
+  size_t best = text.size();
+  for (const char sym : {'#', '[', '@', '^'}) {
+    size_t from = 0;
+    while (from < best) {
+      const void* hit = std::memchr(text.data() + from, sym, best - from);
+      if (!hit) break;
+      const size_t at = static_cast<size_t>(static_cast<const char*>(hit) - text.data());
+      const size_t nl = text.rfind('\n', at);
+      const size_t line_start = nl == std::string_view::npos ? 0 : nl + 1;
+      if (outside_comment(text, line_start, at)) {
+        best = at;
+        break;
+      }
+      from = at + 1;
+    }
+  }
+  // O-words: the first word of a line (after an optional N word).
+  for (size_t ls = 0; ls < best;) {
+    size_t i = ls;
+    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
+    if (i < text.size() && (text[i] == 'N' || text[i] == 'n')) {
+      ++i;
+      while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i;
+      while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
+    }
+    if (i + 1 < text.size() && (text[i] == 'O' || text[i] == 'o') &&
+        (text[i + 1] == '<' || std::isdigit(static_cast<unsigned char>(text[i + 1])))) {
+      best = std::min(best, i);
+      break;
+    }
+    const void* nl = std::memchr(text.data() + ls, '\n', text.size() - ls);
+    if (!nl) break;
+    ls = static_cast<size_t>(static_cast<const char*>(nl) - text.data()) + 1;
+  }
+  if (best >= text.size()) return 0;
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(best), '\n'));
+}
+
 bool starts_with_word(std::string_view code, std::string_view word) {
   // `code` has no spaces and is upper case; the word must not continue with a digit.
   size_t at = 0;
@@ -196,16 +255,7 @@ DialectChoice detect_dialect(std::string_view text, std::optional<Dialect> overr
     if (!c.generator.empty()) break;
   }
   // rs274ngc programming in the text makes it LinuxCNC whatever wrote it.
-  const int ngc_line = first_code_line(text, 1 << 30, [](std::string_view code) {
-    return code.find('#') != std::string_view::npos || code.find('@') != std::string_view::npos ||
-           code.find('^') != std::string_view::npos ||
-           code.find('[') != std::string_view::npos ||
-           (code[0] == 'O' && code.size() > 1 &&
-            (code[1] == '<' || std::isdigit(static_cast<unsigned char>(code[1])))) ||
-           (code[0] == 'N' && code.find('O') != std::string_view::npos &&
-            (code.find("SUB") != std::string_view::npos ||
-             code.find("CALL") != std::string_view::npos));
-  });
+  const int ngc_line = first_ngc_line(text);
   const bool printer_generator = !c.generator.empty() && (c.dialect == Dialect::kMarlin ||
                                                           c.dialect == Dialect::kRepRap);
   if (override_dialect) {

@@ -1354,9 +1354,10 @@ Stats run(std::string text, const std::string& file_name, const Options& options
 }
 
 std::string slurp(std::istream& in, const std::string& file_name) {
-  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::ostringstream s;
+  if (in.peek() != std::char_traits<char>::eof()) s << in.rdbuf();
   if (in.bad()) throw Error(file_name, 0, 0, "read error");
-  return text;
+  return std::move(s).str();
 }
 
 }  // namespace
