@@ -332,18 +332,21 @@ void Lookahead::push(const Segment& s, size_t segment_index) {
 bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chords,
                          size_t first_index) {
   if (!lim_.arc_walk || chords.empty()) return false;
-  if (m.plane != gcode::Plane::kXY) return false;  // ARC frames walk the XY plane
+  // The walk's (u, v) plane and helix axis w (ARC flags bits 3:2).
+  const gcode::PlaneAxes pa = gcode::plane_axes(m.plane);
+  const auto U = static_cast<size_t>(pa.u), V = static_cast<size_t>(pa.v),
+             W = static_cast<size_t>(pa.w);
   const auto& spm = lim_.steps_per_mm;
-  if (spm[0] != spm[1]) return false;  // a circle in mm is an ellipse on the step lattice
+  if (spm[U] != spm[V]) return false;  // a circle in mm is an ellipse on the step lattice
   const Segment& first = chords.front();
   const Segment& last = chords.back();
   Steps4 start{};
   for (size_t a = 0; a < 4; ++a) start[a] = first.target[a] - first.steps[a];
-  const int64_t dx = last.target[0] - start[0], dy = last.target[1] - start[1];
-  const int64_t dz = last.target[2] - start[2], de = last.target[3] - start[3];
+  const int64_t dx = last.target[U] - start[U], dy = last.target[V] - start[V];
+  const int64_t dz = last.target[W] - start[W], de = last.target[3] - start[3];
   if (de != 0) return false;  // ARC carries no E
-  const int64_t cx = std::llround(m.center[0] * spm[0]), cy = std::llround(m.center[1] * spm[1]);
-  const int64_t i = cx - start[0], j = cy - start[1];
+  const int64_t cx = std::llround(m.center[0] * spm[U]), cy = std::llround(m.center[1] * spm[V]);
+  const int64_t i = cx - start[U], j = cy - start[V];
   const bool full = dx == 0 && dy == 0;
   if (full != m.full_circle) return false;  // the end rounds onto the start: no native arc
   constexpr int64_t kLim = int64_t{1} << 22;
@@ -358,6 +361,7 @@ bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chord
   const bool cw = m.motion == gcode::Motion::kArcCw;
   ArcFields af;
   af.code = cw ? 2 : 3;
+  af.plane = static_cast<uint8_t>(m.plane);
   af.i = static_cast<int32_t>(i);
   af.j = static_cast<int32_t>(j);
   af.dx = static_cast<int32_t>(dx);
@@ -380,8 +384,8 @@ bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chord
     if (sweep <= 0.0) sweep += kTwoPi;
   }
   const double lxy_steps = 0.5 * (r0 + r1) * sweep;  // spiral: mean radius
-  const double lxy = lxy_steps / spm[0];             // mm
-  const double dz_mm = static_cast<double>(dz) / spm[2];
+  const double lxy = lxy_steps / spm[U];             // mm
+  const double dz_mm = static_cast<double>(dz) / spm[W];
   Block b;
   Profile& p = b.p;
   p.segment_index = first_index;
@@ -390,14 +394,20 @@ bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chord
   p.spindle_s = first.spindle_s;
   p.arc = true;
   p.arc_fields = af;
-  p.steps = {dx, dy, dz, 0};
+  p.steps = {};
+  p.steps[U] = dx;
+  p.steps[V] = dy;
+  p.steps[W] = dz;
   p.length_mm = std::hypot(lxy, dz_mm);
   const double len = p.length_mm;
   const double fxy = lxy / len;  // XY speed / path speed
   auto tangent = [&](double px, double py, std::array<double, 4>& u) {
     const double r = std::hypot(px, py);
     const double tx = cw ? py / r : -py / r, ty = cw ? -px / r : px / r;
-    u = {tx * fxy, ty * fxy, dz_mm / len, 0.0};
+    u = {};
+    u[U] = tx * fxy;
+    u[V] = ty * fxy;
+    u[W] = dz_mm / len;
   };
   tangent(static_cast<double>(-i), static_cast<double>(-j), b.unit);
   tangent(static_cast<double>(dx - i), static_cast<double>(dy - j), b.unit_out);
@@ -406,23 +416,23 @@ bool Lookahead::push_arc(const gcode::Move& m, const std::vector<Segment>& chord
   // The tangent sweeps every XY direction: the XY speed and acceleration are held to the
   // smaller X/Y limit; the centripetal acceleration v_xy^2 / R to half of it and the tangential
   // to sqrt(3)/2 of it (their vector sum stays within the limit).
-  const double a_xy = std::min(lim_.a_max[0], lim_.a_max[1]);
-  const double r_mm = std::min(r0, r1) / spm[0];
+  const double a_xy = std::min(lim_.a_max[U], lim_.a_max[V]);
+  const double r_mm = std::min(r0, r1) / spm[U];
   double vc = std::min(
-      {feed, std::min(lim_.v_max[0], lim_.v_max[1]) / fxy, std::sqrt(0.5 * a_xy * r_mm) / fxy});
+      {feed, std::min(lim_.v_max[U], lim_.v_max[V]) / fxy, std::sqrt(0.5 * a_xy * r_mm) / fxy});
   double acc = 0.5 * std::sqrt(3.0) * a_xy / fxy;
   if (dz != 0) {
     const double fz = std::fabs(dz_mm) / len;
-    vc = std::min(vc, lim_.v_max[2] / fz);
-    acc = std::min(acc, lim_.a_max[2] / fz);
+    vc = std::min(vc, lim_.v_max[W] / fz);
+    acc = std::min(acc, lim_.a_max[W] / fz);
   }
   // Step rates: an XY lattice move steps each axis at most once, so the move rate is at most
   // the tangential rate in steps per clock: keep it below 1 / min_period and 1/8 (the walk needs 4
   // clocks a move, protocol.md host rule); Z likewise.
   const double clk = static_cast<double>(lim_.clk_hz);
   const double max_steps_per_clock = std::min(0.125, 1.0 / lim_.min_period);
-  vc = std::min(vc, max_steps_per_clock * clk / spm[0] / fxy);
-  if (dz != 0) vc = std::min(vc, max_steps_per_clock * clk / spm[2] * len / std::fabs(dz_mm));
+  vc = std::min(vc, max_steps_per_clock * clk / spm[U] / fxy);
+  if (dz != 0) vc = std::min(vc, max_steps_per_clock * clk / spm[W] * len / std::fabs(dz_mm));
   set_block_rates(b, static_cast<double>(af.c_total), vc, acc, kMaxArcV, kMaxArcA);
   ++stats_.arcs;
   add_block(std::move(b));

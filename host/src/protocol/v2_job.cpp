@@ -144,7 +144,10 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
   last_step.fill(std::numeric_limits<int64_t>::min() / 4);
   int64_t now = 0;  // clock of the current segment's start, relative to the first one's
   bool first = true;
-  auto advance = [&](const plan::Steps4& steps, uint64_t clocks, bool arc) {
+  // arc_plane: -1 for a line; else the ARC's plane (its u and v axes reverse within the arc).
+  auto advance = [&](const plan::Steps4& steps, uint64_t clocks, int arc_plane) {
+    const bool arc = arc_plane >= 0;
+    const gcode::PlaneAxes pa = gcode::plane_axes(static_cast<gcode::Plane>(arc ? arc_plane : 0));
     int64_t d_edge = std::numeric_limits<int64_t>::min();
     bool rev = false;
     for (size_t a = 0; a < 4; ++a) {
@@ -165,7 +168,8 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
     now += static_cast<int64_t>(clocks);
     for (size_t a = 0; a < 4; ++a) {
       if (steps[a] == 0) continue;
-      dir[a] = arc && a < 2 ? 0 : (steps[a] > 0 ? 1 : -1);
+      const bool in_plane = arc && (static_cast<int>(a) == pa.u || static_cast<int>(a) == pa.v);
+      dir[a] = in_plane ? 0 : (steps[a] > 0 ? 1 : -1);
       last_step[a] = now;
     }
   };
@@ -192,9 +196,10 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         jf.profile = true;
         for (size_t a = 0; a < 3; ++a) job.target[a] += p->steps[a];
         job.total_t += arc_ticks;
-        advance(p->steps, arc_ticks, true);
+        advance(p->steps, arc_ticks, p->arc_fields.plane);
         ++job.arcs;
-        job.max_axes = std::max<size_t>(job.max_axes, p->steps[2] != 0 ? 3 : 2);
+        job.max_axes = std::max<size_t>(
+            job.max_axes, p->steps[2] != 0 || p->arc_fields.plane != 0 ? 3 : 2);
         if (p->segment_index != last_seg) {
           ++seg_seen;
           last_seg = p->segment_index;
@@ -219,7 +224,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       jf.profile = true;
       if (jf.frame.payload[0] & kLineShort) ++job.short_lines;
       job.total_t += p->clocks;
-      advance(p->steps, p->clocks, false);
+      advance(p->steps, p->clocks, -1);
       ++job.profiles;
       job.max_axes = std::max(job.max_axes, k);
       if (p->segment_index != last_seg) {
@@ -230,7 +235,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
       for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_seen)) {
         job.total_t += jf.t;
-        advance(plan::Steps4{}, jf.t, false);
+        advance(plan::Steps4{}, jf.t, -1);
         ++job.dwells;
         push(std::move(jf));
       }
@@ -250,7 +255,7 @@ Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan
   fr.seq = seq;
   fr.type = kTypeArc;
   auto& p = fr.payload;
-  p.push_back(g.code);
+  p.push_back(static_cast<uint8_t>(g.code | (g.plane << 2)));  // flags: code, plane bits 3:2
   p.push_back(power);
   put_be(p, static_cast<uint32_t>(g.i), 3);
   put_be(p, static_cast<uint32_t>(g.j), 3);

@@ -59,6 +59,9 @@ struct Recurrence {
 // ARC frame geometry (docs/protocol.md "ARC"): steps relative to the arc's start.
 struct ArcFields {
   uint8_t code = 2;  // 2 = G2 (CW), 3 = G3 (CCW)
+  // Plane (flags bits 3:2): 0 XY (G17), 1 ZX (G18), 2 YZ (G19); i/dx along the plane's u axis,
+  // j/dy along v, dz along the helix axis w (gcode::plane_axes).
+  uint8_t plane = 0;
   int32_t i = 0, j = 0, dx = 0, dy = 0, dz = 0;
   uint32_t n_ramp = 0;
   uint64_t c_total = 0;
