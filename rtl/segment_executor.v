@@ -65,6 +65,19 @@
 // Laser: high after edge R until edge R + T for a segment with code != 0 and power != 0; between
 // two such segments run back to back it stays high; low in HOLD, SETUP, ZERO and idle.
 // position: signed step count per axis, updated on the edge STEP rises.
+// Machine outputs (OUTPUT entries, docs/protocol.md "OUTPUT"): s_out_* from segment_prep, handed
+// over on an edge H (s_out_tvalid && s_out_tready). Every segment accepted before H precedes the
+// OUTPUT in the FIFO, every segment accepted after it follows it. The entry is applied on the
+// edge that ends the segment in progress at H: the levels change on its end edge E = R + T (the
+// edge of its last STEP rise; the next segment, taken on its last tick, starts with R' = E: no
+// gap; a segment still in HOLD / SETUP at H runs first), on A + 1 of a zero-length segment in
+// ZERO, and on H itself when the executor is idle at H (or its segment ends on H). Entries
+// handed over while one is pending are merged into it (later bits win);
+// they are applied together. out_done strobes for one clock after the edge of the change with
+// out_done_n = the number of entries applied (segments_done counts each). Levels: coolant_flood,
+// coolant_mist, dout[3:0] (mask bits 0, 1, 3..6, value bits the same), fan_duty (mask bit 2,
+// the duty byte). abort clears the levels and the pending entry (outputs off from the edge after
+// the abort clock; cnc_core also gates them at once) and s_out_tready is low in an abort clock.
 // Build options (cnc_core passes them): PROFILES = 0 leaves profile_gen and the dda_profile per
 // axis out, ARCS = 0 leaves arc_dda and the in-arc DIR checks out; a segment of a kind left out is
 // run as LINE (segment_prep never sends one: the decoder answers those frames as unknown types).
@@ -74,8 +87,9 @@ module segment_executor #(
     parameter N_AXES   = 4,
     parameter PROFILES = 1,  // 0: no PROFILE kind (no profile_gen / dda_profile)
     parameter ARCS     = 1,  // 0: no ARC kind (no arc_dda)
-    parameter LEAN_DDA = 0  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused) and
-                            //    keep no steps-left counter (cnc_core's v1 build)
+    parameter LEAN_DDA = 0,  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused) and
+                             //    keep no steps-left counter (cnc_core's v1 build)
+    parameter OUTPUTS  = 1   // 0: no machine outputs (s_out_* ignored, levels constant 0)
 ) (
     input wire clk,
     input wire rst,
@@ -107,6 +121,10 @@ module segment_executor #(
     input  wire                  s_axis_tvalid,
     output wire                  s_axis_tready,
 
+    input  wire        s_out_tvalid,  // OUTPUT entry from segment_prep: {mask, value, fan duty}
+    input  wire [23:0] s_out_tdata,
+    output wire        s_out_tready,
+
     input wire [16*N_AXES-1:0] cfg_step_high,
     input wire [16*N_AXES-1:0] cfg_step_low,
     input wire [16*N_AXES-1:0] cfg_dir_setup,
@@ -129,7 +147,14 @@ module segment_executor #(
     output wire [32*N_AXES-1:0] position,
     output wire                 violation,    // 1-clock strobe: a step came before STEP low time
                                               // (or, in an arc, before its DIR setup)
-    output wire                 arc_err       // 1-clock strobe: an arc ended inconsistently
+    output wire                 arc_err,      // 1-clock strobe: an arc ended inconsistently
+
+    output wire        coolant_flood,  // machine outputs (OUTPUT entries)
+    output wire        coolant_mist,
+    output wire [ 3:0] dout,
+    output wire [ 7:0] fan_duty,
+    output wire        out_done,       // 1-clock strobe after the edge OUTPUT entries took effect
+    output wire [15:0] out_done_n      // with out_done: how many entries
 );
 
   localparam [2:0] S_IDLE = 3'd0, S_HOLD = 3'd1, S_SETUP = 3'd2, S_RUN = 3'd3, S_ZERO = 3'd4;
@@ -550,6 +575,78 @@ module segment_executor #(
       arc_end_reg     <= 1'b0;
     end
   end
+
+  // ---------------------------------------------------------------- machine outputs
+  generate
+    if (OUTPUTS != 0) begin : g_out
+      reg [5:0] lvl_reg;  // {dout[3:0], mist, flood}
+      reg [7:0] duty_reg;
+      reg [15:0] pend_n_reg;  // OUTPUT entries handed over and not applied yet (0: none)
+      reg [6:0] pend_mask_reg;  // {dout[3:0], fan, mist, flood}
+      reg [6:0] pend_val_reg;  // the same bits (fan: 0)
+      reg [7:0] pend_duty_reg;
+      reg done_reg;
+      reg [15:0] done_n_reg;
+      wire take_out = s_out_tvalid && !abort && (pend_n_reg != 16'hFFFF);
+      // the pending entry with the one handed over in this clock merged in (its bits win)
+      wire [6:0] in_mask = s_out_tdata[22:16];
+      wire [6:0] in_val = s_out_tdata[14:8];
+      wire [6:0] m_mask = take_out ? (pend_mask_reg | in_mask) : pend_mask_reg;
+      wire [6:0] m_val = take_out ? ((pend_val_reg & ~in_mask) | (in_val & in_mask)) : pend_val_reg;
+      wire [7:0] m_duty = (take_out && in_mask[2]) ? s_out_tdata[7:0] : pend_duty_reg;
+      wire [15:0] m_n = pend_n_reg + {15'd0, take_out};
+      // the segment in progress (if any) ends on this edge
+      wire ends_now = (state_reg == S_IDLE) || (state_reg == S_ZERO) || run_last;
+      wire [5:0] lvl_mask = {m_mask[6:3], m_mask[1:0]};
+      wire [5:0] lvl_val = {m_val[6:3], m_val[1:0]};
+      always @(posedge clk) begin
+        done_reg <= 1'b0;
+        if (m_n != 16'd0 && ends_now) begin
+          lvl_reg       <= (lvl_reg & ~lvl_mask) | (lvl_val & lvl_mask);
+          if (m_mask[2]) duty_reg <= m_duty;
+          done_reg      <= 1'b1;
+          done_n_reg    <= m_n;
+          pend_n_reg    <= 16'd0;
+          pend_mask_reg <= 7'd0;
+          pend_val_reg  <= 7'd0;
+        end else begin
+          pend_n_reg    <= m_n;
+          pend_mask_reg <= m_mask;
+          pend_val_reg  <= m_val;
+        end
+        pend_duty_reg <= m_duty;
+        if (abort || rst) begin
+          lvl_reg       <= 6'd0;
+          duty_reg      <= 8'd0;
+          pend_n_reg    <= 16'd0;
+          pend_mask_reg <= 7'd0;
+          pend_val_reg  <= 7'd0;
+          pend_duty_reg <= 8'd0;
+          done_reg      <= 1'b0;
+        end
+        if (rst) done_n_reg <= 16'd0;
+      end
+      assign s_out_tready  = !abort && (pend_n_reg != 16'hFFFF);
+      assign coolant_flood = lvl_reg[0];
+      assign coolant_mist  = lvl_reg[1];
+      assign dout          = lvl_reg[5:2];
+      assign fan_duty      = duty_reg;
+      assign out_done      = done_reg;
+      assign out_done_n    = done_n_reg;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_out = &{1'b0, s_out_tdata[23], s_out_tdata[15]};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end else begin : g_noout
+      assign s_out_tready  = 1'b0;
+      assign coolant_flood = 1'b0;
+      assign coolant_mist  = 1'b0;
+      assign dout          = 4'd0;
+      assign fan_duty      = 8'd0;
+      assign out_done      = 1'b0;
+      assign out_done_n    = 16'd0;
+      wire unused_out = &{1'b0, s_out_tvalid, s_out_tdata};
+    end
+  endgenerate
 
   assign s_axis_tready = ready;
   assign laser         = laser_reg && !abort;

@@ -18,8 +18,13 @@
 //   kind 0 MOTION, v2 = 1 (LINE): t = T, the segment length in clocks; steps per axis.
 //   kind 1 NUMERATORS: steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y (v1 init or v2 frame).
 //   kind 2 DWELL: t = T clocks with no steps, laser off (steps, code and power are ignored).
-//   kind 3 (never written by the decoder): a zero-length segment (T = 0, no steps, code 0) that
-//          completes at once, so a counted entry always produces one seg_done.
+//   kind 3, v2 = 1 (never written by the decoder): a zero-length segment (T = 0, no steps, code 0)
+//          that completes at once, so a counted entry always produces one seg_done.
+//   kind 3, v2 = 0 OUTPUT (machine outputs, docs/protocol.md "OUTPUT"): t[23:0] = {mask, value,
+//          fan duty}. Not prepared: handed to the executor's output port (m_out_*) in the clock
+//          the entry is taken from the FIFO (s_axis_tready and m_out_tvalid high together, only
+//          while m_out_tready is high); the block stays idle and takes the next entry on the next
+//          edge. So an OUTPUT entry costs one clock of preparation time and no executor time.
 // Arithmetic per entry (sequential divider and multiplier, one bit per clock; no `/`, `*`):
 //   n_dom = max |steps_a|.
 //   v1    : P = NUMERATOR_dom / feed (dominant X if |X| >= |Y| else Y), FEED0_PERIOD when
@@ -67,6 +72,8 @@
 // path (the prof / arc entry bits are ignored, their registers and states are not generated in
 // synthesis: they stay constant and are optimized away); cnc_core then stores neither field in
 // the FIFO and the decoder answers LINE_PROFILE / ARC frames as unknown types.
+// OUTPUTS = 0: no OUTPUT entries (m_out_tvalid constant 0; a kind-3 entry is prepared as the
+// zero-length segment whatever its v2 bit).
 // V1_ONLY = 1 (cnc_core's protocol-v1 build; needs PROFILES = ARCS = 0): the entries are v1
 // MOTION and NUMERATORS only (v2 = 0, kind 0 / 1), so only the v1 arithmetic is built, narrower,
 // with the same results on the same clocks (same latency, same outputs): the divider reads the
@@ -83,6 +90,7 @@ module segment_prep #(
     parameter PROFILES          = 1,      // 0: no LINE_PROFILE entries (prepared as LINE if any)
     parameter ARCS              = 1,      // 0: no ARC entries (prepared as LINE if any)
     parameter V1_ONLY           = 0,      // 1: only v1 MOTION / NUMERATORS entries (see below)
+    parameter OUTPUTS           = 1,      // 0: no OUTPUT entries (see below)
     parameter FEED0_PERIOD      = 62_500,
     parameter DEFAULT_NUMERATOR = 18_750_000   // CLK_HZ * 60 / 160 steps/mm at 50 MHz
 ) (
@@ -130,6 +138,10 @@ module segment_prep #(
     output wire                  m_axis_tvalid,
     input  wire                  m_axis_tready,
 
+    output wire        m_out_tvalid,  // an OUTPUT entry taken from the FIFO in this clock
+    output wire [23:0] m_out_tdata,   // {mask, value, fan duty}
+    input  wire        m_out_tready,
+
     output wire [31:0] numerator_x,
     output wire [31:0] numerator_y,
     output wire        init_applied,  // 1-clock strobe: NUMERATORS applied
@@ -139,7 +151,7 @@ module segment_prep #(
 );
 
   localparam SW = 32 * N_AXES;
-  localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2;
+  localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2, K_OUTPUT = 2'd3;
   localparam [3:0] S_IDLE = 4'd0, S_MAX = 4'd1, S_DIV = 4'd2, S_CLAMP = 4'd3, S_MUL = 4'd4,
                    S_SUB = 4'd5, S_OUT = 4'd6, S_PMUL = 4'd7, S_AMUL = 4'd8, S_ADIV = 4'd9,
                    S_AFIX = 4'd10;
@@ -156,6 +168,7 @@ module segment_prep #(
   wire [1:0] in_kind = s_axis_tdata[SW+43:SW+42];
   wire in_v2 = s_axis_tdata[SW+44];
   wire in_v1_motion = (in_kind == K_MOTION) && !in_v2;
+  wire in_out = (OUTPUTS != 0) && (V1_ONLY == 0) && (in_kind == K_OUTPUT) && !in_v2;
   wire in_prof = (PROFILES != 0) && s_axis_tdata[SW+45] && (in_kind == K_MOTION) && in_v2;
   wire [46:0] in_ve = s_axis_tdata[SW+46+:47];
   wire [46:0] in_vc = s_axis_tdata[SW+94+:47];
@@ -318,7 +331,8 @@ module segment_prep #(
 
   wire idle_state = (state_reg == S_IDLE);
   wire accept_init = idle_state && (in_kind == K_NUMERATORS) && exec_idle && !abort;
-  wire accept_seg = idle_state && (in_kind != K_NUMERATORS) && !abort;
+  wire accept_seg = idle_state && (in_kind != K_NUMERATORS) && !in_out && !abort;
+  wire accept_out = idle_state && in_out && m_out_tready && !abort;
 
   integer i;
   always @(posedge clk) begin
@@ -667,7 +681,9 @@ module segment_prep #(
     end
   end
 
-  assign s_axis_tready   = accept_seg || accept_init;
+  assign s_axis_tready   = accept_seg || accept_init || accept_out;
+  assign m_out_tvalid    = s_axis_tvalid && accept_out;
+  assign m_out_tdata     = in_t[23:0];
   assign m_axis_code     = code_reg;
   assign m_axis_power    = power_reg;
   assign m_axis_v2       = v2_reg;

@@ -91,6 +91,8 @@ std::string type_name(uint8_t type) {
       return "DWELL";
     case Type::Arc:
       return "ARC";
+    case Type::Output:
+      return "OUTPUT";
     case Type::LineProfile:
       return "LINE_PROFILE";
     case Type::HeaterConfig:
@@ -154,6 +156,7 @@ bool is_sequenced(uint8_t type) {
     case Type::Dwell:
     case Type::Arc:
     case Type::LineProfile:
+    case Type::Output:
     case Type::HeaterConfig:
     case Type::HeaterSetpoint:
     case Type::ThermistorTable:
@@ -168,7 +171,9 @@ bool is_sequenced(uint8_t type) {
 bool is_fifo(uint8_t type) {
   return type == static_cast<uint8_t>(Type::Numerators) ||
          type == static_cast<uint8_t>(Type::Line) || type == static_cast<uint8_t>(Type::Dwell) ||
-         type == static_cast<uint8_t>(Type::Arc) || type == static_cast<uint8_t>(Type::LineProfile);
+         type == static_cast<uint8_t>(Type::Arc) ||
+         type == static_cast<uint8_t>(Type::LineProfile) ||
+         type == static_cast<uint8_t>(Type::Output);
 }
 
 uint16_t crc16(std::span<const uint8_t> data) {
@@ -452,6 +457,32 @@ Frame dwell(uint8_t seq, uint32_t t) {
   return make(seq, Type::Dwell, std::move(p));
 }
 
+// ---- OUTPUT (TYPE 0x15) ----
+bool OutputSet::empty() const {
+  if (flood || mist || fan) return false;
+  for (const auto& d : dout)
+    if (d) return false;
+  return true;
+}
+
+Frame output_frame(uint8_t seq, const OutputSet& o) {
+  if (o.empty()) throw std::invalid_argument("OUTPUT: no output to set (an empty mask)");
+  uint8_t mask = 0, value = 0, duty = 0;
+  auto put = [&](const std::optional<bool>& v, uint8_t bit) {
+    if (!v) return;
+    mask |= bit;
+    if (*v) value |= bit;
+  };
+  put(o.flood, kOutFlood);
+  put(o.mist, kOutMist);
+  for (size_t n = 0; n < kDigitalOutputs; ++n) put(o.dout[n], static_cast<uint8_t>(kOutDout0 << n));
+  if (o.fan) {
+    mask |= kOutFan;
+    duty = *o.fan;
+  }
+  return make(seq, Type::Output, {mask, value, duty});
+}
+
 // ---- ARC (TYPE 0x13) ----
 namespace {
 void arc_put(std::vector<uint8_t>& v, uint64_t x, int bytes) {
@@ -645,6 +676,14 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (f.payload[0] & 0x7C) return NakReason::BadField;
       return std::nullopt;
     }
+    case Type::Output: {
+      if (n != kOutputPayload) return NakReason::BadLength;
+      const uint8_t mask = f.payload[0], value = f.payload[1], duty = f.payload[2];
+      if (mask == 0 || (mask & 0x80) != 0 || (value & ~mask) != 0 || (value & kOutFan) != 0 ||
+          ((mask & kOutFan) == 0 && duty != 0))
+        return NakReason::BadField;
+      return std::nullopt;
+    }
     case Type::Arc:
       if (n != kArcPayload) return NakReason::BadLength;
       if (f.payload[0] & 0xFC) return NakReason::BadField;
@@ -721,6 +760,22 @@ Line decode_line(const Frame& f, size_t n_axes) {
 uint32_t decode_dwell(const Frame& f) {
   check_or_throw(f, Type::Dwell, 0);
   return get32(f.payload, 0);
+}
+
+OutputSet decode_output(const Frame& f) {
+  check_or_throw(f, Type::Output, 0);
+  const uint8_t mask = f.payload[0], value = f.payload[1];
+  OutputSet o;
+  auto get = [&](uint8_t bit) -> std::optional<bool> {
+    if ((mask & bit) == 0) return std::nullopt;
+    return (value & bit) != 0;
+  };
+  o.flood = get(kOutFlood);
+  o.mist = get(kOutMist);
+  for (size_t n = 0; n < kDigitalOutputs; ++n)
+    o.dout[n] = get(static_cast<uint8_t>(kOutDout0 << n));
+  if ((mask & kOutFan) != 0) o.fan = f.payload[2];
+  return o;
 }
 
 Arc decode_arc(const Frame& f) {

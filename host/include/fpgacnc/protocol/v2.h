@@ -34,7 +34,8 @@ enum class Type : uint8_t {
   Line = 0x10,
   Dwell = 0x11,
   LineProfile = 0x12,
-  Arc = 0x13,  // circular DDA (issue 6)
+  Arc = 0x13,     // circular DDA (issue 6)
+  Output = 0x15,  // machine outputs in order with the motion (issue 17)
   // Heaters (issue 7): sequenced, not queued.
   HeaterConfig = 0x20,
   HeaterSetpoint = 0x21,
@@ -63,9 +64,9 @@ std::string type_name(uint8_t type);
 // "BAD_CRC", ..., or "reason 9".
 std::string nak_reason_name(uint8_t reason);
 // Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE, LINE, DWELL,
-// LINE_PROFILE, ARC).
+// LINE_PROFILE, ARC, OUTPUT, the heater frames).
 bool is_sequenced(uint8_t type);
-// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC).
+// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC, OUTPUT).
 bool is_fifo(uint8_t type);
 
 // A decoder was given a frame of the wrong type or length, or a field out of range.
@@ -362,6 +363,31 @@ std::string arc_field_error(const Arc& a);
 Frame arc(uint8_t seq, const Arc& a);
 // Decoder (length / field rules as the device checks them; ProtocolError otherwise).
 Arc decode_arc(const Frame& f);
+
+// OUTPUT (TYPE 0x15, 3-byte payload: mask, value, fan duty; docs/protocol.md "OUTPUT"): machine
+// outputs set in order with the motion, on the edge the segment queued before the frame ends
+// (no gap in the motion); answered ACK, later DONE. Each field left empty keeps its output as it
+// is, so one frame can set several: M8 flood = true; M7 mist = true; M9 flood = mist = false;
+// M106 S<s> fan = s (0..255, 255 = always on); M107 fan = 0; M62/M64 P<n> dout[n] = true,
+// M63/M65 P<n> dout[n] = false (n = 0..3).
+constexpr size_t kOutputPayload = 3;
+constexpr size_t kDigitalOutputs = 4;
+constexpr uint8_t kOutFlood = 0x01;  // mask / value bits
+constexpr uint8_t kOutMist = 0x02;
+constexpr uint8_t kOutFan = 0x04;    // mask only: the duty is byte 2
+constexpr uint8_t kOutDout0 = 0x08;  // dout[n]: kOutDout0 << n
+struct OutputSet {
+  std::optional<bool> flood, mist;
+  std::optional<uint8_t> fan;  // PWM duty, 255 = always on
+  std::array<std::optional<bool>, kDigitalOutputs> dout{};
+  bool empty() const;
+  bool operator==(const OutputSet&) const = default;
+};
+// Builder; throws std::invalid_argument for an empty set (the device answers NAK BAD_FIELD).
+Frame output_frame(uint8_t seq, const OutputSet& o);
+// Decoder (LEN 3, mask != 0, reserved bits 0, value bits only where the mask is set, duty 0
+// without the fan bit; ProtocolError naming the rule otherwise).
+OutputSet decode_output(const Frame& f);
 
 // Hex dump "A5 0A 07 10 ..." (upper case, space separated).
 std::string hex(std::span<const uint8_t> bytes);
