@@ -643,11 +643,19 @@ module cnc_core #(
       FAN_PWM_HZ_out_of_range u_fan_pwm_hz_out_of_range ();
     end
     if (OUT_EN != 0) begin : g_fan
-      wire fan_pwm;
+      wire fan_pwm, fan_start;
       /* verilator lint_off UNUSEDSIGNAL */
-      wire fan_start_nc;
       wire [8:0] fan_active_nc;
       /* verilator lint_on UNUSEDSIGNAL */
+      // The PWM takes a duty only at a period boundary: after an e-stop the pin stays low until
+      // the first boundary (fan_start: the clock after it), from which the duty the executor
+      // holds (0 after the e-stop, or a later OUTPUT's) is the active one.
+      reg fan_hold_reg;
+      always @(posedge clk) begin
+        if (fan_start) fan_hold_reg <= 1'b0;
+        if (estop_stop) fan_hold_reg <= 1'b1;
+        if (rst) fan_hold_reg <= 1'b0;
+      end
       pwm #(
           .PWM_BITS(8),
           .PWM_DIV (FAN_DIV)
@@ -657,10 +665,10 @@ module cnc_core #(
           .duty        ((exec_fan_duty == 8'hFF) ? 9'd256 : {1'b0, exec_fan_duty}),
           .force_off   (estop_stop),
           .out         (fan_pwm),
-          .period_start(fan_start_nc),
+          .period_start(fan_start),
           .active      (fan_active_nc)
       );
-      assign fan = fan_pwm && !estop_stop;
+      assign fan = fan_pwm && !estop_stop && !(fan_hold_reg && !fan_start);
     end else begin : g_nofan
       assign fan = 1'b0;
       wire unused_fan = &{1'b0, exec_fan_duty};
