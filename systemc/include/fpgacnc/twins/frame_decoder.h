@@ -12,13 +12,14 @@
 //   LEN > MAX_PAYLOAD: NAK BAD_LENGTH at the LEN byte, the frame abandoned at once;
 //   CRC mismatch: NAK BAD_CRC; a good CRC switches to v2 mode;
 //   then TYPE unknown: NAK UNKNOWN_TYPE; LEN wrong for TYPE: NAK BAD_LENGTH; reserved LINE
-//   flag bits, an axis >= N_AXES, a LINE_PROFILE or ARC field rule broken, a heater field out
-//   of range: NAK BAD_FIELD;
+//   flag bits, an axis >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field rule broken, a heater field
+//   out of range: NAK BAD_FIELD;
 //   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
 //   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS / LINE_PROFILE / ARC
-//   (payload bytes 2..62 as received, FifoEntry::arc_raw) written to the FIFO,
+//   (payload bytes 2..62 as received, FifoEntry::arc_raw) / OUTPUT (kind 3, v2 0, t = the three
+//   payload bytes) written to the FIFO,
 //   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR acts; RELEASE, accepted or a duplicate, returns to
 //   auto mode.
 // Initiators: `fifo` (FIFO write; level read before a write), `resp` (requests to the response
@@ -252,6 +253,14 @@ class FrameDecoderTwin : public sc_core::sc_module {
            (f.a != 0 || f.v_entry != 0);
   }
 
+  // OUTPUT field rules (docs/protocol.md "OUTPUT"): mask != 0, mask bit 7, value bits 2 and 7
+  // clear, value only where the mask is set, duty 0 unless mask bit 2.
+  bool output_fields_ok() const {
+    const uint8_t m = payload_[0], v = payload_[1], d = payload_[2];
+    return m != 0 && (m & 0x80) == 0 && (v & ~m) == 0 && (v & 0x04) == 0 &&
+           ((m & 0x04) != 0 || d == 0);
+  }
+
   void v1_packet(Cycle take) {
     const bool init = kind_ == Kind::V1Init;
     count_ = 0;
@@ -337,6 +346,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return -3;
       case v2::kArc:
         return 63;
+      case v2::kOutput:
+        return 3;
       case 0x20:  // heater frames (docs/protocol.md "Heater frames")
         return 20;
       case 0x21:
@@ -403,7 +414,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     if (((type_ == v2::kLine || type_ == v2::kLineProfile) && (payload_[0] & 0x7C) != 0) ||
         (type_ == v2::kConfigAxis && payload_[0] >= kAxes) ||
         (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) ||
-        (type_ == v2::kArc && !arc_fields_ok()) || !heater_fields_ok()) {
+        (type_ == v2::kArc && !arc_fields_ok()) || (type_ == v2::kOutput && !output_fields_ok()) ||
+        !heater_fields_ok()) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;
@@ -430,10 +442,16 @@ class FrameDecoderTwin : public sc_core::sc_module {
       return;
     }
     if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators ||
-        type_ == v2::kLineProfile || type_ == v2::kArc) {
+        type_ == v2::kLineProfile || type_ == v2::kArc || type_ == v2::kOutput) {
       FifoEntry e{};
       e.v2 = true;
-      if (type_ == v2::kArc) {  // payload bytes 2..62 as received
+      if (type_ == v2::kOutput) {  // kind 3 with v2 0
+        e.v2 = false;
+        e.kind = kEntryOutput;
+        e.power = 0;
+        e.t = static_cast<uint32_t>(payload_[0]) << 16 | static_cast<uint32_t>(payload_[1]) << 8 |
+              payload_[2];
+      } else if (type_ == v2::kArc) {  // payload bytes 2..62 as received
         e.kind = kEntryMotion;
         e.arc = true;
         e.code = payload_[0] & 3;

@@ -13,7 +13,9 @@
 //     n_dom * min_period (counted: clamped); T and no steps is a segment of T ticks without
 //     steps; valid kPrepLatencyV2 (+ kPrepClampExtra when clamped) edges after acceptance.
 //   dwell: T ticks, no steps, laser off; valid kPrepLatencyDwell edges after acceptance.
-//   kind 3 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+//   kind 3, v2 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+//   OUTPUT (kind 3, v2 = 0): not prepared: handed to the executor (`on_output`, called with the
+//     accept edge) on its accept edge; the block takes the next entry from the edge after.
 //   LINE_PROFILE (prof): a PROFILE segment carrying the profile fields (V_entry, V_cruise,
 //     V_exit, A, D) and |steps|; total = period = tmn = 0, dir_fast = 0 (a reversing axis always
 //     takes the executor's HOLD/SETUP path); valid kPrepLatencyProfile (25 + N_AXES) edges after
@@ -34,6 +36,7 @@
 // executor takes it.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 
 #include "fpgacnc/twins/tlm_common.h"
@@ -99,12 +102,20 @@ class SegmentPrepTwin : public sc_core::sc_module {
   std::vector<Cycle> applied_cycles;         // edges of init_applied (v1 init and v2 NUMERATORS)
   bool report_applied = false;               // `applied` is bound
   std::vector<Cycle>* entry_ends = nullptr;  // numerators entries end on their accept edge
+  // OUTPUT entries: the executor's output port (segment_executor s_out_*), called with the edge
+  // the entry is handed over on (its accept edge) in entry order.
+  std::function<void(Cycle, const OutputCmd&)> on_output;
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const FifoEntry c = payload<FifoEntry>(gp);
     Cycle accept = std::max(clk_.at(delay) + 1, free_from_);
-    if (c.kind == kEntryNumerators) {
+    if (c.kind == kEntryOutput && !c.v2) {
+      OutputCmd o{static_cast<uint8_t>(c.t >> 16), static_cast<uint8_t>(c.t >> 8),
+                  static_cast<uint8_t>(c.t)};
+      if (on_output) on_output(accept, o);
+      free_from_ = accept + 1;
+    } else if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};
       transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
       accept = std::max(accept, idle.edge + 1);

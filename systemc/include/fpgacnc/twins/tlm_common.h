@@ -75,7 +75,9 @@ struct Command {  // packet_decoder_v1 -> segment_prep (valid from the delay's e
 //   kind 0 motion: v1 (t = feed, steps X/Y, power 0xFF) or v2 LINE (t = T, steps per axis)
 //   kind 1 numerators: steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y (v1 init or v2 frame)
 //   kind 2 dwell (v2): t = T clocks, no steps, laser off
-inline constexpr uint8_t kEntryMotion = 0, kEntryNumerators = 1, kEntryDwell = 2;
+//   kind 3 with v2 = 0 OUTPUT: t = {mask, value, fan duty} (bits 23..0); kind 3 with v2 = 1 is
+//   segment_prep's zero-length segment (never written by the decoder)
+inline constexpr uint8_t kEntryMotion = 0, kEntryNumerators = 1, kEntryDwell = 2, kEntryOutput = 3;
 struct FifoEntry {
   bool v2;
   uint8_t kind;
@@ -141,6 +143,13 @@ struct AbortSpan {
 };
 struct SegDone {    // segment_executor -> status/ACK: seg_done strobe after the delay's edge
   bool v2 = false;  // seg_done_v2
+  // > 0: not a segment: this many OUTPUT entries applied on the edge (out_done; each counts in
+  // `segments done` like a v2 segment, no seg_done strobe)
+  uint32_t outputs = 0;
+};
+// segment_prep -> segment_executor: an OUTPUT entry handed over on the delay's edge.
+struct OutputCmd {
+  uint8_t mask, value, duty;
 };
 struct TxByte {  // status/ACK -> uart_tx (offered from the delay's edge; accept returned)
   uint8_t byte;
