@@ -497,6 +497,7 @@ module cnc_core #(
   wire [71*N_AXES-1:0] seg_p_v0, seg_p_vc, seg_p_vx;
   wire [56*N_AXES-1:0] seg_p_acc;
   wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
+  wire [1:0] seg_arc_plane;  // and their plane (0 XY, 1 ZX, 2 YZ)
   wire motion_abort = estop_stop;  // e-stop: prep and executor drop what they hold, stay idle
   wire out_tvalid, out_tready;  // OUTPUT entries: segment_prep -> segment_executor
   wire [23:0] out_tdata;
@@ -546,6 +547,7 @@ module cnc_core #(
       .m_axis_prof_vx      (seg_p_vx),
       .m_axis_prof_acc     (seg_p_acc),
       .m_axis_arc          (seg_arc),
+      .m_axis_arc_plane    (seg_arc_plane),
       .m_axis_tvalid  (seg_tvalid),
       .m_axis_tready  (seg_tready),
       .m_out_tvalid   (out_tvalid),
@@ -602,6 +604,7 @@ module cnc_core #(
       .s_axis_prof_vx      (seg_p_vx),
       .s_axis_prof_acc     (seg_p_acc),
       .s_axis_arc          (seg_arc),
+      .s_axis_arc_plane    (seg_arc_plane),
       .s_axis_tvalid  (seg_tvalid),
       .s_axis_tready  (seg_tready),
       .s_out_tvalid   (out_tvalid),

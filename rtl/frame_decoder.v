@@ -16,7 +16,8 @@
 // (BAD_LENGTH), fields (BAD_FIELD: LINE / LINE_PROFILE flag bits [6:2], CONFIG_AXIS axis >=
 // N_AXES, the LINE_PROFILE field rules of docs/protocol.md: 1 <= max|steps| < 2^24, V_cruise <
 // 2^47, V_entry <= V_cruise, V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; the ARC
-// rules: flags 2 or 3, start and end not at the centre, |coordinates| about the centre < 2^22,
+// rules: code 2 or 3, flag bits 7:4 0, plane (bits 3:2) 0..2 and 0 when N_AXES < 3, start and end
+// not at the centre, |coordinates| about the centre < 2^22,
 // DZ != -2^31 (and DZ = 0 when N_AXES < 3), N_RAMP >= 1, 1 <= C_TOTAL < 2^46, V_cruise < 2^63,
 // V_entry and V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; ARC LEN must be 63; OUTPUT
 // LEN 3, mask != 0 with bit 7 clear, value bits 7 and 2 clear and only where the mask is set, fan
@@ -42,7 +43,8 @@
 //                 LINE_PROFILE: kind 0, v2 1, prof 1, t = A, V_entry/V_cruise/V_exit/D, steps
 //                            sign-extended, code = flags[1:0], power.
 //                 ARC:       kind 0, v2 1, arc 1, code = flags[1:0], power, arc_raw = payload
-//                            bytes 2..62 (byte 2 in the top bits), t and steps 0.
+//                            bytes 2..62 (byte 2 in the top bits), t = the plane (flags[3:2]),
+//                            steps 0.
 //                 OUTPUT:    kind 3, v2 0 (the only entry with kind 3 and v2 0), t = {8'd0,
 //                            mask, value, fan duty} (payload bytes 0..2), the rest 0.
 //               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
@@ -296,7 +298,9 @@ module frame_decoder #(
       c22_ok = (v[24:22] == 3'b000) || (v[24:22] == 3'b111 && v[21:0] != 22'd0);
     end
   endfunction
-  wire arc_field_ok = (flags[7:2] == 6'd0) && flags[1] &&
+  // flags: bits 1:0 code (2 / 3), bits 3:2 the plane (0 XY, 1 ZX, 2 YZ; ZX and YZ need Z: 3 axes)
+  wire arc_field_ok = (flags[7:4] == 4'd0) && (flags[3:2] != 2'd3) &&
+                      (flags[3:2] == 2'd0 || N_AXES >= 3) && flags[1] &&
                       (arc_i != 25'sd0 || arc_j != 25'sd0) && (arc_x1 != 25'sd0 || arc_y1 != 25'sd0) &&
                       c22_ok(arc_i) && c22_ok(arc_j) && c22_ok(arc_x1) && c22_ok(arc_y1) &&
                       (arc_dz != 32'h8000_0000) && (N_AXES >= 3 || arc_dz == 32'd0) &&
@@ -321,9 +325,10 @@ module frame_decoder #(
   // OUTPUT: kind 3 with v2 0 (kind 3 with v2 1 is segment_prep's zero-length entry), t = bytes 0..2
   wire [BASE_W-1:0] e_out = {1'b0, 2'd3, 2'd0, 8'd0, 8'd0, out_mask, out_val, out_duty,
                              {32 * N_AXES{1'b0}}};
-  // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power; the arc fields above the profile
+  // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power, t = the plane (flags[3:2]); the
+  // arc fields above the profile
   wire [ENTRY_W-1:0] e_arc = {arc_raw, 1'b1, {(PROF_W - BASE_W) {1'b0}}, 1'b1, 2'd0, flags[1:0],
-                              pb(1), {32 * (N_AXES + 1) {1'b0}}};
+                              pb(1), 30'd0, flags[3:2], {32 * N_AXES{1'b0}}};
   wire [PROF_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(1),
                                 p_a, prof_steps};
 

@@ -6,7 +6,9 @@
 // run_last):
 //   0 LINE: constant rate, T clocks (below). Also DWELL and zero-length segments.
 //   2 ARC: s_axis_arc from segment_prep: arc_dda (loaded on accept, advancing only in RUN: the
-//     arc's clock 0 is tick 1). An arc event of clock c raises STEP at edge R + c + 2 (arc_dda's
+//     arc's clock 0 is tick 1). s_axis_arc_plane routes the walk's u / v steps and DIR and the
+//     helix steps to the plane's axes: 0 XY / Z (axes 0, 1 / 2), 1 ZX / Y (2, 0 / 1), 2 YZ / X
+//     (1, 2 / 0); below "X / Y" of an arc means its u / v axes. An arc event of clock c raises STEP at edge R + c + 2 (arc_dda's
 //     output register, then step_pulse's). The segment lasts c_last + 2 ticks (c_last: the clock
 //     of the arc's last move, arc_dda `ending`): its last tick is the clock after the ending one
 //     (arc_end_reg), in which only the last move's step request is issued, so, as for every other
@@ -118,6 +120,7 @@ module segment_executor #(
     input  wire [ 71*N_AXES-1:0] s_axis_prof_vx,     // V_exit * n_a
     input  wire [ 56*N_AXES-1:0] s_axis_prof_acc,    // A * n_a
     input  wire [           944:0] s_axis_arc,         // ARC: arc_dda's load inputs (segment_prep)
+    input  wire [             1:0] s_axis_arc_plane,   // ARC: 0 XY, 1 ZX, 2 YZ (see below)
     input  wire                  s_axis_tvalid,
     output wire                  s_axis_tready,
 
@@ -355,25 +358,29 @@ module segment_executor #(
     end
   endgenerate
 
-  // arc step requests per axis: X, Y, and Z (axis 2) when there is one
-  assign arc_req[0] = arc_xs;
-  assign arc_req[1] = arc_ys;
+  // The running arc's plane (taken on accept of an arc): per axis, whether it is the walk's u, v
+  // or the helix axis. Arc step requests per axis (u, v, and the helix when the axis exists).
+  reg [1:0] plane_reg;
+  wire [N_AXES-1:0] arc_uv;  // the axis is the arc's u or v (in-arc DIR writes and checks)
+  wire [N_AXES-1:0] arc_sdir;  // the direction of the axis's arc step (u: x_dir, v: y_dir)
+  genvar p;
   generate
-    if (N_AXES >= 3) begin : g_arcz
-      assign arc_req[2] = arc_zs;
-    end
-    if (N_AXES >= 4) begin : g_arcrest
-      assign arc_req[N_AXES-1:3] = {(N_AXES - 3) {1'b0}};
+    for (p = 0; p < N_AXES; p = p + 1) begin : g_plane
+      wire is_u = (plane_reg == 2'd0 && p == 0) || (plane_reg == 2'd1 && p == 2) ||
+                  (plane_reg == 2'd2 && p == 1);
+      wire is_v = (plane_reg == 2'd0 && p == 1) || (plane_reg == 2'd1 && p == 0) ||
+                  (plane_reg == 2'd2 && p == 2);
+      wire is_h = (plane_reg == 2'd0 && p == 2) || (plane_reg == 2'd1 && p == 1) ||
+                  (plane_reg == 2'd2 && p == 0);
+      assign arc_req[p] = (is_u && arc_xs) || (is_v && arc_ys) || (is_h && arc_zs);
+      assign arc_ann[p] = arc_tick && arc_dvalid &&
+                          ((is_u && arc_nx != dir_tgt_reg[p]) || (is_v && arc_ny != dir_tgt_reg[p]));
+      assign arc_uv[p] = is_u || is_v;
+      assign arc_sdir[p] = is_u ? arc_sd[0] : arc_sd[1];
     end
   endgenerate
-  assign arc_ann[0] = arc_tick && arc_dvalid && (arc_nx != dir_tgt_reg[0]);
-  assign arc_ann[1] = arc_tick && arc_dvalid && (arc_ny != dir_tgt_reg[1]);
-  generate
-    if (N_AXES >= 3) begin : g_annrest
-      assign arc_ann[N_AXES-1:2] = {(N_AXES - 2) {1'b0}};
-    end
-  endgenerate
-  reg [31:0] since_wr_reg;  // clocks since the last DIR write of X / Y (saturating)
+  localparam integer NSW = (N_AXES >= 3) ? 3 : 2;  // axes an arc's u / v can be on
+  reg [16*NSW-1:0] since_wr_reg;  // clocks since the last DIR write per axis (saturating)
   reg arc_dir_viol_reg;
   reg arc_err_reg;
 
@@ -455,13 +462,14 @@ module segment_executor #(
     arc_err_reg      <= arc_tick && arc_ending && arc_end_err && !abort;
     arc_end_reg      <= arc_tick && arc_ending && !abort;
     arc_dir_viol_reg <= 1'b0;
-    for (k = 0; k < 2; k = k + 1) begin
+    for (k = 0; k < NSW; k = k + 1) begin
       if (dir_wr[k]) since_wr_reg[16*k+:16] <= 16'd1;
       else if (since_wr_reg[16*k+:16] != 16'hFFFF)
         since_wr_reg[16*k+:16] <= since_wr_reg[16*k+:16] + 16'd1;
-      // an arc step whose direction is not on the DIR pin yet, or within DIR setup of the change
-      if (arc_req[k] && !abort &&
-          (arc_sd[k] != dir[k] || since_wr_reg[16*k+:16] < cfg_dir_setup[16*k+:16]))
+      // an arc step of u / v whose direction is not on the DIR pin yet, or within DIR setup of
+      // the change
+      if (arc_req[k] && arc_uv[k] && !abort &&
+          (arc_sdir[k] != dir[k] || since_wr_reg[16*k+:16] < cfg_dir_setup[16*k+:16]))
         arc_dir_viol_reg <= 1'b1;
     end
 
@@ -474,6 +482,7 @@ module segment_executor #(
       last_reg <= (left_reg == 64'd2);
     end
 
+    if (accept && arc_in) plane_reg <= s_axis_arc_plane;
     if (accept) begin
       kind_reg    <= prof_in ? K_PROFILE : arc_in ? K_ARC : K_LINE;
       code_reg    <= s_axis_code;
@@ -568,8 +577,8 @@ module segment_executor #(
       seg_start_reg   <= 1'b0;
       seg_done_reg    <= 1'b0;
       seg_done_v2_reg <= 1'b0;
-      since_wr_reg[16*0+:16] <= 16'hFFFF;
-      since_wr_reg[16*1+:16] <= 16'hFFFF;
+      since_wr_reg    <= {NSW{16'hFFFF}};
+      plane_reg       <= 2'd0;
       arc_dir_viol_reg <= 1'b0;
       arc_err_reg     <= 1'b0;
       arc_end_reg     <= 1'b0;

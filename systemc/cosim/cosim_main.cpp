@@ -276,14 +276,20 @@ uint64_t g_v2_arc_frames = 0, g_v2_bad_arcs = 0;
 bool g_v2_outputs = true;
 uint64_t g_v2_output_frames = 0;
 
+// ARC planes (flags bits 3:2): XY, ZX, YZ at random (`--v2-arc-planes 0`: XY only), drawn from
+// the OUTPUT frames' generator so that the arcs themselves are the same.
+bool g_v2_arc_planes = true;
+std::array<uint64_t, 3> g_v2_plane_arcs{};
+
 // An ARC frame within the host's rules (arc_stimulus.h, defaults: R = 2..30 steps, cruise at
-// 1 201..2 400 clocks per step, one in ten with C_TOTAL + 1).
-std::vector<uint8_t> random_arc_payload(std::mt19937_64& g, uint8_t power) {
+// 1 201..2 400 clocks per step, one in ten with C_TOTAL + 1), in `plane`.
+std::vector<uint8_t> random_arc_payload(std::mt19937_64& g, uint8_t power, uint8_t plane) {
   bool bad = false;
   const arc::Frame f = random_arc_frame(g, ArcStimulus{}, &bad);
   if (bad) ++g_v2_bad_arcs;
   ++g_v2_arc_frames;
-  return v2::arc_payload(f.g.ccw ? 3 : 2, power, f);
+  ++g_v2_plane_arcs[plane];
+  return v2::arc_payload(static_cast<uint8_t>((f.g.ccw ? 3 : 2) | plane << 2), power, f);
 }
 
 Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
@@ -322,7 +328,8 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
     } else if (kind == 1) {
       it = numerators();
     } else if (kind == 8 && g_v2_arcs) {
-      it = V2Item{kArc, random_arc_payload(g, power)};
+      const auto plane = static_cast<uint8_t>(g_v2_arc_planes ? pick(go, 0, 2) : 0);
+      it = V2Item{kArc, random_arc_payload(g, power, plane)};
     } else if (kind >= 4 && kind <= 7 && g_v2_profiles) {
       // LINE_PROFILE on 1..4 axes (n_a <= 12): cruise at 1 201..2 400 clocks per step (above any
       // random_timing's minimum period, also after a CONFIG_AXIS mid-stream: the STEP timing
@@ -444,6 +451,7 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--v2-profiles", &g_v2_profiles);
   opts.flag("--v2-arcs", &g_v2_arcs);
   opts.flag("--v2-outputs", &g_v2_outputs);
+  opts.flag("--v2-arc-planes", &g_v2_arc_planes);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
 
@@ -507,9 +515,10 @@ int sc_main(int argc, char* argv[]) {
                a.end_cycle, a.timeouts, v2, diff.empty() ? "" : ": first difference: ", diff);
   }
   fmt::print(
-      "cosim: {} LINE_PROFILE, {} ARC ({} with C_TOTAL off by one) and {} OUTPUT frames in the "
-      "random v2 sessions\n",
-      g_v2_profile_frames, g_v2_arc_frames, g_v2_bad_arcs, g_v2_output_frames);
+      "cosim: {} LINE_PROFILE, {} ARC ({} with C_TOTAL off by one; XY {}, ZX {}, YZ {}) and {} "
+      "OUTPUT frames in the random v2 sessions\n",
+      g_v2_profile_frames, g_v2_arc_frames, g_v2_bad_arcs, g_v2_plane_arcs[0], g_v2_plane_arcs[1],
+      g_v2_plane_arcs[2], g_v2_output_frames);
   fmt::print(
       "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "
       "clocks/s), twins {:.3f} s; wall {:.2f} s; {}\n",

@@ -501,6 +501,7 @@ Arc parse_arc(const Frame& f) {
   const auto& p = f.payload;
   Arc a;
   a.code = p[0] & 0x03;
+  a.plane = static_cast<ArcPlane>((p[0] >> 2) & 0x03);
   a.power = p[1];
   a.i = arc_get24s(p, 2);
   a.j = arc_get24s(p, 5);
@@ -518,8 +519,15 @@ Arc parse_arc(const Frame& f) {
 }
 }  // namespace
 
-std::string arc_field_error(const Arc& a) {
+std::string arc_field_error(const Arc& a, size_t n_axes) {
   if (a.code != 2 && a.code != 3) return fmt::format("motion code {} (ARC needs 2 or 3)", a.code);
+  const auto plane = static_cast<unsigned>(a.plane);
+  if (plane > 2) return fmt::format("plane {} (0 XY, 1 ZX, 2 YZ)", plane);
+  if (n_axes != 0 && n_axes < 3 && plane != 0)
+    return fmt::format("plane {} on a board with {} axes (needs 3)", plane == 1 ? "ZX" : "YZ",
+                       n_axes);
+  if (n_axes != 0 && n_axes < 3 && a.dz != 0)
+    return fmt::format("a helix (DZ {}) on a board with {} axes", a.dz, n_axes);
   const int64_t x0 = -int64_t{a.i}, y0 = -int64_t{a.j};
   const int64_t x1 = int64_t{a.dx} - a.i, y1 = int64_t{a.dy} - a.j;
   if (x0 == 0 && y0 == 0) return "start at the centre (I = J = 0)";
@@ -548,7 +556,7 @@ Frame arc(uint8_t seq, const Arc& a) {
   if (const auto e = arc_field_error(a); !e.empty()) throw std::invalid_argument("ARC frame: " + e);
   std::vector<uint8_t> p;
   p.reserve(kArcPayload);
-  p.push_back(a.code);
+  p.push_back(static_cast<uint8_t>(a.code | static_cast<unsigned>(a.plane) << 2));
   p.push_back(a.power);
   for (const int32_t c : {a.i, a.j, a.dx, a.dy})
     arc_put(p, static_cast<uint32_t>(c) & 0xFFFFFFu, 3);
@@ -686,8 +694,8 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
     }
     case Type::Arc:
       if (n != kArcPayload) return NakReason::BadLength;
-      if (f.payload[0] & 0xFC) return NakReason::BadField;
-      if (!arc_field_error(parse_arc(f)).empty()) return NakReason::BadField;
+      if (f.payload[0] & 0xF0) return NakReason::BadField;
+      if (!arc_field_error(parse_arc(f), n_axes).empty()) return NakReason::BadField;
       return std::nullopt;
     case Type::LineProfile: {
       if (n < kProfileHeader) return NakReason::BadLength;

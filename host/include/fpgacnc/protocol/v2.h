@@ -334,10 +334,12 @@ ThermistorChunk decode_thermistor_table(const Frame& f);
 HeaterSafetyFrame decode_heater_safety(const Frame& f);
 uint16_t decode_heater_watchdog(const Frame& f);
 
-// ARC (TYPE 0x13, 63-byte payload): a circular / helical arc in XY run by the hardware circular
-// DDA (docs/protocol.md "ARC", docs/motion.md "Arcs"). Geometry in steps relative to the start:
-// centre (i, j), end (dx, dy; 0, 0 = full circle), dz Z steps over the arc. n_ramp and c_total
-// come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
+// ARC (TYPE 0x13, 63-byte payload): a circular / helical arc run by the hardware circular DDA
+// (docs/protocol.md "ARC", docs/motion.md "Arcs") in one of three planes (flags bits 3:2): the
+// walk's (u, v) axes and the helix axis are XY / Z (G17, plane 0), ZX / Y (G18, 1), YZ / X (G19,
+// 2). Geometry in steps relative to the start, in (u, v): centre (i, j), end (dx, dy; 0, 0 = full
+// circle), dz steps of the helix axis over the arc (G18: i, dx along Z, j, dy along X). n_ramp and
+// c_total come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
 // arc_walk.h). Speeds in UQ16.48 cost units per clock, accel in 2^-48 cost units per clock^2,
 // decel_at (D) in cost units.
 constexpr size_t kArcPayload = 63;
@@ -345,9 +347,11 @@ constexpr int32_t kArcCoordLimit = 1 << 22;  // |i|, |j|, |dx - i|, |dy - j| mus
 constexpr uint32_t kArcNRampMax = (1u << 24) - 1;
 constexpr uint64_t kArcCTotalLimit = uint64_t{1} << 46;  // c_total must be below
 constexpr uint64_t kArcU48Max = (uint64_t{1} << 48) - 1;
+enum class ArcPlane : uint8_t { XY = 0, ZX = 1, YZ = 2 };  // G17, G18, G19
 struct Arc {
-  uint8_t code = 3;  // 2 = G2 (CW), 3 = G3 (CCW)
+  uint8_t code = 3;  // 2 = G2 (CW), 3 = G3 (CCW), seen from the helix axis's positive side
   uint8_t power = 0;
+  ArcPlane plane = ArcPlane::XY;         // flags bits 3:2 (ZX and YZ need a board with 3 axes)
   int32_t i = 0, j = 0, dx = 0, dy = 0;  // int24 on the wire
   int32_t dz = 0;
   uint32_t n_ramp = 1;                             // u24
@@ -358,7 +362,8 @@ struct Arc {
   bool operator==(const Arc&) const = default;
 };
 // Empty when the fields satisfy the device limits (docs/protocol.md "ARC"), else the rule broken.
-std::string arc_field_error(const Arc& a);
+// n_axes (0: no bound): ZX / YZ need 3 axes, a helix in XY too.
+std::string arc_field_error(const Arc& a, size_t n_axes = 0);
 // Builder; throws std::invalid_argument for fields the device would reject (arc_field_error).
 Frame arc(uint8_t seq, const Arc& a);
 // Decoder (length / field rules as the device checks them; ProtocolError otherwise).

@@ -235,19 +235,22 @@ class FrameDecoderTwin : public sc_core::sc_module {
            (acc != 0 || ve != 0);
   }
 
-  // ARC field rules (docs/protocol.md "ARC", as frame_decoder.v checks them): code 2 or 3 and
-  // flag bits 7:2 zero; start and end not at the centre; |I|, |J|, |DX - I|, |DY - J| < 2^22;
-  // DZ != -2^31 (0 with fewer than 3 axes); N_RAMP >= 1; 1 <= C_TOTAL < 2^46; V_cruise < 2^63;
-  // V_entry, V_exit <= V_cruise; V_exit >= 1; A >= 1 or V_entry >= 1.
+  // ARC field rules (docs/protocol.md "ARC", as frame_decoder.v checks them): code 2 or 3, flag
+  // bits 7:4 zero, plane (bits 3:2) 0..2 (1, 2 only with 3 axes); start and end not at the centre;
+  // |I|, |J|, |DX - I|, |DY - J| < 2^22; DZ != -2^31 (0 with fewer than 3 axes); N_RAMP >= 1; 1 <=
+  // C_TOTAL < 2^46; V_cruise < 2^63; V_entry, V_exit <= V_cruise; V_exit >= 1; A >= 1 or V_entry
+  // >= 1.
   bool arc_fields_ok() const {
     std::array<uint8_t, 61> raw{};
     std::copy(payload_.begin() + 2, payload_.begin() + 63, raw.begin());
     const arc::Frame f = v2::arc_frame_from_raw(raw, true);
     const int64_t x1 = int64_t{f.g.dx} - f.g.i, y1 = int64_t{f.g.dy} - f.g.j;
     const auto c22 = [](int64_t v) { return v > -(int64_t{1} << 22) && v < (int64_t{1} << 22); };
-    return (payload_[0] & 0xFC) == 0 && (payload_[0] & 2) != 0 && (f.g.i != 0 || f.g.j != 0) &&
-           (x1 != 0 || y1 != 0) && c22(f.g.i) && c22(f.g.j) && c22(x1) && c22(y1) &&
-           f.dz != INT32_MIN && (kAxes >= 3 || f.dz == 0) && f.n_ramp != 0 && f.c_total != 0 &&
+    const int plane = payload_[0] >> 2 & 3;
+    return (payload_[0] & 0xF0) == 0 && plane != 3 && (plane == 0 || kAxes >= 3) &&
+           (payload_[0] & 2) != 0 && (f.g.i != 0 || f.g.j != 0) && (x1 != 0 || y1 != 0) &&
+           c22(f.g.i) && c22(f.g.j) && c22(x1) && c22(y1) && f.dz != INT32_MIN &&
+           (kAxes >= 3 || f.dz == 0) && f.n_ramp != 0 && f.c_total != 0 &&
            f.c_total < (uint64_t{1} << 46) && f.v_cruise < (uint64_t{1} << 63) &&
            f.v_entry <= f.v_cruise && f.v_exit <= f.v_cruise && f.v_exit != 0 &&
            (f.a != 0 || f.v_entry != 0);
@@ -456,6 +459,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
         e.arc = true;
         e.code = payload_[0] & 3;
         e.power = payload_[1];
+        e.t = payload_[0] >> 2 & 3;  // the plane
         std::copy(payload_.begin() + 2, payload_.begin() + 63, e.arc_raw.begin());
       } else if (type_ == v2::kLineProfile) {
         e.kind = kEntryMotion;

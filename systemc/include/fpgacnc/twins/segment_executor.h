@@ -272,13 +272,16 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // R + ticks is >= cut: the segment is dropped).
   Cycle run_arc(const Segment& s, Cycle r, Cycle cut) {
     arc::Dda dda(s.arc_frame);
-    std::array<bool, 2> tgt{s.dir[0], s.dir[1]}, pend{};
+    // the physical axes of the walk's u, v and the helix (the plane)
+    const ArcAxes pl = arc_axes(s.plane);
+    const std::array<int, 3> axis{pl.u, pl.v, pl.h};
+    std::array<bool, 2> tgt{s.dir[axis[0]], s.dir[axis[1]]}, pend{};
     std::array<bool, 2> pin{};
     std::array<Cycle, 2> last_rise{};
     std::array<Cycle, 3> req{kLongAgo, kLongAgo, kLongAgo};
     std::array<std::deque<Cycle>, 2> rises;  // rise edges not yet reached
     for (size_t k = 0; k < 2; ++k) {
-      const PulseState st = pulse_state(static_cast<int>(k), r);
+      const PulseState st = pulse_state(axis[k], r);
       pin[k] = st.dir;
       last_rise[k] = st.last_rise;
     }
@@ -288,9 +291,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         last_rise[k] = rises[k].front();
         rises[k].pop_front();
       }
-      const Cycle hold = p_.timing[k].hold;
+      const Cycle hold = p_.timing[axis[k]].hold;
       if (t + 1 >= last_rise[k] + hold && req[k] != t + 1) {
-        dir_write(static_cast<int>(k), tgt[k], t + 1);
+        dir_write(axis[k], tgt[k], t + 1);
         pin[k] = tgt[k];
         pend[k] = false;
         ++arc_dir_writes;
@@ -301,7 +304,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     auto first_write = [&](size_t k, Cycle t) {
       Cycle lr = last_rise[k];
       size_t next_rise = 0;
-      const Cycle hold = p_.timing[k].hold;
+      const Cycle hold = p_.timing[axis[k]].hold;
       for (;;) {
         while (next_rise < rises[k].size() && rises[k][next_rise] <= t) lr = rises[k][next_rise++];
         if (t + 1 < lr + hold) {
@@ -344,15 +347,17 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       const Cycle e = t + 2;
       bool viol = false;
       const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
-      for (size_t k = 0; k < 3 && k < static_cast<size_t>(kAxes); ++k) {
+      for (size_t k = 0; k < 3; ++k) {
+        if (axis[k] >= kAxes) continue;
         if (d[k] == 0 || e >= cut) continue;  // (a request in flight on the abort edge: gated)
         const bool dir = d[k] > 0;
+        const auto ak = static_cast<size_t>(axis[k]);
         if (k < 2) {
-          if (dir != pin[k] || e - last_wr_[k] < static_cast<Cycle>(p_.timing[k].setup))
+          if (dir != pin[k] || e - last_wr_[ak] < static_cast<Cycle>(p_.timing[ak].setup))
             viol = true;
         }
         PulseCmd cmd{dir};
-        const Cycle rise = transport(*pulse[k], gp_, clk_, cmd, e);
+        const Cycle rise = transport(*pulse[ak], gp_, clk_, cmd, e);
         if (k < 2) rises[k].push_back(rise);
         req[k] = e;
         arc_step_edges.push_back(e);

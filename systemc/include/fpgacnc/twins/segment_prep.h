@@ -142,18 +142,20 @@ class SegmentPrepTwin : public sc_core::sc_module {
         s.power = c.power;
         s.v2 = true;
         s.arc = true;
+        s.plane = static_cast<uint8_t>(c.t & 3);
         s.arc_frame = v2::arc_frame_from_raw(c.arc_raw, (c.code & 1) != 0);
         const arc::Frame& f = s.arc_frame;
-        // X, Y: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
+        const ArcAxes ax = arc_axes(s.plane);
+        // u, v: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
         const std::array<bool, 2> d0 = arc::start_dirs(f.g);
         abs = {};
-        abs[0] = abs[1] = 1;
+        abs[ax.u] = abs[ax.v] = 1;
         s.dir = {};
-        s.dir[0] = d0[0];
-        s.dir[1] = d0[1];
+        s.dir[ax.u] = d0[0];
+        s.dir[ax.v] = d0[1];
         if (kAxes >= 3) {
-          abs[2] = f.dz < 0 ? 0u - static_cast<uint32_t>(f.dz) : static_cast<uint32_t>(f.dz);
-          s.dir[2] = f.dz >= 0;
+          abs[ax.h] = f.dz < 0 ? 0u - static_cast<uint32_t>(f.dz) : static_cast<uint32_t>(f.dz);
+          s.dir[ax.h] = f.dz >= 0;
         }
         latency = kPrepLatencyArc;
       } else if (c.prof && c.kind == kEntryMotion && c.v2) {  // LINE_PROFILE: kind PROFILE
@@ -213,7 +215,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
                    (n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom));
       // After an arc prep does not know the X / Y DIR levels: no dir_fast for a segment moving X
       // or Y until that axis has moved in a prepared non-arc segment.
-      if (s.arc) unknown_[0] = unknown_[1] = true;
+      if (s.arc) unknown_[arc_axes(s.plane).u] = unknown_[arc_axes(s.plane).v] = true;
       const Cycle taken = transport(segments, gp_, clk_, s, accept + latency);
       free_from_ = taken + 1;
       last_period = s.period;

@@ -95,7 +95,15 @@ struct FifoEntry {
   // V_exit u64, A u48, D u48, big-endian), the entry's arc_raw[487:0] with byte 2 in the top bits.
   bool arc = false;
   std::array<uint8_t, 61> arc_raw{};
+  // ARC: t = the plane (flags bits 3:2: 0 XY, 1 ZX, 2 YZ)
 };
+// The axes of an ARC plane: the walk's u and v axes and the helix axis (docs/protocol.md "ARC").
+struct ArcAxes {
+  int u, v, h;
+};
+inline constexpr ArcAxes arc_axes(uint8_t plane) {
+  return plane == 1 ? ArcAxes{2, 0, 1} : plane == 2 ? ArcAxes{1, 2, 0} : ArcAxes{0, 1, 2};
+}
 // frame_decoder -> segment_fifo: write on the delay's edge. Read (TLM_READ_COMMAND): the level
 // after the delay's edge.
 struct FifoLevel {
@@ -121,6 +129,7 @@ struct Segment {  // segment_prep -> segment_executor (valid from the delay's ed
   // Z the sign of DZ; total = period = tmn = 0, dir_fast = 0.
   bool arc = false;
   arc::Frame arc_frame{};
+  uint8_t plane = 0;  // ARC: 0 XY, 1 ZX, 2 YZ (arc_axes)
 };
 // segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
 // address kDirWrite: DIR load of `dir` on the delay's edge; read (TLM_READ_COMMAND) fills the
