@@ -521,7 +521,7 @@ TEST(CncCoreV2, OutputRulesIdleAndEstop) {
   ASSERT_EQ(b.out_edges().size(), before + 7);
   for (size_t k = before; k < b.out_edges().size(); ++k) {
     EXPECT_EQ(b.out_edges()[k].value, 0u);
-    EXPECT_LE(b.out_edges()[k].cycle, pressed + 3) << "pin " << b.out_edges()[k].pin;
+    EXPECT_EQ(b.out_edges()[k].cycle, pressed + 2) << "pin " << b.out_edges()[k].pin;
   }
   b.dut().estop = 0;
   b.idle(10);
