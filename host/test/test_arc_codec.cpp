@@ -118,8 +118,8 @@ TEST(ArcCodec, DeviceRules) {
 
 }  // namespace
 
-// Planes (flags bits 3:2): G17 XY = 0 (the frame of before), G18 ZX = 1, G19 YZ = 2; 3 and a plane
-// other than XY on a 2-axis board are refused; the plane survives the round trip.
+// Planes (flags bits 3:2): G17 XY = 0 (flags = the motion code), G18 ZX = 1, G19 YZ = 2; 3 and a
+// plane other than XY on a 2-axis board are refused; the plane survives the round trip.
 TEST(ArcCodec, Planes) {
   v2::Arc a = worked();
   EXPECT_EQ(a.plane, v2::ArcPlane::XY) << "default";
