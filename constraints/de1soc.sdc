@@ -11,3 +11,6 @@ set_false_path -to [get_ports {tx step_x dir_x step_y dir_y laser LEDR[*] HEX0[*
 # Heater MOSFET gates (PWM at ~10 Hz) and the ADC's CONVST/SCK/SDI: registered outputs changing at
 # most every SCK_DIV (5) clocks (SCK 5 MHz), far slower than any I/O delay.
 set_false_path -to [get_ports {heater_hotend heater_bed ADC_CONVST ADC_SCK ADC_SDI}]
+# Machine outputs (coolant valves, part-cooling fan PWM at ~1 kHz, digital outputs): drivers
+# switching in microseconds or slower, no I/O timing requirement beyond the clock domain.
+set_false_path -to [get_ports {coolant_flood coolant_mist fan dout[*]}]

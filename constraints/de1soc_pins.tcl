@@ -144,3 +144,21 @@ set_location_assignment PIN_AK4 -to ADC_SDI
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SDI
 set_location_assignment PIN_AK3 -to ADC_SDO
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SDO
+
+# Machine outputs (OUTPUT frames, issue 17; docs/architecture.md "Pins"): GPIO_0[10..16] (pins
+# from the Terasic DE1-SoC manual), high = on, to driver stages (relay / MOSFET) for the coolant
+# valves, the part-cooling fan (PWM) and the digital outputs.
+set_location_assignment PIN_AH18 -to coolant_flood
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to coolant_flood
+set_location_assignment PIN_AH17 -to coolant_mist
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to coolant_mist
+set_location_assignment PIN_AG16 -to fan
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to fan
+set_location_assignment PIN_AE16 -to dout[0]
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to dout[0]
+set_location_assignment PIN_AF16 -to dout[1]
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to dout[1]
+set_location_assignment PIN_AG17 -to dout[2]
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to dout[2]
+set_location_assignment PIN_AA18 -to dout[3]
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to dout[3]

@@ -29,6 +29,12 @@
 // segment_prep and segment_executor aborted (the running segment and the prepared one are dropped:
 // no new STEP rising edge, a STEP pulse already high finishes its high time; positions and the v1
 // numerators are kept), both heaters low. Pin to laser low: 2 clocks; to heaters low: 3.
+// Machine outputs (docs/protocol.md "OUTPUT"): coolant_flood (M8), coolant_mist (M7), fan (part
+// cooling, M106 / M107: rtl/pwm.v, 256 counts a period at about FAN_PWM_HZ, duty byte d gives d
+// counts high, 255 always on) and dout[3:0] (M62..M65) are set by OUTPUT FIFO entries, applied by
+// segment_executor on the edge that ends the segment before them (no gap in the motion), counted
+// in segments_done (DONE). Low after reset; on e-stop gated low at once (the fan PWM forced off)
+// and cleared in the executor: they stay off until the next OUTPUT entry.
 // Status outputs: the v1 ones, plus the v2 counters that STATUS reports (16 bits, wrapping).
 //   packet_count counts v1 packets queued and v2 frames that passed every check.
 // rst is synchronous, active high; the board top synchronizes its reset button.
@@ -51,6 +57,8 @@
 //   ARCS = 0      no circular DDA: ARC (0x13) frames are answered NAK UNKNOWN_TYPE; no arc_dda,
 //                 no ARC arithmetic in segment_prep; the FIFO entry drops the ARC fields (489
 //                 bits; with PROFILES = 0 as well the entry is 45 + 32 * N_AXES bits).
+//   OUTPUTS = 0   no machine outputs: OUTPUT (0x15) frames are answered NAK UNKNOWN_TYPE, the
+//                 output pins are low (PROTO_V2 = 0 implies it).
 //   HEATERS = 0   no heater_block: the heater frames (0x20..0x24) are answered NAK UNKNOWN_TYPE,
 //                 heater and adc_* outputs are low, adc_sdo is ignored, STATUS still carries its
 //                 16 heater bytes (all 0: heaters idle, no faults).
@@ -87,6 +95,8 @@ module cnc_core #(
     parameter PROFILES          = 1,
     parameter ARCS              = 1,
     parameter HEATERS           = 1,
+    parameter OUTPUTS           = 1,
+    parameter FAN_PWM_HZ        = 1000,                // fan PWM frequency (256 counts a period)
     parameter LEAN_TRIM         = 1,                   // PROTO_V2 = 0 only (header comment)
     parameter STEP_CFG          = 1                    // PROTO_V2 = 0 only (header comment)
 ) (
@@ -99,6 +109,11 @@ module cnc_core #(
     output wire [N_AXES-1:0] step,
     output wire [N_AXES-1:0] dir,
     output wire              laser,
+
+    output wire       coolant_flood,  // machine outputs (OUTPUT frames)
+    output wire       coolant_mist,
+    output wire       fan,            // part-cooling fan PWM
+    output wire [3:0] dout,           // digital outputs (M62..M65 P0..P3)
 
     input  wire       estop,       // e-stop, active high, asynchronous
     output wire [1:0] heater,      // 0 hot end, 1 bed
@@ -149,6 +164,17 @@ module cnc_core #(
   localparam integer PROF_EN = (V2_EN != 0 && PROFILES != 0) ? 1 : 0;
   localparam integer ARC_EN = (V2_EN != 0 && ARCS != 0) ? 1 : 0;
   localparam integer HEAT_EN = (V2_EN != 0 && HEATERS != 0) ? 1 : 0;
+  localparam integer OUT_EN = (V2_EN != 0 && OUTPUTS != 0) ? 1 : 0;
+  // fan PWM: 256 counts a period, PWM_DIV clocks a count (rounded): the frequency must come within
+  // 1 % of FAN_PWM_HZ (checked at elaboration below)
+  localparam integer FAN_HZ_I = (FAN_PWM_HZ < 1) ? 1 : FAN_PWM_HZ;
+  localparam integer FAN_DIV_R = (CLK_HZ + 128 * FAN_HZ_I) / (256 * FAN_HZ_I);
+  localparam integer FAN_DIV = (FAN_DIV_R < 1) ? 1 : FAN_DIV_R;
+  localparam integer FAN_PERIOD = 256 * FAN_DIV;
+  localparam integer FAN_ERR = (CLK_HZ > FAN_PERIOD * FAN_HZ_I) ? CLK_HZ - FAN_PERIOD * FAN_HZ_I
+                                                                : FAN_PERIOD * FAN_HZ_I - CLK_HZ;
+  localparam integer FAN_OK = (FAN_PWM_HZ >= 1 && FAN_DIV_R >= 1 &&
+                               FAN_ERR <= FAN_PERIOD * FAN_HZ_I / 100) ? 1 : 0;
   // v1-only datapath trims (segment_prep V1_ONLY, executor LEAN_DDA)
   localparam integer TRIM_EN = (V2_EN == 0 && LEAN_TRIM != 0) ? 1 : 0;
   // v1 build with the step timing fixed at STEP_HIGH / STEP_LOW / DIR_SETUP / DIR_HOLD
@@ -214,6 +240,7 @@ module cnc_core #(
           .MAX_PAYLOAD  (64),
           .PROFILES     (PROF_EN),
           .ARCS         (ARC_EN),
+          .OUTPUTS      (OUT_EN),
           .HEATERS      (HEAT_EN)
       ) u_dec (
           .clk          (clk),
@@ -470,13 +497,17 @@ module cnc_core #(
   wire [71*N_AXES-1:0] seg_p_v0, seg_p_vc, seg_p_vx;
   wire [56*N_AXES-1:0] seg_p_acc;
   wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
+  wire [1:0] seg_arc_plane;  // and their plane (0 XY, 1 ZX, 2 YZ)
   wire motion_abort = estop_stop;  // e-stop: prep and executor drop what they hold, stay idle
+  wire out_tvalid, out_tready;  // OUTPUT entries: segment_prep -> segment_executor
+  wire [23:0] out_tdata;
 
   segment_prep #(
       .N_AXES           (N_AXES),
       .PROFILES         (PROF_EN),
       .ARCS             (ARC_EN),
       .V1_ONLY          (TRIM_EN),
+      .OUTPUTS          (OUT_EN),
       .FEED0_PERIOD     (FEED0_PERIOD),
       .DEFAULT_NUMERATOR(DEFAULT_NUMERATOR)
   ) u_prep (
@@ -516,8 +547,12 @@ module cnc_core #(
       .m_axis_prof_vx      (seg_p_vx),
       .m_axis_prof_acc     (seg_p_acc),
       .m_axis_arc          (seg_arc),
+      .m_axis_arc_plane    (seg_arc_plane),
       .m_axis_tvalid  (seg_tvalid),
       .m_axis_tready  (seg_tready),
+      .m_out_tvalid   (out_tvalid),
+      .m_out_tdata    (out_tdata),
+      .m_out_tready   (out_tready),
       .numerator_x    (numerator_x),
       .numerator_y    (numerator_y),
       .init_applied   (init_applied),
@@ -529,13 +564,19 @@ module cnc_core #(
   // ---------------------------------------------------------------- execution
   wire exec_busy, exec_violation, seg_done_v2, exec_arc_err;
   wire exec_laser;
+  wire exec_flood, exec_mist;
+  wire [3:0] exec_dout;
+  wire [7:0] exec_fan_duty;
+  wire out_done;
+  wire [15:0] out_done_n;
   assign laser = exec_laser && !estop_stop;  // also low at once (the executor's own is registered)
 
   segment_executor #(
       .N_AXES        (N_AXES),
       .PROFILES      (PROF_EN),
       .ARCS          (ARC_EN),
-      .LEAN_DDA      (TRIM_EN)
+      .LEAN_DDA      (TRIM_EN),
+      .OUTPUTS       (OUT_EN)
   ) u_exec (
       .clk            (clk),
       .rst            (rst),
@@ -563,8 +604,12 @@ module cnc_core #(
       .s_axis_prof_vx      (seg_p_vx),
       .s_axis_prof_acc     (seg_p_acc),
       .s_axis_arc          (seg_arc),
+      .s_axis_arc_plane    (seg_arc_plane),
       .s_axis_tvalid  (seg_tvalid),
       .s_axis_tready  (seg_tready),
+      .s_out_tvalid   (out_tvalid),
+      .s_out_tdata    (out_tdata),
+      .s_out_tready   (out_tready),
       .cfg_step_high  (cfg_high),
       .cfg_step_low   (cfg_low),
       .cfg_dir_setup  (cfg_setup),
@@ -581,8 +626,57 @@ module cnc_core #(
       .seg_done_v2    (seg_done_v2),
       .position       (position),
       .violation      (exec_violation),
-      .arc_err        (exec_arc_err)
+      .arc_err        (exec_arc_err),
+      .coolant_flood  (exec_flood),
+      .coolant_mist   (exec_mist),
+      .dout           (exec_dout),
+      .fan_duty       (exec_fan_duty),
+      .out_done       (out_done),
+      .out_done_n     (out_done_n)
   );
+
+  // ---------------------------------------------------------------- machine outputs
+  // low at once on e-stop (the executor clears its levels from the next edge)
+  assign coolant_flood = exec_flood && !estop_stop;
+  assign coolant_mist  = exec_mist && !estop_stop;
+  assign dout          = exec_dout & {4{!estop_stop}};
+  generate
+    if (FAN_OK == 0) begin : g_fan_bad
+      // FAN_PWM_HZ must be at least 1, at most CLK_HZ / 256, and reachable within 1 %
+      FAN_PWM_HZ_out_of_range u_fan_pwm_hz_out_of_range ();
+    end
+    if (OUT_EN != 0) begin : g_fan
+      wire fan_pwm, fan_start;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire [8:0] fan_active_nc;
+      /* verilator lint_on UNUSEDSIGNAL */
+      // The PWM takes a duty only at a period boundary: after an e-stop the pin stays low until
+      // the first boundary (fan_start: the clock after it), from which the duty the executor
+      // holds (0 after the e-stop, or a later OUTPUT's) is the active one.
+      reg fan_hold_reg;
+      always @(posedge clk) begin
+        if (fan_start) fan_hold_reg <= 1'b0;
+        if (estop_stop) fan_hold_reg <= 1'b1;
+        if (rst) fan_hold_reg <= 1'b0;
+      end
+      pwm #(
+          .PWM_BITS(8),
+          .PWM_DIV (FAN_DIV)
+      ) u_fan (
+          .clk         (clk),
+          .rst         (rst),
+          .duty        ((exec_fan_duty == 8'hFF) ? 9'd256 : {1'b0, exec_fan_duty}),
+          .force_off   (estop_stop),
+          .out         (fan_pwm),
+          .period_start(fan_start),
+          .active      (fan_active_nc)
+      );
+      assign fan = fan_pwm && !estop_stop && !(fan_hold_reg && !fan_start);
+    end else begin : g_nofan
+      assign fan = 1'b0;
+      wire unused_fan = &{1'b0, exec_fan_duty};
+    end
+  endgenerate
 
   // ---------------------------------------------------------------- status
   reg [1:0] last_code_reg;
@@ -617,7 +711,8 @@ module cnc_core #(
     if (dec_noise) noise_bytes_reg <= noise_bytes_reg + 16'd1;
     if (prep_clamped) clamped_reg <= clamped_reg + 16'd1;
     if (dec_nak) naks_reg <= naks_reg + 16'd1;
-    segments_done_reg <= segments_done_reg + {31'd0, v2_seg_done} + {31'd0, v2_init_done};
+    segments_done_reg <= segments_done_reg + {31'd0, v2_seg_done} + {31'd0, v2_init_done} +
+                         (out_done ? {16'd0, out_done_n} : 32'd0);
     if (dec_fault_clear) fault_step_reg <= 1'b0;
     if (exec_violation) fault_step_reg <= 1'b1;
     if (dec_fault_clear) fault_arc_reg <= 1'b0;
@@ -726,7 +821,7 @@ module cnc_core #(
           .nak_seq      (dec_nak_seq),
           .nak_reason   (dec_nak_reason),
           .ack_req      (dec_ack),
-          .done_evt     (v2_seg_done || v2_init_done),
+          .done_evt     (v2_seg_done || v2_init_done || out_done),
           .v1_ack       (v1_move_done),
           .next_seq     (dec_next_seq),
           .fifo_free    (fifo_free_w),

@@ -12,12 +12,16 @@
 // with a pull-up, so a broken wire stops the machine), the on-board LTC2308 ADC on its dedicated
 // pins ADC_CONVST/ADC_SCK/ADC_SDI/ADC_SDO (thermistors on ADC inputs 0 and 1). LEDR[6] heater 0
 // or 1 on.
+// Machine outputs (OUTPUT frames, docs/protocol.md "OUTPUT"; pins in docs/architecture.md):
+// coolant_flood GPIO_0[10], coolant_mist GPIO_0[11], fan GPIO_0[12] (PWM at about FAN_PWM_HZ),
+// dout[0..3] GPIO_0[13..16]; high = on, all low after reset and on e-stop.
 // The reset button is synchronized (two flops) and released synchronously.
 `default_nettype none
 
 module de1soc_top #(
     parameter CLK_HZ = 50_000_000,
-    parameter BAUD   = 115_200
+    parameter BAUD   = 115_200,
+    parameter FAN_PWM_HZ = 1000
 ) (
     input  wire       clk,
     input  wire       rst_n,
@@ -28,6 +32,10 @@ module de1soc_top #(
     output wire       dir_y,
     output wire       step_y,
     output wire       laser,
+    output wire       coolant_flood,
+    output wire       coolant_mist,
+    output wire       fan,
+    output wire [3:0] dout,
     output wire [9:0] LEDR,
     output wire [6:0] HEX0,
     output wire [6:0] HEX1,
@@ -70,7 +78,8 @@ module de1soc_top #(
   cnc_core #(
       .CLK_HZ(CLK_HZ),
       .BAUD  (BAUD),
-      .N_AXES(2)
+      .N_AXES(2),
+      .FAN_PWM_HZ(FAN_PWM_HZ)
   ) u_core (
       .clk         (clk),
       .rst         (rst),
@@ -79,6 +88,10 @@ module de1soc_top #(
       .step        (step),
       .dir         (dir),
       .laser       (laser),
+      .coolant_flood(coolant_flood),
+      .coolant_mist (coolant_mist),
+      .fan          (fan),
+      .dout         (dout),
       .estop       (!estop_n),
       .heater      (heater_w),
       .adc_convst  (ADC_CONVST),

@@ -16,10 +16,12 @@
 // (BAD_LENGTH), fields (BAD_FIELD: LINE / LINE_PROFILE flag bits [6:2], CONFIG_AXIS axis >=
 // N_AXES, the LINE_PROFILE field rules of docs/protocol.md: 1 <= max|steps| < 2^24, V_cruise <
 // 2^47, V_entry <= V_cruise, V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; the ARC
-// rules: flags 2 or 3, start and end not at the centre, |coordinates| about the centre < 2^22,
+// rules: code 2 or 3, flag bits 7:4 0, plane (bits 3:2) 0..2 and 0 when N_AXES < 3, start and end
+// not at the centre, |coordinates| about the centre < 2^22,
 // DZ != -2^31 (and DZ = 0 when N_AXES < 3), N_RAMP >= 1, 1 <= C_TOTAL < 2^46, V_cruise < 2^63,
-// V_entry and V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; ARC LEN must be 63; heater
-// fields: see "Heater frames" below), then for
+// V_entry and V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; ARC LEN must be 63; OUTPUT
+// LEN 3, mask != 0 with bit 7 clear, value bits 7 and 2 clear and only where the mask is set, fan
+// duty 0 unless mask bit 2; heater fields: see "Heater frames" below), then for
 // sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
 // duplicate: ACK only, nothing executed; = next_seq -> accepted (FIFO types need a free slot, else
 // FIFO_FULL), next_seq += 1, ACK.
@@ -41,7 +43,10 @@
 //                 LINE_PROFILE: kind 0, v2 1, prof 1, t = A, V_entry/V_cruise/V_exit/D, steps
 //                            sign-extended, code = flags[1:0], power.
 //                 ARC:       kind 0, v2 1, arc 1, code = flags[1:0], power, arc_raw = payload
-//                            bytes 2..62 (byte 2 in the top bits), t and steps 0.
+//                            bytes 2..62 (byte 2 in the top bits), t = the plane (flags[3:2]),
+//                            steps 0.
+//                 OUTPUT:    kind 3, v2 0 (the only entry with kind 3 and v2 0), t = {8'd0,
+//                            mask, value, fan duty} (payload bytes 0..2), the rest 0.
 //               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
 //               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
 //               from its registers. A v1 packet completing while m_axis_tready is low is dropped
@@ -70,8 +75,8 @@
 //   and the decoder hunts again; the strobe is high in the clock WATCHDOG_CLKS clocks after the
 //   last byte's clock.
 // Requires N_AXES >= 2 (v1 and NUMERATORS carry two axes), MAX_PAYLOAD <= 127.
-// Build options (cnc_core passes them): PROFILES = 0, ARCS = 0, HEATERS = 0 make LINE_PROFILE,
-// ARC, resp. the heater frames (0x20..0x24) unknown types (NAK UNKNOWN_TYPE, unknown_type strobe,
+// Build options (cnc_core passes them): PROFILES = 0, ARCS = 0, OUTPUTS = 0, HEATERS = 0 make
+// LINE_PROFILE, ARC, OUTPUT, resp. the heater frames (0x20..0x24) unknown types (NAK UNKNOWN_TYPE, unknown_type strobe,
 // like any other unknown TYPE); their entry fields / heat_* outputs are then constant 0.
 // rst is synchronous, active high (auto mode, next_seq = 0).
 `default_nettype none
@@ -82,6 +87,7 @@ module frame_decoder #(
     parameter MAX_PAYLOAD   = 64,
     parameter PROFILES      = 1,  // 0: LINE_PROFILE (0x12) is an unknown type
     parameter ARCS          = 1,  // 0: ARC (0x13) is an unknown type
+    parameter OUTPUTS       = 1,  // 0: OUTPUT (0x15) is an unknown type
     parameter HEATERS       = 1   // 0: heater frames (0x20..0x24) are unknown types
 ) (
     input wire clk,
@@ -138,7 +144,7 @@ module frame_decoder #(
 
   localparam [7:0] T_HELLO = 8'h01, T_STATUS = 8'h02, T_FCLR = 8'h03, T_CFG = 8'h04,
                    T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11,
-                   T_LPROF = 8'h12, T_ARC = 8'h13;
+                   T_LPROF = 8'h12, T_ARC = 8'h13, T_OUT = 8'h15;
   localparam [7:0] T_HCFG = 8'h20, T_HSET = 8'h21, T_HTAB = 8'h22, T_HSAF = 8'h23, T_HWD = 8'h24;
 
   localparam [7:0] R_BAD_CRC = 8'd1, R_BAD_LENGTH = 8'd2, R_UNKNOWN_TYPE = 8'd3, R_TIMEOUT = 8'd4,
@@ -292,7 +298,9 @@ module frame_decoder #(
       c22_ok = (v[24:22] == 3'b000) || (v[24:22] == 3'b111 && v[21:0] != 22'd0);
     end
   endfunction
-  wire arc_field_ok = (flags[7:2] == 6'd0) && flags[1] &&
+  // flags: bits 1:0 code (2 / 3), bits 3:2 the plane (0 XY, 1 ZX, 2 YZ; ZX and YZ need Z: 3 axes)
+  wire arc_field_ok = (flags[7:4] == 4'd0) && (flags[3:2] != 2'd3) &&
+                      (flags[3:2] == 2'd0 || N_AXES >= 3) && flags[1] &&
                       (arc_i != 25'sd0 || arc_j != 25'sd0) && (arc_x1 != 25'sd0 || arc_y1 != 25'sd0) &&
                       c22_ok(arc_i) && c22_ok(arc_j) && c22_ok(arc_x1) && c22_ok(arc_y1) &&
                       (arc_dz != 32'h8000_0000) && (N_AXES >= 3 || arc_dz == 32'd0) &&
@@ -310,9 +318,17 @@ module frame_decoder #(
   wire [BASE_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(1), be32(2), line_steps};
   wire [BASE_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(0), {32 * N_AXES{1'b0}}};
   wire [BASE_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
-  // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power; the arc fields above the profile
+  // OUTPUT fields: payload bytes 0..2
+  wire [7:0] out_mask = pb(0);
+  wire [7:0] out_val = pb(1);
+  wire [7:0] out_duty = pb(2);
+  // OUTPUT: kind 3 with v2 0 (kind 3 with v2 1 is segment_prep's zero-length entry), t = bytes 0..2
+  wire [BASE_W-1:0] e_out = {1'b0, 2'd3, 2'd0, 8'd0, 8'd0, out_mask, out_val, out_duty,
+                             {32 * N_AXES{1'b0}}};
+  // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power, t = the plane (flags[3:2]); the
+  // arc fields above the profile
   wire [ENTRY_W-1:0] e_arc = {arc_raw, 1'b1, {(PROF_W - BASE_W) {1'b0}}, 1'b1, 2'd0, flags[1:0],
-                              pb(1), {32 * (N_AXES + 1) {1'b0}}};
+                              pb(1), 30'd0, flags[3:2], {32 * N_AXES{1'b0}}};
   wire [PROF_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(1),
                                 p_a, prof_steps};
 
@@ -348,13 +364,19 @@ module frame_decoder #(
 
   wire t_lprof = (PROFILES != 0) && (type_reg == T_LPROF);
   wire t_arc = (ARCS != 0) && (type_reg == T_ARC);
+  wire t_out = (OUTPUTS != 0) && (type_reg == T_OUT);
+  // OUTPUT fields: mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs 0..3; bit 7 reserved),
+  // value (the same bits; 2 and 7 reserved), fan duty (used with mask bit 2)
+  wire out_field_ok = (out_mask != 8'd0) && !out_mask[7] && ((out_val & ~out_mask) == 8'd0) &&
+                      !out_val[2] && (out_mask[2] || out_duty == 8'd0);
   wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
-               t_lprof || t_arc || t_heat;
+               t_lprof || t_arc || t_out || t_heat;
   wire len0 = (len_reg == 8'd0);
   wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
                 (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
                 (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok) ||
-                (t_lprof && prof_len_ok) || (t_arc && len_reg == 8'd63) || heat_len_ok;
+                (t_lprof && prof_len_ok) || (t_arc && len_reg == 8'd63) ||
+                (t_out && len_reg == 8'd3) || heat_len_ok;
   // The field rules are registered: the payload and type are complete at least two clocks before
   // the CHECK clock (the two CRC bytes follow them), so field_ok_reg holds the rules of the frame
   // being checked (the wide ARC / LINE_PROFILE compares end at a register, not in the accept).
@@ -362,10 +384,10 @@ module frame_decoder #(
   wire field_ok = field_ok_reg;
   wire field_ok_w = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(0) >= NAX8) &&
                   !(t_lprof && !prof_field_ok) && !(t_arc && !arc_field_ok) &&
-                  (!t_heat || heat_field_ok);
+                  !(t_out && !out_field_ok) && (!t_heat || heat_field_ok);
   wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
-                   t_heat;
-  wire to_fifo = t_num || t_line || t_dwell || t_lprof || t_arc;
+                   t_out || t_heat;
+  wire to_fifo = t_num || t_line || t_dwell || t_lprof || t_arc || t_out;
   wire [7:0] seq_diff = seq_reg - next_seq_reg;
   wire seq_new = (seq_diff == 8'd0);
   wire seq_dup = seq_diff[7];  // next_seq - 128 .. next_seq - 1
@@ -383,6 +405,7 @@ module frame_decoder #(
     else if (t_dwell) entry = {{PW{1'b0}}, e_dwell};
     else if (t_lprof) entry = {{(ENTRY_W - PROF_W) {1'b0}}, e_lprof};
     else if (t_arc) entry = e_arc;
+    else if (t_out) entry = {{PW{1'b0}}, e_out};
     else entry = {{PW{1'b0}}, e_num};
   end
 

@@ -6,7 +6,9 @@
 // run_last):
 //   0 LINE: constant rate, T clocks (below). Also DWELL and zero-length segments.
 //   2 ARC: s_axis_arc from segment_prep: arc_dda (loaded on accept, advancing only in RUN: the
-//     arc's clock 0 is tick 1). An arc event of clock c raises STEP at edge R + c + 2 (arc_dda's
+//     arc's clock 0 is tick 1). s_axis_arc_plane routes the walk's u / v steps and DIR and the
+//     helix steps to the plane's axes: 0 XY / Z (axes 0, 1 / 2), 1 ZX / Y (2, 0 / 1), 2 YZ / X
+//     (1, 2 / 0); below "X / Y" of an arc means its u / v axes. An arc event of clock c raises STEP at edge R + c + 2 (arc_dda's
 //     output register, then step_pulse's). The segment lasts c_last + 2 ticks (c_last: the clock
 //     of the arc's last move, arc_dda `ending`): its last tick is the clock after the ending one
 //     (arc_end_reg), in which only the last move's step request is issued, so, as for every other
@@ -65,6 +67,19 @@
 // Laser: high after edge R until edge R + T for a segment with code != 0 and power != 0; between
 // two such segments run back to back it stays high; low in HOLD, SETUP, ZERO and idle.
 // position: signed step count per axis, updated on the edge STEP rises.
+// Machine outputs (OUTPUT entries, docs/protocol.md "OUTPUT"): s_out_* from segment_prep, handed
+// over on an edge H (s_out_tvalid && s_out_tready). Every segment accepted before H precedes the
+// OUTPUT in the FIFO, every segment accepted after it follows it. The entry is applied on the
+// edge that ends the segment in progress at H: the levels change on its end edge E = R + T (the
+// edge of its last STEP rise; the next segment, taken on its last tick, starts with R' = E: no
+// gap; a segment still in HOLD / SETUP at H runs first), on A + 1 of a zero-length segment in
+// ZERO, and on H itself when the executor is idle at H (or its segment ends on H). Entries
+// handed over while one is pending are merged into it (later bits win);
+// they are applied together. out_done strobes for one clock after the edge of the change with
+// out_done_n = the number of entries applied (segments_done counts each). Levels: coolant_flood,
+// coolant_mist, dout[3:0] (mask bits 0, 1, 3..6, value bits the same), fan_duty (mask bit 2,
+// the duty byte). abort clears the levels and the pending entry (outputs off from the edge after
+// the abort clock; cnc_core also gates them at once) and s_out_tready is low in an abort clock.
 // Build options (cnc_core passes them): PROFILES = 0 leaves profile_gen and the dda_profile per
 // axis out, ARCS = 0 leaves arc_dda and the in-arc DIR checks out; a segment of a kind left out is
 // run as LINE (segment_prep never sends one: the decoder answers those frames as unknown types).
@@ -74,8 +89,9 @@ module segment_executor #(
     parameter N_AXES   = 4,
     parameter PROFILES = 1,  // 0: no PROFILE kind (no profile_gen / dda_profile)
     parameter ARCS     = 1,  // 0: no ARC kind (no arc_dda)
-    parameter LEAN_DDA = 0  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused) and
-                            //    keep no steps-left counter (cnc_core's v1 build)
+    parameter LEAN_DDA = 0,  // 1: the DDAs compute T - n from s_axis_total (s_axis_tmn unused) and
+                             //    keep no steps-left counter (cnc_core's v1 build)
+    parameter OUTPUTS  = 1   // 0: no machine outputs (s_out_* ignored, levels constant 0)
 ) (
     input wire clk,
     input wire rst,
@@ -104,8 +120,13 @@ module segment_executor #(
     input  wire [ 71*N_AXES-1:0] s_axis_prof_vx,     // V_exit * n_a
     input  wire [ 56*N_AXES-1:0] s_axis_prof_acc,    // A * n_a
     input  wire [           944:0] s_axis_arc,         // ARC: arc_dda's load inputs (segment_prep)
+    input  wire [             1:0] s_axis_arc_plane,   // ARC: 0 XY, 1 ZX, 2 YZ (see below)
     input  wire                  s_axis_tvalid,
     output wire                  s_axis_tready,
+
+    input  wire        s_out_tvalid,  // OUTPUT entry from segment_prep: {mask, value, fan duty}
+    input  wire [23:0] s_out_tdata,
+    output wire        s_out_tready,
 
     input wire [16*N_AXES-1:0] cfg_step_high,
     input wire [16*N_AXES-1:0] cfg_step_low,
@@ -129,7 +150,14 @@ module segment_executor #(
     output wire [32*N_AXES-1:0] position,
     output wire                 violation,    // 1-clock strobe: a step came before STEP low time
                                               // (or, in an arc, before its DIR setup)
-    output wire                 arc_err       // 1-clock strobe: an arc ended inconsistently
+    output wire                 arc_err,      // 1-clock strobe: an arc ended inconsistently
+
+    output wire        coolant_flood,  // machine outputs (OUTPUT entries)
+    output wire        coolant_mist,
+    output wire [ 3:0] dout,
+    output wire [ 7:0] fan_duty,
+    output wire        out_done,       // 1-clock strobe after the edge OUTPUT entries took effect
+    output wire [15:0] out_done_n      // with out_done: how many entries
 );
 
   localparam [2:0] S_IDLE = 3'd0, S_HOLD = 3'd1, S_SETUP = 3'd2, S_RUN = 3'd3, S_ZERO = 3'd4;
@@ -330,25 +358,29 @@ module segment_executor #(
     end
   endgenerate
 
-  // arc step requests per axis: X, Y, and Z (axis 2) when there is one
-  assign arc_req[0] = arc_xs;
-  assign arc_req[1] = arc_ys;
+  // The running arc's plane (taken on accept of an arc): per axis, whether it is the walk's u, v
+  // or the helix axis. Arc step requests per axis (u, v, and the helix when the axis exists).
+  reg [1:0] plane_reg;
+  wire [N_AXES-1:0] arc_uv;  // the axis is the arc's u or v (in-arc DIR writes and checks)
+  wire [N_AXES-1:0] arc_sdir;  // the direction of the axis's arc step (u: x_dir, v: y_dir)
+  genvar p;
   generate
-    if (N_AXES >= 3) begin : g_arcz
-      assign arc_req[2] = arc_zs;
-    end
-    if (N_AXES >= 4) begin : g_arcrest
-      assign arc_req[N_AXES-1:3] = {(N_AXES - 3) {1'b0}};
+    for (p = 0; p < N_AXES; p = p + 1) begin : g_plane
+      wire is_u = (plane_reg == 2'd0 && p == 0) || (plane_reg == 2'd1 && p == 2) ||
+                  (plane_reg == 2'd2 && p == 1);
+      wire is_v = (plane_reg == 2'd0 && p == 1) || (plane_reg == 2'd1 && p == 0) ||
+                  (plane_reg == 2'd2 && p == 2);
+      wire is_h = (plane_reg == 2'd0 && p == 2) || (plane_reg == 2'd1 && p == 1) ||
+                  (plane_reg == 2'd2 && p == 0);
+      assign arc_req[p] = (is_u && arc_xs) || (is_v && arc_ys) || (is_h && arc_zs);
+      assign arc_ann[p] = arc_tick && arc_dvalid &&
+                          ((is_u && arc_nx != dir_tgt_reg[p]) || (is_v && arc_ny != dir_tgt_reg[p]));
+      assign arc_uv[p] = is_u || is_v;
+      assign arc_sdir[p] = is_u ? arc_sd[0] : arc_sd[1];
     end
   endgenerate
-  assign arc_ann[0] = arc_tick && arc_dvalid && (arc_nx != dir_tgt_reg[0]);
-  assign arc_ann[1] = arc_tick && arc_dvalid && (arc_ny != dir_tgt_reg[1]);
-  generate
-    if (N_AXES >= 3) begin : g_annrest
-      assign arc_ann[N_AXES-1:2] = {(N_AXES - 2) {1'b0}};
-    end
-  endgenerate
-  reg [31:0] since_wr_reg;  // clocks since the last DIR write of X / Y (saturating)
+  localparam integer NSW = (N_AXES >= 3) ? 3 : 2;  // axes an arc's u / v can be on
+  reg [16*NSW-1:0] since_wr_reg;  // clocks since the last DIR write per axis (saturating)
   reg arc_dir_viol_reg;
   reg arc_err_reg;
 
@@ -430,13 +462,14 @@ module segment_executor #(
     arc_err_reg      <= arc_tick && arc_ending && arc_end_err && !abort;
     arc_end_reg      <= arc_tick && arc_ending && !abort;
     arc_dir_viol_reg <= 1'b0;
-    for (k = 0; k < 2; k = k + 1) begin
+    for (k = 0; k < NSW; k = k + 1) begin
       if (dir_wr[k]) since_wr_reg[16*k+:16] <= 16'd1;
       else if (since_wr_reg[16*k+:16] != 16'hFFFF)
         since_wr_reg[16*k+:16] <= since_wr_reg[16*k+:16] + 16'd1;
-      // an arc step whose direction is not on the DIR pin yet, or within DIR setup of the change
-      if (arc_req[k] && !abort &&
-          (arc_sd[k] != dir[k] || since_wr_reg[16*k+:16] < cfg_dir_setup[16*k+:16]))
+      // an arc step of u / v whose direction is not on the DIR pin yet, or within DIR setup of
+      // the change
+      if (arc_req[k] && arc_uv[k] && !abort &&
+          (arc_sdir[k] != dir[k] || since_wr_reg[16*k+:16] < cfg_dir_setup[16*k+:16]))
         arc_dir_viol_reg <= 1'b1;
     end
 
@@ -449,6 +482,7 @@ module segment_executor #(
       last_reg <= (left_reg == 64'd2);
     end
 
+    if (accept && arc_in) plane_reg <= s_axis_arc_plane;
     if (accept) begin
       kind_reg    <= prof_in ? K_PROFILE : arc_in ? K_ARC : K_LINE;
       code_reg    <= s_axis_code;
@@ -543,13 +577,85 @@ module segment_executor #(
       seg_start_reg   <= 1'b0;
       seg_done_reg    <= 1'b0;
       seg_done_v2_reg <= 1'b0;
-      since_wr_reg[16*0+:16] <= 16'hFFFF;
-      since_wr_reg[16*1+:16] <= 16'hFFFF;
+      since_wr_reg    <= {NSW{16'hFFFF}};
+      plane_reg       <= 2'd0;
       arc_dir_viol_reg <= 1'b0;
       arc_err_reg     <= 1'b0;
       arc_end_reg     <= 1'b0;
     end
   end
+
+  // ---------------------------------------------------------------- machine outputs
+  generate
+    if (OUTPUTS != 0) begin : g_out
+      reg [5:0] lvl_reg;  // {dout[3:0], mist, flood}
+      reg [7:0] duty_reg;
+      reg [15:0] pend_n_reg;  // OUTPUT entries handed over and not applied yet (0: none)
+      reg [6:0] pend_mask_reg;  // {dout[3:0], fan, mist, flood}
+      reg [6:0] pend_val_reg;  // the same bits (fan: 0)
+      reg [7:0] pend_duty_reg;
+      reg done_reg;
+      reg [15:0] done_n_reg;
+      wire take_out = s_out_tvalid && !abort && (pend_n_reg != 16'hFFFF);
+      // the pending entry with the one handed over in this clock merged in (its bits win)
+      wire [6:0] in_mask = s_out_tdata[22:16];
+      wire [6:0] in_val = s_out_tdata[14:8];
+      wire [6:0] m_mask = take_out ? (pend_mask_reg | in_mask) : pend_mask_reg;
+      wire [6:0] m_val = take_out ? ((pend_val_reg & ~in_mask) | (in_val & in_mask)) : pend_val_reg;
+      wire [7:0] m_duty = (take_out && in_mask[2]) ? s_out_tdata[7:0] : pend_duty_reg;
+      wire [15:0] m_n = pend_n_reg + {15'd0, take_out};
+      // the segment in progress (if any) ends on this edge
+      wire ends_now = (state_reg == S_IDLE) || (state_reg == S_ZERO) || run_last;
+      wire [5:0] lvl_mask = {m_mask[6:3], m_mask[1:0]};
+      wire [5:0] lvl_val = {m_val[6:3], m_val[1:0]};
+      always @(posedge clk) begin
+        done_reg <= 1'b0;
+        if (m_n != 16'd0 && ends_now) begin
+          lvl_reg       <= (lvl_reg & ~lvl_mask) | (lvl_val & lvl_mask);
+          if (m_mask[2]) duty_reg <= m_duty;
+          done_reg      <= 1'b1;
+          done_n_reg    <= m_n;
+          pend_n_reg    <= 16'd0;
+          pend_mask_reg <= 7'd0;
+          pend_val_reg  <= 7'd0;
+        end else begin
+          pend_n_reg    <= m_n;
+          pend_mask_reg <= m_mask;
+          pend_val_reg  <= m_val;
+        end
+        pend_duty_reg <= m_duty;
+        if (abort || rst) begin
+          lvl_reg       <= 6'd0;
+          duty_reg      <= 8'd0;
+          pend_n_reg    <= 16'd0;
+          pend_mask_reg <= 7'd0;
+          pend_val_reg  <= 7'd0;
+          pend_duty_reg <= 8'd0;
+          done_reg      <= 1'b0;
+        end
+        if (rst) done_n_reg <= 16'd0;
+      end
+      assign s_out_tready  = !abort && (pend_n_reg != 16'hFFFF);
+      assign coolant_flood = lvl_reg[0];
+      assign coolant_mist  = lvl_reg[1];
+      assign dout          = lvl_reg[5:2];
+      assign fan_duty      = duty_reg;
+      assign out_done      = done_reg;
+      assign out_done_n    = done_n_reg;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_out = &{1'b0, s_out_tdata[23], s_out_tdata[15]};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end else begin : g_noout
+      assign s_out_tready  = 1'b0;
+      assign coolant_flood = 1'b0;
+      assign coolant_mist  = 1'b0;
+      assign dout          = 4'd0;
+      assign fan_duty      = 8'd0;
+      assign out_done      = 1'b0;
+      assign out_done_n    = 16'd0;
+      wire unused_out = &{1'b0, s_out_tvalid, s_out_tdata};
+    end
+  endgenerate
 
   assign s_axis_tready = ready;
   assign laser         = laser_reg && !abort;

@@ -11,15 +11,21 @@
 //   kind 0 MOTION, v2 = 1, prof = 1 (LINE_PROFILE): t = A; V_entry, V_cruise, V_exit, D; steps per
 //          axis, |steps| < 2^24, not all 0; the frame decoder has checked the field rules of
 //          docs/protocol.md. Prepared as kind PROFILE (below).
-//   kind 0 MOTION, v2 = 1, arc = 1 (ARC): code 2 / 3 (CW / CCW), power, arc_raw; the decoder has
-//          checked the field rules. Prepared as kind ARC (below).
+//   kind 0 MOTION, v2 = 1, arc = 1 (ARC): code 2 / 3 (CW / CCW), power, arc_raw, t[1:0] the plane
+//          (0 XY, 1 ZX, 2 YZ); the decoder has checked the field rules. Prepared as kind ARC
+//          (below).
 //   kind 0 MOTION, v2 = 0 (v1 move): t = {16'd0, feed}, steps[0] = X, steps[1] = Y (the other
 //          axes are ignored: v1 moves X and Y only), power 8'hFF.
 //   kind 0 MOTION, v2 = 1 (LINE): t = T, the segment length in clocks; steps per axis.
 //   kind 1 NUMERATORS: steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y (v1 init or v2 frame).
 //   kind 2 DWELL: t = T clocks with no steps, laser off (steps, code and power are ignored).
-//   kind 3 (never written by the decoder): a zero-length segment (T = 0, no steps, code 0) that
-//          completes at once, so a counted entry always produces one seg_done.
+//   kind 3, v2 = 1 (never written by the decoder): a zero-length segment (T = 0, no steps, code 0)
+//          that completes at once, so a counted entry always produces one seg_done.
+//   kind 3, v2 = 0 OUTPUT (machine outputs, docs/protocol.md "OUTPUT"): t[23:0] = {mask, value,
+//          fan duty}. Not prepared: handed to the executor's output port (m_out_*) in the clock
+//          the entry is taken from the FIFO (s_axis_tready and m_out_tvalid high together, only
+//          while m_out_tready is high); the block stays idle and takes the next entry on the next
+//          edge. So an OUTPUT entry costs one clock of preparation time and no executor time.
 // Arithmetic per entry (sequential divider and multiplier, one bit per clock; no `/`, `*`):
 //   n_dom = max |steps_a|.
 //   v1    : P = NUMERATOR_dom / feed (dominant X if |X| >= |Y| else Y), FEED0_PERIOD when
@@ -56,17 +62,21 @@
 // squares of |x0|, |y0|, |x1|, |y1| (22 bits each, 4 adders of 44 bits) and the Z products (31 bits
 // of |DZ|, 3 adders of 95 bits and one of 79) in parallel, 31 iterations; dT = R1^2 - R0^2 and
 // its sign; a restoring divider (46 iterations, 25-bit remainder) gives |dT| / N_RAMP, and floor
-// division (dt_r in [0, N_RAMP)) follows in one clock. m_axis_steps: X = Y = 1 and Z = |DZ| (the
-// axes the arc may move), m_axis_dir: X / Y the tangent signs at the start (arc_dda's first-move
-// rule), Z the sign of DZ: the executor's HOLD/SETUP rule applies at the arc's start. The arc's
-// final X / Y directions are not known here: dir_fast is 0 for the next segment that moves X or Y
-// until each has moved in a prepared non-arc segment (unk_reg). The same holds for every axis
+// division (dt_r in [0, N_RAMP)) follows in one clock. The plane (m_axis_arc_plane) names the
+// physical axes of the walk's u / v and of the helix: XY / Z (0), ZX / Y (1: u = Z, v = X), YZ / X
+// (2: u = Y, v = Z). m_axis_steps: u = v = 1 and helix = |DZ| (the axes the arc may move),
+// m_axis_dir: u / v the tangent signs at the start (arc_dda's first-move rule), the helix axis the
+// sign of DZ: the executor's HOLD/SETUP rule applies at the arc's start. The arc's final u / v
+// directions are not known here: dir_fast is 0 for the next segment that moves those axes until
+// each has moved in a prepared non-arc segment (unk_reg). The same holds for every axis
 // after an abort (e-stop), which drops segments whose DIR was already tracked.
 // Output (m_axis_*): one prepared segment, held until accepted.
 // Build options (cnc_core passes them): PROFILES = 0 / ARCS = 0 never take the PROFILE / ARC
 // path (the prof / arc entry bits are ignored, their registers and states are not generated in
 // synthesis: they stay constant and are optimized away); cnc_core then stores neither field in
 // the FIFO and the decoder answers LINE_PROFILE / ARC frames as unknown types.
+// OUTPUTS = 0: no OUTPUT entries (m_out_tvalid constant 0; a kind-3 entry is prepared as the
+// zero-length segment whatever its v2 bit).
 // V1_ONLY = 1 (cnc_core's protocol-v1 build; needs PROFILES = ARCS = 0): the entries are v1
 // MOTION and NUMERATORS only (v2 = 0, kind 0 / 1), so only the v1 arithmetic is built, narrower,
 // with the same results on the same clocks (same latency, same outputs): the divider reads the
@@ -83,6 +93,7 @@ module segment_prep #(
     parameter PROFILES          = 1,      // 0: no LINE_PROFILE entries (prepared as LINE if any)
     parameter ARCS              = 1,      // 0: no ARC entries (prepared as LINE if any)
     parameter V1_ONLY           = 0,      // 1: only v1 MOTION / NUMERATORS entries (see below)
+    parameter OUTPUTS           = 1,      // 0: no OUTPUT entries (see below)
     parameter FEED0_PERIOD      = 62_500,
     parameter DEFAULT_NUMERATOR = 18_750_000   // CLK_HZ * 60 / 160 steps/mm at 50 MHz
 ) (
@@ -127,8 +138,13 @@ module segment_prep #(
     output wire [ 71*N_AXES-1:0] m_axis_prof_vx,
     output wire [ 56*N_AXES-1:0] m_axis_prof_acc,
     output wire [           944:0] m_axis_arc,  // ARC (kind 2): arc_dda's load inputs, see below
+    output wire [             1:0] m_axis_arc_plane,  // ARC: 0 XY, 1 ZX, 2 YZ
     output wire                  m_axis_tvalid,
     input  wire                  m_axis_tready,
+
+    output wire        m_out_tvalid,  // an OUTPUT entry taken from the FIFO in this clock
+    output wire [23:0] m_out_tdata,   // {mask, value, fan duty}
+    input  wire        m_out_tready,
 
     output wire [31:0] numerator_x,
     output wire [31:0] numerator_y,
@@ -139,11 +155,10 @@ module segment_prep #(
 );
 
   localparam SW = 32 * N_AXES;
-  localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2;
+  localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2, K_OUTPUT = 2'd3;
   localparam [3:0] S_IDLE = 4'd0, S_MAX = 4'd1, S_DIV = 4'd2, S_CLAMP = 4'd3, S_MUL = 4'd4,
                    S_SUB = 4'd5, S_OUT = 4'd6, S_PMUL = 4'd7, S_AMUL = 4'd8, S_ADIV = 4'd9,
                    S_AFIX = 4'd10;
-  localparam integer ZAX = (N_AXES >= 3) ? 2 : 0;  // the Z axis of an arc (helix)
   localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
   localparam integer AX_LAST_I = N_AXES - 1;
   localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
@@ -156,6 +171,7 @@ module segment_prep #(
   wire [1:0] in_kind = s_axis_tdata[SW+43:SW+42];
   wire in_v2 = s_axis_tdata[SW+44];
   wire in_v1_motion = (in_kind == K_MOTION) && !in_v2;
+  wire in_out = (OUTPUTS != 0) && (V1_ONLY == 0) && (in_kind == K_OUTPUT) && !in_v2;
   wire in_prof = (PROFILES != 0) && s_axis_tdata[SW+45] && (in_kind == K_MOTION) && in_v2;
   wire [46:0] in_ve = s_axis_tdata[SW+46+:47];
   wire [46:0] in_vc = s_axis_tdata[SW+94+:47];
@@ -166,6 +182,11 @@ module segment_prep #(
 
   // ARC registers: the raw frame fields (big-endian order, I first) and the derived values
   reg arc_reg;
+  reg [1:0] plane_reg;  // 0 XY, 1 ZX, 2 YZ
+  // the physical axes of the walk's u, v and of the helix
+  wire [1:0] ax_u = (plane_reg == 2'd1) ? 2'd2 : (plane_reg == 2'd2) ? 2'd1 : 2'd0;
+  wire [1:0] ax_v = (plane_reg == 2'd1) ? 2'd0 : (plane_reg == 2'd2) ? 2'd2 : 2'd1;
+  wire [1:0] ax_h = (plane_reg == 2'd1) ? 2'd1 : (plane_reg == 2'd2) ? 2'd0 : 2'd2;
   reg ccw_reg;
   reg [487:0] araw_reg;
   wire signed [23:0] a_i = araw_reg[487:464];
@@ -318,7 +339,8 @@ module segment_prep #(
 
   wire idle_state = (state_reg == S_IDLE);
   wire accept_init = idle_state && (in_kind == K_NUMERATORS) && exec_idle && !abort;
-  wire accept_seg = idle_state && (in_kind != K_NUMERATORS) && !abort;
+  wire accept_seg = idle_state && (in_kind != K_NUMERATORS) && !in_out && !abort;
+  wire accept_out = idle_state && in_out && m_out_tready && !abort;
 
   integer i;
   always @(posedge clk) begin
@@ -344,6 +366,7 @@ module segment_prep #(
           feed_reg     <= in_v1_motion ? in_t[15:0] : 16'd0;
           prof_reg     <= in_prof;
           arc_reg      <= in_arc;
+          plane_reg    <= in_arc ? in_t[1:0] : 2'd0;
           ccw_reg      <= in_code[0];
           araw_reg     <= in_arc_raw;
           ve_reg       <= in_ve;
@@ -472,22 +495,22 @@ module segment_prep #(
           dt_q_reg <= dneg_reg ? -{2'b00, dq_reg} : {2'b00, dq_reg};
           dt_r_reg <= drem_reg[23:0];
         end
-        // X, Y move (first-move directions), Z when DZ != 0; the executor's HOLD/SETUP rules
+        // u, v move (first-move directions), the helix axis when DZ != 0; the executor's
+        // HOLD/SETUP rules (the decoder allows planes other than XY and a helix only with 3 axes)
         abs_reg <= {SW{1'b0}};
-        abs_reg[31:0] <= 32'd1;
-        abs_reg[63:32] <= 32'd1;
         dir_reg <= {N_AXES{1'b0}};
-        dir_reg[0] <= arc_dx0;
-        dir_reg[1] <= arc_dy0;
-        dir_track_reg[0] <= arc_dx0;
-        dir_track_reg[1] <= arc_dy0;
-        if (N_AXES >= 3) begin
-          abs_reg[32*ZAX+:32] <= {1'b0, mag_z};
-          dir_reg[ZAX] <= !a_dz[31];
-          if (a_dz != 32'd0) dir_track_reg[ZAX] <= !a_dz[31];
+        for (i = 0; i < N_AXES; i = i + 1) begin
+          if (i == {30'd0, ax_u} || i == {30'd0, ax_v}) begin
+            abs_reg[32*i+:32] <= 32'd1;
+            dir_reg[i]       <= (i == {30'd0, ax_u}) ? arc_dx0 : arc_dy0;
+            dir_track_reg[i] <= (i == {30'd0, ax_u}) ? arc_dx0 : arc_dy0;
+            unk_reg[i]       <= 1'b1;
+          end else if (i == {30'd0, ax_h}) begin
+            abs_reg[32*i+:32] <= {1'b0, mag_z};
+            dir_reg[i] <= !a_dz[31];
+            if (a_dz != 32'd0) dir_track_reg[i] <= !a_dz[31];
+          end
         end
-        unk_reg[0] <= 1'b1;
-        unk_reg[1] <= 1'b1;
         total_reg <= 64'd0;
         quot_reg <= 32'd0;
         tmn_reg <= {64 * N_AXES{1'b0}};
@@ -645,6 +668,7 @@ module segment_prep #(
       dir_fast_reg     <= 1'b0;
       prof_reg         <= 1'b0;
       arc_reg          <= 1'b0;
+      plane_reg        <= 2'd0;
       unk_reg          <= {N_AXES{1'b0}};
       ve_reg           <= 47'd0;
       vc_reg           <= 47'd0;
@@ -667,7 +691,9 @@ module segment_prep #(
     end
   end
 
-  assign s_axis_tready   = accept_seg || accept_init;
+  assign s_axis_tready   = accept_seg || accept_init || accept_out;
+  assign m_out_tvalid    = s_axis_tvalid && accept_out;
+  assign m_out_tdata     = in_t[23:0];
   assign m_axis_code     = code_reg;
   assign m_axis_power    = power_reg;
   assign m_axis_v2       = v2_reg;
@@ -679,6 +705,7 @@ module segment_prep #(
   assign m_axis_period   = quot_reg;
   assign m_axis_feed     = feed_reg;
   assign m_axis_kind     = arc_reg ? 2'd2 : {1'b0, prof_reg};
+  assign m_axis_arc_plane = plane_reg;
   assign m_axis_arc = {az_reg, vz_x_reg, vz_c_reg, vz_e_reg, a_dd, a_acc, a_vx, a_vc, a_ve, a_ctot,
                        dt_r_reg, dt_q_reg, a_nramp, a_dz, a_dy, a_dx, a_j, a_i, ccw_reg};
   assign m_axis_prof_u1  = ve_reg;

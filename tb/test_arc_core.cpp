@@ -1,6 +1,7 @@
 // ARC frames (TYPE 0x13) through cnc_core's pins: UART -> frame_decoder -> FIFO -> segment_prep
 // (R0^2, R1^2, floor(dT / N_RAMP), V*|DZ|) -> segment_executor (arc_dda) -> step_pulse pins.
-// Every arc's STEP edges (time and DIR level at the rise) equal the integer reference walk
+// Arcs in the three planes (XY, ZX, YZ: the walk's u / v and helix steps on their axes). Every
+// arc's STEP edges (time and DIR level at the rise) equal the integer reference walk
 // (systemc/include/fpgacnc/twins/arc_walk.h) at a fixed latency of 2 clocks from the arc's first
 // clock (seg_start); zero gap where the directions continue (LINE -> ARC, ARC -> ARC, ARC ->
 // LINE_PROFILE, ARC -> LINE at the minimum STEP period), an arc segment lasting c_last + 2 clocks
@@ -73,8 +74,9 @@ void put(std::vector<uint8_t>& b, uint64_t v, int bytes) {
 }
 
 // The ARC payload of docs/protocol.md (63 bytes).
-std::vector<uint8_t> arc_payload(const arc::Frame& f, uint8_t power) {
-  std::vector<uint8_t> b{static_cast<uint8_t>(f.g.ccw ? 3 : 2), power};
+// plane (flags bits 3:2): 0 XY, 1 ZX, 2 YZ
+std::vector<uint8_t> arc_payload(const arc::Frame& f, uint8_t power, uint8_t plane = 0) {
+  std::vector<uint8_t> b{static_cast<uint8_t>((f.g.ccw ? 3 : 2) | plane << 2), power};
   for (int32_t c : {f.g.i, f.g.j, f.g.dx, f.g.dy}) put(b, static_cast<uint32_t>(c) & 0xFFFFFFu, 3);
   put(b, static_cast<uint32_t>(f.dz), 4);
   put(b, f.n_ramp, 3);
@@ -114,9 +116,18 @@ arc::Frame planned(const arc::Geometry& g, int32_t dz, double v, double ramp) {
   return f;
 }
 
+// The physical axes of an arc plane's u, v and helix (docs/protocol.md "ARC").
+struct PlaneAxes {
+  int u, v, h;
+};
+PlaneAxes plane_axes(uint8_t plane) {
+  return plane == 1 ? PlaneAxes{2, 0, 1} : plane == 2 ? PlaneAxes{1, 2, 0} : PlaneAxes{0, 1, 2};
+}
+
 struct Seg {
   enum Kind { kLine, kProf, kArc, kDwell } kind = kLine;
   arc::Frame f;
+  uint8_t plane = 0;   // arcs: 0 XY, 1 ZX, 2 YZ
   arc::RunResult ref;  // arcs
   int64_t steps[kAxes] = {0, 0, 0, 0};
   bool zero_gap_after = false;  // the next segment must start right after this one's last clock
@@ -209,6 +220,7 @@ TEST(ArcCore, ArcFramesThroughThePins) {
     Seg s;
     s.kind = Seg::kArc;
     s.f = planned(g, dz, 0.02 + u01(rng) * 0.08, n % 2 ? 0.15 : 0.0);
+    s.plane = static_cast<uint8_t>(n % 3);  // G17, G18, G19 in turn
     full_circles += full;
     helices += dz != 0;
     segs.push_back(s);
@@ -259,15 +271,17 @@ TEST(ArcCore, ArcFramesThroughThePins) {
         motion_clocks += 35 * 40;
         break;
       }
-      case Seg::kArc:
+      case Seg::kArc: {
         s.ref = arc::run(s.f);
         ASSERT_FALSE(s.ref.err) << "reference walk inconsistent, arc " << frames.size();
-        s.steps[0] = s.ref.x;
-        s.steps[1] = s.ref.y;
-        s.steps[2] = s.ref.z;
-        frames.push_back(v2::frame(0x13, seq++, arc_payload(s.f, 255)));
+        const PlaneAxes ax = plane_axes(s.plane);
+        s.steps[ax.u] = s.ref.x;
+        s.steps[ax.v] = s.ref.y;
+        s.steps[ax.h] = s.ref.z;
+        frames.push_back(v2::frame(0x13, seq++, arc_payload(s.f, 255, s.plane)));
         motion_clocks += s.ref.end_clock + 2;  // the segment: c_last + 2 ticks
         break;
+      }
     }
   }
   // the dwell lasts until every frame has arrived (10 bits of 16.7 clocks per byte)
@@ -301,8 +315,9 @@ TEST(ArcCore, ArcFramesThroughThePins) {
       arcs += 1;
       for (int a = 0; a < 3; ++a) {
         std::vector<std::pair<uint64_t, int>> want, got;
+        const PlaneAxes ax = plane_axes(s.plane);
         for (const auto& e : s.ref.events) {
-          const int d = a == 0 ? e.dx : a == 1 ? e.dy : e.dz;
+          const int d = a == ax.u ? e.dx : a == ax.v ? e.dy : e.dz;
           if (d) want.emplace_back(st + e.clock + kLatency, d > 0 ? 1 : 0);
         }
         const auto& tr = b.mon().axis(a);
@@ -377,7 +392,8 @@ TEST(ArcCore, BadFieldsAndArcError) {
   };
   bad.push_back({"motion code 1", flags(0x01), 7});
   bad.push_back({"motion code 0", flags(0x00), 7});
-  bad.push_back({"flag bit 2", flags(0x07), 7});
+  bad.push_back({"flag bit 4", flags(0x13), 7});
+  bad.push_back({"plane 3", flags(0x0F), 7});
   bad.push_back({"flag bit 7", flags(0x83), 7});
   bad.push_back({"start at the centre", with([](arc::Frame& f) { f.g.i = f.g.j = 0; }), 7});
   bad.push_back({"end at the centre", with([](arc::Frame& f) {

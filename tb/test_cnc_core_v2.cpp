@@ -3,7 +3,10 @@
 // from tx (UartMonitor + DeviceParser), STEP/DIR recorded every clock (StepMonitor). HELLO ->
 // IDENT, CONFIG_AXIS applied, a burst of LINE/DWELL frames running back to back with zero idle
 // clocks (R' = R + T) and exact step schedules, ACK/DONE credits and counts, STATUS fields, a bad
-// CRC answered by NAK with nothing moving, NUMERATORS, and v1 again after RELEASE.
+// CRC answered by NAK with nothing moving, NUMERATORS, and v1 again after RELEASE; OUTPUT frames
+// between LINE_PROFILE segments (the outputs change on the edge the segment before them ends, the
+// next segment starts on that edge: no gap), the fan PWM, OUTPUT field checks, outputs off on
+// e-stop.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -75,6 +78,19 @@ class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
   const std::vector<uint64_t>& dones() const { return dones_; }
   const std::vector<Interval>& laser() const { return laser_; }
   uint64_t not_running_between() const { return gaps_; }
+  // Output pin edges: 0 flood, 1 mist, 2 fan, 3..6 dout[0..3], with the cycle they were seen.
+  struct OutEdge {
+    uint64_t cycle;
+    int pin;
+    uint32_t value;
+  };
+  const std::vector<OutEdge>& out_edges() const { return out_edges_; }
+  std::vector<OutEdge> out_edges_of(int pin) const {
+    std::vector<OutEdge> v;
+    for (const auto& e : out_edges_)
+      if (e.pin == pin) v.push_back(e);
+    return v;
+  }
 
  protected:
   void observe() override {
@@ -87,6 +103,12 @@ class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
     }
     if (m.seg_start) starts_.push_back(cycle());
     if (m.seg_done) dones_.push_back(cycle());
+    const uint32_t outs = (m.coolant_flood ? 1u : 0u) | (m.coolant_mist ? 2u : 0u) |
+                          (m.fan ? 4u : 0u) | (static_cast<uint32_t>(m.dout) << 3);
+    for (int i = 0; i < 7; ++i)
+      if (((outs ^ outs_prev_) >> i) & 1u)
+        out_edges_.push_back(OutEdge{cycle(), i, (outs >> i) & 1u});
+    outs_prev_ = outs;
     if (m.laser && !laser_prev_) laser_.push_back(Interval{cycle(), 0});
     if (!m.laser && laser_prev_) laser_.back().to = cycle();
     laser_prev_ = m.laser;
@@ -100,6 +122,8 @@ class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
   std::vector<Interval> laser_;
   bool laser_prev_ = false;
   uint64_t gaps_ = 0;
+  uint32_t outs_prev_ = 0;
+  std::vector<OutEdge> out_edges_;
 };
 
 void hello(V2Bench& b) {
@@ -360,6 +384,152 @@ TEST(CncCoreV2, NumeratorsReleaseThenV1) {
   for (size_t i = 1; i < x.rises.size(); ++i) EXPECT_EQ(x.rises[i] - x.rises[i - 1], 7812u);
   EXPECT_GT(b.msgs().back().cycle, x.rises.back()) << "0xAA before the last step";
   EXPECT_EQ(b.dut().segments_done, 1u) << "a v1 move is not a v2 segment";
+}
+
+// Fan PWM of the default build: FAN_PWM_HZ 1000 at 50 MHz: 256 counts of
+// round(50e6 / 256 000) = 195 clocks (docs/protocol.md "OUTPUT").
+constexpr uint64_t kFanCount = 195, kFanPeriod = 256 * kFanCount;
+
+// LINE_PROFILE at a constant 500 clocks per dominant step (V_entry = V_cruise = V_exit, no
+// deceleration), +X and +Y: no reversal, so the next one can start with zero gap.
+std::vector<uint8_t> constant_profile(uint8_t seq, int32_t n) {
+  const uint64_t v = (uint64_t{1} << 48) / 500;
+  return v2::line_profile(seq, 1, 255, v, v, v, 0, static_cast<uint32_t>(n), {n, n / 2}, true);
+}
+
+// OUTPUT frames between two LINE_PROFILE segments, all sent back to back: the outputs of an
+// OUTPUT change on the edge the segment before it ends (its last STEP rise, seg_done), the next
+// segment starts on that edge (seg_start in the same clock as the previous seg_done: no gap), two
+// OUTPUT frames after the last segment are applied together when it ends; DONE counts every one.
+TEST(CncCoreV2, OutputBetweenProfilesNoGap) {
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  const int32_t n = 40;  // 20 000 clocks each: the frames behind arrive and are prepared in time
+  b.queue(constant_profile(0, n));
+  // M8, M62 P2, M106 S128
+  b.queue(v2::output(1, v2::kOutFlood | v2::out_dout(2) | v2::kOutFan,
+                     v2::kOutFlood | v2::out_dout(2), 128));
+  b.queue(constant_profile(2, n));
+  // M9 with M106 S255, then M63 P2
+  b.queue(v2::output(3, v2::kOutFlood | v2::kOutMist | v2::kOutFan, 0, 255));
+  b.queue(v2::output(4, v2::out_dout(2), 0, 0));
+  uint64_t guard = 0;
+  while ((b.dut().segments_done < 5 || !b.rx_idle()) && ++guard < 200'000) b.tick();
+  ASSERT_EQ(b.dut().segments_done, 5u) << "2 segments and 3 OUTPUT entries by cycle " << b.cycle();
+  b.idle(3 * kFanPeriod);
+  ASSERT_EQ(b.starts().size(), 2u);
+  ASSERT_EQ(b.dones().size(), 2u);
+  const uint64_t e_a = b.dones()[0], e_b = b.dones()[1];
+  // No gap: the second segment's tick 1 is the clock after the first one's end edge.
+  EXPECT_EQ(b.starts()[1], e_a) << "seg_start of the second segment vs seg_done of the first";
+  // Each segment's last STEP rise is on its end edge (seen in the same clock as seg_done).
+  ASSERT_EQ(b.mon().axis(0).rises.size(), 2u * n);
+  EXPECT_EQ(b.mon().axis(0).rises[n - 1], e_a);
+  EXPECT_EQ(b.mon().axis(0).rises[2 * n - 1], e_b);
+  // Flood and dout[2] on at the first segment's end, off at the second's; mist never.
+  const auto flood = b.out_edges_of(0);
+  ASSERT_EQ(flood.size(), 2u);
+  EXPECT_EQ(flood[0].cycle, e_a);
+  EXPECT_EQ(flood[0].value, 1u);
+  EXPECT_EQ(flood[1].cycle, e_b);
+  EXPECT_EQ(flood[1].value, 0u);
+  const auto d2 = b.out_edges_of(5);
+  ASSERT_EQ(d2.size(), 2u);
+  EXPECT_EQ(d2[0].cycle, e_a);
+  EXPECT_EQ(d2[1].cycle, e_b);
+  EXPECT_TRUE(b.out_edges_of(1).empty()) << "mist";
+  for (int p : {3, 4, 6}) EXPECT_TRUE(b.out_edges_of(p).empty()) << "dout " << p - 3;
+  // Fan: 128 of 256 counts high from the first PWM period boundary after e_a, in whole periods;
+  // from the first boundary after e_b on always high (255).
+  const auto fan = b.out_edges_of(2);
+  ASSERT_GE(fan.size(), 3u);
+  EXPECT_GE(fan[0].cycle, e_a);
+  EXPECT_LT(fan[0].cycle, e_a + kFanPeriod) << "first fan rise within one PWM period";
+  // rise, fall pairs of 128 counts, rises one period apart, then the last rise stays high
+  ASSERT_EQ(fan.size() % 2, 1u) << "fan edges";
+  for (size_t i = 0; i < fan.size(); i += 2) {
+    EXPECT_EQ(fan[i].value, 1u) << "fan edge " << i;
+    if (i >= 2) {
+      EXPECT_EQ(fan[i].cycle - fan[i - 2].cycle, kFanPeriod) << "fan period, edge " << i;
+    }
+    if (i + 1 < fan.size()) {
+      EXPECT_EQ(fan[i + 1].value, 0u) << "fan edge " << i + 1;
+      EXPECT_EQ(fan[i + 1].cycle - fan[i].cycle, 128 * kFanCount) << "fan high time, edge " << i;
+    }
+  }
+  EXPECT_GT(fan.back().cycle, e_b) << "fan always on from the first boundary after S255";
+  EXPECT_LE(fan.back().cycle, e_b + kFanPeriod);
+  EXPECT_EQ(b.dut().fan, 1);
+  EXPECT_EQ(b.dut().violations, 0u);
+  // Every ACK/DONE in order; the last count 5.
+  uint32_t last_done = 0;
+  for (const auto& m : b.msgs()) {
+    if (!m.v1_ack && (m.type == v2::kAck || m.type == v2::kDone)) last_done = m.u32(3);
+  }
+  EXPECT_EQ(last_done, 5u);
+}
+
+// OUTPUT field and length rules (NAK BAD_FIELD / BAD_LENGTH, nothing changes), an OUTPUT on an
+// idle machine acting on the edge it is handed over, and every output low within 2 clocks of the
+// e-stop pin, staying low after FAULT_CLEAR.
+TEST(CncCoreV2, OutputRulesIdleAndEstop) {
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  struct Bad {
+    std::vector<uint8_t> frame;
+    uint8_t reason;
+    const char* why;
+  };
+  const std::vector<Bad> bad = {
+      {v2::output(0, 0, 0, 0), v2::kBadField, "empty mask"},
+      {v2::output(0, 0x80, 0, 0), v2::kBadField, "mask bit 7"},
+      {v2::output(0, v2::kOutFlood, v2::kOutMist, 0), v2::kBadField, "value outside the mask"},
+      {v2::output(0, v2::kOutFan, v2::kOutFan, 10), v2::kBadField, "value bit 2"},
+      {v2::output(0, v2::kOutFlood, 1, 7), v2::kBadField, "duty without the fan bit"},
+      {v2::frame(v2::kOutput, 0, {1, 1}), v2::kBadLength, "LEN 2"},
+      {v2::frame(v2::kOutput, 0, {1, 1, 0, 0}), v2::kBadLength, "LEN 4"},
+  };
+  for (const auto& x : bad) {
+    b.send_frame(x.frame);
+    ASSERT_TRUE(b.wait_msgs(1, 40 * kByteClocks)) << x.why;
+    const auto& nak = b.msgs().back();
+    ASSERT_EQ(nak.type, v2::kNak) << x.why;
+    EXPECT_EQ(nak.u8(1), x.reason) << x.why;
+    EXPECT_EQ(nak.u8(2), 0u) << x.why << ": next_seq";
+  }
+  b.idle(1000);
+  EXPECT_TRUE(b.out_edges().empty()) << "a rejected OUTPUT changed a pin";
+  // All on, machine idle: the pins change together, on the edge after the frame's entry is taken.
+  b.send_frame(v2::output(0, 0x7B, 0x7B, 0));  // flood, mist, dout 0..3; fan unchanged
+  b.settle(2000);
+  ASSERT_EQ(b.out_edges().size(), 6u);
+  for (const auto& e : b.out_edges()) {
+    EXPECT_EQ(e.value, 1u);
+    EXPECT_EQ(e.cycle, b.out_edges()[0].cycle) << "pin " << e.pin;
+  }
+  EXPECT_EQ(b.dut().segments_done, 1u);
+  b.send_frame(v2::output(1, v2::kOutFan, 0, 255));
+  b.idle(2 * kFanPeriod);
+  EXPECT_EQ(b.dut().fan, 1);
+  // e-stop: two-flop synchronizer, then every output low (combinational gate).
+  const size_t before = b.out_edges().size();
+  b.dut().estop = 1;
+  b.idle(5);
+  const uint64_t pressed = b.cycle() - 5;
+  ASSERT_EQ(b.out_edges().size(), before + 7);
+  for (size_t k = before; k < b.out_edges().size(); ++k) {
+    EXPECT_EQ(b.out_edges()[k].value, 0u);
+    EXPECT_EQ(b.out_edges()[k].cycle, pressed + 2) << "pin " << b.out_edges()[k].pin;
+  }
+  b.dut().estop = 0;
+  b.idle(10);
+  b.send_frame(v2::fault_clear(2));
+  b.settle(2000);
+  EXPECT_EQ(b.dut().faults, 0u);
+  b.idle(2 * kFanPeriod);
+  EXPECT_EQ(b.out_edges().size(), before + 7) << "outputs stay off after the e-stop is cleared";
 }
 
 }  // namespace

@@ -79,7 +79,8 @@ TEST(ArcCodec, DeviceRules) {
   };
   EXPECT_EQ(with([](auto& p) { p.pop_back(); }), v2::NakReason::BadLength);
   EXPECT_EQ(with([](auto& p) { p.push_back(0); }), v2::NakReason::BadLength);
-  EXPECT_EQ(with([](auto& p) { p[0] = 0x07; }), v2::NakReason::BadField);  // reserved bit
+  EXPECT_EQ(with([](auto& p) { p[0] = 0x13; }), v2::NakReason::BadField);  // reserved bit 4
+  EXPECT_EQ(with([](auto& p) { p[0] = 0x0F; }), v2::NakReason::BadField);  // plane 3
   EXPECT_EQ(with([](auto& p) { p[0] = 0x01; }), v2::NakReason::BadField);  // code 1
   EXPECT_EQ(with([](auto& p) { p[2] = p[3] = p[4] = 0; }),
             v2::NakReason::BadField);                                    // I = 0, J = 0
@@ -116,3 +117,32 @@ TEST(ArcCodec, DeviceRules) {
 }
 
 }  // namespace
+
+// Planes (flags bits 3:2): G17 XY = 0 (flags = the motion code), G18 ZX = 1, G19 YZ = 2; 3 and a
+// plane other than XY on a 2-axis board are refused; the plane survives the round trip.
+TEST(ArcCodec, Planes) {
+  v2::Arc a = worked();
+  EXPECT_EQ(a.plane, v2::ArcPlane::XY) << "default";
+  const v2::Frame xy = v2::arc(1, a);
+  EXPECT_EQ(xy.payload[0], a.code) << "XY: flags as without planes";
+  for (const auto plane : {v2::ArcPlane::ZX, v2::ArcPlane::YZ}) {
+    a.plane = plane;
+    const v2::Frame f = v2::arc(1, a);
+    EXPECT_EQ(f.payload[0], a.code | static_cast<unsigned>(plane) << 2);
+    EXPECT_EQ(std::vector<uint8_t>(f.payload.begin() + 1, f.payload.end()),
+              std::vector<uint8_t>(xy.payload.begin() + 1, xy.payload.end()))
+        << "only the flags differ";
+    EXPECT_EQ(v2::decode_arc(f), a);
+    EXPECT_EQ(v2::check_host_frame(f, 4), std::nullopt);
+    EXPECT_EQ(v2::check_host_frame(f, 3), std::nullopt);
+    EXPECT_EQ(v2::check_host_frame(f, 2), v2::NakReason::BadField) << "needs 3 axes";
+    EXPECT_FALSE(v2::arc_field_error(a, 2).empty());
+  }
+  a.plane = static_cast<v2::ArcPlane>(3);
+  EXPECT_THROW(v2::arc(1, a), std::invalid_argument);
+  a.plane = v2::ArcPlane::XY;
+  a.dz = 5;
+  EXPECT_EQ(v2::check_host_frame(v2::arc(1, a), 2), v2::NakReason::BadField) << "helix, 2 axes";
+  a.dz = 0;
+  EXPECT_EQ(v2::check_host_frame(v2::arc(1, a), 2), std::nullopt) << "flat XY arc, 2 axes";
+}

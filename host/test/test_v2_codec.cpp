@@ -431,6 +431,72 @@ TEST(V2Codec, HostFrameChecksFollowTheDeviceRules) {
   EXPECT_FALSE(v2::is_sequenced(0x01) || v2::is_sequenced(0x02));
 }
 
+// OUTPUT (docs/protocol.md "OUTPUT"): the worked examples byte for byte (CRCs from the bitwise
+// CRC of the spec, not from this encoder), decode round trip, and the device's field rules.
+TEST(V2Codec, OutputWorkedExamples) {
+  v2::OutputSet m8_fan_dout;  // M8, M106 S128, M62 P1
+  m8_fan_dout.flood = true;
+  m8_fan_dout.fan = 128;
+  m8_fan_dout.dout[1] = true;
+  const Bytes a = from_hex("A5 03 0C 15 15 11 80 E5 60");
+  EXPECT_EQ(v2::encode(v2::output_frame(12, m8_fan_dout)), a);
+  EXPECT_EQ(v2::decode_output(parse_one(a)), m8_fan_dout);
+  v2::OutputSet m9_m107;  // M9, M107
+  m9_m107.flood = false;
+  m9_m107.mist = false;
+  m9_m107.fan = 0;
+  const Bytes b = from_hex("A5 03 0D 15 07 00 00 C3 F8");
+  EXPECT_EQ(v2::encode(v2::output_frame(13, m9_m107)), b);
+  EXPECT_EQ(v2::decode_output(parse_one(b)), m9_m107);
+  EXPECT_EQ(v2::type_name(0x15), "OUTPUT");
+  EXPECT_TRUE(v2::is_fifo(0x15));
+  EXPECT_TRUE(v2::is_sequenced(0x15));
+}
+
+TEST(V2Codec, OutputRoundTripAndFieldRules) {
+  using R = v2::NakReason;
+  // Every combination of set / not set / level for the 6 on-off outputs, and a fan duty.
+  std::mt19937 rng(seed_from_env());
+  for (int i = 0; i < 2000; ++i) {
+    v2::OutputSet o;
+    auto pick = [&]() -> std::optional<bool> {
+      const unsigned r = rng() % 3;
+      if (r == 0) return std::nullopt;
+      return r == 1;
+    };
+    o.flood = pick();
+    o.mist = pick();
+    for (auto& d : o.dout) d = pick();
+    if (rng() % 2) o.fan = static_cast<uint8_t>(rng());
+    if (o.empty()) {
+      EXPECT_THROW(v2::output_frame(1, o), std::invalid_argument);
+      continue;
+    }
+    const v2::Frame f = v2::output_frame(static_cast<uint8_t>(i), o);
+    ASSERT_EQ(f.payload.size(), 3u);
+    EXPECT_EQ(v2::check_host_frame(f, 4), std::nullopt);
+    EXPECT_EQ(v2::decode_output(f), o);
+    // The mask has exactly the outputs given.
+    const uint8_t mask = f.payload[0];
+    EXPECT_EQ((mask & v2::kOutFlood) != 0, o.flood.has_value());
+    EXPECT_EQ((mask & v2::kOutFan) != 0, o.fan.has_value());
+    for (size_t n = 0; n < v2::kDigitalOutputs; ++n)
+      EXPECT_EQ((mask >> (3 + n) & 1) != 0, o.dout[n].has_value());
+  }
+  auto raw = [](std::vector<uint8_t> p) {
+    return v2::Frame{0, static_cast<uint8_t>(v2::Type::Output), std::move(p)};
+  };
+  EXPECT_EQ(v2::check_host_frame(raw({0, 0, 0}), 4), R::BadField) << "empty mask";
+  EXPECT_EQ(v2::check_host_frame(raw({0x80, 0, 0}), 4), R::BadField) << "mask bit 7";
+  EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x02, 0}), 4), R::BadField) << "value not in mask";
+  EXPECT_EQ(v2::check_host_frame(raw({0x04, 0x04, 9}), 4), R::BadField) << "value bit 2";
+  EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x01, 9}), 4), R::BadField) << "duty without fan";
+  EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x01}), 4), R::BadLength);
+  EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x01, 0, 0}), 4), R::BadLength);
+  EXPECT_THROW(v2::decode_output(raw({0x01, 0x02, 0})), v2::ProtocolError);
+  EXPECT_THROW(v2::decode_output(v2::dwell(0, 1)), v2::ProtocolError);
+}
+
 // ---- Packer: plan -> v2 frames ----
 
 #include "fpgacnc/gcode/interpreter.h"

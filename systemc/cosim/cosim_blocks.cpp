@@ -482,6 +482,16 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
         p = config_axis_payload(
             static_cast<uint8_t>(pick(g, 0, 5)),
             AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
+      } else if (ty == 29) {  // OUTPUT: good, or random bytes (BAD_FIELD mostly)
+        type = kOutput;
+        if (pick(g, 0, 3) == 0) {
+          p = {static_cast<uint8_t>(pick(g, 0, 255)), static_cast<uint8_t>(pick(g, 0, 255)),
+               static_cast<uint8_t>(pick(g, 0, 255))};
+        } else {
+          const auto mask = static_cast<uint8_t>(pick(g, 1, 0x7F));
+          p = {mask, static_cast<uint8_t>(pick(g, 0, 0x7F) & mask & ~0x04u),
+               static_cast<uint8_t>((mask & 0x04) ? pick(g, 0, 255) : 0)};
+        }
       } else if (ty >= 30) {  // ARC: good, or one field rule broken (BAD_FIELD)
         type = kArc;
         arc::Frame f;

@@ -71,6 +71,9 @@ SC_MODULE(RtlHarness) {
   // Heater and e-stop pins (issue 7): e-stop released, ADC SDO low, heater outputs unobserved.
   sc_core::sc_signal<bool> estop, adc_convst, adc_sck, adc_sdi, adc_sdo;
   sc_core::sc_signal<uint32_t> heater;
+  // Machine outputs (OUTPUT frames), compared as pin edges.
+  sc_core::sc_signal<bool> coolant_flood, coolant_mist, fan;
+  sc_core::sc_signal<uint32_t> dout;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -122,6 +125,10 @@ SC_MODULE(RtlHarness) {
     dut.adc_sck(adc_sck);
     dut.adc_sdi(adc_sdi);
     dut.adc_sdo(adc_sdo);
+    dut.coolant_flood(coolant_flood);
+    dut.coolant_mist(coolant_mist);
+    dut.fan(fan);
+    dut.dout(dout);
     SC_THREAD(run);
   }
 
@@ -134,7 +141,7 @@ SC_MODULE(RtlHarness) {
       const auto t0 = std::chrono::steady_clock::now();
       CoreParams p = params;
       p.timing = job.timing;
-      RtlDriver drv(p, job.script, true);
+      RtlDriver drv(p, job.script, true, true);
       rst.write(true);
       rx.write(true);
       cfg_wr.write(false);
@@ -156,7 +163,10 @@ SC_MODULE(RtlHarness) {
         edge();
         drv.after_edge(c, RtlDriver::Outputs{step.read(), dir.read(), laser.read(), tx.read(),
                                              busy.read(), seg_start.read(), seg_done.read(),
-                                             static_cast<uint16_t>(packet_count.read())});
+                                             static_cast<uint16_t>(packet_count.read()),
+                                             (coolant_flood.read() ? 1u : 0u) |
+                                                 (coolant_mist.read() ? 2u : 0u) |
+                                                 (fan.read() ? 4u : 0u) | (dout.read() << 3)});
         if ((c & 1023) == 0) drv.check_stall();
       }
       std::array<int64_t, kAxes> pos{};
@@ -259,20 +269,33 @@ bool g_v2_profiles = true;         // LINE_PROFILE frames in the random v2 sessi
 uint64_t g_v2_profile_frames = 0;  // how many were generated
 bool g_v2_arcs = true;             // ARC frames in the random v2 sessions
 uint64_t g_v2_arc_frames = 0, g_v2_bad_arcs = 0;
+// OUTPUT frames in the random v2 sessions: drawn from a generator of their own, so the other
+// frames of a session are the same with or without them. After about one frame in five an OUTPUT
+// with a random mask, levels and fan duty (0, 1..254 or 255); the session ends with one turning
+// everything off (M9 M107 M65 P0..3), so the fan's PWM stops and the job can end.
+bool g_v2_outputs = true;
+uint64_t g_v2_output_frames = 0;
+
+// ARC planes (flags bits 3:2): XY, ZX, YZ at random (`--v2-arc-planes 0`: XY only), drawn from
+// the OUTPUT frames' generator so that the arcs themselves are the same.
+bool g_v2_arc_planes = true;
+std::array<uint64_t, 3> g_v2_plane_arcs{};
 
 // An ARC frame within the host's rules (arc_stimulus.h, defaults: R = 2..30 steps, cruise at
-// 1 201..2 400 clocks per step, one in ten with C_TOTAL + 1).
-std::vector<uint8_t> random_arc_payload(std::mt19937_64& g, uint8_t power) {
+// 1 201..2 400 clocks per step, one in ten with C_TOTAL + 1), in `plane`.
+std::vector<uint8_t> random_arc_payload(std::mt19937_64& g, uint8_t power, uint8_t plane) {
   bool bad = false;
   const arc::Frame f = random_arc_frame(g, ArcStimulus{}, &bad);
   if (bad) ++g_v2_bad_arcs;
   ++g_v2_arc_frames;
-  return v2::arc_payload(f.g.ccw ? 3 : 2, power, f);
+  ++g_v2_plane_arcs[plane];
+  return v2::arc_payload(static_cast<uint8_t>((f.g.ccw ? 3 : 2) | plane << 2), power, f);
 }
 
 Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
   using namespace fpgacnc::twins::v2;
   std::mt19937_64 g(seed * 0x9E37'79B9'7F4A'7C15ull + 2);
+  std::mt19937_64 go(seed * 0x9E37'79B9'7F4A'7C15ull + 3);  // OUTPUT frames
   Job j;
   j.segments = segments;
   if (pick(g, 0, 4) != 0)
@@ -305,7 +328,8 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
     } else if (kind == 1) {
       it = numerators();
     } else if (kind == 8 && g_v2_arcs) {
-      it = V2Item{kArc, random_arc_payload(g, power)};
+      const auto plane = static_cast<uint8_t>(g_v2_arc_planes ? pick(go, 0, 2) : 0);
+      it = V2Item{kArc, random_arc_payload(g, power, plane)};
     } else if (kind >= 4 && kind <= 7 && g_v2_profiles) {
       // LINE_PROFILE on 1..4 axes (n_a <= 12): cruise at 1 201..2 400 clocks per step (above any
       // random_timing's minimum period, also after a CONFIG_AXIS mid-stream: the STEP timing
@@ -376,6 +400,24 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
       it.pre_gap = static_cast<int64_t>(watchdog) + pick(g, 1, 500);
     }
     sc.items.push_back(std::move(it));
+    if (g_v2_outputs && pick(go, 0, 4) == 0) {
+      auto mask = static_cast<uint8_t>(pick(go, 1, 0x7F));
+      const auto value = static_cast<uint8_t>(pick(go, 0, 0x7F) & mask & ~0x04u);
+      const uint32_t dk = pick(go, 0, 3);
+      const auto duty = static_cast<uint8_t>((mask & 0x04) == 0 ? 0
+                                             : dk == 0          ? 0
+                                             : dk == 1          ? 255
+                                                                : pick(go, 1, 254));
+      V2Item o{kOutput, {mask, value, duty}};
+      o.gap = pick(go, 0, 3) == 0 ? pick(go, 1, 3000) : 1;
+      o.corrupt = pick(go, 0, 32) == 0;
+      sc.items.push_back(std::move(o));
+      ++g_v2_output_frames;
+    }
+  }
+  if (g_v2_outputs) {
+    sc.items.push_back(V2Item{kOutput, {0x7F, 0, 0}});
+    ++g_v2_output_frames;
   }
   j.script.v2 = std::move(sc);
   return j;
@@ -408,6 +450,8 @@ int sc_main(int argc, char* argv[]) {
   opts.real("--corpus-feed-override", &corpus_override);
   opts.flag("--v2-profiles", &g_v2_profiles);
   opts.flag("--v2-arcs", &g_v2_arcs);
+  opts.flag("--v2-outputs", &g_v2_outputs);
+  opts.flag("--v2-arc-planes", &g_v2_arc_planes);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
 
@@ -432,6 +476,7 @@ int sc_main(int argc, char* argv[]) {
   rtl.jobs = &jobs;
   rtl.params = p;
   VirtualBoard twins("twins", p, true);
+  twins.record_outputs(true);
   std::vector<RunResult> twin_results;
   for (const Job& j : jobs)
     twins.add_job(
@@ -470,9 +515,10 @@ int sc_main(int argc, char* argv[]) {
                a.end_cycle, a.timeouts, v2, diff.empty() ? "" : ": first difference: ", diff);
   }
   fmt::print(
-      "cosim: {} LINE_PROFILE and {} ARC frames ({} with C_TOTAL off by one) in the random v2 "
-      "sessions\n",
-      g_v2_profile_frames, g_v2_arc_frames, g_v2_bad_arcs);
+      "cosim: {} LINE_PROFILE, {} ARC ({} with C_TOTAL off by one; XY {}, ZX {}, YZ {}) and {} "
+      "OUTPUT frames in the random v2 sessions\n",
+      g_v2_profile_frames, g_v2_arc_frames, g_v2_bad_arcs, g_v2_plane_arcs[0], g_v2_plane_arcs[1],
+      g_v2_plane_arcs[2], g_v2_output_frames);
   fmt::print(
       "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "
       "clocks/s), twins {:.3f} s; wall {:.2f} s; {}\n",

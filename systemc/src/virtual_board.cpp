@@ -45,6 +45,7 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   prep_.applied.bind(enc_.applied);
   prep_.report_applied = true;
   prep_.entry_ends = &entry_ends_;
+  prep_.on_output = [this](Cycle h, const OutputCmd& o) { exec_.output(h, o); };
   exec_.entry_ends = &entry_ends_;
   make_axis_twins(exec_, clk_, p_, pins_, dda_, pulse_);
   for (auto& pulse : pulse_) pulse->keep_history = true;
@@ -198,6 +199,7 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   deliver(kNever, false);
   qk.sync();
   host_ = nullptr;
+  exec_.flush_outputs(host->ready());
   r.edges = pins_.take_sorted();
   pins_.clear();
   r.acks = host->acks;

@@ -23,6 +23,9 @@ enum Type : uint8_t {
   kRelease = 0x06,
   kLine = 0x10,
   kDwell = 0x11,
+  kLineProfile = 0x12,
+  kArc = 0x13,
+  kOutput = 0x15,
   kAck = 0x80,
   kNak = 0x81,
   kDone = 0x82,
@@ -107,6 +110,15 @@ inline std::vector<uint8_t> dwell(uint8_t seq, uint32_t t) {
   be32(p, t);
   return frame(kDwell, seq, p);
 }
+// OUTPUT (docs/protocol.md "OUTPUT"): mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs
+// 0..3), value (the same bits; the fan's is 0), fan duty (0 unless mask bit 2).
+inline constexpr uint8_t kOutFlood = 0x01, kOutMist = 0x02, kOutFan = 0x04;
+inline constexpr uint8_t out_dout(int n) {
+  return static_cast<uint8_t>(0x08u << n);
+}
+inline std::vector<uint8_t> output(uint8_t seq, uint8_t mask, uint8_t value, uint8_t duty) {
+  return frame(kOutput, seq, {mask, value, duty});
+}
 // LINE payload: flags (code, SHORT), power, T, steps for the given axes (int16 when short_steps).
 inline std::vector<uint8_t> line_payload(uint8_t code, uint8_t power, uint32_t t,
                                          const std::vector<int32_t>& steps, bool short_steps) {
@@ -123,6 +135,27 @@ inline std::vector<uint8_t> line_payload(uint8_t code, uint8_t power, uint32_t t
 inline std::vector<uint8_t> line(uint8_t seq, uint8_t code, uint8_t power, uint32_t t,
                                  const std::vector<int32_t>& steps, bool short_steps) {
   return frame(kLine, seq, line_payload(code, power, t, steps, short_steps));
+}
+// LINE_PROFILE (docs/protocol.md): flags (code, SHORT), power, V_entry, V_cruise, V_exit u48, A,
+// D u32, steps (int16 when short_steps).
+inline std::vector<uint8_t> line_profile(uint8_t seq, uint8_t code, uint8_t power, uint64_t v_entry,
+                                         uint64_t v_cruise, uint64_t v_exit, uint32_t accel,
+                                         uint32_t decel_at, const std::vector<int32_t>& steps,
+                                         bool short_steps) {
+  std::vector<uint8_t> p{static_cast<uint8_t>((code & 3u) | (short_steps ? 0x80u : 0u)), power};
+  for (uint64_t v : {v_entry, v_cruise, v_exit}) {
+    be16(p, static_cast<uint32_t>(v >> 32));
+    be32(p, static_cast<uint32_t>(v));
+  }
+  be32(p, accel);
+  be32(p, decel_at);
+  for (int32_t s : steps) {
+    if (short_steps)
+      be16(p, static_cast<uint16_t>(s));
+    else
+      be32(p, static_cast<uint32_t>(s));
+  }
+  return frame(kLineProfile, seq, p);
 }
 // Whether every step fits int16 (SHORT form).
 inline bool fits_short(const std::vector<int32_t>& steps) {

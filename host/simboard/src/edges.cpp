@@ -15,6 +15,10 @@ std::string signal_name(uint8_t signal) {
   if (signal == kLaser) return "laser";
   if (signal == kTx) return "tx";
   if (signal == kRx) return "rx";
+  if (signal == kFlood) return "coolant_flood";
+  if (signal == kMist) return "coolant_mist";
+  if (signal == kFan) return "fan";
+  if (signal >= kDout0 && signal < kDout0 + 4) return fmt::format("dout{}", signal - kDout0);
   return fmt::format("signal{}", signal);
 }
 

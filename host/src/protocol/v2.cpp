@@ -91,6 +91,8 @@ std::string type_name(uint8_t type) {
       return "DWELL";
     case Type::Arc:
       return "ARC";
+    case Type::Output:
+      return "OUTPUT";
     case Type::LineProfile:
       return "LINE_PROFILE";
     case Type::HeaterConfig:
@@ -154,6 +156,7 @@ bool is_sequenced(uint8_t type) {
     case Type::Dwell:
     case Type::Arc:
     case Type::LineProfile:
+    case Type::Output:
     case Type::HeaterConfig:
     case Type::HeaterSetpoint:
     case Type::ThermistorTable:
@@ -168,7 +171,9 @@ bool is_sequenced(uint8_t type) {
 bool is_fifo(uint8_t type) {
   return type == static_cast<uint8_t>(Type::Numerators) ||
          type == static_cast<uint8_t>(Type::Line) || type == static_cast<uint8_t>(Type::Dwell) ||
-         type == static_cast<uint8_t>(Type::Arc) || type == static_cast<uint8_t>(Type::LineProfile);
+         type == static_cast<uint8_t>(Type::Arc) ||
+         type == static_cast<uint8_t>(Type::LineProfile) ||
+         type == static_cast<uint8_t>(Type::Output);
 }
 
 uint16_t crc16(std::span<const uint8_t> data) {
@@ -452,6 +457,32 @@ Frame dwell(uint8_t seq, uint32_t t) {
   return make(seq, Type::Dwell, std::move(p));
 }
 
+// ---- OUTPUT (TYPE 0x15) ----
+bool OutputSet::empty() const {
+  if (flood || mist || fan) return false;
+  for (const auto& d : dout)
+    if (d) return false;
+  return true;
+}
+
+Frame output_frame(uint8_t seq, const OutputSet& o) {
+  if (o.empty()) throw std::invalid_argument("OUTPUT: no output to set (an empty mask)");
+  uint8_t mask = 0, value = 0, duty = 0;
+  auto put = [&](const std::optional<bool>& v, uint8_t bit) {
+    if (!v) return;
+    mask |= bit;
+    if (*v) value |= bit;
+  };
+  put(o.flood, kOutFlood);
+  put(o.mist, kOutMist);
+  for (size_t n = 0; n < kDigitalOutputs; ++n) put(o.dout[n], static_cast<uint8_t>(kOutDout0 << n));
+  if (o.fan) {
+    mask |= kOutFan;
+    duty = *o.fan;
+  }
+  return make(seq, Type::Output, {mask, value, duty});
+}
+
 // ---- ARC (TYPE 0x13) ----
 namespace {
 void arc_put(std::vector<uint8_t>& v, uint64_t x, int bytes) {
@@ -470,6 +501,7 @@ Arc parse_arc(const Frame& f) {
   const auto& p = f.payload;
   Arc a;
   a.code = p[0] & 0x03;
+  a.plane = static_cast<ArcPlane>((p[0] >> 2) & 0x03);
   a.power = p[1];
   a.i = arc_get24s(p, 2);
   a.j = arc_get24s(p, 5);
@@ -487,8 +519,15 @@ Arc parse_arc(const Frame& f) {
 }
 }  // namespace
 
-std::string arc_field_error(const Arc& a) {
+std::string arc_field_error(const Arc& a, size_t n_axes) {
   if (a.code != 2 && a.code != 3) return fmt::format("motion code {} (ARC needs 2 or 3)", a.code);
+  const auto plane = static_cast<unsigned>(a.plane);
+  if (plane > 2) return fmt::format("plane {} (0 XY, 1 ZX, 2 YZ)", plane);
+  if (n_axes != 0 && n_axes < 3 && plane != 0)
+    return fmt::format("plane {} on a board with {} axes (needs 3)", plane == 1 ? "ZX" : "YZ",
+                       n_axes);
+  if (n_axes != 0 && n_axes < 3 && a.dz != 0)
+    return fmt::format("a helix (DZ {}) on a board with {} axes", a.dz, n_axes);
   const int64_t x0 = -int64_t{a.i}, y0 = -int64_t{a.j};
   const int64_t x1 = int64_t{a.dx} - a.i, y1 = int64_t{a.dy} - a.j;
   if (x0 == 0 && y0 == 0) return "start at the centre (I = J = 0)";
@@ -517,7 +556,7 @@ Frame arc(uint8_t seq, const Arc& a) {
   if (const auto e = arc_field_error(a); !e.empty()) throw std::invalid_argument("ARC frame: " + e);
   std::vector<uint8_t> p;
   p.reserve(kArcPayload);
-  p.push_back(a.code);
+  p.push_back(static_cast<uint8_t>(a.code | static_cast<unsigned>(a.plane) << 2));
   p.push_back(a.power);
   for (const int32_t c : {a.i, a.j, a.dx, a.dy})
     arc_put(p, static_cast<uint32_t>(c) & 0xFFFFFFu, 3);
@@ -645,10 +684,18 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (f.payload[0] & 0x7C) return NakReason::BadField;
       return std::nullopt;
     }
+    case Type::Output: {
+      if (n != kOutputPayload) return NakReason::BadLength;
+      const uint8_t mask = f.payload[0], value = f.payload[1], duty = f.payload[2];
+      if (mask == 0 || (mask & 0x80) != 0 || (value & ~mask) != 0 || (value & kOutFan) != 0 ||
+          ((mask & kOutFan) == 0 && duty != 0))
+        return NakReason::BadField;
+      return std::nullopt;
+    }
     case Type::Arc:
       if (n != kArcPayload) return NakReason::BadLength;
-      if (f.payload[0] & 0xFC) return NakReason::BadField;
-      if (!arc_field_error(parse_arc(f)).empty()) return NakReason::BadField;
+      if (f.payload[0] & 0xF0) return NakReason::BadField;
+      if (!arc_field_error(parse_arc(f), n_axes).empty()) return NakReason::BadField;
       return std::nullopt;
     case Type::LineProfile: {
       if (n < kProfileHeader) return NakReason::BadLength;
@@ -721,6 +768,22 @@ Line decode_line(const Frame& f, size_t n_axes) {
 uint32_t decode_dwell(const Frame& f) {
   check_or_throw(f, Type::Dwell, 0);
   return get32(f.payload, 0);
+}
+
+OutputSet decode_output(const Frame& f) {
+  check_or_throw(f, Type::Output, 0);
+  const uint8_t mask = f.payload[0], value = f.payload[1];
+  OutputSet o;
+  auto get = [&](uint8_t bit) -> std::optional<bool> {
+    if ((mask & bit) == 0) return std::nullopt;
+    return (value & bit) != 0;
+  };
+  o.flood = get(kOutFlood);
+  o.mist = get(kOutMist);
+  for (size_t n = 0; n < kDigitalOutputs; ++n)
+    o.dout[n] = get(static_cast<uint8_t>(kOutDout0 << n));
+  if ((mask & kOutFan) != 0) o.fan = f.payload[2];
+  return o;
 }
 
 Arc decode_arc(const Frame& f) {

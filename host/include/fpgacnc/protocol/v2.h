@@ -34,7 +34,8 @@ enum class Type : uint8_t {
   Line = 0x10,
   Dwell = 0x11,
   LineProfile = 0x12,
-  Arc = 0x13,  // circular DDA (issue 6)
+  Arc = 0x13,     // circular DDA (issue 6)
+  Output = 0x15,  // machine outputs in order with the motion (issue 17)
   // Heaters (issue 7): sequenced, not queued.
   HeaterConfig = 0x20,
   HeaterSetpoint = 0x21,
@@ -63,9 +64,9 @@ std::string type_name(uint8_t type);
 // "BAD_CRC", ..., or "reason 9".
 std::string nak_reason_name(uint8_t reason);
 // Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE, LINE, DWELL,
-// LINE_PROFILE, ARC).
+// LINE_PROFILE, ARC, OUTPUT, the heater frames).
 bool is_sequenced(uint8_t type);
-// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC).
+// Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC, OUTPUT).
 bool is_fifo(uint8_t type);
 
 // A decoder was given a frame of the wrong type or length, or a field out of range.
@@ -333,10 +334,12 @@ ThermistorChunk decode_thermistor_table(const Frame& f);
 HeaterSafetyFrame decode_heater_safety(const Frame& f);
 uint16_t decode_heater_watchdog(const Frame& f);
 
-// ARC (TYPE 0x13, 63-byte payload): a circular / helical arc in XY run by the hardware circular
-// DDA (docs/protocol.md "ARC", docs/motion.md "Arcs"). Geometry in steps relative to the start:
-// centre (i, j), end (dx, dy; 0, 0 = full circle), dz Z steps over the arc. n_ramp and c_total
-// come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
+// ARC (TYPE 0x13, 63-byte payload): a circular / helical arc run by the hardware circular DDA
+// (docs/protocol.md "ARC", docs/motion.md "Arcs") in one of three planes (flags bits 3:2): the
+// walk's (u, v) axes and the helix axis are XY / Z (G17, plane 0), ZX / Y (G18, 1), YZ / X (G19,
+// 2). Geometry in steps relative to the start, in (u, v): centre (i, j), end (dx, dy; 0, 0 = full
+// circle), dz steps of the helix axis over the arc (G18: i, dx along Z, j, dy along X). n_ramp and
+// c_total come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
 // arc_walk.h). Speeds in UQ16.48 cost units per clock, accel in 2^-48 cost units per clock^2,
 // decel_at (D) in cost units.
 constexpr size_t kArcPayload = 63;
@@ -344,9 +347,11 @@ constexpr int32_t kArcCoordLimit = 1 << 22;  // |i|, |j|, |dx - i|, |dy - j| mus
 constexpr uint32_t kArcNRampMax = (1u << 24) - 1;
 constexpr uint64_t kArcCTotalLimit = uint64_t{1} << 46;  // c_total must be below
 constexpr uint64_t kArcU48Max = (uint64_t{1} << 48) - 1;
+enum class ArcPlane : uint8_t { XY = 0, ZX = 1, YZ = 2 };  // G17, G18, G19
 struct Arc {
-  uint8_t code = 3;  // 2 = G2 (CW), 3 = G3 (CCW)
+  uint8_t code = 3;  // 2 = G2 (CW), 3 = G3 (CCW), seen from the helix axis's positive side
   uint8_t power = 0;
+  ArcPlane plane = ArcPlane::XY;         // flags bits 3:2 (ZX and YZ need a board with 3 axes)
   int32_t i = 0, j = 0, dx = 0, dy = 0;  // int24 on the wire
   int32_t dz = 0;
   uint32_t n_ramp = 1;                             // u24
@@ -357,11 +362,37 @@ struct Arc {
   bool operator==(const Arc&) const = default;
 };
 // Empty when the fields satisfy the device limits (docs/protocol.md "ARC"), else the rule broken.
-std::string arc_field_error(const Arc& a);
+// n_axes (0: no bound): ZX / YZ need 3 axes, a helix in XY too.
+std::string arc_field_error(const Arc& a, size_t n_axes = 0);
 // Builder; throws std::invalid_argument for fields the device would reject (arc_field_error).
 Frame arc(uint8_t seq, const Arc& a);
 // Decoder (length / field rules as the device checks them; ProtocolError otherwise).
 Arc decode_arc(const Frame& f);
+
+// OUTPUT (TYPE 0x15, 3-byte payload: mask, value, fan duty; docs/protocol.md "OUTPUT"): machine
+// outputs set in order with the motion, on the edge the segment queued before the frame ends
+// (no gap in the motion); answered ACK, later DONE. Each field left empty keeps its output as it
+// is, so one frame can set several: M8 flood = true; M7 mist = true; M9 flood = mist = false;
+// M106 S<s> fan = s (0..255, 255 = always on); M107 fan = 0; M62/M64 P<n> dout[n] = true,
+// M63/M65 P<n> dout[n] = false (n = 0..3).
+constexpr size_t kOutputPayload = 3;
+constexpr size_t kDigitalOutputs = 4;
+constexpr uint8_t kOutFlood = 0x01;  // mask / value bits
+constexpr uint8_t kOutMist = 0x02;
+constexpr uint8_t kOutFan = 0x04;    // mask only: the duty is byte 2
+constexpr uint8_t kOutDout0 = 0x08;  // dout[n]: kOutDout0 << n
+struct OutputSet {
+  std::optional<bool> flood, mist;
+  std::optional<uint8_t> fan;  // PWM duty, 255 = always on
+  std::array<std::optional<bool>, kDigitalOutputs> dout{};
+  bool empty() const;
+  bool operator==(const OutputSet&) const = default;
+};
+// Builder; throws std::invalid_argument for an empty set (the device answers NAK BAD_FIELD).
+Frame output_frame(uint8_t seq, const OutputSet& o);
+// Decoder (LEN 3, mask != 0, reserved bits 0, value bits only where the mask is set, duty 0
+// without the fan bit; ProtocolError naming the rule otherwise).
+OutputSet decode_output(const Frame& f);
 
 // Hex dump "A5 0A 07 10 ..." (upper case, space separated).
 std::string hex(std::span<const uint8_t> bytes);

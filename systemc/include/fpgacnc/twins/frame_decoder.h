@@ -12,13 +12,14 @@
 //   LEN > MAX_PAYLOAD: NAK BAD_LENGTH at the LEN byte, the frame abandoned at once;
 //   CRC mismatch: NAK BAD_CRC; a good CRC switches to v2 mode;
 //   then TYPE unknown: NAK UNKNOWN_TYPE; LEN wrong for TYPE: NAK BAD_LENGTH; reserved LINE
-//   flag bits, an axis >= N_AXES, a LINE_PROFILE or ARC field rule broken, a heater field out
-//   of range: NAK BAD_FIELD;
+//   flag bits, an axis >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field rule broken, a heater field
+//   out of range: NAK BAD_FIELD;
 //   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
 //   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS / LINE_PROFILE / ARC
-//   (payload bytes 2..62 as received, FifoEntry::arc_raw) written to the FIFO,
+//   (payload bytes 2..62 as received, FifoEntry::arc_raw) / OUTPUT (kind 3, v2 0, t = the three
+//   payload bytes) written to the FIFO,
 //   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR acts; RELEASE, accepted or a duplicate, returns to
 //   auto mode.
 // Initiators: `fifo` (FIFO write; level read before a write), `resp` (requests to the response
@@ -234,22 +235,33 @@ class FrameDecoderTwin : public sc_core::sc_module {
            (acc != 0 || ve != 0);
   }
 
-  // ARC field rules (docs/protocol.md "ARC", as frame_decoder.v checks them): code 2 or 3 and
-  // flag bits 7:2 zero; start and end not at the centre; |I|, |J|, |DX - I|, |DY - J| < 2^22;
-  // DZ != -2^31 (0 with fewer than 3 axes); N_RAMP >= 1; 1 <= C_TOTAL < 2^46; V_cruise < 2^63;
-  // V_entry, V_exit <= V_cruise; V_exit >= 1; A >= 1 or V_entry >= 1.
+  // ARC field rules (docs/protocol.md "ARC", as frame_decoder.v checks them): code 2 or 3, flag
+  // bits 7:4 zero, plane (bits 3:2) 0..2 (1, 2 only with 3 axes); start and end not at the centre;
+  // |I|, |J|, |DX - I|, |DY - J| < 2^22; DZ != -2^31 (0 with fewer than 3 axes); N_RAMP >= 1; 1 <=
+  // C_TOTAL < 2^46; V_cruise < 2^63; V_entry, V_exit <= V_cruise; V_exit >= 1; A >= 1 or V_entry
+  // >= 1.
   bool arc_fields_ok() const {
     std::array<uint8_t, 61> raw{};
     std::copy(payload_.begin() + 2, payload_.begin() + 63, raw.begin());
     const arc::Frame f = v2::arc_frame_from_raw(raw, true);
     const int64_t x1 = int64_t{f.g.dx} - f.g.i, y1 = int64_t{f.g.dy} - f.g.j;
     const auto c22 = [](int64_t v) { return v > -(int64_t{1} << 22) && v < (int64_t{1} << 22); };
-    return (payload_[0] & 0xFC) == 0 && (payload_[0] & 2) != 0 && (f.g.i != 0 || f.g.j != 0) &&
-           (x1 != 0 || y1 != 0) && c22(f.g.i) && c22(f.g.j) && c22(x1) && c22(y1) &&
-           f.dz != INT32_MIN && (kAxes >= 3 || f.dz == 0) && f.n_ramp != 0 && f.c_total != 0 &&
+    const int plane = payload_[0] >> 2 & 3;
+    return (payload_[0] & 0xF0) == 0 && plane != 3 && (plane == 0 || kAxes >= 3) &&
+           (payload_[0] & 2) != 0 && (f.g.i != 0 || f.g.j != 0) && (x1 != 0 || y1 != 0) &&
+           c22(f.g.i) && c22(f.g.j) && c22(x1) && c22(y1) && f.dz != INT32_MIN &&
+           (kAxes >= 3 || f.dz == 0) && f.n_ramp != 0 && f.c_total != 0 &&
            f.c_total < (uint64_t{1} << 46) && f.v_cruise < (uint64_t{1} << 63) &&
            f.v_entry <= f.v_cruise && f.v_exit <= f.v_cruise && f.v_exit != 0 &&
            (f.a != 0 || f.v_entry != 0);
+  }
+
+  // OUTPUT field rules (docs/protocol.md "OUTPUT"): mask != 0, mask bit 7, value bits 2 and 7
+  // clear, value only where the mask is set, duty 0 unless mask bit 2.
+  bool output_fields_ok() const {
+    const uint8_t m = payload_[0], v = payload_[1], d = payload_[2];
+    return m != 0 && (m & 0x80) == 0 && (v & ~m) == 0 && (v & 0x04) == 0 &&
+           ((m & 0x04) != 0 || d == 0);
   }
 
   void v1_packet(Cycle take) {
@@ -337,6 +349,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return -3;
       case v2::kArc:
         return 63;
+      case v2::kOutput:
+        return 3;
       case 0x20:  // heater frames (docs/protocol.md "Heater frames")
         return 20;
       case 0x21:
@@ -403,7 +417,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     if (((type_ == v2::kLine || type_ == v2::kLineProfile) && (payload_[0] & 0x7C) != 0) ||
         (type_ == v2::kConfigAxis && payload_[0] >= kAxes) ||
         (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) ||
-        (type_ == v2::kArc && !arc_fields_ok()) || !heater_fields_ok()) {
+        (type_ == v2::kArc && !arc_fields_ok()) || (type_ == v2::kOutput && !output_fields_ok()) ||
+        !heater_fields_ok()) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;
@@ -430,14 +445,21 @@ class FrameDecoderTwin : public sc_core::sc_module {
       return;
     }
     if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators ||
-        type_ == v2::kLineProfile || type_ == v2::kArc) {
+        type_ == v2::kLineProfile || type_ == v2::kArc || type_ == v2::kOutput) {
       FifoEntry e{};
       e.v2 = true;
-      if (type_ == v2::kArc) {  // payload bytes 2..62 as received
+      if (type_ == v2::kOutput) {  // kind 3 with v2 0
+        e.v2 = false;
+        e.kind = kEntryOutput;
+        e.power = 0;
+        e.t = static_cast<uint32_t>(payload_[0]) << 16 | static_cast<uint32_t>(payload_[1]) << 8 |
+              payload_[2];
+      } else if (type_ == v2::kArc) {  // payload bytes 2..62 as received
         e.kind = kEntryMotion;
         e.arc = true;
         e.code = payload_[0] & 3;
         e.power = payload_[1];
+        e.t = payload_[0] >> 2 & 3;  // the plane
         std::copy(payload_.begin() + 2, payload_.begin() + 63, e.arc_raw.begin());
       } else if (type_ == v2::kLineProfile) {
         e.kind = kEntryMotion;

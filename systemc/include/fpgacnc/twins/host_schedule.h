@@ -140,7 +140,7 @@ struct V2Item {
   int64_t pre_gap = 1;
   bool fifo() const {
     return type == v2::kLine || type == v2::kLineProfile || type == v2::kArc ||
-           type == v2::kDwell || type == v2::kNumerators;
+           type == v2::kDwell || type == v2::kNumerators || type == v2::kOutput;
   }
 };
 struct V2Script {

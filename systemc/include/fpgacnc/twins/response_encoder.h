@@ -6,7 +6,8 @@
 //   target `req` (frame_decoder): IDENT, STATUS, NAK (seq, reason; a newer NAK replaces a
 //     pending one), ACK requests, FAULT_CLEAR;
 //   target `done` (segment_executor seg_done): a v2 segment counts in `segments done` and sets
-//     DONE pending; a v1 motion owes one 0xAA byte;
+//     DONE pending; a v1 motion owes one 0xAA byte; SegDone::outputs OUTPUT entries applied on the
+//     edge (out_done) count like as many v2 segments (no seg_done strobe);
 //   target `applied` (segment_prep): a v2 NUMERATORS entry applied counts like a v2 segment.
 // A frame is decided on the first edge d on which the encoder is free (the edge after the last
 // byte of the previous frame was taken by uart_tx) and something is pending: a v1 0xAA first (it
@@ -156,9 +157,15 @@ class ResponseEncoderTwin : public sc_core::sc_module {
   }
   void on_done(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const Cycle e = clk_.at(delay);
+    const SegDone& d = payload<SegDone>(gp);
+    gp.set_response_status(tlm::TLM_OK_RESPONSE);
+    if (d.outputs > 0) {
+      for (uint32_t i = 0; i < d.outputs; ++i) push(e, 2);
+      return;
+    }
     seg_done_cycles.push_back(e);
     ++moves_done;
-    push(e, payload<SegDone>(gp).v2 ? 2 : 1);
+    push(e, d.v2 ? 2 : 1);
     gp.set_response_status(tlm::TLM_OK_RESPONSE);
   }
   void on_applied(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {

@@ -33,8 +33,12 @@ inline constexpr int kSettleEdges = 4;
 
 class RtlDriver {
  public:
-  RtlDriver(const CoreParams& p, const HostScript& script, bool record_tx)
+  // record_outputs: the machine output pins (coolant, fan, dout) as edges too; a fan pin high
+  // keeps the job running (its PWM edges end when its duty is 0).
+  RtlDriver(const CoreParams& p, const HostScript& script, bool record_tx,
+            bool record_outputs = false)
       : p_(p),
+        outputs_(record_outputs),
         sender_{p.clk_hz, p.baud},
         timer_(p.clk_hz, p.baud),
         host_ptr_(make_host(script, sender_, timer_.tx_boundary(10))),
@@ -61,6 +65,8 @@ class RtlDriver {
     uint32_t step, dir;
     bool laser, tx, busy, seg_start, seg_done;
     uint16_t packet_count;
+    // machine outputs: bit 0 coolant_flood, 1 coolant_mist, 2 fan, 3..6 dout[0..3]
+    uint32_t outputs = 0;
   };
   // Outputs seen after edge c.
   void after_edge(Cycle c, const Outputs& o) {
@@ -73,6 +79,17 @@ class RtlDriver {
           r_.edges.push_back(
               simboard::Edge{static_cast<uint64_t>(c), s, static_cast<uint8_t>(sig >> s & 1u)});
       prev_sig_ = sig;
+    }
+    if (outputs_ && o.outputs != prev_out_) {
+      static constexpr uint8_t kSig[7] = {
+          simboard::kFlood,     simboard::kMist,      simboard::kFan,      simboard::kDout0,
+          simboard::kDout0 + 1, simboard::kDout0 + 2, simboard::kDout0 + 3};
+      const uint32_t ch = o.outputs ^ prev_out_;
+      for (int b = 0; b < 7; ++b)
+        if (ch >> b & 1u)
+          r_.edges.push_back(simboard::Edge{static_cast<uint64_t>(c), kSig[b],
+                                            static_cast<uint8_t>(o.outputs >> b & 1u)});
+      prev_out_ = o.outputs;
     }
     if (o.packet_count != prev_count_) {
       r_.packet_done.push_back(c - 1);
@@ -100,7 +117,7 @@ class RtlDriver {
       }
     }
     prev_tx_ = o.tx;
-    if (o.busy || o.step || tx_start_) last_active_ = c;
+    if (o.busy || o.step || tx_start_ || (outputs_ && (o.outputs & 4u))) last_active_ = c;
     cycle_ = c;
   }
 
@@ -156,6 +173,8 @@ class RtlDriver {
   }
 
   CoreParams p_;
+  bool outputs_;
+  uint32_t prev_out_ = 0;
   SenderTiming sender_;
   BitTimer timer_;
   std::unique_ptr<Host> host_ptr_;

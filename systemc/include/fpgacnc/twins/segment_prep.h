@@ -13,7 +13,9 @@
 //     n_dom * min_period (counted: clamped); T and no steps is a segment of T ticks without
 //     steps; valid kPrepLatencyV2 (+ kPrepClampExtra when clamped) edges after acceptance.
 //   dwell: T ticks, no steps, laser off; valid kPrepLatencyDwell edges after acceptance.
-//   kind 3 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+//   kind 3, v2 (never written by the decoder): a zero-length segment, as a dwell of T = 0.
+//   OUTPUT (kind 3, v2 = 0): not prepared: handed to the executor (`on_output`, called with the
+//     accept edge) on its accept edge; the block takes the next entry from the edge after.
 //   LINE_PROFILE (prof): a PROFILE segment carrying the profile fields (V_entry, V_cruise,
 //     V_exit, A, D) and |steps|; total = period = tmn = 0, dir_fast = 0 (a reversing axis always
 //     takes the executor's HOLD/SETUP path); valid kPrepLatencyProfile (25 + N_AXES) edges after
@@ -34,6 +36,7 @@
 // executor takes it.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 
 #include "fpgacnc/twins/tlm_common.h"
@@ -99,12 +102,20 @@ class SegmentPrepTwin : public sc_core::sc_module {
   std::vector<Cycle> applied_cycles;         // edges of init_applied (v1 init and v2 NUMERATORS)
   bool report_applied = false;               // `applied` is bound
   std::vector<Cycle>* entry_ends = nullptr;  // numerators entries end on their accept edge
+  // OUTPUT entries: the executor's output port (segment_executor s_out_*), called with the edge
+  // the entry is handed over on (its accept edge) in entry order.
+  std::function<void(Cycle, const OutputCmd&)> on_output;
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const FifoEntry c = payload<FifoEntry>(gp);
     Cycle accept = std::max(clk_.at(delay) + 1, free_from_);
-    if (c.kind == kEntryNumerators) {
+    if (c.kind == kEntryOutput && !c.v2) {
+      OutputCmd o{static_cast<uint8_t>(c.t >> 16), static_cast<uint8_t>(c.t >> 8),
+                  static_cast<uint8_t>(c.t)};
+      if (on_output) on_output(accept, o);
+      free_from_ = accept + 1;
+    } else if (c.kind == kEntryNumerators) {
       ExecIdle idle{0};
       transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
       accept = std::max(accept, idle.edge + 1);
@@ -131,18 +142,20 @@ class SegmentPrepTwin : public sc_core::sc_module {
         s.power = c.power;
         s.v2 = true;
         s.arc = true;
+        s.plane = static_cast<uint8_t>(c.t & 3);
         s.arc_frame = v2::arc_frame_from_raw(c.arc_raw, (c.code & 1) != 0);
         const arc::Frame& f = s.arc_frame;
-        // X, Y: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
+        const ArcAxes ax = arc_axes(s.plane);
+        // u, v: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
         const std::array<bool, 2> d0 = arc::start_dirs(f.g);
         abs = {};
-        abs[0] = abs[1] = 1;
+        abs[ax.u] = abs[ax.v] = 1;
         s.dir = {};
-        s.dir[0] = d0[0];
-        s.dir[1] = d0[1];
+        s.dir[ax.u] = d0[0];
+        s.dir[ax.v] = d0[1];
         if (kAxes >= 3) {
-          abs[2] = f.dz < 0 ? 0u - static_cast<uint32_t>(f.dz) : static_cast<uint32_t>(f.dz);
-          s.dir[2] = f.dz >= 0;
+          abs[ax.h] = f.dz < 0 ? 0u - static_cast<uint32_t>(f.dz) : static_cast<uint32_t>(f.dz);
+          s.dir[ax.h] = f.dz >= 0;
         }
         latency = kPrepLatencyArc;
       } else if (c.prof && c.kind == kEntryMotion && c.v2) {  // LINE_PROFILE: kind PROFILE
@@ -202,7 +215,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
                    (n_dom == 0 || dir_fast(rev, p_.timing, s.total / n_dom));
       // After an arc prep does not know the X / Y DIR levels: no dir_fast for a segment moving X
       // or Y until that axis has moved in a prepared non-arc segment.
-      if (s.arc) unknown_[0] = unknown_[1] = true;
+      if (s.arc) unknown_[arc_axes(s.plane).u] = unknown_[arc_axes(s.plane).v] = true;
       const Cycle taken = transport(segments, gp_, clk_, s, accept + latency);
       free_from_ = taken + 1;
       last_period = s.period;

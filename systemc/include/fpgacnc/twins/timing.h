@@ -42,6 +42,14 @@ struct CoreParams {
   uint32_t feed0_period = 62'500;
   uint32_t default_numerator = 18'750'000;
   std::array<AxisTiming, kAxes> timing{};
+  // Fan PWM (cnc_core FAN_PWM_HZ): 256 counts of fan_div() clocks; the PWM counts from the reset
+  // release, fan_phase clocks before cycle 0 (the RTL harness: release edge, 16 cfg writes, 4
+  // settle edges).
+  uint32_t fan_pwm_hz = 1000;
+  int64_t fan_phase = 21;
+  uint32_t fan_div() const {
+    return static_cast<uint32_t>((clk_hz + 128 * fan_pwm_hz) / (256 * fan_pwm_hz));
+  }
 
   // The executor's minimum period: max over axes of STEP high + STEP low, a setting of 0 counting
   // as 1 clock as in the pulse generator (docs/timing.md "Segment length").
@@ -159,7 +167,7 @@ inline constexpr uint32_t kBuildId = 0x2026'0005;
 // Host -> device types.
 inline constexpr uint8_t kHello = 0x01, kStatusQuery = 0x02, kFaultClear = 0x03, kConfigAxis = 0x04,
                          kNumerators = 0x05, kRelease = 0x06, kLine = 0x10, kDwell = 0x11,
-                         kLineProfile = 0x12, kArc = 0x13;
+                         kLineProfile = 0x12, kArc = 0x13, kOutput = 0x15;
 // Device -> host types.
 inline constexpr uint8_t kAck = 0x80, kNak = 0x81, kDone = 0x82, kStatus = 0x83, kIdent = 0x84;
 // NAK reasons.

@@ -75,7 +75,9 @@ struct Command {  // packet_decoder_v1 -> segment_prep (valid from the delay's e
 //   kind 0 motion: v1 (t = feed, steps X/Y, power 0xFF) or v2 LINE (t = T, steps per axis)
 //   kind 1 numerators: steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y (v1 init or v2 frame)
 //   kind 2 dwell (v2): t = T clocks, no steps, laser off
-inline constexpr uint8_t kEntryMotion = 0, kEntryNumerators = 1, kEntryDwell = 2;
+//   kind 3 with v2 = 0 OUTPUT: t = {mask, value, fan duty} (bits 23..0); kind 3 with v2 = 1 is
+//   segment_prep's zero-length segment (never written by the decoder)
+inline constexpr uint8_t kEntryMotion = 0, kEntryNumerators = 1, kEntryDwell = 2, kEntryOutput = 3;
 struct FifoEntry {
   bool v2;
   uint8_t kind;
@@ -93,7 +95,15 @@ struct FifoEntry {
   // V_exit u64, A u48, D u48, big-endian), the entry's arc_raw[487:0] with byte 2 in the top bits.
   bool arc = false;
   std::array<uint8_t, 61> arc_raw{};
+  // ARC: t = the plane (flags bits 3:2: 0 XY, 1 ZX, 2 YZ)
 };
+// The axes of an ARC plane: the walk's u and v axes and the helix axis (docs/protocol.md "ARC").
+struct ArcAxes {
+  int u, v, h;
+};
+inline constexpr ArcAxes arc_axes(uint8_t plane) {
+  return plane == 1 ? ArcAxes{2, 0, 1} : plane == 2 ? ArcAxes{1, 2, 0} : ArcAxes{0, 1, 2};
+}
 // frame_decoder -> segment_fifo: write on the delay's edge. Read (TLM_READ_COMMAND): the level
 // after the delay's edge.
 struct FifoLevel {
@@ -119,6 +129,7 @@ struct Segment {  // segment_prep -> segment_executor (valid from the delay's ed
   // Z the sign of DZ; total = period = tmn = 0, dir_fast = 0.
   bool arc = false;
   arc::Frame arc_frame{};
+  uint8_t plane = 0;  // ARC: 0 XY, 1 ZX, 2 YZ (arc_axes)
 };
 // segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
 // address kDirWrite: DIR load of `dir` on the delay's edge; read (TLM_READ_COMMAND) fills the
@@ -141,6 +152,13 @@ struct AbortSpan {
 };
 struct SegDone {    // segment_executor -> status/ACK: seg_done strobe after the delay's edge
   bool v2 = false;  // seg_done_v2
+  // > 0: not a segment: this many OUTPUT entries applied on the edge (out_done; each counts in
+  // `segments done` like a v2 segment, no seg_done strobe)
+  uint32_t outputs = 0;
+};
+// segment_prep -> segment_executor: an OUTPUT entry handed over on the delay's edge.
+struct OutputCmd {
+  uint8_t mask, value, duty;
 };
 struct TxByte {  // status/ACK -> uart_tx (offered from the delay's edge; accept returned)
   uint8_t byte;

@@ -56,6 +56,9 @@ class VirtualBoard : public sc_core::sc_module {
   // sc_time quantum of the host's quantum keeper (default 1 ms).
   void set_quantum(const sc_core::sc_time& q) { quantum_ = q; }
   const CoreParams& params() const { return p_; }
+  // Machine outputs (OUTPUT frames) as pin edges: coolant, fan PWM, digital outputs (off: the
+  // edge list has STEP/DIR/LASER/TX only, as the Verilated board records it).
+  void record_outputs(bool on) { exec_.record_outputs = on; }
   // Called in the host thread after the jobs: a TwinBoard's pty sessions (twin_board.h).
   std::function<void(VirtualBoard&)> live;
 
