@@ -255,10 +255,9 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     fmt::print("{}", link::format_report(r));
     if (r.skipped_heater) fmt::print("{} heater commands not sent\n", r.skipped_heater);
     if (r.pauses) fmt::print("{} pauses\n", r.pauses);
-    if (r.skipped_outputs)
-      fmt::print("{} outputs (coolant, fan, digital) not sent: this board version has no output "
-                 "frames\n",
-                 r.skipped_outputs);
+    if (job2->outputs)
+      fmt::print("{} OUTPUT frames (coolant, fan, digital outputs) in step with the motion\n",
+                 job2->outputs);
     if (r.t_raised) {
       fmt::print("{} segments faster than the STEP timing allows: slowed to it\n", r.t_raised);
     }

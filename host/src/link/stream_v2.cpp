@@ -458,7 +458,6 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     const size_t at = ev.before_frame < frame_item.size() ? frame_item[ev.before_frame] : n;
     if (const auto* p = std::get_if<gcode::Pause>(&ev.what)) pauses.emplace_back(at, p);
     if (const auto* m = std::get_if<gcode::Message>(&ev.what)) messages.emplace_back(at, m);
-    if (std::holds_alternative<gcode::Output>(ev.what)) ++rep.skipped_outputs;
   }
   size_t next_pause = 0, next_message = 0;
   auto gate = [&]() {

@@ -11,18 +11,50 @@
 namespace fpgacnc::protocol::v2 {
 namespace {
 
-// Pauses, messages and outputs keep their place in the frame list (Job::events).
-template <typename Item>
-bool record_event(Job& job, const Item& item) {
+// An output command as the OUTPUT frame's fields (merged into `set`: later ones win).
+void add_output(OutputSet& set, const gcode::Output& o) {
+  switch (o.kind) {
+    case gcode::Output::Kind::kFlood: set.flood = o.value != 0.0; break;
+    case gcode::Output::Kind::kMist: set.mist = o.value != 0.0; break;
+    case gcode::Output::Kind::kFan:
+      set.fan = static_cast<uint8_t>(std::clamp(std::lround(o.value * 255.0), 0L, 255L));
+      break;
+    case gcode::Output::Kind::kDigital:
+      if (o.index >= 0 && static_cast<size_t>(o.index) < kDigitalOutputs)
+        set.dout[static_cast<size_t>(o.index)] = o.value != 0.0;
+      break;
+  }
+}
+
+// Pauses, messages and outputs keep their place in the frame list (Job::events); outputs also
+// become OUTPUT frames (consecutive ones merged into one frame).
+template <typename Item, typename Push>
+bool record_event(Job& job, const Item& item, size_t next_segment, Push&& push) {
+  if (const auto* o = std::get_if<gcode::Output>(&item)) {
+    job.events.push_back(JobEvent{job.frames.size(), *o});
+    if (!job.frames.empty() && job.frames.back().frame.type == static_cast<uint8_t>(Type::Output) &&
+        job.frames.back().segment_index == next_segment) {
+      OutputSet set = decode_output(job.frames.back().frame);
+      add_output(set, *o);
+      job.frames.back().frame = output_frame(0, set);
+      return true;
+    }
+    OutputSet set;
+    add_output(set, *o);
+    JobFrame jf;
+    jf.frame = output_frame(0, set);
+    jf.segment_index = next_segment;
+    jf.source_line = o->line;
+    push(std::move(jf));
+    ++job.outputs;
+    return true;
+  }
   if (const auto* p = std::get_if<gcode::Pause>(&item)) {
     job.events.push_back(JobEvent{job.frames.size(), *p});
     ++job.pauses;
   } else if (const auto* m = std::get_if<gcode::Message>(&item)) {
     job.events.push_back(JobEvent{job.frames.size(), *m});
     ++job.messages;
-  } else if (const auto* o = std::get_if<gcode::Output>(&item)) {
-    job.events.push_back(JobEvent{job.frames.size(), *o});
-    ++job.skipped_outputs;
   } else {
     return false;
   }
@@ -239,7 +271,7 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         ++job.dwells;
         push(std::move(jf));
       }
-    } else if (!record_event(job, item)) {
+    } else if (!record_event(job, item, seg_seen, push)) {
       ++job.skipped_heater;
     }
   }
@@ -404,7 +436,7 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
         ++job.dwells;
         push(std::move(jf));
       }
-    } else if (!record_event(job, item)) {
+    } else if (!record_event(job, item, seg_index, push)) {
       ++job.skipped_heater;
     }
   }

@@ -64,12 +64,12 @@ struct Job {
   size_t split_moves = 0;     // segments sent as more than one LINE
   size_t t_raised = 0;        // LINE frames whose T was raised to n_dom * min_period
   size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
-  // Pauses, messages and outputs in frame order. Outputs are not frames yet: the streamer
-  // reports them (skipped_outputs counts them).
+  // Pauses, messages and outputs in frame order; outputs are also OUTPUT frames (consecutive
+  // ones merged: `outputs` counts the frames).
   std::vector<JobEvent> events;
   size_t pauses = 0;
   size_t messages = 0;
-  size_t skipped_outputs = 0;
+  size_t outputs = 0;
   size_t profiles = 0;        // LINE_PROFILE frames (motion = "profile")
   size_t arcs = 0;            // ARC frames (motion = "profile" with an arc walk)
   // motion = "profile": DIR hold/setup pauses at reversals (HOLD/SETUP path), in total_t.
