@@ -20,8 +20,7 @@ config::MachineConfig load_config(const CommonOptions& opt) {
   if (!opt.dialect.empty()) {
     cfg.gcode.dialect = opt.dialect;
     if (cfg.gcode.dialect != "auto" && !gcode::parse_dialect(cfg.gcode.dialect))
-      throw std::invalid_argument(
-          "--dialect must be auto, grbl, linuxcnc, marlin or reprap");
+      throw std::invalid_argument("--dialect must be auto, grbl, linuxcnc, marlin or reprap");
   }
   if (!opt.tool_table.empty()) cfg.gcode.tool_table = opt.tool_table;
   return cfg;

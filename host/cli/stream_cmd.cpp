@@ -20,8 +20,8 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <iostream>
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -48,7 +48,7 @@ struct StreamArgs {
   std::string protocol;  // "": from config
   CommonOptions common;
   SimOutputOptions sim;
-  std::string heater_plot;  // temperature and duty against time (.svg)
+  std::string heater_plot;          // temperature and duty against time (.svg)
   std::string pause_mode = "auto";  // --pause: auto, prompt, continue, stop
 };
 
@@ -179,8 +179,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     // Pauses (M0/M1, M6, M600): at rest, ask the operator (a terminal), go on (a simulated
     // board without a terminal) or stop (a real machine without a terminal).
     std::string mode = a.pause_mode;
-    if (mode == "auto")
-      mode = isatty(STDIN_FILENO) ? "prompt" : port.empty() ? "continue" : "stop";
+    if (mode == "auto") mode = isatty(STDIN_FILENO) ? "prompt" : port.empty() ? "continue" : "stop";
     o2.on_pause = [&bar, mode](const gcode::Pause& pz) {
       bar.finish_line();
       if (mode == "continue") {
@@ -188,8 +187,9 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
         return true;
       }
       if (mode == "stop") return false;
-      fmt::print("pause at line {}: {}. The machine is at rest. Enter: go on, q Enter: stop the job\n",
-                 pz.line, pz.prompt);
+      fmt::print(
+          "pause at line {}: {}. The machine is at rest. Enter: go on, q Enter: stop the job\n",
+          pz.line, pz.prompt);
       std::fflush(stdout);
       std::string answer;
       if (!std::getline(std::cin, answer)) return false;

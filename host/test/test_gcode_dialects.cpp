@@ -96,9 +96,8 @@ TEST(Dialect, UnknownMCodesWarnForPrintersAndFailForMills) {
 }
 
 TEST(GCode, OutputsMessagesAndPausesKeepTheirPlace) {
-  const auto p = run(
-      "G1 X1 F100\nM8\nM106 S128\nG1 X2\n(MSG,Layer 2)\nM0\nM62 P3\nM9\nM107\nG1 X3",
-      gc::Dialect::kGrbl);
+  const auto p = run("G1 X1 F100\nM8\nM106 S128\nG1 X2\n(MSG,Layer 2)\nM0\nM62 P3\nM9\nM107\nG1 X3",
+                     gc::Dialect::kGrbl);
   // grbl has no (MSG,...): the comment is only a comment there.
   std::vector<size_t> kinds;
   for (const auto& c : p.commands) kinds.push_back(c.index());
@@ -127,8 +126,8 @@ TEST(GCode, OutputsMessagesAndPausesKeepTheirPlace) {
 }
 
 TEST(GCode, FeedAndFlowFactors) {
-  const auto m = all<gc::Move>(run("M220 S50\nG1 X10 E1 F1000\nM221 S200\nG1 X20 E2",
-                                   gc::Dialect::kMarlin));
+  const auto m =
+      all<gc::Move>(run("M220 S50\nG1 X10 E1 F1000\nM221 S200\nG1 X20 E2", gc::Dialect::kMarlin));
   EXPECT_DOUBLE_EQ(m[0].feed_mm_min, 500.0);
   EXPECT_DOUBLE_EQ(m[0].end[3], 1.0);
   EXPECT_DOUBLE_EQ(m[1].end[3], 3.0);  // 1 mm more programmed, doubled
@@ -145,7 +144,8 @@ TEST(GCode, JobLimitsNeverExceedTheMachine) {
 }
 
 TEST(GCode, PlanesAndCentreModes) {
-  const auto m = all<gc::Move>(run("G0 X10 Z0\nG18 G2 X0 Z10 I-10 K0 F100", gc::Dialect::kLinuxCnc));
+  const auto m =
+      all<gc::Move>(run("G0 X10 Z0\nG18 G2 X0 Z10 I-10 K0 F100", gc::Dialect::kLinuxCnc));
   EXPECT_EQ(m[1].plane, gc::Plane::kZX);
   EXPECT_DOUBLE_EQ(m[1].center[0], 0.0);  // Z
   EXPECT_DOUBLE_EQ(m[1].center[1], 0.0);  // X

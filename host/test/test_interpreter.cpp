@@ -203,8 +203,8 @@ TEST(Interpreter, G28GoesHomeViaIntermediatePoint) {
 TEST(Interpreter, DwellSpindleHeater) {
   gc::Options grbl;
   grbl.dialect = gc::Dialect::kGrbl;
-  const auto p = gc::parse_string(
-      "M3 S80\nG4 P0.5\nM104 S200\nM109 S210\nM140 S60\nM190 S60\nM5", "t.gcode", grbl);
+  const auto p = gc::parse_string("M3 S80\nG4 P0.5\nM104 S200\nM109 S210\nM140 S60\nM190 S60\nM5",
+                                  "t.gcode", grbl);
   ASSERT_EQ(p.commands.size(), 5u);
   EXPECT_DOUBLE_EQ(std::get<gc::Dwell>(p.commands[0]).seconds, 0.5);
   EXPECT_EQ(std::get<gc::Heater>(p.commands[1]).mcode, 104);

@@ -138,7 +138,8 @@ TEST(Planner, LaserRequiresM3) {
 }
 
 TEST(Planner, ZEOnlyMovesAndDwellAndHeater) {
-  const auto p = plan_text("G1 Z-1 F100\nG4 S0.25\nM104 S200\nG1 X1 E2", laser_always());  // Marlin: S in s
+  const auto p =
+      plan_text("G1 Z-1 F100\nG4 S0.25\nM104 S200\nG1 X1 E2", laser_always());  // Marlin: S in s
   EXPECT_EQ(p.stats.ze_only_moves, 1u);
   EXPECT_EQ(p.stats.dwells, 1u);
   EXPECT_EQ(p.stats.heater_commands, 1u);

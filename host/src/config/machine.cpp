@@ -194,8 +194,9 @@ MachineConfig load_machine_config(const std::string& path) {
   MachineConfig c = parse_stream(f, path);
   // Files the configuration names are relative to the configuration's folder.
   if (!c.gcode.tool_table.empty() && std::filesystem::path(c.gcode.tool_table).is_relative())
-    c.gcode.tool_table =
-        (std::filesystem::path(path).parent_path() / c.gcode.tool_table).lexically_normal().string();
+    c.gcode.tool_table = (std::filesystem::path(path).parent_path() / c.gcode.tool_table)
+                             .lexically_normal()
+                             .string();
   return c;
 }
 

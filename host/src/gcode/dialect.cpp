@@ -203,7 +203,8 @@ int first_ngc_line(std::string_view text) {
     ls = static_cast<size_t>(static_cast<const char*>(nl) - text.data()) + 1;
   }
   if (best >= text.size()) return 0;
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(best), '\n'));
+  return 1 +
+         static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(best), '\n'));
 }
 
 bool starts_with_word(std::string_view code, std::string_view word) {
@@ -213,8 +214,8 @@ bool starts_with_word(std::string_view code, std::string_view word) {
     const size_t p = code.find(word, at);
     if (p == std::string_view::npos) return false;
     const size_t end = p + word.size();
-    const bool digit_before = p > 0 && (std::isdigit(static_cast<unsigned char>(code[p - 1])) ||
-                                        code[p - 1] == '.');
+    const bool digit_before =
+        p > 0 && (std::isdigit(static_cast<unsigned char>(code[p - 1])) || code[p - 1] == '.');
     const bool digit_after =
         end < code.size() &&
         (std::isdigit(static_cast<unsigned char>(code[end])) || code[end] == '.');
@@ -225,9 +226,13 @@ bool starts_with_word(std::string_view code, std::string_view word) {
 
 }  // namespace
 
-const DialectRules& dialect_rules(Dialect d) { return kRules[static_cast<size_t>(d)]; }
+const DialectRules& dialect_rules(Dialect d) {
+  return kRules[static_cast<size_t>(d)];
+}
 
-const char* dialect_names() { return "grbl, linuxcnc, marlin, reprap, makerbot"; }
+const char* dialect_names() {
+  return "grbl, linuxcnc, marlin, reprap, makerbot";
+}
 
 std::optional<Dialect> parse_dialect(std::string_view name) {
   const std::string n = lower(name);
@@ -256,8 +261,8 @@ DialectChoice detect_dialect(std::string_view text, std::optional<Dialect> overr
   }
   // rs274ngc programming in the text makes it LinuxCNC whatever wrote it.
   const int ngc_line = first_ngc_line(text);
-  const bool printer_generator = !c.generator.empty() && (c.dialect == Dialect::kMarlin ||
-                                                          c.dialect == Dialect::kRepRap);
+  const bool printer_generator =
+      !c.generator.empty() && (c.dialect == Dialect::kMarlin || c.dialect == Dialect::kRepRap);
   if (override_dialect) {
     c.dialect = *override_dialect;
     c.reason = fmt::format("{} {}", override_source, dialect_rules(c.dialect).name);
@@ -283,10 +288,10 @@ DialectChoice detect_dialect(std::string_view text, std::optional<Dialect> overr
   });
   if (printer_line && (c.generator.empty() || c.dialect == Dialect::kGrbl)) {
     c.dialect = Dialect::kMarlin;
-    c.reason = c.generator.empty()
-                   ? fmt::format("line {} has printer codes (extrusion or heaters)", printer_line)
-                   : fmt::format("{} wrote it and line {} has printer codes", c.generator,
-                                 printer_line);
+    c.reason =
+        c.generator.empty()
+            ? fmt::format("line {} has printer codes (extrusion or heaters)", printer_line)
+            : fmt::format("{} wrote it and line {} has printer codes", c.generator, printer_line);
     return c;
   }
   if (!c.generator.empty()) return c;

@@ -35,7 +35,9 @@ constexpr int kCoordSystems = 9;   // G54 .. G59.3
 constexpr double kInch = 25.4;
 
 // G and M codes are compared as ten times their value (G91.1 -> 911).
-int code10(const Word& w) { return static_cast<int>(std::lround(w.value * 10.0)); }
+int code10(const Word& w) {
+  return static_cast<int>(std::lround(w.value * 10.0));
+}
 
 bool is_code10_exact(const Word& w) {
   return std::fabs(w.value * 10.0 - std::round(w.value * 10.0)) < 1e-6;
@@ -47,39 +49,95 @@ std::string gname(int c10) {
 
 // Motion modes: the four moves and the canned cycles (G-code times ten; 800 = G80, none).
 constexpr int kCycleNone = 800;
-bool is_cycle(int m) { return m == 730 || (m >= 810 && m <= 890); }
+bool is_cycle(int m) {
+  return m == 730 || (m >= 810 && m <= 890);
+}
 
 // Modal groups of G codes (rs274ngc table), for "two codes of one group" errors.
 int g_group(int c10) {
   switch (c10) {
-    case 0: case 10: case 20: case 30: case 380: case 382: case 383: case 384: case 385:
-    case 730: case 800: case 810: case 820: case 830: case 840: case 850: case 860: case 870:
-    case 880: case 890: case 330: case 50: case 51: case 52:
+    case 0:
+    case 10:
+    case 20:
+    case 30:
+    case 380:
+    case 382:
+    case 383:
+    case 384:
+    case 385:
+    case 730:
+    case 800:
+    case 810:
+    case 820:
+    case 830:
+    case 840:
+    case 850:
+    case 860:
+    case 870:
+    case 880:
+    case 890:
+    case 330:
+    case 50:
+    case 51:
+    case 52:
       return 1;
-    case 170: case 180: case 190:
+    case 170:
+    case 180:
+    case 190:
       return 2;
-    case 900: case 910:
+    case 900:
+    case 910:
       return 3;
-    case 901: case 911:
+    case 901:
+    case 911:
       return 4;
-    case 930: case 940: case 950:
+    case 930:
+    case 940:
+    case 950:
       return 5;
-    case 200: case 210:
+    case 200:
+    case 210:
       return 6;
-    case 400: case 410: case 420:
+    case 400:
+    case 410:
+    case 420:
       return 7;
-    case 430: case 431: case 432: case 490:
+    case 430:
+    case 431:
+    case 432:
+    case 490:
       return 8;
-    case 980: case 990:
+    case 980:
+    case 990:
       return 10;
-    case 540: case 550: case 560: case 570: case 580: case 590: case 591: case 592: case 593:
+    case 540:
+    case 550:
+    case 560:
+    case 570:
+    case 580:
+    case 590:
+    case 591:
+    case 592:
+    case 593:
       return 12;
-    case 610: case 611: case 640:
+    case 610:
+    case 611:
+    case 640:
       return 13;
     case 690:
       return 14;  // rotation cancel: nothing is ever rotated here
-    case 40: case 100: case 110: case 280: case 281: case 300: case 301: case 530: case 920: case 921:
-    case 922: case 923:
+    case 40:
+    case 100:
+    case 110:
+    case 280:
+    case 281:
+    case 300:
+    case 301:
+    case 530:
+    case 920:
+    case 921:
+    case 922:
+    case 923:
       return 0;
     default:
       return -1;
@@ -133,14 +191,14 @@ struct Interpreter::Impl {
   Stats stats;
   ToolTable tools;
 
-  Vec4 pos{};  // machine mm (E: the extruder's real position, after M221)
+  Vec4 pos{};           // machine mm (E: the extruder's real position, after M221)
   double e_prog = 0.0;  // E as programmed (machine frame, before M221 flow)
   std::array<Vec4, kCoordSystems> g5x{};
   int cs = 0;  // 0 = G54
   Vec4 g92{};
   Vec4 g92_saved{};  // parameters 5211-5213 (G92.2 clears the offsets, G92.3 restores them)
-  Vec4 tlo{};  // tool length offset
-  Vec4 pos_tlo{};  // the tool length offset `pos` was reached with
+  Vec4 tlo{};        // tool length offset
+  Vec4 pos_tlo{};    // the tool length offset `pos` was reached with
   double unit = 1.0;
   bool absolute = true;
   bool arc_absolute = false;  // G90.1
@@ -150,8 +208,8 @@ struct Interpreter::Impl {
   bool inverse_time = false;  // G93
   double feed;                // mm/min as programmed
   bool feed_given = false;
-  double feed_factor = 1.0;   // M220
-  double flow = 1.0;          // M221
+  double feed_factor = 1.0;  // M220
+  double flow = 1.0;         // M221
   bool spindle_on = false;
   std::optional<double> spindle_s;
   int tool = 0;
@@ -274,9 +332,8 @@ struct Interpreter::Impl {
   }
 
   bool execute(const Block& b, std::vector<Command>& out);
-  void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3],
-                    std::vector<Command>& out, int repeats, const Word* first_col,
-                    const Word* polar_r, const Word* polar_a);
+  void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3], std::vector<Command>& out,
+                    int repeats, const Word* first_col, const Word* polar_r, const Word* polar_a);
 };
 
 namespace {
@@ -387,8 +444,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       };
       for (int k = 0; k < w.mcount; ++k)
         if (group(c) && group(w.mcodes[k]) == group(c))
-          throw fail(b, wd.col,
-                     fmt::format("M{} and M{} on one line are in the same modal group", w.mcodes[k], c));
+          throw fail(
+              b, wd.col,
+              fmt::format("M{} and M{} on one line are in the same modal group", w.mcodes[k], c));
       if (w.mcount == 16) throw fail(b, wd.col, "too many M codes on one line");
       w.mcodes[w.mcount] = c;
       w.mwords[w.mcount++] = &wd;
@@ -400,8 +458,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       continue;
     }
     if (l == 'E' && !rules->e_is_axis)
-      throw fail(b, wd.col,
-                 fmt::format("'E' is not a word of the {} dialect (no extruder axis)", rules->name));
+      throw fail(
+          b, wd.col,
+          fmt::format("'E' is not a word of the {} dialect (no extruder axis)", rules->name));
     if (l == 'A' || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W') {
       // Marlin's M-codes take some of these as parameters; the used-word check catches the rest.
       bool m_param = rules->unknown_m_warns && w.mcount > 0;
@@ -452,7 +511,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   // 2. Feed mode and units (F and all lengths are read in them).
   if (const Word* g = gw(5)) {
     if (code10(*g) == 950)
-      throw fail(b, g->col, "G95 feed per revolution needs a spindle encoder, which this machine does not have");
+      throw fail(
+          b, g->col,
+          "G95 feed per revolution needs a spindle encoder, which this machine does not have");
     inverse_time = code10(*g) == 930;
   }
   if (const Word* g = gw(6)) unit = code10(*g) == 200 ? kInch : 1.0;
@@ -482,8 +543,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (!t->integer || t->value < 0) throw fail(b, t->col, "T must be a non-negative integer");
     if (rules->t_selects_extruder) {
       if (t->value != 0 && !w.m(104) && !w.m(109))
-        throw fail(b, t->col, fmt::format("T{}: this machine has one extruder (T0)",
-                                          static_cast<int>(t->value)));
+        throw fail(
+            b, t->col,
+            fmt::format("T{}: this machine has one extruder (T0)", static_cast<int>(t->value)));
     } else {
       next_tool = static_cast<int>(t->value);
     }
@@ -524,39 +586,70 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       did = true;
     };
     switch (c) {
-      case 0: case 1: case 2: case 30: case 3: case 4: case 5: case 6:
+      case 0:
+      case 1:
+      case 2:
+      case 30:
+      case 3:
+      case 4:
+      case 5:
+      case 6:
         break;  // in their own step
       case 60:
         throw fail(b, mw.col, "M60 pallet change: this machine has no pallet changer");
-      case 7: output(Output::Kind::kMist, 0, 1.0, false); break;
-      case 8: output(Output::Kind::kFlood, 0, 1.0, false); break;
+      case 7:
+        output(Output::Kind::kMist, 0, 1.0, false);
+        break;
+      case 8:
+        output(Output::Kind::kFlood, 0, 1.0, false);
+        break;
       case 9:
         output(Output::Kind::kMist, 0, 0.0, false);
         output(Output::Kind::kFlood, 0, 0.0, false);
         break;
-      case 48: case 49: case 50: case 51: case 52: case 53:
+      case 48:
+      case 49:
+      case 50:
+      case 51:
+      case 52:
+      case 53:
         word('P');
         warn(fmt::format("M{} (override switches) ignored", c), b.line);
         break;
-      case 62: case 63: case 64: case 65: {
+      case 62:
+      case 63:
+      case 64:
+      case 65: {
         const Word* p = word('P');
         if (!p) throw fail(b, mw.col, fmt::format("M{} needs P (output number)", c));
         if (!p->integer || p->value < 0 || p->value > 3)
           throw fail(b, p->col, "digital output number P must be 0..3 (four outputs)");
-        output(Output::Kind::kDigital, static_cast<int>(p->value),
-               (c == 62 || c == 64) ? 1.0 : 0.0, c >= 64);
+        output(Output::Kind::kDigital, static_cast<int>(p->value), (c == 62 || c == 64) ? 1.0 : 0.0,
+               c >= 64);
         break;
       }
-      case 66: throw fail(b, mw.col, "M66 wait on input: this machine has no inputs for it");
-      case 67: case 68:
+      case 66:
+        throw fail(b, mw.col, "M66 wait on input: this machine has no inputs for it");
+      case 67:
+      case 68:
         throw fail(b, mw.col, fmt::format("M{} analog output: this machine has none", c));
-      case 82: e_absolute = true; did = true; break;
-      case 83: e_absolute = false; did = true; break;
-      case 18: case 84:
+      case 82:
+        e_absolute = true;
+        did = true;
+        break;
+      case 83:
+        e_absolute = false;
+        did = true;
+        break;
+      case 18:
+      case 84:
         for (char l : {'X', 'Y', 'Z', 'E', 'S'}) word(l);
         did = true;
         break;
-      case 104: case 109: case 140: case 190: {
+      case 104:
+      case 109:
+      case 140:
+      case 190: {
         Heater h;
         h.mcode = c;
         if (const Word* s = word('S')) h.s = s->value;
@@ -568,7 +661,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         produced = true;
         break;
       }
-      case 106: case 107: {
+      case 106:
+      case 107: {
         double duty = 0.0;
         if (c == 106) {
           const Word* s = word('S');
@@ -594,17 +688,21 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         did = true;
         break;
       }
-      case 117: case 118:
+      case 117:
+      case 118:
         for (char l = 'A'; l <= 'Z'; ++l) word(l);
-        out.emplace_back(Message{c == 117 ? Message::Kind::kDisplay : Message::Kind::kEcho,
-                                 b.text, -1.0, b.line});
+        out.emplace_back(Message{c == 117 ? Message::Kind::kDisplay : Message::Kind::kEcho, b.text,
+                                 -1.0, b.line});
         did = true;
         break;
       case 400:
         for (char l = 'A'; l <= 'Z'; ++l) word(l);
         did = true;
         break;  // wait for the moves: a streamed job is in order anyway
-      case 201: case 203: case 204: case 205: {
+      case 201:
+      case 203:
+      case 204:
+      case 205: {
         Limits lim;
         lim.line = b.line;
         for (int a = 0; a < 4; ++a) {
@@ -624,14 +722,16 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           if (p && p->value > 0) lim.path_accel_mm_s2 = p->value * unit;
         }
         if (c == 205) {
-          if (const Word* j = word('J'); j && j->value > 0) lim.junction_deviation_mm = j->value * unit;
+          if (const Word* j = word('J'); j && j->value > 0)
+            lim.junction_deviation_mm = j->value * unit;
         }
         for (char l = 'A'; l <= 'Z'; ++l) word(l);  // the rest: jerk, retract and travel
         out.emplace_back(lim);
         did = true;
         break;
       }
-      case 220: case 221: {
+      case 220:
+      case 221: {
         const Word* s = word('S');
         for (char l : {'B', 'R', 'T', 'D'}) word(l);
         if (s) {
@@ -641,7 +741,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         did = true;
         break;
       }
-      case 207: case 208: {
+      case 207:
+      case 208: {
         if (const Word* s = word('S')) (c == 207 ? retract_mm : recover_extra) = s->value * unit;
         if (const Word* f = word('F')) (c == 207 ? retract_feed : recover_feed) = f->value * unit;
         if (const Word* z = word('Z'); z && c == 207) retract_zlift = z->value * unit;
@@ -664,7 +765,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           break;
         }
         if (!rules->unknown_m_warns)
-          throw fail(b, mw.col, fmt::format("M{}: not supported in the {} dialect", c, rules->name));
+          throw fail(b, mw.col,
+                     fmt::format("M{}: not supported in the {} dialect", c, rules->name));
         const char* what = printer_ignored(c);
         warn(what ? fmt::format("{} ignored", what)
                   : fmt::format("M{} unknown here, ignored (as {} does)", c, rules->name),
@@ -721,7 +823,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       Vec4 off{};
       if (e)
         for (size_t a = 0; a < 3; ++a) off[a] = e->offset[a];
-      if (c == 430) tlo = off;
+      if (c == 430)
+        tlo = off;
       else
         for (size_t a = 0; a < 3; ++a) tlo[a] += off[a];
     } else {  // G43.1: the axis words are the offsets
@@ -790,8 +893,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   auto apply_polar = [&](Vec4& t) {
     if (!polar_r && !polar_a) return;
     const Word* pw = polar_r ? polar_r : polar_a;
-    if (w.get('X') || w.get('Y'))
-      throw fail(b, pw->col, "polar '@'/'^' and X/Y on the same line");
+    if (w.get('X') || w.get('Y')) throw fail(b, pw->col, "polar '@'/'^' and X/Y on the same line");
     if (plane != Plane::kXY) throw fail(b, pw->col, "polar coordinates need the XY plane (G17)");
     const double px = pos[0] - offset(0), py = pos[1] - offset(1);
     double r = std::hypot(px, py), a = std::atan2(py, px);
@@ -875,7 +977,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   }
   if (nmc == 110) {  // G11
     if (!rules->g10_retract)
-      throw fail(b, nm->col, fmt::format("G11 (firmware retraction) is not in the {} dialect", rules->name));
+      throw fail(b, nm->col,
+                 fmt::format("G11 (firmware retraction) is not in the {} dialect", rules->name));
     word('S');
     if (retracted) {
       Vec4 t = pos;
@@ -899,8 +1002,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         const Word* aw = word(kAxisNames[a]);
         if (!aw) continue;
         const auto i = static_cast<size_t>(a);
-        if (a == 3) g92[3] = e_prog - to_mm(aw);
-        else g92[i] = pos[i] - g5x[static_cast<size_t>(cs)][i] - tlo[i] - to_mm(aw);
+        if (a == 3)
+          g92[3] = e_prog - to_mm(aw);
+        else
+          g92[i] = pos[i] - g5x[static_cast<size_t>(cs)][i] - tlo[i] - to_mm(aw);
       }
       g92_saved = g92;
     } else if (nmc == 923) {
@@ -955,15 +1060,15 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (const Word* g = gw(1)) {
     const int c = code10(*g);
     if (c >= 380 && c <= 385)
-      throw fail(b, g->col,
-                 fmt::format("{}: probing needs the probe input (not on this machine yet)", gname(c)));
+      throw fail(
+          b, g->col,
+          fmt::format("{}: probing needs the probe input (not on this machine yet)", gname(c)));
     if (c == 840 || c == 860 || c == 870 || c == 880)
       throw fail(b, g->col,
                  fmt::format("{}: this cycle needs spindle control (orient, stop or tapping) that "
                              "this machine does not have",
                              gname(c)));
-    if (c == 330)
-      throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
+    if (c == 330) throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
     if (is_cycle(c) && motion != c) cycle_z_set = false;
     if (!is_cycle(c)) cycle_il_set = false;
     motion = c;
@@ -1009,8 +1114,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         if (!l->integer || l->value < 1) throw fail(b, l->col, "L (repeats) must be >= 1");
         repeats = static_cast<int>(l->value);
       }
-      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(kAxisNames[cpa.u]),
-                   polar_r, polar_a);
+      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(kAxisNames[cpa.u]), polar_r,
+                   polar_a);
     }
     if (w.get('E')) throw fail(b, w.get('E')->col, "E in a canned cycle");
   } else if (has_axis || (arc_mode && arc_words && (gw(1) || true) && (has_axis || arc_words))) {
@@ -1037,9 +1142,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (!fw || fw->value <= 0)
         throw fail(b, fw ? fw->col : motion_col, "G93 inverse time: each move needs F > 0");
     }
-    if (mo != Motion::kRapid && !inverse_time && rules->feed_required && !feed_given &&
-        !w.get('F'))
-      throw fail(b, motion_col, "no feed given yet: a G1/G2/G3 move needs F (LinuxCNC starts at F0)");
+    if (mo != Motion::kRapid && !inverse_time && rules->feed_required && !feed_given && !w.get('F'))
+      throw fail(b, motion_col,
+                 "no feed given yet: a G1/G2/G3 move needs F (LinuxCNC starts at F0)");
     if (mo != Motion::kRapid && !inverse_time && feed <= 0.0) {
       const Word* fw = w.get('F');
       throw fail(b, fw ? fw->col : motion_col, "feed is 0: a G1/G2/G3 move needs F > 0");
@@ -1055,7 +1160,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           throw fail(b, motion_col,
                      fmt::format("arc without centre (no {}, {} or R) in the {} dialect",
                                  kOffsetWord[pa.u], kOffsetWord[pa.v], rules->name));
-        if (gw(1)) throw fail(b, gw(1)->col, fmt::format("arc without centre (no {}, {} or R)", kOffsetWord[pa.u], kOffsetWord[pa.v]));
+        if (gw(1))
+          throw fail(b, gw(1)->col,
+                     fmt::format("arc without centre (no {}, {} or R)", kOffsetWord[pa.u],
+                                 kOffsetWord[pa.v]));
         // A modal G2/G3 repeated with axis words only: a straight cutting line, as CNCjs does.
         mv.motion = Motion::kLinear;
         ++stats.modal_arc_as_line;
@@ -1063,7 +1171,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v);
         const double su = pos[u], sv = pos[v], eu = t[u], ev = t[v];
         if (pw) {
-          if (!pw->integer || pw->value < 1) throw fail(b, pw->col, "arc P (turns) must be an integer >= 1");
+          if (!pw->integer || pw->value < 1)
+            throw fail(b, pw->col, "arc P (turns) must be an integer >= 1");
           mv.extra_turns = static_cast<int>(pw->value) - 1;
         }
         if (r_word) {
@@ -1071,7 +1180,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           const double r = to_mm(r_word);
           const double x = eu - su, y = ev - sv;
           const double d = std::hypot(x, y);
-          if (d < 1e-9) throw fail(b, r_word->col, "R-form arc with end point equal to start point");
+          if (d < 1e-9)
+            throw fail(b, r_word->col, "R-form arc with end point equal to start point");
           double disc = 4.0 * r * r - x * x - y * y;
           if (disc < 0.0) {
             constexpr double kRTolerance = 1e-3;  // mm: rounding in the file's decimals
@@ -1108,7 +1218,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         }
       }
     } else if (arc_words || w.get('I') || w.get('J') || w.get('K')) {
-      const Word* a = w.get('R') ? w.get('R') : w.get('I') ? w.get('I') : w.get('J') ? w.get('J') : w.get('K');
+      const Word* a = w.get('R')   ? w.get('R')
+                      : w.get('I') ? w.get('I')
+                      : w.get('J') ? w.get('J')
+                                   : w.get('K');
       throw fail(b, a->col, "I/J/K/R words on a G0/G1 move");
     }
     if (inverse_time && mo != Motion::kRapid) {
@@ -1135,7 +1248,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     write_position();
   } else if (arc_words || (!used['I' - 'A'] && w.get('I')) || (!used['J' - 'A'] && w.get('J')) ||
              (!used['K' - 'A'] && w.get('K')) || (!arc_mode && !used['R' - 'A'] && w.get('R'))) {
-    const Word* a = w.get('R') ? w.get('R') : w.get('I') ? w.get('I') : w.get('J') ? w.get('J') : w.get('K');
+    const Word* a = w.get('R')   ? w.get('R')
+                    : w.get('I') ? w.get('I')
+                    : w.get('J') ? w.get('J')
+                                 : w.get('K');
     throw fail(b, a->col, "I/J/K/R words without an arc (G2/G3)");
   }
   if (g53 && !has_axis) throw fail(b, nm->col, "G53 needs axis words on the same line");
@@ -1164,7 +1280,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       produced = true;
     } else if (c == 1) {
       if (opt.optional_stop) {
-        out.emplace_back(Pause{Pause::Reason::kOptionalStop, 0, "optional stop (M1): resume to go on", b.line});
+        out.emplace_back(
+            Pause{Pause::Reason::kOptionalStop, 0, "optional stop (M1): resume to go on", b.line});
         ++stats.pauses;
       }
       produced = true;
@@ -1181,16 +1298,17 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
 // per hole: rapid to the hole at the current level, down to R, the cycle's moves, back to the
 // clear level (G98: the level before the cycle or R, whichever is higher; G99: R).
 void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool given[3],
-                                     std::vector<Command>& out, int repeats,
-                                     const Word* first_col, const Word* polar_r,
-                                     const Word* polar_a) {
+                                     std::vector<Command>& out, int repeats, const Word* first_col,
+                                     const Word* polar_r, const Word* polar_a) {
   const PlaneAxes pa = plane_axes(plane);
   const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v),
              wa = static_cast<size_t>(pa.w);
   const int col = first_col ? first_col->col : 1;
   if (!cycle_z_set)
-    throw fail(b, col, fmt::format("{}: the cycle needs {} (the bottom)", gname(motion), kAxisNames[wa]));
-  if (!cycle_r_set) throw fail(b, col, fmt::format("{}: the cycle needs R (the retract level)", gname(motion)));
+    throw fail(b, col,
+               fmt::format("{}: the cycle needs {} (the bottom)", gname(motion), kAxisNames[wa]));
+  if (!cycle_r_set)
+    throw fail(b, col, fmt::format("{}: the cycle needs R (the retract level)", gname(motion)));
   if ((motion == 730 || motion == 830) && cycle_q <= 0)
     throw fail(b, col, fmt::format("{}: the cycle needs Q (the peck depth) > 0", gname(motion)));
   if (feed <= 0 && !inverse_time) throw fail(b, col, "feed is 0: a canned cycle needs F > 0");
@@ -1212,7 +1330,8 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
     bottom = r + cycle_z;
   }
   if (bottom > r + 1e-9)
-    throw fail(b, col, fmt::format("{}: the bottom ({}) is above R", gname(motion), kAxisNames[wa]));
+    throw fail(b, col,
+               fmt::format("{}: the bottom ({}) is above R", gname(motion), kAxisNames[wa]));
   const double f = feed * feed_factor;
   const double rapid_delta = 0.010 * kInch;  // LinuxCNC's G73/G83 back-off (0.010 inch)
   auto at = [&](double cu, double cv, double cw) {
@@ -1275,8 +1394,10 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
       case 890:
         line_to(out, Motion::kLinear, at(hu, hv, bottom), b.line, f);
         out.emplace_back(Dwell{cycle_p, b.line});
-        if (motion == 820) line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
-        else line_to(out, Motion::kLinear, at(hu, hv, clear), b.line, f);
+        if (motion == 820)
+          line_to(out, Motion::kRapid, at(hu, hv, clear), b.line);
+        else
+          line_to(out, Motion::kLinear, at(hu, hv, clear), b.line, f);
         break;
       case 830:
       case 730: {
@@ -1318,8 +1439,12 @@ void Interpreter::finish() {
                 "empty job (no motion and no commands)");
 }
 
-const Vec4& Interpreter::position() const { return impl_->pos; }
-const Stats& Interpreter::stats() const { return impl_->stats; }
+const Vec4& Interpreter::position() const {
+  return impl_->pos;
+}
+const Stats& Interpreter::stats() const {
+  return impl_->stats;
+}
 
 namespace {
 

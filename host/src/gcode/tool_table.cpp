@@ -17,7 +17,9 @@ const ToolEntry* ToolTable::find(int tool) const {
   return it == tools_.end() ? nullptr : &it->second;
 }
 
-void ToolTable::set(const ToolEntry& e) { tools_[e.tool] = e; }
+void ToolTable::set(const ToolEntry& e) {
+  tools_[e.tool] = e;
+}
 
 ToolTable parse_tool_table(std::string_view text, const std::string& name) {
   ToolTable t;
@@ -63,12 +65,30 @@ ToolTable parse_tool_table(std::string_view text, const std::string& name) {
           e.tool = static_cast<int>(v);
           has_t = true;
           break;
-        case 'P': e.pocket = static_cast<int>(v); break;
-        case 'X': e.offset[0] = v; break;
-        case 'Y': e.offset[1] = v; break;
-        case 'Z': e.offset[2] = v; break;
-        case 'D': e.diameter = v; break;
-        case 'A': case 'B': case 'C': case 'U': case 'V': case 'W': case 'I': case 'J': case 'Q':
+        case 'P':
+          e.pocket = static_cast<int>(v);
+          break;
+        case 'X':
+          e.offset[0] = v;
+          break;
+        case 'Y':
+          e.offset[1] = v;
+          break;
+        case 'Z':
+          e.offset[2] = v;
+          break;
+        case 'D':
+          e.diameter = v;
+          break;
+        case 'A':
+        case 'B':
+        case 'C':
+        case 'U':
+        case 'V':
+        case 'W':
+        case 'I':
+        case 'J':
+        case 'Q':
           break;  // rotary offsets, lathe angles and orientation: not used here
         default:
           throw Error(name, line, col, fmt::format("unknown tool table field '{}'", letter));

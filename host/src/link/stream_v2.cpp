@@ -308,7 +308,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     items.push_back({job.config[a], false, nullptr});
   }
   // Heaters: setup frames, then each setpoint before the FIFO frame it precedes in the program.
-  std::vector<size_t> waits;  // item indices of M109/M190 setpoints
+  std::vector<size_t> waits;       // item indices of M109/M190 setpoints
   std::vector<size_t> frame_item;  // item index of job.frames[j]
   {
     size_t ai = 0;
@@ -681,9 +681,10 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
       const gcode::Pause& pz = *pauses[next_pause].second;
       ++rep.pauses;
       if (opt.on_pause && !opt.on_pause(pz))
-        throw Error(fmt::format("{}: job stopped at the pause of line {} ({}): the machine is at "
-                                "rest there",
-                                name, pz.line, pz.prompt));
+        throw Error(
+            fmt::format("{}: job stopped at the pause of line {} ({}): the machine is at "
+                        "rest there",
+                        name, pz.line, pz.prompt));
       ++next_pause;
       s.restart_silence();
       last_progress = link.now();

@@ -14,8 +14,12 @@ namespace {
 // An output command as the OUTPUT frame's fields (merged into `set`: later ones win).
 void add_output(OutputSet& set, const gcode::Output& o) {
   switch (o.kind) {
-    case gcode::Output::Kind::kFlood: set.flood = o.value != 0.0; break;
-    case gcode::Output::Kind::kMist: set.mist = o.value != 0.0; break;
+    case gcode::Output::Kind::kFlood:
+      set.flood = o.value != 0.0;
+      break;
+    case gcode::Output::Kind::kMist:
+      set.mist = o.value != 0.0;
+      break;
     case gcode::Output::Kind::kFan:
       set.fan = static_cast<uint8_t>(std::clamp(std::lround(o.value * 255.0), 0L, 255L));
       break;
@@ -60,7 +64,6 @@ bool record_event(Job& job, const Item& item, size_t next_segment, Push&& push) 
   }
   return true;
 }
-
 
 constexpr uint64_t kMaxT = std::numeric_limits<uint32_t>::max();
 constexpr int64_t kMaxSteps = std::numeric_limits<int32_t>::max();
@@ -230,8 +233,8 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         job.total_t += arc_ticks;
         advance(p->steps, arc_ticks, p->arc_fields.plane);
         ++job.arcs;
-        job.max_axes = std::max<size_t>(
-            job.max_axes, p->steps[2] != 0 || p->arc_fields.plane != 0 ? 3 : 2);
+        job.max_axes =
+            std::max<size_t>(job.max_axes, p->steps[2] != 0 || p->arc_fields.plane != 0 ? 3 : 2);
         if (p->segment_index != last_seg) {
           ++seg_seen;
           last_seg = p->segment_index;

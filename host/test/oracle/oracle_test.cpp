@@ -180,8 +180,8 @@ std::vector<std::string> compare(const std::string& name, const OracleRun& o,
     }
     if (a.kind == CanonMove::Kind::kArc && kind_ok) {
       if (std::abs(a.rotation) != b.extra_turns + 1) {
-        why.push_back(fmt::format("rs274 arc of {} turns, ours {}", std::abs(a.rotation),
-                                  b.extra_turns + 1));
+        why.push_back(
+            fmt::format("rs274 arc of {} turns, ours {}", std::abs(a.rotation), b.extra_turns + 1));
       }
       // Our centre is (u, v) in the plane's axis order (gcode::plane_axes).
       const gcode::PlaneAxes pa = gcode::plane_axes(b.plane);
@@ -189,9 +189,8 @@ std::vector<std::string> compare(const std::string& name, const OracleRun& o,
                               (a.plane == oracle::Plane::kXZ && b.plane == gcode::Plane::kZX) ||
                               (a.plane == oracle::Plane::kYZ && b.plane == gcode::Plane::kYZ);
       if (!same_plane) why.push_back("arc in another plane");
-      const double dev =
-          std::max(std::fabs(a.centre[static_cast<size_t>(pa.u)] - b.center[0]),
-                   std::fabs(a.centre[static_cast<size_t>(pa.v)] - b.center[1]));
+      const double dev = std::max(std::fabs(a.centre[static_cast<size_t>(pa.u)] - b.center[0]),
+                                  std::fabs(a.centre[static_cast<size_t>(pa.v)] - b.center[1]));
       if (dev > kTol) {
         why.push_back(fmt::format("centre rs274 ({:.9g}, {:.9g}) ours ({:.9g}, {:.9g})",
                                   a.centre[static_cast<size_t>(pa.u)],

@@ -54,8 +54,8 @@ struct MachineConfig {
   bool native_arcs = true;
   // [gcode]: how G-code files are read (docs/gcode.md).
   struct GCode {
-    std::string dialect = "auto";  // "auto" (detected per file), grbl, linuxcnc, marlin, reprap
-    std::string tool_table;        // LinuxCNC-format tool table for G43 H and M6 prompts
+    std::string dialect = "auto";   // "auto" (detected per file), grbl, linuxcnc, marlin, reprap
+    std::string tool_table;         // LinuxCNC-format tool table for G43 H and M6 prompts
     bool tool_change_pause = true;  // M6 stops at rest and asks for the tool
     bool optional_stop = false;     // M1 pauses like M0
     bool block_delete = false;      // lines starting with '/' are skipped

@@ -31,8 +31,9 @@ struct PlaneAxes {
   int u, v, w;  // indices into Vec4
 };
 constexpr PlaneAxes plane_axes(Plane p) {
-  return p == Plane::kXY ? PlaneAxes{0, 1, 2} : p == Plane::kZX ? PlaneAxes{2, 0, 1}
-                                                                : PlaneAxes{1, 2, 0};
+  return p == Plane::kXY   ? PlaneAxes{0, 1, 2}
+         : p == Plane::kZX ? PlaneAxes{2, 0, 1}
+                           : PlaneAxes{1, 2, 0};
 }
 
 struct Move {
@@ -81,8 +82,8 @@ struct Pause {
 struct Output {
   enum class Kind : uint8_t { kFlood, kMist, kFan, kDigital };
   Kind kind = Kind::kFlood;
-  int index = 0;       // kDigital: output number (M62-M65 P); kFan: fan number (0)
-  double value = 0.0;  // 0/1 for switches; fan duty 0..1
+  int index = 0;           // kDigital: output number (M62-M65 P); kFan: fan number (0)
+  double value = 0.0;      // 0/1 for switches; fan duty 0..1
   bool immediate = false;  // M64/M65 (else M62/M63: with the next motion)
   int line = 0;
 };
@@ -99,10 +100,10 @@ struct Message {
 // Job limits for the rest of the job (M201/M203/M204/M205): 0 = unchanged. The planner never
 // lets them exceed the machine's configured limits.
 struct Limits {
-  std::array<double, 4> accel_mm_s2{};     // M201 per axis
+  std::array<double, 4> accel_mm_s2{};      // M201 per axis
   std::array<double, 4> max_feed_mm_min{};  // M203 per axis (Marlin gives mm/s: converted)
-  double path_accel_mm_s2 = 0.0;           // M204 P/S (printing) / T (travel: ignored)
-  double junction_deviation_mm = 0.0;      // M205 J
+  double path_accel_mm_s2 = 0.0;            // M204 P/S (printing) / T (travel: ignored)
+  double junction_deviation_mm = 0.0;       // M205 J
   int line = 0;
 };
 
@@ -110,9 +111,9 @@ using Command = std::variant<Move, Dwell, Heater, Pause, Output, Message, Limits
 
 struct Options {
   double default_feed_mm_min = 1000.0;
-  std::optional<Dialect> dialect;          // override of the detection
+  std::optional<Dialect> dialect;            // override of the detection
   std::string dialect_source = "--dialect";  // where the override came from, for the report
-  std::string tool_table;   // LinuxCNC tool table file ("" = none: G43 H needs one)
+  std::string tool_table;         // LinuxCNC tool table file ("" = none: G43 H needs one)
   bool tool_change_pause = true;  // M6 pauses with a prompt (false: T/M6 only recorded)
   bool optional_stop = false;     // M1 pauses (LinuxCNC's optional stop switch)
   bool block_delete = false;      // lines starting with '/' are skipped
@@ -159,8 +160,7 @@ class Interpreter {
  public:
   // `params` is the rs274ngc parameter table the reader evaluates against: the interpreter
   // writes the system parameters (positions, offsets, tool) into it as its state changes.
-  Interpreter(std::string file_name, Options options, const DialectChoice& dialect,
-              Params& params);
+  Interpreter(std::string file_name, Options options, const DialectChoice& dialect, Params& params);
   ~Interpreter();
   Interpreter(const Interpreter&) = delete;
   Interpreter& operator=(const Interpreter&) = delete;

@@ -103,8 +103,8 @@ struct StreamV2Report {
   size_t profiles = 0;  // LINE_PROFILE frames
   size_t arcs = 0;      // ARC frames
   size_t dwells = 0;
-  size_t pauses = 0;            // pauses the job stopped at
-  size_t outputs = 0;           // OUTPUT frames (M7-M9, M62-M65, M106/M107)
+  size_t pauses = 0;             // pauses the job stopped at
+  size_t outputs = 0;            // OUTPUT frames (M7-M9, M62-M65, M106/M107)
   size_t retransmissions = 0;    // sequenced frames written more than once (each resend)
   size_t go_backs = 0;           // times the window went back (NAK or timeout)
   size_t timeouts = 0;           // retransmission timeouts

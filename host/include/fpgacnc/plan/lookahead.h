@@ -139,8 +139,8 @@ struct ProfileStats {
 
 // Pauses, outputs and messages come out in their place between the profiles: before the first
 // profile of the segment that followed them in the plan.
-using ProfileItem = std::variant<Profile, Dwell, HeaterCommand, gcode::Pause, gcode::Output,
-                                 gcode::Message>;
+using ProfileItem =
+    std::variant<Profile, Dwell, HeaterCommand, gcode::Pause, gcode::Output, gcode::Message>;
 
 struct ProfilePlan {
   std::vector<ProfileItem> items;
@@ -170,12 +170,12 @@ class Lookahead {
  private:
   struct Block {
     Profile p;
-    double scale_v = 0.0;          // LSB per mm/s
-    double l_eff = 0.0;            // length used for speed changes, mm (L minus a safety margin)
-    double v_junction_max = 0.0;   // entry junction limit, mm/s
+    double scale_v = 0.0;             // LSB per mm/s
+    double l_eff = 0.0;               // length used for speed changes, mm (L minus a safety margin)
+    double v_junction_max = 0.0;      // entry junction limit, mm/s
     double junction_deviation = 0.0;  // mm at its entry junction (0: the machine's)
     bool exact_stop = false;          // G61: plan a stop at its end
-    std::array<double, 4> unit{};  // path direction at the start (XYZ, or E alone)
+    std::array<double, 4> unit{};     // path direction at the start (XYZ, or E alone)
     std::array<double, 4> unit_out{};  // at the end (= unit for a line)
     uint64_t v_cap = 0;                // largest V field (LSB)
     uint64_t v_stop = 0;               // stop rate (LSB)

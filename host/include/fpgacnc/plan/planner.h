@@ -55,8 +55,8 @@ struct HeaterCommand {
 
 // Pauses (M0/M1, M6, M600), outputs (M7-M9, M62-M65, M106/M107) and messages (M117, M118,
 // M73, (MSG,...)) keep their place between the segments.
-using PlanItem = std::variant<Segment, Dwell, HeaterCommand, gcode::Pause, gcode::Output,
-                              gcode::Message>;
+using PlanItem =
+    std::variant<Segment, Dwell, HeaterCommand, gcode::Pause, gcode::Output, gcode::Message>;
 
 struct Stats {
   uint64_t segments = 0;
@@ -69,10 +69,10 @@ struct Stats {
   uint64_t outputs = 0;
   uint64_t messages = 0;
   uint64_t limits_clamped = 0;  // M201/M203/M204/M205 values above the machine's (lowered)
-  uint64_t feed_clamped = 0;     // v1 feed outside [1, 65535] (warning)
-  uint64_t feed_limited = 0;     // feed reduced to respect an axis max feed (warning)
-  uint64_t split_moves = 0;      // moves split because |steps| > INT32_MAX
-  uint64_t ze_only_moves = 0;    // Z/E-only moves not driven by v1 (sent as 0,0 steps)
+  uint64_t feed_clamped = 0;    // v1 feed outside [1, 65535] (warning)
+  uint64_t feed_limited = 0;    // feed reduced to respect an axis max feed (warning)
+  uint64_t split_moves = 0;     // moves split because |steps| > INT32_MAX
+  uint64_t ze_only_moves = 0;   // Z/E-only moves not driven by v1 (sent as 0,0 steps)
   double path_length_mm = 0.0;
   double estimated_time_s = 0.0;  // sum of length / feed plus dwells (no acceleration)
 };

@@ -70,8 +70,8 @@ struct Job {
   size_t pauses = 0;
   size_t messages = 0;
   size_t outputs = 0;
-  size_t profiles = 0;        // LINE_PROFILE frames (motion = "profile")
-  size_t arcs = 0;            // ARC frames (motion = "profile" with an arc walk)
+  size_t profiles = 0;  // LINE_PROFILE frames (motion = "profile")
+  size_t arcs = 0;      // ARC frames (motion = "profile" with an arc walk)
   // motion = "profile": DIR hold/setup pauses at reversals (HOLD/SETUP path), in total_t.
   size_t reversal_gaps = 0;
   uint64_t reversal_gap_clocks = 0;
