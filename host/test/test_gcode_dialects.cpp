@@ -169,3 +169,21 @@ TEST(GCode, ToolTableOffsets) {
   EXPECT_NE(error_of("G43 H7\nG0 X1", gc::Dialect::kLinuxCnc).find("no tool table"),
             std::string::npos);
 }
+
+TEST(Dialect, PrinterLinesOtherFirmwaresWrite) {
+  // Klipper's extended commands, quoted strings and version strings after M codes, G4 alone.
+  const auto p =
+      run("EXCLUDE_OBJECT_DEFINE NAME=part_1 CENTER=150,150 POLYGON=[[1,2],[3,4]]\n"
+          "START_PRINT EXTRUDER_TEMP=220 BED_TEMP=50\nM862.3 P \"MK3S\"\nM115 U6.3.0+10073\n"
+          "G1 X1 E1 F100\nG4\nG1 X2 E2",
+          gc::Dialect::kMarlin);
+  ASSERT_EQ(all<gc::Move>(p).size(), 2u);
+  EXPECT_EQ(all<gc::Dwell>(p).size(), 1u);
+  EXPECT_NE(p.stats.warnings.at(0).what.find("EXCLUDE_OBJECT_DEFINE"), std::string::npos);
+  EXPECT_NE(p.stats.warnings.at(1).what.find("START_PRINT"), std::string::npos);
+  // A version string is only an M code's parameter: on a move it is an error.
+  EXPECT_EQ(error_of("G1 X1.2.3 E1 F100", gc::Dialect::kMarlin),
+            "t.gcode:1:8: error: garbage in the number of 'X'");
+  EXPECT_EQ(error_of("G1 X E1 F100", gc::Dialect::kMarlin),
+            "t.gcode:1:4: error: expected a number after 'X'");
+}

@@ -677,8 +677,9 @@ struct Reader::Impl {
         ++i;
         continue;
       }
-      if (is_alpha(c)) {
-        const char letter = to_upper(c);
+      // A word: a letter, or LinuxCNC's polar '@' (distance) and '^' (angle), and its value.
+      if (is_alpha(c) || ((c == kPolarRadius || c == kPolarAngle) && syn.ngc)) {
+        const char letter = is_alpha(c) ? to_upper(c) : c;
         const int wcol = col(i);
         if (letter == 'O') {
           if (!syn.ngc) fail(wcol, "O-words are rs274ngc (LinuxCNC) syntax" + dialect_suffix(syn));
@@ -746,25 +747,6 @@ struct Reader::Impl {
             break;
           }
         }
-        continue;
-      }
-      if ((c == '@' || c == '^') && syn.ngc) {
-        const int wcol = col(i);
-        ++i;
-        while (i < n && is_space(p[i])) ++i;
-        Word w;
-        w.letter = c;
-        w.col = wcol;
-        double v = 0.0;
-        bool dot = false;
-        if (plain_number(i, v, dot)) {
-          w.value = v;
-          w.integer = !dot;
-        } else {
-          w.value = expr().real_value(i);
-          w.from_expr = true;
-        }
-        push_word(out, w);
         continue;
       }
       if (c == '(') {
