@@ -393,81 +393,18 @@ module segment_prep #(
         end
       end
       S_PMUL: begin
-        // iteration 0 loads; 1..24 add bit iter-1 of every n_a; then PINIT (state S_SUB with
-        // prof_reg: vcma, vxpa, V(1), op(1)).
-        if (iter_reg == 6'd0) begin
-          mc_ve_reg <= {24'd0, ve_reg};
-          mc_vc_reg <= {24'd0, vc_reg};
-          mc_vx_reg <= {24'd0, vx_reg};
-          mc_a_reg  <= {24'd0, pa_reg};
-          for (i = 0; i < N_AXES; i = i + 1) pm_reg[24*i+:24] <= abs_reg[32*i+:24];
-          p_v0_reg <= {71 * N_AXES{1'b0}};
-          p_vc_reg <= {71 * N_AXES{1'b0}};
-          p_vx_reg <= {71 * N_AXES{1'b0}};
-          p_a_reg  <= {56 * N_AXES{1'b0}};
-          iter_reg <= 6'd1;
-        end else begin
-          for (i = 0; i < N_AXES; i = i + 1) begin
-            if (pm_reg[24*i]) begin
-              p_v0_reg[71*i+:71] <= p_v0_reg[71*i+:71] + mc_ve_reg;
-              p_vc_reg[71*i+:71] <= p_vc_reg[71*i+:71] + mc_vc_reg;
-              p_vx_reg[71*i+:71] <= p_vx_reg[71*i+:71] + mc_vx_reg;
-              p_a_reg[56*i+:56]  <= p_a_reg[56*i+:56] + mc_a_reg;
-            end
-            pm_reg[24*i+:24] <= {1'b0, pm_reg[24*i+1+:23]};
-          end
-          mc_ve_reg <= {mc_ve_reg[69:0], 1'b0};
-          mc_vc_reg <= {mc_vc_reg[69:0], 1'b0};
-          mc_vx_reg <= {mc_vx_reg[69:0], 1'b0};
-          mc_a_reg  <= {mc_a_reg[54:0], 1'b0};
-          iter_reg  <= iter_reg + 6'd1;
-          if (iter_reg == 6'd24) state_reg <= S_SUB;
-        end
+        // iteration 0 loads; 1..24 add bit iter-1 of every n_a (the products: pmul_seq below);
+        // then PINIT (state S_SUB with prof_reg: vcma, vxpa, V(1), op(1)).
+        iter_reg <= iter_reg + 6'd1;
+        if (iter_reg == 6'd24) state_reg <= S_SUB;
       end
       S_AMUL: begin
         // iteration 0 loads; 1..31 add bit iter-1 of |x0|, |y0|, |x1|, |y1| (squares) and |DZ|
-        if (iter_reg == 6'd0) begin
-          sq_mc_reg[44*0+:44] <= {22'd0, mag_i};
-          sq_mc_reg[44*1+:44] <= {22'd0, mag_j};
-          sq_mc_reg[44*2+:44] <= {22'd0, mag_x1};
-          sq_mc_reg[44*3+:44] <= {22'd0, mag_y1};
-          sq_mp_reg[22*0+:22] <= mag_i;
-          sq_mp_reg[22*1+:22] <= mag_j;
-          sq_mp_reg[22*2+:22] <= mag_x1;
-          sq_mp_reg[22*3+:22] <= mag_y1;
-          for (i = 0; i < 4; i = i + 1) sq_reg[44*i+:44] <= 44'd0;
-          zmc_e_reg <= {31'd0, a_ve};
-          zmc_c_reg <= {31'd0, a_vc};
-          zmc_x_reg <= {31'd0, a_vx};
-          zmc_a_reg <= {31'd0, a_acc};
-          zmp_reg   <= mag_z;
-          vz_e_reg  <= 96'd0;
-          vz_c_reg  <= 96'd0;
-          vz_x_reg  <= 96'd0;
-          az_reg    <= 96'd0;
-          iter_reg  <= 6'd1;
-        end else begin
-          for (i = 0; i < 4; i = i + 1) begin
-            if (sq_mp_reg[22*i]) sq_reg[44*i+:44] <= sq_reg[44*i+:44] + sq_mc_reg[44*i+:44];
-            sq_mp_reg[22*i+:22] <= {1'b0, sq_mp_reg[22*i+1+:21]};
-            sq_mc_reg[44*i+:44] <= {sq_mc_reg[44*i+:43], 1'b0};
-          end
-          if (zmp_reg[0]) begin
-            vz_e_reg <= vz_e_reg + {1'b0, zmc_e_reg};
-            vz_c_reg <= vz_c_reg + {1'b0, zmc_c_reg};
-            vz_x_reg <= vz_x_reg + {1'b0, zmc_x_reg};
-            az_reg   <= az_reg + {17'd0, zmc_a_reg};
-          end
-          zmp_reg   <= {1'b0, zmp_reg[30:1]};
-          zmc_e_reg <= {zmc_e_reg[93:0], 1'b0};
-          zmc_c_reg <= {zmc_c_reg[93:0], 1'b0};
-          zmc_x_reg <= {zmc_x_reg[93:0], 1'b0};
-          zmc_a_reg <= {zmc_a_reg[77:0], 1'b0};
-          iter_reg  <= iter_reg + 6'd1;
-          if (iter_reg == 6'd31) begin
-            state_reg <= S_ADIV;
-            iter_reg  <= 6'd0;
-          end
+        // (the products: amul_seq below)
+        iter_reg <= iter_reg + 6'd1;
+        if (iter_reg == 6'd31) begin
+          state_reg <= S_ADIV;
+          iter_reg  <= 6'd0;
         end
       end
       S_ADIV: begin
@@ -679,15 +616,126 @@ module segment_prep #(
       op1_reg          <= OP_CRU;
       vcma_reg         <= 48'd0;
       vxpa_reg         <= 48'd0;
-      mc_ve_reg        <= 71'd0;
-      mc_vc_reg        <= 71'd0;
-      mc_vx_reg        <= 71'd0;
-      mc_a_reg         <= 56'd0;
-      pm_reg           <= {24 * N_AXES{1'b0}};
-      p_v0_reg         <= {71 * N_AXES{1'b0}};
-      p_vc_reg         <= {71 * N_AXES{1'b0}};
-      p_vx_reg         <= {71 * N_AXES{1'b0}};
-      p_a_reg          <= {56 * N_AXES{1'b0}};
+    end
+  end
+
+  // The multipliers' datapaths, each register written by one guarded assignment: Verilator then
+  // updates it in place and skips the block on the clocks it is idle (a register assigned in
+  // several places of a clocked block is copied through a shadow on every clock).
+  // PROFILE products (S_PMUL): iteration 0 loads, 1..24 add bit iter-1 of every n_a.
+  always @(posedge clk) begin : pmul_seq
+    reg [71*N_AXES-1:0] v0_n, vc_n, vx_n;
+    reg [56*N_AXES-1:0] a_n;
+    reg [24*N_AXES-1:0] pm_n;
+    reg [70:0] mce_n, mcc_n, mcx_n;
+    reg [55:0] mca_n;
+    integer k;
+    if (rst || state_reg == S_PMUL) begin
+      v0_n  = {71 * N_AXES{1'b0}};
+      vc_n  = {71 * N_AXES{1'b0}};
+      vx_n  = {71 * N_AXES{1'b0}};
+      a_n   = {56 * N_AXES{1'b0}};
+      pm_n  = {24 * N_AXES{1'b0}};
+      mce_n = 71'd0;
+      mcc_n = 71'd0;
+      mcx_n = 71'd0;
+      mca_n = 56'd0;
+      if (!rst && iter_reg == 6'd0) begin
+        mce_n = {24'd0, ve_reg};
+        mcc_n = {24'd0, vc_reg};
+        mcx_n = {24'd0, vx_reg};
+        mca_n = {24'd0, pa_reg};
+        for (k = 0; k < N_AXES; k = k + 1) pm_n[24*k+:24] = abs_reg[32*k+:24];
+      end else if (!rst) begin
+        for (k = 0; k < N_AXES; k = k + 1) begin
+          v0_n[71*k+:71] = p_v0_reg[71*k+:71];
+          vc_n[71*k+:71] = p_vc_reg[71*k+:71];
+          vx_n[71*k+:71] = p_vx_reg[71*k+:71];
+          a_n[56*k+:56]  = p_a_reg[56*k+:56];
+          if (pm_reg[24*k]) begin
+            v0_n[71*k+:71] = p_v0_reg[71*k+:71] + mc_ve_reg;
+            vc_n[71*k+:71] = p_vc_reg[71*k+:71] + mc_vc_reg;
+            vx_n[71*k+:71] = p_vx_reg[71*k+:71] + mc_vx_reg;
+            a_n[56*k+:56]  = p_a_reg[56*k+:56] + mc_a_reg;
+          end
+          pm_n[24*k+:24] = {1'b0, pm_reg[24*k+1+:23]};
+        end
+        mce_n = {mc_ve_reg[69:0], 1'b0};
+        mcc_n = {mc_vc_reg[69:0], 1'b0};
+        mcx_n = {mc_vx_reg[69:0], 1'b0};
+        mca_n = {mc_a_reg[54:0], 1'b0};
+      end
+      p_v0_reg  <= v0_n;
+      p_vc_reg  <= vc_n;
+      p_vx_reg  <= vx_n;
+      p_a_reg   <= a_n;
+      pm_reg    <= pm_n;
+      mc_ve_reg <= mce_n;
+      mc_vc_reg <= mcc_n;
+      mc_vx_reg <= mcx_n;
+      mc_a_reg  <= mca_n;
+    end
+  end
+
+  // ARC squares and Z products (S_AMUL): iteration 0 loads; 1..31 add bit iter-1 of |x0|,
+  // |y0|, |x1|, |y1| and |DZ|. (Not reset: S_AMUL always starts with the load.)
+  always @(posedge clk) begin : amul_seq
+    reg [4*44-1:0] sq_n, mc_n;
+    reg [4*22-1:0] mp_n;
+    reg [94:0] ze_n, zc_n, zx_n;
+    reg [78:0] za_n;
+    reg [30:0] zp_n;
+    reg [95:0] ve_n, vc_n, vx_n, az_n;
+    integer k;
+    if (state_reg == S_AMUL) begin
+      if (iter_reg == 6'd0) begin
+        mc_n = {22'd0, mag_y1, 22'd0, mag_x1, 22'd0, mag_j, 22'd0, mag_i};
+        mp_n = {mag_y1, mag_x1, mag_j, mag_i};
+        sq_n = {4 * 44{1'b0}};
+        ze_n = {31'd0, a_ve};
+        zc_n = {31'd0, a_vc};
+        zx_n = {31'd0, a_vx};
+        za_n = {31'd0, a_acc};
+        zp_n = mag_z;
+        ve_n = 96'd0;
+        vc_n = 96'd0;
+        vx_n = 96'd0;
+        az_n = 96'd0;
+      end else begin
+        for (k = 0; k < 4; k = k + 1) begin
+          sq_n[44*k+:44] = sq_mp_reg[22*k] ? sq_reg[44*k+:44] + sq_mc_reg[44*k+:44]
+                                           : sq_reg[44*k+:44];
+          mp_n[22*k+:22] = {1'b0, sq_mp_reg[22*k+1+:21]};
+          mc_n[44*k+:44] = {sq_mc_reg[44*k+:43], 1'b0};
+        end
+        ve_n = vz_e_reg;
+        vc_n = vz_c_reg;
+        vx_n = vz_x_reg;
+        az_n = az_reg;
+        if (zmp_reg[0]) begin
+          ve_n = vz_e_reg + {1'b0, zmc_e_reg};
+          vc_n = vz_c_reg + {1'b0, zmc_c_reg};
+          vx_n = vz_x_reg + {1'b0, zmc_x_reg};
+          az_n = az_reg + {17'd0, zmc_a_reg};
+        end
+        zp_n = {1'b0, zmp_reg[30:1]};
+        ze_n = {zmc_e_reg[93:0], 1'b0};
+        zc_n = {zmc_c_reg[93:0], 1'b0};
+        zx_n = {zmc_x_reg[93:0], 1'b0};
+        za_n = {zmc_a_reg[77:0], 1'b0};
+      end
+      sq_reg    <= sq_n;
+      sq_mp_reg <= mp_n;
+      sq_mc_reg <= mc_n;
+      zmc_e_reg <= ze_n;
+      zmc_c_reg <= zc_n;
+      zmc_x_reg <= zx_n;
+      zmc_a_reg <= za_n;
+      zmp_reg   <= zp_n;
+      vz_e_reg  <= ve_n;
+      vz_c_reg  <= vc_n;
+      vz_x_reg  <= vx_n;
+      az_reg    <= az_n;
     end
   end
 
