@@ -434,8 +434,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (l == 'M') {
       if (!wd.integer && !(rules->dialect != Dialect::kLinuxCnc && is_code10_exact(wd)))
         throw fail(b, wd.col, "M codes are integers");
+      if (!(wd.value >= 0.0 && wd.value < 10000.0))
+        throw fail(b, wd.col, fmt::format("M{} out of range", wd.value));
       const int c = static_cast<int>(std::floor(wd.value));
-      if (c < 0 || c > 9999) throw fail(b, wd.col, fmt::format("M{} out of range", wd.value));
       auto group = [](int m) {
         return (m == 0 || m == 1 || m == 2 || m == 30 || m == 60) ? 1
                : (m >= 3 && m <= 5)                               ? 2
