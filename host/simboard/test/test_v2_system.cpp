@@ -240,7 +240,7 @@ TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
 
 // (b) Line faults both ways: the job completes, no segment lost or run twice.
 TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
-  const size_t n = env_size("FPGACNC_V2_FAULT_SEGMENTS", 200);
+  const size_t n = env_size("FPGACNC_V2_FAULT_SEGMENTS", 120);
   const uint64_t seed = env_size("FPGACNC_SEED", 5);
   std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
   cfgns::MachineConfig cfg;
