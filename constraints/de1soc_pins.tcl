@@ -145,7 +145,7 @@ set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SDI
 set_location_assignment PIN_AK3 -to ADC_SDO
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to ADC_SDO
 
-# Machine outputs (OUTPUT frames, issue 17; docs/architecture.md "Pins"): GPIO_0[10..16] (pins
+# Machine outputs (OUTPUT frames; docs/architecture.md "Pins"): GPIO_0[10..16] (pins
 # from the Terasic DE1-SoC manual), high = on, to driver stages (relay / MOSFET) for the coolant
 # valves, the part-cooling fan (PWM) and the digital outputs.
 set_location_assignment PIN_AH18 -to coolant_flood

@@ -1,4 +1,4 @@
-// The interpreter's dialect table and the words issue 17 added (docs/gcode.md).
+// The interpreter's dialect table and its words beyond the basic moves (docs/gcode.md).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -34,8 +34,8 @@ enum class Type : uint8_t {
   Line = 0x10,
   Dwell = 0x11,
   LineProfile = 0x12,
-  Arc = 0x13,     // circular DDA (issue 6)
-  Output = 0x15,  // machine outputs in order with the motion (issue 17)
+  Arc = 0x13,     // circular DDA
+  Output = 0x15,  // machine outputs in order with the motion
   // Heaters (issue 7): sequenced, not queued.
   HeaterConfig = 0x20,
   HeaterSetpoint = 0x21,
