@@ -86,6 +86,9 @@ void run_decoders(const v2::Frame& f) {
           if (!v2::arc_field_error(a).empty()) fail("decode_arc: bad field accepted");
           // every payload bit is a field: the builder gives the same bytes back
           if (v2::arc(f.seq, a).payload != f.payload) fail("decode_arc: rebuilt payload differs");
+          // The board's own rule (a helix or a ZX / YZ plane needs 3 axes) is the field check
+          // with n_axes: a frame it breaks is refused like a decoder error.
+          if (!v2::arc_field_error(a, axes).empty()) throw v2::ProtocolError("needs 3 axes");
           break;
         }
         case v2::Type::ConfigAxis: {
