@@ -228,6 +228,14 @@ void TwinBoard::set_estop(bool) {
   throw BoardError("twin board (--model tlm): no e-stop input is modelled; use --model rtl");
 }
 
+void TwinBoard::set_host_deadline(int64_t cycle) {
+  host_deadline_.store(cycle);
+  if (cycle >= 0) {
+    const uint64_t one = 1;
+    [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  }
+}
+
 bool TwinBoard::idle_for_host() const {
   if (!quiet_.load()) return false;
   // Bytes the host wrote that the board has not read yet: not idle.
@@ -465,6 +473,10 @@ void TwinBoard::session(VirtualBoard& vb) {
     if (!never_active && act + kQuiet + 1 > now) e = std::min(e, act + kQuiet + 1);
     if (wd >= 0) e = std::min(e, std::max(wd + 1, now + 1));
     if (hold_at > now) e = std::min(e, hold_at);
+    // The host's next timer: stop there (not past it) so that it can poll during a long move.
+    const Cycle host_at = host_deadline_.load();
+    const bool to_host = !opt_.realtime && host_at > now && e != kNone && host_at < e;
+    if (to_host) e = host_at;
     if (e == kNone) {
       // Quiet: time stands still until the host writes.
       publish(true);
@@ -493,6 +505,17 @@ void TwinBoard::session(VirtualBoard& vb) {
       if (wait_input(last_write + grace)) continue;
     }
     now = e;
+    if (to_host) {
+      // Held at the host's timer until the host writes or waits for a later one (at most 2 s
+      // of wall time: a host that went away does not stop the board).
+      publish(false);
+      const auto give_up = wall_clock::now() + std::chrono::seconds(2);
+      bool input = false;
+      while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
+             !stop_.load())
+        input = wait_input(std::min(give_up, wall_clock::now() + std::chrono::milliseconds(10)));
+      if (host_deadline_.load() == host_at) host_deadline_.store(-1);
+    }
   }
   // Final figures: violations as cnc_core counts them (clocks with a `violation` strobe).
   std::vector<Cycle> strobes = vb.exec_.arc_violation_cycles;

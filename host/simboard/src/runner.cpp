@@ -1,6 +1,7 @@
 #include "fpgacnc/simboard/runner.h"
 
 #include <fmt/format.h>
+#include <cmath>
 
 #include <thread>
 
@@ -83,6 +84,10 @@ std::optional<uint8_t> BoardLink::take_in_flight(uint64_t upto) {
 }
 
 std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
+  // The board may not jump past the host's deadline (an event-driven board would otherwise run
+  // a long move to its end before the host's poll).
+  board_->set_host_deadline(static_cast<int64_t>(
+      std::ceil(static_cast<double>((deadline - skipped_).count()) * board_->clk_hz() / 1e9)));
   for (;;) {
     if (auto b = take(std::chrono::milliseconds(0))) return b;
     // The cycle first: every answer byte decoded up to it is counted in bytes_to_host() by now.
@@ -99,6 +104,8 @@ std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
 }
 
 void BoardLink::wait_until(Time deadline) {
+  board_->set_host_deadline(static_cast<int64_t>(
+      std::ceil(static_cast<double>((deadline - skipped_).count()) * board_->clk_hz() / 1e9)));
   for (;;) {
     const Time t = now();
     if (t >= deadline) return;

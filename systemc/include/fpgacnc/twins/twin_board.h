@@ -21,11 +21,12 @@
 // Without realtime the board jumps from event to event (an answer's decision, a byte decoded, the
 // end of activity) with no per-clock work. So that a host keeps up as with SimBoard (which needs
 // about 2.7 ms of wall time per UART byte), it holds its time (a) before its time passes the end
-// of the host's bytes on the line, until `host_grace` after the host's last write, and (b) after
+// of the host's bytes on the line, until `host_grace` after the host's last write, (b) after
 // the last byte of an answer, at the clock SimBoard would write it (the first inactive clock, at
 // most one poll interval later), until the client has read every answer byte and then
-// `host_grace` has passed without a write. With realtime, simulated time follows the wall clock
-// (50 M clocks per second at 50 MHz) while the board is busy; no holds.
+// `host_grace` has passed without a write, and (c) at the host's next timer
+// (set_host_deadline: a STATUS poll during a long move), for `host_grace`. With realtime, simulated
+// time follows the wall clock (50 M clocks per second at 50 MHz) while the board is busy; no holds.
 //
 // No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
 // e-stop input (set_estop throws BoardError). The SystemC kernel runs in a thread of its own, one
@@ -91,6 +92,7 @@ class TwinBoard : public simboard::Board {
   uint64_t bytes_to_host() const override;
   bool frozen() const override;
   std::string model() const override { return "tlm"; }
+  void set_host_deadline(int64_t cycle) override;
   // An error that ended the session (a twin's logic error), "" when none.
   std::string error() const;
 
@@ -112,6 +114,7 @@ class TwinBoard : public simboard::Board {
   bool running_ = false;
   std::atomic<bool> stop_{false};
   std::atomic<bool> quiet_{true};
+  std::atomic<int64_t> host_deadline_{-1};
   std::atomic<bool> session_done_{true};
   std::chrono::steady_clock::time_point t_start_{};
 };

@@ -167,6 +167,10 @@ class Board {
   // Not serving the pty (stopped, or paused): nothing comes at all, whatever the host writes.
   virtual bool frozen() const = 0;
   virtual std::string model() const = 0;  // "rtl" (Verilated cnc_core) or "tlm" (twins)
+  // The clock at which the host's next timer fires (a poll, a retransmission, a timeout), set
+  // by the host's link before it waits. A board that jumps from event to event stops there and
+  // gives the host its grace to act, as a board that runs clock by clock does; -1: none.
+  virtual void set_host_deadline(int64_t cycle) { (void)cycle; }
 };
 
 class SimBoard : public Board {
