@@ -506,10 +506,10 @@ void TwinBoard::session(VirtualBoard& vb) {
     }
     now = e;
     if (to_host) {
-      // Held at the host's timer until the host writes or waits for a later one (at most 2 s
+      // Held at the host's timer until the host writes or waits for a later one (at most 5 s
       // of wall time: a host that went away does not stop the board).
       publish(false);
-      const auto give_up = wall_clock::now() + std::chrono::seconds(2);
+      const auto give_up = wall_clock::now() + std::chrono::seconds(5);
       bool input = false;
       while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
              !stop_.load())

@@ -83,11 +83,18 @@ std::optional<uint8_t> BoardLink::take_in_flight(uint64_t upto) {
   return std::nullopt;
 }
 
+void BoardLink::hold_board_at(Time deadline) const {
+  // Only a deadline ahead of the board: a look without waiting (a deadline already passed) must
+  // not release the hold at the host's real next timer.
+  if (deadline <= now()) return;
+  board_->set_host_deadline(static_cast<int64_t>(
+      std::ceil(static_cast<double>((deadline - skipped_).count()) * board_->clk_hz() / 1e9)));
+}
+
 std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
   // The board may not jump past the host's deadline (an event-driven board would otherwise run
   // a long move to its end before the host's poll).
-  board_->set_host_deadline(static_cast<int64_t>(
-      std::ceil(static_cast<double>((deadline - skipped_).count()) * board_->clk_hz() / 1e9)));
+  hold_board_at(deadline);
   for (;;) {
     if (auto b = take(std::chrono::milliseconds(0))) return b;
     // The cycle first: every answer byte decoded up to it is counted in bytes_to_host() by now.
@@ -104,8 +111,7 @@ std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
 }
 
 void BoardLink::wait_until(Time deadline) {
-  board_->set_host_deadline(static_cast<int64_t>(
-      std::ceil(static_cast<double>((deadline - skipped_).count()) * board_->clk_hz() / 1e9)));
+  hold_board_at(deadline);
   for (;;) {
     const Time t = now();
     if (t >= deadline) return;

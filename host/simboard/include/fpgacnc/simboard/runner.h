@@ -48,6 +48,8 @@ class BoardLink : public link::Link {
   std::optional<link::BoardClock> board_clock() const override;
   Time now() const override;
   std::optional<uint8_t> read_byte_until(Time deadline) override;
+  // Tells the board the host waits until `deadline` (Board::set_host_deadline).
+  void hold_board_at(Time deadline) const;
   void wait_until(Time deadline) override;
   // Waits until the board is idle for the host (true) or `timeout` of board time has passed
   // (false): after the last answer, before reading the board's figures.
