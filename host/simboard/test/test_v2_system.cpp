@@ -5,7 +5,7 @@
 // Job: a square spiral of short segments, each 0.1 mm (16 steps) along X or Y at 3000 mm/min:
 // T = 0.1 / 3000 * 60 * 50e6 = 100 000 clocks (2 ms) per segment; sides of 1, 1, 2, 2, 3, 3, ...
 // segments (every corner turns 90 degrees; X and Y each reverse every other side), laser on
-// (M3 S1000: power 255). FPGACNC_V2_SEGMENTS sets the number of segments: CTest runs 160
+// (M3 S1000: power 255). FPGACNC_V2_SEGMENTS sets the number of segments: CTest runs 100
 // (0.32 s of machine time, about 25 s of simulation for v2 and v1), `make soak` 10 000; run by hand
 // the default is 1 000. Every host timer runs on the board's clock (BoardLink, link.h): the
 // timeouts below are board time.
