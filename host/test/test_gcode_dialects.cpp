@@ -187,3 +187,11 @@ TEST(Dialect, PrinterLinesOtherFirmwaresWrite) {
   EXPECT_EQ(error_of("G1 X E1 F100", gc::Dialect::kMarlin),
             "t.gcode:1:4: error: expected a number after 'X'");
 }
+
+TEST(GCode, SplinesAreRefusedByName) {
+  // G5 is a motion code of LinuxCNC's; here it is refused with its name, never run as a move.
+  EXPECT_EQ(error_of("G0 X1\nG5 X2 Y2 I1 J0 P1 Q1", gc::Dialect::kLinuxCnc),
+            "t.gcode:2:1: error: G5: splines are not supported");
+  EXPECT_EQ(error_of("G5.1 X2 Y2 I1 J0", gc::Dialect::kGrbl),
+            "t.gcode:1:1: error: G5.1: splines are not supported");
+}

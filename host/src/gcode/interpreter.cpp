@@ -77,9 +77,6 @@ int g_group(int c10) {
     case 880:
     case 890:
     case 330:
-    case 50:
-    case 51:
-    case 52:
       return 1;
     case 170:
     case 180:
