@@ -25,6 +25,8 @@ struct CommonOptions {
 
 // The interpreter's part of a report: dialect and why, pauses/outputs/messages, warnings.
 void print_gcode_report(const plan::Plan& p);
+// "final position: steps X .. Y .. Z .. E|A ..; mm ..." of a plan.
+void print_final_position(const plan::Plan& p);
 
 // --dialect and --tool-table (the G-code options every command that reads G-code takes).
 void add_gcode_options(CLI::App* sub, CommonOptions& opt);

@@ -26,6 +26,14 @@ config::MachineConfig load_config(const CommonOptions& opt) {
   return cfg;
 }
 
+void print_final_position(const plan::Plan& p) {
+  const char f = p.fourth_axis;
+  fmt::print(
+      "final position: steps X {} Y {} Z {} {} {}; mm X {:.4f} Y {:.4f} Z {:.4f} {} {:.4f}\n",
+      p.final_steps[0], p.final_steps[1], p.final_steps[2], f, p.final_steps[3], p.final_mm[0],
+      p.final_mm[1], p.final_mm[2], f, p.final_mm[3]);
+}
+
 void print_gcode_report(const plan::Plan& p) {
   const auto& in = p.input;
   if (in.dialect.empty()) return;  // a step file

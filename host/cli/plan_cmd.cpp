@@ -56,9 +56,7 @@ void print_summary(const plan::Plan& p, const config::MachineConfig& cfg) {
         "whose end radius differs from the start radius (planned as spirals)\n",
         p.input.modal_arc_as_line, p.input.arc_radius_mismatch);
   }
-  fmt::print("final position: steps X {} Y {} Z {} E {}; mm X {:.4f} Y {:.4f} Z {:.4f} E {:.4f}\n",
-             p.final_steps[0], p.final_steps[1], p.final_steps[2], p.final_steps[3], p.final_mm[0],
-             p.final_mm[1], p.final_mm[2], p.final_mm[3]);
+  print_final_position(p);
 }
 
 // Constant-feed v2 speeds: every LINE at length / T, as the device runs it (zero gap).

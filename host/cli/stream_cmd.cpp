@@ -93,12 +93,6 @@ class ProgressBar {
   size_t done_ = 0, total_ = 1;
 };
 
-void print_final(const plan::Plan& p) {
-  fmt::print("final position: steps X {} Y {} Z {} E {}; mm X {:.4f} Y {:.4f} Z {:.4f} E {:.4f}\n",
-             p.final_steps[0], p.final_steps[1], p.final_steps[2], p.final_steps[3], p.final_mm[0],
-             p.final_mm[1], p.final_mm[2], p.final_mm[3]);
-}
-
 void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
   config::MachineConfig cfg = load_config(a.common);
   if (a.baud) cfg.baud = a.baud;
@@ -261,7 +255,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     if (r.t_raised) {
       fmt::print("{} segments faster than the STEP timing allows: slowed to it\n", r.t_raised);
     }
-    print_final(p);
+    print_final_position(p);
     if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, sim);
     if (!r.position_ok) {
       throw link::Error(fmt::format(
@@ -285,7 +279,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       r.elapsed.count());
   if (r.skipped_heater) fmt::print("{} heater commands not sent (v1 has none)\n", r.skipped_heater);
   if (r.ze_only) fmt::print("{} Z/E-only moves not driven by v1 (sent as 0,0 steps)\n", r.ze_only);
-  print_final(p);
+  print_final_position(p);
   if (port.empty() && hooks.after_default_stream) hooks.after_default_stream(*lk, p, cfg, sim);
 }
 

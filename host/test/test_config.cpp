@@ -79,6 +79,18 @@ TEST(Config, ParsesValues) {
   EXPECT_EQ(c.step_timing.step_high, 1u);
 }
 
+TEST(Config, FourthAxisIsTheExtruderOrARotaryA) {
+  EXPECT_EQ(fpgacnc::config::parse_machine_config("", "m.toml").fourth_axis, 'E');
+  const auto c = fpgacnc::config::parse_machine_config(
+      "fourth_axis = \"A\"\n[steps_per_mm]\na = 50\n", "m.toml");
+  EXPECT_EQ(c.fourth_axis, 'A');
+  EXPECT_EQ(c.steps_per_mm[3], 50.0);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("fourth_axis = \"B\"\n", "m.toml"),
+               fpgacnc::config::Error);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("[steps_per_mm]\na = 50\ne = 10\n", "m.toml"),
+               fpgacnc::config::Error);
+}
+
 TEST(Config, UnknownKeyNamesFileAndKey) {
   try {
     fpgacnc::config::parse_machine_config("baud = 9600\nbogus = 1\n", "m.toml");

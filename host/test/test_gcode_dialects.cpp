@@ -83,8 +83,19 @@ TEST(Dialect, TIsAToolOrTheExtruder) {
   EXPECT_EQ(pz[0].tool, 2);
   EXPECT_NE(pz[0].prompt.find("T2"), std::string::npos);
   EXPECT_EQ(all<gc::Pause>(run("T0\nG1 X1 E1 F100", gc::Dialect::kMarlin)).size(), 0u);
-  EXPECT_NE(error_of("T1\nG1 X1 E1 F100", gc::Dialect::kMarlin).find("one extruder"),
-            std::string::npos);
+  // One extruder: T1 is a manual filament change (a pause), T1 again is none, T0 is one more.
+  const auto f = all<gc::Pause>(run("T1\nG1 X1 E1 F100\nT1\nG1 X2 E2\nT0", gc::Dialect::kMarlin));
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0].reason, gc::Pause::Reason::kFilamentChange);
+  EXPECT_EQ(f[0].tool, 1);
+  EXPECT_EQ(f[0].line, 1);
+  EXPECT_NE(f[0].prompt.find("T1"), std::string::npos);
+  EXPECT_EQ(f[1].tool, 0);
+  EXPECT_EQ(f[1].line, 5);
+  o.tool_change_pause = false;
+  EXPECT_EQ(all<gc::Pause>(run("T1\nG1 X1 E1 F100", gc::Dialect::kMarlin, o)).size(), 0u);
+  // A T beside M104 is the heater's extruder parameter, not a change.
+  EXPECT_EQ(all<gc::Pause>(run("M104 T1 S200\nG1 X1 E1 F100", gc::Dialect::kMarlin)).size(), 0u);
 }
 
 TEST(Dialect, UnknownMCodesWarnForPrintersAndFailForMills) {
@@ -194,4 +205,39 @@ TEST(GCode, SplinesAreRefusedByName) {
             "t.gcode:2:1: error: G5: splines are not supported");
   EXPECT_EQ(error_of("G5.1 X2 Y2 I1 J0", gc::Dialect::kGrbl),
             "t.gcode:1:1: error: G5.1: splines are not supported");
+}
+
+TEST(GCode, RotaryFourthAxisA) {
+  gc::Options o;
+  o.fourth_axis = 'A';
+  // Degrees are not scaled by G20; a move of A alone takes F in degrees per minute.
+  const auto m =
+      all<gc::Move>(run("G20\nG0 X1 A90\nG1 A180 F10\nG1 X2 A0", gc::Dialect::kLinuxCnc, o));
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_DOUBLE_EQ(m[0].end[0], 25.4);
+  EXPECT_DOUBLE_EQ(m[0].end[3], 90.0);
+  EXPECT_DOUBLE_EQ(m[1].end[3], 180.0);
+  EXPECT_DOUBLE_EQ(m[1].feed_mm_min, 10.0);
+  EXPECT_DOUBLE_EQ(m[2].end[3], 0.0);
+  EXPECT_DOUBLE_EQ(m[2].feed_mm_min, 254.0);  // with X: F is inches of the XYZ path per minute
+  // Work offsets and G92 apply to A; its parameters are LinuxCNC's (#5423 position, #5224 G54).
+  const auto w =
+      all<gc::Move>(run("G10 L2 P1 A45\nG54 G0 A0\nG92 A10\nG0 A20\n#1=#5423\n"
+                        "#2=#5224\nG0 X#1 Y#2",
+                        gc::Dialect::kLinuxCnc, o));
+  ASSERT_EQ(w.size(), 3u);
+  EXPECT_DOUBLE_EQ(w[0].end[3], 45.0);
+  EXPECT_DOUBLE_EQ(w[1].end[3], 55.0);  // G92 A10 at machine 45: program 20 is machine 55
+  EXPECT_DOUBLE_EQ(w[2].end[0], 20.0);
+  EXPECT_DOUBLE_EQ(w[2].end[1], 45.0);
+  // E is refused on a machine whose fourth axis is A, A on one whose fourth axis is E.
+  try {
+    run("G1 X1 E1 F100", gc::Dialect::kMarlin, o);
+    ADD_FAILURE() << "E accepted";
+  } catch (const gc::Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "t.gcode:1:7: error: no E axis on this machine (its fourth axis is the rotary A)");
+  }
+  EXPECT_EQ(error_of("G0 X1 A1", gc::Dialect::kLinuxCnc),
+            "t.gcode:1:7: error: no A axis on this machine (its axes are X Y Z E)");
 }

@@ -44,15 +44,20 @@ class Reader {
     return v.as_boolean();
   }
   void axes(const toml::value& v, const std::string& key, std::array<double, kAxes>& out) {
-    if (!v.is_table()) fail(v, key, "expected a table with keys x, y, z, e");
+    if (!v.is_table()) fail(v, key, "expected a table with keys x, y, z, e (or a)");
+    bool fourth = false;
     for (const auto& [k, sub] : v.as_table()) {
       const std::string full = key + "." + k;
       int a = -1;
       if (k == "x") a = kX;
       if (k == "y") a = kY;
       if (k == "z") a = kZ;
-      if (k == "e") a = kE;
-      if (a < 0) fail(sub, full, "unknown key (expected x, y, z or e)");
+      if (k == "e" || k == "a") {  // the fourth channel, named after the axis it drives
+        if (fourth) fail(sub, full, "e and a are the same (fourth) axis: give one of them");
+        fourth = true;
+        a = kE;
+      }
+      if (a < 0) fail(sub, full, "unknown key (expected x, y, z, e or a)");
       const double d = number(sub, full);
       if (!(d > 0.0)) fail(sub, full, "must be > 0");
       out[static_cast<size_t>(a)] = d;
@@ -104,6 +109,10 @@ class Reader {
       } else if (k == "motion") {
         c.motion = string(v, k);
         if (!valid_motion_name(c.motion)) fail(v, k, "expected \"profile\" or \"constant\"");
+      } else if (k == "fourth_axis") {
+        const std::string n = string(v, k);
+        if (n != "E" && n != "A") fail(v, k, "expected \"E\" (extruder) or \"A\" (rotary)");
+        c.fourth_axis = n[0];
       } else if (k == "native_arcs") {
         c.native_arcs = boolean(v, k);
       } else if (k == "laser_requires_m3") {

@@ -30,8 +30,11 @@ SourceError::SourceError(std::string file, int line, int column, std::string mes
 namespace fpgacnc::gcode {
 namespace {
 
-constexpr double kMaxValue = 1e6;  // |value| limit for every word (mm, mm/min, s)
-constexpr int kCoordSystems = 9;   // G54 .. G59.3
+constexpr double kMaxValue = 1e6;  // |value| limit for every word (mm, s) but F
+// F may ask for more than any machine has (LinuxCNC's 3D_Chips.ngc programs 2 250 000 mm/min to
+// mean "as fast as the machine goes"): the planner lowers it to the axes' limits.
+constexpr double kMaxFeed = 1e12;
+constexpr int kCoordSystems = 9;  // G54 .. G59.3
 constexpr double kInch = 25.4;
 
 // G and M codes are compared as ten times their value (G91.1 -> 911).
@@ -184,6 +187,11 @@ struct Interpreter::Impl {
   std::string file;
   Options opt;
   const DialectRules* rules;
+  // The fourth step channel: the extruder E (mm, M82/M83, M221) or a rotary A axis (degrees,
+  // G90/G91, work offsets like X Y Z, never scaled by G20).
+  bool rotary;
+  std::array<char, 4> axis_names;
+  int offset_axes;  // axes with work offsets, G28/G30 positions and parameters: 3, or 4 with A
   Params* params;
   Stats stats;
   ToolTable tools;
@@ -211,6 +219,7 @@ struct Interpreter::Impl {
   std::optional<double> spindle_s;
   int tool = 0;
   int next_tool = 0;
+  int filament = 0;  // printer dialects: the filament (slicer's T) loaded in the one extruder
   bool exact_stop = false;
   double tolerance = 0.0;
   bool retract_to_r = false;  // G99 (else G98)
@@ -229,6 +238,9 @@ struct Interpreter::Impl {
       : file(std::move(f)),
         opt(std::move(o)),
         rules(&dialect_rules(d.dialect)),
+        rotary(opt.fourth_axis == 'A'),
+        axis_names{'X', 'Y', 'Z', rotary ? 'A' : 'E'},
+        offset_axes(rotary ? 4 : 3),
         params(&p),
         feed(opt.default_feed_mm_min),
         retract_mm(opt.retract_mm),
@@ -255,35 +267,39 @@ struct Interpreter::Impl {
     return g5x[static_cast<size_t>(cs)][i] + g92[i] + tlo[i];
   }
 
+  // Program units per machine unit of an axis: degrees of A are never scaled by G20.
+  double unit_of(int a) const { return rotary && a == 3 ? 1.0 : unit; }
+
   // rs274ngc system parameters (LinuxCNC numbering) that programs read, in program units.
   void write_params() {
     Params& p = *params;
-    for (int a = 0; a < 3; ++a) {
+    for (int a = 0; a < offset_axes; ++a) {
       const auto i = static_cast<size_t>(a);
-      p.set(5420 + a, (pos[i] - offset(a)) / unit);
-      p.set(5211 + a, g92_saved[i] / unit);
-      p.set(5161 + a, g28_home[i] / unit);
-      p.set(5181 + a, g30_home[i] / unit);
+      p.set(5420 + a, (pos[i] - offset(a)) / unit_of(a));
+      p.set(5211 + a, g92_saved[i] / unit_of(a));
+      p.set(5161 + a, g28_home[i] / unit_of(a));
+      p.set(5181 + a, g30_home[i] / unit_of(a));
     }
-    p.set(5210, std::any_of(g92.begin(), g92.begin() + 3, [](double v) { return v != 0.0; }));
+    p.set(5210,
+          std::any_of(g92.begin(), g92.begin() + offset_axes, [](double v) { return v != 0.0; }));
     p.set(5220, cs + 1);
     for (int s = 0; s < kCoordSystems; ++s)
-      for (int a = 0; a < 3; ++a)
-        p.set(5221 + 20 * s + a, g5x[static_cast<size_t>(s)][static_cast<size_t>(a)] / unit);
+      for (int a = 0; a < offset_axes; ++a)
+        p.set(5221 + 20 * s + a, g5x[static_cast<size_t>(s)][static_cast<size_t>(a)] / unit_of(a));
     p.set(5400, tool);
     p.set(5403, tlo[2] / unit);
     if (rules->syntax.ngc) write_named();
   }
   void write_position() {
-    for (int a = 0; a < 3; ++a)
-      params->set(5420 + a, (pos[static_cast<size_t>(a)] - offset(a)) / unit);
+    for (int a = 0; a < offset_axes; ++a)
+      params->set(5420 + a, (pos[static_cast<size_t>(a)] - offset(a)) / unit_of(a));
   }
   // LinuxCNC's read-only named parameters that programs test (#<_x>, #<_metric>, #<_task>...).
   void write_named() {
     Params& p = *params;
-    static constexpr const char* kXyz[3] = {"_x", "_y", "_z"};
-    for (int a = 0; a < 3; ++a)
-      p.set_named(kXyz[a], (pos[static_cast<size_t>(a)] - offset(a)) / unit);
+    static constexpr const char* kXyza[4] = {"_x", "_y", "_z", "_a"};
+    for (int a = 0; a < offset_axes; ++a)
+      p.set_named(kXyza[a], (pos[static_cast<size_t>(a)] - offset(a)) / unit_of(a));
     p.set_named("_metric", unit == 1.0);
     p.set_named("_imperial", unit != 1.0);
     p.set_named("_absolute", absolute);
@@ -349,8 +365,6 @@ struct BlockWords {
     return nullptr;
   }
 };
-
-constexpr char kAxisNames[4] = {'X', 'Y', 'Z', 'E'};
 
 }  // namespace
 
@@ -459,7 +473,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       throw fail(
           b, wd.col,
           fmt::format("'E' is not a word of the {} dialect (no extruder axis)", rules->name));
-    if (l == 'A' || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W') {
+    if (l == 'E' && rotary && !(rules->unknown_m_warns && w.mcount > 0))
+      throw fail(b, wd.col, "no E axis on this machine (its fourth axis is the rotary A)");
+    if ((l == 'A' && !rotary) || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W') {
       // Marlin's M-codes take some of these as parameters; the used-word check catches the rest.
       bool m_param = rules->unknown_m_warns && w.mcount > 0;
       if (rules->g28_homes && w.g[1] && code10(*w.g[1]) == 280) {  // G28 U0: a second carriage
@@ -467,14 +483,16 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         continue;
       }
       if (!m_param)
-        throw fail(b, wd.col, fmt::format("no {} axis on this machine (its axes are X Y Z E)", l));
+        throw fail(
+            b, wd.col,
+            fmt::format("no {} axis on this machine (its axes are X Y Z {})", l, axis_names[3]));
     }
     if (l == 'N') {
       if (!wd.integer || wd.value < 0) throw fail(b, wd.col, "N must be a non-negative integer");
       continue;
     }
     if (w.letter[l - 'A']) throw fail(b, wd.col, fmt::format("two '{}' words on one line", l));
-    if (std::fabs(wd.value) > kMaxValue)
+    if (std::fabs(wd.value) > (l == 'F' ? kMaxFeed : kMaxValue))
       throw fail(b, wd.col, fmt::format("value of '{}' out of range (|value| > 1e6)", l));
     w.letter[l - 'A'] = &wd;
   }
@@ -498,6 +516,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
                  fmt::format("value of '{}' out of range (|value| > 1e6 mm)", wd->letter));
     return v;
   };
+  // An axis word in machine units: mm (scaled by G20), or degrees of a rotary A.
+  auto axis_mm = [&](int a, const Word* wd) { return rotary && a == 3 ? wd->value : to_mm(wd); };
   bool did = false;
 
   // rs274ngc order of execution.
@@ -525,7 +545,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (const Word* f = w.get('F'); f && !f_for_m) {
     word('F');
     if (f->value < 0) throw fail(b, f->col, "negative feed");
-    if (!inverse_time) feed = to_mm(f);
+    if (!inverse_time) feed = f->value * unit;
     feed_given = true;
   }
   // 4. S.
@@ -540,10 +560,19 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     word('T');
     if (!t->integer || t->value < 0) throw fail(b, t->col, "T must be a non-negative integer");
     if (rules->t_selects_extruder) {
-      if (t->value != 0 && !w.m(104) && !w.m(109))
-        throw fail(
-            b, t->col,
-            fmt::format("T{}: this machine has one extruder (T0)", static_cast<int>(t->value)));
+      // One extruder: a slicer's T<n> for another filament is a manual filament change at rest
+      // (the prompt names the filament), or only recorded with tool_change = "ignore".
+      const int n = static_cast<int>(t->value);
+      if (n != filament) {
+        ++stats.tool_changes;
+        if (opt.tool_change_pause) {
+          out.emplace_back(Pause{
+              Pause::Reason::kFilamentChange, n,
+              fmt::format("load the filament of T{} (this machine has one extruder)", n), b.line});
+          ++stats.pauses;
+        }
+        filament = n;
+      }
     } else {
       next_tool = static_cast<int>(t->value);
     }
@@ -704,14 +733,14 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         Limits lim;
         lim.line = b.line;
         for (int a = 0; a < 4; ++a) {
-          const Word* aw = word(kAxisNames[a]);
+          const Word* aw = word(axis_names[a]);
           if (!aw || aw->value <= 0) continue;
           const auto i = static_cast<size_t>(a);
-          if (c == 201) lim.accel_mm_s2[i] = aw->value * unit;
+          if (c == 201) lim.accel_mm_s2[i] = aw->value * unit_of(a);
           // Marlin's M203 is in units per second; RepRapFirmware's in units per minute.
           if (c == 203)
             lim.max_feed_mm_min[i] =
-                aw->value * unit * (rules->dialect == Dialect::kMarlin ? 60.0 : 1.0);
+                aw->value * unit_of(a) * (rules->dialect == Dialect::kMarlin ? 60.0 : 1.0);
         }
         if (c == 204) {
           const Word* p = word('P');
@@ -828,7 +857,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     } else {  // G43.1: the axis words are the offsets
       tlo = {};
       for (int a = 0; a < 3; ++a)
-        if (const Word* aw = word(kAxisNames[a])) tlo[static_cast<size_t>(a)] = to_mm(aw);
+        if (const Word* aw = word(axis_names[a])) tlo[static_cast<size_t>(a)] = to_mm(aw);
       tlo_words = true;
     }
     did = true;
@@ -857,7 +886,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (gw(2) || gw(3) || gw(4) || gw(5) || gw(6) || gw(7) || gw(10)) did = true;
 
   bool has_axis = polar_r || polar_a;  // axis words no M code on the line took as its own
-  for (char l : kAxisNames) has_axis = has_axis || (w.get(l) && !used[l - 'A']);
+  for (char l : axis_names) has_axis = has_axis || (w.get(l) && !used[l - 'A']);
   if (tlo_words) has_axis = false;
   auto no_motion_word = [&](const char* what) {
     if (gw(1))
@@ -874,13 +903,13 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   // (LinuxCNC keeps the program position, so the machine moves by the change).
   auto target = [&](bool machine) {
     Vec4 t = pos;
-    for (int a = 0; a < 3; ++a) {
+    for (int a = 0; a < offset_axes; ++a) {
       const auto i = static_cast<size_t>(a);
       const double shift = tlo[i] - pos_tlo[i];
       t[i] = pos[i] + shift;
-      const Word* aw = word(kAxisNames[a]);
+      const Word* aw = word(axis_names[a]);
       if (!aw) continue;
-      const double v = to_mm(aw);
+      const double v = axis_mm(a, aw);
       t[i] = machine ? v : absolute ? v + offset(a) : pos[i] + shift + v;
       if (std::fabs(t[i]) > 1e9) throw fail(b, aw->col, "position out of range");
     }
@@ -946,11 +975,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       const int n = p ? static_cast<int>(p->value) : 0;
       if (p && (!p->integer || n < 0 || n > 9)) throw fail(b, p->col, "G10 P must be 0..9");
       const int s = n == 0 ? cs : n - 1;
-      for (int a = 0; a < 3; ++a) {
-        const Word* aw = word(kAxisNames[a]);
+      for (int a = 0; a < offset_axes; ++a) {
+        const Word* aw = word(axis_names[a]);
         if (!aw) continue;
         const auto i = static_cast<size_t>(a);
-        const double v = to_mm(aw);
+        const double v = axis_mm(a, aw);
         // L20: the current position becomes v in that system.
         g5x[static_cast<size_t>(s)][i] = lv == 2 ? v : pos[i] - g92[i] - tlo[i] - v;
       }
@@ -964,7 +993,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (const ToolEntry* old = tools.find(static_cast<int>(p->value))) e = *old;
       e.tool = static_cast<int>(p->value);
       for (int a = 0; a < 3; ++a)
-        if (const Word* aw = word(kAxisNames[a])) e.offset[static_cast<size_t>(a)] = to_mm(aw);
+        if (const Word* aw = word(axis_names[a])) e.offset[static_cast<size_t>(a)] = to_mm(aw);
       if (const Word* r = word('R')) e.diameter = 2 * to_mm(r);
       for (char c : {'I', 'J', 'Q'}) word(c);
       tools.set(e);
@@ -997,13 +1026,13 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (nmc == 920) {
       if (!has_axis) throw fail(b, nm->col, "G92 needs at least one axis word");
       for (int a = 0; a < 4; ++a) {
-        const Word* aw = word(kAxisNames[a]);
+        const Word* aw = word(axis_names[a]);
         if (!aw) continue;
         const auto i = static_cast<size_t>(a);
-        if (a == 3)
+        if (a == 3 && !rotary)
           g92[3] = e_prog - to_mm(aw);
         else
-          g92[i] = pos[i] - g5x[static_cast<size_t>(cs)][i] - tlo[i] - to_mm(aw);
+          g92[i] = pos[i] - g5x[static_cast<size_t>(cs)][i] - tlo[i] - axis_mm(a, aw);
       }
       g92_saved = g92;
     } else if (nmc == 923) {
@@ -1028,7 +1057,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       Vec4 t = pos;
       bool any = false;
       for (int a = 0; a < 3; ++a)
-        if (word(kAxisNames[a])) {
+        if (word(axis_names[a])) {
           t[static_cast<size_t>(a)] = 0.0;
           any = true;
         }
@@ -1043,10 +1072,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (has_axis) {
       const Vec4 via = target(false);
       line_to(out, Motion::kRapid, via, b.line);
-      for (int a = 0; a < 3; ++a)
-        if (w.get(kAxisNames[a])) home[static_cast<size_t>(a)] = stored[static_cast<size_t>(a)];
+      for (int a = 0; a < offset_axes; ++a)
+        if (w.get(axis_names[a])) home[static_cast<size_t>(a)] = stored[static_cast<size_t>(a)];
     } else {
-      for (size_t a = 0; a < 3; ++a) home[a] = stored[a];
+      for (size_t a = 0; a < static_cast<size_t>(offset_axes); ++a) home[a] = stored[a];
     }
     line_to(out, Motion::kRapid, home, b.line);
     write_position();
@@ -1084,7 +1113,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   if (cycle_mode) {
     for (char l : {'Z', 'R', 'P', 'Q', 'L'}) word(l);
     const PlaneAxes cpa = pa;
-    const char wl = kAxisNames[cpa.w];
+    const char wl = axis_names[cpa.w];
     const Word* zw = w.get(wl);
     if (const Word* r = w.get('R')) {
       cycle_r = to_mm(r);
@@ -1099,20 +1128,20 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (q->value <= 0) throw fail(b, q->col, "Q (peck depth) must be > 0");
       cycle_q = to_mm(q);
     }
-    const bool pos_words = w.get(kAxisNames[cpa.u]) || w.get(kAxisNames[cpa.v]) || zw ||
+    const bool pos_words = w.get(axis_names[cpa.u]) || w.get(axis_names[cpa.v]) || zw ||
                            w.get('R') || gw(1) || polar_r || polar_a;
     if (pos_words) {
-      for (int a = 0; a < 3; ++a) word(kAxisNames[a]);
+      for (int a = 0; a < 3; ++a) word(axis_names[a]);
       bool given[3] = {w.get('X') != nullptr, w.get('Y') != nullptr, w.get('Z') != nullptr};
       Vec4 hole = pos;
       for (int a = 0; a < 3; ++a)
-        if (given[a]) hole[static_cast<size_t>(a)] = to_mm(w.get(kAxisNames[a]));
+        if (given[a]) hole[static_cast<size_t>(a)] = to_mm(w.get(axis_names[a]));
       int repeats = 1;
       if (const Word* l = w.get('L')) {
         if (!l->integer || l->value < 1) throw fail(b, l->col, "L (repeats) must be >= 1");
         repeats = static_cast<int>(l->value);
       }
-      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(kAxisNames[cpa.u]), polar_r,
+      canned_cycle(b, hole, given, out, repeats, gw(1) ? gw(1) : w.get(axis_names[cpa.u]), polar_r,
                    polar_a);
     }
     if (w.get('E')) throw fail(b, w.get('E')->col, "E in a canned cycle");
@@ -1120,8 +1149,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     const Word* first_axis = nullptr;
     for (int i = 0; i < b.count && !first_axis; ++i) {
       const char l = b.words[static_cast<size_t>(i)].letter;
-      if (l == 'X' || l == 'Y' || l == 'Z' || l == 'E' || l == 'I' || l == 'J' || l == 'K' ||
-          l == 'R')
+      if (l == 'X' || l == 'Y' || l == 'Z' || l == axis_names[3] || l == 'I' || l == 'J' ||
+          l == 'K' || l == 'R')
         first_axis = &b.words[static_cast<size_t>(i)];
     }
     const int motion_col = gw(1) ? gw(1)->col : first_axis ? first_axis->col : 1;
@@ -1135,6 +1164,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     apply_e(t);
     Motion mo = static_cast<Motion>(motion / 10);
     double f = feed * feed_factor;
+    // A move of the rotary A alone: F is in degrees per minute, whatever G20/G21 (LinuxCNC).
+    const bool a_only =
+        rotary && t[3] != pos[3] && t[0] == pos[0] && t[1] == pos[1] && t[2] == pos[2];
+    if (a_only) f /= unit;
     if (inverse_time && mo != Motion::kRapid) {
       const Word* fw = w.get('F');
       if (!fw || fw->value <= 0)
@@ -1225,7 +1258,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (inverse_time && mo != Motion::kRapid) {
       double len = 0;
       for (size_t a = 0; a < 3; ++a) len += (t[a] - pos[a]) * (t[a] - pos[a]);
-      len = std::sqrt(len);
+      len = a_only ? std::fabs(t[3] - pos[3]) : std::sqrt(len);
       if (mv.motion == Motion::kArcCw || mv.motion == Motion::kArcCcw) {
         const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v);
         const double r = std::hypot(pos[u] - mv.center[0], pos[v] - mv.center[1]);
@@ -1304,7 +1337,7 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
   const int col = first_col ? first_col->col : 1;
   if (!cycle_z_set)
     throw fail(b, col,
-               fmt::format("{}: the cycle needs {} (the bottom)", gname(motion), kAxisNames[wa]));
+               fmt::format("{}: the cycle needs {} (the bottom)", gname(motion), axis_names[wa]));
   if (!cycle_r_set)
     throw fail(b, col, fmt::format("{}: the cycle needs R (the retract level)", gname(motion)));
   if ((motion == 730 || motion == 830) && cycle_q <= 0)
@@ -1329,7 +1362,7 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
   }
   if (bottom > r + 1e-9)
     throw fail(b, col,
-               fmt::format("{}: the bottom ({}) is above R", gname(motion), kAxisNames[wa]));
+               fmt::format("{}: the bottom ({}) is above R", gname(motion), axis_names[wa]));
   const double f = feed * feed_factor;
   const double rapid_delta = 0.010 * kInch;  // LinuxCNC's G73/G83 back-off (0.010 inch)
   auto at = [&](double cu, double cv, double cw) {

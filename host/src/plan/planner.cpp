@@ -245,6 +245,7 @@ void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double fe
 
 Plan Planner::finish() {
   plan_.final_steps = pos_;
+  plan_.fourth_axis = cfg_.fourth_axis;
   for (size_t a = 0; a < 4; ++a) {
     plan_.final_mm[a] = static_cast<double>(pos_[a]) / cfg_.steps_per_mm[a];
   }
@@ -260,6 +261,7 @@ gcode::Options gcode_options(const config::MachineConfig& cfg) {
   }
   go.tool_table = cfg.gcode.tool_table;
   go.tool_change_pause = cfg.gcode.tool_change_pause;
+  go.fourth_axis = cfg.fourth_axis;
   go.optional_stop = cfg.gcode.optional_stop;
   go.block_delete = cfg.gcode.block_delete;
   return go;

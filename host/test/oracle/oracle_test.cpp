@@ -41,10 +41,12 @@ const std::string kData = FPGACNC_ORACLE_DATA;
 const std::string kShim = FPGACNC_ORACLE_SHIM;
 const std::string kSource = FPGACNC_SOURCE_DIR;
 
-// Options for our interpreter: LinuxCNC's dialect and the same tool table (tool.tbl, in mm).
+// Options for our interpreter: LinuxCNC's dialect, the same tool table (tool.tbl, in mm) and a
+// rotary A axis as the fourth (rs274 has A B C; the moves compared are X Y Z).
 gcode::Options our_options() {
   gcode::Options o;
   o.dialect = gcode::Dialect::kLinuxCnc;
+  o.fourth_axis = 'A';
   o.tool_table = kData + "/tool.tbl";
   return o;
 }

@@ -52,6 +52,9 @@ struct MachineConfig {
   // motion = "profile": send G2/G3 in XY as ARC frames (the device's circular DDA) where the
   // arc qualifies (docs/motion.md "Native arcs on the host"), chords otherwise; false: chords.
   bool native_arcs = true;
+  // The fourth step channel: "E" (an extruder, mm) or "A" (a rotary axis: steps_per_mm.a is
+  // steps per degree, max_feed_mm_min.a degrees per minute, max_accel_mm_s2.a degrees/s^2).
+  char fourth_axis = 'E';
   // [gcode]: how G-code files are read (docs/gcode.md).
   struct GCode {
     std::string dialect = "auto";   // "auto" (detected per file), grbl, linuxcnc, marlin, reprap

@@ -69,11 +69,12 @@ struct Heater {
 };
 
 // The job stops at rest until the operator resumes: M0/M1 (M1 only with optional stop on),
-// M6 tool changes (with the configured tool_change = "pause"), Marlin's M600 filament change.
+// M6 tool changes (with the configured tool_change = "pause"), Marlin's M600 filament change and,
+// in the printer dialects, a slicer's T<n> for another filament (this machine has one extruder).
 struct Pause {
   enum class Reason : uint8_t { kProgramPause, kOptionalStop, kToolChange, kFilamentChange };
   Reason reason = Reason::kProgramPause;
-  int tool = 0;        // kToolChange: the tool to insert
+  int tool = 0;        // kToolChange: the tool to insert; kFilamentChange after T<n>: n
   std::string prompt;  // what the operator is asked to do
   int line = 0;
 };
@@ -115,8 +116,11 @@ struct Options {
   std::string dialect_source = "--dialect";  // where the override came from, for the report
   std::string tool_table;         // LinuxCNC tool table file ("" = none: G43 H needs one)
   bool tool_change_pause = true;  // M6 pauses with a prompt (false: T/M6 only recorded)
-  bool optional_stop = false;     // M1 pauses (LinuxCNC's optional stop switch)
-  bool block_delete = false;      // lines starting with '/' are skipped
+  // The fourth axis: 'E' (the extruder; A, B, C words are refused) or 'A' (a rotary axis in
+  // degrees: A words move it, E words are refused; Move::end[3] is then A in degrees).
+  char fourth_axis = 'E';
+  bool optional_stop = false;  // M1 pauses (LinuxCNC's optional stop switch)
+  bool block_delete = false;   // lines starting with '/' are skipped
   // Firmware retraction defaults (G10/G11; M207/M208 change them), mm and mm/min.
   double retract_mm = 1.0;
   double retract_feed_mm_min = 2100.0;

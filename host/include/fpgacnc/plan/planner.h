@@ -83,6 +83,7 @@ struct Plan {
   std::array<uint32_t, 2> numerator{18'750'000, 18'750'000};  // v1 init packet (X, Y)
   Steps4 final_steps{};
   std::array<double, 4> final_mm{};
+  char fourth_axis = 'E';  // the name of axis 4 (the configuration's fourth_axis; A in degrees)
   // G2/G3 moves as programmed (machine mm), for packers that send arcs natively; their chords
   // carry Segment::arc_id = index + 1.
   std::vector<gcode::Move> arcs;
