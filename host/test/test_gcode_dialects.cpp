@@ -179,6 +179,11 @@ TEST(GCode, ToolTableOffsets) {
   EXPECT_DOUBLE_EQ(m[1].end[2], 0.0);
   EXPECT_NE(error_of("G43 H7\nG0 X1", gc::Dialect::kLinuxCnc).find("no tool table"),
             std::string::npos);
+  // M61 Q3 makes tool 3 the loaded one without a change (no pause); G43 then takes its length.
+  const auto q = run("M61 Q3 G43\nG0 Z0", gc::Dialect::kLinuxCnc, o);
+  EXPECT_TRUE(all<gc::Pause>(q).empty());
+  EXPECT_DOUBLE_EQ(all<gc::Move>(q)[0].end[2], 12.5);
+  EXPECT_NE(error_of("M61\nG0 X1", gc::Dialect::kLinuxCnc).find("M61 needs Q"), std::string::npos);
 }
 
 TEST(Dialect, PrinterLinesOtherFirmwaresWrite) {

@@ -673,6 +673,16 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         for (char l : {'X', 'Y', 'Z', 'E', 'S'}) word(l);
         did = true;
         break;
+      case 61: {  // set the loaded tool's number without a change (LinuxCNC)
+        if (rules->dialect != Dialect::kLinuxCnc)
+          throw fail(b, mw.col, fmt::format("M61: not supported in the {} dialect", rules->name));
+        const Word* q = word('Q');
+        if (!q || !q->integer || q->value < 0)
+          throw fail(b, q ? q->col : mw.col, "M61 needs Q<tool number> (a non-negative integer)");
+        tool = next_tool = static_cast<int>(q->value);
+        did = true;
+        break;
+      }
       case 104:
       case 109:
       case 140:
@@ -708,7 +718,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         output(Output::Kind::kFan, 0, duty, false);
         break;
       }
-      case 73: {
+      case 73: {  // printers: progress; LinuxCNC: save the modal state, restore it on return
+        if (rules->dialect == Dialect::kLinuxCnc)
+          throw fail(b, mw.col,
+                     "M73: saving and restoring the modal state (M70-M73) is not supported");
         const Word* p = word('P');
         for (char l : {'R', 'Q', 'S', 'C', 'D'}) word(l);
         if (p) out.emplace_back(Message{Message::Kind::kProgress, "", p->value, b.line});
@@ -791,6 +804,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           for (char l = 'A'; l <= 'Z'; ++l) word(l);
           break;
         }
+        if (rules->dialect == Dialect::kLinuxCnc && c >= 70 && c <= 72)
+          throw fail(b, mw.col,
+                     fmt::format("M{}: saving and restoring the modal state (M70-M73) is not "
+                                 "supported",
+                                 c));
         if (!rules->unknown_m_warns)
           throw fail(b, mw.col,
                      fmt::format("M{}: not supported in the {} dialect", c, rules->name));

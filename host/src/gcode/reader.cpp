@@ -1082,7 +1082,9 @@ struct Reader::Impl {
         if (frames.size() == 1) {
           fail(o.label_col, fmt::format("{} {} outside a subroutine call", lab, kw_name(o.kw)));
         }
-        if (frames.back().label != lab) {
+        // A return may carry any label (LinuxCNC's retval.ngc returns with the label of the `if`
+        // around it); endsub closes the subroutine it names.
+        if (o.kw == Kw::kEndsub && frames.back().label != lab) {
           fail(o.label_col,
                fmt::format("{} {} inside subroutine {}", lab, kw_name(o.kw), frames.back().label));
         }
