@@ -17,11 +17,17 @@ for f in "${files[@]}"; do
   if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: $f"; cat "$log"; fail=1
   fi
-  if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; hierarchy -check -top $top; proc; check -assert" >/dev/null 2>&1 \
-      || grep -qi "warning" "$log"; then
-    echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
-  fi
 done
+# Yosys: the files are read once and each top elaborated from a saved copy; only when that run
+# fails or warns is each top run alone, so the failure names its file.
+yosys_one() {  # top, chparam arguments ("" for the default build)
+  local chp=""
+  [ -n "$2" ] && chp="chparam$2 $1;"
+  echo "design -load base; $chp hierarchy -check -top $1; proc; check -assert;"
+}
+script="read_verilog ${files[*]}; design -save base;"
+for f in "${files[@]}"; do script="$script $(yosys_one "$(basename "$f" .v)" "")"; done
+declare -A ygs=()
 # cnc_core build options: "name param=value ..." (the default build is checked above).
 configs=(
   "lean N_AXES=2 PROTO_V2=0"
@@ -44,11 +50,24 @@ for c in "${configs[@]}"; do
   if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
-  if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; chparam$yg cnc_core; hierarchy -check -top cnc_core; proc; check -assert" >/dev/null 2>&1 \
-      || grep -qi "warning" "$log"; then
-    echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
-  fi
+  ygs[$name]="$yg"
+  script="$script $(yosys_one cnc_core "$yg")"
 done
+if ! yosys -q -l "$log" -p "$script" >/dev/null 2>&1 || grep -qi "warning" "$log"; then
+  for f in "${files[@]}"; do
+    if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; design -save base; $(yosys_one "$(basename "$f" .v)" "")" >/dev/null 2>&1 \
+        || grep -qi "warning" "$log"; then
+      echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
+    fi
+  done
+  for c in "${configs[@]}"; do
+    read -r name params <<<"$c"
+    if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; design -save base; $(yosys_one cnc_core "${ygs[$name]}")" >/dev/null 2>&1 \
+        || grep -qi "warning" "$log"; then
+      echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
+    fi
+  done
+fi
 if [ $fail -eq 0 ]; then
   echo "lint: ${#files[@]} files clean (verilator -Wall, iverilog -g2005, yosys check), and cnc_core in ${#configs[@]} build-option configurations"
 fi
