@@ -1,0 +1,287 @@
+#include "cutter_comp.h"
+
+#include <cmath>
+#include <variant>
+
+namespace fpgacnc::gcode {
+namespace {
+
+// Corners whose direction changes by at most this much (radians) get neither an intersection
+// nor an arc: the next move starts where the last one ended (LinuxCNC's tolerance, 0.05 rad).
+constexpr double kSmallTurn = 0.05;
+constexpr double kEps = 1e-9;
+
+void set_line(Command& c, int line) {
+  std::visit([line](auto& x) { x.line = line; }, c);
+}
+
+}  // namespace
+
+CutterComp::P2 CutterComp::uv(const Vec4& p) const {
+  return {p[static_cast<size_t>(u_)], p[static_cast<size_t>(v_)]};
+}
+
+void CutterComp::set_uv(Vec4& p, P2 q) const {
+  p[static_cast<size_t>(u_)] = q.x;
+  p[static_cast<size_t>(v_)] = q.y;
+}
+
+// Unit direction of travel at `at` (a point of the path).
+CutterComp::P2 CutterComp::tangent(const Seg& s, P2 at) const {
+  if (!s.arc) {
+    const double dx = s.b.x - s.a.x, dy = s.b.y - s.a.y, d = std::hypot(dx, dy);
+    return {dx / d, dy / d};
+  }
+  const double rx = at.x - s.c.x, ry = at.y - s.c.y, d = std::hypot(rx, ry);
+  return {-s.dir * ry / d, s.dir * rx / d};
+}
+
+// Left of a counter-clockwise arc is its centre: the offset path's radius shrinks there.
+double CutterComp::offset_radius(const Seg& s) const {
+  return s.radius - sign_ * s.dir * r_;
+}
+
+CutterComp::P2 CutterComp::offset_point(const Seg& s, P2 at) const {
+  if (s.arc) {
+    const double k = offset_radius(s) / std::hypot(at.x - s.c.x, at.y - s.c.y);
+    return {s.c.x + (at.x - s.c.x) * k, s.c.y + (at.y - s.c.y) * k};
+  }
+  const P2 t = tangent(s, at);
+  return {at.x - sign_ * r_ * t.y, at.y + sign_ * r_ * t.x};
+}
+
+// Where the offset paths of s0 and s1 cross, the crossing nearest `near` (the programmed
+// corner). False when they do not cross.
+bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const {
+  P2 cand[2];
+  int n = 0;
+  // A line's offset: a point and a unit direction; an arc's: centre and radius.
+  auto line_of = [&](const Seg& s, P2& q, P2& d) {
+    d = tangent(s, s.a);
+    q = offset_point(s, s.a);
+  };
+  auto line_circle = [&](P2 q, P2 d, P2 c, double rad) {
+    const double fx = q.x - c.x, fy = q.y - c.y;
+    const double b = fx * d.x + fy * d.y, cc = fx * fx + fy * fy - rad * rad;
+    const double disc = b * b - cc;
+    if (disc < 0) return;
+    const double sq = std::sqrt(disc);
+    for (double t : {-b - sq, -b + sq}) cand[n++] = {q.x + t * d.x, q.y + t * d.y};
+  };
+  if (!s0.arc && !s1.arc) {
+    P2 q0, d0, q1, d1;
+    line_of(s0, q0, d0);
+    line_of(s1, q1, d1);
+    const double den = d0.x * d1.y - d0.y * d1.x;
+    if (std::fabs(den) < kEps) return false;
+    const double t = ((q1.x - q0.x) * d1.y - (q1.y - q0.y) * d1.x) / den;
+    hit = {q0.x + t * d0.x, q0.y + t * d0.y};
+    return true;
+  }
+  if (s0.arc != s1.arc) {
+    const Seg& ln = s0.arc ? s1 : s0;
+    const Seg& ar = s0.arc ? s0 : s1;
+    P2 q, d;
+    line_of(ln, q, d);
+    line_circle(q, d, ar.c, offset_radius(ar));
+  } else {
+    const double r0 = offset_radius(s0), r1 = offset_radius(s1);
+    const double dx = s1.c.x - s0.c.x, dy = s1.c.y - s0.c.y, d = std::hypot(dx, dy);
+    if (d < kEps || d > r0 + r1 || d < std::fabs(r0 - r1)) return false;
+    const double a = (r0 * r0 - r1 * r1 + d * d) / (2 * d);
+    const double h = std::sqrt(std::max(0.0, r0 * r0 - a * a));
+    const double mx = s0.c.x + a * dx / d, my = s0.c.y + a * dy / d;
+    cand[n++] = {mx - h * dy / d, my + h * dx / d};
+    cand[n++] = {mx + h * dy / d, my - h * dx / d};
+  }
+  if (n == 0) return false;
+  hit = cand[0];
+  for (int i = 1; i < n; ++i)
+    if (std::hypot(cand[i].x - near.x, cand[i].y - near.y) <
+        std::hypot(hit.x - near.x, hit.y - near.y))
+      hit = cand[i];
+  return true;
+}
+
+void CutterComp::start(Side side, double radius, Plane plane, const Vec4& pos) {
+  if (on_) throw Error("cutter radius compensation is already on (G40 first)");
+  if (plane == Plane::kYZ)
+    throw Error("cutter radius compensation needs the XY or XZ plane (G17 or G18), not G19");
+  sign_ = side == Side::kLeft ? 1 : -1;
+  if (radius < 0) sign_ = -sign_;
+  r_ = std::fabs(radius);
+  plane_ = plane;
+  const PlaneAxes pa = plane_axes(plane);
+  u_ = pa.u;
+  v_ = pa.v;
+  w_ = pa.w;
+  if (!exiting_) cur_ = pos;
+  exiting_ = false;
+  on_ = true;
+  entry_ = true;
+}
+
+void CutterComp::stop(std::vector<Command>& out, int line) {
+  if (!on_) return;
+  flush(out, line);
+  on_ = false;
+  exiting_ = true;
+}
+
+void CutterComp::flush(std::vector<Command>& out, int line) {
+  for (auto& c : queue_) {
+    set_line(c, line);
+    out.push_back(std::move(c));
+  }
+  queue_.clear();
+}
+
+void CutterComp::process(std::vector<Command>& cmds, std::vector<Command>& out, int line) {
+  for (auto& c : cmds) {
+    if (auto* mv = std::get_if<Move>(&c))
+      move(*mv, out, line);
+    else if (queue_.empty())
+      out.push_back(std::move(c));
+    else
+      queue_.push_back(std::move(c));
+  }
+}
+
+void CutterComp::move_pending_end(P2 hit) {
+  Move& pm = std::get<Move>(queue_[0]);
+  const P2 s = uv(pm.start);
+  if (pending_.arc) {
+    // The new end must come before the old one along the arc.
+    auto sweep = [&](P2 to) {
+      double a = std::atan2(to.y - pending_.c.y, to.x - pending_.c.x) -
+                 std::atan2(s.y - pending_.c.y, s.x - pending_.c.x);
+      a *= pending_.dir;
+      while (a <= 0) a += 2 * M_PI;
+      while (a > 2 * M_PI) a -= 2 * M_PI;
+      return a;
+    };
+    if (pm.extra_turns == 0 && !pm.full_circle && sweep(hit) > sweep(uv(pm.end)) + 1e-9)
+      throw Error(
+          "arc in a concave corner: the tool cannot follow it without gouging (the tool is too "
+          "large for this corner)");
+    pm.full_circle = false;
+  } else {
+    const P2 t = tangent(pending_, pending_.a);
+    if ((hit.x - s.x) * t.x + (hit.y - s.y) * t.y <= 0)
+      throw Error(
+          "straight move in a concave corner: the tool cannot reach the corner without gouging "
+          "(the tool is too large for this corner)");
+  }
+  for (auto& c : queue_)
+    if (auto* m = std::get_if<Move>(&c)) {
+      if (m != &pm) set_uv(m->start, hit);
+      set_uv(m->end, hit);
+    }
+  set_uv(cur_, hit);
+}
+
+void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
+  const bool arc = mv.motion == Motion::kArcCw || mv.motion == Motion::kArcCcw;
+  if (exiting_) {
+    if (arc)
+      throw Error(
+          "the move after G40 (the exit from cutter radius compensation) must be a straight "
+          "line, not an arc");
+    exiting_ = false;
+    mv.start = cur_;
+    cur_ = mv.end;
+    out.push_back(mv);
+    return;
+  }
+  if (!on_) {
+    cur_ = mv.end;
+    out.push_back(mv);
+    return;
+  }
+  if (arc && mv.plane != plane_)
+    throw Error("an arc in another plane than the one cutter radius compensation was turned on in");
+  Seg s;
+  s.a = uv(mv.start);
+  s.b = uv(mv.end);
+  s.arc = arc;
+  if (arc) {
+    s.c = {mv.center[0], mv.center[1]};
+    s.radius = std::hypot(s.a.x - s.c.x, s.a.y - s.c.y);
+    s.dir = mv.motion == Motion::kArcCcw ? 1 : -1;
+  }
+  const bool in_plane = arc || std::hypot(s.b.x - s.a.x, s.b.y - s.a.y) > kEps;
+  if (entry_) {
+    if (arc)
+      throw Error(
+          "an arc as the entry move of cutter radius compensation (the first move after "
+          "G41/G42): make it a straight line");
+    if (!in_plane || std::hypot(s.b.x - s.a.x, s.b.y - s.a.y) <= r_)
+      throw Error(
+          "the entry move of cutter radius compensation (the first move after G41/G42) must be "
+          "longer in the plane than the tool radius");
+    mv.start = cur_;
+    set_uv(mv.end, offset_point(s, s.b));
+    cur_ = mv.end;
+    queue_.clear();
+    queue_.emplace_back(mv);
+    pending_ = s;
+    entry_ = false;
+    return;
+  }
+  if (!in_plane) {  // along the third axis only: from the offset point, held with the move before
+    mv.start = cur_;
+    set_uv(mv.end, uv(cur_));
+    cur_ = mv.end;
+    if (queue_.empty())
+      out.push_back(mv);
+    else
+      queue_.emplace_back(mv);
+    return;
+  }
+  if (arc && offset_radius(s) <= kEps)
+    throw Error(
+        "arc radius not larger than the tool radius on the inside of the arc: the tool cannot "
+        "follow it");
+  const P2 t0 = tangent(pending_, pending_.b);
+  const P2 t1 = tangent(s, s.a);
+  // Turn from the last move to this one, > 0 to the left; times the side: > 0 turns towards
+  // the tool (an inside corner), < 0 away from it (outside).
+  const double turn = sign_ * std::atan2(t0.x * t1.y - t0.y * t1.x, t0.x * t1.x + t0.y * t1.y);
+  if (turn > kSmallTurn) {
+    P2 hit;
+    if (!intersect(pending_, s, s.a, hit))
+      throw Error(
+          "concave corner: the offset paths do not meet (the tool is too large for this "
+          "corner)");
+    move_pending_end(hit);
+    flush(out, line);
+  } else if (turn < -kSmallTurn) {
+    flush(out, line);
+    Move corner = mv;
+    corner.start = cur_;
+    corner.end = cur_;
+    set_uv(corner.end, offset_point(s, s.a));
+    corner.extra_turns = 0;
+    corner.full_circle = false;
+    if (mv.motion != Motion::kRapid) {
+      corner.motion = sign_ > 0 ? Motion::kArcCw : Motion::kArcCcw;
+      corner.plane = plane_;
+      corner.center = {s.a.x, s.a.y};
+    }
+    corner.line = line;
+    cur_ = corner.end;
+    out.push_back(corner);
+  } else {
+    flush(out, line);
+  }
+  mv.start = cur_;
+  set_uv(mv.end, offset_point(s, s.b));
+  if (arc)
+    mv.full_circle =
+        std::hypot(uv(mv.end).x - uv(mv.start).x, uv(mv.end).y - uv(mv.start).y) < kEps;
+  cur_ = mv.end;
+  queue_.emplace_back(mv);
+  pending_ = s;
+}
+
+}  // namespace fpgacnc::gcode
