@@ -38,6 +38,7 @@ CutterComp::P2 CutterComp::tangent(const Seg& s, P2 at) const {
 
 // Left of a counter-clockwise arc is its centre: the offset path's radius shrinks there.
 double CutterComp::offset_radius(const Seg& s) const {
+  if (s.tool_path) return s.radius;
   return s.radius - sign_ * s.dir * r_;
 }
 
@@ -210,11 +211,41 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
     s.dir = mv.motion == Motion::kArcCcw ? 1 : -1;
   }
   const bool in_plane = arc || std::hypot(s.b.x - s.a.x, s.b.y - s.a.y) > kEps;
-  if (entry_) {
-    if (arc)
+  if (entry_ && arc) {
+    // An entry arc ends at the offset of its programmed end; its centre moves along the radius
+    // through that end until it is as far from the tool's start as from the end (LinuxCNC).
+    const double rr = offset_radius(s);
+    if (rr <= kEps)
       throw Error(
-          "an arc as the entry move of cutter radius compensation (the first move after "
-          "G41/G42): make it a straight line");
+          "arc radius not larger than the tool radius on the inside of the arc: the tool cannot "
+          "follow it");
+    const P2 st = uv(cur_);
+    const P2 u{(s.b.x - s.c.x) / s.radius, (s.b.y - s.c.y) / s.radius};
+    const double cx = s.c.x - st.x, cy = s.c.y - st.y;
+    const double den = 2 * (u.x * cx + u.y * cy + rr);
+    if (std::fabs(den) < kEps)
+      throw Error("entry arc of cutter radius compensation: no arc from the tool to its end");
+    const double t = (rr * rr - cx * cx - cy * cy) / den;
+    Seg e;
+    e.arc = true;
+    e.tool_path = true;
+    e.dir = s.dir;
+    e.a = st;
+    e.b = {s.c.x + rr * u.x, s.c.y + rr * u.y};
+    e.c = {s.c.x + t * u.x, s.c.y + t * u.y};
+    e.radius = std::fabs(rr - t);
+    mv.start = cur_;
+    set_uv(mv.end, e.b);
+    mv.center = {e.c.x, e.c.y};
+    mv.full_circle = false;
+    cur_ = mv.end;
+    queue_.clear();
+    queue_.emplace_back(mv);
+    pending_ = e;
+    entry_ = false;
+    return;
+  }
+  if (entry_) {
     if (!in_plane || std::hypot(s.b.x - s.a.x, s.b.y - s.a.y) <= r_)
       throw Error(
           "the entry move of cutter radius compensation (the first move after G41/G42) must be "

@@ -47,6 +47,7 @@ class CutterComp {
     P2 a, b, c;
     double radius = 0;  // arcs: programmed radius
     int dir = 1;
+    bool tool_path = false;  // c and radius are the tool's path already (an entry arc)
   };
   void move(Move mv, std::vector<Command>& out, int line);
   P2 uv(const Vec4& p) const;
