@@ -161,14 +161,15 @@ void CutterComp::move_pending_end(P2 hit) {
       while (a > 2 * M_PI) a -= 2 * M_PI;
       return a;
     };
-    if (pm.extra_turns == 0 && !pm.full_circle && sweep(hit) > sweep(uv(pm.end)) + 1e-9)
+    if (!pending_entry_ && pm.extra_turns == 0 && !pm.full_circle &&
+        sweep(hit) > sweep(uv(pm.end)) + 1e-9)
       throw Error(
           "arc in a concave corner: the tool cannot follow it without gouging (the tool is too "
           "large for this corner)");
     pm.full_circle = false;
   } else {
     const P2 t = tangent(pending_, pending_.a);
-    if ((hit.x - s.x) * t.x + (hit.y - s.y) * t.y <= 0)
+    if (!pending_entry_ && (hit.x - s.x) * t.x + (hit.y - s.y) * t.y <= 0)
       throw Error(
           "straight move in a concave corner: the tool cannot reach the corner without gouging "
           "(the tool is too large for this corner)");
@@ -242,6 +243,7 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
     queue_.clear();
     queue_.emplace_back(mv);
     pending_ = e;
+    pending_entry_ = true;
     entry_ = false;
     return;
   }
@@ -256,6 +258,7 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
     queue_.clear();
     queue_.emplace_back(mv);
     pending_ = s;
+    pending_entry_ = true;
     entry_ = false;
     return;
   }
@@ -313,6 +316,7 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
   cur_ = mv.end;
   queue_.emplace_back(mv);
   pending_ = s;
+  pending_entry_ = false;
 }
 
 }  // namespace fpgacnc::gcode

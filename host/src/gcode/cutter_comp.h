@@ -68,6 +68,7 @@ class CutterComp {
   Vec4 cur_{};                  // where the tool is after everything in queue_
   std::vector<Command> queue_;  // [0]: the move in the plane whose end is not known yet
   Seg pending_;                 // its programmed path
+  bool pending_entry_ = false;  // it is the entry move (its end may move anywhere)
 };
 
 }  // namespace fpgacnc::gcode
