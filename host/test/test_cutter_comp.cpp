@@ -192,3 +192,26 @@ TEST(LatheMode, DiameterAndRadius) {
   EXPECT_NEAR(m[4].end[0], 22, 1e-12);
   EXPECT_NEAR(m[5].end[0], 30, 1e-12);
 }
+
+// G43 keeps the machine where it is (the program position moves by the offset); an M6 after it
+// (on its line or later, before the next move) reads the position back as it was before the
+// change, so the next move goes there with the new offset (LinuxCNC's rs274 does both).
+TEST(ToolLengthOffset, MachineStaysUnlessAToolChangeFollows) {
+  const auto dir = std::filesystem::temp_directory_path() / "fpgacnc_tlo_test";
+  std::filesystem::create_directories(dir);
+  const auto tbl = dir / "tools.tbl";
+  std::ofstream(tbl) << "T3 P3 Z31.75 D10 ;10 mm end mill\n";
+  gc::Options o;
+  o.tool_table = tbl.string();
+  o.tool_change_pause = false;
+  auto m = moves_of("G21 G90 G0 X1 Z1\nG43 H3\nG0 X50\nM2\n", o);
+  ASSERT_EQ(m.size(), 2u);
+  expect_at(m[1], 50, 0, 1);
+  m = moves_of("G21 G90 G0 X1 Z1\nT3 M6 G43 H3\nG0 X50\nM2\n", o);
+  expect_at(m[1], 50, 0, 1 + 31.75);
+  m = moves_of("G21 G90 G0 X1 Z1\nG43 H3\nT3 M6\nG0 X50\nM2\n", o);
+  expect_at(m[1], 50, 0, 1 + 31.75);
+  m = moves_of("G21 G90 G0 X1 Z1\nG43 H3\nG0 Z0\nM2\n", o);
+  expect_at(m[1], 1, 0, 31.75);  // program Z0 with the offset
+  std::filesystem::remove_all(dir);
+}

@@ -201,7 +201,9 @@ struct Interpreter::Impl {
   Vec4 g92{};
   Vec4 g92_saved{};  // parameters 5211-5213 (G92.2 clears the offsets, G92.3 restores them)
   Vec4 tlo{};        // tool length offset
-  Vec4 pos_tlo{};    // the tool length offset `pos` was reached with
+  Vec4 pos_tlo{};    // the tool length offset the program position is reckoned with
+  Vec4 move_tlo{};   // the tool length offset of the last move
+  bool tool_changed = false;  // M6 in this block
   double unit = 1.0;
   bool absolute = true;
   bool arc_absolute = false;  // G90.1
@@ -340,6 +342,7 @@ struct Interpreter::Impl {
   void push(std::vector<Command>& out, const Move& mv) {
     pos = mv.end;
     pos_tlo = tlo;
+    move_tlo = tlo;
     out.emplace_back(mv);
     ++stats.moves;
     produced = true;
@@ -587,6 +590,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         ++stats.pauses;
       }
       tool = next_tool;
+      tool_changed = true;
     }
     did = true;
   }
@@ -895,6 +899,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         if (const Word* aw = word(kAxisNames[a])) tlo[static_cast<size_t>(a)] = to_mm(aw);
       tlo_words = true;
     }
+    pos_tlo = tlo;  // the machine stays; the program position moves (until an M6, below)
     did = true;
   }
   // 13. Coordinate system.
@@ -1532,6 +1537,13 @@ bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
   m.move_col = 1;
   const bool go_on = m.execute(block, out);
   m.last_line = block.line;
+  // LinuxCNC reads the position back after a tool change: the program position from before any
+  // tool length offset change since the last move, so the next move goes there with the new
+  // offset (the machine moves by the change).
+  if (m.tool_changed) {
+    m.pos_tlo = m.move_tlo;
+    m.tool_changed = false;
+  }
   if (engaged || m.comp_event != Impl::CompEvent::kNone) {
     m.compensate(block, out, first, go_on);
     m.comp_event = Impl::CompEvent::kNone;
