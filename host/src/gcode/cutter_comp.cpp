@@ -6,6 +6,14 @@
 namespace fpgacnc::gcode {
 namespace {
 
+// The angle an arc about c turns through from a to b in direction dir (+1 CCW), (0, 2 pi].
+double sweep_of_impl(double cx, double cy, double ax, double ay, double bx, double by, int dir) {
+  double a = (std::atan2(by - cy, bx - cx) - std::atan2(ay - cy, ax - cx)) * dir;
+  while (a <= 0) a += 2 * M_PI;
+  while (a > 2 * M_PI) a -= 2 * M_PI;
+  return a;
+}
+
 // Corners whose direction changes by at most this much (radians) get neither an intersection
 // nor an arc: the next move starts where the last one ended (LinuxCNC's tolerance, 0.05 rad).
 constexpr double kSmallTurn = 0.05;
@@ -37,14 +45,15 @@ CutterComp::P2 CutterComp::tangent(const Seg& s, P2 at) const {
 }
 
 // Left of a counter-clockwise arc is its centre: the offset path's radius shrinks there.
-double CutterComp::offset_radius(const Seg& s) const {
+double CutterComp::offset_radius(const Seg& s, bool at_end) const {
   if (s.tool_path) return s.radius;
-  return s.radius - sign_ * s.dir * r_;
+  return (at_end ? s.radius_end : s.radius) - sign_ * s.dir * r_;
 }
 
 CutterComp::P2 CutterComp::offset_point(const Seg& s, P2 at) const {
-  if (s.arc) {
-    const double k = offset_radius(s) / std::hypot(at.x - s.c.x, at.y - s.c.y);
+  if (s.arc) {  // along the radius through `at`, by the tool radius
+    const double d = std::hypot(at.x - s.c.x, at.y - s.c.y);
+    const double k = s.tool_path ? s.radius / d : (d - sign_ * s.dir * r_) / d;
     return {s.c.x + (at.x - s.c.x) * k, s.c.y + (at.y - s.c.y) * k};
   }
   const P2 t = tangent(s, at);
@@ -84,9 +93,9 @@ bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const
     const Seg& ar = s0.arc ? s0 : s1;
     P2 q, d;
     line_of(ln, q, d);
-    line_circle(q, d, ar.c, offset_radius(ar));
+    line_circle(q, d, ar.c, offset_radius(ar, &ar == &s0));
   } else {
-    const double r0 = offset_radius(s0), r1 = offset_radius(s1);
+    const double r0 = offset_radius(s0, true), r1 = offset_radius(s1);
     const double dx = s1.c.x - s0.c.x, dy = s1.c.y - s0.c.y, d = std::hypot(dx, dy);
     if (d < kEps || d > r0 + r1 || d < std::fabs(r0 - r1)) return false;
     const double a = (r0 * r0 - r1 * r1 + d * d) / (2 * d);
@@ -102,6 +111,10 @@ bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const
         std::hypot(hit.x - near.x, hit.y - near.y))
       hit = cand[i];
   return true;
+}
+
+double CutterComp::sweep_of(P2 c, P2 a, P2 b, int dir) {
+  return sweep_of_impl(c.x, c.y, a.x, a.y, b.x, b.y, dir);
 }
 
 void CutterComp::start(Side side, double radius, Plane plane, const Vec4& pos) {
@@ -124,6 +137,7 @@ void CutterComp::start(Side side, double radius, Plane plane, const Vec4& pos) {
 
 void CutterComp::stop(std::vector<Command>& out, int line) {
   if (!on_) return;
+  if (!queue_.empty()) move_pending_end(uv(cur_));  // the last move must still run forwards
   flush(out, line);
   on_ = false;
   exiting_ = true;
@@ -153,23 +167,18 @@ void CutterComp::move_pending_end(P2 hit) {
   const P2 s = uv(pm.start);
   if (pending_.arc) {
     // The new end must come before the old one along the arc.
-    auto sweep = [&](P2 to) {
-      double a = std::atan2(to.y - pending_.c.y, to.x - pending_.c.x) -
-                 std::atan2(s.y - pending_.c.y, s.x - pending_.c.x);
-      a *= pending_.dir;
-      while (a <= 0) a += 2 * M_PI;
-      while (a > 2 * M_PI) a -= 2 * M_PI;
-      return a;
-    };
-    if (!pending_entry_ && pm.extra_turns == 0 && !pm.full_circle &&
-        sweep(hit) > sweep(uv(pm.end)) + 1e-9)
+    // From the tool's start to the new end, the arc may turn 0.254 rad more than to its old
+    // end (LinuxCNC's allowance); more means the path crossed itself.
+    if (!pending_entry_ && pm.extra_turns == 0 &&
+        sweep_of(pending_.c, s, hit, pending_.dir) >
+            sweep_of(pending_.c, s, uv(pm.end), pending_.dir) + 0.254)
       throw Error(
           "arc in a concave corner: the tool cannot follow it without gouging (the tool is too "
           "large for this corner)");
-    pm.full_circle = false;
+    if (std::hypot(hit.x - uv(pm.end).x, hit.y - uv(pm.end).y) > kEps) pm.full_circle = false;
   } else {
     const P2 t = tangent(pending_, pending_.a);
-    if (!pending_entry_ && (hit.x - s.x) * t.x + (hit.y - s.y) * t.y <= 0)
+    if (!pending_entry_ && (hit.x - s.x) * t.x + (hit.y - s.y) * t.y < 0)
       throw Error(
           "straight move in a concave corner: the tool cannot reach the corner without gouging "
           "(the tool is too large for this corner)");
@@ -209,19 +218,21 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
   if (arc) {
     s.c = {mv.center[0], mv.center[1]};
     s.radius = std::hypot(s.a.x - s.c.x, s.a.y - s.c.y);
+    s.radius_end = std::hypot(s.b.x - s.c.x, s.b.y - s.c.y);
+    s.sweep = sweep_of(s.c, s.a, s.b, s.dir);
     s.dir = mv.motion == Motion::kArcCcw ? 1 : -1;
   }
   const bool in_plane = arc || std::hypot(s.b.x - s.a.x, s.b.y - s.a.y) > kEps;
   if (entry_ && arc) {
     // An entry arc ends at the offset of its programmed end; its centre moves along the radius
     // through that end until it is as far from the tool's start as from the end (LinuxCNC).
-    const double rr = offset_radius(s);
+    const double rr = offset_radius(s, true);
     if (rr <= kEps)
       throw Error(
           "arc radius not larger than the tool radius on the inside of the arc: the tool cannot "
           "follow it");
     const P2 st = uv(cur_);
-    const P2 u{(s.b.x - s.c.x) / s.radius, (s.b.y - s.c.y) / s.radius};
+    const P2 u{(s.b.x - s.c.x) / s.radius_end, (s.b.y - s.c.y) / s.radius_end};
     const double cx = s.c.x - st.x, cy = s.c.y - st.y;
     const double den = 2 * (u.x * cx + u.y * cy + rr);
     if (std::fabs(den) < kEps)
@@ -281,7 +292,14 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
   // Turn from the last move to this one, > 0 to the left; times the side: > 0 turns towards
   // the tool (an inside corner), < 0 away from it (outside).
   const double turn = sign_ * std::atan2(t0.x * t1.y - t0.y * t1.x, t0.x * t1.x + t0.y * t1.y);
-  if (turn > kSmallTurn) {
+  // LinuxCNC's corner angle: beta = -turn in [-pi/2, 3pi/2). Inside when it turns towards the
+  // tool by more than the tolerance and less than a reversal; an almost reversal after an arc
+  // the tool runs outside of ("h" shape) counts as inside too.
+  double beta = -turn;
+  if (beta < -M_PI / 2) beta += 2 * M_PI;
+  const bool concave = beta < -kSmallTurn || beta > M_PI + kSmallTurn ||
+                       (beta > M_PI - kSmallTurn && pending_.arc && sign_ * pending_.dir < 0);
+  if (concave) {
     P2 hit;
     if (!intersect(pending_, s, s.a, hit))
       throw Error(
@@ -289,7 +307,8 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
           "corner)");
     move_pending_end(hit);
     flush(out, line);
-  } else if (turn < -kSmallTurn) {
+  } else if (beta > kSmallTurn) {
+    move_pending_end(uv(cur_));  // the end stays; the move must still run forwards
     flush(out, line);
     Move corner = mv;
     corner.start = cur_;

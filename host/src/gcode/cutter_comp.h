@@ -45,7 +45,9 @@ class CutterComp {
   struct Seg {
     bool arc = false;
     P2 a, b, c;
-    double radius = 0;  // arcs: programmed radius
+    double radius = 0;      // arcs: programmed radius at the start
+    double radius_end = 0;  // and at the end (they differ by the file's rounding)
+    double sweep = 0;       // the angle it turns through, (0, 2 pi]
     int dir = 1;
     bool tool_path = false;  // c and radius are the tool's path already (an entry arc)
   };
@@ -53,10 +55,12 @@ class CutterComp {
   P2 uv(const Vec4& p) const;
   void set_uv(Vec4& p, P2 q) const;
   P2 tangent(const Seg& s, P2 at) const;
-  double offset_radius(const Seg& s) const;  // arcs: the radius of the offset path
+  // Arcs: the radius of the offset path, reckoned from the start's or the end's radius.
+  double offset_radius(const Seg& s, bool at_end = false) const;
   P2 offset_point(const Seg& s, P2 at) const;
   bool intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const;
   void move_pending_end(P2 hit);
+  static double sweep_of(P2 c, P2 a, P2 b, int dir);
 
   bool on_ = false;
   bool exiting_ = false;
