@@ -166,12 +166,10 @@ void CutterComp::move_pending_end(P2 hit) {
   Move& pm = std::get<Move>(queue_[0]);
   const P2 s = uv(pm.start);
   if (pending_.arc) {
-    // The new end must come before the old one along the arc.
-    // From the tool's start to the new end, the arc may turn 0.254 rad more than to its old
-    // end (LinuxCNC's allowance); more means the path crossed itself.
+    // From the tool's start to the new end, the arc may turn 0.254 rad more than programmed
+    // (LinuxCNC's allowance); more means the path crossed itself.
     if (!pending_entry_ && pm.extra_turns == 0 &&
-        sweep_of(pending_.c, s, hit, pending_.dir) >
-            sweep_of(pending_.c, s, uv(pm.end), pending_.dir) + 0.254)
+        sweep_of(pending_.c, s, hit, pending_.dir) > pending_.sweep + 0.254)
       throw Error(
           "arc in a concave corner: the tool cannot follow it without gouging (the tool is too "
           "large for this corner)");
@@ -219,8 +217,8 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
     s.c = {mv.center[0], mv.center[1]};
     s.radius = std::hypot(s.a.x - s.c.x, s.a.y - s.c.y);
     s.radius_end = std::hypot(s.b.x - s.c.x, s.b.y - s.c.y);
-    s.sweep = sweep_of(s.c, s.a, s.b, s.dir);
     s.dir = mv.motion == Motion::kArcCcw ? 1 : -1;
+    s.sweep = sweep_of(s.c, s.a, s.b, s.dir);
   }
   const bool in_plane = arc || std::hypot(s.b.x - s.a.x, s.b.y - s.a.y) > kEps;
   if (entry_ && arc) {
