@@ -291,12 +291,15 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
   // the tool (an inside corner), < 0 away from it (outside).
   const double turn = sign_ * std::atan2(t0.x * t1.y - t0.y * t1.x, t0.x * t1.x + t0.y * t1.y);
   // LinuxCNC's corner angle: beta = -turn in [-pi/2, 3pi/2). Inside when it turns towards the
-  // tool by more than the tolerance and less than a reversal; an almost reversal after an arc
-  // the tool runs outside of ("h" shape) counts as inside too.
+  // tool by more than the tolerance and less than a reversal.
   double beta = -turn;
   if (beta < -M_PI / 2) beta += 2 * M_PI;
-  const bool concave = beta < -kSmallTurn || beta > M_PI + kSmallTurn ||
-                       (beta > M_PI - kSmallTurn && pending_.arc && sign_ * pending_.dir < 0);
+  // "h" and "m" shapes: an almost reversal counts as inside when the tool runs outside of the
+  // arc (the last one, before a line; the next one, before an arc), as LinuxCNC keeps it there.
+  const bool reversal_inside =
+      arc ? std::fabs(beta - M_PI) < kSmallTurn && sign_ * s.dir < 0
+          : beta > M_PI - kSmallTurn && pending_.arc && sign_ * pending_.dir < 0;
+  const bool concave = beta < -kSmallTurn || beta > M_PI + kSmallTurn || reversal_inside;
   if (concave) {
     P2 hit;
     if (!intersect(pending_, s, s.a, hit))
@@ -306,7 +309,7 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
     move_pending_end(hit);
     flush(out, line);
   } else if (beta > kSmallTurn) {
-    move_pending_end(uv(cur_));  // the end stays; the move must still run forwards
+    if (!arc) move_pending_end(uv(cur_));  // the end stays; it must still run forwards
     flush(out, line);
     Move corner = mv;
     corner.start = cur_;

@@ -871,6 +871,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   bool tlo_words = false;
   if (const Word* g = gw(8)) {
     const int c = code10(*g);
+    if (comp_on())
+      throw fail(b, g->col,
+                 fmt::format("{}: no tool length offset change with cutter radius compensation on "
+                             "(G40 first)",
+                             gname(c)));
     if (c == 490) {
       tlo = {};
     } else if (c == 430 || c == 432) {
@@ -905,6 +910,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   // 13. Coordinate system.
   if (const Word* g = gw(12)) {
     const int c = code10(*g);
+    if (comp_on())
+      throw fail(b, g->col,
+                 fmt::format("{}: no change of coordinate system with cutter radius compensation "
+                             "on (G40 first)",
+                             gname(c)));
     cs = c < 591 ? c / 10 - 54 : 6 + (c - 591);
     did = true;
   }
@@ -1015,6 +1025,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       const int n = p ? static_cast<int>(p->value) : 0;
       if (p && (!p->integer || n < 0 || n > 9)) throw fail(b, p->col, "G10 P must be 0..9");
       const int s = n == 0 ? cs : n - 1;
+      if (s == cs && comp_on())
+        throw fail(b, nm->col,
+                   fmt::format("G10 L{}: no change of the active coordinate system with cutter "
+                               "radius compensation on (G40 first)",
+                               lv));
       for (int a = 0; a < 3; ++a) {
         const Word* aw = word(kAxisNames[a]);
         if (!aw) continue;
@@ -1065,6 +1080,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     no_motion_word(gname(nmc).c_str());
     if (nmc == 920) {
       if (!has_axis) throw fail(b, nm->col, "G92 needs at least one axis word");
+      if (comp_on()) throw fail(b, nm->col, "G92 with cutter radius compensation on (G40 first)");
       for (int a = 0; a < 4; ++a) {
         const Word* aw = word(kAxisNames[a]);
         if (!aw) continue;
