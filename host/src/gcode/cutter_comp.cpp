@@ -60,9 +60,13 @@ CutterComp::P2 CutterComp::offset_point(const Seg& s, P2 at) const {
   return {at.x - sign_ * r_ * t.y, at.y + sign_ * r_ * t.x};
 }
 
-// Where the offset paths of s0 and s1 cross, the crossing nearest `near` (the programmed
-// corner). False when they do not cross.
-bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const {
+// Where the offset paths of s0 and s1 cross (false when they do not). Of two crossings, the one
+// LinuxCNC takes: for a line and an arc, the one behind the arc's centre along the line when the
+// tool is inside the arc, ahead of it when outside (the line coming first: the other way
+// round); for two arcs, the one to the left of the line from the first centre to the second
+// when the tool is inside the first arc and the second runs counter-clockwise, or outside and
+// clockwise.
+bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2& hit) const {
   P2 cand[2];
   int n = 0;
   // A line's offset: a point and a unit direction; an arc's: centre and radius.
@@ -88,12 +92,20 @@ bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const
     hit = {q0.x + t * d0.x, q0.y + t * d0.y};
     return true;
   }
+  auto inside = [&](const Seg& a) { return sign_ * a.dir > 0; };
   if (s0.arc != s1.arc) {
     const Seg& ln = s0.arc ? s1 : s0;
     const Seg& ar = s0.arc ? s0 : s1;
     P2 q, d;
     line_of(ln, q, d);
     line_circle(q, d, ar.c, offset_radius(ar, &ar == &s0));
+    if (n == 0) return false;
+    // cand[0] lies before cand[1] along the line.
+    const bool ahead = s0.arc ? !inside(ar) : inside(ar);
+    const double along0 = (cand[0].x - ar.c.x) * d.x + (cand[0].y - ar.c.y) * d.y;
+    const double along1 = (cand[1].x - ar.c.x) * d.x + (cand[1].y - ar.c.y) * d.y;
+    hit = (along0 > along1) == ahead ? cand[0] : cand[1];
+    return true;
   } else {
     const double r0 = offset_radius(s0, true), r1 = offset_radius(s1);
     const double dx = s1.c.x - s0.c.x, dy = s1.c.y - s0.c.y, d = std::hypot(dx, dy);
@@ -101,16 +113,10 @@ bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const
     const double a = (r0 * r0 - r1 * r1 + d * d) / (2 * d);
     const double h = std::sqrt(std::max(0.0, r0 * r0 - a * a));
     const double mx = s0.c.x + a * dx / d, my = s0.c.y + a * dy / d;
-    cand[n++] = {mx - h * dy / d, my + h * dx / d};
-    cand[n++] = {mx + h * dy / d, my - h * dx / d};
+    const bool left = inside(s0) == (s1.dir > 0);
+    hit = left ? P2{mx - h * dy / d, my + h * dx / d} : P2{mx + h * dy / d, my - h * dx / d};
+    return true;
   }
-  if (n == 0) return false;
-  hit = cand[0];
-  for (int i = 1; i < n; ++i)
-    if (std::hypot(cand[i].x - near.x, cand[i].y - near.y) <
-        std::hypot(hit.x - near.x, hit.y - near.y))
-      hit = cand[i];
-  return true;
 }
 
 double CutterComp::sweep_of(P2 c, P2 a, P2 b, int dir) {
@@ -302,7 +308,7 @@ void CutterComp::move(Move mv, std::vector<Command>& out, int line) {
   const bool concave = beta < -kSmallTurn || beta > M_PI + kSmallTurn || reversal_inside;
   if (concave) {
     P2 hit;
-    if (!intersect(pending_, s, s.a, hit))
+    if (!intersect(pending_, s, hit))
       throw Error(
           "concave corner: the offset paths do not meet (the tool is too large for this "
           "corner)");

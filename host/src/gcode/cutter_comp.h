@@ -58,7 +58,7 @@ class CutterComp {
   // Arcs: the radius of the offset path, reckoned from the start's or the end's radius.
   double offset_radius(const Seg& s, bool at_end = false) const;
   P2 offset_point(const Seg& s, P2 at) const;
-  bool intersect(const Seg& s0, const Seg& s1, P2 near, P2& hit) const;
+  bool intersect(const Seg& s0, const Seg& s1, P2& hit) const;
   void move_pending_end(P2 hit);
   static double sweep_of(P2 c, P2 a, P2 b, int dir);
 
