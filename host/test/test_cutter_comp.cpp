@@ -169,6 +169,11 @@ TEST(CutterComp, Errors) {
   expect_error("G0 X0 Y0\nG41.1 D4\nG1 X10 F100\nG81 X5 Y5 Z-1 R1", 4, 1, "no canned cycle");
   expect_error("G0 X0 Y0\nG41.1 D4\nG1 X10 F100\nG40\nG2 X20 Y0 I5 J0", 5, 1,
                "must be a straight line");
+  expect_error("G0 X0 Y0\nG41.1 D4\nG1 X10 F100\nG92 X0", 4, 1, "G92 with cutter radius");
+  expect_error("G0 X0 Y0\nG41.1 D4\nG1 X10 F100\nG55", 4, 1, "no change of coordinate system");
+  expect_error("G0 X0 Y0\nG41.1 D4\nG1 X10 F100\nG10 L2 P0 X1", 4, 1,
+               "no change of the active coordinate system");
+  expect_error("G0 X0 Y0\nG41.1 D4\nG1 X10 F100\nG43.1 Z1", 4, 1, "no tool length offset change");
 }
 
 // G7: X words are diameters (halved), in every distance mode and in G92; I, K and R are not.
