@@ -6,14 +6,6 @@
 namespace fpgacnc::gcode {
 namespace {
 
-// The angle an arc about c turns through from a to b in direction dir (+1 CCW), (0, 2 pi].
-double sweep_of_impl(double cx, double cy, double ax, double ay, double bx, double by, int dir) {
-  double a = (std::atan2(by - cy, bx - cx) - std::atan2(ay - cy, ax - cx)) * dir;
-  while (a <= 0) a += 2 * M_PI;
-  while (a > 2 * M_PI) a -= 2 * M_PI;
-  return a;
-}
-
 // Corners whose direction changes by at most this much (radians) get neither an intersection
 // nor an arc: the next move starts where the last one ended (LinuxCNC's tolerance, 0.05 rad).
 constexpr double kSmallTurn = 0.05;
@@ -119,8 +111,12 @@ bool CutterComp::intersect(const Seg& s0, const Seg& s1, P2& hit) const {
   }
 }
 
+// The angle an arc about c turns through from a to b in direction dir (+1 CCW), (0, 2 pi].
 double CutterComp::sweep_of(P2 c, P2 a, P2 b, int dir) {
-  return sweep_of_impl(c.x, c.y, a.x, a.y, b.x, b.y, dir);
+  double t = (std::atan2(b.y - c.y, b.x - c.x) - std::atan2(a.y - c.y, a.x - c.x)) * dir;
+  while (t <= 0) t += 2 * M_PI;
+  while (t > 2 * M_PI) t -= 2 * M_PI;
+  return t;
 }
 
 void CutterComp::start(Side side, double radius, Plane plane, const Vec4& pos) {
@@ -134,7 +130,6 @@ void CutterComp::start(Side side, double radius, Plane plane, const Vec4& pos) {
   const PlaneAxes pa = plane_axes(plane);
   u_ = pa.u;
   v_ = pa.v;
-  w_ = pa.w;
   if (!exiting_) cur_ = pos;
   exiting_ = false;
   on_ = true;

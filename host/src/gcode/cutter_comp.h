@@ -68,7 +68,7 @@ class CutterComp {
   int sign_ = 1;        // +1 left of the path, -1 right
   double r_ = 0;
   Plane plane_ = Plane::kXY;
-  int u_ = 0, v_ = 1, w_ = 2;
+  int u_ = 0, v_ = 1;           // the plane's axes (plane_axes)
   Vec4 cur_{};                  // where the tool is after everything in queue_
   std::vector<Command> queue_;  // [0]: the move in the plane whose end is not known yet
   Seg pending_;                 // its programmed path
