@@ -10,6 +10,7 @@
 #include <map>
 #include <sstream>
 
+#include "cutter_comp.h"
 #include "fpgacnc/gcode/reader.h"
 #include "fpgacnc/gcode/tool_table.h"
 
@@ -100,8 +101,13 @@ int g_group(int c10) {
       return 6;
     case 400:
     case 410:
+    case 411:
     case 420:
+    case 421:
       return 7;
+    case 70:
+    case 80:
+      return 11;  // lathe diameter / radius mode (LinuxCNC's group 15)
     case 430:
     case 431:
     case 432:
@@ -203,7 +209,9 @@ struct Interpreter::Impl {
   Vec4 g92{};
   Vec4 g92_saved{};  // parameters 5211-5213 (G92.2 clears the offsets, G92.3 restores them)
   Vec4 tlo{};        // tool length offset
-  Vec4 pos_tlo{};    // the tool length offset `pos` was reached with
+  Vec4 pos_tlo{};    // the tool length offset the program position is reckoned with
+  Vec4 move_tlo{};   // the tool length offset of the last move
+  bool tool_changed = false;  // M6 in this block
   double unit = 1.0;
   bool absolute = true;
   bool arc_absolute = false;  // G90.1
@@ -233,6 +241,21 @@ struct Interpreter::Impl {
   bool retracted = false;
   bool produced = false;
   std::map<std::string, size_t> warning_index;
+  bool diameter_mode = false;  // G7: X words are diameters
+  // Cutter radius compensation: a G40/G41/G42 of the block being executed takes effect from
+  // the block's command comp_at on (compensate()).
+  CutterComp comp;
+  enum class CompEvent : uint8_t { kNone, kOn, kOff };
+  CompEvent comp_event = CompEvent::kNone;
+  size_t comp_at = 0;
+  CutterComp::Side comp_side = CutterComp::Side::kLeft;
+  double comp_radius = 0.0;
+  Vec4 comp_pos{};
+  int move_col = 1;  // column of the block's motion, for compensation errors
+  int last_line = 0;
+  bool comp_on() const {
+    return comp_event == CompEvent::kOn || (comp_event == CompEvent::kNone && comp.on());
+  }
 
   Impl(std::string f, Options o, const DialectChoice& d, Params& p)
       : file(std::move(f)),
@@ -335,6 +358,7 @@ struct Interpreter::Impl {
   void push(std::vector<Command>& out, const Move& mv) {
     pos = mv.end;
     pos_tlo = tlo;
+    move_tlo = tlo;
     out.emplace_back(mv);
     ++stats.moves;
     produced = true;
@@ -345,6 +369,7 @@ struct Interpreter::Impl {
   }
 
   bool execute(const Block& b, std::vector<Command>& out);
+  void compensate(const Block& b, std::vector<Command>& out, size_t first, bool go_on);
   void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3], std::vector<Command>& out,
                     int repeats, const Word* first_col, const Word* polar_r, const Word* polar_a);
 };
@@ -419,12 +444,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       }
       if (grp < 0) {
         std::string why = "not supported";
-        if (c == 410 || c == 420)
-          why = "cutter radius compensation is not supported (let the CAM program offset the path)";
-        else if (c == 330 || c == 331 || c == 760 || c == 950)
+        if (c == 330 || c == 331 || c == 760 || c == 950)
           why = "needs a spindle encoder, which this machine does not have";
-        else if (c == 70 || c == 80)
-          why = "lathe diameter/radius mode is not supported";
         else if (c == 680)
           why = "coordinate system rotation is not supported";
         else if (c == 520)
@@ -510,7 +531,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     return w.get(l);
   };
   auto to_mm = [&](const Word* wd) {
-    const double v = wd->value * unit;
+    const double v = wd->value * unit * (diameter_mode && wd->letter == 'X' ? 0.5 : 1.0);
     if (std::fabs(v) > kMaxValue)
       throw fail(b, wd->col,
                  fmt::format("value of '{}' out of range (|value| > 1e6 mm)", wd->letter));
@@ -535,6 +556,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     inverse_time = code10(*g) == 930;
   }
   if (const Word* g = gw(6)) unit = code10(*g) == 200 ? kInch : 1.0;
+  if (const Word* g = gw(11)) diameter_mode = code10(*g) == 70;  // G7 / G8
   // 3. F.
   const bool s_for_m = w.m(104) || w.m(109) || w.m(140) || w.m(190) || w.m(106) || w.m(220) ||
                        w.m(221) || w.m(207) || w.m(208) || w.m(204) || w.m(205) || w.m(141) ||
@@ -580,6 +602,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   }
   // 6. M6.
   if (w.m(6)) {
+    if (comp_on())
+      throw fail(b, w.m(6)->col,
+                 "M6: no tool change with cutter radius compensation on (G40 first)");
     if (!rules->t_selects_extruder) {
       ++stats.tool_changes;
       if (opt.tool_change_pause && next_tool != tool) {
@@ -594,6 +619,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         ++stats.pauses;
       }
       tool = next_tool;
+      tool_changed = true;
     }
     did = true;
   }
@@ -838,18 +864,65 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     produced = true;
   }
   // 10. Plane.
-  if (const Word* g = gw(2))
-    plane = code10(*g) == 170 ? Plane::kXY : code10(*g) == 180 ? Plane::kZX : Plane::kYZ;
-  // 11. Cutter compensation (G40 only).
-  if (const Word* g = gw(7); g && code10(*g) != 400)
-    throw fail(b, g->col,
-               fmt::format("{}: cutter radius compensation is not supported (let the CAM program "
-                           "offset the path)",
-                           gname(code10(*g))));
+  if (const Word* g = gw(2)) {
+    const Plane p = code10(*g) == 170 ? Plane::kXY : code10(*g) == 180 ? Plane::kZX : Plane::kYZ;
+    if (p != plane && comp_on())
+      throw fail(b, g->col,
+                 fmt::format("{}: no change of plane with cutter radius compensation on",
+                             gname(code10(*g))));
+    plane = p;
+  }
+  // 11. Cutter radius compensation (cutter_comp.h; compensate() applies it).
+  if (const Word* g = gw(7)) {
+    const int c = code10(*g);
+    if (c == 400) {
+      comp_event = CompEvent::kOff;
+    } else {
+      if (comp_on())
+        throw fail(
+            b, g->col,
+            fmt::format("{}: cutter radius compensation is already on (G40 first)", gname(c)));
+      if (plane == Plane::kYZ)
+        throw fail(b, g->col,
+                   fmt::format("{}: cutter radius compensation needs the XY or XZ plane (G17 or "
+                               "G18), not G19",
+                               gname(c)));
+      const Word* d = word('D');
+      if (c == 410 || c == 420) {  // D: a tool of the tool table (none: the current tool)
+        if (d && (!d->integer || d->value < 0))
+          throw fail(b, d->col, fmt::format("{} D must be a tool number", gname(c)));
+        const int n = d ? static_cast<int>(d->value) : tool;
+        const ToolEntry* e = tools.find(n);
+        if (!e && n != 0)
+          throw fail(b, d ? d->col : g->col,
+                     opt.tool_table.empty()
+                         ? fmt::format("{}: no tool table to read the diameter of tool {} from "
+                                       "(give one with --tool-table or tool_table in the machine "
+                                       "configuration)",
+                                       gname(c), n)
+                         : fmt::format("{}: tool {} is not in the tool table {}", gname(c), n,
+                                       opt.tool_table));
+        comp_radius = e ? e->diameter / 2.0 : 0.0;
+      } else {  // G41.1/G42.1: D is the diameter; L (a lathe tool's orientation) changes nothing
+        if (!d) throw fail(b, g->col, fmt::format("{} needs D (the tool diameter)", gname(c)));
+        comp_radius = to_mm(d) / 2.0;
+        word('L');
+      }
+      comp_side = c == 410 || c == 411 ? CutterComp::Side::kLeft : CutterComp::Side::kRight;
+      comp_event = CompEvent::kOn;
+      comp_pos = pos;
+    }
+    comp_at = out.size();
+  }
   // 12. Tool length offset.
   bool tlo_words = false;
   if (const Word* g = gw(8)) {
     const int c = code10(*g);
+    if (comp_on())
+      throw fail(b, g->col,
+                 fmt::format("{}: no tool length offset change with cutter radius compensation on "
+                             "(G40 first)",
+                             gname(c)));
     if (c == 490) {
       tlo = {};
     } else if (c == 430 || c == 432) {
@@ -878,11 +951,17 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         if (const Word* aw = word(axis_names[a])) tlo[static_cast<size_t>(a)] = to_mm(aw);
       tlo_words = true;
     }
+    pos_tlo = tlo;  // the machine stays; the program position moves (until an M6, below)
     did = true;
   }
   // 13. Coordinate system.
   if (const Word* g = gw(12)) {
     const int c = code10(*g);
+    if (comp_on())
+      throw fail(b, g->col,
+                 fmt::format("{}: no change of coordinate system with cutter radius compensation "
+                             "on (G40 first)",
+                             gname(c)));
     cs = c < 591 ? c / 10 - 54 : 6 + (c - 591);
     did = true;
   }
@@ -993,6 +1072,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       const int n = p ? static_cast<int>(p->value) : 0;
       if (p && (!p->integer || n < 0 || n > 9)) throw fail(b, p->col, "G10 P must be 0..9");
       const int s = n == 0 ? cs : n - 1;
+      if (s == cs && comp_on())
+        throw fail(b, nm->col,
+                   fmt::format("G10 L{}: no change of the active coordinate system with cutter "
+                               "radius compensation on (G40 first)",
+                               lv));
       for (int a = 0; a < offset_axes; ++a) {
         const Word* aw = word(axis_names[a]);
         if (!aw) continue;
@@ -1043,6 +1127,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     no_motion_word(gname(nmc).c_str());
     if (nmc == 920) {
       if (!has_axis) throw fail(b, nm->col, "G92 needs at least one axis word");
+      if (comp_on()) throw fail(b, nm->col, "G92 with cutter radius compensation on (G40 first)");
       for (int a = 0; a < 4; ++a) {
         const Word* aw = word(axis_names[a]);
         if (!aw) continue;
@@ -1070,6 +1155,9 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   }
   if (nmc == 280 || nmc == 300) {
     no_motion_word(gname(nmc).c_str());
+    if (comp_on())
+      throw fail(b, nm->col,
+                 fmt::format("{} with cutter radius compensation on (G40 first)", gname(nmc)));
     if (rules->g28_homes && nmc == 280) {
       // Marlin's G28 [X] [Y] [Z]: home the named axes (all when none): machine zero.
       Vec4 t = pos;
@@ -1100,6 +1188,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     return true;
   }
   const bool g53 = nmc == 530;
+  if (g53 && comp_on())
+    throw fail(b, nm->col, "G53 with cutter radius compensation on (G40 first)");
 
   // 17. Motion.
   if (const Word* g = gw(1)) {
@@ -1172,6 +1262,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         first_axis = &b.words[static_cast<size_t>(i)];
     }
     const int motion_col = gw(1) ? gw(1)->col : first_axis ? first_axis->col : 1;
+    move_col = motion_col;
     if (motion < 0 || motion == kCycleNone)
       throw fail(b, motion_col, "axis words with no motion mode (G0/G1/G2/G3) active");
     Vec4 t = target(g53);
@@ -1353,6 +1444,10 @@ void Interpreter::Impl::canned_cycle(const Block& b, const Vec4& given_pos, bool
   const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v),
              wa = static_cast<size_t>(pa.w);
   const int col = first_col ? first_col->col : 1;
+  if (comp_on())
+    throw fail(b, col,
+               fmt::format("{}: no canned cycle with cutter radius compensation on (G40 first)",
+                           gname(motion)));
   if (!cycle_z_set)
     throw fail(b, col,
                fmt::format("{}: the cycle needs {} (the bottom)", gname(motion), axis_names[wa]));
@@ -1476,10 +1571,56 @@ Interpreter::Interpreter(std::string file_name, Options options, const DialectCh
     : impl_(std::make_unique<Impl>(std::move(file_name), std::move(options), dialect, params)) {}
 Interpreter::~Interpreter() = default;
 
+// Cutter radius compensation takes the block's commands (moves as programmed) and puts back
+// what the machine runs; a block with no compensation in force skips it.
+void Interpreter::Impl::compensate(const Block& b, std::vector<Command>& out, size_t first,
+                                   bool go_on) {
+  std::vector<Command> cmds(std::make_move_iterator(out.begin() + static_cast<long>(first)),
+                            std::make_move_iterator(out.end()));
+  out.erase(out.begin() + static_cast<long>(first), out.end());
+  const size_t at =
+      comp_event == CompEvent::kNone ? cmds.size() : std::min(comp_at - first, cmds.size());
+  std::vector<Command> after(std::make_move_iterator(cmds.begin() + static_cast<long>(at)),
+                             std::make_move_iterator(cmds.end()));
+  cmds.resize(at);
+  try {
+    comp.process(cmds, out, b.line);
+    if (comp_event == CompEvent::kOn)
+      comp.start(comp_side, comp_radius, plane, comp_pos);
+    else if (comp_event == CompEvent::kOff)
+      comp.stop(out, b.line);
+    comp.process(after, out, b.line);
+    if (!go_on) comp.flush(out, b.line);
+  } catch (const CutterComp::Error& e) {
+    throw fail(b, move_col, e.what());
+  }
+}
+
 bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
-  const bool go_on = impl_->execute(block, out);
-  if (impl_->rules->syntax.ngc) impl_->write_named();  // what the next line may read
+  Impl& m = *impl_;
+  const size_t first = out.size();
+  const bool engaged = m.comp.engaged();
+  m.comp_event = Impl::CompEvent::kNone;
+  m.move_col = 1;
+  const bool go_on = m.execute(block, out);
+  m.last_line = block.line;
+  // LinuxCNC reads the position back after a tool change: the program position from before any
+  // tool length offset change since the last move, so the next move goes there with the new
+  // offset (the machine moves by the change).
+  if (m.tool_changed) {
+    m.pos_tlo = m.move_tlo;
+    m.tool_changed = false;
+  }
+  if (engaged || m.comp_event != Impl::CompEvent::kNone) {
+    m.compensate(block, out, first, go_on);
+    m.comp_event = Impl::CompEvent::kNone;
+  }
+  if (m.rules->syntax.ngc) m.write_named();  // what the next line may read
   return go_on;
+}
+
+void Interpreter::flush(std::vector<Command>& out) {
+  impl_->comp.flush(out, impl_->last_line);
 }
 
 void Interpreter::finish() {
@@ -1523,6 +1664,9 @@ Stats run(std::string text, const std::string& file_name, const Options& options
     }
   }
   (void)last_line;
+  out.clear();
+  interp.flush(out);
+  for (const auto& c : out) sink(c);
   interp.finish();
   return interp.stats();
 }

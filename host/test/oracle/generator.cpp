@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -488,6 +489,149 @@ void fam_mixed(Gen& g) {
   g.line("G92.1 G49 G54");
 }
 
+// Cutter radius compensation: closed shapes (rectangles, rounded rectangles, regular polygons,
+// circles) cut on a random side in a random direction with G41/G42 D (tool table diameters) or
+// G41.1/G42.1 D, entered by a straight line or an arc from outside, with plunges, dwells and
+// rapids in between, left by G40 and a straight move. Sizes keep every inside corner and arc
+// wider than the tool, so rs274 accepts each program.
+void fam_cutcomp(Gen& g) {
+  g.line("G21 G17 G90 G0 X0 Y0 Z5");
+  g.line(fmt::format("F{}", g.r.range(100, 2000)));
+  const int shapes = g.r.range(2, 3);
+  for (int k = 0; k < shapes; ++k) {
+    const int form = g.r.range(0, 3);
+    const double cx = g.r.dec(-60, 60, 2), cy = g.r.dec(-60, 60, 2);
+    // Tool: from the table (tools 1..3: 6, 3, 10 mm) or a diameter on the line.
+    const int side = g.r.range(0, 1);  // 0 left, 1 right
+    double radius;
+    std::string comp_on;
+    if (g.r.coin()) {
+      const int t = g.r.range(1, 3);
+      radius = t == 1 ? 3 : t == 2 ? 1.5 : 5;
+      comp_on = fmt::format("G4{} D{}", side ? "2" : "1", t);
+    } else {
+      const double d = g.r.dec(1, 10, 2);
+      radius = d / 2;
+      comp_on = fmt::format("G4{}.1 D{}", side ? "2" : "1", n3(d));
+    }
+    const bool ccw = g.r.coin();
+    // The shape's points in travel order (polygon corners; arcs between for the rounded form).
+    std::vector<std::pair<double, double>> pts;
+    if (form == 0 || form == 1) {
+      const double w = g.r.dec(32, 60, 2), h = g.r.dec(32, 60, 2);
+      pts = {{cx - w / 2, cy - h / 2},
+             {cx + w / 2, cy - h / 2},
+             {cx + w / 2, cy + h / 2},
+             {cx - w / 2, cy + h / 2}};
+    } else if (form == 2) {
+      const int n = g.r.range(3, 8);
+      const double rr = g.r.dec(15, 40, 2);
+      const double a0 = g.r.dec(0, 360, 1) * kPi / 180;
+      for (int i = 0; i < n; ++i) {
+        const double a = a0 + 2 * kPi * i / n;
+        pts.push_back({std::round((cx + rr * std::cos(a)) * 1000) / 1000,
+                       std::round((cy + rr * std::sin(a)) * 1000) / 1000});
+      }
+    }
+    if (!ccw) std::reverse(pts.begin(), pts.end());
+    const std::string cut = g.r.coin() ? " F" + std::to_string(g.r.range(100, 2000)) : "";
+    if (form == 3) {  // a circle, entered along a radius from its centre side or from outside
+      const double rr = g.r.dec(static_cast<int>(radius) + 8, 40, 2);
+      const double sx = cx + rr, sy = cy;
+      g.line(fmt::format("G0 X{} Y{}", n3(sx + 2 * radius + 5), n3(sy - 2 * radius - 5)));
+      g.line(comp_on);
+      g.line(fmt::format("G1 X{} Y{}{}", n3(sx), n3(sy), cut));
+      g.line("G1 Z-1");
+      g.line(fmt::format("G{} X{} Y{} I{} J0", ccw ? 3 : 2, n3(sx), n3(sy), n3(-rr)));
+      g.line(fmt::format("G40 G1 X{} Y{}", n3(sx + 2 * radius + 5), n3(sy + 2 * radius + 5)));
+      g.line("G0 Z5");
+      continue;
+    }
+    // Entry along the first edge's line, from behind its first point.
+    const auto& p0 = pts[0];
+    const auto& p1 = pts[1];
+    const double l01 = std::hypot(p1.first - p0.first, p1.second - p0.second);
+    const double ex =
+        std::round((p0.first - (p1.first - p0.first) / l01 * (2 * radius + 5)) * 1000) / 1000;
+    const double ey =
+        std::round((p0.second - (p1.second - p0.second) / l01 * (2 * radius + 5)) * 1000) / 1000;
+    g.line(fmt::format("G0 X{} Y{}", n3(ex), n3(ey)));
+    g.line(comp_on);
+    g.line(fmt::format("G1 X{} Y{}{}", n3(p0.first), n3(p0.second), cut));
+    g.line(fmt::format("G1 Z{}", n3(g.r.dec(-3, 0, 2))));
+    if (g.r.range(0, 3) == 0) g.line("G4 P0.5");
+    const size_t n = pts.size();
+    if (form == 1) {  // rounded rectangle: fillets of radius rf at each corner, tangent
+      const double rf = g.r.dec(static_cast<int>(radius) + 2, static_cast<int>(radius) + 6, 2);
+      // Walk the edges: from p[i] shortened by rf at both ends, a fillet about the corner.
+      for (size_t i = 0; i < n; ++i) {
+        const auto& a = pts[i];
+        const auto& b = pts[(i + 1) % n];
+        const auto& c = pts[(i + 2) % n];
+        const double lab = std::hypot(b.first - a.first, b.second - a.second);
+        const double ux = (b.first - a.first) / lab, uy = (b.second - a.second) / lab;
+        const double lbc = std::hypot(c.first - b.first, c.second - b.second);
+        const double vx = (c.first - b.first) / lbc, vy = (c.second - b.second) / lbc;
+        const double qx = b.first - rf * ux, qy = b.second - rf * uy;
+        const double ox = b.first + rf * vx, oy = b.second + rf * vy;
+        g.line(fmt::format("G1 X{} Y{}", n3(qx), n3(qy)));
+        // Centre: from q, rf along the next edge's direction.
+        g.line(fmt::format("G{} X{} Y{} I{} J{}", ccw ? 3 : 2, n3(ox), n3(oy), n3(rf * vx),
+                           n3(rf * vy)));
+      }
+    } else {
+      for (size_t i = 1; i <= n; ++i) {
+        const auto& p = pts[i % n];
+        g.line(fmt::format("{} X{} Y{}", g.r.range(0, 5) == 0 ? "G0" : "G1", n3(p.first),
+                           n3(p.second)));
+        if (g.r.range(0, 5) == 0) g.line("G1 Z" + n3(g.r.dec(-3, 0, 2)));
+      }
+    }
+    if (g.r.coin()) {
+      g.line("G40");
+      g.line(fmt::format("G1 X{} Y{}", n3(ex), n3(ey)));
+    } else {
+      g.line(fmt::format("G40 G0 X{} Y{}", n3(ex), n3(ey)));
+    }
+    g.line("G0 Z5");
+  }
+}
+
+// Lathe diameter mode: G7 X words are diameters (absolute, incremental, G92, G10 L2), G8
+// radii; in the XZ plane with R arcs.
+void fam_lathe_diameter(Gen& g) {
+  g.line("G21 G18 G90 G0 X40 Z5");
+  g.line(fmt::format("F{}", g.r.range(50, 500)));
+  bool dia = true;
+  g.line("G7");
+  for (int i = 0; i < 12; ++i) {
+    const int kind = g.r.range(0, 6);
+    if (kind == 0) {
+      dia = !dia;
+      g.line(dia ? "G7" : "G8");
+    } else if (kind == 1) {
+      g.line(fmt::format("G91 G1 X{} Z{}", n3(g.r.dec(-10, 10)), n3(g.r.dec(-5, 5))));
+      g.line("G90");
+    } else if (kind == 2) {
+      g.line(fmt::format("G92 X{}", n3(g.r.dec(0, 50))));
+      g.line(fmt::format("G1 X{} Z{}", n3(g.r.dec(0, 60)), n3(g.r.dec(-30, 5))));
+      g.line("G92.1");
+    } else if (kind == 3) {
+      g.line(fmt::format("G10 L2 P1 X{} Z{}", n3(g.r.dec(-5, 5)), n3(g.r.dec(-5, 5))));
+      g.line(fmt::format("G0 X{} Z{}", n3(g.r.dec(0, 60)), n3(g.r.dec(-30, 5))));
+    } else if (kind == 4) {
+      // An R arc: R well above half the chord (X in this mode's unit, Z in mm).
+      g.line(fmt::format("G{} X{} Z{} R{}", g.r.coin() ? 2 : 3, n3(g.r.dec(0, 20)),
+                         n3(g.r.dec(-40, -20)), n3(g.r.dec(80, 120))));
+    } else {
+      g.line(
+          fmt::format("G{} X{} Z{}", g.r.coin() ? 0 : 1, n3(g.r.dec(0, 60)), n3(g.r.dec(-30, 5))));
+    }
+  }
+  g.line("G10 L2 P1 X0 Z0");
+  g.line("G8");
+}
+
 using Family = void (*)(Gen&);
 const std::vector<std::pair<std::string, Family>>& families() {
   static const std::vector<std::pair<std::string, Family>> f = {
@@ -510,6 +654,8 @@ const std::vector<std::pair<std::string, Family>>& families() {
       {"cycles", fam_cycles},
       {"tools", fam_tools},
       {"mixed", fam_mixed},
+      {"cutcomp", fam_cutcomp},
+      {"lathe-diameter", fam_lathe_diameter},
   };
   return f;
 }

@@ -172,6 +172,9 @@ class Interpreter {
   // Executes one block; appends the commands it produces to `out`. Returns false when the block
   // ends the program (M2/M30).
   bool execute(const Block& block, std::vector<Command>& out);
+  // Call after the last block when the program did not end with M2/M30: appends the moves
+  // cutter radius compensation still holds back (each waits for the next move).
+  void flush(std::vector<Command>& out);
   // Call after the last block: throws "empty job" when nothing was produced at all.
   void finish();
 
