@@ -5,7 +5,9 @@
 // linuxcnc-uspace `rs274` command) run on the same lines; each such case says so.
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -868,4 +870,33 @@ TEST(ReaderHeader, CommentsOfTheFirstLines) {
   EXPECT_EQ(h[3].text, "tail");
   EXPECT_EQ(h[3].line, 4);
   EXPECT_EQ(h[4].text, "unclosed");
+}
+
+// Numbers in words are read exactly as std::from_chars reads them (the reader has a fast path for
+// up to 15-16 digits and falls back to from_chars beyond): random numbers of 1 to 24 digits with
+// the point anywhere, signs and leading zeros.
+TEST(ReaderNumbers, SameDoubleAsFromChars) {
+  std::mt19937_64 rng(7);
+  std::string text;
+  std::vector<double> want;
+  for (int k = 0; k < 20000; ++k) {
+    const int digits = 1 + static_cast<int>(rng() % 24);
+    std::string num;
+    for (int d = 0; d < digits; ++d) num += static_cast<char>('0' + rng() % 10);
+    const size_t dot = rng() % (num.size() + 2);
+    if (dot <= num.size()) num.insert(dot, ".");
+    double v = 0;
+    std::from_chars(num.data(), num.data() + num.size(), v);
+    const bool neg = rng() % 2;
+    want.push_back(neg ? -v : v);
+    text += std::string("G0 X") + (neg ? "-" : "") + num + "\n";
+  }
+  Syntax s;
+  const auto blocks = read_all(text, s);
+  ASSERT_EQ(blocks.size(), want.size());
+  for (size_t k = 0; k < want.size(); ++k) {
+    const Word& x = blocks[k].words[1];
+    ASSERT_EQ(x.value, want[k]) << "line " << k + 1;
+    ASSERT_EQ(std::signbit(x.value), std::signbit(want[k])) << "line " << k + 1;
+  }
 }
