@@ -14,7 +14,7 @@
 // two 65-bit candidates computed in parallel from registers, selected by the sign bit: one
 // 65-bit add deep, ending at the register. load sets s = -(T - n) (r = 0).
 // The executor gives one tick per clock for constant-rate segments; a rate generator can gate
-// `tick` to follow a speed profile, the arithmetic stays exact (the oversampled DDA of system.md).
+// `tick` to follow a speed profile, the arithmetic stays exact (the oversampled DDA, docs/motion.md).
 // load: takes steps (n) and tmn = T - n (load wins over a tick on the same edge: the executor loads
 // the next segment on the edge that ends the last tick of the current one; that tick's step is
 // still issued, being combinational). step is combinational from the registers and tick.

@@ -1,5 +1,5 @@
 // de1soc_top: Terasic DE1-SoC board top (protocols v1 and v2, N_AXES = 2), with the original
-// controller's pin names (hardware.md): 50 MHz clk, KEY[0] as rst_n, USB-UART on GPIO_0[0..1],
+// controller's pin names (docs/architecture.md "Pins"): 50 MHz clk, KEY[0] as rst_n, USB-UART on GPIO_0[0..1],
 // X/Y STEP/DIR and the laser enable on GPIO_0[2..6].
 //   LEDR[0] busy, LEDR[1] laser, LEDR[2] dir_x, LEDR[3] dir_y, LEDR[4] v2 mode, LEDR[5] a fault
 //   is latched (STEP timing violation, e-stop, heater, watchdog: until FAULT_CLEAR), LEDR[7]

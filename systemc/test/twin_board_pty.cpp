@@ -198,7 +198,7 @@ TEST(TwinBoardPty, PyserialClientGetsTheAck) {
   ASSERT_TRUE(board.wait_quiet(5000ms));
   board.stop();
   const auto n = board.net_steps();
-  EXPECT_EQ(n[0], 320);  // the example's X +320, Y -160 steps (docs/protocol-v1.md)
+  EXPECT_EQ(n[0], 320);  // the example's X +320, Y -160 steps (docs/protocol.md, "v1")
   EXPECT_EQ(n[1], -160);
   EXPECT_EQ(board.stats().moves_done, 1u);
 }

@@ -1,4 +1,4 @@
-// Protocol v1 packets for benches, written from protocol-v1.md independently of the host's
+// Protocol v1 packets for benches, written from docs/protocol.md ("v1") independently of the host's
 // packer so that each checks the other.
 #pragma once
 

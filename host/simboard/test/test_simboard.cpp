@@ -32,7 +32,7 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// The original controller's worked examples (protocol-v1.md).
+// The original controller's worked examples (docs/protocol.md, "v1").
 const std::vector<uint8_t> kInit = {0xFF, 0x01, 0x1E, 0x1A, 0x30, 0x01, 0x1E, 0x1A, 0x30};
 const std::vector<uint8_t> kMotion = {0x01, 0x00, 0x00, 0x01, 0x40, 0xFF,
                                       0xFF, 0xFF, 0x60, 0x04, 0xB0};

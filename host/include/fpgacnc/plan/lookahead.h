@@ -16,7 +16,7 @@
 // do not stop (the laser power travels per segment in the frame, like grbl's laser mode);
 // M104/M140 do not stop.
 //
-// Hardware recurrence (prof.md): per clock U += V; the segment ends on the first clock with
+// Hardware recurrence (docs/motion.md): per clock U += V; the segment ends on the first clock with
 // U >= n_dom * 2^48; else V = U >= D * 2^48 ? max(V - A, V_exit) : min(V + A, V_cruise).
 // simulate_profile() evaluates it exactly in closed form per phase (same integers).
 #pragma once
@@ -80,7 +80,7 @@ struct ProfileRun {
   std::vector<std::pair<uint64_t, uint64_t>> knots;
 };
 
-// Throws std::invalid_argument when the fields break the device's limits (prof.md) or the
+// Throws std::invalid_argument when the fields break the device's limits (docs/protocol.md, LINE_PROFILE) or the
 // segment would never end. Cost: O(phases * log) (binary searches over 128-bit quadratics).
 ProfileRun simulate_profile(const ProfileFields& f, bool record_knots = false);
 ProfileRun simulate_recurrence(const Recurrence& r, bool record_knots = false);

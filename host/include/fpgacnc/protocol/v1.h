@@ -1,4 +1,4 @@
-// Protocol v1 packer (byte-exact with docs protocol-v1.md): big-endian fields.
+// Protocol v1 packer (byte-exact with docs/protocol.md, "v1"): big-endian fields.
 #pragma once
 
 #include <array>
