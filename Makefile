@@ -55,7 +55,7 @@ soak: build
 	$(MAKE) fuzz-soak
 	$(MAKE) soak-part-heaters
 
-# part.gcode end to end on the simulated board with heaters (issue 7): printer start sequence
+# part.gcode end to end on the simulated board with heaters: printer start sequence
 # (M140/M104/M190/M109), the whole file (44 305 lines), heaters off; hours of simulation (the
 # motion runs in real board time at 50 MHz).
 CORPUS ?= corpus/cncjs

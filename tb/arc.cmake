@@ -1,4 +1,4 @@
-# Circular DDA (issue 6): arc_dda against the integer reference walk
+# Circular DDA: arc_dda against the integer reference walk
 # (systemc/include/fpgacnc/twins/arc_walk.h, header-only, no SystemC).
 fpgacnc_verilated(varc TOP arc_dda SOURCES ${FPGACNC_RTL_DIR}/arc_dda.v)
 fpgacnc_bench(test_arc_dda LABEL rtl SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_arc_dda.cpp

@@ -232,8 +232,8 @@ TEST(ArcCore, ArcFramesThroughThePins) {
   {
     // A LINE queued behind the last arc (zero gap, the arc's end tangent (-, +)) with X and Y at
     // the minimum period (STEP high + low = 4): its first steps come 4 clocks after its start, so
-    // the arc's last STEP must rise by the arc segment's last edge (it rose one edge later before
-    // issue 6's fix: a STEP timing violation).
+    // the arc's last STEP must rise by the arc segment's last edge (one edge later would be a STEP
+    // timing violation).
     Seg l;
     l.kind = Seg::kLine;
     l.steps[0] = -8;

@@ -1,4 +1,4 @@
-// Bench for arc_dda (circular / helical DDA, issue 6): the RTL against the integer reference
+// Bench for arc_dda (circular / helical DDA): the RTL against the integer reference
 // walk (systemc/include/fpgacnc/twins/arc_walk.h) edge for edge, and the geometry and speed of
 // the walk against the real-valued ideal arc:
 //  - every visited lattice point within 1 step of the ideal arc (radius linear in the swept angle

@@ -1,4 +1,4 @@
-// Profiled segments (LINE_PROFILE, issue 6): FIFO entries -> segment_prep -> segment_executor
+// Profiled segments (LINE_PROFILE): FIFO entries -> segment_prep -> segment_executor
 // (profile_gen + dda_profile) against an exact integer reference of the profile arithmetic
 // (docs/protocol.md "LINE_PROFILE", docs/timing.md "Profiled segments").
 //

@@ -62,7 +62,7 @@ using AfterDefaultStream = std::function<void(
     link::Link&, const plan::Plan&, const config::MachineConfig&, const SimOutputOptions&)>;
 // Adds options of the default link to a subcommand (the simulated board's --line-* options).
 using AddSimOptions = std::function<void(CLI::App&, SimOutputOptions&)>;
-// Heaters (issue 7): adjusts the v2 options for a default link (the simulated board gives its
+// Heaters: adjusts the v2 options for a default link (the simulated board gives its
 // plant clock and a faster STATUS poll; host/simboard scales thermal time).
 using ConfigureDefaultV2 = std::function<void(link::Link&, link::StreamV2Options&)>;
 // `stream --model both`: the job (the first max_moves moves) through the pty into the twin board

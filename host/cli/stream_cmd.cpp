@@ -77,7 +77,7 @@ class ProgressBar {
   void finish_line() {
     if (enabled_ && done_ != total_) fmt::print(stderr, "\n");
   }
-  // Heaters: temperatures shown after the bar (issue 7), redrawn at most every 100 ms.
+  // Heaters: temperatures shown after the bar, redrawn at most every 100 ms.
   void set_extra(std::string extra) {
     extra_ = std::move(extra);
     if (done_ != total_) update(done_, total_);

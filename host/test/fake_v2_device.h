@@ -68,7 +68,7 @@ class FakeV2Device : public link::Link {
     bool send_done = true;     // false: DONE frames are never sent (ACK and STATUS still are)
     std::chrono::microseconds line_delay{0};  // host bytes reach the decoder this much later
     FakeFaults faults;
-    // Heaters (issue 7): STATUS carries the heater block; each enabled channel's temperature
+    // Heaters: STATUS carries the heater block; each enabled channel's temperature
     // approaches its setpoint exponentially with `heater_tau` of wall time (from `ambient_c`).
     bool heaters = false;
     std::chrono::microseconds heater_tau{50'000};

@@ -68,7 +68,7 @@ SC_MODULE(RtlHarness) {
       length_errors, unknown_types, noise_bytes, clamped, naks;
   sc_core::sc_signal<bool> v2_mode;
   sc_core::sc_signal<bool> rx_partial;
-  // Heater and e-stop pins (issue 7): e-stop released, ADC SDO low, heater outputs unobserved.
+  // Heater and e-stop pins: e-stop released, ADC SDO low, heater outputs unobserved.
   sc_core::sc_signal<bool> estop, adc_convst, adc_sck, adc_sdi, adc_sdo;
   sc_core::sc_signal<uint32_t> heater;
   // Machine outputs (OUTPUT frames), compared as pin edges.

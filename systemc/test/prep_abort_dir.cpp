@@ -1,4 +1,4 @@
-// Regression test (CTest prep_abort_dir; found as a reproducer in session 5): segment_prep's DIR
+// Regression test (CTest prep_abort_dir): segment_prep's DIR
 // tracking after an abort.
 // Verilated segment_prep + segment_executor chained as in cnc_core (tb/test_profile.cpp's bench),
 // DIR setup 3, DIR hold 2, STEP 1/1 (min period 2) on every axis.

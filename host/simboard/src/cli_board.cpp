@@ -20,7 +20,7 @@ void print_sim_extras(const SimBoard& b, const BoardStats& s) {
     fmt::print("simulated board: line faults ({}): {}\n", b.options().line_faults.describe(),
                describe(s.line));
   }
-  const ThermalStats t = b.thermal();  // issue 7
+  const ThermalStats t = b.thermal();
   if (t.ticks) {
     fmt::print(
         "simulated board heaters: {} sample ticks = {} plant seconds (1 per {} clocks); hot end "

@@ -661,7 +661,7 @@ std::string SimBoard::stats_line() const {
 
 namespace fpgacnc::simboard {
 
-// ---- Heaters (issue 7) ----
+// ---- Heaters ----
 
 ThermalStats SimBoard::thermal() const {
   OtherThreadLock l(*this);

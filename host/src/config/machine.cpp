@@ -157,7 +157,7 @@ class Reader {
             fail(gv, full, "unknown key");
           }
         }
-      } else if (k == "heater") {  // issue 7: host/src/heat/heater_config.cpp
+      } else if (k == "heater") {  // host/src/heat/heater_config.cpp
         heat::read_heater_toml(v, c.heaters, name_);
       } else {
         fail(v, k, "unknown key");

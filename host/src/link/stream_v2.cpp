@@ -443,7 +443,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     last_progress = link.now();
   };
 
-  // ---- Heaters (issue 7): M109/M190 gates, STATUS polling, faults ----
+  // ---- Heaters: M109/M190 gates, STATUS polling, faults ----
   const Time link_t0 = link.now();
   const auto plant_now = [&]() -> double {
     if (opt.plant_time) return opt.plant_time();
@@ -816,7 +816,7 @@ std::string format_report(const StreamV2Report& r) {
   s += fmt::format(" steps: {}\n", r.position_ok ? "matches the plan" : "DOES NOT match the plan");
   bool heaters_used = r.heater_frames > 0;
   for (const auto& h : r.status_end.heaters) heaters_used |= h.enabled() || h.faults;
-  if (heaters_used) {  // issue 7
+  if (heaters_used) {
     s += fmt::format("heaters: {} heater frames", r.heater_frames);
     const std::string h = heat::format_heaters(r.status_end);
     if (!h.empty()) s += "; at the end " + h;

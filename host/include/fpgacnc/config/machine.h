@@ -63,7 +63,7 @@ struct MachineConfig {
     bool optional_stop = false;     // M1 pauses like M0
     bool block_delete = false;      // lines starting with '/' are skipped
   } gcode;
-  // [heater.hotend], [heater.bed]: heater channels (issue 7; fpgacnc/heat/heater_config.h).
+  // [heater.hotend], [heater.bed]: heater channels (fpgacnc/heat/heater_config.h).
   heat::HeaterSet heaters;
 };
 

@@ -18,7 +18,7 @@
 //     silent;
 //  4. complete when `segments done` has counted every FIFO frame; then STATUS_QUERY (final
 //     position compared with the job's target) and RELEASE (back to auto mode).
-// Heaters (issue 7, fpgacnc/heat/heater_job.h): the heater setup frames follow CONFIG_AXIS; each
+// Heaters (fpgacnc/heat/heater_job.h): the heater setup frames follow CONFIG_AXIS; each
 // M104/M109/M140/M190 is a HEATER_SETPOINT between the FIFO frames where it stands in the program.
 // After an M109/M190 setpoint nothing more is sent until the FIFO has drained and STATUS shows
 // the temperature within the channel's tolerance for its settle time (plant seconds). While a job
@@ -60,7 +60,7 @@ struct StreamV2Options {
   bool release = true;           // send RELEASE at the end
   // Called when `segments done` advances: (FIFO frames done, FIFO frames in the job).
   std::function<void(size_t, size_t)> progress;
-  // ---- Heaters (issue 7) ----
+  // ---- Heaters ----
   // The job's heater commands and setup frames (stream_v2() makes them from the plan); null or
   // empty: no heater frames are sent.
   const heat::HeaterJob* heaters = nullptr;

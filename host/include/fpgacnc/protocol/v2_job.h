@@ -18,7 +18,8 @@
 //   (min_period = STEP high + STEP low, 0 counting as 1: the device would clamp otherwise) and a
 //   move whose T exceeds UINT32_MAX (or whose steps exceed int32) is split into equal parts.
 // - G4 dwell -> DWELL frames (T = round(seconds * clk_hz), split above UINT32_MAX; 0 s: none).
-// - Heater commands are skipped (counted): v2 has no heater frames yet (issue 7).
+// - Heater commands are not packed here (counted as skipped): the streamer sends the heater
+//   frames and holds the motion at M109/M190 (fpgacnc/link/stream_v2.h).
 // The whole job is packed and validated before the first byte is sent.
 #pragma once
 

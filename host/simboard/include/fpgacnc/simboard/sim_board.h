@@ -41,7 +41,7 @@
 // flips). A stall holds the rx line idle while the board keeps running: the held line counts as
 // activity, so simulated time advances through it exactly as through a byte on the line.
 //
-// Heaters (issue 7, docs/heater.md "Simulated board"). The Verilated core is built with a scaled
+// Heaters (docs/heater.md "Simulated board"). The Verilated core is built with a scaled
 // thermal time base: one sample tick every kSampleClks = 102 400 clocks (2.048 ms of board time)
 // instead of 50 000 000, and the heater PWM at 1024 clocks per period (HEAT_PWM_DIV 1), so one
 // plant second passes every 2.048 ms of simulated time (488x faster than the board's motion time;
@@ -244,7 +244,7 @@ class SimBoard : public Board {
   // One-line summary of stats() for reports.
   std::string stats_line() const;
 
-  // ---- Heaters (issue 7) ----
+  // ---- Heaters ----
   ThermalStats thermal() const;
   // Plant seconds since reset (sample ticks, fractional).
   double plant_seconds() const;
