@@ -180,18 +180,25 @@ def gen_verilog(d):
         else:
             define(macro(k), vlog_int(v), doc)
     L.append("")
-    L.append("// ---- frame TYPEs (8 bits) and payload lengths")
+    L.append("// ---- frame TYPEs and payload lengths (LEN), 8 bits each; LENI_*: the lengths as integers")
     for t in d["type"]:
         define("T_" + macro(t["name"]), vlog_int(t["value"], 8, True), f"{t['name']}: {t['doc']}")
         if "len" in t:
-            L.append(f"`define FPGACNC_LEN_{macro(t['name'])} {t['len']}")
+            L.append(f"`define FPGACNC_LEN_{macro(t['name'])} {vlog_int(t['len'], 8)}")
         if "len_header" in t:
-            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_HEADER {t['len_header']}")
+            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_HEADER {vlog_int(t['len_header'], 8)}")
         if "per_axis" in t and len(t["per_axis"]) == 1:
-            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_PER_AXIS {t['per_axis'][0]}")
+            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_PER_AXIS {vlog_int(t['per_axis'][0], 8)}")
+        # unsized (integer) forms for parameter arithmetic
+        if "len" in t:
+            L.append(f"`define FPGACNC_LENI_{macro(t['name'])} {t['len']}")
+        if "len_header" in t:
+            L.append(f"`define FPGACNC_LENI_{macro(t['name'])}_HEADER {t['len_header']}")
+        if "per_axis" in t and len(t["per_axis"]) == 1:
+            L.append(f"`define FPGACNC_LENI_{macro(t['name'])}_PER_AXIS {t['per_axis'][0]}")
         if "len_min" in t:
-            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_MIN {t['len_min']}")
-            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_MAX {t['len_max']}")
+            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_MIN {vlog_int(t['len_min'], 8)}")
+            L.append(f"`define FPGACNC_LEN_{macro(t['name'])}_MAX {vlog_int(t['len_max'], 8)}")
     L.append("")
     L.append("// ---- NAK reasons (8 bits)")
     for r in d["nak"]:

@@ -32,72 +32,93 @@
 // host: never more sequenced frames unacknowledged (half the SEQ space less one)
 `define FPGACNC_MAX_UNACKED 127
 
-// ---- frame TYPEs (8 bits) and payload lengths
+// ---- frame TYPEs and payload lengths (LEN), 8 bits each; LENI_*: the lengths as integers
 // HELLO: asks the device who it is; also switches a board in auto mode to v2
 `define FPGACNC_T_HELLO 8'h01
-`define FPGACNC_LEN_HELLO 0
+`define FPGACNC_LEN_HELLO 8'd0
+`define FPGACNC_LENI_HELLO 0
 // STATUS_QUERY: asks for the STATUS frame
 `define FPGACNC_T_STATUS_QUERY 8'h02
-`define FPGACNC_LEN_STATUS_QUERY 0
+`define FPGACNC_LEN_STATUS_QUERY 8'd0
+`define FPGACNC_LENI_STATUS_QUERY 0
 // FAULT_CLEAR: clears the latched faults
 `define FPGACNC_T_FAULT_CLEAR 8'h03
-`define FPGACNC_LEN_FAULT_CLEAR 0
+`define FPGACNC_LEN_FAULT_CLEAR 8'd0
+`define FPGACNC_LENI_FAULT_CLEAR 0
 // CONFIG_AXIS: axis u8, STEP high u16, STEP low u16, DIR setup u16, DIR hold u16
 `define FPGACNC_T_CONFIG_AXIS 8'h04
-`define FPGACNC_LEN_CONFIG_AXIS 9
+`define FPGACNC_LEN_CONFIG_AXIS 8'd9
+`define FPGACNC_LENI_CONFIG_AXIS 9
 // NUMERATORS: NUMERATOR_X u32, NUMERATOR_Y u32 (for v1 moves, as the v1 init)
 `define FPGACNC_T_NUMERATORS 8'h05
-`define FPGACNC_LEN_NUMERATORS 8
+`define FPGACNC_LEN_NUMERATORS 8'd8
+`define FPGACNC_LENI_NUMERATORS 8
 // RELEASE: gives the link back to auto mode (v1 or v2 by the next first byte)
 `define FPGACNC_T_RELEASE 8'h06
-`define FPGACNC_LEN_RELEASE 0
+`define FPGACNC_LEN_RELEASE 8'd0
+`define FPGACNC_LENI_RELEASE 0
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32)
 `define FPGACNC_T_LINE 8'h10
-`define FPGACNC_LEN_LINE_HEADER 6
+`define FPGACNC_LEN_LINE_HEADER 8'd6
+`define FPGACNC_LENI_LINE_HEADER 6
 // DWELL: T u32: clocks to wait, laser off
 `define FPGACNC_T_DWELL 8'h11
-`define FPGACNC_LEN_DWELL 4
+`define FPGACNC_LEN_DWELL 8'd4
+`define FPGACNC_LENI_DWELL 4
 // LINE_PROFILE: a line with a trapezoidal speed profile (V_entry, V_cruise, V_exit u48, A u32, D u32, steps)
 `define FPGACNC_T_LINE_PROFILE 8'h12
-`define FPGACNC_LEN_LINE_PROFILE_HEADER 28
+`define FPGACNC_LEN_LINE_PROFILE_HEADER 8'd28
+`define FPGACNC_LENI_LINE_PROFILE_HEADER 28
 // ARC: circular / helical arc in the XY, ZX or YZ plane
 `define FPGACNC_T_ARC 8'h13
-`define FPGACNC_LEN_ARC 63
+`define FPGACNC_LEN_ARC 8'd63
+`define FPGACNC_LENI_ARC 63
 // OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty
 `define FPGACNC_T_OUTPUT 8'h15
-`define FPGACNC_LEN_OUTPUT 3
+`define FPGACNC_LEN_OUTPUT 8'd3
+`define FPGACNC_LENI_OUTPUT 3
 // HEATER_CONFIG: channel, mode, gains, limits
 `define FPGACNC_T_HEATER_CONFIG 8'h20
-`define FPGACNC_LEN_HEATER_CONFIG 20
+`define FPGACNC_LEN_HEATER_CONFIG 8'd20
+`define FPGACNC_LENI_HEATER_CONFIG 20
 // HEATER_SETPOINT: channel u8, setpoint s16 Q11.4 degC
 `define FPGACNC_T_HEATER_SETPOINT 8'h21
-`define FPGACNC_LEN_HEATER_SETPOINT 3
+`define FPGACNC_LEN_HEATER_SETPOINT 8'd3
+`define FPGACNC_LENI_HEATER_SETPOINT 3
 // THERMISTOR_TABLE: channel u8, first index u8, 1..8 entries s16 Q11.4
 `define FPGACNC_T_THERMISTOR_TABLE 8'h22
-`define FPGACNC_LEN_THERMISTOR_TABLE_MIN 4
-`define FPGACNC_LEN_THERMISTOR_TABLE_MAX 18
+`define FPGACNC_LEN_THERMISTOR_TABLE_MIN 8'd4
+`define FPGACNC_LEN_THERMISTOR_TABLE_MAX 8'd18
 // HEATER_SAFETY: channel u8, thresholds and periods
 `define FPGACNC_T_HEATER_SAFETY 8'h23
-`define FPGACNC_LEN_HEATER_SAFETY 13
+`define FPGACNC_LEN_HEATER_SAFETY 8'd13
+`define FPGACNC_LENI_HEATER_SAFETY 13
 // HEATER_WATCHDOG: period u16 in sample ticks, 0 = off
 `define FPGACNC_T_HEATER_WATCHDOG 8'h24
-`define FPGACNC_LEN_HEATER_WATCHDOG 2
+`define FPGACNC_LEN_HEATER_WATCHDOG 8'd2
+`define FPGACNC_LENI_HEATER_WATCHDOG 2
 // ACK: next_seq u8, free FIFO slots u16, segments done u32
 `define FPGACNC_T_ACK 8'h80
-`define FPGACNC_LEN_ACK 7
+`define FPGACNC_LEN_ACK 8'd7
+`define FPGACNC_LENI_ACK 7
 // NAK: SEQ of the rejected frame u8, reason u8, next_seq u8, free FIFO slots u16
 `define FPGACNC_T_NAK 8'h81
-`define FPGACNC_LEN_NAK 5
+`define FPGACNC_LEN_NAK 8'd5
+`define FPGACNC_LENI_NAK 5
 // DONE: the same 7 bytes as ACK: sent when v2 segments complete
 `define FPGACNC_T_DONE 8'h82
-`define FPGACNC_LEN_DONE 7
+`define FPGACNC_LEN_DONE 8'd7
+`define FPGACNC_LENI_DONE 7
 // STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block
 `define FPGACNC_T_STATUS 8'h83
-`define FPGACNC_LEN_STATUS_HEADER 27
-`define FPGACNC_LEN_STATUS_PER_AXIS 4
+`define FPGACNC_LEN_STATUS_HEADER 8'd27
+`define FPGACNC_LEN_STATUS_PER_AXIS 8'd4
+`define FPGACNC_LENI_STATUS_HEADER 27
+`define FPGACNC_LENI_STATUS_PER_AXIS 4
 // IDENT: version u8, N_AXES u8, FIFO depth u16, CLK_HZ u32, BAUD u32, build id u32, next_seq u8, MAX_PAYLOAD u8
 `define FPGACNC_T_IDENT 8'h84
-`define FPGACNC_LEN_IDENT 18
+`define FPGACNC_LEN_IDENT 8'd18
+`define FPGACNC_LENI_IDENT 18
 
 // ---- NAK reasons (8 bits)
 // CRC mismatch
