@@ -11,13 +11,13 @@ trap 'rm -f "$log"' EXIT
 files=(rtl/*.v)
 for f in "${files[@]}"; do
   top=$(basename "$f" .v)
-  if ! verilator --lint-only -Wall -Irtl --top-module "$top" "$f" >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! verilator --lint-only -Wall -Irtl -Irtl/include --top-module "$top" "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: $f"; cat "$log"; fail=1
   fi
-  if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: $f"; cat "$log"; fail=1
   fi
-  if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; hierarchy -check -top $top; proc; check -assert" >/dev/null 2>&1 \
+  if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; hierarchy -check -top $top; proc; check -assert" >/dev/null 2>&1 \
       || grep -qi "warning" "$log"; then
     echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
   fi
@@ -38,13 +38,13 @@ for c in "${configs[@]}"; do
   for pv in $params; do
     vg+=("-G$pv"); ig+=("-Pcnc_core.$pv"); yg="$yg -set ${pv%=*} ${pv#*=}"
   done
-  if ! verilator --lint-only -Wall -Irtl --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! verilator --lint-only -Wall -Irtl -Irtl/include --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
-  if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
-  if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; chparam$yg cnc_core; hierarchy -check -top cnc_core; proc; check -assert" >/dev/null 2>&1 \
+  if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; chparam$yg cnc_core; hierarchy -check -top cnc_core; proc; check -assert" >/dev/null 2>&1 \
       || grep -qi "warning" "$log"; then
     echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
   fi
