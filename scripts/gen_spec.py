@@ -254,7 +254,7 @@ def gen_cpp(d):
          "// The protocol's and the command-FIFO entry's numbers (docs/protocol.md \"Where the numbers",
          "// come from\"): used by the host, the SystemC twins and the benches.",
          "#pragma once", "", "#include <array>", "#include <cstddef>", "#include <cstdint>",
-         "#include <string_view>", "", "namespace fpgacnc::spec {", ""]
+         "#include <string_view>", "", "// clang-format off", "namespace fpgacnc::spec {", ""]
 
     def const(ctype, name, value, doc):
         L.append(f"// {doc}")
@@ -368,6 +368,7 @@ def gen_cpp(d):
         const("uint64_t", "k" + camel(k), cpp_int(v), doc)
     L.append("")
     L.append("}  // namespace fpgacnc::spec")
+    L.append("// clang-format on")
     return "\n".join(L) + "\n"
 
 
@@ -466,7 +467,7 @@ def tables(d):
             continue
         rows.append(f"| `0x{t['value']:02X}` | `{t['name']}` | {md_escape(t['doc'])} ({type_len_doc(t)}) | "
                     f"{'yes' if t.get('sequenced') else 'no'} | {'yes' if t.get('fifo') else 'no'} | "
-                    + ", ".join(f"`{x}`" if x.isupper() else x for x in t["answer"].split(", ")) + " |")
+                    + re.sub(r"\b([A-Z][A-Z_]+)\b", r"`\1`", t["answer"]) + " |")
     T["types-host"] = rows
     rows = ["| TYPE | name | payload |", "| --- | --- | --- |"]
     for t in d["type"]:

@@ -216,7 +216,7 @@ TEST(ResponseEncoder, IdentAndStatusFields) {
   EXPECT_EQ(id.u16(2), 64u);
   EXPECT_EQ(id.u32(4), 50'000'000u);
   EXPECT_EQ(id.u32(8), 115'200u);
-  EXPECT_EQ(id.u32(12), 0x20260005u);
+  EXPECT_EQ(id.u32(12), fpgacnc::spec::kBuildId);
   EXPECT_EQ(id.u8(16), 0x5Au);
   EXPECT_EQ(id.u8(17), 64u);
   const auto& st = b.msgs()[1];

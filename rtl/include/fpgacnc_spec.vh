@@ -57,7 +57,7 @@
 `define FPGACNC_T_RELEASE 8'h06
 `define FPGACNC_LEN_RELEASE 8'd0
 `define FPGACNC_LENI_RELEASE 0
-// LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32)
+// LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 `define FPGACNC_T_LINE 8'h10
 `define FPGACNC_LEN_LINE_HEADER 8'd6
 `define FPGACNC_LENI_LINE_HEADER 6
@@ -65,19 +65,19 @@
 `define FPGACNC_T_DWELL 8'h11
 `define FPGACNC_LEN_DWELL 8'd4
 `define FPGACNC_LENI_DWELL 4
-// LINE_PROFILE: a line with a trapezoidal speed profile (V_entry, V_cruise, V_exit u48, A u32, D u32, steps)
+// LINE_PROFILE: a line with a trapezoidal speed profile (V_entry, V_cruise, V_exit u48, A u32, D u32, steps), see below
 `define FPGACNC_T_LINE_PROFILE 8'h12
 `define FPGACNC_LEN_LINE_PROFILE_HEADER 8'd28
 `define FPGACNC_LENI_LINE_PROFILE_HEADER 28
-// ARC: circular / helical arc in the XY, ZX or YZ plane
+// ARC: circular / helical arc in the XY, ZX or YZ plane, see below
 `define FPGACNC_T_ARC 8'h13
 `define FPGACNC_LEN_ARC 8'd63
 `define FPGACNC_LENI_ARC 63
-// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty
+// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty, see below
 `define FPGACNC_T_OUTPUT 8'h15
 `define FPGACNC_LEN_OUTPUT 8'd3
 `define FPGACNC_LENI_OUTPUT 3
-// HEATER_CONFIG: channel, mode, gains, limits
+// HEATER_CONFIG: channel, mode, gains, limits (see "Heater frames")
 `define FPGACNC_T_HEATER_CONFIG 8'h20
 `define FPGACNC_LEN_HEATER_CONFIG 8'd20
 `define FPGACNC_LENI_HEATER_CONFIG 20
@@ -101,7 +101,7 @@
 `define FPGACNC_T_ACK 8'h80
 `define FPGACNC_LEN_ACK 8'd7
 `define FPGACNC_LENI_ACK 7
-// NAK: SEQ of the rejected frame u8, reason u8, next_seq u8, free FIFO slots u16
+// NAK: SEQ of the rejected frame as received u8, reason u8, next_seq u8, free FIFO slots u16
 `define FPGACNC_T_NAK 8'h81
 `define FPGACNC_LEN_NAK 8'd5
 `define FPGACNC_LENI_NAK 5
@@ -109,7 +109,7 @@
 `define FPGACNC_T_DONE 8'h82
 `define FPGACNC_LEN_DONE 8'd7
 `define FPGACNC_LENI_DONE 7
-// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block
+// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block; see below
 `define FPGACNC_T_STATUS 8'h83
 `define FPGACNC_LEN_STATUS_HEADER 8'd27
 `define FPGACNC_LEN_STATUS_PER_AXIS 8'd4
@@ -133,7 +133,7 @@
 `define FPGACNC_NAK_OUT_OF_ORDER 8'd5
 // a FIFO frame arrived with no free slot
 `define FPGACNC_NAK_FIFO_FULL 8'd6
-// reserved flag bits set, axis number >= N_AXES, a LINE_PROFILE, ARC, OUTPUT or heater field out of range
+// reserved flag bits set, axis number >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field out of range, a heater field out of range (see "Heater frames")
 `define FPGACNC_NAK_BAD_FIELD 8'd7
 
 // ---- STATUS
@@ -242,7 +242,7 @@
 // code: motion code
 `define FPGACNC_E_CODE 40
 `define FPGACNC_E_CODE_W 2
-// kind: entry kind (table above)
+// kind: entry kind (table below)
 `define FPGACNC_E_KIND 42
 `define FPGACNC_E_KIND_W 2
 // v2: written by a v2 frame

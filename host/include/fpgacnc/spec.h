@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string_view>
 
+// clang-format off
 namespace fpgacnc::spec {
 
 // build id the device reports in IDENT
@@ -60,22 +61,22 @@ inline constexpr size_t kLenNumerators = 8;
 // RELEASE: gives the link back to auto mode (v1 or v2 by the next first byte)
 inline constexpr uint8_t kTypeRelease = 0x06;
 inline constexpr size_t kLenRelease = 0;
-// LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32)
+// LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 inline constexpr uint8_t kTypeLine = 0x10;
 inline constexpr size_t kLenLineHeader = 6;
 // DWELL: T u32: clocks to wait, laser off
 inline constexpr uint8_t kTypeDwell = 0x11;
 inline constexpr size_t kLenDwell = 4;
-// LINE_PROFILE: a line with a trapezoidal speed profile (V_entry, V_cruise, V_exit u48, A u32, D u32, steps)
+// LINE_PROFILE: a line with a trapezoidal speed profile (V_entry, V_cruise, V_exit u48, A u32, D u32, steps), see below
 inline constexpr uint8_t kTypeLineProfile = 0x12;
 inline constexpr size_t kLenLineProfileHeader = 28;
-// ARC: circular / helical arc in the XY, ZX or YZ plane
+// ARC: circular / helical arc in the XY, ZX or YZ plane, see below
 inline constexpr uint8_t kTypeArc = 0x13;
 inline constexpr size_t kLenArc = 63;
-// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty
+// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty, see below
 inline constexpr uint8_t kTypeOutput = 0x15;
 inline constexpr size_t kLenOutput = 3;
-// HEATER_CONFIG: channel, mode, gains, limits
+// HEATER_CONFIG: channel, mode, gains, limits (see "Heater frames")
 inline constexpr uint8_t kTypeHeaterConfig = 0x20;
 inline constexpr size_t kLenHeaterConfig = 20;
 // HEATER_SETPOINT: channel u8, setpoint s16 Q11.4 degC
@@ -94,13 +95,13 @@ inline constexpr size_t kLenHeaterWatchdog = 2;
 // ACK: next_seq u8, free FIFO slots u16, segments done u32
 inline constexpr uint8_t kTypeAck = 0x80;
 inline constexpr size_t kLenAck = 7;
-// NAK: SEQ of the rejected frame u8, reason u8, next_seq u8, free FIFO slots u16
+// NAK: SEQ of the rejected frame as received u8, reason u8, next_seq u8, free FIFO slots u16
 inline constexpr uint8_t kTypeNak = 0x81;
 inline constexpr size_t kLenNak = 5;
 // DONE: the same 7 bytes as ACK: sent when v2 segments complete
 inline constexpr uint8_t kTypeDone = 0x82;
 inline constexpr size_t kLenDone = 7;
-// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block
+// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block; see below
 inline constexpr uint8_t kTypeStatus = 0x83;
 inline constexpr size_t kLenStatusHeader = 27;
 inline constexpr size_t kLenStatusPerAxis = 4;
@@ -151,7 +152,7 @@ inline constexpr uint8_t kNakTimeout = 4;
 inline constexpr uint8_t kNakOutOfOrder = 5;
 // FIFO_FULL: a FIFO frame arrived with no free slot
 inline constexpr uint8_t kNakFifoFull = 6;
-// BAD_FIELD: reserved flag bits set, axis number >= N_AXES, a LINE_PROFILE, ARC, OUTPUT or heater field out of range
+// BAD_FIELD: reserved flag bits set, axis number >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field out of range, a heater field out of range (see "Heater frames")
 inline constexpr uint8_t kNakBadField = 7;
 struct NakInfo {
   uint8_t value;
@@ -276,7 +277,7 @@ inline constexpr EntryField kEntryT = {0, 32};
 inline constexpr EntryField kEntryPower = {32, 8};
 // motion code
 inline constexpr EntryField kEntryCode = {40, 2};
-// entry kind (table above)
+// entry kind (table below)
 inline constexpr EntryField kEntryKind = {42, 2};
 // written by a v2 frame
 inline constexpr EntryField kEntryV2 = {44, 1};
@@ -334,3 +335,4 @@ inline constexpr uint64_t kSimboardSampleClks = 0x1'9000;
 inline constexpr uint64_t kBenchSampleClks = 4096;
 
 }  // namespace fpgacnc::spec
+// clang-format on
