@@ -216,7 +216,7 @@ class DecoderBench {
   }
 
   Entry read_out() const {
-    const auto& w = m_->m_axis_tdata;  // 173 bits
+    const auto& w = m_->m_axis_tdata;  // the whole entry (spec::entry_width(kAxes) bits)
     auto bits64 = [&](int lo, int width) {
       uint64_t v = 0;
       for (int i = 0; i < width; ++i) {

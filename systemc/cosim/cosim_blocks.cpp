@@ -27,6 +27,7 @@
 #include "fpgacnc/twins/v2_frames.h"
 
 using namespace fpgacnc::twins;
+namespace spec = fpgacnc::spec;
 
 namespace {
 
