@@ -9,7 +9,7 @@ DEMO_ARGS ?= --plot $(BUILD)/demo-path.svg
 DEMO_RTL_MOVES ?= 100
 DEMO_RTL_ARGS ?= --config examples/demo-machine.toml
 
-.PHONY: all deps configure build test lint bench demo synth quartus formal format clean
+.PHONY: all deps configure build test lint bench demo synth quartus formal format clean spec
 
 all: build
 
@@ -28,6 +28,11 @@ build: configure
 	@cmake --build $(BUILD) -j $(JOBS) || { \
 	  echo "make build: failed; building again (Verilator renames generated files after some RTL edits)"; \
 	  cmake --build $(BUILD) -j $(JOBS) -- -k >/dev/null 2>&1; cmake --build $(BUILD) -j $(JOBS); }
+
+# Regenerate the files written from spec/protocol.toml (Verilog and C++ headers, spec.cmake, the
+# worked-frame vectors, the docs' tables); the CTest spec_generated_up_to_date checks them.
+spec:
+	python3 scripts/gen_spec.py
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 1200

@@ -74,20 +74,22 @@
 //                 the cfg_* port is not read. With cfg_wr held low the pins are the same on every
 //                 clock as with STEP_CFG = 1.
 `default_nettype none
+`include "fpgacnc_spec.vh"
 
 module cnc_core #(
-    parameter CLK_HZ            = 50_000_000,
-    parameter BAUD              = 115_200,
-    parameter N_AXES            = 4,
+    parameter CLK_HZ            = `FPGACNC_DEF_CLK_HZ,
+    parameter BAUD              = `FPGACNC_DEF_BAUD,
+    parameter N_AXES            = `FPGACNC_DEF_N_AXES,
     parameter WATCHDOG_CLKS     = CLK_HZ / 10,         // 100 ms packet watchdog
-    parameter FEED0_PERIOD      = 62_500,              // dominant period when feed = 0
-    parameter DEFAULT_NUMERATOR = CLK_HZ / 160 * 60,   // CLK_HZ * 60 / 160 steps/mm
-    parameter STEP_HIGH         = 100,
-    parameter STEP_LOW          = 100,
-    parameter DIR_SETUP         = 200,
-    parameter DIR_HOLD          = 200,
-    parameter FIFO_DEPTH        = 64,                  // command FIFO entries (power of two)
-    parameter BUILD_ID          = 32'h2026_0005,       // reported by IDENT
+    parameter FEED0_PERIOD      = `FPGACNC_DEF_FEED0_PERIOD,  // dominant period when feed = 0
+    // CLK_HZ * 60 / steps per mm
+    parameter DEFAULT_NUMERATOR = CLK_HZ / `FPGACNC_DEF_STEPS_PER_MM * 60,
+    parameter STEP_HIGH         = `FPGACNC_DEF_STEP_HIGH,
+    parameter STEP_LOW          = `FPGACNC_DEF_STEP_LOW,
+    parameter DIR_SETUP         = `FPGACNC_DEF_DIR_SETUP,
+    parameter DIR_HOLD          = `FPGACNC_DEF_DIR_HOLD,
+    parameter FIFO_DEPTH        = `FPGACNC_DEF_FIFO_DEPTH,  // command FIFO entries (power of two)
+    parameter BUILD_ID          = `FPGACNC_BUILD_ID,   // reported by IDENT
     parameter SAMPLE_CLKS       = CLK_HZ,              // heater sample tick (1 s)
     parameter HEAT_PWM_BITS     = 10,
     parameter HEAT_PWM_DIV      = 4883,                // heater PWM 10 Hz at 50 MHz
@@ -158,7 +160,7 @@ module cnc_core #(
 );
 
   // FIFO entry (segment_prep header, LINE_PROFILE and ARC fields): 839 bits for 4 axes
-  localparam ENTRY_W = 711 + 32 * N_AXES;
+  localparam ENTRY_W = `FPGACNC_ENTRY_W + 32 * N_AXES;
   // build options in effect (v1 carries no profiles, arcs or heater frames)
   localparam integer V2_EN = (PROTO_V2 != 0) ? 1 : 0;
   localparam integer PROF_EN = (V2_EN != 0 && PROFILES != 0) ? 1 : 0;
@@ -181,8 +183,9 @@ module cnc_core #(
   localparam integer FIXED_EN = (V2_EN == 0 && STEP_CFG == 0) ? 1 : 0;
   // the FIFO holds only the fields of the kinds built: header 45 + 32 * N_AXES, + 177 profile
   // fields, + 489 ARC fields (segment_prep's entry layout; the bits above are 0)
-  localparam integer FIFO_W = (ARC_EN != 0) ? ENTRY_W : (PROF_EN != 0) ? 222 + 32 * N_AXES
-                                                                      : 45 + 32 * N_AXES;
+  localparam integer FIFO_W = (ARC_EN != 0)  ? ENTRY_W :
+                              (PROF_EN != 0) ? `FPGACNC_ENTRY_PROF_W + 32 * N_AXES
+                                             : `FPGACNC_ENTRY_BASE_W + 32 * N_AXES;
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;
@@ -330,8 +333,9 @@ module cnc_core #(
       // segment_prep's entry (as frame_decoder writes a v1 packet): motion {v2 0, kind 0, code,
       // power 0xFF, t = feed, steps X, Y}; init {v2 0, kind 1, NUMERATOR_X, NUMERATOR_Y}
       wire [32*N_AXES-1:0] v1_two = {{32 * (N_AXES - 2) {1'b0}}, v1_tdata[47:16], v1_tdata[79:48]};
-      assign cmd_tdata = {{(ENTRY_W - 45 - 32 * N_AXES) {1'b0}}, 1'b0,
-                          v1_init ? 2'd1 : 2'd0, v1_init ? 2'd0 : v1_tdata[81:80],
+      assign cmd_tdata = {{(ENTRY_W - `FPGACNC_ENTRY_BASE_W - 32 * N_AXES) {1'b0}}, 1'b0,
+                          v1_init ? `FPGACNC_K_NUMERATORS : `FPGACNC_K_MOTION,
+                          v1_init ? 2'd0 : v1_tdata[81:80],
                           v1_init ? 8'd0 : 8'hFF, v1_init ? 16'd0 : 16'd0,
                           v1_init ? 16'd0 : v1_tdata[15:0], v1_two};
       assign fifo_level_w     = {15'd0, cmd_tvalid};
@@ -849,7 +853,7 @@ module cnc_core #(
         endcase
         if (rst) aa_cnt_reg <= 8'd0;
       end
-      assign enc_tdata  = 8'hAA;
+      assign enc_tdata  = `FPGACNC_V1_ACK;
       assign enc_tvalid = (aa_cnt_reg != 8'd0);
       // v2-only status and requests, unused in a v1 build
       wire unused_v2 = &{1'b0, dec_hello, dec_status, dec_ack, dec_nak, dec_nak_seq, dec_nak_reason,

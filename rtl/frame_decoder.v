@@ -81,10 +81,12 @@
 // rst is synchronous, active high (auto mode, next_seq = 0).
 `default_nettype none
 
+`include "fpgacnc_spec.vh"
+
 module frame_decoder #(
     parameter N_AXES        = 4,
     parameter WATCHDOG_CLKS = 5_000_000,  // 100 ms at 50 MHz
-    parameter MAX_PAYLOAD   = 64,
+    parameter MAX_PAYLOAD   = `FPGACNC_MAX_PAYLOAD,
     parameter PROFILES      = 1,  // 0: LINE_PROFILE (0x12) is an unknown type
     parameter ARCS          = 1,  // 0: ARC (0x13) is an unknown type
     parameter OUTPUTS       = 1,  // 0: OUTPUT (0x15) is an unknown type
@@ -97,7 +99,7 @@ module frame_decoder #(
     input  wire       s_axis_tvalid,
     output wire       s_axis_tready,
 
-    output wire [711+32*N_AXES-1:0] m_axis_tdata,
+    output wire [`FPGACNC_ENTRY_W+32*N_AXES-1:0] m_axis_tdata,
     output wire                    m_axis_tvalid,
     input  wire                    m_axis_tready,
 
@@ -133,22 +135,30 @@ module frame_decoder #(
     output wire v1_overrun
 );
 
-  localparam ENTRY_W = 711 + 32 * N_AXES;
-  localparam BASE_W = 45 + 32 * N_AXES;  // entry without the LINE_PROFILE and ARC fields
-  localparam PROF_W = 222 + 32 * N_AXES;  // entry without the ARC fields
+  localparam ENTRY_W = `FPGACNC_ENTRY_W + 32 * N_AXES;
+  // entry without the LINE_PROFILE and ARC fields
+  localparam BASE_W = `FPGACNC_ENTRY_BASE_W + 32 * N_AXES;
+  localparam PROF_W = `FPGACNC_ENTRY_PROF_W + 32 * N_AXES;  // entry without the ARC fields
   // payload bytes kept: LINE_PROFILE with int32 steps, ARC (63); heater frames need 20
   localparam integer PB = (28 + 4 * N_AXES > 63) ? 28 + 4 * N_AXES : 63;
 
   localparam [2:0] ST_HUNT = 3'd0, ST_V1 = 3'd1, ST_LEN = 3'd2, ST_SEQ = 3'd3, ST_TYPE = 3'd4,
                    ST_PAY = 3'd5, ST_CRC1 = 3'd6, ST_CRC2 = 3'd7;
 
-  localparam [7:0] T_HELLO = 8'h01, T_STATUS = 8'h02, T_FCLR = 8'h03, T_CFG = 8'h04,
-                   T_NUM = 8'h05, T_REL = 8'h06, T_LINE = 8'h10, T_DWELL = 8'h11,
-                   T_LPROF = 8'h12, T_ARC = 8'h13, T_OUT = 8'h15;
-  localparam [7:0] T_HCFG = 8'h20, T_HSET = 8'h21, T_HTAB = 8'h22, T_HSAF = 8'h23, T_HWD = 8'h24;
+  localparam [7:0] T_HELLO = `FPGACNC_T_HELLO, T_STATUS = `FPGACNC_T_STATUS_QUERY,
+                   T_FCLR = `FPGACNC_T_FAULT_CLEAR, T_CFG = `FPGACNC_T_CONFIG_AXIS,
+                   T_NUM = `FPGACNC_T_NUMERATORS, T_REL = `FPGACNC_T_RELEASE,
+                   T_LINE = `FPGACNC_T_LINE, T_DWELL = `FPGACNC_T_DWELL,
+                   T_LPROF = `FPGACNC_T_LINE_PROFILE, T_ARC = `FPGACNC_T_ARC,
+                   T_OUT = `FPGACNC_T_OUTPUT;
+  localparam [7:0] T_HCFG = `FPGACNC_T_HEATER_CONFIG, T_HSET = `FPGACNC_T_HEATER_SETPOINT,
+                   T_HTAB = `FPGACNC_T_THERMISTOR_TABLE, T_HSAF = `FPGACNC_T_HEATER_SAFETY,
+                   T_HWD = `FPGACNC_T_HEATER_WATCHDOG;
 
-  localparam [7:0] R_BAD_CRC = 8'd1, R_BAD_LENGTH = 8'd2, R_UNKNOWN_TYPE = 8'd3, R_TIMEOUT = 8'd4,
-                   R_OUT_OF_ORDER = 8'd5, R_FIFO_FULL = 8'd6, R_BAD_FIELD = 8'd7;
+  localparam [7:0] R_BAD_CRC = `FPGACNC_NAK_BAD_CRC, R_BAD_LENGTH = `FPGACNC_NAK_BAD_LENGTH,
+                   R_UNKNOWN_TYPE = `FPGACNC_NAK_UNKNOWN_TYPE, R_TIMEOUT = `FPGACNC_NAK_TIMEOUT,
+                   R_OUT_OF_ORDER = `FPGACNC_NAK_OUT_OF_ORDER, R_FIFO_FULL = `FPGACNC_NAK_FIFO_FULL,
+                   R_BAD_FIELD = `FPGACNC_NAK_BAD_FIELD;
 
   localparam integer MAXP_I = MAX_PAYLOAD;
   localparam [7:0] MAXP = MAXP_I[7:0];
@@ -213,7 +223,7 @@ module frame_decoder #(
   wire [7:0] flags = pb(0);
   wire       short_steps = flags[7];
   wire [7:0] len_m6 = len_reg - 8'd6;
-  wire       line_len_ok = (len_reg >= 8'd6) &&
+  wire       line_len_ok = (len_reg >= `FPGACNC_LEN_LINE_HEADER) &&
                            (short_steps ? (len_m6[0] == 1'b0 && {1'b0, len_m6[7:1]} <= NAX8)
                                         : (len_m6[1:0] == 2'b00 && {2'b00, len_m6[7:2]} <= NAX8));
 
@@ -234,7 +244,7 @@ module frame_decoder #(
 
   // LINE_PROFILE: the same step fields from byte 28
   wire [7:0] len_m28 = len_reg - 8'd28;
-  wire       prof_len_ok = (len_reg >= 8'd28) &&
+  wire       prof_len_ok = (len_reg >= `FPGACNC_LEN_LINE_PROFILE_HEADER) &&
                            (short_steps ? (len_m28[0] == 1'b0 && {1'b0, len_m28[7:1]} <= NAX8)
                                         : (len_m28[1:0] == 2'b00 && {2'b00, len_m28[7:2]} <= NAX8));
   reg [32*N_AXES-1:0] prof_steps;
@@ -348,9 +358,12 @@ module frame_decoder #(
   wire t_hsaf = (type_reg == T_HSAF);
   wire t_hwd = (type_reg == T_HWD);
   wire t_heat = (HEATERS != 0) && (t_hcfg || t_hset || t_htab || t_hsaf || t_hwd);
-  wire heat_len_ok = t_heat && ((t_hcfg && len_reg == 8'd20) || (t_hset && len_reg == 8'd3) ||
-                     (t_htab && len_reg >= 8'd4 && len_reg <= 8'd18 && !len_reg[0]) ||
-                     (t_hsaf && len_reg == 8'd13) || (t_hwd && len_reg == 8'd2));
+  wire heat_len_ok = t_heat && ((t_hcfg && len_reg == `FPGACNC_LEN_HEATER_CONFIG) ||
+                     (t_hset && len_reg == `FPGACNC_LEN_HEATER_SETPOINT) ||
+                     (t_htab && len_reg >= `FPGACNC_LEN_THERMISTOR_TABLE_MIN &&
+                      len_reg <= `FPGACNC_LEN_THERMISTOR_TABLE_MAX && !len_reg[0]) ||
+                     (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
+                     (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
   wire [15:0] h_umax = {pb(14), pb(15)};
   wire [15:0] h_manual = {pb(18), pb(19)};
   wire signed [15:0] h_tmin = {pb(1), pb(2)};
@@ -373,10 +386,11 @@ module frame_decoder #(
                t_lprof || t_arc || t_out || t_heat;
   wire len0 = (len_reg == 8'd0);
   wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
-                (t_cfg && len_reg == 8'd9) || (t_num && len_reg == 8'd8) ||
-                (t_dwell && len_reg == 8'd4) || (t_line && line_len_ok) ||
-                (t_lprof && prof_len_ok) || (t_arc && len_reg == 8'd63) ||
-                (t_out && len_reg == 8'd3) || heat_len_ok;
+                (t_cfg && len_reg == `FPGACNC_LEN_CONFIG_AXIS) ||
+                (t_num && len_reg == `FPGACNC_LEN_NUMERATORS) ||
+                (t_dwell && len_reg == `FPGACNC_LEN_DWELL) || (t_line && line_len_ok) ||
+                (t_lprof && prof_len_ok) || (t_arc && len_reg == `FPGACNC_LEN_ARC) ||
+                (t_out && len_reg == `FPGACNC_LEN_OUTPUT) || heat_len_ok;
   // The field rules are registered: the payload and type are complete at least two clocks before
   // the CHECK clock (the two CRC bytes follow them), so field_ok_reg holds the rules of the frame
   // being checked (the wide ARC / LINE_PROFILE compares end at a register, not in the accept).
@@ -483,10 +497,10 @@ module frame_decoder #(
       case (st_reg)
         ST_HUNT: begin
           cnt_reg     <= 7'd0;
-          is_init_reg <= (d == 8'hFF);
+          is_init_reg <= (d == `FPGACNC_V1_INIT_BYTE);
           code_reg    <= d[1:0];
-          if (d == 8'hA5) st_reg <= ST_LEN;
-          else if (!v2_mode_reg && (d == 8'hFF || d[7:2] == 6'd0)) st_reg <= ST_V1;
+          if (d == `FPGACNC_SYNC) st_reg <= ST_LEN;
+          else if (!v2_mode_reg && (d == `FPGACNC_V1_INIT_BYTE || d[7:2] == 6'd0)) st_reg <= ST_V1;
           else noise_reg <= 1'b1;
         end
         ST_V1: begin
@@ -662,7 +676,7 @@ module frame_decoder #(
   reg [ 7:0] f_n_reg;    // bytes taken after the sync byte
   reg [ 7:0] f_len_reg;  // the first of them (LEN)
   reg [15:0] f_crc_reg;  // CRC over the bytes after the sync
-  wire       f_sync = take && (st_reg == ST_HUNT) && (d == 8'hA5);
+  wire       f_sync = take && (st_reg == ST_HUNT) && (d == `FPGACNC_SYNC);
 
   always @(posedge clk) begin
     if (f_sync) begin
@@ -711,7 +725,7 @@ module frame_decoder #(
   reg f_past_valid = 1'b0;
   always @(posedge clk) f_past_valid <= 1'b1;
   always @(*) if (!f_past_valid) assume (rst);
-  always @(*) if (s_axis_tvalid) assume (s_axis_tdata != 8'hA5);
+  always @(*) if (s_axis_tvalid) assume (s_axis_tdata != `FPGACNC_SYNC);
 
   localparam integer F_W = WD_W + 1;
   localparam [F_W-1:0] F_WD = WATCHDOG_CLKS;
@@ -722,14 +736,14 @@ module frame_decoder #(
   wire           f_boundary = chk_reg || timeout_reg;
   wire [    3:0] f_n_eff = f_boundary ? 4'd0 : f_n;  // bytes of the packet still open
   wire [    3:0] f_len = f_init ? 4'd9 : 4'd11;
-  wire           f_v1_start = (s_axis_tdata == 8'hFF) || (s_axis_tdata[7:2] == 6'd0);
+  wire           f_v1_start = (s_axis_tdata == `FPGACNC_V1_INIT_BYTE) || (s_axis_tdata[7:2] == 6'd0);
 
   always @(posedge clk) begin
     if (take) begin
       f_idle <= {F_W{1'b0}};
       if (f_n_eff == 4'd0) begin
         f_n    <= f_v1_start ? 4'd1 : 4'd0;  // anything else is noise
-        f_init <= (s_axis_tdata == 8'hFF);
+        f_init <= (s_axis_tdata == `FPGACNC_V1_INIT_BYTE);
       end else begin
         f_n <= f_n_eff + 4'd1;
       end

@@ -30,14 +30,15 @@
 //   nothing is being sent, 0xA5 offered from E + 1, taken by an idle uart_tx on edge E + 2.
 // rst is synchronous, active high (nothing pending, device SEQ 0).
 `default_nettype none
+`include "fpgacnc_spec.vh"
 
 module response_encoder #(
-    parameter N_AXES      = 4,
-    parameter FIFO_DEPTH  = 64,
-    parameter CLK_HZ      = 50_000_000,
-    parameter BAUD        = 115_200,
-    parameter BUILD_ID    = 32'h2026_0005,
-    parameter MAX_PAYLOAD = 64,
+    parameter N_AXES      = `FPGACNC_DEF_N_AXES,
+    parameter FIFO_DEPTH  = `FPGACNC_DEF_FIFO_DEPTH,
+    parameter CLK_HZ      = `FPGACNC_DEF_CLK_HZ,
+    parameter BAUD        = `FPGACNC_DEF_BAUD,
+    parameter BUILD_ID    = `FPGACNC_BUILD_ID,
+    parameter MAX_PAYLOAD = `FPGACNC_MAX_PAYLOAD,
     parameter HEAT_BYTES  = 0  // heater status bytes appended to STATUS (0..16)
 ) (
     input wire clk,
@@ -71,9 +72,11 @@ module response_encoder #(
     output wire frame_start  // 1-clock strobe: a frame's fields were snapshotted
 );
 
-  localparam integer STATUS_BASE = 27 + 4 * N_AXES;
+  localparam integer STATUS_BASE = `FPGACNC_LENI_STATUS_HEADER +
+                                   `FPGACNC_LENI_STATUS_PER_AXIS * N_AXES;
   localparam integer STATUS_LEN = STATUS_BASE + HEAT_BYTES;
-  localparam integer MAX_LEN = (STATUS_LEN > 18) ? STATUS_LEN : 18;
+  localparam integer MAX_LEN = (STATUS_LEN > `FPGACNC_LENI_IDENT) ? STATUS_LEN
+                                                                  : `FPGACNC_LENI_IDENT;
   localparam integer SHB = 3 + MAX_LEN;  // LEN, SEQ, TYPE, payload
   localparam integer SHW = 8 * SHB;
 
@@ -114,16 +117,17 @@ module response_encoder #(
     for (a = 0; a < N_AXES; a = a + 1) pos_be[32*(N_AXES-1-a)+:32] = position[32*a+:32];
 
   /* verilator lint_off UNUSEDSIGNAL */
-  wire [8*(3+STATUS_BASE)+127:0] img_status_full = {SLEN8, dseq_reg, 8'h83, state, faults,
-                                                   fifo_level, next_seq, segments_done, pos_be,
-                                                   counters, heat_status};
+  wire [8*(3+STATUS_BASE)+127:0] img_status_full = {SLEN8, dseq_reg, `FPGACNC_T_STATUS, state,
+                                                   faults, fifo_level, next_seq, segments_done,
+                                                   pos_be, counters, heat_status};
   /* verilator lint_on UNUSEDSIGNAL */
   wire [8*(3+STATUS_LEN)-1:0] img_status = img_status_full[8*(3+STATUS_BASE)+127-:8*(3+STATUS_LEN)];
-  wire [8*21-1:0] img_ident = {8'd18, dseq_reg, 8'h84, 8'd2, NAX8, DEPTH16, CLK32, BAUD32,
-                               BUILD32, next_seq, MAXP8};
-  wire [8*8-1:0] img_nak = {8'd5, dseq_reg, 8'h81, nak_seq_reg, nak_reason_reg, next_seq,
-                            fifo_free};
-  wire [8*3-1:0] img_ack_hdr = {8'd7, dseq_reg, ack_p_reg ? 8'h80 : 8'h82};
+  wire [8*21-1:0] img_ident = {`FPGACNC_LEN_IDENT, dseq_reg, `FPGACNC_T_IDENT, `FPGACNC_VERSION,
+                               NAX8, DEPTH16, CLK32, BAUD32, BUILD32, next_seq, MAXP8};
+  wire [8*8-1:0] img_nak = {`FPGACNC_LEN_NAK, dseq_reg, `FPGACNC_T_NAK, nak_seq_reg, nak_reason_reg,
+                            next_seq, fifo_free};
+  wire [8*3-1:0] img_ack_hdr = {`FPGACNC_LEN_ACK, dseq_reg,
+                                ack_p_reg ? `FPGACNC_T_ACK : `FPGACNC_T_DONE};
   wire [8*10-1:0] img_ack = {img_ack_hdr, next_seq, fifo_free, segments_done};
 
   wire any_p = ident_p_reg || status_p_reg || nak_p_reg || ack_p_reg || done_p_reg;
@@ -183,13 +187,13 @@ module response_encoder #(
           tvalid_reg <= 1'b0;
         end else if (!tvalid_reg && aa_cnt_reg != 8'd0) begin
           tvalid_reg <= 1'b1;
-          tdata_reg  <= 8'hAA;
+          tdata_reg  <= `FPGACNC_V1_ACK;
         end else if (start) begin
           sh_reg       <= img;
           body_cnt_reg <= img_bytes;
           st_reg       <= E_SYNC;
           tvalid_reg   <= 1'b1;
-          tdata_reg    <= 8'hA5;
+          tdata_reg    <= `FPGACNC_SYNC;
         end
       end
       E_SYNC: begin

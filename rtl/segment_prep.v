@@ -1,6 +1,6 @@
 // segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
 //
-// Input (s_axis_*): one FIFO entry, width ENTRY_W = 711 + 32*N_AXES (839 for 4 axes),
+// Input (s_axis_*): one FIFO entry, width ENTRY_W = `FPGACNC_ENTRY_W + 32*N_AXES (839 for 4 axes),
 //   { arc_raw[487:0], arc[0], D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
 //     v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N_AXES-1:0] }
 //   arc_raw (ARC entries only, else 0): the ARC payload bytes 2..62 as received, byte 2 in the
@@ -87,6 +87,7 @@
 // path; m_axis_tmn is 0 (the executor is built with LEAN_DDA and computes T - n itself from
 // m_axis_total and m_axis_steps).
 `default_nettype none
+`include "fpgacnc_spec.vh"
 
 module segment_prep #(
     parameter N_AXES            = 4,
@@ -94,8 +95,9 @@ module segment_prep #(
     parameter ARCS              = 1,      // 0: no ARC entries (prepared as LINE if any)
     parameter V1_ONLY           = 0,      // 1: only v1 MOTION / NUMERATORS entries (see below)
     parameter OUTPUTS           = 1,      // 0: no OUTPUT entries (see below)
-    parameter FEED0_PERIOD      = 62_500,
-    parameter DEFAULT_NUMERATOR = 18_750_000   // CLK_HZ * 60 / 160 steps/mm at 50 MHz
+    parameter FEED0_PERIOD      = `FPGACNC_DEF_FEED0_PERIOD,
+    // CLK_HZ * 60 / steps/mm at the default clock
+    parameter DEFAULT_NUMERATOR = `FPGACNC_DEF_CLK_HZ / `FPGACNC_DEF_STEPS_PER_MM * 60
 ) (
     input wire clk,
     input wire rst,
@@ -103,7 +105,7 @@ module segment_prep #(
     input wire abort,  // e-stop: drop the entry being prepared or waiting (idle after the edge)
     /* verilator lint_on SYMRSVDWORD */
 
-    input  wire [711+32*N_AXES-1:0] s_axis_tdata,
+    input  wire [`FPGACNC_ENTRY_W+32*N_AXES-1:0] s_axis_tdata,
     input  wire                    s_axis_tvalid,
     output wire                    s_axis_tready,
 
@@ -155,7 +157,8 @@ module segment_prep #(
 );
 
   localparam SW = 32 * N_AXES;
-  localparam [1:0] K_MOTION = 2'd0, K_NUMERATORS = 2'd1, K_DWELL = 2'd2, K_OUTPUT = 2'd3;
+  localparam [1:0] K_MOTION = `FPGACNC_K_MOTION, K_NUMERATORS = `FPGACNC_K_NUMERATORS,
+                   K_DWELL = `FPGACNC_K_DWELL, K_OUTPUT = `FPGACNC_K_OUTPUT;
   localparam [3:0] S_IDLE = 4'd0, S_MAX = 4'd1, S_DIV = 4'd2, S_CLAMP = 4'd3, S_MUL = 4'd4,
                    S_SUB = 4'd5, S_OUT = 4'd6, S_PMUL = 4'd7, S_AMUL = 4'd8, S_ADIV = 4'd9,
                    S_AFIX = 4'd10;
@@ -165,20 +168,23 @@ module segment_prep #(
 
   // entry fields
   wire [SW-1:0] in_steps = s_axis_tdata[SW-1:0];
-  wire [31:0] in_t = s_axis_tdata[SW+31:SW];
-  wire [7:0] in_power = s_axis_tdata[SW+39:SW+32];
-  wire [1:0] in_code = s_axis_tdata[SW+41:SW+40];
-  wire [1:0] in_kind = s_axis_tdata[SW+43:SW+42];
-  wire in_v2 = s_axis_tdata[SW+44];
+  wire [`FPGACNC_E_T_W-1:0] in_t = s_axis_tdata[SW+`FPGACNC_E_T+:`FPGACNC_E_T_W];
+  wire [`FPGACNC_E_POWER_W-1:0] in_power = s_axis_tdata[SW+`FPGACNC_E_POWER+:`FPGACNC_E_POWER_W];
+  wire [`FPGACNC_E_CODE_W-1:0] in_code = s_axis_tdata[SW+`FPGACNC_E_CODE+:`FPGACNC_E_CODE_W];
+  wire [`FPGACNC_E_KIND_W-1:0] in_kind = s_axis_tdata[SW+`FPGACNC_E_KIND+:`FPGACNC_E_KIND_W];
+  wire in_v2 = s_axis_tdata[SW+`FPGACNC_E_V2];
   wire in_v1_motion = (in_kind == K_MOTION) && !in_v2;
   wire in_out = (OUTPUTS != 0) && (V1_ONLY == 0) && (in_kind == K_OUTPUT) && !in_v2;
-  wire in_prof = (PROFILES != 0) && s_axis_tdata[SW+45] && (in_kind == K_MOTION) && in_v2;
-  wire [46:0] in_ve = s_axis_tdata[SW+46+:47];
-  wire [46:0] in_vc = s_axis_tdata[SW+94+:47];
-  wire [46:0] in_vx = s_axis_tdata[SW+142+:47];
-  wire [31:0] in_d = s_axis_tdata[SW+190+:32];
-  wire in_arc = (ARCS != 0) && s_axis_tdata[SW+222] && (in_kind == K_MOTION) && in_v2;
-  wire [487:0] in_arc_raw = s_axis_tdata[SW+223+:488];
+  wire in_prof = (PROFILES != 0) && s_axis_tdata[SW+`FPGACNC_E_PROF] && (in_kind == K_MOTION) &&
+                 in_v2;
+  wire [46:0] in_ve = s_axis_tdata[SW+`FPGACNC_E_V_ENTRY+:47];
+  wire [46:0] in_vc = s_axis_tdata[SW+`FPGACNC_E_V_CRUISE+:47];
+  wire [46:0] in_vx = s_axis_tdata[SW+`FPGACNC_E_V_EXIT+:47];
+  wire [`FPGACNC_E_DECEL_AT_W-1:0] in_d =
+      s_axis_tdata[SW+`FPGACNC_E_DECEL_AT+:`FPGACNC_E_DECEL_AT_W];
+  wire in_arc = (ARCS != 0) && s_axis_tdata[SW+`FPGACNC_E_ARC] && (in_kind == K_MOTION) && in_v2;
+  wire [`FPGACNC_E_ARC_RAW_W-1:0] in_arc_raw =
+      s_axis_tdata[SW+`FPGACNC_E_ARC_RAW+:`FPGACNC_E_ARC_RAW_W];
 
   // ARC registers: the raw frame fields (big-endian order, I first) and the derived values
   reg arc_reg;

@@ -7,7 +7,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 t=$(mktemp)
 trap 'rm -f "$t"' EXIT
-if ! yosys -q -p "read_verilog rtl/*.v; hierarchy -top de1soc_top; tee -q -o $t ls; \
+if ! yosys -q -p "read_verilog -Irtl/include rtl/*.v; hierarchy -top de1soc_top; tee -q -o $t ls; \
     tee -q -a $t select -list de1soc_top/i:* de1soc_top/o:*" >/dev/null 2>&1; then
   echo "check_qsf: yosys could not elaborate de1soc_top from rtl/*.v"; exit 2
 fi

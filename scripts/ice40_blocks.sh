@@ -43,7 +43,7 @@ for b in $blocks; do
   pre=""
   [ -n "$chp" ] && pre="chparam $chp $b;"
   # the block's ports (after parameters) -> wrapper
-  yosys -q -p "read_verilog $files; $pre hierarchy -top $b; proc; write_json $out/$tag.ports.json" >/dev/null
+  yosys -q -p "read_verilog -Irtl/include $files; $pre hierarchy -top $b; proc; write_json $out/$tag.ports.json" >/dev/null
   python3 - "$out/$tag.ports.json" "$b" "$chp" >"$out/$tag.v" <<'PYEOF'
 import json, sys
 d = json.load(open(sys.argv[1])); name = sys.argv[2]; chp = sys.argv[3].split()
@@ -81,7 +81,7 @@ print("  assign scan_out = scan_reg[%d];" % wo)
 print("endmodule")
 PYEOF
   t0=$(date +%s)
-  if ! yosys -q -l "$out/$tag.yosys.log" -p "read_verilog $files $out/$tag.v; \
+  if ! yosys -q -l "$out/$tag.yosys.log" -p "read_verilog -Irtl/include $files $out/$tag.v; \
       synth_ice40 -noflatten -top ice40_blk_top -json $out/$tag.json" >/dev/null; then
     echo "ice40_blocks: Yosys failed for $b (see $out/$tag.yosys.log)"; status=1; continue
   fi

@@ -122,7 +122,7 @@ for n in $configs; do
   set -- ${CFG[$n]}
   while [ $# -ge 2 ]; do chp="$chp -set $1 $2"; shift 2; done
   t0=$(date +%s)
-  yosys -q -l "$out/$tag.yosys.log" -p "read_verilog $core_rtl $wrap; \
+  yosys -q -l "$out/$tag.yosys.log" -p "read_verilog -Irtl/include $core_rtl $wrap; \
     chparam $chp ice40_cnc_top; \
     synth_ice40 -top ice40_cnc_top -json $out/$tag.json; tee -q -o $out/$tag.stat.txt stat" >/dev/null
   t1=$(date +%s)

@@ -11,10 +11,10 @@ trap 'rm -f "$log"' EXIT
 files=(rtl/*.v)
 for f in "${files[@]}"; do
   top=$(basename "$f" .v)
-  if ! verilator --lint-only -Wall -Irtl --top-module "$top" "$f" >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! verilator --lint-only -Wall -Irtl -Irtl/include --top-module "$top" "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: $f"; cat "$log"; fail=1
   fi
-  if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: $f"; cat "$log"; fail=1
   fi
 done
@@ -25,7 +25,7 @@ yosys_one() {  # top, chparam arguments ("" for the default build)
   [ -n "$2" ] && chp="chparam$2 $1;"
   echo "design -load base; $chp hierarchy -check -top $1; proc; check -assert;"
 }
-script="read_verilog ${files[*]}; design -save base;"
+script="read_verilog -Irtl/include ${files[*]}; design -save base;"
 for f in "${files[@]}"; do script="$script $(yosys_one "$(basename "$f" .v)" "")"; done
 declare -A ygs=()
 # cnc_core build options: "name param=value ..." (the default build is checked above).
@@ -44,10 +44,10 @@ for c in "${configs[@]}"; do
   for pv in $params; do
     vg+=("-G$pv"); ig+=("-Pcnc_core.$pv"); yg="$yg -set ${pv%=*} ${pv#*=}"
   done
-  if ! verilator --lint-only -Wall -Irtl --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! verilator --lint-only -Wall -Irtl -Irtl/include --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
-  if ! iverilog -g2005 -Wall -Wno-timescale -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
   ygs[$name]="$yg"
@@ -55,14 +55,14 @@ for c in "${configs[@]}"; do
 done
 if ! yosys -q -l "$log" -p "$script" >/dev/null 2>&1 || grep -qi "warning" "$log"; then
   for f in "${files[@]}"; do
-    if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; design -save base; $(yosys_one "$(basename "$f" .v)" "")" >/dev/null 2>&1 \
+    if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; design -save base; $(yosys_one "$(basename "$f" .v)" "")" >/dev/null 2>&1 \
         || grep -qi "warning" "$log"; then
       echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
     fi
   done
   for c in "${configs[@]}"; do
     read -r name params <<<"$c"
-    if ! yosys -q -l "$log" -p "read_verilog ${files[*]}; design -save base; $(yosys_one cnc_core "${ygs[$name]}")" >/dev/null 2>&1 \
+    if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; design -save base; $(yosys_one cnc_core "${ygs[$name]}")" >/dev/null 2>&1 \
         || grep -qi "warning" "$log"; then
       echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
     fi

@@ -10,7 +10,7 @@ set(FPGACNC_HEATER_RTL
     ${FPGACNC_RTL_DIR}/ltc2308_spi.v ${FPGACNC_RTL_DIR}/temp_table.v)
 # Scaled time: one sample tick every 4096 clocks, PWM period 1024 clocks (4 per tick).
 fpgacnc_verilated(vheat TOP heater_block SOURCES ${FPGACNC_HEATER_RTL}
-                  ARGS -GSAMPLE_CLKS=4096 -GPWM_DIV=1)
+                  ARGS -GSAMPLE_CLKS=${FPGACNC_SPEC_BENCH_SAMPLE_CLKS} -GPWM_DIV=1)
 
 fpgacnc_bench(test_heater_units LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_units.cpp LIBS vpwm vpid vadc vtable)
@@ -18,6 +18,6 @@ fpgacnc_bench(test_heater_block LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_block.cpp LIBS vheat)
 # cnc_core with heaters at 3 Mbaud, scaled sample tick (4096 clocks) and heater PWM (1024 clocks).
 fpgacnc_verilated(vcore_heat TOP cnc_core PREFIX Vcnc_core_heat SOURCES ${FPGACNC_CORE_RTL}
-                  ARGS -GBAUD=3000000 -GSAMPLE_CLKS=4096 -GHEAT_PWM_DIV=1)
+                  ARGS -GBAUD=3000000 -GSAMPLE_CLKS=${FPGACNC_SPEC_BENCH_SAMPLE_CLKS} -GHEAT_PWM_DIV=1)
 fpgacnc_bench(test_heater_core LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_core.cpp LIBS vcore_heat)

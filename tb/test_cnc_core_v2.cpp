@@ -148,7 +148,7 @@ TEST(CncCoreV2, HelloIdent) {
   EXPECT_EQ(id.u16(2), 64u) << "FIFO depth";
   EXPECT_EQ(id.u32(4), 50'000'000u) << "CLK_HZ";
   EXPECT_EQ(id.u32(8), 3'000'000u) << "BAUD";
-  EXPECT_EQ(id.u32(12), 0x20260005u) << "BUILD_ID";
+  EXPECT_EQ(id.u32(12), fpgacnc::spec::kBuildId) << "BUILD_ID";
   EXPECT_EQ(id.u8(16), 0u) << "next_seq";
   EXPECT_EQ(id.u8(17), 64u) << "MAX_PAYLOAD";
   EXPECT_EQ(b.dut().v2_mode, 1);

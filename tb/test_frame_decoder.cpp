@@ -16,6 +16,7 @@
 #include "common/seed.h"
 #include "common/v1_packets.h"
 #include "common/v2_frames.h"
+#include "fpgacnc/spec_vectors.h"
 #include "verilated.h"
 
 namespace {
@@ -32,6 +33,9 @@ struct Entry {
   bool v2 = false;
   uint32_t kind = 0, code = 0, power = 0, t = 0;
   int32_t steps[kAxes] = {0, 0, 0, 0};
+  // LINE_PROFILE and ARC fields (not compared by ==; the spec vector test checks them)
+  uint64_t prof = 0, v_entry = 0, v_cruise = 0, v_exit = 0, decel_at = 0, arc = 0;
+  std::vector<uint8_t> arc_raw;  // ARC payload bytes 2.., byte 2 first
   bool operator==(const Entry& o) const {
     for (int a = 0; a < kAxes; ++a)
       if (steps[a] != o.steps[a]) return false;
@@ -212,22 +216,35 @@ class DecoderBench {
   }
 
   Entry read_out() const {
-    const auto& w = m_->m_axis_tdata;  // 173 bits
-    auto bits = [&](int lo, int width) {
+    const auto& w = m_->m_axis_tdata;  // the whole entry (spec::entry_width(kAxes) bits)
+    auto bits64 = [&](int lo, int width) {
       uint64_t v = 0;
       for (int i = 0; i < width; ++i) {
         const int bit = lo + i;
         v |= static_cast<uint64_t>((w[bit / 32] >> (bit % 32)) & 1u) << i;
       }
-      return static_cast<uint32_t>(v);
+      return v;
     };
+    auto bits = [&](int lo, int width) { return static_cast<uint32_t>(bits64(lo, width)); };
     Entry e;
     for (int a = 0; a < kAxes; ++a) e.steps[a] = static_cast<int32_t>(bits(32 * a, 32));
-    e.t = bits(128, 32);
-    e.power = bits(160, 8);
-    e.code = bits(168, 2);
-    e.kind = bits(170, 2);
-    e.v2 = bits(172, 1) != 0;
+    auto field = [&](fpgacnc::spec::EntryField f) { return bits(32 * kAxes + f.lsb, f.width); };
+    e.t = field(fpgacnc::spec::kEntryT);
+    e.power = field(fpgacnc::spec::kEntryPower);
+    e.code = field(fpgacnc::spec::kEntryCode);
+    e.kind = field(fpgacnc::spec::kEntryKind);
+    e.v2 = field(fpgacnc::spec::kEntryV2) != 0;
+    namespace spec = fpgacnc::spec;
+    auto field64 = [&](spec::EntryField f) { return bits64(32 * kAxes + f.lsb, f.width); };
+    e.prof = field64(spec::kEntryProf);
+    e.v_entry = field64(spec::kEntryVEntry);
+    e.v_cruise = field64(spec::kEntryVCruise);
+    e.v_exit = field64(spec::kEntryVExit);
+    e.decel_at = field64(spec::kEntryDecelAt);
+    e.arc = field64(spec::kEntryArc);
+    const int raw_top = 32 * kAxes + spec::kEntryArcRaw.lsb + spec::kEntryArcRaw.width;
+    for (int k = 0; k < spec::kEntryArcRaw.width / 8; ++k)
+      e.arc_raw.push_back(static_cast<uint8_t>(bits64(raw_top - 8 * (k + 1), 8)));
     return e;
   }
 
@@ -754,3 +771,69 @@ TEST(FrameDecoderV2, RandomBytesInV2Mode) {
 }
 
 }  // namespace
+
+// The worked frames of spec/vectors.txt (generated from spec/protocol.toml; the host codec test
+// and the twin codec test read the same file): each into a fresh decoder in v2 mode whose
+// next_seq is the frame's SEQ (reached with FAULT_CLEAR frames); the answer strobes and the FIFO
+// entry are the stated ones.
+TEST(FrameDecoderV2, SpecVectors) {
+  namespace spec = fpgacnc::spec;
+  const auto vectors = spec::load_vectors();
+  size_t checked = 0, entries = 0;
+  for (const auto& v : vectors) {
+    if (!v.has_answer) continue;  // device frames
+    SCOPED_TRACE(v.name + ": " + v.doc);
+    DecoderBench b;
+    b.frame(v2::hello());
+    for (int s = 0; s < v.seq; ++s)
+      b.frame(v2::frame(v2::kFaultClear, static_cast<uint8_t>(s), {}));
+    ASSERT_EQ(b.naks().size(), 0u);
+    ASSERT_EQ(b.acks().size(), size_t{v.seq});
+    b.clear_records();
+    b.frame(v.bytes);
+    b.idle(4);
+    const auto got = b.take();
+    if (v.answer == "NAK") {
+      ASSERT_EQ(b.naks().size(), 1u);
+      EXPECT_EQ(b.naks()[0].reason, v.answer_value) << "NAK " << v.nak_name;
+      EXPECT_EQ(b.naks()[0].seq, v.seq) << "the NAK names the SEQ as received";
+      EXPECT_TRUE(b.acks().empty());
+      EXPECT_TRUE(got.empty());
+    } else {
+      EXPECT_TRUE(b.naks().empty());
+      EXPECT_EQ(b.frames_ok(), 1u);
+      EXPECT_EQ(b.hellos(), v.answer == "IDENT" ? 1u : 0u);
+      EXPECT_EQ(b.status_reqs(), v.answer == "STATUS" ? 1u : 0u);
+      EXPECT_EQ(b.acks().size(), v.answer == "ACK" ? 1u : 0u);
+      EXPECT_EQ(b.dut().v2_mode, 1);
+      ASSERT_EQ(got.size(), v.has_entry() ? 1u : 0u);
+      if (v.has_entry()) {
+        const Entry& e = got[0];
+        EXPECT_EQ(e.kind, v.entry_field("kind"));
+        EXPECT_EQ(e.v2, v.entry_field("v2") != 0);
+        EXPECT_EQ(e.code, v.entry_field("code"));
+        EXPECT_EQ(e.power, v.entry_field("power"));
+        EXPECT_EQ(e.t, v.entry_field("t"));
+        const auto steps = v.entry_steps();
+        for (int a = 0; a < kAxes; ++a)
+          EXPECT_EQ(e.steps[a], a < static_cast<int>(steps.size()) ? steps[a] : 0) << "axis " << a;
+        EXPECT_EQ(e.prof, static_cast<uint64_t>(v.entry_field("prof")));
+        EXPECT_EQ(e.v_entry, static_cast<uint64_t>(v.entry_field("v_entry")));
+        EXPECT_EQ(e.v_cruise, static_cast<uint64_t>(v.entry_field("v_cruise")));
+        EXPECT_EQ(e.v_exit, static_cast<uint64_t>(v.entry_field("v_exit")));
+        EXPECT_EQ(e.decel_at, static_cast<uint64_t>(v.entry_field("decel_at")));
+        EXPECT_EQ(e.arc, static_cast<uint64_t>(v.entry_field("arc")));
+        // ARC: the payload's bytes 2.. as received; else 0
+        std::vector<uint8_t> raw(e.arc_raw.size(), 0);
+        if (v.entry_field("arc") != 0)
+          for (size_t k = 0; k < raw.size() && 6 + k < v.bytes.size() - 2; ++k)
+            raw[k] = v.bytes[6 + k];
+        EXPECT_EQ(e.arc_raw, raw);
+        ++entries;
+      }
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 15u);
+  EXPECT_GE(entries, 7u);
+}

@@ -24,6 +24,7 @@
 #include "common/ltc2308_model.h"
 #include "common/pid_ref.h"
 #include "common/thermal_plant.h"
+#include "fpgacnc/spec.h"
 #include "verilated.h"
 
 namespace {
@@ -31,7 +32,7 @@ namespace {
 using namespace fpgacnc;
 namespace th = fpgacnc::thermal;
 
-constexpr uint64_t kSampleClks = 4096;
+constexpr uint64_t kSampleClks = fpgacnc::spec::kBenchSampleClks;
 constexpr int kPwmBits = 10;
 // Documented reaction time (docs/heater.md): a MINTEMP/MAXTEMP reading taken at a sample tick
 // drives the pin low 636 clocks after the tick strobe (ADC 619, two lookups, eval, PWM register).

@@ -13,6 +13,7 @@
 #include "common/ltc2308_model.h"
 #include "common/thermal_plant.h"
 #include "common/v2_frames.h"
+#include "fpgacnc/spec.h"
 
 namespace {
 
@@ -21,7 +22,7 @@ namespace th = fpgacnc::thermal;
 
 constexpr int kAxes = 4;
 constexpr uint64_t kByteClocks = 167;  // 10 bits at 3 Mbaud
-constexpr uint64_t kSample = 4096;
+constexpr uint64_t kSample = fpgacnc::spec::kBenchSampleClks;
 
 std::vector<uint8_t> bytes(const char* hex) {
   std::vector<uint8_t> v;

@@ -365,8 +365,9 @@ class FakeV2Device : public link::Link {
     v2::Frame f;
     if (pend_ident_) {
       pend_ident_ = false;
-      f = v2::ident(dev_seq_, v2::Ident{2, o_.n_axes, o_.fifo_depth, 50'000'000, 115200, 0x20260005,
-                                        next_seq_, 64});
+      f = v2::ident(dev_seq_, v2::Ident{v2::kVersion, o_.n_axes, o_.fifo_depth, spec::kDefaultClkHz,
+                                        spec::kDefaultBaud, spec::kBuildId, next_seq_,
+                                        static_cast<uint8_t>(v2::kMaxPayload)});
     } else if (pend_status_) {
       pend_status_ = false;
       v2::Status s;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/spec.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins {
@@ -90,9 +91,9 @@ inline void wide_events(std::vector<BlockEvent>& out, Cycle c, uint64_t tag,
     out.push_back(e);
   }
 }
-inline constexpr int kEntryBits = 711 + 32 * kAxes;  // 839: the FIFO entry
-inline constexpr int kEntryLow = 45 + 32 * kAxes;    // 173: the fields of the kEvWrite event
-inline constexpr int kArcBits = 945;                 // segment_prep's m_axis_arc
+inline constexpr int kEntryBits = spec::entry_width(kAxes);       // 839: the FIFO entry
+inline constexpr int kEntryLow = spec::kEntryBaseW + 32 * kAxes;  // 173: the kEvWrite fields
+inline constexpr int kArcBits = 945;                              // segment_prep's m_axis_arc
 
 // segment_prep: FIFO entry k valid from (previous accept, or 0) + gap; segment j taken
 // `accept_delay[j]` edges late; exec_idle low from its accept edge A_j until after edge

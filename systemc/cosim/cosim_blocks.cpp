@@ -27,6 +27,7 @@
 #include "fpgacnc/twins/v2_frames.h"
 
 using namespace fpgacnc::twins;
+namespace spec = fpgacnc::spec;
 
 namespace {
 
@@ -38,19 +39,23 @@ uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
 Bits entry_bits(const FifoEntry& e) {
   Bits b(kEntryBits);
   for (int a = 0; a < kAxes; ++a) b.put(32 * a, e.steps[static_cast<size_t>(a)], 32);
-  const int o = 32 * kAxes;
-  b.put(o, e.t, 32);
-  b.put(o + 32, e.power, 8);
-  b.put(o + 40, e.code, 2);
-  b.put(o + 42, e.kind, 2);
-  b.put(o + 44, e.v2, 1);
-  b.put(o + 45, e.prof, 1);
-  b.put(o + 46, e.v_entry, 48);
-  b.put(o + 94, e.v_cruise, 48);
-  b.put(o + 142, e.v_exit, 48);
-  b.put(o + 190, e.decel_at, 32);
-  b.put(o + 222, e.arc, 1);
-  for (int k = 0; k < 61; ++k) b.put(o + 223 + 8 * (60 - k), e.arc_raw[static_cast<size_t>(k)], 8);
+  const int o = spec::kEntryStepsPerAxis * kAxes;
+  auto field = [&](spec::EntryField f, uint64_t v) { b.put(o + f.lsb, v, f.width); };
+  field(spec::kEntryT, e.t);
+  field(spec::kEntryPower, e.power);
+  field(spec::kEntryCode, e.code);
+  field(spec::kEntryKind, e.kind);
+  field(spec::kEntryV2, e.v2);
+  field(spec::kEntryProf, e.prof);
+  field(spec::kEntryVEntry, e.v_entry);
+  field(spec::kEntryVCruise, e.v_cruise);
+  field(spec::kEntryVExit, e.v_exit);
+  field(spec::kEntryDecelAt, e.decel_at);
+  field(spec::kEntryArc, e.arc);
+  // arc_raw: payload byte 2 in the top byte
+  constexpr int kRaw = static_cast<int>(spec::kArcRawBytes);
+  for (int k = 0; k < kRaw; ++k)
+    b.put(o + spec::kEntryArcRaw.lsb + 8 * (kRaw - 1 - k), e.arc_raw[static_cast<size_t>(k)], 8);
   return b;
 }
 

@@ -208,26 +208,32 @@ BlockRun rtl_prep(const PrepJob& j) {
     m->exec_idle = c > idle_after ? 1 : 0;
     const bool offering = k < j.commands.size() && c > valid_from;
     if (offering) {
-      // { v2, kind[1:0], code[1:0], power[7:0], t[31:0], steps[4 x 32] }: 173 bits
+      // The entry as spec/protocol.toml [entry] lays it out (fpgacnc/spec.h): steps, then fields.
       const PrepCommand& p = j.commands[k];
+      for (int w = 0; w < (kEntryBits + 31) / 32; ++w) m->s_axis_tdata[w] = 0;
       for (int a = 0; a < kAxes; ++a) m->s_axis_tdata[a] = p.steps[a];
-      m->s_axis_tdata[4] = p.t;
-      m->s_axis_tdata[5] = p.power | static_cast<uint32_t>(p.code & 3) << 8 |
-                           static_cast<uint32_t>(p.kind & 3) << 10 | (p.v2 ? 1u << 12 : 0u);
-      // LINE_PROFILE fields above: prof at 173, V_entry 174.., V_cruise 222.., V_exit 270..,
-      // D 318.. (48-bit fields, top bit 0).
-      for (int w = 6; w < 27; ++w) m->s_axis_tdata[w] = 0;
-      if (p.arc) {  // arc at 350, payload bytes 2..62 at 351.. (byte 2 in the top bits)
-        put_bits(m->s_axis_tdata, 350, 1, 1);
-        for (int b = 0; b < 61; ++b)
-          put_bits(m->s_axis_tdata, 351 + 8 * (60 - b), p.arc_raw[static_cast<size_t>(b)], 8);
+      const int o = spec::kEntryStepsPerAxis * kAxes;
+      auto field = [&](spec::EntryField f, uint64_t v) {
+        put_bits(m->s_axis_tdata, o + f.lsb, v, f.width);
+      };
+      field(spec::kEntryT, p.t);
+      field(spec::kEntryPower, p.power);
+      field(spec::kEntryCode, p.code & 3u);
+      field(spec::kEntryKind, p.kind & 3u);
+      field(spec::kEntryV2, p.v2 ? 1 : 0);
+      if (p.arc) {  // payload bytes 2..62, byte 2 in the top bits
+        field(spec::kEntryArc, 1);
+        constexpr int kRaw = static_cast<int>(spec::kArcRawBytes);
+        for (int b = 0; b < kRaw; ++b)
+          put_bits(m->s_axis_tdata, o + spec::kEntryArcRaw.lsb + 8 * (kRaw - 1 - b),
+                   p.arc_raw[static_cast<size_t>(b)], 8);
       }
       if (p.prof) {
-        put_bits(m->s_axis_tdata, 173, 1, 1);
-        put_bits(m->s_axis_tdata, 174, p.profile.v_entry, 48);
-        put_bits(m->s_axis_tdata, 222, p.profile.v_cruise, 48);
-        put_bits(m->s_axis_tdata, 270, p.profile.v_exit, 48);
-        put_bits(m->s_axis_tdata, 318, p.profile.decel_at, 32);
+        field(spec::kEntryProf, 1);
+        field(spec::kEntryVEntry, p.profile.v_entry);
+        field(spec::kEntryVCruise, p.profile.v_cruise);
+        field(spec::kEntryVExit, p.profile.v_exit);
+        field(spec::kEntryDecelAt, p.profile.decel_at);
       }
     }
     m->s_axis_tvalid = offering ? 1 : 0;

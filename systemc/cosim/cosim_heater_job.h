@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "fpgacnc/spec.h"
 #include "fpgacnc/twins/heater.h"
 
 namespace fpgacnc::cosim::heater {
@@ -13,7 +14,7 @@ namespace fpgacnc::cosim::heater {
 using fpgacnc::twins::Cycle;
 namespace ht = fpgacnc::twins::heater;
 
-constexpr Cycle kSample = 4096;
+constexpr Cycle kSample = spec::kBenchSampleClks;
 constexpr int kPwmBits = 10;
 
 struct Event {

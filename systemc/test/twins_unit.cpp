@@ -11,6 +11,7 @@
 #include <systemc>
 
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/spec_vectors.h"
 #include "fpgacnc/twins/v2_frames.h"
 #include "fpgacnc/twins/virtual_board.h"
 
@@ -205,6 +206,62 @@ bool is_nak(const std::vector<RespReq>& r, uint8_t seq, uint8_t reason) {
 }
 bool is_ack(const std::vector<RespReq>& r) {
   return r.size() == 1 && r[0].kind == kReqAck;
+}
+
+// The worked frames of spec/vectors.txt (generated from spec/protocol.toml; the host codec test
+// and the Verilated frame_decoder bench read the same file) through the decoder twin, in v2 mode
+// with next_seq brought to the frame's SEQ by FAULT_CLEAR frames: the stated answer and entry.
+void spec_vector_tests(DecoderBench& b) {
+  using namespace fpgacnc::twins::v2;
+  const auto vectors = fpgacnc::spec::load_vectors();
+  size_t checked = 0, entries = 0;
+  for (const auto& v : vectors) {
+    const std::string at = "spec vector " + v.name;
+    // The twin's framing and CRC rebuild every frame but the one with a bad CRC.
+    const Bytes payload(v.bytes.begin() + 4, v.bytes.end() - 2);
+    const bool bad_crc = v.has_answer && v.answer == "NAK" && v.answer_value == kBadCrc;
+    check((frame(v.seq, v.type, payload) == v.bytes) != bad_crc, at + ": framing and CRC");
+    if (!v.has_answer) continue;  // device frames
+    b.run(frame(0, kHello));
+    for (int n = 0; b.dec.current().next_seq != v.seq && n < 256; ++n)
+      b.run(frame(b.dec.current().next_seq, kFaultClear));
+    check(b.dec.current().next_seq == v.seq, at + ": next_seq reached");
+    const auto [r, w] = b.run(v.bytes);
+    if (v.answer == "NAK") {
+      check(is_nak(r, v.seq, v.answer_value) && w == 0, at + ": NAK " + v.nak_name);
+    } else {
+      const uint8_t want = v.answer == "IDENT"    ? kReqIdent
+                           : v.answer == "STATUS" ? kReqStatus
+                                                  : kReqAck;
+      check(r.size() == 1 && r[0].kind == want, at + ": answer " + v.answer);
+      check(w == (v.has_entry() ? 1u : 0u), at + ": FIFO writes");
+      if (v.has_entry() && w == 1) {
+        const FifoEntry& e = b.writes.back().second;
+        check_eq(int{e.kind}, v.entry_field("kind"), at + ": kind");
+        check_eq(int{e.v2}, v.entry_field("v2"), at + ": v2");
+        check_eq(int{e.code}, v.entry_field("code"), at + ": code");
+        check_eq(int{e.power}, v.entry_field("power"), at + ": power");
+        check_eq(int64_t{e.t}, v.entry_field("t"), at + ": t");
+        const auto steps = v.entry_steps();
+        for (size_t a = 0; a < e.steps.size(); ++a)
+          check_eq(static_cast<int64_t>(static_cast<int32_t>(e.steps[a])),
+                   a < steps.size() ? steps[a] : 0, at + fmt::format(": steps[{}]", a));
+        check_eq(int{e.prof}, v.entry_field("prof"), at + ": prof");
+        check_eq(e.v_entry, static_cast<uint64_t>(v.entry_field("v_entry")), at + ": v_entry");
+        check_eq(e.v_cruise, static_cast<uint64_t>(v.entry_field("v_cruise")), at + ": v_cruise");
+        check_eq(e.v_exit, static_cast<uint64_t>(v.entry_field("v_exit")), at + ": v_exit");
+        check_eq(int64_t{e.decel_at}, v.entry_field("decel_at"), at + ": decel_at");
+        check_eq(int{e.arc}, v.entry_field("arc"), at + ": arc");
+        for (size_t k = 0; k < e.arc_raw.size(); ++k) {
+          const uint8_t want_raw = v.entry_field("arc") != 0 ? v.bytes[6 + k] : 0;
+          check_eq(int{e.arc_raw[k]}, int{want_raw}, at + fmt::format(": arc_raw[{}]", k));
+        }
+        ++entries;
+      }
+    }
+    ++checked;
+  }
+  check(checked >= 15 && entries >= 7, "spec vectors: all checked");
 }
 
 void decoder_tests(DecoderBench& b) {
@@ -405,8 +462,11 @@ void encoder_tests(EncoderBench& b) {
   Bytes got;
   for (auto [c, x] : b.bytes) got.push_back(x);
   // DONE and ACK were both pending: one ACK (it stands for the DONE).
-  check_bytes(got, {0xA5, 0x07, 0x00, 0x80, 0x08, 0x00, 0x3F, 0x00, 0x00, 0x00, 0x05, 0xAA, 0x5D},
-              "ACK frame (docs test vector), a pending DONE folded into it");
+  Bytes want;
+  for (const auto& v : fpgacnc::spec::load_vectors())
+    if (v.name == "ack") want = v.bytes;  // spec/vectors.txt: next_seq 8, 63 free, 5 done
+  check(!want.empty(), "spec vector ack present");
+  check_bytes(got, want, "ACK frame (spec/vectors.txt), a pending DONE folded into it");
   check_eq(b.bytes.front().first, 104 + kRespStart + 1,
            "first byte taken kRespStart + 1 after the last strobe");
   for (size_t i = 1; i < b.bytes.size(); ++i)
@@ -862,6 +922,7 @@ int sc_main(int, char*[]) {
     }
     void run() {
       decoder_tests(d);
+      spec_vector_tests(d);
       encoder_tests(e);
       executor_tests(x);
       executor_abort_tests(x);

@@ -1,19 +1,25 @@
-// The command-FIFO entry that segment_prep takes (rtl-back contract, docs/timing.md), 222 + 32*N
-// bits (350 for N = 4) plus the ARC fields (711 + 32*N bits in all, 839 for N = 4):
-// { D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
-//   v2[0], kind[1:0], code[1:0], power[7:0], t[31:0], steps[32*N-1:0] }, axis a in [32*a+:32].
+// The command-FIFO entry that segment_prep takes (rtl-back contract, docs/timing.md): the layout of
+// spec/protocol.toml [entry] (fpgacnc/spec.h; docs/architecture.md "Command-FIFO entry"),
+// steps[32*N-1:0] (axis a in [32*a+:32]) then the fields. The ARC fields stay 0 here.
 // LINE_PROFILE: prof = 1, v2 = 1, kind 0, t = A; the profile fields are 0 for every other entry.
 #pragma once
 
 #include <cstdint>
 #include <initializer_list>
 
+#include "fpgacnc/spec.h"
+
 namespace fpgacnc::tb {
 
 inline constexpr int kEntryAxes = 4;
-inline constexpr int kEntryWords = 27;  // 839 bits (the ARC fields above bit 350 stay 0 here)
+inline constexpr int kEntryWords = (spec::entry_width(kEntryAxes) + 31) / 32;
 
-enum EntryKind { kMotion = 0, kNumerators = 1, kDwell = 2, kKind3 = 3 };
+enum EntryKind {
+  kMotion = spec::kKindMotion,
+  kNumerators = spec::kKindNumerators,
+  kDwell = spec::kKindDwell,
+  kKind3 = spec::kKindOutput
+};
 
 struct Entry {
   bool v2 = false;
@@ -35,17 +41,18 @@ struct Entry {
         if ((v >> b) & 1) w[(pos + b) / 32] |= 1u << ((pos + b) % 32);
     };
     for (int a = 0; a < kEntryAxes; ++a) put(32 * a, 32, static_cast<uint32_t>(steps[a]));
-    const int sw = 32 * kEntryAxes;
-    put(sw, 32, t);
-    put(sw + 32, 8, static_cast<uint64_t>(power));
-    put(sw + 40, 2, static_cast<uint64_t>(code));
-    put(sw + 42, 2, static_cast<uint64_t>(kind));
-    put(sw + 44, 1, v2 ? 1 : 0);
-    put(sw + 45, 1, prof ? 1 : 0);
-    put(sw + 46, 48, v_entry);
-    put(sw + 94, 48, v_cruise);
-    put(sw + 142, 48, v_exit);
-    put(sw + 190, 32, decel_at);
+    const int sw = spec::kEntryStepsPerAxis * kEntryAxes;
+    auto field = [&](spec::EntryField f, uint64_t v) { put(sw + f.lsb, f.width, v); };
+    field(spec::kEntryT, t);
+    field(spec::kEntryPower, static_cast<uint64_t>(power));
+    field(spec::kEntryCode, static_cast<uint64_t>(code));
+    field(spec::kEntryKind, static_cast<uint64_t>(kind));
+    field(spec::kEntryV2, v2 ? 1 : 0);
+    field(spec::kEntryProf, prof ? 1 : 0);
+    field(spec::kEntryVEntry, v_entry);
+    field(spec::kEntryVCruise, v_cruise);
+    field(spec::kEntryVExit, v_exit);
+    field(spec::kEntryDecelAt, decel_at);
   }
 };
 

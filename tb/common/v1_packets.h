@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "fpgacnc/spec.h"
+
 namespace fpgacnc::tb {
 
 inline void put32(std::vector<uint8_t>& v, uint32_t x) {
@@ -12,7 +14,7 @@ inline void put32(std::vector<uint8_t>& v, uint32_t x) {
 }
 
 inline std::vector<uint8_t> init_packet(uint32_t nx, uint32_t ny) {
-  std::vector<uint8_t> v{0xFF};
+  std::vector<uint8_t> v{spec::kV1InitByte};
   put32(v, nx);
   put32(v, ny);
   return v;

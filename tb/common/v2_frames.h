@@ -9,38 +9,42 @@
 #include <string>
 #include <vector>
 
+#include "fpgacnc/spec.h"
+
 namespace fpgacnc::tb::v2 {
 
-inline constexpr uint8_t kSync = 0xA5;
-inline constexpr int kMaxPayload = 64;
+// The numbers come from spec/protocol.toml (fpgacnc/spec.h, generated); the codec below is
+// written here.
+inline constexpr uint8_t kSync = spec::kSync;
+inline constexpr int kMaxPayload = static_cast<int>(spec::kMaxPayload);
 
 enum Type : uint8_t {
-  kHello = 0x01,
-  kStatusQuery = 0x02,
-  kFaultClear = 0x03,
-  kConfigAxis = 0x04,
-  kNumerators = 0x05,
-  kRelease = 0x06,
-  kLine = 0x10,
-  kDwell = 0x11,
-  kLineProfile = 0x12,
-  kArc = 0x13,
-  kOutput = 0x15,
-  kAck = 0x80,
-  kNak = 0x81,
-  kDone = 0x82,
-  kStatus = 0x83,
-  kIdent = 0x84,
+  kHello = spec::kTypeHello,
+  kStatusQuery = spec::kTypeStatusQuery,
+  kFaultClear = spec::kTypeFaultClear,
+  kConfigAxis = spec::kTypeConfigAxis,
+  kNumerators = spec::kTypeNumerators,
+  kRelease = spec::kTypeRelease,
+  kLine = spec::kTypeLine,
+  kDwell = spec::kTypeDwell,
+  kLineProfile = spec::kTypeLineProfile,
+  kArc = spec::kTypeArc,
+  kOutput = spec::kTypeOutput,
+  kAck = spec::kTypeAck,
+  kNak = spec::kTypeNak,
+  kDone = spec::kTypeDone,
+  kStatus = spec::kTypeStatus,
+  kIdent = spec::kTypeIdent,
 };
 
 enum Reason : uint8_t {
-  kBadCrc = 1,
-  kBadLength = 2,
-  kUnknownType = 3,
-  kTimeout = 4,
-  kOutOfOrder = 5,
-  kFifoFull = 6,
-  kBadField = 7,
+  kBadCrc = spec::kNakBadCrc,
+  kBadLength = spec::kNakBadLength,
+  kUnknownType = spec::kNakUnknownType,
+  kTimeout = spec::kNakTimeout,
+  kOutOfOrder = spec::kNakOutOfOrder,
+  kFifoFull = spec::kNakFifoFull,
+  kBadField = spec::kNakBadField,
 };
 
 // CRC-16/CCITT-FALSE, bit by bit: poly 0x1021, init 0xFFFF, no reflection, no final XOR.
@@ -112,9 +116,10 @@ inline std::vector<uint8_t> dwell(uint8_t seq, uint32_t t) {
 }
 // OUTPUT (docs/protocol.md "OUTPUT"): mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs
 // 0..3), value (the same bits; the fan's is 0), fan duty (0 unless mask bit 2).
-inline constexpr uint8_t kOutFlood = 0x01, kOutMist = 0x02, kOutFan = 0x04;
+inline constexpr uint8_t kOutFlood = spec::kOutFlood, kOutMist = spec::kOutMist,
+                         kOutFan = spec::kOutFan;
 inline constexpr uint8_t out_dout(int n) {
-  return static_cast<uint8_t>(0x08u << n);
+  return static_cast<uint8_t>(spec::kOutDout0 << n);
 }
 inline std::vector<uint8_t> output(uint8_t seq, uint8_t mask, uint8_t value, uint8_t duty) {
   return frame(kOutput, seq, {mask, value, duty});
@@ -183,7 +188,7 @@ class DeviceParser {
   // Returns a message when a byte completes one; other bytes between frames are kept as junk.
   std::optional<DeviceMsg> push(uint8_t b, uint64_t cycle = 0) {
     if (buf_.empty()) {
-      if (b == 0xAA) {
+      if (b == spec::kV1Ack) {
         DeviceMsg m;
         m.v1_ack = true;
         m.crc_ok = true;

@@ -71,109 +71,39 @@ Credit credit_from(const Frame& f) {
 
 }  // namespace
 
+namespace {
+// The TYPE table of spec/protocol.toml (fpgacnc/spec.h).
+const spec::TypeInfo* type_info(uint8_t type) {
+  for (const auto& t : spec::kTypes)
+    if (t.value == type) return &t;
+  return nullptr;
+}
+}  // namespace
+
 std::string type_name(uint8_t type) {
-  switch (static_cast<Type>(type)) {
-    case Type::Hello:
-      return "HELLO";
-    case Type::StatusQuery:
-      return "STATUS_QUERY";
-    case Type::FaultClear:
-      return "FAULT_CLEAR";
-    case Type::ConfigAxis:
-      return "CONFIG_AXIS";
-    case Type::Numerators:
-      return "NUMERATORS";
-    case Type::Release:
-      return "RELEASE";
-    case Type::Line:
-      return "LINE";
-    case Type::Dwell:
-      return "DWELL";
-    case Type::Arc:
-      return "ARC";
-    case Type::Output:
-      return "OUTPUT";
-    case Type::LineProfile:
-      return "LINE_PROFILE";
-    case Type::HeaterConfig:
-      return "HEATER_CONFIG";
-    case Type::HeaterSetpoint:
-      return "HEATER_SETPOINT";
-    case Type::ThermistorTable:
-      return "THERMISTOR_TABLE";
-    case Type::HeaterSafety:
-      return "HEATER_SAFETY";
-    case Type::HeaterWatchdog:
-      return "HEATER_WATCHDOG";
-    case Type::Ack:
-      return "ACK";
-    case Type::Nak:
-      return "NAK";
-    case Type::Done:
-      return "DONE";
-    case Type::Status:
-      return "STATUS";
-    case Type::Ident:
-      return "IDENT";
-  }
+  if (const auto* t = type_info(type)) return std::string(t->name);
   return fmt::format("type 0x{:02X}", type);
 }
 
 std::string nak_reason_name(uint8_t reason) {
-  switch (static_cast<NakReason>(reason)) {
-    case NakReason::BadCrc:
-      return "BAD_CRC";
-    case NakReason::BadLength:
-      return "BAD_LENGTH";
-    case NakReason::UnknownType:
-      return "UNKNOWN_TYPE";
-    case NakReason::Timeout:
-      return "TIMEOUT";
-    case NakReason::OutOfOrder:
-      return "OUT_OF_ORDER";
-    case NakReason::FifoFull:
-      return "FIFO_FULL";
-    case NakReason::BadField:
-      return "BAD_FIELD";
-  }
+  for (const auto& r : spec::kNakReasons)
+    if (r.value == reason) return std::string(r.name);
   return fmt::format("reason {}", reason);
 }
 
 std::string counter_name(size_t index) {
-  static constexpr std::array<const char*, kCounters> kNames{
-      "frames_ok",           "crc_errors", "length_errors", "unknown_types", "timeouts",
-      "uart_framing_errors", "overruns",   "noise_bytes",   "clamped"};
-  return index < kCounters ? kNames[index] : fmt::format("counter {}", index);
+  return index < kCounters ? std::string(spec::kCounterNames[index])
+                           : fmt::format("counter {}", index);
 }
 
 bool is_sequenced(uint8_t type) {
-  switch (static_cast<Type>(type)) {
-    case Type::FaultClear:
-    case Type::ConfigAxis:
-    case Type::Numerators:
-    case Type::Release:
-    case Type::Line:
-    case Type::Dwell:
-    case Type::Arc:
-    case Type::LineProfile:
-    case Type::Output:
-    case Type::HeaterConfig:
-    case Type::HeaterSetpoint:
-    case Type::ThermistorTable:
-    case Type::HeaterSafety:
-    case Type::HeaterWatchdog:
-      return true;
-    default:
-      return false;
-  }
+  const auto* t = type_info(type);
+  return t && t->host && t->sequenced;
 }
 
 bool is_fifo(uint8_t type) {
-  return type == static_cast<uint8_t>(Type::Numerators) ||
-         type == static_cast<uint8_t>(Type::Line) || type == static_cast<uint8_t>(Type::Dwell) ||
-         type == static_cast<uint8_t>(Type::Arc) ||
-         type == static_cast<uint8_t>(Type::LineProfile) ||
-         type == static_cast<uint8_t>(Type::Output);
+  const auto* t = type_info(type);
+  return t && t->host && t->fifo;
 }
 
 uint16_t crc16(std::span<const uint8_t> data) {
@@ -271,29 +201,29 @@ void FrameParser::reset() {
 // ---- Device -> host ----
 
 size_t status_payload_size(size_t n_axes) {
-  return 27 + 4 * n_axes;
+  return spec::kLenStatusHeader + spec::kLenStatusPerAxis * n_axes;
 }
 
 Credit decode_credit(const Frame& f) {
   if (f.type != static_cast<uint8_t>(Type::Ack) && f.type != static_cast<uint8_t>(Type::Done)) {
     throw ProtocolError(fmt::format("expected an ACK or DONE frame, got {}", type_name(f.type)));
   }
-  if (f.payload.size() != 7) {
-    throw ProtocolError(
-        fmt::format("{}: payload of {} bytes, expected 7", type_name(f.type), f.payload.size()));
+  if (f.payload.size() != spec::kLenAck) {
+    throw ProtocolError(fmt::format("{}: payload of {} bytes, expected {}", type_name(f.type),
+                                    f.payload.size(), spec::kLenAck));
   }
   return credit_from(f);
 }
 
 Nak decode_nak(const Frame& f) {
-  expect(f, Type::Nak, 5);
+  expect(f, Type::Nak, spec::kLenNak);
   const uint8_t r = f.payload[1];
   if (r < 1 || r > 7) throw ProtocolError(fmt::format("NAK: unknown reason {}", r));
   return Nak{f.payload[0], static_cast<NakReason>(r), f.payload[2], get16(f.payload, 3)};
 }
 
 Ident decode_ident(const Frame& f) {
-  expect(f, Type::Ident, 18);
+  expect(f, Type::Ident, spec::kLenIdent);
   const auto& p = f.payload;
   Ident i;
   i.version = p[0];
@@ -580,7 +510,7 @@ uint64_t get48(const std::vector<uint8_t>& v, size_t i) {
   return (uint64_t{get16(v, i)} << 32) | get32(v, i + 2);
 }
 // Payload layout: flags, power, V_entry u48, V_cruise u48, V_exit u48, A u32, D u32, steps.
-constexpr size_t kProfileHeader = 28;
+constexpr size_t kProfileHeader = spec::kLenLineProfileHeader;
 
 LineProfile parse_line_profile(const Frame& f) {
   const auto& p = f.payload;
@@ -667,20 +597,20 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (n != 0) return NakReason::BadLength;
       return std::nullopt;
     case Type::ConfigAxis:
-      if (n != 9) return NakReason::BadLength;
+      if (n != spec::kLenConfigAxis) return NakReason::BadLength;
       if (n_axes && f.payload[0] >= n_axes) return NakReason::BadField;
       return std::nullopt;
     case Type::Numerators:
-      if (n != 8) return NakReason::BadLength;
+      if (n != spec::kLenNumerators) return NakReason::BadLength;
       return std::nullopt;
     case Type::Dwell:
-      if (n != 4) return NakReason::BadLength;
+      if (n != spec::kLenDwell) return NakReason::BadLength;
       return std::nullopt;
     case Type::Line: {
-      if (n < 6) return NakReason::BadLength;
+      if (n < spec::kLenLineHeader) return NakReason::BadLength;
       const size_t w = (f.payload[0] & kLineShort) ? 2 : 4;
-      if ((n - 6) % w != 0) return NakReason::BadLength;
-      if (n_axes && (n - 6) / w > n_axes) return NakReason::BadLength;
+      if ((n - spec::kLenLineHeader) % w != 0) return NakReason::BadLength;
+      if (n_axes && (n - spec::kLenLineHeader) / w > n_axes) return NakReason::BadLength;
       if (f.payload[0] & 0x7C) return NakReason::BadField;
       return std::nullopt;
     }
@@ -708,28 +638,29 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
     }
     // Heaters (issue 7).
     case Type::HeaterConfig:
-      if (n != 20) return NakReason::BadLength;
+      if (n != spec::kLenHeaterConfig) return NakReason::BadLength;
       if (f.payload[0] > 1 || f.payload[1] > 4 || get16(f.payload, 14) > 0x8000 ||
           get16(f.payload, 18) > 0x8000)
         return NakReason::BadField;
       return std::nullopt;
     case Type::HeaterSetpoint:
-      if (n != 3) return NakReason::BadLength;
+      if (n != spec::kLenHeaterSetpoint) return NakReason::BadLength;
       if (f.payload[0] > 1) return NakReason::BadField;
       return std::nullopt;
     case Type::ThermistorTable:
-      if (n < 4 || n > 18 || n % 2) return NakReason::BadLength;
+      if (n < spec::kLenThermistorTableMin || n > spec::kLenThermistorTableMax || n % 2)
+        return NakReason::BadLength;
       if (f.payload[0] > 1 || f.payload[1] + (n - 2) / 2 > kThermistorEntries)
         return NakReason::BadField;
       return std::nullopt;
     case Type::HeaterSafety:
-      if (n != 13) return NakReason::BadLength;
+      if (n != spec::kLenHeaterSafety) return NakReason::BadLength;
       if (f.payload[0] > 1 ||
           static_cast<int16_t>(get16(f.payload, 1)) >= static_cast<int16_t>(get16(f.payload, 3)))
         return NakReason::BadField;
       return std::nullopt;
     case Type::HeaterWatchdog:
-      if (n != 2) return NakReason::BadLength;
+      if (n != spec::kLenHeaterWatchdog) return NakReason::BadLength;
       return std::nullopt;
     default:
       return NakReason::UnknownType;
@@ -758,7 +689,7 @@ Line decode_line(const Frame& f, size_t n_axes) {
   l.power = p[1];
   l.t = get32(p, 2);
   const size_t w = l.short_steps ? 2 : 4;
-  for (size_t i = 6; i + w <= p.size(); i += w) {
+  for (size_t i = spec::kLenLineHeader; i + w <= p.size(); i += w) {
     l.steps.push_back(w == 2 ? static_cast<int32_t>(static_cast<int16_t>(get16(p, i)))
                              : static_cast<int32_t>(get32(p, i)));
   }

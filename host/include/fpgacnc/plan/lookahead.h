@@ -31,13 +31,14 @@
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v2.h"
 
 namespace fpgacnc::plan {
 
 inline constexpr int kFracBits = 48;  // V and A: 2^-48 dominant steps (per clock)
-inline constexpr int64_t kMaxProfileSteps = (int64_t{1} << 24) - 1;  // n_dom < 2^24
-inline constexpr uint64_t kMaxVCruise = (uint64_t{1} << 47) - 1;     // V_cruise < 2^47
-inline constexpr uint64_t kMaxA = 0xFFFFFFFFull;                     // A is u32
+inline constexpr int64_t kMaxProfileSteps = protocol::v2::kProfileNDomMax;  // n_dom < 2^24
+inline constexpr uint64_t kMaxVCruise = protocol::v2::kProfileVMax - 1;     // V_cruise < 2^47
+inline constexpr uint64_t kMaxA = 0xFFFFFFFFull;                            // A is u32
 
 // The integer fields of one LINE_PROFILE frame (besides code, power and steps).
 struct ProfileFields {
@@ -68,7 +69,7 @@ struct ArcFields {
 };
 inline constexpr uint64_t kMaxArcV = (uint64_t{1} << 63) - 1;
 inline constexpr uint64_t kMaxArcA = (uint64_t{1} << 48) - 1;
-inline constexpr uint64_t kMaxArcCost = (uint64_t{1} << 46) - 1;
+inline constexpr uint64_t kMaxArcCost = protocol::v2::kArcCTotalLimit - 1;
 
 // Exact result of the hardware recurrence for one profiled segment.
 struct ProfileRun {

@@ -7,13 +7,14 @@
 #include <vector>
 
 #include "fpgacnc/plan/planner.h"
+#include "fpgacnc/spec.h"
 
 namespace fpgacnc::protocol::v1 {
 
-inline constexpr uint8_t kInitByte = 0xFF;
-inline constexpr uint8_t kAck = 0xAA;
-inline constexpr size_t kInitSize = 9;
-inline constexpr size_t kMotionSize = 11;
+inline constexpr uint8_t kInitByte = spec::kV1InitByte;
+inline constexpr uint8_t kAck = spec::kV1Ack;
+inline constexpr size_t kInitSize = spec::kV1InitSize;
+inline constexpr size_t kMotionSize = spec::kV1MotionSize;
 
 std::array<uint8_t, kInitSize> pack_init(uint32_t numerator_x, uint32_t numerator_y);
 std::array<uint8_t, kMotionSize> pack_motion(uint8_t code, int32_t steps_x, int32_t steps_y,

@@ -14,49 +14,53 @@
 #include <string>
 #include <vector>
 
+#include "fpgacnc/spec.h"
+
 namespace fpgacnc::protocol::v2 {
 
-constexpr uint8_t kSync = 0xA5;
-constexpr size_t kMaxPayload = 64;
-constexpr size_t kOverhead = 6;  // sync, LEN, SEQ, TYPE, CRC x2
+// The numbers come from spec/protocol.toml (fpgacnc/spec.h, generated).
+constexpr uint8_t kSync = spec::kSync;
+constexpr size_t kMaxPayload = spec::kMaxPayload;
+constexpr size_t kOverhead = spec::kOverhead;  // sync, LEN, SEQ, TYPE, CRC x2
 constexpr size_t kMaxFrame = kMaxPayload + kOverhead;
-constexpr uint8_t kVersion = 2;
-constexpr size_t kMaxUnacked = 127;  // host: never more sequenced frames unacknowledged
-constexpr size_t kCounters = 9;      // STATUS counters
+constexpr uint8_t kVersion = spec::kVersion;
+constexpr size_t kMaxUnacked =
+    spec::kMaxUnacked;                         // host: never more sequenced frames unacknowledged
+constexpr size_t kCounters = spec::kCounters;  // STATUS counters
 
 enum class Type : uint8_t {
-  Hello = 0x01,
-  StatusQuery = 0x02,
-  FaultClear = 0x03,
-  ConfigAxis = 0x04,
-  Numerators = 0x05,
-  Release = 0x06,
-  Line = 0x10,
-  Dwell = 0x11,
-  LineProfile = 0x12,
-  Arc = 0x13,     // circular DDA
-  Output = 0x15,  // machine outputs in order with the motion
+  Hello = spec::kTypeHello,
+  StatusQuery = spec::kTypeStatusQuery,
+  FaultClear = spec::kTypeFaultClear,
+  ConfigAxis = spec::kTypeConfigAxis,
+  Numerators = spec::kTypeNumerators,
+  Release = spec::kTypeRelease,
+  Line = spec::kTypeLine,
+  Dwell = spec::kTypeDwell,
+  LineProfile = spec::kTypeLineProfile,
+  Arc = spec::kTypeArc,        // circular DDA
+  Output = spec::kTypeOutput,  // machine outputs in order with the motion
   // Heaters (issue 7): sequenced, not queued.
-  HeaterConfig = 0x20,
-  HeaterSetpoint = 0x21,
-  ThermistorTable = 0x22,
-  HeaterSafety = 0x23,
-  HeaterWatchdog = 0x24,
-  Ack = 0x80,
-  Nak = 0x81,
-  Done = 0x82,
-  Status = 0x83,
-  Ident = 0x84
+  HeaterConfig = spec::kTypeHeaterConfig,
+  HeaterSetpoint = spec::kTypeHeaterSetpoint,
+  ThermistorTable = spec::kTypeThermistorTable,
+  HeaterSafety = spec::kTypeHeaterSafety,
+  HeaterWatchdog = spec::kTypeHeaterWatchdog,
+  Ack = spec::kTypeAck,
+  Nak = spec::kTypeNak,
+  Done = spec::kTypeDone,
+  Status = spec::kTypeStatus,
+  Ident = spec::kTypeIdent
 };
 
 enum class NakReason : uint8_t {
-  BadCrc = 1,
-  BadLength = 2,
-  UnknownType = 3,
-  Timeout = 4,
-  OutOfOrder = 5,
-  FifoFull = 6,
-  BadField = 7
+  BadCrc = spec::kNakBadCrc,
+  BadLength = spec::kNakBadLength,
+  UnknownType = spec::kNakUnknownType,
+  Timeout = spec::kNakTimeout,
+  OutOfOrder = spec::kNakOutOfOrder,
+  FifoFull = spec::kNakFifoFull,
+  BadField = spec::kNakBadField
 };
 
 // "HELLO", "ACK", ..., or "0x12" for a value not in the table.
@@ -150,27 +154,27 @@ struct Ident {  // 18 bytes
 };
 
 // STATUS state bits.
-constexpr uint8_t kStateBusy = 0x01;
-constexpr uint8_t kStateV2 = 0x02;
-constexpr uint8_t kStateFault = 0x04;
-constexpr uint8_t kStateEstop = 0x08;  // the e-stop input is active now
+constexpr uint8_t kStateBusy = spec::kStateBusy;
+constexpr uint8_t kStateV2 = spec::kStateV2;
+constexpr uint8_t kStateFault = spec::kStateFault;
+constexpr uint8_t kStateEstop = spec::kStateEstop;  // the e-stop input is active now
 // STATUS fault bits.
-constexpr uint8_t kFaultStepTiming = 0x01;
-constexpr uint8_t kFaultEstop = 0x10;
-constexpr uint8_t kFaultWatchdog = 0x20;  // heater watchdog (host silent)
-constexpr uint8_t kFaultHotend = 0x40;    // channel 0 fault (its own byte says which)
-constexpr uint8_t kFaultBed = 0x80;       // channel 1 fault
+constexpr uint8_t kFaultStepTiming = spec::kFaultStepTiming;
+constexpr uint8_t kFaultEstop = spec::kFaultEstop;
+constexpr uint8_t kFaultWatchdog = spec::kFaultWatchdog;  // heater watchdog (host silent)
+constexpr uint8_t kFaultHotend = spec::kFaultHotend;  // channel 0 fault (its own byte says which)
+constexpr uint8_t kFaultBed = spec::kFaultBed;        // channel 1 fault
 // STATUS counters, in order.
 enum Counter : size_t {
-  kFramesOk = 0,
-  kCrcErrors,
-  kLengthErrors,
-  kUnknownTypes,
-  kTimeouts,
-  kUartFramingErrors,
-  kOverruns,
-  kNoiseBytes,
-  kClamped
+  kFramesOk = spec::kCounterFramesOk,
+  kCrcErrors = spec::kCounterCrcErrors,
+  kLengthErrors = spec::kCounterLengthErrors,
+  kUnknownTypes = spec::kCounterUnknownTypes,
+  kTimeouts = spec::kCounterTimeouts,
+  kUartFramingErrors = spec::kCounterUartFramingErrors,
+  kOverruns = spec::kCounterOverruns,
+  kNoiseBytes = spec::kCounterNoiseBytes,
+  kClamped = spec::kCounterClamped
 };
 // "frames_ok", "crc_errors", ...
 std::string counter_name(size_t index);
@@ -189,12 +193,12 @@ struct HeaterStatus {
   bool holding() const { return (mode & 0x40) != 0; }
   bool operator==(const HeaterStatus&) const = default;
 };
-constexpr uint8_t kHeaterMinTemp = 0x01;
-constexpr uint8_t kHeaterMaxTemp = 0x02;
-constexpr uint8_t kHeaterRunaway = 0x04;
-constexpr uint8_t kHeaterHeating = 0x08;
-constexpr size_t kHeaterChannels = 2;
-constexpr size_t kHeaterStatusBytes = 8;
+constexpr uint8_t kHeaterMinTemp = spec::kHeaterFaultMintemp;
+constexpr uint8_t kHeaterMaxTemp = spec::kHeaterFaultMaxtemp;
+constexpr uint8_t kHeaterRunaway = spec::kHeaterFaultRunaway;
+constexpr uint8_t kHeaterHeating = spec::kHeaterFaultHeating;
+constexpr size_t kHeaterChannels = spec::kStatusHeaterChannels;
+constexpr size_t kHeaterStatusBytes = spec::kStatusHeaterChannelBytes;
 // "MINTEMP|RUNAWAY" (or "none").
 std::string heater_fault_names(uint8_t faults);
 
@@ -246,9 +250,9 @@ Frame dwell(uint8_t seq, uint32_t t);
 // 2^-48 dominant steps per clock^2, decel_at (D) is the dominant step count at which deceleration
 // starts. Device limits (else NAK BAD_FIELD): 1 <= n_dom = max|steps| < 2^24, v_cruise < 2^47,
 // v_entry <= v_cruise, v_exit <= v_cruise, v_exit >= 1, accel >= 1 or v_entry >= 1.
-constexpr uint64_t kProfileOne = uint64_t{1} << 48;   // 1 dominant step per clock (never reached)
-constexpr uint64_t kProfileVMax = uint64_t{1} << 47;  // v_cruise must be below this
-constexpr uint32_t kProfileNDomMax = (1u << 24) - 1;  // largest n_dom
+constexpr uint64_t kProfileOne = uint64_t{1} << 48;  // 1 dominant step per clock (never reached)
+constexpr uint64_t kProfileVMax = uint64_t{1} << spec::kProfileVBits;     // v_cruise must be below
+constexpr uint32_t kProfileNDomMax = (1u << spec::kProfileNDomBits) - 1;  // largest n_dom
 struct LineProfile {
   uint8_t code = 0;
   uint8_t power = 0;
@@ -266,7 +270,7 @@ std::string line_profile_field_error(const LineProfile& p);
 // device would reject (line_profile_field_error).
 Frame line_profile(uint8_t seq, const LineProfile& p, bool short_if_fits = true);
 
-constexpr uint8_t kLineShort = 0x80;
+constexpr uint8_t kLineShort = spec::kLineShort;
 
 struct Line {
   uint8_t code = 0;
@@ -318,8 +322,8 @@ struct ThermistorChunk {  // THERMISTOR_TABLE, 2 + 2n bytes
   std::vector<int16_t> entries;  // 1..8, Q11.4
   bool operator==(const ThermistorChunk&) const = default;
 };
-constexpr size_t kThermistorEntries = 65;  // entry i: temperature at ADC code 64 * i
-constexpr size_t kThermistorChunk = 8;
+constexpr size_t kThermistorEntries = spec::kThermistorEntries;  // entry i: at ADC code 64 * i
+constexpr size_t kThermistorChunk = spec::kThermistorChunk;
 
 // Builders (throw std::invalid_argument for a field the device would refuse).
 Frame heater_config(uint8_t seq, const HeaterConfigFrame& c);
@@ -342,10 +346,10 @@ uint16_t decode_heater_watchdog(const Frame& f);
 // c_total come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
 // arc_walk.h). Speeds in UQ16.48 cost units per clock, accel in 2^-48 cost units per clock^2,
 // decel_at (D) in cost units.
-constexpr size_t kArcPayload = 63;
-constexpr int32_t kArcCoordLimit = 1 << 22;  // |i|, |j|, |dx - i|, |dy - j| must be below
-constexpr uint32_t kArcNRampMax = (1u << 24) - 1;
-constexpr uint64_t kArcCTotalLimit = uint64_t{1} << 46;  // c_total must be below
+constexpr size_t kArcPayload = spec::kLenArc;
+constexpr int32_t kArcCoordLimit = 1 << spec::kArcCoordBits;  // |i|, |j|, |dx - i|, |dy - j| below
+constexpr uint32_t kArcNRampMax = (1u << spec::kArcNRampBits) - 1;
+constexpr uint64_t kArcCTotalLimit = uint64_t{1} << spec::kArcCTotalBits;  // c_total below
 constexpr uint64_t kArcU48Max = (uint64_t{1} << 48) - 1;
 enum class ArcPlane : uint8_t { XY = 0, ZX = 1, YZ = 2 };  // G17, G18, G19
 struct Arc {
@@ -375,12 +379,12 @@ Arc decode_arc(const Frame& f);
 // is, so one frame can set several: M8 flood = true; M7 mist = true; M9 flood = mist = false;
 // M106 S<s> fan = s (0..255, 255 = always on); M107 fan = 0; M62/M64 P<n> dout[n] = true,
 // M63/M65 P<n> dout[n] = false (n = 0..3).
-constexpr size_t kOutputPayload = 3;
-constexpr size_t kDigitalOutputs = 4;
-constexpr uint8_t kOutFlood = 0x01;  // mask / value bits
-constexpr uint8_t kOutMist = 0x02;
-constexpr uint8_t kOutFan = 0x04;    // mask only: the duty is byte 2
-constexpr uint8_t kOutDout0 = 0x08;  // dout[n]: kOutDout0 << n
+constexpr size_t kOutputPayload = spec::kLenOutput;
+constexpr size_t kDigitalOutputs = spec::kDigitalOutputs;
+constexpr uint8_t kOutFlood = spec::kOutFlood;  // mask / value bits
+constexpr uint8_t kOutMist = spec::kOutMist;
+constexpr uint8_t kOutFan = spec::kOutFan;      // mask only: the duty is byte 2
+constexpr uint8_t kOutDout0 = spec::kOutDout0;  // dout[n]: kOutDout0 << n
 struct OutputSet {
   std::optional<bool> flood, mist;
   std::optional<uint8_t> fan;  // PWM duty, 255 = always on

@@ -185,7 +185,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
       const bool v2m = take >= mode_from_ ? s_.v2_mode : mode_before_;
       if (byte == v2::kSync) {
         kind_ = Kind::V2;
-      } else if (!v2m && byte == 0xFF) {
+      } else if (!v2m && byte == spec::kV1InitByte) {
         kind_ = Kind::V1Init;
       } else if (!v2m && byte <= 3) {
         kind_ = Kind::V1Motion;
@@ -226,12 +226,13 @@ class FrameDecoderTwin : public sc_core::sc_module {
     bool moves = false;
     for (int a = 0; a < axes; ++a) {
       const auto s = static_cast<int32_t>(profile_step(a, width));
-      if (s <= -(1 << 24) || s >= (1 << 24)) return false;
+      constexpr int32_t kLim = int32_t{1} << spec::kProfileNDomBits;
+      if (s <= -kLim || s >= kLim) return false;
       if (s != 0) moves = true;
     }
     const uint64_t ve = be48(&payload_[2]), vc = be48(&payload_[8]), vx = be48(&payload_[14]);
     const uint32_t acc = be32(&payload_[20]);
-    return moves && vc < (uint64_t{1} << 47) && ve <= vc && vx <= vc && vx != 0 &&
+    return moves && vc < (uint64_t{1} << spec::kProfileVBits) && ve <= vc && vx <= vc && vx != 0 &&
            (acc != 0 || ve != 0);
   }
 
@@ -241,17 +242,18 @@ class FrameDecoderTwin : public sc_core::sc_module {
   // C_TOTAL < 2^46; V_cruise < 2^63; V_entry, V_exit <= V_cruise; V_exit >= 1; A >= 1 or V_entry
   // >= 1.
   bool arc_fields_ok() const {
-    std::array<uint8_t, 61> raw{};
-    std::copy(payload_.begin() + 2, payload_.begin() + 63, raw.begin());
+    std::array<uint8_t, spec::kArcRawBytes> raw{};
+    std::copy(payload_.begin() + 2, payload_.begin() + 2 + spec::kArcRawBytes, raw.begin());
     const arc::Frame f = v2::arc_frame_from_raw(raw, true);
     const int64_t x1 = int64_t{f.g.dx} - f.g.i, y1 = int64_t{f.g.dy} - f.g.j;
-    const auto c22 = [](int64_t v) { return v > -(int64_t{1} << 22) && v < (int64_t{1} << 22); };
+    constexpr int64_t kC = int64_t{1} << spec::kArcCoordBits;
+    const auto c22 = [](int64_t v) { return v > -kC && v < kC; };
     const int plane = payload_[0] >> 2 & 3;
     return (payload_[0] & 0xF0) == 0 && plane != 3 && (plane == 0 || kAxes >= 3) &&
            (payload_[0] & 2) != 0 && (f.g.i != 0 || f.g.j != 0) && (x1 != 0 || y1 != 0) &&
            c22(f.g.i) && c22(f.g.j) && c22(x1) && c22(y1) && f.dz != INT32_MIN &&
            (kAxes >= 3 || f.dz == 0) && f.n_ramp != 0 && f.c_total != 0 &&
-           f.c_total < (uint64_t{1} << 46) && f.v_cruise < (uint64_t{1} << 63) &&
+           f.c_total < (uint64_t{1} << spec::kArcCTotalBits) && f.v_cruise < (uint64_t{1} << 63) &&
            f.v_entry <= f.v_cruise && f.v_exit <= f.v_cruise && f.v_exit != 0 &&
            (f.a != 0 || f.v_entry != 0);
   }
@@ -329,7 +331,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     frame(take);
   }
 
-  // Expected payload length of a type (-1: unknown type; -2: LINE, checked apart).
+  // Expected payload length of a type (-1: unknown type; -2: LINE, -3: LINE_PROFILE, -4:
+  // THERMISTOR_TABLE, checked apart).
   static int expected_len(uint8_t type) {
     switch (type) {
       case v2::kHello:
@@ -338,29 +341,29 @@ class FrameDecoderTwin : public sc_core::sc_module {
       case v2::kRelease:
         return 0;
       case v2::kConfigAxis:
-        return 9;
+        return static_cast<int>(spec::kLenConfigAxis);
       case v2::kNumerators:
-        return 8;
+        return static_cast<int>(spec::kLenNumerators);
       case v2::kDwell:
-        return 4;
+        return static_cast<int>(spec::kLenDwell);
       case v2::kLine:
         return -2;
       case v2::kLineProfile:
         return -3;
       case v2::kArc:
-        return 63;
+        return static_cast<int>(spec::kLenArc);
       case v2::kOutput:
-        return 3;
-      case 0x20:  // heater frames (docs/protocol.md "Heater frames")
-        return 20;
-      case 0x21:
-        return 3;
-      case 0x22:
-        return -4;  // THERMISTOR_TABLE: 4..18, even
-      case 0x23:
-        return 13;
-      case 0x24:
-        return 2;
+        return static_cast<int>(spec::kLenOutput);
+      case v2::kHeaterConfig:  // heater frames (docs/protocol.md "Heater frames")
+        return static_cast<int>(spec::kLenHeaterConfig);
+      case v2::kHeaterSetpoint:
+        return static_cast<int>(spec::kLenHeaterSetpoint);
+      case v2::kThermistorTable:
+        return -4;  // even, within its min..max
+      case v2::kHeaterSafety:
+        return static_cast<int>(spec::kLenHeaterSafety);
+      case v2::kHeaterWatchdog:
+        return static_cast<int>(spec::kLenHeaterWatchdog);
       default:
         return -1;
     }
@@ -370,12 +373,15 @@ class FrameDecoderTwin : public sc_core::sc_module {
   // duty_max or manual > 0x8000; THERMISTOR_TABLE first > 64 or first + n > 65; HEATER_SAFETY
   // Tmin >= Tmax. Other types: true.
   bool heater_fields_ok() const {
-    if (type_ < 0x20 || type_ > 0x24) return true;
+    if (type_ < v2::kHeaterConfig || type_ > v2::kHeaterWatchdog) return true;
     auto u16 = [&](int i) { return (payload_[i] << 8) | payload_[i + 1]; };
-    if (type_ != 0x24 && payload_[0] > 1) return false;
-    if (type_ == 0x20) return payload_[1] <= 4 && u16(14) <= 0x8000 && u16(18) <= 0x8000;
-    if (type_ == 0x22) return payload_[1] <= 64 && payload_[1] + (len_ - 2) / 2 <= 65;
-    if (type_ == 0x23) return static_cast<int16_t>(u16(1)) < static_cast<int16_t>(u16(3));
+    if (type_ != v2::kHeaterWatchdog && payload_[0] > 1) return false;
+    if (type_ == v2::kHeaterConfig)
+      return payload_[1] <= 4 && u16(14) <= 0x8000 && u16(18) <= 0x8000;
+    if (type_ == v2::kThermistorTable)
+      return payload_[1] <= 64 && payload_[1] + (len_ - 2) / 2 <= 65;
+    if (type_ == v2::kHeaterSafety)
+      return static_cast<int16_t>(u16(1)) < static_cast<int16_t>(u16(3));
     return true;
   }
 
@@ -393,7 +399,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     int width = 4, axes = 0;
     if (want == -2 || want == -3) {
       width = (payload_[0] & 0x80) ? 2 : 4;
-      const int rest = len_ - (want == -2 ? 6 : 28);
+      const int rest =
+          len_ - static_cast<int>(want == -2 ? spec::kLenLineHeader : spec::kLenLineProfileHeader);
       if (rest < 0 || rest % width != 0 || rest / width > kAxes) {
         ++s_.length_errors;
         commit_check(take);
@@ -402,7 +409,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
       }
       axes = rest / width;
     } else if (want == -4) {
-      if (len_ < 4 || len_ > 18 || (len_ & 1)) {
+      if (len_ < static_cast<int>(spec::kLenThermistorTableMin) ||
+          len_ > static_cast<int>(spec::kLenThermistorTableMax) || (len_ & 1)) {
         ++s_.length_errors;
         commit_check(take);
         request(r, RespReq{kReqNak, seq_, v2::kBadLength});

@@ -219,7 +219,7 @@ class ResponseEncoderTwin : public sc_core::sc_module {
     std::vector<uint8_t> out;
     if (v1_acks_owed_ > 0) {
       --v1_acks_owed_;
-      out.push_back(0xAA);
+      out.push_back(spec::kV1Ack);
     } else {
       StatusSnapshot s{};
       transport(state, gp_, clk_, s, d, tlm::TLM_READ_COMMAND);

@@ -11,12 +11,13 @@
 #include <numeric>
 #include <vector>
 
+#include "fpgacnc/spec.h"
 #include "fpgacnc/twins/ramp.h"
 
 namespace fpgacnc::twins {
 
 using Cycle = int64_t;
-inline constexpr int kAxes = 4;  // cnc_core N_AXES
+inline constexpr int kAxes = static_cast<int>(spec::kDefaultNAxes);  // cnc_core N_AXES
 
 // ceil(a / b) for a >= 0 (or small negative a), b > 0, in 128 bits.
 inline constexpr int64_t ceil_div(__int128 a, __int128 b) {
@@ -160,33 +161,46 @@ inline uint16_t crc16_ccitt(const uint8_t* data, size_t n, uint16_t crc = 0xFFFF
 }
 
 namespace v2 {
-inline constexpr uint8_t kSync = 0xA5;
-inline constexpr int kMaxPayload = 64;
-inline constexpr int kFifoDepth = 64;
-inline constexpr uint32_t kBuildId = 0x2026'0005;
+// The numbers come from spec/protocol.toml (fpgacnc/spec.h, generated).
+inline constexpr uint8_t kSync = spec::kSync;
+inline constexpr int kMaxPayload = static_cast<int>(spec::kMaxPayload);
+inline constexpr int kFifoDepth = static_cast<int>(spec::kDefaultFifoDepth);
+inline constexpr uint32_t kBuildId = spec::kBuildId;
 // Host -> device types.
-inline constexpr uint8_t kHello = 0x01, kStatusQuery = 0x02, kFaultClear = 0x03, kConfigAxis = 0x04,
-                         kNumerators = 0x05, kRelease = 0x06, kLine = 0x10, kDwell = 0x11,
-                         kLineProfile = 0x12, kArc = 0x13, kOutput = 0x15;
+inline constexpr uint8_t kHello = spec::kTypeHello, kStatusQuery = spec::kTypeStatusQuery,
+                         kFaultClear = spec::kTypeFaultClear, kConfigAxis = spec::kTypeConfigAxis,
+                         kNumerators = spec::kTypeNumerators, kRelease = spec::kTypeRelease,
+                         kLine = spec::kTypeLine, kDwell = spec::kTypeDwell,
+                         kLineProfile = spec::kTypeLineProfile, kArc = spec::kTypeArc,
+                         kOutput = spec::kTypeOutput;
+inline constexpr uint8_t kHeaterConfig = spec::kTypeHeaterConfig,
+                         kHeaterSetpoint = spec::kTypeHeaterSetpoint,
+                         kThermistorTable = spec::kTypeThermistorTable,
+                         kHeaterSafety = spec::kTypeHeaterSafety,
+                         kHeaterWatchdog = spec::kTypeHeaterWatchdog;
 // Device -> host types.
-inline constexpr uint8_t kAck = 0x80, kNak = 0x81, kDone = 0x82, kStatus = 0x83, kIdent = 0x84;
+inline constexpr uint8_t kAck = spec::kTypeAck, kNak = spec::kTypeNak, kDone = spec::kTypeDone,
+                         kStatus = spec::kTypeStatus, kIdent = spec::kTypeIdent;
 // NAK reasons.
-inline constexpr uint8_t kBadCrc = 1, kBadLength = 2, kUnknownType = 3, kTimeout = 4,
-                         kOutOfOrder = 5, kFifoFull = 6, kBadField = 7;
+inline constexpr uint8_t kBadCrc = spec::kNakBadCrc, kBadLength = spec::kNakBadLength,
+                         kUnknownType = spec::kNakUnknownType, kTimeout = spec::kNakTimeout,
+                         kOutOfOrder = spec::kNakOutOfOrder, kFifoFull = spec::kNakFifoFull,
+                         kBadField = spec::kNakBadField;
 // STATUS counters (payload order).
 enum Counter : int {
-  kFramesOk,
-  kCrcErrors,
-  kLengthErrors,
-  kUnknownTypes,
-  kTimeouts,
-  kFramingErrors,
-  kOverruns,
-  kNoiseBytes,
-  kClamped,
-  kCounters
+  kFramesOk = spec::kCounterFramesOk,
+  kCrcErrors = spec::kCounterCrcErrors,
+  kLengthErrors = spec::kCounterLengthErrors,
+  kUnknownTypes = spec::kCounterUnknownTypes,
+  kTimeouts = spec::kCounterTimeouts,
+  kFramingErrors = spec::kCounterUartFramingErrors,
+  kOverruns = spec::kCounterOverruns,
+  kNoiseBytes = spec::kCounterNoiseBytes,
+  kClamped = spec::kCounterClamped,
+  kCounters = spec::kCounters
 };
-inline constexpr int kStatusPayload = 27 + 4 * kAxes;
+inline constexpr int kStatusPayload =
+    static_cast<int>(spec::kLenStatusHeader + spec::kLenStatusPerAxis * kAxes);
 }  // namespace v2
 
 // SEQ relative to the device's next_seq (docs/protocol.md "Sequence numbers").

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/spec.h"
 #include "fpgacnc/twins/arc_walk.h"
 #include "fpgacnc/twins/timing.h"
 
@@ -77,7 +78,8 @@ struct Command {  // packet_decoder_v1 -> segment_prep (valid from the delay's e
 //   kind 2 dwell (v2): t = T clocks, no steps, laser off
 //   kind 3 with v2 = 0 OUTPUT: t = {mask, value, fan duty} (bits 23..0); kind 3 with v2 = 1 is
 //   segment_prep's zero-length segment (never written by the decoder)
-inline constexpr uint8_t kEntryMotion = 0, kEntryNumerators = 1, kEntryDwell = 2, kEntryOutput = 3;
+inline constexpr uint8_t kEntryMotion = spec::kKindMotion, kEntryNumerators = spec::kKindNumerators,
+                         kEntryDwell = spec::kKindDwell, kEntryOutput = spec::kKindOutput;
 struct FifoEntry {
   bool v2;
   uint8_t kind;
@@ -94,7 +96,7 @@ struct FifoEntry {
   // 2..62 as received (I, J, DX, DY int24, DZ int32, N_RAMP u24, C_TOTAL u48, V_entry, V_cruise,
   // V_exit u64, A u48, D u48, big-endian), the entry's arc_raw[487:0] with byte 2 in the top bits.
   bool arc = false;
-  std::array<uint8_t, 61> arc_raw{};
+  std::array<uint8_t, spec::kArcRawBytes> arc_raw{};
   // ARC: t = the plane (flags bits 3:2: 0 XY, 1 ZX, 2 YZ)
 };
 // The axes of an ARC plane: the walk's u and v axes and the helix axis (docs/protocol.md "ARC").

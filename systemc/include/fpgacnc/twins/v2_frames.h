@@ -95,7 +95,7 @@ inline std::vector<uint8_t> arc_payload(uint8_t flags, uint8_t power, const arc:
   return p;
 }
 // The entry's arc_raw (payload bytes 2..62) as an arc::Frame (int24 fields sign-extended).
-inline arc::Frame arc_frame_from_raw(const std::array<uint8_t, 61>& r, bool ccw) {
+inline arc::Frame arc_frame_from_raw(const std::array<uint8_t, spec::kArcRawBytes>& r, bool ccw) {
   auto get = [&r](int at, int bytes) {
     uint64_t v = 0;
     for (int b = 0; b < bytes; ++b) v = v << 8 | r[static_cast<size_t>(at + b)];

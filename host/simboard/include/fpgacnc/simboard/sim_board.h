@@ -72,6 +72,7 @@
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/simboard/edges.h"
 #include "fpgacnc/simboard/line_faults.h"
+#include "fpgacnc/spec.h"
 
 namespace fpgacnc::simboard {
 
@@ -178,7 +179,7 @@ class SimBoard : public Board {
   // Clock cycles of inactivity after which the board counts as quiet.
   static constexpr uint64_t kQuietCycles = 32;
   // Heater sample tick of the Verilated core (cnc_core SAMPLE_CLKS, see the file comment).
-  static constexpr uint64_t kSampleClks = 102'400;
+  static constexpr uint64_t kSampleClks = spec::kSimboardSampleClks;
 
   // Creates the pty and the model, resets the core and writes the step timing. Throws
   // BoardError.
