@@ -231,7 +231,8 @@ struct Reader::Impl {
     std::vector<std::pair<int, uint64_t>> loops;   // loop head line -> jumps back so far
   };
   std::vector<Frame> frames;
-  int jumped_to = -1;  // the while line an endwhile jumped back to
+  int jumped_to = -1;    // the while line an endwhile jumped back to
+  int lowest_depth = 0;  // the lowest call depth since the last block (Block::lowest_depth)
 
   // The line being lexed: its original text, and the buffer the lexer reads (the original text,
   // or for rs274ngc the line without blanks outside comments, upper case, with each character's
@@ -1106,6 +1107,7 @@ struct Reader::Impl {
         const double v = has_value ? arg(o, 0) : 0.0;
         cur = frames.back().return_line;
         frames.pop_back();
+        lowest_depth = std::min(lowest_depth, static_cast<int>(frames.size()) - 1);
         params.pop_frame();
         params.set_named("_value", v);
         params.set_named("_value_returned", has_value ? 1.0 : 0.0);
@@ -1278,7 +1280,12 @@ struct Reader::Impl {
         ended = true;
         return false;
       }
-      if (lex(out, line0)) return true;
+      if (lex(out, line0)) {
+        out.call_depth = static_cast<int>(frames.size()) - 1;
+        out.lowest_depth = std::min(lowest_depth, out.call_depth);
+        lowest_depth = out.call_depth;
+        return true;
+      }
     }
   }
 };
