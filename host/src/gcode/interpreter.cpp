@@ -1358,6 +1358,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       throw fail(b, g->col,
                  fmt::format("{}: NURBS curves are not supported (the G5 and G5.1 splines are)",
                              gname(c)));
+    if ((c == 50 || c == 51) && rules->dialect != Dialect::kLinuxCnc)
+      throw fail(b, g->col,
+                 fmt::format("{}: splines are not supported in the {} dialect (LinuxCNC's G5 and "
+                             "G5.1 are)",
+                             gname(c), rules->name));
     if (c == 50 || c == 51) {
       spline = c;
       c = kCycleNone;  // as LinuxCNC: no motion mode after a spline
