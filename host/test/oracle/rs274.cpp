@@ -224,8 +224,12 @@ void parse_canon(std::string_view out, OracleRun& run) {
       CanonMove m;
       m.kind = CanonMove::Kind::kSpline;
       m.name = name;
+      // Z stays where the last move left it (machine mm: `last` may be in other units).
+      const double z = run.moves.empty() ? 0.0 : run.moves.back().end[2];
       for (size_t k = 0; k < n; ++k) {
-        m.control.push_back(f.machine({v[1 + 3 * k], v[2 + 3 * k], last[2]}));
+        Xyz p = f.machine({v[1 + 3 * k], v[2 + 3 * k], 0.0});
+        p[2] = z;
+        m.control.push_back(p);
         m.weights.push_back(v[3 + 3 * k]);
       }
       last = {v[1 + 3 * (n - 1)], v[2 + 3 * (n - 1)], last[2]};
