@@ -304,6 +304,7 @@ struct Interpreter::Impl {
     ModalState st;
   };
   std::vector<SavedState> saved;
+  int leave_below = -1;  // the depth of saved.back() (-1: none): a block below it left that depth
   // Cutter radius compensation: a G40/G41/G42 of the block being executed takes effect from
   // the block's command comp_at on (compensate()).
   CutterComp comp;
@@ -439,6 +440,10 @@ struct Interpreter::Impl {
   void restore_state(const ModalState& st, const Block& b, int col, const char* what,
                      std::vector<Command>& out);
   void leave_depths(const Block& b, std::vector<Command>& out);
+  int spline_code(const Block& b, const Word& g) const;
+  void spline_move(const Block& b, const Word& g, int code, const Vec4& t, const Word* iw,
+                   const Word* jw, const Word* pw, const Word* qw, const Word* fw,
+                   std::vector<Command>& out);
   bool execute(const Block& b, std::vector<Command>& out);
   void compensate(const Block& b, std::vector<Command>& out, size_t first, bool go_on);
   void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3], std::vector<Command>& out,
@@ -514,13 +519,97 @@ void Interpreter::Impl::leave_depths(const Block& b, std::vector<Command>& out) 
   while (!saved.empty() && saved.back().depth > b.lowest_depth) {
     const SavedState s = saved.back();
     saved.pop_back();
+    leave_below = saved.empty() ? -1 : saved.back().depth;
     if (s.autorestore) restore_state(s.st, b, 1, "M73 (restore on return)", out);
   }
 }
 
+// G5 / G5.1 (50 / 51) in the motion step: refused where they cannot run.
+int Interpreter::Impl::spline_code(const Block& b, const Word& g) const {
+  const int c = code10(g);
+  if (c == 52 || c == 53)
+    throw fail(
+        b, g.col,
+        fmt::format("{}: NURBS curves are not supported (the G5 and G5.1 splines are)", gname(c)));
+  if (rules->dialect != Dialect::kLinuxCnc)
+    throw fail(b, g.col,
+               fmt::format("{}: splines are not supported in the {} dialect (LinuxCNC's G5 and "
+                           "G5.1 are)",
+                           gname(c), rules->name));
+  if (plane != Plane::kXY)
+    throw fail(b, g.col, fmt::format("{}: splines need the XY plane (G17)", gname(c)));
+  if (comp_on())
+    throw fail(
+        b, g.col,
+        fmt::format("{}: no spline with cutter radius compensation on (G40 first)", gname(c)));
+  return c;
+}
+
+// A G5 / G5.1 block to the machine point t (docs/gcode.md, "Splines"): control points in machine
+// mm, P0 the start, P1 = P0 + (I, J); G5: P2 = end + (P, Q); the end. G5 without I J continues
+// the last G5's curve smoothly: (I, J) = -(its P, Q).
+void Interpreter::Impl::spline_move(const Block& b, const Word& g, int code, const Vec4& t,
+                                    const Word* iw, const Word* jw, const Word* pw, const Word* qw,
+                                    const Word* fw, std::vector<Command>& out) {
+  const std::string name = gname(code);
+  move_col = g.col;
+  if (!iw != !jw || (code == 51 && !iw))
+    throw fail(b,
+               (iw   ? iw
+                : jw ? jw
+                     : &g)
+                   ->col,
+               fmt::format("{} needs both I and J{}", name, code == 50 ? " (or neither)" : ""));
+  if (code == 50 && (!pw || !qw))
+    throw fail(b, (pw ? pw : qw ? qw : &g)->col, fmt::format("{} needs both P and Q", name));
+  if (inverse_time) {
+    if (!fw || fw->value <= 0)
+      throw fail(b, fw ? fw->col : g.col, "G93 inverse time: each move needs F > 0");
+  } else if (rules->feed_required && !feed_given && !fw) {
+    throw fail(b, g.col,
+               fmt::format("no feed given yet: {} needs F (LinuxCNC starts at F0)", name));
+  } else if (feed <= 0.0) {
+    throw fail(b, g.col, fmt::format("feed is 0: {} needs F > 0", name));
+  }
+  auto mm = [&](const Word* wd) {
+    const double v = wd->value * unit;
+    if (std::fabs(v) > kMaxValue)
+      throw fail(b, wd->col,
+                 fmt::format("value of '{}' out of range (|value| > 1e6 mm)", wd->letter));
+    return v;
+  };
+  SplinePoints cp{};
+  cp.n = code == 50 ? 4 : 3;
+  cp.p[0] = {pos[0], pos[1]};
+  const std::array<double, 2> ij =
+      iw ? std::array<double, 2>{mm(iw), mm(jw)}
+         : std::array<double, 2>{-spline_last_pq[0], -spline_last_pq[1]};
+  cp.p[1] = {pos[0] + ij[0], pos[1] + ij[1]};
+  cp.p[static_cast<size_t>(cp.n - 1)] = {t[0], t[1]};
+  if (code == 50) {
+    spline_last_pq = {mm(pw), mm(qw)};
+    cp.p[2] = {t[0] + spline_last_pq[0], t[1] + spline_last_pq[1]};
+  }
+  const std::vector<std::array<double, 2>> pts = spline_pieces(cp, opt.arc_tolerance_mm);
+  double f = feed * feed_factor;
+  if (inverse_time) {
+    double len = 0.0;
+    for (size_t k = 1; k < pts.size(); ++k)
+      len += std::hypot(pts[k][0] - pts[k - 1][0], pts[k][1] - pts[k - 1][1]);
+    f = len * fw->value * feed_factor;
+    if (f <= 0) f = feed;
+  }
+  for (size_t k = 1; k < pts.size(); ++k) {
+    Vec4 e = t;
+    e[0] = pts[k][0];
+    e[1] = pts[k][1];
+    line_to(out, Motion::kLinear, e, b.line, f);
+  }
+  write_position();
+}
+
 bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   ++stats.lines;
-  if (!saved.empty() && b.lowest_depth < saved.back().depth) leave_depths(b, out);
   if (b.block_delete && opt.block_delete) return true;
   if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
   if (b.kind == BlockKind::kMacro) {
@@ -755,7 +844,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     }
   // 7b. Saving and restoring the modal state (LinuxCNC's M70-M73), after F, S and the spindle and
   // before the modes of the line's G codes (units excepted: they are read first here).
-  if (rules->dialect == Dialect::kLinuxCnc && w.mcount > 0)
+  if (w.mcount > 0 && rules->dialect == Dialect::kLinuxCnc)
     for (int k = 0; k < w.mcount; ++k) {
       const int c = w.mcodes[k];
       if (c < 70 || c > 73) continue;
@@ -765,8 +854,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (c == 70 || c == 73) {
         if (!mine) mine = &saved.emplace_back();
         *mine = SavedState{b.call_depth, c == 73, modal_state()};
+        leave_below = b.call_depth;
       } else if (c == 71) {
         if (mine) saved.pop_back();
+        leave_below = saved.empty() ? -1 : saved.back().depth;
       } else {
         if (!mine)
           throw fail(b, w.mwords[k]->col,
@@ -1341,7 +1432,6 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     throw fail(b, nm->col, "G53 with cutter radius compensation on (G40 first)");
 
   // 17. Motion.
-  int spline = 0;  // G5 (50) or G5.1 (51) on this line
   if (const Word* g = gw(1)) {
     int c = code10(*g);
     if (c >= 380 && c <= 385)
@@ -1354,18 +1444,26 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
                              "this machine does not have",
                              gname(c)));
     if (c == 330) throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
-    if (c == 52 || c == 53)
-      throw fail(b, g->col,
-                 fmt::format("{}: NURBS curves are not supported (the G5 and G5.1 splines are)",
-                             gname(c)));
-    if ((c == 50 || c == 51) && rules->dialect != Dialect::kLinuxCnc)
-      throw fail(b, g->col,
-                 fmt::format("{}: splines are not supported in the {} dialect (LinuxCNC's G5 and "
-                             "G5.1 are)",
-                             gname(c), rules->name));
-    if (c == 50 || c == 51) {
-      spline = c;
-      c = kCycleNone;  // as LinuxCNC: no motion mode after a spline
+    if (c >= 50 && c <= 53) {  // G5, G5.1: the whole move here; no motion mode after it
+      const int spline = spline_code(b, *g);
+      for (char l : {'Z', axis_names[3]})
+        if (const Word* aw = w.get(l))
+          throw fail(b, aw->col,
+                     fmt::format("{}: a spline moves X and Y only, not {}", gname(spline), l));
+      if (!w.get('X') && !w.get('Y'))
+        throw fail(b, g->col,
+                   fmt::format("{}: a spline needs X or Y (its end point)", gname(spline)));
+      if (polar_r || polar_a)
+        throw fail(
+            b, (polar_r ? polar_r : polar_a)->col,
+            fmt::format("{}: polar coordinates in a spline are not supported", gname(spline)));
+      const Word* iw = word('I');
+      const Word* jw = word('J');
+      const Word* pw = spline == 50 ? word('P') : nullptr;
+      const Word* qw = spline == 50 ? word('Q') : nullptr;
+      spline_move(b, *g, spline, target(false), iw, jw, pw, qw, w.get('F'), out);
+      has_axis = false;
+      c = kCycleNone;
     }
     if (is_cycle(c) && motion != c) cycle_z_set = false;
     if (!is_cycle(c)) cycle_il_set = false;
@@ -1381,78 +1479,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   const Word* cv = arc_mode ? unused(kOffsetWord[pa.v]) : nullptr;
   const Word* r_word = arc_mode ? unused('R') : nullptr;
   const bool arc_words = cu || cv || r_word;
-  if (spline) {
-    const Word* g = gw(1);
-    move_col = g->col;
-    const std::string name = gname(spline);
-    if (plane != Plane::kXY)
-      throw fail(b, g->col, fmt::format("{}: splines need the XY plane (G17)", name));
-    if (comp_on())
-      throw fail(b, g->col,
-                 fmt::format("{}: no spline with cutter radius compensation on (G40 first)", name));
-    if (polar_r || polar_a)
-      throw fail(b, (polar_r ? polar_r : polar_a)->col,
-                 fmt::format("{}: polar coordinates in a spline are not supported", name));
-    for (char l : {'Z', axis_names[3]})
-      if (const Word* aw = w.get(l))
-        throw fail(b, aw->col, fmt::format("{}: a spline moves X and Y only, not {}", name, l));
-    if (!w.get('X') && !w.get('Y'))
-      throw fail(b, g->col, fmt::format("{}: a spline needs X or Y (its end point)", name));
-    const Word* iw = word('I');
-    const Word* jw = word('J');
-    const Word* pw = spline == 50 ? word('P') : nullptr;
-    const Word* qw = spline == 50 ? word('Q') : nullptr;
-    if (!iw != !jw || (spline == 51 && !iw))
-      throw fail(b,
-                 (iw   ? iw
-                  : jw ? jw
-                       : g)
-                     ->col,
-                 fmt::format("{} needs both I and J{}", name, spline == 50 ? " (or neither)" : ""));
-    if (spline == 50 && (!pw || !qw))
-      throw fail(b, (pw ? pw : qw ? qw : g)->col, fmt::format("{} needs both P and Q", name));
-    if (inverse_time) {
-      const Word* fw = w.get('F');
-      if (!fw || fw->value <= 0)
-        throw fail(b, fw ? fw->col : g->col, "G93 inverse time: each move needs F > 0");
-    } else if (rules->feed_required && !feed_given && !w.get('F')) {
-      throw fail(b, g->col,
-                 fmt::format("no feed given yet: {} needs F (LinuxCNC starts at F0)", name));
-    } else if (feed <= 0.0) {
-      throw fail(b, g->col, fmt::format("feed is 0: {} needs F > 0", name));
-    }
-    const Vec4 t = target(false);
-    // Control points in machine mm: P0 the start, P1 = P0 + (I, J); G5: P2 = end + (P, Q); the
-    // end. G5 without I J continues the last G5's curve smoothly: (I, J) = -(its P, Q).
-    SplinePoints cp{};
-    cp.n = spline == 50 ? 4 : 3;
-    cp.p[0] = {pos[0], pos[1]};
-    const std::array<double, 2> ij =
-        iw ? std::array<double, 2>{to_mm(iw), to_mm(jw)}
-           : std::array<double, 2>{-spline_last_pq[0], -spline_last_pq[1]};
-    cp.p[1] = {pos[0] + ij[0], pos[1] + ij[1]};
-    cp.p[static_cast<size_t>(cp.n - 1)] = {t[0], t[1]};
-    if (spline == 50) {
-      spline_last_pq = {to_mm(pw), to_mm(qw)};
-      cp.p[2] = {t[0] + spline_last_pq[0], t[1] + spline_last_pq[1]};
-    }
-    const std::vector<std::array<double, 2>> pts = spline_pieces(cp, opt.arc_tolerance_mm);
-    double f = feed * feed_factor;
-    if (inverse_time) {
-      double len = 0.0;
-      for (size_t k = 1; k < pts.size(); ++k)
-        len += std::hypot(pts[k][0] - pts[k - 1][0], pts[k][1] - pts[k - 1][1]);
-      f = len * w.get('F')->value * feed_factor;
-      if (f <= 0) f = feed;
-    }
-    for (size_t k = 1; k < pts.size(); ++k) {
-      Vec4 e = t;
-      e[0] = pts[k][0];
-      e[1] = pts[k][1];
-      line_to(out, Motion::kLinear, e, b.line, f);
-    }
-    write_position();
-  } else if (cycle_mode) {
+  if (cycle_mode) {
     for (char l : {'Z', 'R', 'P', 'Q', 'L'}) word(l);
     const PlaneAxes cpa = pa;
     const char wl = axis_names[cpa.w];
@@ -1836,6 +1863,7 @@ bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
   const bool engaged = m.comp.engaged();
   m.comp_event = Impl::CompEvent::kNone;
   m.move_col = 1;
+  if (block.lowest_depth < m.leave_below) m.leave_depths(block, out);
   const bool go_on = m.execute(block, out);
   m.last_line = block.line;
   // LinuxCNC reads the position back after a tool change: the program position from before any

@@ -232,6 +232,7 @@ struct Reader::Impl {
   };
   std::vector<Frame> frames;
   int jumped_to = -1;    // the while line an endwhile jumped back to
+  int depth = 0;         // subroutine calls in progress: frames.size() - 1
   int lowest_depth = 0;  // the lowest call depth since the last block (Block::lowest_depth)
 
   // The line being lexed: its original text, and the buffer the lexer reads (the original text,
@@ -1107,7 +1108,7 @@ struct Reader::Impl {
         const double v = has_value ? arg(o, 0) : 0.0;
         cur = frames.back().return_line;
         frames.pop_back();
-        lowest_depth = std::min(lowest_depth, static_cast<int>(frames.size()) - 1);
+        lowest_depth = std::min(lowest_depth, --depth);
         params.pop_frame();
         params.set_named("_value", v);
         params.set_named("_value_returned", has_value ? 1.0 : 0.0);
@@ -1150,6 +1151,7 @@ struct Reader::Impl {
         f.call_line = lnum;
         f.return_line = line0 + 1;
         frames.push_back(std::move(f));
+        ++depth;
         cur = def->line + 1;
         return false;
       }
@@ -1281,9 +1283,9 @@ struct Reader::Impl {
         return false;
       }
       if (lex(out, line0)) {
-        out.call_depth = static_cast<int>(frames.size()) - 1;
-        out.lowest_depth = std::min(lowest_depth, out.call_depth);
-        lowest_depth = out.call_depth;
+        out.call_depth = depth;
+        out.lowest_depth = lowest_depth;
+        lowest_depth = depth;
         return true;
       }
     }
