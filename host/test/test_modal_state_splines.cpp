@@ -212,3 +212,22 @@ TEST(ModalState, PrinterM73IsProgress) {
       progress = progress || (msg->kind == gc::Message::Kind::kProgress && msg->percent == 50.0);
   EXPECT_TRUE(progress);
 }
+
+// M70-M72 are LinuxCNC's: grbl refuses them, Marlin skips unknown M codes with a warning.
+TEST(ModalState, OtherDialects) {
+  gc::Options grbl;
+  grbl.dialect = gc::Dialect::kGrbl;
+  try {
+    gc::parse_string("M70\nG1 X1 F100\n", "t.gcode", grbl);
+    ADD_FAILURE() << "no error";
+  } catch (const gc::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("t.gcode:1:1: error: M70: not supported in the grbl"),
+              std::string::npos)
+        << e.what();
+  }
+  gc::Options marlin;
+  marlin.dialect = gc::Dialect::kMarlin;
+  const auto p = gc::parse_string("M72\nG1 X1 F100\n", "t.gcode", marlin);
+  ASSERT_EQ(p.stats.warnings.size(), 1u);
+  EXPECT_NE(p.stats.warnings[0].what.find("M72"), std::string::npos);
+}

@@ -900,13 +900,6 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         output(Output::Kind::kFlood, 0, 0.0, false);
         mist = flood = false;
         break;
-      case 70:
-      case 71:
-      case 72:
-        if (rules->dialect != Dialect::kLinuxCnc)
-          throw fail(b, mw.col,
-                     fmt::format("M{}: not supported in the {} dialect", c, rules->name));
-        break;  // in their own step
       case 48:
       case 49:
       case 50:
@@ -1075,6 +1068,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           for (char l = 'A'; l <= 'Z'; ++l) word(l);
           break;
         }
+        if (rules->dialect == Dialect::kLinuxCnc && c >= 70 && c <= 72) break;  // step 7b
         if (!rules->unknown_m_warns)
           throw fail(b, mw.col,
                      fmt::format("M{}: not supported in the {} dialect", c, rules->name));
