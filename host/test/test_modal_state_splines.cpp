@@ -231,3 +231,13 @@ TEST(ModalState, OtherDialects) {
   ASSERT_EQ(p.stats.warnings.size(), 1u);
   EXPECT_NE(p.stats.warnings[0].what.find("M72"), std::string::npos);
 }
+
+// The restore happens at the endsub itself: the next line's parameters read the caller's state
+// (#<_imperial> is 0 again, so X10, in mm).
+TEST(ModalState, M73RestoresBeforeTheNextLineIsRead) {
+  const auto m =
+      moves_of(run("o1 sub\nM73\nG20\no1 endsub\nG21 G90 F100\no1 call\nG1 X[10 + #<_imperial>]\n"
+                   "M2\n"));
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(m[0].end[0], 10.0);
+}

@@ -513,10 +513,10 @@ void Interpreter::Impl::restore_state(const ModalState& st, const Block& b, int 
   write_params();
 }
 
-// The program left the call depths above b.lowest_depth since the last block: their saved
-// states go, and an M73 state comes back.
+// A subroutine returned to b.call_depth (the return's own empty Block): the states saved deeper
+// go, and an M73 state comes back.
 void Interpreter::Impl::leave_depths(const Block& b, std::vector<Command>& out) {
-  while (!saved.empty() && saved.back().depth > b.lowest_depth) {
+  while (!saved.empty() && saved.back().depth > b.call_depth) {
     const SavedState s = saved.back();
     saved.pop_back();
     leave_below = saved.empty() ? -1 : saved.back().depth;
@@ -1857,7 +1857,7 @@ bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
   const bool engaged = m.comp.engaged();
   m.comp_event = Impl::CompEvent::kNone;
   m.move_col = 1;
-  if (block.lowest_depth < m.leave_below) m.leave_depths(block, out);
+  if (block.call_depth < m.leave_below) m.leave_depths(block, out);
   const bool go_on = m.execute(block, out);
   m.last_line = block.line;
   // LinuxCNC reads the position back after a tool change: the program position from before any

@@ -231,9 +231,8 @@ struct Reader::Impl {
     std::vector<std::pair<int, uint64_t>> loops;   // loop head line -> jumps back so far
   };
   std::vector<Frame> frames;
-  int jumped_to = -1;    // the while line an endwhile jumped back to
-  int depth = 0;         // subroutine calls in progress: frames.size() - 1
-  int lowest_depth = 0;  // the lowest call depth since the last block (Block::lowest_depth)
+  int jumped_to = -1;  // the while line an endwhile jumped back to
+  int depth = 0;       // subroutine calls in progress (Block::call_depth): frames.size() - 1
 
   // The line being lexed: its original text, and the buffer the lexer reads (the original text,
   // or for rs274ngc the line without blanks outside comments, upper case, with each character's
@@ -1108,11 +1107,11 @@ struct Reader::Impl {
         const double v = has_value ? arg(o, 0) : 0.0;
         cur = frames.back().return_line;
         frames.pop_back();
-        lowest_depth = std::min(lowest_depth, --depth);
+        --depth;
         params.pop_frame();
         params.set_named("_value", v);
         params.set_named("_value_returned", has_value ? 1.0 : 0.0);
-        return false;
+        return true;  // an empty Block at the caller's depth: the interpreter sees the return
       }
       case Kw::kCall: {
         const auto* es = entries(lab);
@@ -1284,8 +1283,6 @@ struct Reader::Impl {
       }
       if (lex(out, line0)) {
         out.call_depth = depth;
-        out.lowest_depth = lowest_depth;
-        lowest_depth = depth;
         return true;
       }
     }

@@ -52,12 +52,10 @@ struct Block {
   std::string text;  // message text (parameters substituted for DEBUG/PRINT) or the
                      // '%' / '$' / '?' line's text
   int text_col = 0;  // column of the message or text
-  // O-word subroutine calls (rs274ngc): the call depth the line runs at (0: the main program),
-  // and the lowest depth the program was at since the previous block. A subroutine that returned
-  // (endsub or return) since then shows as lowest_depth below the depth it ran at; M70-M73
-  // (the interpreter's saved modal states, one per call depth) rely on it.
+  // O-word subroutine calls (rs274ngc): the call depth the line runs at (0: the main program).
+  // An endsub or return line gives an empty Block at the caller's depth, so a Block below the
+  // depth of an earlier one means a subroutine returned (M73's restore relies on it).
   int call_depth = 0;
-  int lowest_depth = 0;
 
   const Word* find(char letter) const {
     for (int i = 0; i < count; ++i)
