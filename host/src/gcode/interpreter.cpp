@@ -440,10 +440,9 @@ struct Interpreter::Impl {
   void restore_state(const ModalState& st, const Block& b, int col, const char* what,
                      std::vector<Command>& out);
   void leave_depths(const Block& b, std::vector<Command>& out);
-  int spline_code(const Block& b, const Word& g) const;
-  void spline_move(const Block& b, const Word& g, int code, const Vec4& t, const Word* iw,
-                   const Word* jw, const Word* pw, const Word* qw, const Word* fw,
-                   std::vector<Command>& out);
+  [[gnu::cold, gnu::noinline]] void spline_block(const Block& b, const Word& g,
+                                                 const Word* const letters[26], bool used[26],
+                                                 const Word* polar, std::vector<Command>& out);
   bool execute(const Block& b, std::vector<Command>& out);
   void compensate(const Block& b, std::vector<Command>& out, size_t first, bool go_on);
   void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3], std::vector<Command>& out,
@@ -524,34 +523,46 @@ void Interpreter::Impl::leave_depths(const Block& b, std::vector<Command>& out) 
   }
 }
 
-// G5 / G5.1 (50 / 51) in the motion step: refused where they cannot run.
-int Interpreter::Impl::spline_code(const Block& b, const Word& g) const {
-  const int c = code10(g);
-  if (c == 52 || c == 53)
+// A G5 / G5.1 block, whole, in the motion step (docs/gcode.md, "Splines"): the control points
+// in machine mm are P0 the start, P1 = P0 + (I, J); G5: P2 = end + (P, Q); the end. G5 without
+// I J continues the last G5's curve smoothly: (I, J) = -(its P, Q). `letters` are the block's
+// words by letter; the ones it uses are marked in `used`.
+void Interpreter::Impl::spline_block(const Block& b, const Word& g, const Word* const letters[26],
+                                     bool used[26], const Word* polar, std::vector<Command>& out) {
+  const int code = code10(g);
+  const std::string name = gname(code);
+  auto get = [&](char l) { return letters[l - 'A']; };
+  auto word = [&](char l) {
+    used[l - 'A'] = true;
+    return letters[l - 'A'];
+  };
+  if (code == 52 || code == 53)
     throw fail(
         b, g.col,
-        fmt::format("{}: NURBS curves are not supported (the G5 and G5.1 splines are)", gname(c)));
+        fmt::format("{}: NURBS curves are not supported (the G5 and G5.1 splines are)", name));
   if (rules->dialect != Dialect::kLinuxCnc)
     throw fail(b, g.col,
                fmt::format("{}: splines are not supported in the {} dialect (LinuxCNC's G5 and "
                            "G5.1 are)",
-                           gname(c), rules->name));
+                           name, rules->name));
   if (plane != Plane::kXY)
-    throw fail(b, g.col, fmt::format("{}: splines need the XY plane (G17)", gname(c)));
+    throw fail(b, g.col, fmt::format("{}: splines need the XY plane (G17)", name));
   if (comp_on())
-    throw fail(
-        b, g.col,
-        fmt::format("{}: no spline with cutter radius compensation on (G40 first)", gname(c)));
-  return c;
-}
-
-// A G5 / G5.1 block to the machine point t (docs/gcode.md, "Splines"): control points in machine
-// mm, P0 the start, P1 = P0 + (I, J); G5: P2 = end + (P, Q); the end. G5 without I J continues
-// the last G5's curve smoothly: (I, J) = -(its P, Q).
-void Interpreter::Impl::spline_move(const Block& b, const Word& g, int code, const Vec4& t,
-                                    const Word* iw, const Word* jw, const Word* pw, const Word* qw,
-                                    const Word* fw, std::vector<Command>& out) {
-  const std::string name = gname(code);
+    throw fail(b, g.col,
+               fmt::format("{}: no spline with cutter radius compensation on (G40 first)", name));
+  for (char l : {'Z', axis_names[3]})
+    if (const Word* aw = get(l))
+      throw fail(b, aw->col, fmt::format("{}: a spline moves X and Y only, not {}", name, l));
+  if (!get('X') && !get('Y'))
+    throw fail(b, g.col, fmt::format("{}: a spline needs X or Y (its end point)", name));
+  if (polar)
+    throw fail(b, polar->col,
+               fmt::format("{}: polar coordinates in a spline are not supported", name));
+  const Word* iw = word('I');
+  const Word* jw = word('J');
+  const Word* pw = code == 50 ? word('P') : nullptr;
+  const Word* qw = code == 50 ? word('Q') : nullptr;
+  const Word* fw = get('F');
   move_col = g.col;
   if (!iw != !jw || (code == 51 && !iw))
     throw fail(b,
@@ -572,12 +583,26 @@ void Interpreter::Impl::spline_move(const Block& b, const Word& g, int code, con
     throw fail(b, g.col, fmt::format("feed is 0: {} needs F > 0", name));
   }
   auto mm = [&](const Word* wd) {
-    const double v = wd->value * unit;
+    const double v = wd->value * unit * (diameter_mode && wd->letter == 'X' ? 0.5 : 1.0);
     if (std::fabs(v) > kMaxValue)
       throw fail(b, wd->col,
                  fmt::format("value of '{}' out of range (|value| > 1e6 mm)", wd->letter));
     return v;
   };
+  // The end point as any move's (G90/G91, offsets; a tool length offset changed since the last
+  // move shifts every axis).
+  Vec4 t = pos;
+  for (int a = 0; a < offset_axes; ++a) {
+    const auto i = static_cast<size_t>(a);
+    const double shift = tlo[i] - pos_tlo[i];
+    t[i] = pos[i] + shift;
+    if (a > 1) continue;
+    if (const Word* aw = word(axis_names[i])) {
+      const double v = mm(aw);
+      t[i] = absolute ? v + offset(a) : pos[i] + shift + v;
+      if (std::fabs(t[i]) > 1e9) throw fail(b, aw->col, "position out of range");
+    }
+  }
   SplinePoints cp{};
   cp.n = code == 50 ? 4 : 3;
   cp.p[0] = {pos[0], pos[1]};
@@ -1438,26 +1463,10 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
                              "this machine does not have",
                              gname(c)));
     if (c == 330) throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
-    if (c >= 50 && c <= 53) {  // G5, G5.1: the whole move here; no motion mode after it
-      const int spline = spline_code(b, *g);
-      for (char l : {'Z', axis_names[3]})
-        if (const Word* aw = w.get(l))
-          throw fail(b, aw->col,
-                     fmt::format("{}: a spline moves X and Y only, not {}", gname(spline), l));
-      if (!w.get('X') && !w.get('Y'))
-        throw fail(b, g->col,
-                   fmt::format("{}: a spline needs X or Y (its end point)", gname(spline)));
-      if (polar_r || polar_a)
-        throw fail(
-            b, (polar_r ? polar_r : polar_a)->col,
-            fmt::format("{}: polar coordinates in a spline are not supported", gname(spline)));
-      const Word* iw = word('I');
-      const Word* jw = word('J');
-      const Word* pw = spline == 50 ? word('P') : nullptr;
-      const Word* qw = spline == 50 ? word('Q') : nullptr;
-      spline_move(b, *g, spline, target(false), iw, jw, pw, qw, w.get('F'), out);
+    if (c >= 50 && c <= 53) [[unlikely]] {  // G5, G5.1: the whole move here
+      spline_block(b, *g, w.letter, used, polar_r ? polar_r : polar_a, out);
       has_axis = false;
-      c = kCycleNone;
+      c = kCycleNone;  // no motion mode after a spline (LinuxCNC)
     }
     if (is_cycle(c) && motion != c) cycle_z_set = false;
     if (!is_cycle(c)) cycle_il_set = false;
