@@ -284,7 +284,7 @@ struct Interpreter::Impl {
   bool diameter_mode = false;              // G7: X words are diameters
   bool mist = false, flood = false;        // M7 / M8 (M9 both off)
   std::array<double, 2> spline_last_pq{};  // the last G5's P, Q (mm)
-  // M70-M73: the modal state saved at a call depth (Block::call_depth), deepest last. Leaving a
+  // M70-M73: the modal state saved at a call depth (call_depth), deepest last. Leaving a
   // depth (a subroutine's return) drops its state, restoring it first when M73 saved it.
   struct ModalState {
     double unit;
@@ -304,7 +304,8 @@ struct Interpreter::Impl {
     ModalState st;
   };
   std::vector<SavedState> saved;
-  int leave_below = -1;  // the depth of saved.back() (-1: none): a block below it left that depth
+  int leave_below = -1;  // the depth of saved.back() (-1: none): a return below it leaves it
+  int call_depth = 0;    // subroutine calls in progress (BlockKind::kCall / kReturn blocks)
   // Cutter radius compensation: a G40/G41/G42 of the block being executed takes effect from
   // the block's command comp_at on (compensate()).
   CutterComp comp;
@@ -512,10 +513,10 @@ void Interpreter::Impl::restore_state(const ModalState& st, const Block& b, int 
   write_params();
 }
 
-// A subroutine returned to b.call_depth (the return's own empty Block): the states saved deeper
-// go, and an M73 state comes back.
+// A subroutine returned (b is its endsub or return line): the states saved deeper than the
+// caller go, and an M73 state comes back.
 void Interpreter::Impl::leave_depths(const Block& b, std::vector<Command>& out) {
-  while (!saved.empty() && saved.back().depth > b.call_depth) {
+  while (!saved.empty() && saved.back().depth > call_depth) {
     const SavedState s = saved.back();
     saved.pop_back();
     leave_below = saved.empty() ? -1 : saved.back().depth;
@@ -636,25 +637,36 @@ void Interpreter::Impl::spline_block(const Block& b, const Word& g, const Word* 
 bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   ++stats.lines;
   if (b.block_delete && opt.block_delete) return true;
-  if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
-  if (b.kind == BlockKind::kMacro) {
-    std::string name = b.text.substr(0, b.text.find_first_of(" \t"));
-    warn(fmt::format("extended command '{}' skipped (a Klipper macro: Klipper runs it from its "
-                     "printer.cfg; nothing here moves for it)",
-                     name),
-         b.line);
-    return true;
-  }
-  if (b.kind == BlockKind::kSystem) {
-    const std::string& t = b.text;
-    if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
-      throw fail(b, b.text_col,
-                 "'$H' homing cycle: this controller has no homing yet; home the machine before "
-                 "the job and remove the line");
-    if (t.size() >= 2 && (t[1] == 'J' || t[1] == 'j'))
-      throw fail(b, b.text_col, "'$J=' jogging is not a job command");
-    warn(fmt::format("grbl system line '{}' ignored", t), b.line);
-    return true;
+  if (b.kind != BlockKind::kWords) [[unlikely]] {
+    if (b.kind == BlockKind::kCall) {
+      ++call_depth;
+      return true;
+    }
+    if (b.kind == BlockKind::kReturn) {
+      --call_depth;
+      if (call_depth < leave_below) leave_depths(b, out);
+      return true;
+    }
+    if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
+    if (b.kind == BlockKind::kMacro) {
+      std::string name = b.text.substr(0, b.text.find_first_of(" \t"));
+      warn(fmt::format("extended command '{}' skipped (a Klipper macro: Klipper runs it from its "
+                       "printer.cfg; nothing here moves for it)",
+                       name),
+           b.line);
+      return true;
+    }
+    if (b.kind == BlockKind::kSystem) {
+      const std::string& t = b.text;
+      if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
+        throw fail(b, b.text_col,
+                   "'$H' homing cycle: this controller has no homing yet; home the machine before "
+                   "the job and remove the line");
+      if (t.size() >= 2 && (t[1] == 'J' || t[1] == 'j'))
+        throw fail(b, b.text_col, "'$J=' jogging is not a job command");
+      warn(fmt::format("grbl system line '{}' ignored", t), b.line);
+      return true;
+    }
   }
 
   // Classify.
@@ -875,11 +887,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       if (c < 70 || c > 73) continue;
       did = true;
       SavedState* mine =
-          !saved.empty() && saved.back().depth == b.call_depth ? &saved.back() : nullptr;
+          !saved.empty() && saved.back().depth == call_depth ? &saved.back() : nullptr;
       if (c == 70 || c == 73) {
         if (!mine) mine = &saved.emplace_back();
-        *mine = SavedState{b.call_depth, c == 73, modal_state()};
-        leave_below = b.call_depth;
+        *mine = SavedState{call_depth, c == 73, modal_state()};
+        leave_below = call_depth;
       } else if (c == 71) {
         if (mine) saved.pop_back();
         leave_below = saved.empty() ? -1 : saved.back().depth;
@@ -1866,7 +1878,6 @@ bool Interpreter::execute(const Block& block, std::vector<Command>& out) {
   const bool engaged = m.comp.engaged();
   m.comp_event = Impl::CompEvent::kNone;
   m.move_col = 1;
-  if (block.call_depth < m.leave_below) m.leave_depths(block, out);
   const bool go_on = m.execute(block, out);
   m.last_line = block.line;
   // LinuxCNC reads the position back after a tool change: the program position from before any

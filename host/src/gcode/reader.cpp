@@ -232,7 +232,6 @@ struct Reader::Impl {
   };
   std::vector<Frame> frames;
   int jumped_to = -1;  // the while line an endwhile jumped back to
-  int depth = 0;       // subroutine calls in progress (Block::call_depth): frames.size() - 1
 
   // The line being lexed: its original text, and the buffer the lexer reads (the original text,
   // or for rs274ngc the line without blanks outside comments, upper case, with each character's
@@ -1107,11 +1106,11 @@ struct Reader::Impl {
         const double v = has_value ? arg(o, 0) : 0.0;
         cur = frames.back().return_line;
         frames.pop_back();
-        --depth;
         params.pop_frame();
         params.set_named("_value", v);
         params.set_named("_value_returned", has_value ? 1.0 : 0.0);
-        return true;  // an empty Block at the caller's depth: the interpreter sees the return
+        out.kind = BlockKind::kReturn;
+        return true;
       }
       case Kw::kCall: {
         const auto* es = entries(lab);
@@ -1150,9 +1149,9 @@ struct Reader::Impl {
         f.call_line = lnum;
         f.return_line = line0 + 1;
         frames.push_back(std::move(f));
-        ++depth;
         cur = def->line + 1;
-        return false;
+        out.kind = BlockKind::kCall;
+        return true;
       }
       case Kw::kDo:
         if (!find_after(lab, line0, {Kw::kWhile}, true)) missing("a closing while");
@@ -1281,10 +1280,7 @@ struct Reader::Impl {
         ended = true;
         return false;
       }
-      if (lex(out, line0)) {
-        out.call_depth = depth;
-        return true;
-      }
+      if (lex(out, line0)) return true;
     }
   }
 };

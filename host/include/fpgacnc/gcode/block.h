@@ -35,6 +35,8 @@ enum class BlockKind : uint8_t {
   kQuery,    // a grbl '?' line; only when Syntax::dollar_lines
   kMacro,    // an extended command line ("START_PRINT", "EXCLUDE_OBJECT_DEFINE NAME=..."):
              // Klipper's, written by slicers; only when Syntax::macro_lines (`text` holds it)
+  kCall,     // an O-word call line (rs274ngc): the subroutine's lines follow (no words)
+  kReturn,   // an endsub or return line: the caller's lines follow (no words); M73 relies on it
 };
 
 // A message for the operator: (MSG,...), (DEBUG,...), (PRINT,...) comments (rs274ngc) and the
@@ -52,10 +54,6 @@ struct Block {
   std::string text;  // message text (parameters substituted for DEBUG/PRINT) or the
                      // '%' / '$' / '?' line's text
   int text_col = 0;  // column of the message or text
-  // O-word subroutine calls (rs274ngc): the call depth the line runs at (0: the main program).
-  // An endsub or return line gives an empty Block at the caller's depth, so a Block below the
-  // depth of an earlier one means a subroutine returned (M73's restore relies on it).
-  int call_depth = 0;
 
   const Word* find(char letter) const {
     for (int i = 0; i < count; ++i)
