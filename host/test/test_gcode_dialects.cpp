@@ -204,12 +204,14 @@ TEST(Dialect, PrinterLinesOtherFirmwaresWrite) {
             "t.gcode:1:4: error: expected a number after 'X'");
 }
 
-TEST(GCode, SplinesAreRefusedByName) {
-  // G5 is a motion code of LinuxCNC's; here it is refused with its name, never run as a move.
-  EXPECT_EQ(error_of("G0 X1\nG5 X2 Y2 I1 J0 P1 Q1", gc::Dialect::kLinuxCnc),
-            "t.gcode:2:1: error: G5: splines are not supported");
+TEST(GCode, SplinesAreLinuxCncs) {
+  // G5 is a motion code of LinuxCNC's (straight pieces along the curve); the other dialects
+  // refuse it with its name, never run it as a move.
+  EXPECT_GT(all<gc::Move>(run("G0 X1 F100\nG5 X2 Y2 I1 J0 P1 Q1", gc::Dialect::kLinuxCnc)).size(),
+            2u);
   EXPECT_EQ(error_of("G5.1 X2 Y2 I1 J0", gc::Dialect::kGrbl),
-            "t.gcode:1:1: error: G5.1: splines are not supported");
+            "t.gcode:1:1: error: G5.1: splines are not supported in the grbl dialect (LinuxCNC's "
+            "G5 and G5.1 are)");
 }
 
 TEST(GCode, RotaryFourthAxisA) {

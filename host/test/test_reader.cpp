@@ -760,6 +760,26 @@ TEST(ReaderO, NestedLoopsAndLoopsInSubroutines) {
                   "G1 Z2", "G1 Z1"}));
 }
 
+// A call and an endsub or return give a block of their own kind (no words), in execution order:
+// the interpreter counts the call depth from them (M73 restores on the return).
+TEST(ReaderO, CallAndReturnBlocks) {
+  const auto bs = read_all(
+      "o1 sub\nG0 X1\no2 if [#1 GT 0]\no1 return\no2 endif\no1 endsub\no1 call [1]\n"
+      "o1 call [0]\nG0 X2\n");
+  std::vector<std::pair<int, BlockKind>> seq;
+  for (const auto& b : bs) seq.emplace_back(b.line, b.kind);
+  const std::vector<std::pair<int, BlockKind>> want = {
+      {7, BlockKind::kCall}, {2, BlockKind::kWords}, {4, BlockKind::kReturn},
+      {8, BlockKind::kCall}, {2, BlockKind::kWords}, {6, BlockKind::kReturn},
+      {9, BlockKind::kWords}};
+  EXPECT_EQ(seq, want);
+  for (const auto& b : bs) {
+    if (b.kind != BlockKind::kWords) {
+      EXPECT_EQ(b.count, 0);
+    }
+  }
+}
+
 TEST(ReaderO, BlockLineNumbersFollowExecution) {
   const auto bs = read_all("o1 repeat [2]\nG0 X1\no1 endrepeat\nG0 X2\n");
   std::vector<int> lines;

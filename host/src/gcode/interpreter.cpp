@@ -81,6 +81,10 @@ int g_group(int c10) {
     case 880:
     case 890:
     case 330:
+    case 50:
+    case 51:
+    case 52:
+    case 53:
       return 1;
     case 170:
     case 180:
@@ -187,6 +191,42 @@ const char* printer_ignored(int code) {
   return nullptr;
 }
 
+// A spline's control points (machine mm, XY): 3 (G5.1, quadratic) or 4 (G5, cubic Bezier).
+struct SplinePoints {
+  int n = 0;
+  std::array<std::array<double, 2>, 4> p{};
+};
+
+std::array<double, 2> spline_at(const SplinePoints& c, double t) {
+  const double s = 1.0 - t;
+  std::array<double, 2> r{};
+  for (size_t a = 0; a < 2; ++a)
+    r[a] = c.n == 3 ? s * s * c.p[0][a] + 2 * s * t * c.p[1][a] + t * t * c.p[2][a]
+                    : s * s * s * c.p[0][a] + 3 * s * s * t * c.p[1][a] +
+                          3 * s * t * t * c.p[2][a] + t * t * t * c.p[3][a];
+  return r;
+}
+
+// The points of straight pieces within `tolerance` of the curve: a chord over a parameter step h
+// is within h^2 / 8 * max|C''| of the curve, and |C''| is at most 2 |P0 - 2 P1 + P2| (quadratic)
+// or 6 max(|P0 - 2 P1 + P2|, |P1 - 2 P2 + P3|) (cubic). The first point is the start, the last
+// exactly the end.
+std::vector<std::array<double, 2>> spline_pieces(const SplinePoints& c, double tolerance) {
+  auto second = [&](size_t k) {
+    return std::hypot(c.p[k][0] - 2 * c.p[k + 1][0] + c.p[k + 2][0],
+                      c.p[k][1] - 2 * c.p[k + 1][1] + c.p[k + 2][1]);
+  };
+  const double curv = c.n == 3 ? 2 * second(0) : 6 * std::max(second(0), second(1));
+  const double n_real = std::ceil(std::sqrt(curv / (8.0 * std::max(tolerance, 1e-6))));
+  const int n = static_cast<int>(std::clamp(n_real, 1.0, 1e6));
+  std::vector<std::array<double, 2>> pts;
+  pts.reserve(static_cast<size_t>(n) + 1);
+  pts.push_back(c.p[0]);
+  for (int k = 1; k < n; ++k) pts.push_back(spline_at(c, static_cast<double>(k) / n));
+  pts.push_back(c.p[static_cast<size_t>(c.n - 1)]);
+  return pts;
+}
+
 }  // namespace
 
 struct Interpreter::Impl {
@@ -241,7 +281,31 @@ struct Interpreter::Impl {
   bool retracted = false;
   bool produced = false;
   std::map<std::string, size_t> warning_index;
-  bool diameter_mode = false;  // G7: X words are diameters
+  bool diameter_mode = false;              // G7: X words are diameters
+  bool mist = false, flood = false;        // M7 / M8 (M9 both off)
+  std::array<double, 2> spline_last_pq{};  // the last G5's P, Q (mm)
+  // M70-M73: the modal state saved at a call depth (call_depth), deepest last. Leaving a
+  // depth (a subroutine's return) drops its state, restoring it first when M73 saved it.
+  struct ModalState {
+    double unit;
+    Plane plane;
+    bool absolute, arc_absolute, inverse_time, retract_to_r, exact_stop, diameter_mode;
+    int cs;
+    Vec4 tlo;
+    double tolerance, feed;
+    std::optional<double> spindle_s;
+    bool spindle_on, mist, flood, comp_on;
+    CutterComp::Side comp_side;
+    double comp_radius;
+  };
+  struct SavedState {
+    int depth;
+    bool autorestore;  // M73
+    ModalState st;
+  };
+  std::vector<SavedState> saved;
+  int leave_below = -1;  // the depth of saved.back() (-1: none): a return below it leaves it
+  int call_depth = 0;    // subroutine calls in progress (BlockKind::kCall / kReturn blocks)
   // Cutter radius compensation: a G40/G41/G42 of the block being executed takes effect from
   // the block's command comp_at on (compensate()).
   CutterComp comp;
@@ -368,6 +432,18 @@ struct Interpreter::Impl {
     push(out, make_move(m, end, line, feed_mm_min > 0 ? feed_mm_min : feed * feed_factor));
   }
 
+  ModalState modal_state() const {
+    return ModalState{unit,         plane,      absolute,      arc_absolute, inverse_time,
+                      retract_to_r, exact_stop, diameter_mode, cs,           tlo,
+                      tolerance,    feed,       spindle_s,     spindle_on,   mist,
+                      flood,        comp_on(),  comp_side,     comp_radius};
+  }
+  void restore_state(const ModalState& st, const Block& b, int col, const char* what,
+                     std::vector<Command>& out);
+  void leave_depths(const Block& b, std::vector<Command>& out);
+  [[gnu::cold, gnu::noinline]] void spline_block(const Block& b, const Word& g,
+                                                 const Word* const letters[26], bool used[26],
+                                                 const Word* polar, std::vector<Command>& out);
   bool execute(const Block& b, std::vector<Command>& out);
   void compensate(const Block& b, std::vector<Command>& out, size_t first, bool go_on);
   void canned_cycle(const Block& b, const Vec4& hole, bool hole_given[3], std::vector<Command>& out,
@@ -393,28 +469,204 @@ struct BlockWords {
 
 }  // namespace
 
+// M72 / M73's restore: the modes as they were saved; coolant switched as M7/M8/M9 would.
+void Interpreter::Impl::restore_state(const ModalState& st, const Block& b, int col,
+                                      const char* what, std::vector<Command>& out) {
+  if ((st.comp_on || comp_on()) &&
+      (st.comp_on != comp_on() || st.comp_side != comp_side || st.comp_radius != comp_radius ||
+       st.plane != plane || st.cs != cs || st.tlo != tlo))
+    throw fail(b, col,
+               fmt::format("{}: the saved modal state differs in cutter radius compensation (or "
+                           "in the plane, work offset or tool length offset under it); G40 before "
+                           "saving and restoring",
+                           what));
+  unit = st.unit;
+  plane = st.plane;
+  absolute = st.absolute;
+  arc_absolute = st.arc_absolute;
+  inverse_time = st.inverse_time;
+  retract_to_r = st.retract_to_r;
+  exact_stop = st.exact_stop;
+  diameter_mode = st.diameter_mode;
+  cs = st.cs;
+  if (tlo != st.tlo) {
+    tlo = st.tlo;
+    pos_tlo = tlo;  // as G43: the machine stays, the program position moves
+  }
+  tolerance = st.tolerance;
+  feed = st.feed;
+  spindle_s = st.spindle_s;
+  spindle_on = st.spindle_on;
+  auto output = [&](Output::Kind kind, double value) {
+    out.emplace_back(Output{kind, 0, value, false, b.line});
+    ++stats.outputs;
+  };
+  if (st.mist && !mist) output(Output::Kind::kMist, 1.0);
+  if (st.flood && !flood) output(Output::Kind::kFlood, 1.0);
+  if (!st.mist && !st.flood && (mist || flood)) {
+    output(Output::Kind::kMist, 0.0);
+    output(Output::Kind::kFlood, 0.0);
+    mist = flood = false;
+  }
+  mist = mist || st.mist;
+  flood = flood || st.flood;
+  write_params();
+}
+
+// A subroutine returned (b is its endsub or return line): the states saved deeper than the
+// caller go, and an M73 state comes back.
+void Interpreter::Impl::leave_depths(const Block& b, std::vector<Command>& out) {
+  while (!saved.empty() && saved.back().depth > call_depth) {
+    const SavedState s = saved.back();
+    saved.pop_back();
+    leave_below = saved.empty() ? -1 : saved.back().depth;
+    if (s.autorestore) restore_state(s.st, b, 1, "M73 (restore on return)", out);
+  }
+}
+
+// A G5 / G5.1 block, whole, in the motion step (docs/gcode.md, "Splines"): the control points
+// in machine mm are P0 the start, P1 = P0 + (I, J); G5: P2 = end + (P, Q); the end. G5 without
+// I J continues the last G5's curve smoothly: (I, J) = -(its P, Q). `letters` are the block's
+// words by letter; the ones it uses are marked in `used`.
+void Interpreter::Impl::spline_block(const Block& b, const Word& g, const Word* const letters[26],
+                                     bool used[26], const Word* polar, std::vector<Command>& out) {
+  const int code = code10(g);
+  const std::string name = gname(code);
+  auto get = [&](char l) { return letters[l - 'A']; };
+  auto word = [&](char l) {
+    used[l - 'A'] = true;
+    return letters[l - 'A'];
+  };
+  if (code == 52 || code == 53)
+    throw fail(
+        b, g.col,
+        fmt::format("{}: NURBS curves are not supported (the G5 and G5.1 splines are)", name));
+  if (rules->dialect != Dialect::kLinuxCnc)
+    throw fail(b, g.col,
+               fmt::format("{}: splines are not supported in the {} dialect (LinuxCNC's G5 and "
+                           "G5.1 are)",
+                           name, rules->name));
+  if (plane != Plane::kXY)
+    throw fail(b, g.col, fmt::format("{}: splines need the XY plane (G17)", name));
+  if (comp_on())
+    throw fail(b, g.col,
+               fmt::format("{}: no spline with cutter radius compensation on (G40 first)", name));
+  for (char l : {'Z', axis_names[3]})
+    if (const Word* aw = get(l))
+      throw fail(b, aw->col, fmt::format("{}: a spline moves X and Y only, not {}", name, l));
+  if (!get('X') && !get('Y'))
+    throw fail(b, g.col, fmt::format("{}: a spline needs X or Y (its end point)", name));
+  if (polar)
+    throw fail(b, polar->col,
+               fmt::format("{}: polar coordinates in a spline are not supported", name));
+  const Word* iw = word('I');
+  const Word* jw = word('J');
+  const Word* pw = code == 50 ? word('P') : nullptr;
+  const Word* qw = code == 50 ? word('Q') : nullptr;
+  const Word* fw = get('F');
+  move_col = g.col;
+  if (!iw != !jw || (code == 51 && !iw))
+    throw fail(b,
+               (iw   ? iw
+                : jw ? jw
+                     : &g)
+                   ->col,
+               fmt::format("{} needs both I and J{}", name, code == 50 ? " (or neither)" : ""));
+  if (code == 50 && (!pw || !qw))
+    throw fail(b, (pw ? pw : qw ? qw : &g)->col, fmt::format("{} needs both P and Q", name));
+  if (inverse_time) {
+    if (!fw || fw->value <= 0)
+      throw fail(b, fw ? fw->col : g.col, "G93 inverse time: each move needs F > 0");
+  } else if (rules->feed_required && !feed_given && !fw) {
+    throw fail(b, g.col,
+               fmt::format("no feed given yet: {} needs F (LinuxCNC starts at F0)", name));
+  } else if (feed <= 0.0) {
+    throw fail(b, g.col, fmt::format("feed is 0: {} needs F > 0", name));
+  }
+  auto mm = [&](const Word* wd) {
+    const double v = wd->value * unit * (diameter_mode && wd->letter == 'X' ? 0.5 : 1.0);
+    if (std::fabs(v) > kMaxValue)
+      throw fail(b, wd->col,
+                 fmt::format("value of '{}' out of range (|value| > 1e6 mm)", wd->letter));
+    return v;
+  };
+  // The end point as any move's (G90/G91, offsets; a tool length offset changed since the last
+  // move shifts every axis).
+  Vec4 t = pos;
+  for (int a = 0; a < offset_axes; ++a) {
+    const auto i = static_cast<size_t>(a);
+    const double shift = tlo[i] - pos_tlo[i];
+    t[i] = pos[i] + shift;
+    if (a > 1) continue;
+    if (const Word* aw = word(axis_names[i])) {
+      const double v = mm(aw);
+      t[i] = absolute ? v + offset(a) : pos[i] + shift + v;
+      if (std::fabs(t[i]) > 1e9) throw fail(b, aw->col, "position out of range");
+    }
+  }
+  SplinePoints cp{};
+  cp.n = code == 50 ? 4 : 3;
+  cp.p[0] = {pos[0], pos[1]};
+  const std::array<double, 2> ij =
+      iw ? std::array<double, 2>{mm(iw), mm(jw)}
+         : std::array<double, 2>{-spline_last_pq[0], -spline_last_pq[1]};
+  cp.p[1] = {pos[0] + ij[0], pos[1] + ij[1]};
+  cp.p[static_cast<size_t>(cp.n - 1)] = {t[0], t[1]};
+  if (code == 50) {
+    spline_last_pq = {mm(pw), mm(qw)};
+    cp.p[2] = {t[0] + spline_last_pq[0], t[1] + spline_last_pq[1]};
+  }
+  const std::vector<std::array<double, 2>> pts = spline_pieces(cp, opt.arc_tolerance_mm);
+  double f = feed * feed_factor;
+  if (inverse_time) {
+    double len = 0.0;
+    for (size_t k = 1; k < pts.size(); ++k)
+      len += std::hypot(pts[k][0] - pts[k - 1][0], pts[k][1] - pts[k - 1][1]);
+    f = len * fw->value * feed_factor;
+    if (f <= 0) f = feed;
+  }
+  for (size_t k = 1; k < pts.size(); ++k) {
+    Vec4 e = t;
+    e[0] = pts[k][0];
+    e[1] = pts[k][1];
+    line_to(out, Motion::kLinear, e, b.line, f);
+  }
+  write_position();
+}
+
 bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   ++stats.lines;
   if (b.block_delete && opt.block_delete) return true;
-  if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
-  if (b.kind == BlockKind::kMacro) {
-    std::string name = b.text.substr(0, b.text.find_first_of(" \t"));
-    warn(fmt::format("extended command '{}' skipped (a Klipper macro: Klipper runs it from its "
-                     "printer.cfg; nothing here moves for it)",
-                     name),
-         b.line);
-    return true;
-  }
-  if (b.kind == BlockKind::kSystem) {
-    const std::string& t = b.text;
-    if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
-      throw fail(b, b.text_col,
-                 "'$H' homing cycle: this controller has no homing yet; home the machine before "
-                 "the job and remove the line");
-    if (t.size() >= 2 && (t[1] == 'J' || t[1] == 'j'))
-      throw fail(b, b.text_col, "'$J=' jogging is not a job command");
-    warn(fmt::format("grbl system line '{}' ignored", t), b.line);
-    return true;
+  if (b.kind != BlockKind::kWords) [[unlikely]] {
+    if (b.kind == BlockKind::kCall) {
+      ++call_depth;
+      return true;
+    }
+    if (b.kind == BlockKind::kReturn) {
+      --call_depth;
+      if (call_depth < leave_below) leave_depths(b, out);
+      return true;
+    }
+    if (b.kind == BlockKind::kPercent || b.kind == BlockKind::kQuery) return true;
+    if (b.kind == BlockKind::kMacro) {
+      std::string name = b.text.substr(0, b.text.find_first_of(" \t"));
+      warn(fmt::format("extended command '{}' skipped (a Klipper macro: Klipper runs it from its "
+                       "printer.cfg; nothing here moves for it)",
+                       name),
+           b.line);
+      return true;
+    }
+    if (b.kind == BlockKind::kSystem) {
+      const std::string& t = b.text;
+      if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
+        throw fail(b, b.text_col,
+                   "'$H' homing cycle: this controller has no homing yet; home the machine before "
+                   "the job and remove the line");
+      if (t.size() >= 2 && (t[1] == 'J' || t[1] == 'j'))
+        throw fail(b, b.text_col, "'$J=' jogging is not a job command");
+      warn(fmt::format("grbl system line '{}' ignored", t), b.line);
+      return true;
+    }
   }
 
   // Classify.
@@ -450,8 +702,6 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           why = "coordinate system rotation is not supported";
         else if (c == 520)
           why = "G52 local offsets are not supported (use G92 or G10 L2)";
-        else if (c == 50 || c == 51 || c == 52 || c == 53)
-          why = "splines are not supported";
         else if (c == 290 || c == 291 || c == 292 || c == 293)
           why = "bed levelling needs a probe (not on this machine yet)";
         throw fail(b, wd.col, fmt::format("{}: {}", gname(c), why));
@@ -629,6 +879,30 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       spindle_on = w.mcodes[k] != 5;
       did = true;
     }
+  // 7b. Saving and restoring the modal state (LinuxCNC's M70-M73), after F, S and the spindle and
+  // before the modes of the line's G codes (units excepted: they are read first here).
+  if (w.mcount > 0 && rules->dialect == Dialect::kLinuxCnc)
+    for (int k = 0; k < w.mcount; ++k) {
+      const int c = w.mcodes[k];
+      if (c < 70 || c > 73) continue;
+      did = true;
+      SavedState* mine =
+          !saved.empty() && saved.back().depth == call_depth ? &saved.back() : nullptr;
+      if (c == 70 || c == 73) {
+        if (!mine) mine = &saved.emplace_back();
+        *mine = SavedState{call_depth, c == 73, modal_state()};
+        leave_below = call_depth;
+      } else if (c == 71) {
+        if (mine) saved.pop_back();
+        leave_below = saved.empty() ? -1 : saved.back().depth;
+      } else {
+        if (!mine)
+          throw fail(b, w.mwords[k]->col,
+                     "M72: no modal state saved at this call level (M70 or M73 first)");
+        const ModalState st = mine->st;
+        restore_state(st, b, w.mwords[k]->col, "M72", out);
+      }
+    }
   // 8. The other M codes, in the order written.
   for (int k = 0; k < w.mcount; ++k) {
     const int c = w.mcodes[k];
@@ -652,13 +926,16 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         throw fail(b, mw.col, "M60 pallet change: this machine has no pallet changer");
       case 7:
         output(Output::Kind::kMist, 0, 1.0, false);
+        mist = true;
         break;
       case 8:
         output(Output::Kind::kFlood, 0, 1.0, false);
+        flood = true;
         break;
       case 9:
         output(Output::Kind::kMist, 0, 0.0, false);
         output(Output::Kind::kFlood, 0, 0.0, false);
+        mist = flood = false;
         break;
       case 48:
       case 49:
@@ -745,9 +1022,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         break;
       }
       case 73: {  // printers: progress; LinuxCNC: save the modal state, restore it on return
-        if (rules->dialect == Dialect::kLinuxCnc)
-          throw fail(b, mw.col,
-                     "M73: saving and restoring the modal state (M70-M73) is not supported");
+        if (rules->dialect == Dialect::kLinuxCnc) break;  // in its own step
         const Word* p = word('P');
         for (char l : {'R', 'Q', 'S', 'C', 'D'}) word(l);
         if (p) out.emplace_back(Message{Message::Kind::kProgress, "", p->value, b.line});
@@ -830,11 +1105,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
           for (char l = 'A'; l <= 'Z'; ++l) word(l);
           break;
         }
-        if (rules->dialect == Dialect::kLinuxCnc && c >= 70 && c <= 72)
-          throw fail(b, mw.col,
-                     fmt::format("M{}: saving and restoring the modal state (M70-M73) is not "
-                                 "supported",
-                                 c));
+        if (rules->dialect == Dialect::kLinuxCnc && c >= 70 && c <= 72) break;  // step 7b
         if (!rules->unknown_m_warns)
           throw fail(b, mw.col,
                      fmt::format("M{}: not supported in the {} dialect", c, rules->name));
@@ -1193,7 +1464,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
 
   // 17. Motion.
   if (const Word* g = gw(1)) {
-    const int c = code10(*g);
+    int c = code10(*g);
     if (c >= 380 && c <= 385)
       throw fail(
           b, g->col,
@@ -1204,6 +1475,11 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
                              "this machine does not have",
                              gname(c)));
     if (c == 330) throw fail(b, g->col, "G33: spindle-synchronised motion needs a spindle encoder");
+    if (c >= 50 && c <= 53) [[unlikely]] {  // G5, G5.1: the whole move here
+      spline_block(b, *g, w.letter, used, polar_r ? polar_r : polar_a, out);
+      has_axis = false;
+      c = kCycleNone;  // no motion mode after a spline (LinuxCNC)
+    }
     if (is_cycle(c) && motion != c) cycle_z_set = false;
     if (!is_cycle(c)) cycle_il_set = false;
     motion = c;

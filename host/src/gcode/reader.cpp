@@ -1109,7 +1109,8 @@ struct Reader::Impl {
         params.pop_frame();
         params.set_named("_value", v);
         params.set_named("_value_returned", has_value ? 1.0 : 0.0);
-        return false;
+        out.kind = BlockKind::kReturn;
+        return true;
       }
       case Kw::kCall: {
         const auto* es = entries(lab);
@@ -1149,7 +1150,8 @@ struct Reader::Impl {
         f.return_line = line0 + 1;
         frames.push_back(std::move(f));
         cur = def->line + 1;
-        return false;
+        out.kind = BlockKind::kCall;
+        return true;
       }
       case Kw::kDo:
         if (!find_after(lab, line0, {Kw::kWhile}, true)) missing("a closing while");

@@ -255,6 +255,7 @@ Plan Planner::finish() {
 gcode::Options gcode_options(const config::MachineConfig& cfg) {
   gcode::Options go;
   go.default_feed_mm_min = cfg.default_feed_mm_min;
+  go.arc_tolerance_mm = cfg.arc_tolerance_mm;
   if (cfg.gcode.dialect != "auto") {
     go.dialect = gcode::parse_dialect(cfg.gcode.dialect);
     go.dialect_source = "configuration [gcode] dialect =";

@@ -632,6 +632,110 @@ void fam_lathe_diameter(Gen& g) {
   g.line("G8");
 }
 
+// G5 cubic and G5.1 quadratic splines (XY): random control offsets, continued G5s without I J,
+// G91 and G20 splines, lines between, under a work offset and G92.
+void fam_splines(Gen& g) {
+  g.line("G21 G90 G17 G0 X0 Y0 Z1");
+  g.line(fmt::format("F{}", g.r.range(100, 2000)));
+  if (g.r.coin())
+    g.line(fmt::format("G10 L2 P1 X{} Y{}", n3(g.r.dec(-20, 20)), n3(g.r.dec(-20, 20))));
+  if (g.r.coin()) g.line(fmt::format("G92 X{}", n3(g.r.dec(-10, 10))));
+  auto xy = [&](int lim) {
+    return fmt::format("X{} Y{}", n3(g.r.dec(-lim, lim)), n3(g.r.dec(-lim, lim)));
+  };
+  auto off = [&](char a, char b, int lim) {
+    return fmt::format("{}{} {}{}", a, n3(g.r.dec(-lim, lim)), b, n3(g.r.dec(-lim, lim)));
+  };
+  for (int i = 0; i < 10; ++i) {
+    switch (g.r.range(0, 5)) {
+      case 0:
+        g.line("G5.1 " + xy(60) + " " + off('I', 'J', 30));
+        break;
+      case 1:
+      case 2:
+        g.line("G5 " + xy(60) + " " + off('I', 'J', 30) + " " + off('P', 'Q', 30));
+        // Continued: without I J, the curve leaves in the last G5's direction (I J = -(P Q)).
+        g.line("G5 " + xy(60) + " " + off('P', 'Q', 30));
+        break;
+      case 3:
+        g.line("G1 " + xy(60));
+        break;
+      case 4:
+        g.line(fmt::format("G20 G5.1 X{} Y{} I{} J{}", n4(g.r.dec(-2, 2, 4)), n4(g.r.dec(-2, 2, 4)),
+                           n4(g.r.dec(-1, 1, 4)), n4(g.r.dec(-1, 1, 4))));
+        g.line("G21");
+        break;
+      default:
+        g.line("G91 G5 " + xy(20) + " " + off('I', 'J', 10) + " " + off('P', 'Q', 10));
+        g.line("G90");
+        break;
+    }
+  }
+  g.line("G92.1");
+  g.line("G10 L2 P1 X0 Y0");
+}
+
+// M70/M71/M72 at the top level and M73 in subroutines (restored on endsub and on return, nested
+// calls): units, distance mode, feed, coordinate system and spindle changed and put back, with
+// moves after each restore.
+void fam_modal_state(Gen& g) {
+  g.line("o<inch> sub");
+  g.line("M73");
+  g.line("G20 G91 F20 S500 M4");
+  g.line("G1 X#1 Y#2");
+  g.line("o<inch-if> if [#3 GT 0]");
+  g.line("o<inch-if> return");
+  g.line("o<inch-if> endif");
+  g.line("G1 X#2");
+  g.line("o<inch> endsub");
+  g.line("o<outer> sub");
+  g.line("M73");
+  g.line("G91 G55");
+  g.line("o<inch> call [#1] [#2] [0]");
+  g.line("G1 X#1 Y#2");
+  g.line("o<outer> endsub");
+  g.line("G21 G90 G54 G0 X0 Y0 Z0");
+  g.line(fmt::format("G10 L2 P2 X{} Y{}", n3(g.r.dec(-30, 30)), n3(g.r.dec(-30, 30))));
+  g.line(fmt::format("F{} S1000 M3", g.r.range(100, 2000)));
+  auto small = [&] { return n4(g.r.dec(-1, 1, 4)); };
+  auto abs_line = [&] {
+    g.line(fmt::format("G1 X{} Y{}", n3(g.r.dec(-50, 50)), n3(g.r.dec(-50, 50))));
+  };
+  for (int i = 0; i < 8; ++i) {
+    switch (g.r.range(0, 4)) {
+      case 0:
+        g.line(fmt::format("o<inch> call [{}] [{}] [{}]", small(), small(), g.r.range(0, 1)));
+        abs_line();
+        break;
+      case 1:
+        g.line("M70");
+        g.line(fmt::format("G20 G91 G56 G1 X{} Y{} F{}", small(), small(), g.r.range(5, 50)));
+        g.line("M72");
+        abs_line();
+        if (g.r.coin()) {
+          g.line("G91 G1 X1");
+          g.line("M72");
+          abs_line();
+        }
+        g.line("M71");
+        break;
+      case 2:
+        g.line(fmt::format("o<outer> call [{}] [{}]", small(), small()));
+        abs_line();
+        break;
+      case 3:
+        // On one line the restore comes before G91 (and after G20): an incremental move in mm.
+        g.line("M70");
+        g.line(fmt::format("G21 G91 M72 G1 X{}", n3(g.r.dec(-5, 5))));
+        g.line("G90 M71");
+        break;
+      default:
+        abs_line();
+        break;
+    }
+  }
+}
+
 using Family = void (*)(Gen&);
 const std::vector<std::pair<std::string, Family>>& families() {
   static const std::vector<std::pair<std::string, Family>> f = {
@@ -656,6 +760,8 @@ const std::vector<std::pair<std::string, Family>>& families() {
       {"mixed", fam_mixed},
       {"cutcomp", fam_cutcomp},
       {"lathe-diameter", fam_lathe_diameter},
+      {"splines", fam_splines},
+      {"modal-state", fam_modal_state},
   };
   return f;
 }

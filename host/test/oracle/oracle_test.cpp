@@ -111,7 +111,7 @@ std::vector<const CanonMove*> oracle_moves(const OracleRun& o) {
     const bool straight = m.kind == CanonMove::Kind::kTraverse || m.kind == CanonMove::Kind::kFeed;
     bool moves = false;
     for (size_t k = 0; k < 3; ++k) moves = moves || std::fabs(m.end[k] - at[k]) > kZeroLength;
-    if (m.kind != CanonMove::Kind::kOther) at = m.end;
+    if (m.kind != CanonMove::Kind::kOther) at = m.end;  // a spline's end: its last point
     if (straight && !moves) continue;
     v.push_back(&m);
   }
@@ -139,21 +139,124 @@ const char* motion_name(gcode::Motion m) {
   return "other motion";
 }
 
+// A spline (rs274's NURBS_FEED) as a rational Bezier curve, sampled densely: a point's distance
+// from the polyline through the samples is its distance from the curve to within
+// max|C''| / (8 kSplineSamples^2) (below 1e-6 mm for the test's curves).
+constexpr int kSplineSamples = 4096;
+// Our pieces of a spline must stay this close to rs274's curve: the machine's arc tolerance (our
+// interpreter's default Options::arc_tolerance_mm) and the comparison's rounding.
+const double kSplineTol = gcode::Options{}.arc_tolerance_mm + kTol;
+
+std::vector<oracle::Xyz> spline_samples(const CanonMove& a) {
+  const size_t n = a.control.size();
+  std::vector<oracle::Xyz> pts;
+  pts.reserve(kSplineSamples + 1);
+  for (int s = 0; s <= kSplineSamples; ++s) {
+    const double t = static_cast<double>(s) / kSplineSamples;
+    oracle::Xyz p{};
+    double den = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+      // Bernstein polynomial of degree n - 1.
+      double bern = 1.0;
+      for (size_t i = 0; i < k; ++i) bern *= t * static_cast<double>(n - 1 - i) / (i + 1.0);
+      bern *= std::pow(1.0 - t, static_cast<double>(n - 1 - k));
+      const double wb = bern * a.weights[k];
+      den += wb;
+      for (size_t c = 0; c < 3; ++c) p[c] += wb * a.control[k][c];
+    }
+    for (size_t c = 0; c < 3; ++c) p[c] /= den;
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+double distance_to_polyline(const std::vector<oracle::Xyz>& pl, const oracle::Xyz& p) {
+  double best = 1e300;
+  for (size_t k = 1; k < pl.size(); ++k) {
+    const oracle::Xyz& a = pl[k - 1];
+    const oracle::Xyz& b = pl[k];
+    double ab2 = 0.0, apab = 0.0;
+    for (size_t c = 0; c < 3; ++c) {
+      ab2 += (b[c] - a[c]) * (b[c] - a[c]);
+      apab += (p[c] - a[c]) * (b[c] - a[c]);
+    }
+    const double t = ab2 > 0 ? std::clamp(apab / ab2, 0.0, 1.0) : 0.0;
+    double d2 = 0.0;
+    for (size_t c = 0; c < 3; ++c) {
+      const double q = a[c] + t * (b[c] - a[c]) - p[c];
+      d2 += q * q;
+    }
+    best = std::min(best, d2);
+  }
+  return std::sqrt(best);
+}
+
+// Our straight pieces of one rs274 spline: from `j` on, the moves of the spline's source line up
+// to the first that ends at the spline's end. Compared by the start, the end (kTol) and the
+// largest distance of the pieces' ends and midpoints from rs274's curve (kSplineTol).
+std::vector<std::string> compare_spline(const CanonMove& a,
+                                        const std::vector<const gcode::Move*>& mv, size_t& j) {
+  std::vector<std::string> why;
+  const size_t first = j;
+  auto end_of = [](const gcode::Move& m) { return oracle::Xyz{m.end[0], m.end[1], m.end[2]}; };
+  auto dist = [](const oracle::Xyz& p, const oracle::Xyz& q) {
+    return std::max({std::fabs(p[0] - q[0]), std::fabs(p[1] - q[1]), std::fabs(p[2] - q[2])});
+  };
+  while (j < mv.size() && mv[j]->line == a.line) {
+    const bool done = dist(end_of(*mv[j]), a.end) <= kTol;
+    ++j;
+    if (done) break;
+  }
+  if (j == first) {
+    why.push_back("ours makes no move for rs274's spline");
+    return why;
+  }
+  const oracle::Xyz start{mv[first]->start[0], mv[first]->start[1], mv[first]->start[2]};
+  if (dist(start, a.control.front()) > kTol)
+    why.push_back(fmt::format("spline start rs274 {} ours {}", xyz(a.control.front()), xyz(start)));
+  if (dist(end_of(*mv[j - 1]), a.end) > kTol)
+    why.push_back(fmt::format("spline end rs274 {} ours {}", xyz(a.end), xyz(end_of(*mv[j - 1]))));
+  const auto curve = spline_samples(a);
+  double worst = 0.0;
+  for (size_t k = first; k < j; ++k) {
+    if (mv[k]->motion != gcode::Motion::kLinear)
+      why.push_back(fmt::format("spline piece {} is {}", k - first, motion_name(mv[k]->motion)));
+    const oracle::Xyz e = end_of(*mv[k]);
+    oracle::Xyz mid{};
+    for (size_t c = 0; c < 3; ++c) mid[c] = 0.5 * (mv[k]->start[c] + e[c]);
+    worst = std::max({worst, distance_to_polyline(curve, e), distance_to_polyline(curve, mid)});
+  }
+  if (worst > kSplineTol)
+    why.push_back(fmt::format("our {} pieces leave rs274's spline by {:.3g} mm (> {:.3g})",
+                              j - first, worst, kSplineTol));
+  return why;
+}
+
 // Every way the two runs of one accepted program differ; empty when they agree. Moves are
 // matched one to one in order: STRAIGHT_TRAVERSE with a rapid, STRAIGHT_FEED with a linear
-// move, ARC_FEED with an arc of the same direction (rotation > 0: G3, counter-clockwise).
+// move, ARC_FEED with an arc of the same direction (rotation > 0: G3, counter-clockwise); a
+// spline (NURBS_FEED) with our straight pieces of its line (compare_spline).
 std::vector<std::string> compare(const std::string& name, const OracleRun& o,
                                  const gcode::Program& ours) {
   std::vector<std::string> d;
   const auto mv = our_moves(ours);
   const auto om = oracle_moves(o);
-  if (mv.size() != om.size()) {
-    d.push_back(fmt::format("{}: rs274 makes {} moves, ours {}", name, om.size(), mv.size()));
-  }
-  const size_t n = std::min(mv.size(), om.size());
-  for (size_t i = 0; i < n; ++i) {
+  size_t i = 0, j = 0;
+  for (; i < om.size() && j < mv.size(); ++i) {
     const CanonMove& a = *om[i];
-    const gcode::Move& b = *mv[i];
+    const gcode::Move& b = *mv[j];
+    if (a.kind == CanonMove::Kind::kSpline) {
+      const size_t first = j;
+      const auto why = compare_spline(a, mv, j);
+      if (!why.empty()) {
+        std::string all;
+        for (const auto& w : why) all += (all.empty() ? "" : "; ") + w;
+        d.push_back(fmt::format("{}:{}: spline {} (our moves {}..{}): {}  [rs274: {}]", name,
+                                a.line, i, first, j, all, a.text));
+      }
+      continue;
+    }
+    ++j;
     const oracle::Xyz be{b.end[0], b.end[1], b.end[2]};
     std::vector<std::string> why;
     bool kind_ok = false;
@@ -168,6 +271,7 @@ std::vector<std::string> compare(const std::string& name, const OracleRun& o,
         kind_ok = (a.rotation > 0 && b.motion == gcode::Motion::kArcCcw) ||
                   (a.rotation < 0 && b.motion == gcode::Motion::kArcCw);
         break;
+      case CanonMove::Kind::kSpline:
       case CanonMove::Kind::kOther:
         break;
     }
@@ -208,13 +312,17 @@ std::vector<std::string> compare(const std::string& name, const OracleRun& o,
       d.push_back(fmt::format("{}:{}: move {}: {}  [rs274: {}]", name, b.line, i, all, a.text));
     }
   }
-  if (om.size() > n) {
-    const CanonMove& a = *om[n];
+  if (i < om.size() || j < mv.size()) {
+    d.push_back(fmt::format("{}: rs274 makes {} moves, ours {} (matched {} and {})", name,
+                            om.size(), mv.size(), i, j));
+  }
+  if (i < om.size()) {
+    const CanonMove& a = *om[i];
     d.push_back(fmt::format("{}:{}: move {}: only rs274 makes it: {} to {}  [rs274: {}]", name,
-                            a.line, n, a.name, xyz(a.end), a.text));
-  } else if (mv.size() > n) {
-    const gcode::Move& b = *mv[n];
-    d.push_back(fmt::format("{}:{}: move {}: only ours makes it: {} to {}", name, b.line, n,
+                            a.line, i, a.name, xyz(a.end), a.text));
+  } else if (j < mv.size()) {
+    const gcode::Move& b = *mv[j];
+    d.push_back(fmt::format("{}:{}: move {}: only ours makes it: {} to {}", name, b.line, j,
                             motion_name(b.motion), xyz({b.end[0], b.end[1], b.end[2]})));
   }
   const auto dw = our_dwells(ours);
@@ -476,6 +584,31 @@ TEST(Oracle, ComparisonCatchesDifferences) {
   const auto d2 = compare("t", o, fewer);
   ASSERT_EQ(d2.size(), 2u);
   EXPECT_NE(d2[1].find("t:3: move 1: only rs274 makes it"), std::string::npos) << d2[1];
+}
+
+// A spline: rs274's control points (as the precision library prints them) against our pieces.
+// The quadratic (0,0) (5,5) (10,0) peaks at (5, 2.5): a straight line on its line is 2.5 mm off.
+TEST(Oracle, ComparisonOfSplines) {
+  OracleRun o;
+  oracle::parse_canon("    1 L2 N..... NURBS_FEED(3, 0, 0, 1, 5, 5, 1, 10, 0, 1)\n", o);
+  ASSERT_EQ(o.moves.size(), 1u);
+  EXPECT_EQ(o.moves[0].kind, CanonMove::Kind::kSpline);
+  ASSERT_EQ(o.moves[0].control.size(), 3u);
+  EXPECT_EQ(o.moves[0].end, (oracle::Xyz{10, 0, 0}));
+  const auto ours = gcode::parse_string("F100\nG5.1 X10 Y0 I5 J5\n", "t", our_options());
+  EXPECT_GT(our_moves(ours).size(), 10u);
+  EXPECT_TRUE(compare("t", o, ours).empty());
+  const auto straight = gcode::parse_string("F100\nG1 X10 Y0\n", "t", our_options());
+  const auto d1 = compare("t", o, straight);
+  ASSERT_EQ(d1.size(), 1u);
+  EXPECT_NE(d1[0].find("leave rs274's spline by 2.5 mm"), std::string::npos) << d1[0];
+  const auto other_end = gcode::parse_string("F100\nG5.1 X10 Y0.001 I5 J5\n", "t", our_options());
+  EXPECT_FALSE(compare("t", o, other_end).empty());
+  // Without the library's points the line is still read, as a move nothing of ours equals.
+  OracleRun plain;
+  oracle::parse_canon("    1 L2 N..... NURBS_FEED(3, ...)\n", plain);
+  ASSERT_EQ(plain.moves.size(), 1u);
+  EXPECT_EQ(plain.moves[0].kind, CanonMove::Kind::kOther);
 }
 
 // Every program through both interpreters; a summary table; the ratchet.

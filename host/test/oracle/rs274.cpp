@@ -214,6 +214,29 @@ void parse_canon(std::string_view out, OracleRun& run) {
       m.line = src;
       m.text = line;
       run.moves.push_back(std::move(m));
+    } else if (name == "NURBS_FEED" && args.find("...") == std::string_view::npos) {
+      // NURBS_FEED(n, x0, y0, w0, ..., x(n-1), y(n-1), w(n-1)) in the XY plane.
+      const auto v = nums();
+      need(v, 1);
+      const auto n = static_cast<size_t>(v[0]);
+      if (v[0] < 2 || v.size() != 1 + 3 * n)
+        throw std::runtime_error("rs274 output: NURBS_FEED with a wrong count: " + line);
+      CanonMove m;
+      m.kind = CanonMove::Kind::kSpline;
+      m.name = name;
+      // Z stays where the last move left it (machine mm: `last` may be in other units).
+      const double z = run.moves.empty() ? 0.0 : run.moves.back().end[2];
+      for (size_t k = 0; k < n; ++k) {
+        Xyz p = f.machine({v[1 + 3 * k], v[2 + 3 * k], 0.0});
+        p[2] = z;
+        m.control.push_back(p);
+        m.weights.push_back(v[3 + 3 * k]);
+      }
+      last = {v[1 + 3 * (n - 1)], v[2 + 3 * (n - 1)], last[2]};
+      m.end = m.control.back();
+      m.line = src;
+      m.text = line;
+      run.moves.push_back(std::move(m));
     } else if (name == "STRAIGHT_PROBE" || name == "RIGID_TAP" || name == "NURBS_FEED" ||
                name == "SPLINE_FEED" || name == "NURBS_G5_FEED" || name == "NURBS_G6_FEED") {
       // Motion our Move cannot express (yet): counted as a move, never equal to one of ours.

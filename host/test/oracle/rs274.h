@@ -15,7 +15,7 @@ using Xyz = std::array<double, 3>;
 enum class Plane { kXY, kYZ, kXZ };
 
 struct CanonMove {
-  enum class Kind { kTraverse, kFeed, kArc, kOther };
+  enum class Kind { kTraverse, kFeed, kArc, kSpline, kOther };
   Kind kind = Kind::kTraverse;
   std::string name;  // canonical command, e.g. STRAIGHT_TRAVERSE, ARC_FEED, STRAIGHT_PROBE
   Xyz end{};         // machine mm: work offset, G92 offset, XY rotation and tool length applied
@@ -24,6 +24,11 @@ struct CanonMove {
   int rotation = 0;  // arcs: > 0 counter-clockwise (G3), < 0 clockwise (G2); |rotation| turns
   int line = 0;      // source line of the block that produced it (1-based)
   std::string text;  // the printed command
+  // kSpline (NURBS_FEED as the precision library prints it): the control points in machine mm
+  // (Z of the position before) and their weights; the curve is the rational Bezier curve of
+  // those points (rs274 gives G5 four points, G5.1 three, with the order equal to the count).
+  std::vector<Xyz> control;
+  std::vector<double> weights;
 };
 
 struct CanonDwell {

@@ -35,6 +35,8 @@ enum class BlockKind : uint8_t {
   kQuery,    // a grbl '?' line; only when Syntax::dollar_lines
   kMacro,    // an extended command line ("START_PRINT", "EXCLUDE_OBJECT_DEFINE NAME=..."):
              // Klipper's, written by slicers; only when Syntax::macro_lines (`text` holds it)
+  kCall,     // an O-word call line (rs274ngc): the subroutine's lines follow (no words)
+  kReturn,   // an endsub or return line: the caller's lines follow (no words); M73 relies on it
 };
 
 // A message for the operator: (MSG,...), (DEBUG,...), (PRINT,...) comments (rs274ngc) and the

@@ -127,6 +127,9 @@ struct Options {
   double retract_zlift_mm = 0.0;
   double recover_extra_mm = 0.0;
   double recover_feed_mm_min = 2100.0;
+  // Splines (G5, G5.1) run as straight pieces within this distance of the curve (mm): the
+  // machine's arc_tolerance_mm.
+  double arc_tolerance_mm = 0.01;
 };
 
 // A warning kept in the statistics: once per kind, with its count and first line.

@@ -55,7 +55,8 @@ class Reader {
 
   // Next block in execution order; false at the end of the program text. Every line that runs
   // gives one Block (blank and comment-only lines too, with no words), except O-word lines,
-  // which the reader executes itself (a lone program number 'O1000' gives an empty Block); a
+  // which the reader executes itself (a lone program number 'O1000' gives an empty Block, a call
+  // a BlockKind::kCall Block and an endsub or return a BlockKind::kReturn one); a
   // line run again by a loop or call gives a Block again. Throws Error
   // ("FILE:LINE:COL: error: ...") for anything malformed: the error names the column of the
   // offending character, word or expression and says why.
