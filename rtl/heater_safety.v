@@ -51,30 +51,34 @@ module heater_safety (
   reg [15:0] wtimer_reg, rtimer_reg;
   reg arm_pend_reg;
 
-  wire signed [17:0] t18 = {{2{temp[15]}}, temp};
-  wire signed [17:0] s18 = {{2{setpoint[15]}}, setpoint};
-  wire signed [17:0] b18 = {2'd0, band};
-  wire signed [17:0] r18 = {{2{ref_reg[15]}}, ref_reg};
-  wire signed [17:0] w18 = {2'd0, wrise};
-  wire above_band = (t18 > s18 + b18);  // temp > set + band
-  wire below_band = (t18 < s18 - b18);  // temp < set - band
-  wire [15:0] wtimer_next = wtimer_reg + 16'd1;
-  wire [15:0] rtimer_next = rtimer_reg + 16'd1;
-
-  reg [3:0] found;
-  always @(*) begin
+  // The band compares, timers' next values and the faults found are block-local regs formed
+  // only in an eval clock (the only clocks that use them): the same logic as continuous
+  // assignments, and a simulator evaluates them only on the sample tick.
+  always @(posedge clk) begin : seq
+    reg signed [17:0] t18, s18, b18, r18, w18;
+    reg above_band, below_band;
+    reg [15:0] wtimer_next, rtimer_next;
+    reg [3:0] found;
     found = 4'd0;
-    if (eval && enable) begin
-      found[0] = (temp < tmin);
-      found[1] = (temp > tmax);
-      found[2] = !arm_pend_reg && (q_reg == Q_HOLD) && (above_band || below_band) && (rperiod != 16'd0) &&
-                 (rtimer_next >= rperiod);
-      found[3] = !arm_pend_reg && (q_reg == Q_WATCH) && below_band && (t18 < r18 + w18) && (wperiod != 16'd0) &&
-                 (wtimer_next >= wperiod);
+    if (eval) begin
+      t18         = {{2{temp[15]}}, temp};
+      s18         = {{2{setpoint[15]}}, setpoint};
+      b18         = {2'd0, band};
+      r18         = {{2{ref_reg[15]}}, ref_reg};
+      w18         = {2'd0, wrise};
+      above_band  = (t18 > s18 + b18);  // temp > set + band
+      below_band  = (t18 < s18 - b18);  // temp < set - band
+      wtimer_next = wtimer_reg + 16'd1;
+      rtimer_next = rtimer_reg + 16'd1;
+      if (enable) begin
+        found[0] = (temp < tmin);
+        found[1] = (temp > tmax);
+        found[2] = !arm_pend_reg && (q_reg == Q_HOLD) && (above_band || below_band) &&
+                   (rperiod != 16'd0) && (rtimer_next >= rperiod);
+        found[3] = !arm_pend_reg && (q_reg == Q_WATCH) && below_band && (t18 < r18 + w18) &&
+                   (wperiod != 16'd0) && (wtimer_next >= wperiod);
+      end
     end
-  end
-
-  always @(posedge clk) begin
     if (!enable) begin
       q_reg        <= Q_IDLE;
       wtimer_reg   <= 16'd0;
