@@ -50,7 +50,8 @@
 //               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
 //               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
 //               from its registers. A v1 packet completing while m_axis_tready is low is dropped
-//               (v1_overrun strobe); a v2 FIFO frame is answered NAK FIFO_FULL.
+//               (v1_overrun strobe); a v2 FIFO frame is answered NAK FIFO_FULL. m_axis_tdata is
+//               defined in CHECK clocks only (don't-care, x, in any other clock).
 //   The strobes below are registered: high for the clock after the CHECK edge (after the byte
 //   edge for noise, after the LEN edge for BAD_LENGTH at once, after the watchdog edge for
 //   timeout).
