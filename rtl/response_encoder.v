@@ -107,45 +107,44 @@ module response_encoder #(
   wire [15:0] crc;
   wire take = tvalid_reg && m_axis_tready;
 
+  // ---------------------------------------------------------------- frame images
+  reg [32*N_AXES-1:0] pos_be;  // axis 0 first (most significant)
+  integer a;
+  always @(*)
+    for (a = 0; a < N_AXES; a = a + 1) pos_be[32*(N_AXES-1-a)+:32] = position[32*a+:32];
+
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [8*(3+STATUS_BASE)+127:0] img_status_full = {SLEN8, dseq_reg, 8'h83, state, faults,
+                                                   fifo_level, next_seq, segments_done, pos_be,
+                                                   counters, heat_status};
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [8*(3+STATUS_LEN)-1:0] img_status = img_status_full[8*(3+STATUS_BASE)+127-:8*(3+STATUS_LEN)];
+  wire [8*21-1:0] img_ident = {8'd18, dseq_reg, 8'h84, 8'd2, NAX8, DEPTH16, CLK32, BAUD32,
+                               BUILD32, next_seq, MAXP8};
+  wire [8*8-1:0] img_nak = {8'd5, dseq_reg, 8'h81, nak_seq_reg, nak_reason_reg, next_seq,
+                            fifo_free};
+  wire [8*3-1:0] img_ack_hdr = {8'd7, dseq_reg, ack_p_reg ? 8'h80 : 8'h82};
+  wire [8*10-1:0] img_ack = {img_ack_hdr, next_seq, fifo_free, segments_done};
+
   wire any_p = ident_p_reg || status_p_reg || nak_p_reg || ack_p_reg || done_p_reg;
   wire start = (st_reg == E_IDLE) && !tvalid_reg && (aa_cnt_reg == 8'd0) && any_p;
-  wire [6:0] img_bytes = ident_p_reg ? 7'd21 : status_p_reg ? 7'd3 + SLEN8[6:0] :
-                         nak_p_reg ? 7'd8 : 7'd10;
 
-  // ---------------------------------------------------------------- frame image and shifter
-  // The image of the frame that starts (highest pending first: IDENT, STATUS, NAK, ACK / DONE),
-  // LEN first in the top byte, is formed in block-local regs on the start edge only and loaded
-  // into sh_reg, which then shifts one byte per byte sent (its own block, one assignment: a
-  // simulator updates it in place and skips it between bytes).
-  always @(posedge clk) begin : shifter
-    reg [32*N_AXES-1:0] pos_be;  // axis 0 first (most significant)
-    /* verilator lint_off UNUSEDSIGNAL */
-    reg [8*(3+STATUS_BASE)+127:0] img_status_full;
-    /* verilator lint_on UNUSEDSIGNAL */
-    reg [SHW-1:0] img;
-    integer a;
-    if (rst) begin
-      sh_reg <= {SHW{1'b0}};
-    end else if (start) begin
-      img = {SHW{1'b0}};
-      if (ident_p_reg) begin
-        img[SHW-1-:8*21] = {8'd18, dseq_reg, 8'h84, 8'd2, NAX8, DEPTH16, CLK32, BAUD32, BUILD32,
-                            next_seq, MAXP8};
-      end else if (status_p_reg) begin
-        for (a = 0; a < N_AXES; a = a + 1) pos_be[32*(N_AXES-1-a)+:32] = position[32*a+:32];
-        img_status_full = {SLEN8, dseq_reg, 8'h83, state, faults, fifo_level, next_seq,
-                           segments_done, pos_be, counters, heat_status};
-        img[SHW-1-:8*(3+STATUS_LEN)] = img_status_full[8*(3+STATUS_BASE)+127-:8*(3+STATUS_LEN)];
-      end else if (nak_p_reg) begin
-        img[SHW-1-:8*8] = {8'd5, dseq_reg, 8'h81, nak_seq_reg, nak_reason_reg, next_seq,
-                           fifo_free};
-      end else begin
-        img[SHW-1-:8*10] = {8'd7, dseq_reg, ack_p_reg ? 8'h80 : 8'h82, next_seq, fifo_free,
-                            segments_done};
-      end
-      sh_reg <= img;
-    end else if (take && (st_reg == E_SYNC || (st_reg == E_BODY && body_cnt_reg != 7'd1))) begin
-      sh_reg <= {sh_reg[SHW-9:0], 8'h00};
+  reg [SHW-1:0] img;
+  reg [6:0] img_bytes;
+  always @(*) begin
+    img = {SHW{1'b0}};
+    if (ident_p_reg) begin
+      img[SHW-1-:8*21] = img_ident;
+      img_bytes = 7'd21;
+    end else if (status_p_reg) begin
+      img[SHW-1-:8*(3+STATUS_LEN)] = img_status;
+      img_bytes = 7'd3 + SLEN8[6:0];
+    end else if (nak_p_reg) begin
+      img[SHW-1-:8*8] = img_nak;
+      img_bytes = 7'd8;
+    end else begin
+      img[SHW-1-:8*10] = img_ack;
+      img_bytes = 7'd10;
     end
   end
 
@@ -186,6 +185,7 @@ module response_encoder #(
           tvalid_reg <= 1'b1;
           tdata_reg  <= 8'hAA;
         end else if (start) begin
+          sh_reg       <= img;
           body_cnt_reg <= img_bytes;
           st_reg       <= E_SYNC;
           tvalid_reg   <= 1'b1;
@@ -196,6 +196,7 @@ module response_encoder #(
         if (take) begin
           st_reg    <= E_BODY;
           tdata_reg <= sh_reg[SHW-1-:8];
+          sh_reg    <= {sh_reg[SHW-9:0], 8'h00};
         end
       end
       E_BODY: begin
@@ -206,6 +207,7 @@ module response_encoder #(
             tvalid_reg <= 1'b0;  // the CRC of the last byte is ready on the next edge
           end else begin
             tdata_reg <= sh_reg[SHW-1-:8];
+            sh_reg    <= {sh_reg[SHW-9:0], 8'h00};
           end
         end
       end
@@ -229,6 +231,7 @@ module response_encoder #(
 
     if (rst) begin
       st_reg         <= E_IDLE;
+      sh_reg         <= {SHW{1'b0}};
       body_cnt_reg   <= 7'd0;
       dseq_reg       <= 8'd0;
       aa_cnt_reg     <= 8'd0;
