@@ -25,24 +25,20 @@ module crc16_ccitt (
 
   reg [15:0] crc_reg;
 
-  function [15:0] crc_byte;
-    input [15:0] c;
-    input [7:0] d;
-    integer i;
+  // The byte update is formed in block-local regs inside the en branch (the same logic as a
+  // function call there; a simulator evaluates it only on the clocks a byte is taken).
+  always @(posedge clk) begin : upd
     reg [15:0] x;
-    begin
-      x = c ^ {d, 8'h00};
+    integer i;
+    if (rst) begin
+      crc_reg <= 16'hFFFF;
+    end else if (en) begin
+      x = (init ? 16'hFFFF : crc_reg) ^ {data, 8'h00};
       for (i = 0; i < 8; i = i + 1) x = x[15] ? ({x[14:0], 1'b0} ^ 16'h1021) : {x[14:0], 1'b0};
-      crc_byte = x;
+      crc_reg <= x;
+    end else if (init) begin
+      crc_reg <= 16'hFFFF;
     end
-  endfunction
-
-  wire [15:0] base = init ? 16'hFFFF : crc_reg;
-
-  always @(posedge clk) begin
-    if (en) crc_reg <= crc_byte(base, data);
-    else crc_reg <= base;
-    if (rst) crc_reg <= 16'hFFFF;
   end
 
   assign crc = crc_reg;

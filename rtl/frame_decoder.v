@@ -50,7 +50,8 @@
 //               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
 //               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
 //               from its registers. A v1 packet completing while m_axis_tready is low is dropped
-//               (v1_overrun strobe); a v2 FIFO frame is answered NAK FIFO_FULL.
+//               (v1_overrun strobe); a v2 FIFO frame is answered NAK FIFO_FULL. m_axis_tdata is
+//               defined in CHECK clocks only (don't-care, x, in any other clock).
 //   The strobes below are registered: high for the clock after the CHECK edge (after the byte
 //   edge for noise, after the LEN edge for BAD_LENGTH at once, after the watchdog edge for
 //   timeout).
@@ -203,9 +204,8 @@ module frame_decoder #(
   );
 
   // ---------------------------------------------------------------- payload fields
-  // Payload byte i and the big-endian 32-bit field at byte i. They read pay_reg directly rather
-  // than take it as an argument: the same logic, and a simulator need not copy the whole payload
-  // register for every field.
+  // Payload byte i (reads pay_reg directly: a simulator need not copy the whole payload register
+  // for every field).
   function [7:0] pb;
     input integer i;
     begin
@@ -213,134 +213,16 @@ module frame_decoder #(
     end
   endfunction
 
-  function [31:0] be32;
-    input integer i;
-    begin
-      be32 = {pay_reg[8*i+:8], pay_reg[8*(i+1)+:8], pay_reg[8*(i+2)+:8], pay_reg[8*(i+3)+:8]};
-    end
-  endfunction
-
-  wire [7:0] flags = pb(0);
-  wire       short_steps = flags[7];
+  wire       short_steps = pay_reg[7];  // flag bit 7: int16 step fields
   wire [7:0] len_m6 = len_reg - 8'd6;
   wire       line_len_ok = (len_reg >= `FPGACNC_LEN_LINE_HEADER) &&
                            (short_steps ? (len_m6[0] == 1'b0 && {1'b0, len_m6[7:1]} <= NAX8)
                                         : (len_m6[1:0] == 2'b00 && {2'b00, len_m6[7:2]} <= NAX8));
-
-  reg [32*N_AXES-1:0] line_steps;
-  integer a;
-  always @(*) begin
-    line_steps = {32 * N_AXES{1'b0}};
-    for (a = 0; a < N_AXES; a = a + 1) begin
-      if (short_steps) begin
-        if ({1'b0, len_reg} >= 9'd8 + 9'd2 * a[8:0])
-          line_steps[32*a+:32] = {{16{pay_reg[8*(6+2*a)+7]}}, pay_reg[8*(6+2*a)+:8],
-                                  pay_reg[8*(7+2*a)+:8]};
-      end else begin
-        if ({1'b0, len_reg} >= 9'd10 + 9'd4 * a[8:0]) line_steps[32*a+:32] = be32(6 + 4 * a);
-      end
-    end
-  end
-
   // LINE_PROFILE: the same step fields from byte 28
   wire [7:0] len_m28 = len_reg - 8'd28;
   wire       prof_len_ok = (len_reg >= `FPGACNC_LEN_LINE_PROFILE_HEADER) &&
                            (short_steps ? (len_m28[0] == 1'b0 && {1'b0, len_m28[7:1]} <= NAX8)
                                         : (len_m28[1:0] == 2'b00 && {2'b00, len_m28[7:2]} <= NAX8));
-  reg [32*N_AXES-1:0] prof_steps;
-  always @(*) begin
-    prof_steps = {32 * N_AXES{1'b0}};
-    for (a = 0; a < N_AXES; a = a + 1) begin
-      if (short_steps) begin
-        if ({1'b0, len_reg} >= 9'd30 + 9'd2 * a[8:0])
-          prof_steps[32*a+:32] = {{16{pay_reg[8*(28+2*a)+7]}}, pay_reg[8*(28+2*a)+:8],
-                                  pay_reg[8*(29+2*a)+:8]};
-      end else begin
-        if ({1'b0, len_reg} >= 9'd32 + 9'd4 * a[8:0]) prof_steps[32*a+:32] = be32(28 + 4 * a);
-      end
-    end
-  end
-  wire [47:0] p_ve = {pb(2), pb(3), be32(4)};
-  wire [47:0] p_vc = {pb(8), pb(9), be32(10)};
-  wire [47:0] p_vx = {pb(14), pb(15), be32(16)};
-  wire [31:0] p_a = be32(20);
-  wire [31:0] p_d = be32(24);
-  // every axis |steps| < 2^24 and at least one axis moves
-  reg prof_range_ok, prof_moves;
-  always @(*) begin
-    prof_range_ok = 1'b1;
-    prof_moves    = 1'b0;
-    for (a = 0; a < N_AXES; a = a + 1) begin
-      if (!(prof_steps[32*a+24+:8] == 8'h00 ||
-            (prof_steps[32*a+24+:8] == 8'hFF && prof_steps[32*a+:24] != 24'd0)))
-        prof_range_ok = 1'b0;
-      if (prof_steps[32*a+:32] != 32'd0) prof_moves = 1'b1;
-    end
-  end
-  wire prof_field_ok = (flags[6:2] == 5'd0) && prof_range_ok && prof_moves && !p_vc[47] &&
-                       (p_ve <= p_vc) && (p_vx <= p_vc) && (p_vx != 48'd0) &&
-                       (p_a != 32'd0 || p_ve != 48'd0);
-
-  // ARC (63 bytes): payload bytes 2..62 go to the entry as they are (big-endian, byte 2 first);
-  // segment_prep takes the fields apart. Field rules of docs/protocol.md (BAD_FIELD otherwise).
-  reg [487:0] arc_raw;
-  integer b;
-  always @(*) begin
-    for (b = 0; b < 61; b = b + 1) arc_raw[8*(60-b)+:8] = pay_reg[8*(b+2)+:8];
-  end
-  wire signed [24:0] arc_i = {arc_raw[487], arc_raw[487:464]};
-  wire signed [24:0] arc_j = {arc_raw[463], arc_raw[463:440]};
-  wire signed [24:0] arc_dx = {arc_raw[439], arc_raw[439:416]};
-  wire signed [24:0] arc_dy = {arc_raw[415], arc_raw[415:392]};
-  wire [31:0] arc_dz = arc_raw[391:360];
-  wire [23:0] arc_nramp = arc_raw[359:336];
-  wire [47:0] arc_ctot = arc_raw[335:288];
-  wire [63:0] arc_ve = arc_raw[287:224];
-  wire [63:0] arc_vc = arc_raw[223:160];
-  wire [63:0] arc_vx = arc_raw[159:96];
-  wire [47:0] arc_a = arc_raw[95:48];
-  wire signed [24:0] arc_x1 = arc_dx - arc_i;  // end relative to the centre
-  wire signed [24:0] arc_y1 = arc_dy - arc_j;
-  // |v| < 2^22 for a 25-bit v (the start, -I / -J, has the same magnitudes as I / J)
-  function c22_ok;
-    input [24:0] v;
-    begin
-      c22_ok = (v[24:22] == 3'b000) || (v[24:22] == 3'b111 && v[21:0] != 22'd0);
-    end
-  endfunction
-  // flags: bits 1:0 code (2 / 3), bits 3:2 the plane (0 XY, 1 ZX, 2 YZ; ZX and YZ need Z: 3 axes)
-  wire arc_field_ok = (flags[7:4] == 4'd0) && (flags[3:2] != 2'd3) &&
-                      (flags[3:2] == 2'd0 || N_AXES >= 3) && flags[1] &&
-                      (arc_i != 25'sd0 || arc_j != 25'sd0) && (arc_x1 != 25'sd0 || arc_y1 != 25'sd0) &&
-                      c22_ok(arc_i) && c22_ok(arc_j) && c22_ok(arc_x1) && c22_ok(arc_y1) &&
-                      (arc_dz != 32'h8000_0000) && (N_AXES >= 3 || arc_dz == 32'd0) &&
-                      (arc_nramp != 24'd0) && (arc_ctot != 48'd0) && (arc_ctot[47:46] == 2'b00) &&
-                      !arc_vc[63] && (arc_ve <= arc_vc) && (arc_vx <= arc_vc) && (arc_vx != 64'd0) &&
-                      (arc_a != 48'd0 || arc_ve != 64'd0);
-
-  wire [32*N_AXES-1:0] two_steps = {{32 * (N_AXES - 2) {1'b0}}, be32(4), be32(0)};
-
-  // v1 packet
-  wire [BASE_W-1:0] e_v1_motion = {1'b0, 2'd0, code_reg, 8'hFF, 16'd0, pb(8),
-                                    pb(9), two_steps};
-  wire [BASE_W-1:0] e_v1_init = {1'b0, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
-  // v2 frames
-  wire [BASE_W-1:0] e_line = {1'b1, 2'd0, flags[1:0], pb(1), be32(2), line_steps};
-  wire [BASE_W-1:0] e_dwell = {1'b1, 2'd2, 2'd0, 8'd0, be32(0), {32 * N_AXES{1'b0}}};
-  wire [BASE_W-1:0] e_num = {1'b1, 2'd1, 2'd0, 8'd0, 32'd0, two_steps};
-  // OUTPUT fields: payload bytes 0..2
-  wire [7:0] out_mask = pb(0);
-  wire [7:0] out_val = pb(1);
-  wire [7:0] out_duty = pb(2);
-  // OUTPUT: kind 3 with v2 0 (kind 3 with v2 1 is segment_prep's zero-length entry), t = bytes 0..2
-  wire [BASE_W-1:0] e_out = {1'b0, 2'd3, 2'd0, 8'd0, 8'd0, out_mask, out_val, out_duty,
-                             {32 * N_AXES{1'b0}}};
-  // ARC: kind 0, v2 1, prof 0, code = flags[1:0] (2 or 3), power, t = the plane (flags[3:2]); the
-  // arc fields above the profile
-  wire [ENTRY_W-1:0] e_arc = {arc_raw, 1'b1, {(PROF_W - BASE_W) {1'b0}}, 1'b1, 2'd0, flags[1:0],
-                              pb(1), 30'd0, flags[3:2], {32 * N_AXES{1'b0}}};
-  wire [PROF_W-1:0] e_lprof = {p_d, p_vx, p_vc, p_ve, 1'b1, 1'b1, 2'd0, flags[1:0], pb(1),
-                                p_a, prof_steps};
 
   // ---------------------------------------------------------------- CHECK
   wire t_hello = (type_reg == T_HELLO);
@@ -364,24 +246,10 @@ module frame_decoder #(
                       len_reg <= `FPGACNC_LEN_THERMISTOR_TABLE_MAX && !len_reg[0]) ||
                      (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
                      (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
-  wire [15:0] h_umax = {pb(14), pb(15)};
-  wire [15:0] h_manual = {pb(18), pb(19)};
-  wire signed [15:0] h_tmin = {pb(1), pb(2)};
-  wire signed [15:0] h_tmax = {pb(3), pb(4)};
-  wire [7:0] h_tab_end = pb(1) + {1'b0, len_reg[7:1]} - 8'd1;  // first + (LEN - 2) / 2
-  wire heat_field_ok = (pb(0) <= 8'd1 || t_hwd) &&
-                       !(t_hcfg && (pb(1) > 8'd4 || h_umax > 16'h8000 ||
-                                    h_manual > 16'h8000)) &&
-                       !(t_htab && (pb(1) > 8'd64 || h_tab_end > 8'd65)) &&
-                       !(t_hsaf && h_tmin >= h_tmax);
 
   wire t_lprof = (PROFILES != 0) && (type_reg == T_LPROF);
   wire t_arc = (ARCS != 0) && (type_reg == T_ARC);
   wire t_out = (OUTPUTS != 0) && (type_reg == T_OUT);
-  // OUTPUT fields: mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs 0..3; bit 7 reserved),
-  // value (the same bits; 2 and 7 reserved), fan duty (used with mask bit 2)
-  wire out_field_ok = (out_mask != 8'd0) && !out_mask[7] && ((out_val & ~out_mask) == 8'd0) &&
-                      !out_val[2] && (out_mask[2] || out_duty == 8'd0);
   wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
                t_lprof || t_arc || t_out || t_heat;
   wire len0 = (len_reg == 8'd0);
@@ -391,14 +259,31 @@ module frame_decoder #(
                 (t_dwell && len_reg == `FPGACNC_LEN_DWELL) || (t_line && line_len_ok) ||
                 (t_lprof && prof_len_ok) || (t_arc && len_reg == `FPGACNC_LEN_ARC) ||
                 (t_out && len_reg == `FPGACNC_LEN_OUTPUT) || heat_len_ok;
-  // The field rules are registered: the payload and type are complete at least two clocks before
-  // the CHECK clock (the two CRC bytes follow them), so field_ok_reg holds the rules of the frame
-  // being checked (the wide ARC / LINE_PROFILE compares end at a register, not in the accept).
-  reg field_ok_reg;
-  wire field_ok = field_ok_reg;
-  wire field_ok_w = !(t_line && flags[6:2] != 5'd0) && !(t_cfg && pb(0) >= NAX8) &&
-                  !(t_lprof && !prof_field_ok) && !(t_arc && !arc_field_ok) &&
-                  !(t_out && !out_field_ok) && (!t_heat || heat_field_ok);
+  // The field rules (frame_fields) are evaluated on the edge that takes the frame's last byte:
+  // payload, LEN and TYPE are complete then and stay until the CHECK clock, so field_ok holds the
+  // rules of the frame being checked.
+  wire field_ok;
+  frame_fields #(
+      .N_AXES(N_AXES),
+      .PB    (PB)
+  ) u_fields (
+      .clk    (clk),
+      .rst    (rst),
+      .en     (take && st_reg == ST_CRC2),
+      .pay    (pay_reg),
+      .len    (len_reg),
+      .t_line (t_line),
+      .t_cfg  (t_cfg),
+      .t_lprof(t_lprof),
+      .t_arc  (t_arc),
+      .t_out  (t_out),
+      .t_heat (t_heat),
+      .t_hcfg (t_hcfg),
+      .t_htab (t_htab),
+      .t_hsaf (t_hsaf),
+      .t_hwd  (t_hwd),
+      .ok     (field_ok)
+  );
   wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
                    t_out || t_heat;
   wire to_fifo = t_num || t_line || t_dwell || t_lprof || t_arc || t_out;
@@ -411,20 +296,45 @@ module frame_decoder #(
                    (!to_fifo || m_axis_tready);
   wire v1_write = chk_reg && chk_v1_reg && m_axis_tready;
 
-  localparam PW = ENTRY_W - BASE_W;
-  reg [ENTRY_W-1:0] entry;
-  always @(*) begin
-    if (chk_v1_reg) entry = {{PW{1'b0}}, is_init_reg ? e_v1_init : e_v1_motion};
-    else if (t_line) entry = {{PW{1'b0}}, e_line};
-    else if (t_dwell) entry = {{PW{1'b0}}, e_dwell};
-    else if (t_lprof) entry = {{(ENTRY_W - PROF_W) {1'b0}}, e_lprof};
-    else if (t_arc) entry = e_arc;
-    else if (t_out) entry = {{PW{1'b0}}, e_out};
-    else entry = {{PW{1'b0}}, e_num};
+  // The FIFO entry (entry_pack), packed in the CHECK clock only (don't-care in other clocks: the
+  // FIFO takes it only with m_axis_tvalid, which is high only in a CHECK clock).
+  wire [ENTRY_W-1:0] entry;
+  entry_pack #(
+      .N_AXES (N_AXES),
+      .PB     (PB),
+      .ENTRY_W(ENTRY_W),
+      .BASE_W (BASE_W),
+      .PROF_W (PROF_W)
+  ) u_pack (
+      .build  (chk_reg),
+      .v1     (chk_v1_reg),
+      .is_init(is_init_reg),
+      .code   (code_reg),
+      .t_line (t_line),
+      .t_dwell(t_dwell),
+      .t_lprof(t_lprof),
+      .t_arc  (t_arc),
+      .t_out  (t_out),
+      .len    (len_reg),
+      .pay    (pay_reg),
+      .entry  (entry)
+  );
+
+  // Payload bytes, written as they are taken (v1 packet, v2 payload): the next value is formed in
+  // the branch that writes it, so the register is updated in place and skipped between bytes.
+  always @(posedge clk) begin : pay_wr
+    reg [8*PB-1:0] pay_n;
+    integer k;
+    if (rst) begin
+      pay_reg <= {8 * PB{1'b0}};
+    end else if (take && (st_reg == ST_V1 || st_reg == ST_PAY)) begin
+      pay_n = pay_reg;
+      for (k = 0; k < PB; k = k + 1) if (cnt_reg == k[6:0]) pay_n[8*k+:8] = d;
+      pay_reg <= pay_n;
+    end
   end
 
   // ---------------------------------------------------------------- byte handling and strobes
-  integer i;
   always @(posedge clk) begin
     cfg_wr_reg       <= 1'b0;
     heat_wr_reg      <= 1'b0;
@@ -443,7 +353,6 @@ module frame_decoder #(
     v1_packet_reg    <= 1'b0;
     v1_overrun_reg   <= 1'b0;
     chk_reg          <= 1'b0;
-    field_ok_reg     <= field_ok_w;
 
     // CHECK of the packet/frame completed on the previous edge.
     if (chk_reg) begin
@@ -504,7 +413,6 @@ module frame_decoder #(
           else noise_reg <= 1'b1;
         end
         ST_V1: begin
-          for (i = 0; i < PB; i = i + 1) if (cnt_reg == i[6:0]) pay_reg[8*i+:8] <= d;
           cnt_reg <= cnt_reg + 7'd1;
           if (cnt_reg == (is_init_reg ? 7'd7 : 7'd9)) begin
             st_reg     <= ST_HUNT;
@@ -534,7 +442,6 @@ module frame_decoder #(
           st_reg   <= (len_reg == 8'd0) ? ST_CRC1 : ST_PAY;
         end
         ST_PAY: begin
-          for (i = 0; i < PB; i = i + 1) if (cnt_reg == i[6:0]) pay_reg[8*i+:8] <= d;
           cnt_reg <= cnt_reg + 7'd1;
           if ({1'b0, cnt_reg} == len_reg - 8'd1) st_reg <= ST_CRC1;
         end
@@ -568,10 +475,8 @@ module frame_decoder #(
       len_reg          <= 8'd0;
       seq_reg          <= 8'd0;
       type_reg         <= 8'd0;
-      pay_reg          <= {8 * PB{1'b0}};
       idle_reg         <= {WD_W{1'b0}};
       chk_reg          <= 1'b0;
-      field_ok_reg     <= 1'b0;
       chk_v1_reg       <= 1'b0;
       v2_mode_reg      <= 1'b0;
       next_seq_reg     <= 8'd0;

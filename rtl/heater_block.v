@@ -95,6 +95,32 @@ module heater_block #(
   wire t_saf = frame_wr && frame_type == 8'h23;
   wire t_wd = frame_wr && frame_type == 8'h24;
 
+  // Channel fields of the heater frame being written: CONFIG kp, ki, kd (bytes 2, 6, 10), duty_max,
+  // hyst, manual (14, 16, 18); SETPOINT value and SAFETY Tmin (1), Tmax, band, runaway period,
+  // watch rise, watch period (3, 5, 7, 9, 11). Formed only in the clock of a heater frame
+  // (frame_wr) and don't-care in any other: a channel takes them only with its cfg_wr, set_wr or
+  // safe_wr. The same logic as the plain fields; a simulator skips it between frames.
+  reg [31:0] c_kp, c_ki, c_kd;
+  reg [15:0] c_umax, c_hyst, c_manual, c_b1, c_b3, c_b5, c_b7, c_b9, c_b11;
+  always @(*) begin
+    {c_kp, c_ki, c_kd} = {96{1'bx}};
+    {c_umax, c_hyst, c_manual, c_b1, c_b3, c_b5, c_b7, c_b9, c_b11} = {144{1'bx}};
+    if (frame_wr) begin
+      c_kp     = f32(2);
+      c_ki     = f32(6);
+      c_kd     = f32(10);
+      c_umax   = f16(14);
+      c_hyst   = f16(16);
+      c_manual = f16(18);
+      c_b1     = f16(1);
+      c_b3     = f16(3);
+      c_b5     = f16(5);
+      c_b7     = f16(7);
+      c_b9     = f16(9);
+      c_b11    = f16(11);
+    end
+  end
+
   // ---------------------------------------------------------------- table loader
   reg [127:0] tab_data_reg;  // entries still to write, next in [127:112]
   reg [3:0] tab_left_reg;
@@ -261,21 +287,21 @@ module heater_block #(
       .rst         (rst),
       .cfg_wr      (t_cfg && ch_byte[0] == 1'b0),
       .cfg_mode    (mode_byte[2:0]),
-      .cfg_kp      (f32(2)),
-      .cfg_ki      (f32(6)),
-      .cfg_kd      (f32(10)),
-      .cfg_umax    (f16(14)),
-      .cfg_hyst    (f16(16)),
-      .cfg_manual  (f16(18)),
+      .cfg_kp      (c_kp),
+      .cfg_ki      (c_ki),
+      .cfg_kd      (c_kd),
+      .cfg_umax    (c_umax),
+      .cfg_hyst    (c_hyst),
+      .cfg_manual  (c_manual),
       .set_wr      (t_set && ch_byte[0] == 1'b0),
-      .set_value   (f16(1)),
+      .set_value   (c_b1),
       .safe_wr     (t_saf && ch_byte[0] == 1'b0),
-      .safe_tmin   (f16(1)),
-      .safe_tmax   (f16(3)),
-      .safe_band   (f16(5)),
-      .safe_rperiod(f16(7)),
-      .safe_wrise  (f16(9)),
-      .safe_wperiod(f16(11)),
+      .safe_tmin   (c_b1),
+      .safe_tmax   (c_b3),
+      .safe_band   (c_b5),
+      .safe_rperiod(c_b7),
+      .safe_wrise  (c_b9),
+      .safe_wperiod(c_b11),
       .eval        (eval_reg),
       .temp        (t0_reg),
       .kill        (kill),
@@ -302,21 +328,21 @@ module heater_block #(
       .rst         (rst),
       .cfg_wr      (t_cfg && ch_byte[0] == 1'b1),
       .cfg_mode    (mode_byte[2:0]),
-      .cfg_kp      (f32(2)),
-      .cfg_ki      (f32(6)),
-      .cfg_kd      (f32(10)),
-      .cfg_umax    (f16(14)),
-      .cfg_hyst    (f16(16)),
-      .cfg_manual  (f16(18)),
+      .cfg_kp      (c_kp),
+      .cfg_ki      (c_ki),
+      .cfg_kd      (c_kd),
+      .cfg_umax    (c_umax),
+      .cfg_hyst    (c_hyst),
+      .cfg_manual  (c_manual),
       .set_wr      (t_set && ch_byte[0] == 1'b1),
-      .set_value   (f16(1)),
+      .set_value   (c_b1),
       .safe_wr     (t_saf && ch_byte[0] == 1'b1),
-      .safe_tmin   (f16(1)),
-      .safe_tmax   (f16(3)),
-      .safe_band   (f16(5)),
-      .safe_rperiod(f16(7)),
-      .safe_wrise  (f16(9)),
-      .safe_wperiod(f16(11)),
+      .safe_tmin   (c_b1),
+      .safe_tmax   (c_b3),
+      .safe_band   (c_b5),
+      .safe_rperiod(c_b7),
+      .safe_wrise  (c_b9),
+      .safe_wperiod(c_b11),
       .eval        (eval_reg),
       .temp        (t1_reg),
       .kill        (kill),

@@ -51,63 +51,67 @@ module heater_safety (
   reg [15:0] wtimer_reg, rtimer_reg;
   reg arm_pend_reg;
 
-  wire signed [17:0] t18 = {{2{temp[15]}}, temp};
-  wire signed [17:0] s18 = {{2{setpoint[15]}}, setpoint};
-  wire signed [17:0] b18 = {2'd0, band};
-  wire signed [17:0] r18 = {{2{ref_reg[15]}}, ref_reg};
-  wire signed [17:0] w18 = {2'd0, wrise};
-  wire above_band = (t18 > s18 + b18);  // temp > set + band
-  wire below_band = (t18 < s18 - b18);  // temp < set - band
-  wire [15:0] wtimer_next = wtimer_reg + 16'd1;
-  wire [15:0] rtimer_next = rtimer_reg + 16'd1;
-
-  reg [3:0] found;
-  always @(*) begin
+  // The band compares, timers' next values and the faults found are block-local regs formed
+  // only in an enabled eval clock, in the branch that reads them (the same logic as continuous
+  // assignments; a simulator evaluates them only on the sample tick).
+  always @(posedge clk) begin : seq
+    reg signed [17:0] t18, s18, b18, r18, w18;
+    reg above_band, below_band;
+    reg [15:0] wtimer_next, rtimer_next;
+    reg [3:0] found;
     found = 4'd0;
     if (eval && enable) begin
-      found[0] = (temp < tmin);
-      found[1] = (temp > tmax);
-      found[2] = !arm_pend_reg && (q_reg == Q_HOLD) && (above_band || below_band) && (rperiod != 16'd0) &&
-                 (rtimer_next >= rperiod);
-      found[3] = !arm_pend_reg && (q_reg == Q_WATCH) && below_band && (t18 < r18 + w18) && (wperiod != 16'd0) &&
-                 (wtimer_next >= wperiod);
-    end
-  end
-
-  always @(posedge clk) begin
-    if (!enable) begin
+      t18         = {{2{temp[15]}}, temp};
+      s18         = {{2{setpoint[15]}}, setpoint};
+      b18         = {2'd0, band};
+      r18         = {{2{ref_reg[15]}}, ref_reg};
+      w18         = {2'd0, wrise};
+      above_band  = (t18 > s18 + b18);  // temp > set + band
+      below_band  = (t18 < s18 - b18);  // temp < set - band
+      wtimer_next = wtimer_reg + 16'd1;
+      rtimer_next = rtimer_reg + 16'd1;
+      found[0]    = (temp < tmin);
+      found[1]    = (temp > tmax);
+      found[2]    = !arm_pend_reg && (q_reg == Q_HOLD) && (above_band || below_band) &&
+                    (rperiod != 16'd0) && (rtimer_next >= rperiod);
+      found[3]    = !arm_pend_reg && (q_reg == Q_WATCH) && below_band && (t18 < r18 + w18) &&
+                    (wperiod != 16'd0) && (wtimer_next >= wperiod);
+      if (arm) begin
+        arm_pend_reg <= 1'b1;
+      end else if (arm_pend_reg) begin
+        arm_pend_reg <= 1'b0;
+        ref_reg      <= temp;
+        wtimer_reg   <= 16'd0;
+        rtimer_reg   <= 16'd0;
+        q_reg        <= below_band ? Q_WATCH : above_band ? Q_COOL : Q_HOLD;
+      end else begin
+        case (q_reg)
+          Q_WATCH:
+          if (!below_band) begin
+            q_reg      <= Q_HOLD;
+            rtimer_reg <= 16'd0;
+          end else if (t18 >= r18 + w18) begin
+            ref_reg    <= temp;
+            wtimer_reg <= 16'd0;
+          end else begin
+            wtimer_reg <= wtimer_next;
+          end
+          Q_HOLD: rtimer_reg <= (above_band || below_band) ? rtimer_next : 16'd0;
+          Q_COOL:
+          if (!above_band) begin
+            q_reg      <= Q_HOLD;
+            rtimer_reg <= 16'd0;
+          end
+          default: q_reg <= Q_IDLE;
+        endcase
+      end
+    end else if (!enable) begin
       q_reg        <= Q_IDLE;
       wtimer_reg   <= 16'd0;
       rtimer_reg   <= 16'd0;
       arm_pend_reg <= 1'b0;
     end else if (arm) begin
       arm_pend_reg <= 1'b1;
-    end else if (eval && arm_pend_reg) begin
-      arm_pend_reg <= 1'b0;
-      ref_reg      <= temp;
-      wtimer_reg   <= 16'd0;
-      rtimer_reg   <= 16'd0;
-      q_reg        <= below_band ? Q_WATCH : above_band ? Q_COOL : Q_HOLD;
-    end else if (eval) begin
-      case (q_reg)
-        Q_WATCH:
-        if (!below_band) begin
-          q_reg      <= Q_HOLD;
-          rtimer_reg <= 16'd0;
-        end else if (t18 >= r18 + w18) begin
-          ref_reg    <= temp;
-          wtimer_reg <= 16'd0;
-        end else begin
-          wtimer_reg <= wtimer_next;
-        end
-        Q_HOLD: rtimer_reg <= (above_band || below_band) ? rtimer_next : 16'd0;
-        Q_COOL:
-        if (!above_band) begin
-          q_reg      <= Q_HOLD;
-          rtimer_reg <= 16'd0;
-        end
-        default: q_reg <= Q_IDLE;
-      endcase
     end
     faults_reg <= (fault_clear ? 4'd0 : faults_reg) | found;
     if (rst) begin

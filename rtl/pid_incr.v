@@ -65,47 +65,25 @@ module pid_incr (
   reg [51:0] macc_reg;
   reg [4:0] mcnt_reg;
 
-  wire signed [19:0] e_now = {{4{setpoint[15]}}, setpoint} - {{4{temp[15]}}, temp};
-  wire [28:0] umax28 = {umax[15:0], 13'd0};
-  wire [28:0] man28 = (manual > umax) ? umax28 : {manual[15:0], 13'd0};
-  wire signed [19:0] hyst20 = {4'd0, hyst};
-  wire signed [19:0] d1 = e_reg - e1_reg;
-  wire signed [19:0] d2 = e_reg - (e1_reg <<< 1) + e2_reg;
-
-  // Operand of the next product.
-  reg [31:0] op_coef;
-  reg signed [19:0] op_val;
-  always @(*) begin
-    case (term_reg)
-      2'd0: begin
-        op_coef = kp;
-        op_val  = (mode == M_P) ? e_reg : d1;
-      end
-      2'd1: begin
-        op_coef = kd;
-        op_val  = d2;
-      end
-      default: begin
-        op_coef = ki;
-        op_val  = e_reg;
-      end
-    endcase
-  end
-  wire [19:0] op_mag = op_val[19] ? -op_val : op_val;
-
-  wire signed [55:0] prod = mneg_reg ? -$signed({4'd0, macc_reg}) : $signed({4'd0, macc_reg});
-  wire signed [55:0] umax56 = {27'd0, umax28};
-
-  always @(posedge clk) begin
+  // The operands and sums below are block-local regs formed in the state that uses them: the
+  // same logic as continuous assignments, and a simulator evaluates them only in that state.
+  always @(posedge clk) begin : seq
+    reg [28:0] umax28, man28;
+    reg signed [19:0] hyst20, d1, d2, op_val;
+    reg [31:0] op_coef;
+    reg signed [55:0] prod;
     done_reg <= 1'b0;
     case (st_reg)
       S_IDLE:
       if (start) begin
-        e_reg  <= e_now;
+        e_reg  <= {{4{setpoint[15]}}, setpoint} - {{4{temp[15]}}, temp};
         st_reg <= S_ERR;
       end
       S_ERR: begin
         // e_reg holds e(k). Decide by mode.
+        umax28 = {umax[15:0], 13'd0};
+        man28  = (manual > umax) ? umax28 : {manual[15:0], 13'd0};
+        hyst20 = {4'd0, hyst};
         if (!enable || mode > M_PID || mode == M_OFF) begin
           u_reg     <= 29'd0;
           fresh_reg <= 1'b1;
@@ -142,8 +120,25 @@ module pid_incr (
         end
       end
       S_LOAD: begin
+        // operand of the next product
+        d1 = e_reg - e1_reg;
+        d2 = e_reg - (e1_reg <<< 1) + e2_reg;
+        case (term_reg)
+          2'd0: begin
+            op_coef = kp;
+            op_val  = (mode == M_P) ? e_reg : d1;
+          end
+          2'd1: begin
+            op_coef = kd;
+            op_val  = d2;
+          end
+          default: begin
+            op_coef = ki;
+            op_val  = e_reg;
+          end
+        endcase
         mcand_reg  <= {20'd0, op_coef};
-        mplier_reg <= op_mag;
+        mplier_reg <= op_val[19] ? -op_val : op_val;
         mneg_reg   <= op_val[19];
         macc_reg   <= 52'd0;
         mcnt_reg   <= 5'd0;
@@ -157,6 +152,7 @@ module pid_incr (
         if (mcnt_reg == 5'd19) st_reg <= S_ADD;
       end
       S_ADD: begin
+        prod = mneg_reg ? -$signed({4'd0, macc_reg}) : $signed({4'd0, macc_reg});
         sum_reg <= sum_reg + prod;
         if (last_term_reg) begin
           st_reg <= S_CLAMP;
@@ -168,8 +164,9 @@ module pid_incr (
         end
       end
       default: begin  // S_CLAMP
+        umax28 = {umax[15:0], 13'd0};
         if (sum_reg < 56'sd0) u_reg <= 29'd0;
-        else if (sum_reg > umax56) u_reg <= umax28;
+        else if (sum_reg > $signed({27'd0, umax28})) u_reg <= umax28;
         else u_reg <= sum_reg[28:0];
         if (mode == M_PID) begin
           e2_reg <= e1_reg;

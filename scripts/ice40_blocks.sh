@@ -24,7 +24,7 @@ declare -A BLK=(
   [dda_linear]="rtl/dda_linear.v|"
   [pid_incr]="rtl/pid_incr.v|"
   [heater_channel]="rtl/heater_channel.v rtl/pid_incr.v rtl/heater_safety.v rtl/pwm.v|"
-  [frame_decoder]="rtl/frame_decoder.v rtl/crc16_ccitt.v|-set N_AXES 2"
+  [frame_decoder]="rtl/frame_decoder.v rtl/frame_fields.v rtl/entry_pack.v rtl/crc16_ccitt.v|-set N_AXES 2"
   [response_encoder]="rtl/response_encoder.v rtl/crc16_ccitt.v|-set N_AXES 2 -set HEAT_BYTES 16"
   [segment_prep]="rtl/segment_prep.v|-set N_AXES 2"
 )
