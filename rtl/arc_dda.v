@@ -1,4 +1,4 @@
-// arc_dda: circular / helical DDA for one ARC segment (issue 6; docs/motion.md "Arcs", ARC frame in
+// arc_dda: circular / helical DDA for one ARC segment (docs/motion.md "Arcs", ARC frame in
 // docs/protocol.md). The integer reference is systemc/include/fpgacnc/twins/arc_walk.h; this block
 // produces the identical edge list.
 //

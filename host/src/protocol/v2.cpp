@@ -261,7 +261,7 @@ Status decode_status(const Frame& f, size_t n_axes) {
     c = get16(p, i);
     i += 2;
   }
-  // Heater block (issue 7).
+  // Heater block.
   for (; i + kHeaterStatusBytes <= p.size(); i += kHeaterStatusBytes) {
     HeaterStatus h;
     h.temp_q4 = static_cast<int16_t>(get16(p, i));
@@ -305,7 +305,7 @@ Frame status(uint8_t dev_seq, const Status& s) {
   put32(p, s.done);
   for (const int32_t x : s.position) put32(p, static_cast<uint32_t>(x));
   for (const uint16_t c : s.counters) put16(p, c);
-  for (const auto& h : s.heaters) {  // issue 7
+  for (const auto& h : s.heaters) {
     put16(p, static_cast<uint16_t>(h.temp_q4));
     put16(p, static_cast<uint16_t>(h.setpoint_q4));
     put16(p, h.duty_q15);
@@ -636,7 +636,7 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (!line_profile_field_error(parse_line_profile(f)).empty()) return NakReason::BadField;
       return std::nullopt;
     }
-    // Heaters (issue 7).
+    // Heaters.
     case Type::HeaterConfig:
       if (n != spec::kLenHeaterConfig) return NakReason::BadLength;
       if (f.payload[0] > 1 || f.payload[1] > 4 || get16(f.payload, 14) > 0x8000 ||
@@ -738,7 +738,7 @@ std::array<uint32_t, 2> decode_numerators(const Frame& f) {
   return {get32(f.payload, 0), get32(f.payload, 4)};
 }
 
-// ---- Heaters (issue 7) ----
+// ---- Heaters ----
 
 std::string heater_fault_names(uint8_t faults) {
   static constexpr std::array<const char*, 4> kNames{"MINTEMP", "MAXTEMP", "RUNAWAY", "HEATING"};

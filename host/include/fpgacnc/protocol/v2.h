@@ -40,7 +40,7 @@ enum class Type : uint8_t {
   LineProfile = spec::kTypeLineProfile,
   Arc = spec::kTypeArc,        // circular DDA
   Output = spec::kTypeOutput,  // machine outputs in order with the motion
-  // Heaters (issue 7): sequenced, not queued.
+  // Heaters: sequenced, not queued.
   HeaterConfig = spec::kTypeHeaterConfig,
   HeaterSetpoint = spec::kTypeHeaterSetpoint,
   ThermistorTable = spec::kTypeThermistorTable,
@@ -202,7 +202,7 @@ constexpr size_t kHeaterStatusBytes = spec::kStatusHeaterChannelBytes;
 // "MINTEMP|RUNAWAY" (or "none").
 std::string heater_fault_names(uint8_t faults);
 
-struct Status {  // 27 + 4 * n_axes bytes, + 16 with the heater block (issue 7)
+struct Status {  // 27 + 4 * n_axes bytes, + 16 with the heater block
   uint8_t state = 0, faults = 0;
   uint16_t fifo_level = 0;
   uint8_t next_seq = 0;
@@ -298,7 +298,7 @@ std::array<uint32_t, 2> decode_numerators(const Frame& f);
 // nullopt when it is well formed (sequence and FIFO rules not included).
 std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes);
 
-// ---- Heaters (issue 7; docs/protocol.md "Heater frames", docs/heater.md formats) ----
+// ---- Heaters (docs/protocol.md "Heater frames", docs/heater.md formats) ----
 
 struct HeaterConfigFrame {  // HEATER_CONFIG, 20 bytes
   uint8_t channel = 0;
