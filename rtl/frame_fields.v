@@ -23,6 +23,8 @@
 // same logic as continuous assignments, and a simulator evaluates them only on en clocks.
 `default_nettype none
 
+`include "fpgacnc_spec.vh"
+
 module frame_fields #(
     parameter N_AXES = 4,
     parameter PB     = 63   // payload bytes held by frame_decoder
@@ -49,6 +51,13 @@ module frame_fields #(
 
   localparam integer NAX_I = N_AXES;
   localparam [7:0] NAX8 = NAX_I[7:0];
+  // Limits of the heater frames and the OUTPUT bits, from the specification.
+  localparam integer HEAT_CH_I = `FPGACNC_STATUS_HEATER_CHANNELS;
+  localparam integer MODE_MAX_I = `FPGACNC_HEATER_MODES - 1;
+  localparam integer TAB_N_I = `FPGACNC_THERMISTOR_ENTRIES;
+  localparam [7:0] HEAT_CH = HEAT_CH_I[7:0];  // channels 0 .. HEAT_CH - 1
+  localparam [7:0] MODE_MAX = MODE_MAX_I[7:0];
+  localparam [7:0] TAB_N = TAB_N_I[7:0];  // thermistor entries 0 .. TAB_N - 1
 
   // Payload byte i and the big-endian 32-bit field at byte i (read pay directly: a simulator need
   // not copy the whole payload for every field).
@@ -143,8 +152,8 @@ module frame_fields #(
 
       // OUTPUT: mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs 0..3; bit 7 reserved),
       // value (the same bits; 2 and 7 reserved), fan duty (used with mask bit 2)
-      out_ok = (pb(0) != 8'd0) && !pay[7] && ((pb(1) & ~pb(0)) == 8'd0) && !pay[10] &&
-               (pay[2] || pb(2) == 8'd0);
+      out_ok = (pb(0) != 8'd0) && !pay[`FPGACNC_OUT_RESERVED_BIT] && ((pb(1) & ~pb(0)) == 8'd0) &&
+               !pay[8+`FPGACNC_OUT_FAN_BIT] && (pay[`FPGACNC_OUT_FAN_BIT] || pb(2) == 8'd0);
 
       // heater frames
       umax    = {pb(14), pb(15)};
@@ -152,9 +161,10 @@ module frame_fields #(
       tmin    = {pb(1), pb(2)};
       tmax    = {pb(3), pb(4)};
       tab_end = pb(1) + {1'b0, len[7:1]} - 8'd1;  // first + (LEN - 2) / 2
-      heat_ok = (pb(0) <= 8'd1 || t_hwd) &&
-                !(t_hcfg && (pb(1) > 8'd4 || umax > 16'h8000 || manual > 16'h8000)) &&
-                !(t_htab && (pb(1) > 8'd64 || tab_end > 8'd65)) && !(t_hsaf && tmin >= tmax);
+      heat_ok = (pb(0) < HEAT_CH || t_hwd) &&
+                !(t_hcfg && (pb(1) > MODE_MAX || umax > `FPGACNC_DUTY_ONE ||
+                             manual > `FPGACNC_DUTY_ONE)) &&
+                !(t_htab && (pb(1) >= TAB_N || tab_end > TAB_N)) && !(t_hsaf && tmin >= tmax);
 
       ok_reg <= !(t_line && pay[6:2] != 5'd0) && !(t_cfg && pb(0) >= NAX8) &&
                 !(t_lprof && !prof_ok) && !(t_arc && !arc_ok) && !(t_out && !out_ok) &&
