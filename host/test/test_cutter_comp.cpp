@@ -8,34 +8,22 @@
 #include <fstream>
 
 #include "fpgacnc/gcode/interpreter.h"
+#include "gcode_test_util.h"
 
 namespace gc = fpgacnc::gcode;
 
 namespace {
 
+using gc::test::expect_error;
+
 std::vector<gc::Move> moves_of(std::string_view text, gc::Options o = {}) {
-  std::vector<gc::Move> m;
-  for (const auto& c : gc::parse_string(text, "t.ngc", o).commands)
-    if (const auto* mv = std::get_if<gc::Move>(&c)) m.push_back(*mv);
-  return m;
+  return gc::test::moves_of(gc::parse_string(text, "t.ngc", o));
 }
 
 void expect_at(const gc::Move& m, double x, double y, double z) {
   EXPECT_NEAR(m.end[0], x, 1e-9) << "line " << m.line;
   EXPECT_NEAR(m.end[1], y, 1e-9) << "line " << m.line;
   EXPECT_NEAR(m.end[2], z, 1e-9) << "line " << m.line;
-}
-
-void expect_error(std::string_view text, int line, int col, std::string_view msg) {
-  SCOPED_TRACE(std::string(text));
-  try {
-    gc::parse_string(text, "t.ngc");
-    ADD_FAILURE() << "no error";
-  } catch (const gc::Error& e) {
-    EXPECT_EQ(e.line(), line) << e.what();
-    EXPECT_EQ(e.column(), col) << e.what();
-    EXPECT_NE(std::string(e.what()).find(msg), std::string::npos) << e.what();
-  }
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/plan/planner.h"
+#include "gcode_test_util.h"
 
 namespace gc = fpgacnc::gcode;
 
@@ -19,13 +20,7 @@ gc::Program run(std::string_view text, std::optional<gc::Dialect> d = std::nullo
   return gc::parse_string(text, "t.gcode", o);
 }
 
-template <typename T>
-std::vector<T> all(const gc::Program& p) {
-  std::vector<T> r;
-  for (const auto& c : p.commands)
-    if (const auto* x = std::get_if<T>(&c)) r.push_back(*x);
-  return r;
-}
+using gc::test::all;
 
 std::string error_of(std::string_view text, std::optional<gc::Dialect> d = std::nullopt) {
   try {

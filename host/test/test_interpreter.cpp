@@ -5,18 +5,13 @@
 
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/plan/planner.h"
+#include "gcode_test_util.h"
 
 namespace gc = fpgacnc::gcode;
 
 namespace {
 
-std::vector<gc::Move> moves_of(const gc::Program& p) {
-  std::vector<gc::Move> m;
-  for (const auto& c : p.commands) {
-    if (const auto* mv = std::get_if<gc::Move>(&c)) m.push_back(*mv);
-  }
-  return m;
-}
+using gc::test::moves_of;
 
 gc::Move last_move(std::string_view text) {
   const auto m = moves_of(gc::parse_string(text));
@@ -24,22 +19,8 @@ gc::Move last_move(std::string_view text) {
   return m.back();
 }
 
-// Expects parse_string(text) to throw at line:col with `msg` in the message.
 void expect_error(std::string_view text, int line, int col, std::string_view msg) {
-  SCOPED_TRACE(std::string(text));
-  try {
-    gc::parse_string(text, "t.gcode");
-    ADD_FAILURE() << "no error";
-  } catch (const gc::Error& e) {
-    EXPECT_EQ(e.file(), "t.gcode");
-    EXPECT_EQ(e.line(), line) << e.what();
-    EXPECT_EQ(e.column(), col) << e.what();
-    EXPECT_NE(std::string(e.what()).find(msg), std::string::npos) << e.what();
-    EXPECT_EQ(std::string(e.what()).rfind(
-                  "t.gcode:" + std::to_string(line) + ":" + std::to_string(col) + ": error: ", 0),
-              0u)
-        << e.what();
-  }
+  gc::test::expect_error(text, line, col, msg, {}, "t.gcode");
 }
 
 }  // namespace

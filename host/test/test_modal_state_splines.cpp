@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "fpgacnc/gcode/interpreter.h"
+#include "gcode_test_util.h"
 
 namespace gc = fpgacnc::gcode;
 
@@ -22,23 +23,10 @@ gc::Program run(std::string_view text, gc::Options o = cnc()) {
   return gc::parse_string(text, "t.ngc", o);
 }
 
-std::vector<gc::Move> moves_of(const gc::Program& p) {
-  std::vector<gc::Move> m;
-  for (const auto& c : p.commands)
-    if (const auto* mv = std::get_if<gc::Move>(&c)) m.push_back(*mv);
-  return m;
-}
+using gc::test::moves_of;
 
 void expect_error(std::string_view text, int line, int col, std::string_view msg) {
-  SCOPED_TRACE(std::string(text));
-  try {
-    run(text);
-    ADD_FAILURE() << "no error";
-  } catch (const gc::Error& e) {
-    EXPECT_EQ(e.line(), line) << e.what();
-    EXPECT_EQ(e.column(), col) << e.what();
-    EXPECT_NE(std::string(e.what()).find(msg), std::string::npos) << e.what();
-  }
+  gc::test::expect_error(text, line, col, msg, cnc());
 }
 
 }  // namespace
