@@ -40,19 +40,8 @@ module entry_pack #(
   localparam SW = 32 * N_AXES;
   localparam PW = ENTRY_W - BASE_W;
 
-  function [7:0] pb;
-    input integer i;
-    begin
-      pb = pay[8*i+:8];
-    end
-  endfunction
-
-  function [31:0] be32;
-    input integer i;
-    begin
-      be32 = {pay[8*i+:8], pay[8*(i+1)+:8], pay[8*(i+2)+:8], pay[8*(i+3)+:8]};
-    end
-  endfunction
+  // pb(i): payload byte i; be32(i): the big-endian 32-bit field at byte i.
+`include "payload_fields.vh"
 
   // Step fields (steps_l: LINE from byte 6, steps_p: LINE_PROFILE from byte 28): int16 (flag bit
   // 7) or int32 per axis, big-endian, sign-extended; axes beyond LEN are 0 (axis a in [32*a+:32]).

@@ -59,21 +59,8 @@ module frame_fields #(
   localparam [7:0] MODE_MAX = MODE_MAX_I[7:0];
   localparam [7:0] TAB_N = TAB_N_I[7:0];  // thermistor entries 0 .. TAB_N - 1
 
-  // Payload byte i and the big-endian 32-bit field at byte i (read pay directly: a simulator need
-  // not copy the whole payload for every field).
-  function [7:0] pb;
-    input integer i;
-    begin
-      pb = pay[8*i+:8];
-    end
-  endfunction
-
-  function [31:0] be32;
-    input integer i;
-    begin
-      be32 = {pay[8*i+:8], pay[8*(i+1)+:8], pay[8*(i+2)+:8], pay[8*(i+3)+:8]};
-    end
-  endfunction
+  // pb(i): payload byte i; be32(i): the big-endian 32-bit field at byte i.
+`include "payload_fields.vh"
 
   // |v| < 2^22 for a 25-bit v (the start, -I / -J, has the same magnitudes as I / J)
   function c22_ok;
