@@ -213,17 +213,6 @@ module frame_decoder #(
     end
   endfunction
 
-  wire       short_steps = pay_reg[7];  // flag bit 7: int16 step fields
-  wire [7:0] len_m6 = len_reg - 8'd6;
-  wire       line_len_ok = (len_reg >= `FPGACNC_LEN_LINE_HEADER) &&
-                           (short_steps ? (len_m6[0] == 1'b0 && {1'b0, len_m6[7:1]} <= NAX8)
-                                        : (len_m6[1:0] == 2'b00 && {2'b00, len_m6[7:2]} <= NAX8));
-  // LINE_PROFILE: the same step fields from byte 28
-  wire [7:0] len_m28 = len_reg - 8'd28;
-  wire       prof_len_ok = (len_reg >= `FPGACNC_LEN_LINE_PROFILE_HEADER) &&
-                           (short_steps ? (len_m28[0] == 1'b0 && {1'b0, len_m28[7:1]} <= NAX8)
-                                        : (len_m28[1:0] == 2'b00 && {2'b00, len_m28[7:2]} <= NAX8));
-
   // ---------------------------------------------------------------- CHECK
   wire t_hello = (type_reg == T_HELLO);
   wire t_status = (type_reg == T_STATUS);
@@ -240,25 +229,46 @@ module frame_decoder #(
   wire t_hsaf = (type_reg == T_HSAF);
   wire t_hwd = (type_reg == T_HWD);
   wire t_heat = (HEATERS != 0) && (t_hcfg || t_hset || t_htab || t_hsaf || t_hwd);
-  wire heat_len_ok = t_heat && ((t_hcfg && len_reg == `FPGACNC_LEN_HEATER_CONFIG) ||
-                     (t_hset && len_reg == `FPGACNC_LEN_HEATER_SETPOINT) ||
-                     (t_htab && len_reg >= `FPGACNC_LEN_THERMISTOR_TABLE_MIN &&
-                      len_reg <= `FPGACNC_LEN_THERMISTOR_TABLE_MAX && !len_reg[0]) ||
-                     (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
-                     (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
-
   wire t_lprof = (PROFILES != 0) && (type_reg == T_LPROF);
   wire t_arc = (ARCS != 0) && (type_reg == T_ARC);
   wire t_out = (OUTPUTS != 0) && (type_reg == T_OUT);
-  wire known = t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
+  // TYPE and LEN rules, formed (block-local regs) and registered on the edge that takes the
+  // frame's last byte, as the field rules are: LEN, TYPE and the flag byte are complete then and
+  // stay until the CHECK clock, the only clock that reads them.
+  reg known_reg, len_ok_reg;
+  always @(posedge clk) begin : len_rules
+    reg short_steps, line_len_ok, prof_len_ok, heat_len_ok;
+    reg [7:0] len_m6, len_m28;
+    if (rst) begin
+      known_reg  <= 1'b0;
+      len_ok_reg <= 1'b0;
+    end else if (take && st_reg == ST_CRC2) begin
+      short_steps = pay_reg[7];  // flag bit 7: int16 step fields
+      len_m6 = len_reg - 8'd6;
+      line_len_ok = (len_reg >= `FPGACNC_LEN_LINE_HEADER) &&
+                    (short_steps ? (len_m6[0] == 1'b0 && {1'b0, len_m6[7:1]} <= NAX8)
+                                 : (len_m6[1:0] == 2'b00 && {2'b00, len_m6[7:2]} <= NAX8));
+      // LINE_PROFILE: the same step fields from byte 28
+      len_m28 = len_reg - 8'd28;
+      prof_len_ok = (len_reg >= `FPGACNC_LEN_LINE_PROFILE_HEADER) &&
+                    (short_steps ? (len_m28[0] == 1'b0 && {1'b0, len_m28[7:1]} <= NAX8)
+                                 : (len_m28[1:0] == 2'b00 && {2'b00, len_m28[7:2]} <= NAX8));
+      heat_len_ok = t_heat && ((t_hcfg && len_reg == `FPGACNC_LEN_HEATER_CONFIG) ||
+                    (t_hset && len_reg == `FPGACNC_LEN_HEATER_SETPOINT) ||
+                    (t_htab && len_reg >= `FPGACNC_LEN_THERMISTOR_TABLE_MIN &&
+                     len_reg <= `FPGACNC_LEN_THERMISTOR_TABLE_MAX && !len_reg[0]) ||
+                    (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
+                    (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
+      known_reg <= t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
                t_lprof || t_arc || t_out || t_heat;
-  wire len0 = (len_reg == 8'd0);
-  wire len_ok = ((t_hello || t_status || t_fclr || t_rel) && len0) ||
+      len_ok_reg <= ((t_hello || t_status || t_fclr || t_rel) && len_reg == 8'd0) ||
                 (t_cfg && len_reg == `FPGACNC_LEN_CONFIG_AXIS) ||
                 (t_num && len_reg == `FPGACNC_LEN_NUMERATORS) ||
                 (t_dwell && len_reg == `FPGACNC_LEN_DWELL) || (t_line && line_len_ok) ||
                 (t_lprof && prof_len_ok) || (t_arc && len_reg == `FPGACNC_LEN_ARC) ||
                 (t_out && len_reg == `FPGACNC_LEN_OUTPUT) || heat_len_ok;
+    end
+  end
   // The field rules (frame_fields) are evaluated on the edge that takes the frame's last byte:
   // payload, LEN and TYPE are complete then and stay until the CHECK clock, so field_ok holds the
   // rules of the frame being checked.
@@ -292,7 +302,7 @@ module frame_decoder #(
   wire seq_dup = seq_diff[7];  // next_seq - 128 .. next_seq - 1
 
   wire v2_chk = chk_reg && !chk_v1_reg;
-  wire v2_accept = v2_chk && (crc == 16'd0) && known && len_ok && field_ok && sequenced && seq_new &&
+  wire v2_accept = v2_chk && (crc == 16'd0) && known_reg && len_ok_reg && field_ok && sequenced && seq_new &&
                    (!to_fifo || m_axis_tready);
   wire v1_write = chk_reg && chk_v1_reg && m_axis_tready;
 
@@ -366,12 +376,12 @@ module frame_decoder #(
         crc_error_reg  <= 1'b1;
       end else begin
         v2_mode_reg <= 1'b1;
-        if (!known || !len_ok || !field_ok) begin
+        if (!known_reg || !len_ok_reg || !field_ok) begin
           nak_reg          <= 1'b1;
           nak_seq_reg      <= seq_reg;
-          nak_reason_reg   <= !known ? R_UNKNOWN_TYPE : !len_ok ? R_BAD_LENGTH : R_BAD_FIELD;
-          unknown_type_reg <= !known;
-          length_error_reg <= known && !len_ok;
+          nak_reason_reg   <= !known_reg ? R_UNKNOWN_TYPE : !len_ok_reg ? R_BAD_LENGTH : R_BAD_FIELD;
+          unknown_type_reg <= !known_reg;
+          length_error_reg <= known_reg && !len_ok_reg;
         end else if (!sequenced) begin
           frame_ok_reg <= 1'b1;
           hello_reg    <= t_hello;
