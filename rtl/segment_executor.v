@@ -252,7 +252,6 @@ module segment_executor #(
   // SETUP ends when the clocks since the DIR write (setup_cnt_reg, 1 in the first SETUP clock)
   // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
   // (the run starts on edge D + max(largest setup, 1)).
-  wire [N_AXES-1:0] setup_ok;
   wire [N_AXES-1:0] step_req;
 
   generate
@@ -358,27 +357,26 @@ module segment_executor #(
     end
   endgenerate
 
-  // The running arc's plane (taken on accept of an arc): per axis, whether it is the walk's u, v
-  // or the helix axis. Arc step requests per axis (u, v, and the helix when the axis exists).
-  reg [1:0] plane_reg;
-  wire [N_AXES-1:0] arc_uv;  // the axis is the arc's u or v (in-arc DIR writes and checks)
-  wire [N_AXES-1:0] arc_sdir;  // the direction of the axis's arc step (u: x_dir, v: y_dir)
-  genvar p;
-  generate
-    for (p = 0; p < N_AXES; p = p + 1) begin : g_plane
-      wire is_u = (plane_reg == 2'd0 && p == 0) || (plane_reg == 2'd1 && p == 2) ||
-                  (plane_reg == 2'd2 && p == 1);
-      wire is_v = (plane_reg == 2'd0 && p == 1) || (plane_reg == 2'd1 && p == 0) ||
-                  (plane_reg == 2'd2 && p == 2);
-      wire is_h = (plane_reg == 2'd0 && p == 2) || (plane_reg == 2'd1 && p == 1) ||
-                  (plane_reg == 2'd2 && p == 0);
-      assign arc_req[p] = (is_u && arc_xs) || (is_v && arc_ys) || (is_h && arc_zs);
-      assign arc_ann[p] = arc_tick && arc_dvalid &&
-                          ((is_u && arc_nx != dir_tgt_reg[p]) || (is_v && arc_ny != dir_tgt_reg[p]));
-      assign arc_uv[p] = is_u || is_v;
-      assign arc_sdir[p] = is_u ? arc_sd[0] : arc_sd[1];
+  // The running arc's plane (taken on accept of an arc) as per-axis masks: the axis of the walk's
+  // u, v and of the helix (none for plane 3, which the decoder refuses). Arc step requests per
+  // axis (u, v, and the helix when the axis exists).
+  reg [N_AXES-1:0] u_mask_reg, v_mask_reg, h_mask_reg;
+  function [N_AXES-1:0] axis_bit;  // the mask of axis i (0 when the build has no axis i)
+    input integer i;
+    integer j;
+    begin
+      for (j = 0; j < N_AXES; j = j + 1) axis_bit[j] = (j == i);
     end
-  endgenerate
+  endfunction
+  wire [N_AXES-1:0] arc_uv = u_mask_reg | v_mask_reg;  // in-arc DIR writes and checks
+  // the direction of the axis's arc step (u: x_dir, v: y_dir)
+  wire [N_AXES-1:0] arc_sdir = (u_mask_reg & {N_AXES{arc_sd[0]}}) |
+                               (~u_mask_reg & {N_AXES{arc_sd[1]}});
+  assign arc_req = (u_mask_reg & {N_AXES{arc_xs}}) | (v_mask_reg & {N_AXES{arc_ys}}) |
+                   (h_mask_reg & {N_AXES{arc_zs}});
+  assign arc_ann = {N_AXES{arc_tick && arc_dvalid}} &
+                   ((u_mask_reg & ({N_AXES{arc_nx}} ^ dir_tgt_reg)) |
+                    (v_mask_reg & ({N_AXES{arc_ny}} ^ dir_tgt_reg)));
   localparam integer NSW = (N_AXES >= 3) ? 3 : 2;  // axes an arc's u / v can be on
   reg [16*NSW-1:0] since_wr_reg;  // clocks since the last DIR write per axis (saturating)
   reg arc_dir_viol_reg;
@@ -395,7 +393,6 @@ module segment_executor #(
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
       assign step_req[a] = (dda_step[a] || prof_step[a] || arc_req[a]) && !abort;
-      assign setup_ok[a] = !setup_axes_reg[a] || (setup_cnt_reg >= cfg_dir_setup[16*a+:16]);
 
       dda_linear #(
           .TMN_FROM_TOTAL(LEAN_DDA),
@@ -454,7 +451,8 @@ module segment_executor #(
   endgenerate
 
   integer k;
-  always @(posedge clk) begin
+  always @(posedge clk) begin : seq
+    reg setup_ok;  // SETUP: every axis written on leaving HOLD has had its DIR setup
     seg_start_reg <= 1'b0;
     seg_done_reg  <= 1'b0;
     pend_reg      <= (pend_reg & ~dir_wr) | (accept ? rev : arc_ann);
@@ -482,7 +480,14 @@ module segment_executor #(
       last_reg <= (left_reg == 64'd2);
     end
 
-    if (accept && arc_in) plane_reg <= s_axis_arc_plane;
+    if (accept && arc_in) begin
+      u_mask_reg <= (s_axis_arc_plane == 2'd0) ? axis_bit(0) : (s_axis_arc_plane == 2'd1) ?
+                    axis_bit(2) : (s_axis_arc_plane == 2'd2) ? axis_bit(1) : {N_AXES{1'b0}};
+      v_mask_reg <= (s_axis_arc_plane == 2'd0) ? axis_bit(1) : (s_axis_arc_plane == 2'd1) ?
+                    axis_bit(0) : (s_axis_arc_plane == 2'd2) ? axis_bit(2) : {N_AXES{1'b0}};
+      h_mask_reg <= (s_axis_arc_plane == 2'd0) ? axis_bit(2) : (s_axis_arc_plane == 2'd1) ?
+                    axis_bit(1) : (s_axis_arc_plane == 2'd2) ? axis_bit(0) : {N_AXES{1'b0}};
+    end
     if (accept) begin
       kind_reg    <= prof_in ? K_PROFILE : arc_in ? K_ARC : K_LINE;
       code_reg    <= s_axis_code;
@@ -514,7 +519,10 @@ module segment_executor #(
         end
       end
       S_SETUP: begin
-        if (&setup_ok) begin
+        setup_ok = 1'b1;
+        for (k = 0; k < N_AXES; k = k + 1)
+          if (setup_axes_reg[k] && setup_cnt_reg < cfg_dir_setup[16*k+:16]) setup_ok = 1'b0;
+        if (setup_ok) begin
           state_reg     <= S_RUN;
           seg_start_reg <= 1'b1;
           laser_reg     <= (code_reg != 2'd0) && (power_reg != 8'd0);
@@ -578,7 +586,9 @@ module segment_executor #(
       seg_done_reg    <= 1'b0;
       seg_done_v2_reg <= 1'b0;
       since_wr_reg    <= {NSW{16'hFFFF}};
-      plane_reg       <= 2'd0;
+      u_mask_reg      <= axis_bit(0);  // plane 0 (XY)
+      v_mask_reg      <= axis_bit(1);
+      h_mask_reg      <= axis_bit(2);
       arc_dir_viol_reg <= 1'b0;
       arc_err_reg     <= 1'b0;
       arc_end_reg     <= 1'b0;
