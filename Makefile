@@ -105,7 +105,7 @@ demo: configure
 
 # Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz.
 synth: deps
-	EXTRA=fixed ./scripts/synth_report.sh $(BUILD)/synth
+	EXTRA=v1-board-fixed ./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth
 	./scripts/ice40_blocks.sh $(BUILD)/synth
 
