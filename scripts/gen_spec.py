@@ -668,11 +668,12 @@ def main():
                 stale += 1
                 sys.stdout.writelines(difflib.unified_diff(
                     old.splitlines(True), text.splitlines(True), f"{rel} (committed)",
-                    f"{rel} (from {SPEC})"))
+                    f"{rel} (generated)"))
         if stale:
-            print(f"gen_spec: {stale} file(s) not up to date with {SPEC}: run `make spec`", file=sys.stderr)
+            print(f"gen_spec: {stale} file(s) not up to date with {SPEC} and {CONFIGS}: run `make spec`",
+                  file=sys.stderr)
             return 1
-        print(f"gen_spec: {len(files)} files up to date with {SPEC}")
+        print(f"gen_spec: {len(files)} files up to date with {SPEC} and {CONFIGS}")
         return 0
     base = a.out if a.out else ROOT
     for rel, text in files.items():
