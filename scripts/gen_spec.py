@@ -149,39 +149,56 @@ def load_configs():
     """The [[config]] entries of spec/configs.toml, checked for form (cnc_core's elaboration
     guards decide which parameter combinations are legal; scripts/lint.sh elaborates each)."""
     try:
-        with open(ROOT / CONFIGS, "rb") as f:
-            c = tomllib.load(f)
+        text = (ROOT / CONFIGS).read_text()
+        c = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         m = re.search(r"line (\d+), column (\d+)", str(e))
         at = f"{m.group(1)}:{m.group(2)}" if m else "1:1"
         raise SpecError(f"{CONFIGS}:{at}: {e}") from e
+    lines = text.splitlines()
+    starts = [n for n, line in enumerate(lines) if line.strip() == "[[config]]"]
+
+    def cfail(i, key, why):
+        """Error at `key` inside the i-th [[config]] entry (its header line when not found)."""
+        lo = starts[i] if i < len(starts) else 0
+        hi = starts[i + 1] if i + 1 < len(starts) else len(lines)
+        at = f"{lo + 1}:1"
+        for n in range(lo, hi):
+            col = lines[n].find(f"{key} =") if key else -1
+            if col >= 0:
+                at = f"{n + 1}:{col + 1}"
+                break
+        name = c["config"][i].get("name", "?")
+        raise SpecError(f"{CONFIGS}:{at}: config {name}: {why}")
+
     seen = set()
-    for cfg in c.get("config", []):
-        name = cfg.get("name", "?")
-        where = f"config {name}"
+    for i, cfg in enumerate(c.get("config", [])):
         for k in ("name", "doc", "used", "params"):
             if k not in cfg:
-                fail(where, f"{k} missing", CONFIGS)
-        if not re.fullmatch(r"[a-z0-9]+(-[a-z0-9]+)*", name):
-            fail(where, "name must be lower-case letters and digits in words joined by '-'", CONFIGS)
+                cfail(i, None, f"{k} missing")
+        name = cfg["name"]
+        if not isinstance(name, str) or not re.fullmatch(r"[a-z0-9]+(-[a-z0-9]+)*", name):
+            cfail(i, "name", "name must be lower-case letters and digits in words joined by '-'")
         if name in seen:
-            fail(where, "name given twice", CONFIGS)
+            cfail(i, "name", "name given twice")
         seen.add(name)
         p = cfg["params"]
         for k in p:
             if k not in CONFIG_PARAMS:
-                fail(f"{where} {k}", f"not a build parameter ({', '.join(CONFIG_PARAMS)})", CONFIGS)
+                cfail(i, k, f"{k} is not a build parameter ({', '.join(CONFIG_PARAMS)})")
         for k in CONFIG_PARAMS:
             if k not in p:
-                fail(where, f"params: {k} missing (every configuration sets all {len(CONFIG_PARAMS)})", CONFIGS)
+                cfail(i, "params", f"{k} missing (every configuration sets all {len(CONFIG_PARAMS)})")
             if not isinstance(p[k], int) or isinstance(p[k], bool):
-                fail(f"{where} {k}", "value must be an integer", CONFIGS)
+                cfail(i, k, f"{k} must be an integer")
+        if not isinstance(cfg["doc"], str) or not cfg["doc"]:
+            cfail(i, "doc", "doc must be a line of text")
         if not isinstance(cfg["used"], list) or not all(isinstance(u, str) for u in cfg["used"]):
-            fail(where, "used must be a list of strings", CONFIGS)
-        if "board_top" in cfg and not re.fullmatch(r"[a-z_][a-z0-9_]*", cfg["board_top"]):
-            fail(where, "board_top must be a module name", CONFIGS)
+            cfail(i, "used", "used must be a list of strings")
+        if "board_top" in cfg and not re.fullmatch(r"[a-z_][a-z0-9_]*", str(cfg["board_top"])):
+            cfail(i, "board_top", "board_top must be a module name")
     if not seen:
-        fail("config", "no [[config]] entry", CONFIGS)
+        raise SpecError(f"{CONFIGS}:1:1: no [[config]] entry")
     return c["config"]
 
 
