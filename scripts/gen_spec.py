@@ -7,6 +7,7 @@ numbers, written once) and spec/configs.toml (cnc_core's named build configurati
   spec/spec.cmake                  CMake variables (the benches' SAMPLE_CLKS)
   spec/vectors.txt                 worked frames read by the host, RTL and twin codec tests
   spec/configs.cmake               the configurations' Verilator -G arguments (tb/, systemc/)
+  rtl/include/fpgacnc_configs.vh   the parameters of the configurations a board top instantiates
   scripts/configs.sh               the configurations for the lint, synthesis and timing scripts
   docs/protocol.md, docs/architecture.md, docs/synthesis.md: the tables between
                                    "<!-- spec:NAME begin -->" and "<!-- spec:NAME end -->" comments
@@ -457,6 +458,22 @@ def gen_configs_cmake(d):
     return "\n".join(L) + "\n"
 
 
+def gen_configs_vh(d):
+    L = [f"// {CONFIGS_HEADER}.",
+         "// The parameters of cnc_core's named configurations that a board top instantiates",
+         "// (board_top in spec/configs.toml): `FPGACNC_CFG_<NAME>_<PARAMETER>.",
+         "`ifndef FPGACNC_CONFIGS_VH",
+         "`define FPGACNC_CONFIGS_VH"]
+    for c in d["config"]:
+        if "board_top" not in c:
+            continue
+        L.append(f"// {c['name']} ({c['board_top']}): {c['doc']}")
+        for k in CONFIG_PARAMS:
+            L.append(f"`define FPGACNC_CFG_{macro(c['name'])}_{k} {c['params'][k]}")
+    L.append("`endif")
+    return "\n".join(L) + "\n"
+
+
 def gen_configs_sh(d):
     def q(x):
         return "'" + x.replace("'", "'\\''") + "'"
@@ -658,6 +675,7 @@ def outputs(d):
         "spec/spec.cmake": gen_cmake(d),
         "spec/vectors.txt": gen_vectors(d),
         "spec/configs.cmake": gen_configs_cmake(d),
+        "rtl/include/fpgacnc_configs.vh": gen_configs_vh(d),
         "scripts/configs.sh": gen_configs_sh(d),
     }
     for doc in ("docs/protocol.md", "docs/architecture.md", "docs/synthesis.md"):
