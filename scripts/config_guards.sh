@@ -7,7 +7,7 @@
 # Every named configuration of spec/configs.toml is elaborated by scripts/lint.sh.
 # Exit non-zero on the first case that does not behave. CTest lint_config_guards (label lint).
 set -uo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 2
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 fail=0
