@@ -4,8 +4,8 @@
 # naming the missing module cnc_core_illegal_<rule> that says what is wrong; one of them in Yosys
 # too. A few legal combinations (the defaults, PROTO_V2 = 0 alone, which relies on the options'
 # defaults following PROTO_V2, and ARCS without PROFILES) must elaborate without that error.
-# Every named configuration of spec/configs.toml is elaborated by scripts/lint.sh.
-# Exits non-zero when any case does not behave (each is reported). CTest lint_config_guards (label lint).
+# Every named configuration of spec/configs.toml is elaborated by scripts/lint.sh. Exits non-zero
+# when any case does not behave (each is reported). CTest lint_config_guards (label lint).
 set -uo pipefail
 cd "$(dirname "$0")/.." || exit 2
 log=$(mktemp)
