@@ -29,8 +29,9 @@ build: configure
 	  echo "make build: failed; building again (Verilator renames generated files after some RTL edits)"; \
 	  cmake --build $(BUILD) -j $(JOBS) -- -k >/dev/null 2>&1; cmake --build $(BUILD) -j $(JOBS); }
 
-# Regenerate the files written from spec/protocol.toml (Verilog and C++ headers, spec.cmake, the
-# worked-frame vectors, the docs' tables); the CTest spec_generated_up_to_date checks them.
+# Regenerate the files written from spec/protocol.toml and spec/configs.toml (Verilog and C++
+# headers, spec.cmake, the worked-frame vectors, the configurations for CMake and the scripts, the
+# docs' tables); the CTest spec_generated_up_to_date checks them.
 spec:
 	python3 scripts/gen_spec.py
 
@@ -105,7 +106,7 @@ demo: configure
 
 # Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz.
 synth: deps
-	EXTRA=fixed ./scripts/synth_report.sh $(BUILD)/synth
+	EXTRA=v1-board-fixed ./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth
 	./scripts/ice40_blocks.sh $(BUILD)/synth
 

@@ -39,8 +39,12 @@
 //   packet_count counts v1 packets queued and v2 frames that passed every check.
 // rst is synchronous, active high; the board top synchronizes its reset button.
 //
-// Build options (Verilog parameters; the defaults 1 build everything, as the board top and every
-// bench use it; docs/synthesis.md has the resource figures of each configuration):
+// Build options (Verilog parameters). The defaults build everything with 4 axes; PROFILES, ARCS,
+// HEATERS and OUTPUTS default to PROTO_V2 and LEAN_TRIM to 1 when PROTO_V2 = 0, so setting
+// PROTO_V2 = 0 alone gives the trimmed v1 build. spec/configs.toml names the configurations that
+// are built, linted, synthesised and timed (docs/synthesis.md has their table and resource
+// figures). Each option is 0 or 1; an illegal combination stops elaboration (below: a module named
+// cnc_core_illegal_<rule> is instantiated, which does not exist).
 //   PROTO_V2 = 0  protocol v1 only, as the original controller: packet_decoder_v1 (any first
 //                 byte other than 0xFF starts an 11-byte motion packet, 0xFF a 9-byte init; the
 //                 100 ms watchdog) hands its one-entry output register straight to segment_prep
@@ -49,30 +53,31 @@
 //                 previous one is still waiting for segment_prep is dropped (overruns). The v2-only
 //                 status outputs are 0 (fifo_level is 1 while a decoded packet waits), the runtime
 //                 configuration is the cfg port only, and a latched fault (STEP timing violation,
-//                 e-stop) clears only at reset (v1 has no FAULT_CLEAR). PROTO_V2 = 0 implies
-//                 PROFILES = ARCS = HEATERS = 0 (v1 cannot carry them).
+//                 e-stop) clears only at reset (v1 has no FAULT_CLEAR). Needs PROFILES = ARCS =
+//                 HEATERS = OUTPUTS = 0 (v1 cannot carry their frames).
 //   PROFILES = 0  no trapezoidal profiles: LINE_PROFILE (0x12) frames are answered NAK
 //                 UNKNOWN_TYPE; no profile_gen / dda_profile / profile products in prep and
 //                 executor; the FIFO entry drops the profile fields (177 bits).
 //   ARCS = 0      no circular DDA: ARC (0x13) frames are answered NAK UNKNOWN_TYPE; no arc_dda,
 //                 no ARC arithmetic in segment_prep; the FIFO entry drops the ARC fields (489
-//                 bits; with PROFILES = 0 as well the entry is 45 + 32 * N_AXES bits).
+//                 bits; with PROFILES = 0 as well the entry is 45 + 32 * N_AXES bits). ARCS and
+//                 PROFILES are independent (an arc runs its own pacing, never a profile).
 //   OUTPUTS = 0   no machine outputs: OUTPUT (0x15) frames are answered NAK UNKNOWN_TYPE, the
-//                 output pins are low (PROTO_V2 = 0 implies it).
+//                 output pins are low.
 //   HEATERS = 0   no heater_block: the heater frames (0x20..0x24) are answered NAK UNKNOWN_TYPE,
 //                 heater and adc_* outputs are low, adc_sdo is ignored, STATUS still carries its
 //                 16 heater bytes (all 0: heaters idle, no faults).
-//   LEAN_TRIM = 1 (used only with PROTO_V2 = 0): segment_prep is built for v1 entries only
+//   LEAN_TRIM = 1 (PROTO_V2 = 0 only): segment_prep is built for v1 entries only
 //                 (V1_ONLY: narrower divider and multiplier, no v2 paths) and the executor's DDAs
 //                 compute T - n themselves and keep no steps-left counter (LEAN_DDA): same pins
-//                 on every clock, fewer
-//                 registers and LUTs. LEAN_TRIM = 0 keeps the general datapath (the bench
-//                 test_cnc_core_lean runs both in lockstep).
-//   STEP_CFG = 0  (used only with PROTO_V2 = 0): the step timing is fixed at STEP_HIGH, STEP_LOW,
+//                 on every clock, fewer registers and LUTs. LEAN_TRIM = 0 keeps the general
+//                 datapath (the bench test_cnc_core_lean runs both in lockstep).
+//   STEP_CFG = 0  (PROTO_V2 = 0 only): the step timing is fixed at STEP_HIGH, STEP_LOW,
 //                 DIR_SETUP, DIR_HOLD on every axis, as on the original controller (the board top
 //                 ties cfg_wr low too): no shadow and active sets, no minimum-period scanner, and
 //                 the cfg_* port is not read. With cfg_wr held low the pins are the same on every
 //                 clock as with STEP_CFG = 1.
+//   N_AXES        2..15 (X and Y always exist; 15 is the minimum-period scanner's bound, below).
 `default_nettype none
 `include "fpgacnc_spec.vh"
 
@@ -94,13 +99,13 @@ module cnc_core #(
     parameter HEAT_PWM_BITS     = 10,
     parameter HEAT_PWM_DIV      = 4883,                // heater PWM 10 Hz at 50 MHz
     parameter PROTO_V2          = 1,                   // build options (header comment)
-    parameter PROFILES          = 1,
-    parameter ARCS              = 1,
-    parameter HEATERS           = 1,
-    parameter OUTPUTS           = 1,
+    parameter PROFILES          = PROTO_V2,
+    parameter ARCS              = PROTO_V2,
+    parameter HEATERS           = PROTO_V2,
+    parameter OUTPUTS           = PROTO_V2,
     parameter FAN_PWM_HZ        = 1000,                // fan PWM frequency (256 counts a period)
-    parameter LEAN_TRIM         = 1,                   // PROTO_V2 = 0 only (header comment)
-    parameter STEP_CFG          = 1                    // PROTO_V2 = 0 only (header comment)
+    parameter LEAN_TRIM         = (PROTO_V2 == 0) ? 1 : 0,  // 1: PROTO_V2 = 0 only
+    parameter STEP_CFG          = 1                    // 0: PROTO_V2 = 0 only
 ) (
     input wire clk,
     input wire rst,
@@ -186,6 +191,57 @@ module cnc_core #(
   localparam integer FIFO_W = (ARC_EN != 0)  ? ENTRY_W :
                               (PROF_EN != 0) ? `FPGACNC_ENTRY_PROF_W + 32 * N_AXES
                                              : `FPGACNC_ENTRY_BASE_W + 32 * N_AXES;
+
+  // ---------------------------------------------------------------- build option guards
+  // An illegal combination of the build options (header comment) instantiates a module that does
+  // not exist, named after the rule it breaks: Verilator, Icarus, Yosys and Quartus all stop at
+  // elaboration and name it.
+  generate
+    if (PROTO_V2 != 0 && PROTO_V2 != 1) begin : g_bad_proto_v2
+      cnc_core_illegal_PROTO_V2_not_0_or_1 u_err ();
+    end
+    if (PROFILES != 0 && PROFILES != 1) begin : g_bad_profiles
+      cnc_core_illegal_PROFILES_not_0_or_1 u_err ();
+    end
+    if (ARCS != 0 && ARCS != 1) begin : g_bad_arcs
+      cnc_core_illegal_ARCS_not_0_or_1 u_err ();
+    end
+    if (HEATERS != 0 && HEATERS != 1) begin : g_bad_heaters
+      cnc_core_illegal_HEATERS_not_0_or_1 u_err ();
+    end
+    if (OUTPUTS != 0 && OUTPUTS != 1) begin : g_bad_outputs
+      cnc_core_illegal_OUTPUTS_not_0_or_1 u_err ();
+    end
+    if (LEAN_TRIM != 0 && LEAN_TRIM != 1) begin : g_bad_lean_trim
+      cnc_core_illegal_LEAN_TRIM_not_0_or_1 u_err ();
+    end
+    if (STEP_CFG != 0 && STEP_CFG != 1) begin : g_bad_step_cfg
+      cnc_core_illegal_STEP_CFG_not_0_or_1 u_err ();
+    end
+    if (N_AXES < 2 || N_AXES > 15) begin : g_bad_n_axes
+      cnc_core_illegal_N_AXES_not_2_to_15 u_err ();
+    end
+    // v1 carries no profile, arc, heater or OUTPUT frame
+    if (PROTO_V2 == 0 && PROFILES != 0) begin : g_v1_profiles
+      cnc_core_illegal_PROFILES_needs_PROTO_V2_1 u_err ();
+    end
+    if (PROTO_V2 == 0 && ARCS != 0) begin : g_v1_arcs
+      cnc_core_illegal_ARCS_needs_PROTO_V2_1 u_err ();
+    end
+    if (PROTO_V2 == 0 && HEATERS != 0) begin : g_v1_heaters
+      cnc_core_illegal_HEATERS_needs_PROTO_V2_1 u_err ();
+    end
+    if (PROTO_V2 == 0 && OUTPUTS != 0) begin : g_v1_outputs
+      cnc_core_illegal_OUTPUTS_needs_PROTO_V2_1 u_err ();
+    end
+    // the v1 datapath trims and the fixed step timing exist in the v1 build only
+    if (PROTO_V2 != 0 && LEAN_TRIM != 0) begin : g_v2_lean_trim
+      cnc_core_illegal_LEAN_TRIM_needs_PROTO_V2_0 u_err ();
+    end
+    if (PROTO_V2 != 0 && STEP_CFG == 0) begin : g_v2_step_cfg
+      cnc_core_illegal_STEP_CFG_0_needs_PROTO_V2_0 u_err ();
+    end
+  endgenerate
 
   // ---------------------------------------------------------------- UART in
   wire [7:0] rx_tdata;

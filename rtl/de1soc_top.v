@@ -16,7 +16,9 @@
 // coolant_flood GPIO_0[10], coolant_mist GPIO_0[11], fan GPIO_0[12] (PWM at about FAN_PWM_HZ),
 // dout[0..3] GPIO_0[13..16]; high = on, all low after reset and on e-stop.
 // The reset button is synchronized (two flops) and released synchronously.
+// Its cnc_core is the configuration full-2axis of spec/configs.toml (fpgacnc_configs.vh).
 `default_nettype none
+`include "fpgacnc_configs.vh"
 
 module de1soc_top #(
     parameter CLK_HZ = 50_000_000,
@@ -76,9 +78,16 @@ module de1soc_top #(
   assign heater_bed    = heater_w[1];
 
   cnc_core #(
-      .CLK_HZ(CLK_HZ),
-      .BAUD  (BAUD),
-      .N_AXES(2),
+      .CLK_HZ    (CLK_HZ),
+      .BAUD      (BAUD),
+      .N_AXES    (`FPGACNC_CFG_FULL_2AXIS_N_AXES),
+      .PROTO_V2  (`FPGACNC_CFG_FULL_2AXIS_PROTO_V2),
+      .PROFILES  (`FPGACNC_CFG_FULL_2AXIS_PROFILES),
+      .ARCS      (`FPGACNC_CFG_FULL_2AXIS_ARCS),
+      .HEATERS   (`FPGACNC_CFG_FULL_2AXIS_HEATERS),
+      .OUTPUTS   (`FPGACNC_CFG_FULL_2AXIS_OUTPUTS),
+      .LEAN_TRIM (`FPGACNC_CFG_FULL_2AXIS_LEAN_TRIM),
+      .STEP_CFG  (`FPGACNC_CFG_FULL_2AXIS_STEP_CFG),
       .FAN_PWM_HZ(FAN_PWM_HZ)
   ) u_core (
       .clk         (clk),

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # RTL lint: every file in rtl/ must be clean under
 #   verilator --lint-only -Wall, iverilog -g2005, and Yosys (read, hierarchy, proc, check)
-# with the file's own module as top, and cnc_core's build options (lean configurations, see
-# rtl/cnc_core.v) elaborated the same three ways. Exit non-zero on any warning or error.
+# with the file's own module as top, and cnc_core in every named configuration of
+# spec/configs.toml (scripts/configs.sh) elaborated the same three ways, so an illegal entry there
+# (rtl/cnc_core.v's elaboration guards) fails too. Exit non-zero on any warning or error.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/configs.sh
+source scripts/configs.sh
 fail=0
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
@@ -28,18 +31,10 @@ yosys_one() {  # top, chparam arguments ("" for the default build)
 script="read_verilog -Irtl/include ${files[*]}; design -save base;"
 for f in "${files[@]}"; do script="$script $(yosys_one "$(basename "$f" .v)" "")"; done
 declare -A ygs=()
-# cnc_core build options: "name param=value ..." (the default build is checked above).
-configs=(
-  "lean N_AXES=2 PROTO_V2=0"
-  "lean4 N_AXES=4 PROTO_V2=0"
-  "lean-fixed N_AXES=2 PROTO_V2=0 STEP_CFG=0"
-  "lean-untrimmed N_AXES=2 PROTO_V2=0 LEAN_TRIM=0"
-  "v2-lines N_AXES=2 PROFILES=0 ARCS=0 HEATERS=0"
-  "v2-noarc N_AXES=4 ARCS=0"
-  "v2-noprof N_AXES=4 PROFILES=0 HEATERS=0"
-)
-for c in "${configs[@]}"; do
-  read -r name params <<<"$c"
+# cnc_core's named configurations (the default build is checked above).
+configs=("${FPGACNC_CONFIGS[@]}")
+for name in "${configs[@]}"; do
+  params=${FPGACNC_CONFIG_PARAMS[$name]}
   vg=() ig=() yg=""
   for pv in $params; do
     vg+=("-G$pv"); ig+=("-Pcnc_core.$pv"); yg="$yg -set ${pv%=*} ${pv#*=}"
@@ -60,8 +55,8 @@ if ! yosys -q -l "$log" -p "$script" >/dev/null 2>&1 || grep -qi "warning" "$log
       echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
     fi
   done
-  for c in "${configs[@]}"; do
-    read -r name params <<<"$c"
+  for name in "${configs[@]}"; do
+    params=${FPGACNC_CONFIG_PARAMS[$name]}
     if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; design -save base; $(yosys_one cnc_core "${ygs[$name]}")" >/dev/null 2>&1 \
         || grep -qi "warning" "$log"; then
       echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
@@ -69,6 +64,6 @@ if ! yosys -q -l "$log" -p "$script" >/dev/null 2>&1 || grep -qi "warning" "$log
   done
 fi
 if [ $fail -eq 0 ]; then
-  echo "lint: ${#files[@]} files clean (verilator -Wall, iverilog -g2005, yosys check), and cnc_core in ${#configs[@]} build-option configurations"
+  echo "lint: ${#files[@]} files clean (verilator -Wall, iverilog -g2005, yosys check), and cnc_core in its ${#configs[@]} named configurations (spec/configs.toml)"
 fi
 exit $fail

@@ -6,14 +6,17 @@
 # e.g. dda_linear inside segment_executor), and each submodule is mapped separately (-noflatten).
 # The per-block figures therefore add up to slightly more LUTs than the flattened build (ABC does
 # not optimize across the block boundaries); registers match to within a few.
-# Usage: scripts/synth_breakdown.sh [OUT_DIR] [CHPARAM...]
-#   default CHPARAM: "-set N_AXES 2 -set PROTO_V2 0" (the lean build); e.g.
-#   scripts/synth_breakdown.sh build/synth -set N_AXES 2 -set PROTO_V2 0 -set STEP_CFG 0
+# Usage: scripts/synth_breakdown.sh [OUT_DIR] [CONFIGURATION]
+#   a named configuration of spec/configs.toml (scripts/configs.sh), default v1-board; e.g.
+#   scripts/synth_breakdown.sh build/synth v1-board-fixed
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/configs.sh
+source scripts/configs.sh
 out=${1:-build/synth}
-shift || true
-chp=${*:-"-set N_AXES 2 -set PROTO_V2 0"}
+cfg=${2:-v1-board}
+fpgacnc_config_check "$cfg" synth_breakdown || exit 2
+chp=$(fpgacnc_config_chparam "$cfg")
 mkdir -p "$out"
 command -v yosys >/dev/null || { echo "synth_breakdown: yosys not found (Debian: yosys)"; exit 2; }
 blocks="segment_prep segment_executor dda_linear step_pulse uart_rx uart_tx packet_decoder_v1
@@ -28,7 +31,7 @@ stat="$out/breakdown_stat.txt"
 yosys -q -l "$out/breakdown.log" -p "read_verilog -Irtl/include rtl/*.v; chparam $chp cnc_core;
   hierarchy -top cnc_core; proc; flatten; opt -full; wreduce; opt_clean; $attrs submod;
   synth_intel_alm -family cyclonev -top cnc_core -noflatten; tee -q -o $stat stat" >/dev/null
-echo "cnc_core ($chp): per-block Yosys synth_intel_alm figures (cnc_core = its own logic)"
+echo "cnc_core $cfg ($chp): per-block Yosys synth_intel_alm figures (cnc_core = its own logic)"
 awk '
   /^=== / { name = $2; sub(/^cnc_core_bd_/, "", name); if (name == "design") name = "total"; next }
   $1 ~ /^MISTRAL_ALUT/ { lut[name] += $2 }

@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # Open-tool resource report for Cyclone V (Yosys synth_intel_alm -family cyclonev), checked against
-# constraints/resource_budget.txt. Three configurations:
-#   lean  cnc_core with N_AXES=2 PROTO_V2=0 (chparam; protocol v1 only: no frame decoder, FIFO,
-#         response encoder, profiles, arcs or heaters; the build options in rtl/cnc_core.v), the
-#         configuration to compare with the original controller (2 axes, v1, no FIFO)
-#   v1    de1soc_top, the DE1-SoC board (cnc_core with N_AXES=2, every feature built)
-#   full  cnc_core with N_AXES=4 (chparam), every status output a top-level port
-# and, when EXTRA="fixed" (make synth sets it; CTest does not, to save ~15 s):
-#   fixed cnc_core with N_AXES=2 PROTO_V2=0 STEP_CFG=0: the lean build with the step timing fixed
-#         at the defaults (no cfg port), the original controller's feature set
+# constraints/resource_budget.txt (keys <configuration>.<figure>), of named configurations of
+# spec/configs.toml (scripts/configs.sh): cnc_core with the configuration's parameters (chparam),
+# every status output a top-level port, or, for a configuration with a board top, that top
+# (full-2axis: de1soc_top, the DE1-SoC board with its LEDs and displays). By default
+#   v1-board    the original controller's feature set (2 axes, protocol v1 only, no FIFO), with
+#               the cfg port
+#   full-2axis  the DE1-SoC board (de1soc_top)
+#   full-4axis  cnc_core with every feature and 4 axes
+# make synth adds v1-board-fixed (the original's fixed step timing); CTest runs
+# "v1-board full-2axis" (the 4-axis build is make synth's).
 # Every run also fails on a Yosys warning (the former synth_smoke check; ABC's notes excepted).
 # For each: LUTs (MISTRAL_ALUT* cells), an ALM estimate, registers (MISTRAL_FF), DSP blocks
 # (MISTRAL_MUL*), RAM blocks and bits (MISTRAL_M10K 10240 bits, MISTRAL_MLAB 640 bits per block),
@@ -20,11 +21,12 @@
 # fitter packs better or worse than this, Quartus' figure is the authority).
 # Exits 1 when a figure exceeds its budget, 2 when Yosys fails or prints a warning.
 # Usage: scripts/synth_report.sh [OUT_DIR]     env: BUDGET_FILE (default constraints/resource_budget.txt),
-#                                                   EXTRA="fixed" (the fourth configuration),
-#                                                   CONFIGS (default "lean v1 full"; CTest runs
-#                                                   "lean v1": the 4-axis build is make synth's)
+#                                                   CONFIGS (default "v1-board full-2axis full-4axis"),
+#                                                   EXTRA (configurations after CONFIGS)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/configs.sh
+source scripts/configs.sh
 out=${1:-build/synth}
 mkdir -p "$out"
 budget_file=${BUDGET_FILE:-constraints/resource_budget.txt}
@@ -64,26 +66,23 @@ run() {
   R[$cfg.dsp]=$(cells "$stat" 'MISTRAL_MUL.*')
   R[$cfg.m10k]=$(cells "$stat" MISTRAL_M10K)
   R[$cfg.mlab]=$(cells "$stat" MISTRAL_MLAB)
-  R[$cfg.ram_bits]=$((R[$cfg.m10k] * 10240 + R[$cfg.mlab] * 640))
+  R[$cfg.ram_bits]=$((${R[$cfg.m10k]} * 10240 + ${R[$cfg.mlab]} * 640))
   R[$cfg.ltp_cells]=$(sed -nE 's/.*Longest topological path in .*\(length=([-0-9]+)\).*/\1/p' "$ltp" | sort -n | tail -1)
   R[$cfg.ltp_from]=$(awk '/Longest topological path/ {getline; sub(/^ *0: */, ""); print; exit}' "$ltp")
   R[$cfg.ltp_to]=$(awk '/^ *[0-9]+: / {l=$0} END {sub(/^ *[0-9]+: */, "", l); print l}' "$ltp")
 }
 
 cfgs=""
-for cfg in ${CONFIGS:-lean v1 full}; do
-  case $cfg in
-    lean) run lean cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 cnc_core;" ;;
-    v1) run v1 de1soc_top "" ;;
-    full) run full cnc_core "chparam -set N_AXES 4 cnc_core;" ;;
-    *) echo "synth_report: unknown configuration '$cfg' (lean, v1, full)"; exit 2 ;;
-  esac
+for cfg in ${CONFIGS:-v1-board full-2axis full-4axis} ${EXTRA:-}; do
+  fpgacnc_config_check "$cfg" synth_report || exit 2
+  board=${FPGACNC_CONFIG_BOARD_TOP[$cfg]}
+  if [ -n "$board" ]; then
+    run "$cfg" "$board" ""
+  else
+    run "$cfg" cnc_core "chparam $(fpgacnc_config_chparam "$cfg") cnc_core;"
+  fi
   cfgs="$cfgs $cfg"
 done
-if [[ " ${EXTRA:-} " == *" fixed "* ]]; then
-  run fixed cnc_core "chparam -set N_AXES 2 -set PROTO_V2 0 -set STEP_CFG 0 cnc_core;"
-  cfgs="$cfgs fixed"
-fi
 
 keys="luts alms registers dsp m10k mlab ram_bits ltp_cells"
 declare -A LABEL=([luts]="LUTs (MISTRAL_ALUT*)" [alms]="ALMs (estimate)" [registers]="registers (MISTRAL_FF)"
@@ -94,18 +93,12 @@ echo "Cyclone V (Yosys $(yosys -V | awk '{print $2}') synth_intel_alm -family cy
 fmt='%-28s %10s'
 h1=("" "original")
 h2=("" "(2 axes)")
-declare -A H1=([lean]="lean 2-axis" [v1]="2-axis full" [full]="4-axis full")
-declare -A H2=([lean]="v1 only" [v1]="de1soc_top" [full]="cnc_core")
 for cfg in $cfgs; do
-  [ "$cfg" = fixed ] && continue
-  fmt="$fmt %12s %7s"
-  h1+=("${H1[$cfg]}" "budget")
-  h2+=("${H2[$cfg]}" "")
+  w=${#cfg}; [ "$w" -lt 12 ] && w=12
+  fmt="$fmt %${w}s %7s"
+  h1+=("$cfg" "budget")
+  h2+=("${FPGACNC_CONFIG_BOARD_TOP[$cfg]:-cnc_core}" "")
 done
-if [[ " $cfgs " == *" fixed "* ]]; then
-  fmt="$fmt %12s %7s"
-  h1+=("lean 2-axis" "budget"); h2+=("fixed timing" "")
-fi
 fmt="$fmt\n"
 printf "$fmt" "${h1[@]}"
 printf "$fmt" "${h2[@]}"

@@ -23,8 +23,8 @@ target_link_libraries(bench_core PRIVATE vcore vexec fpgacnc_spec fmt::fmt)
 # Protocol benchmark (make bench; not built by `make` / `make test`): v1 stop-and-wait against
 # the v2 sliding window with the host's streamers, through the pins at 115 200 and 1 000 000 baud.
 if(FPGACNC_BUILD_HOST)
-  fpgacnc_verilated(vcore_1m TOP cnc_core PREFIX Vcnc_core_1m SOURCES ${FPGACNC_CORE_RTL}
-                    ARGS -GBAUD=1000000)
+  fpgacnc_verilated(vcore_1m TOP cnc_core PREFIX Vcnc_core_1m CONFIG full-4axis
+                    SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=1000000)
   set_target_properties(vcore_1m PROPERTIES EXCLUDE_FROM_ALL ON)
   add_executable(bench_protocol EXCLUDE_FROM_ALL ${CMAKE_CURRENT_SOURCE_DIR}/bench_protocol.cpp)
   fpgacnc_warnings(bench_protocol)

@@ -14,10 +14,11 @@ fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo
 fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
 fpgacnc_verilated(vencoder TOP response_encoder
                   SOURCES ${FPGACNC_RTL_DIR}/response_encoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
-fpgacnc_verilated(vcore TOP cnc_core SOURCES ${FPGACNC_CORE_RTL})
+fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis SOURCES ${FPGACNC_CORE_RTL})
 # cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
-fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m SOURCES ${FPGACNC_CORE_RTL}
-                  ARGS -GBAUD=3000000)
+fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m CONFIG full-4axis
+                  SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=3000000)
+# The DE1-SoC top: its cnc_core is the configuration full-2axis (spec/configs.toml).
 fpgacnc_verilated(vde1soc TOP de1soc_top
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/hex7seg.v
                           ${FPGACNC_RTL_DIR}/de1soc_top.v

@@ -1,21 +1,22 @@
 # Open-tool synthesis checks (label synth).
-# synth_report: Yosys synth_intel_alm resource report for cnc_core's lean build (2 axes, v1 only)
-#   and the DE1-SoC top (2 axes, everything), checked against constraints/resource_budget.txt;
-#   also fails on a Yosys warning. The 4-axis cnc_core (another ~2 min of Yosys) and the
-#   fixed-timing lean build are `make synth`'s. ~2 min alone on a 2-core machine.
+# synth_report: Yosys synth_intel_alm resource report for the configurations v1-board (cnc_core,
+#   2 axes, v1 only) and full-2axis (the DE1-SoC top, 2 axes, everything; spec/configs.toml),
+#   checked against constraints/resource_budget.txt; also fails on a Yosys warning. full-4axis
+#   (another ~2 min of Yosys) and v1-board-fixed are `make synth`'s. ~2 min alone on a 2-core
+#   machine.
 add_test(NAME synth_report
-         COMMAND ${CMAKE_COMMAND} -E env "CONFIGS=lean v1"
+         COMMAND ${CMAKE_COMMAND} -E env "CONFIGS=v1-board full-2axis"
                  ${CMAKE_SOURCE_DIR}/scripts/synth_report.sh ${CMAKE_BINARY_DIR}/synth
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 # COST: the longest tests start first under `ctest -j` (a fresh clone has no timing history), so
 # they do not form the tail of the run.
 set_tests_properties(synth_report PROPERTIES LABELS synth TIMEOUT 600 COST 1000)
 
-# ice40_timing: Yosys synth_ice40 + nextpnr-ice40 (HX8K ct256) of cnc_core's lean 2-axis build at
+# ice40_timing: Yosys synth_ice40 + nextpnr-ice40 (HX8K ct256) of the v1-board configuration at
 #   50 MHz, seed 1; fails below 50 MHz (docs/synthesis.md has every configuration's Fmax and
 #   margin over seeds). ~50 s.
 add_test(NAME ice40_timing
-         COMMAND ${CMAKE_COMMAND} -E env CONFIGS=lean2
+         COMMAND ${CMAKE_COMMAND} -E env CONFIGS=v1-board
                  ${CMAKE_SOURCE_DIR}/scripts/ice40_timing.sh ${CMAKE_BINARY_DIR}/synth
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 set_tests_properties(ice40_timing PROPERTIES LABELS synth TIMEOUT 600 COST 300)

@@ -1,11 +1,13 @@
-// System bench for cnc_core's lean build (N_AXES = 2, PROTO_V2 = 0: protocol v1 only, see the
-// build options in rtl/cnc_core.v) through its pins: v1 bytes bit-banged onto rx at 115200 baud,
-// the 0xAA ACKs decoded from tx, STEP/DIR recorded every clock. Checks a seeded v1 job with the
-// host's handshake (exact STEP schedule R + ceil(k*T/n), DIR, laser, ACK after the move,
-// positions), packets sent without waiting (run back to back, one ACK each), and that a v2 frame is
-// not understood (no answer, cut by the 100 ms watchdog like any partial v1 packet). Lockstep:
-// the trimmed lean datapath (LEAN_TRIM = 1) and the fixed step timing (STEP_CFG = 0) against the
-// general lean build, every output on every clock of a random v1 session.
+// System bench for cnc_core's reduced configurations (spec/configs.toml), first v1-board
+// (N_AXES = 2, PROTO_V2 = 0: protocol v1 only, see the build options in rtl/cnc_core.v) through
+// its pins: v1 bytes bit-banged onto rx at 115200 baud, the 0xAA ACKs decoded from tx, STEP/DIR
+// recorded every clock. Checks a seeded v1 job with the host's handshake (exact STEP schedule R +
+// ceil(k*T/n), DIR, laser, ACK after the move, positions), packets sent without waiting (run back
+// to back, one ACK each), and that a v2 frame is not understood (no answer, cut by the 100 ms
+// watchdog like any partial v1 packet); lines-2axis answers the frames it lacks NAK UNKNOWN_TYPE.
+// Lockstep: the trimmed v1 datapath (v1-board, LEAN_TRIM = 1) and the fixed step timing
+// (v1-board-fixed, STEP_CFG = 0) against the general datapath (v1-board-untrimmed), every output on
+// every clock of a random v1 session.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,11 +21,11 @@
 #include <utility>
 #include <vector>
 
-#include "Vcnc_core_lean.h"
-#include "Vcnc_core_lean_fast.h"
-#include "Vcnc_core_lean_fixed.h"
-#include "Vcnc_core_lean_ref.h"
-#include "Vcnc_core_lines.h"
+#include "Vcnc_core_lines_2axis.h"
+#include "Vcnc_core_v1_board.h"
+#include "Vcnc_core_v1_board_fast.h"
+#include "Vcnc_core_v1_board_fixed_fast.h"
+#include "Vcnc_core_v1_board_untrimmed_fast.h"
 #include "common/core_pins.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
@@ -53,9 +55,9 @@ uint64_t period_of(uint32_t num, uint16_t feed) {
   return std::max<uint64_t>(feed == 0 ? kFeed0Period : num / feed, kMinPeriod);
 }
 
-class LeanBench : public fpgacnc::tb::PinHarness<Vcnc_core_lean> {
+class V1BoardBench : public fpgacnc::tb::PinHarness<Vcnc_core_v1_board> {
  public:
-  LeanBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_lean>()) {
+  V1BoardBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_v1_board>()) {
     dut().estop = 0;
     dut().adc_sdo = 0;
     fpgacnc::tb::reset_core(*this);
@@ -72,7 +74,7 @@ class LeanBench : public fpgacnc::tb::PinHarness<Vcnc_core_lean> {
 
  protected:
   void observe() override {
-    const Vcnc_core_lean& m = dut();
+    const Vcnc_core_v1_board& m = dut();
     if (m.seg_start) starts_.push_back(cycle());
     if (m.seg_done) dones_.push_back(cycle());
     if (m.laser) ++laser_clocks_;
@@ -95,7 +97,7 @@ struct Move {
 
 // Checks the STEP rises of one move that started at seg_start cycle `start`: count, DIR and the
 // exact schedule start + ceil(k*T/n) per axis (T = P * n_dom).
-void check_steps(LeanBench& b, const Move& mv, uint64_t start, uint64_t period,
+void check_steps(V1BoardBench& b, const Move& mv, uint64_t start, uint64_t period,
                  const size_t rise0[2], int idx) {
   const int64_t steps[2] = {mv.sx, mv.sy};
   const uint64_t n_dom = std::max(mag(mv.sx), mag(mv.sy));
@@ -120,7 +122,7 @@ TEST(CncCoreLean, V1JobWithHandshake) {
   auto uni = [&](int64_t lo, int64_t hi) {
     return std::uniform_int_distribution<int64_t>(lo, hi)(rng);
   };
-  LeanBench b;
+  V1BoardBench b;
   EXPECT_EQ(b.dut().numerator_x, kDefaultNumerator);
   // init with other numerators: applied while idle, no ACK
   const uint32_t num = 9'375'000;
@@ -187,14 +189,14 @@ TEST(CncCoreLean, V1JobWithHandshake) {
   EXPECT_EQ(b.dut().packet_count, job.size() + 1);
   EXPECT_EQ(b.dut().faults, 0u);
   EXPECT_FALSE(b.heater_seen()) << "heater / ADC pins moved in a build without heaters";
-  std::printf("lean v1 job: %zu moves, seed %llu, %llu clocks\n", job.size(),
+  std::printf("v1-board job: %zu moves, seed %llu, %llu clocks\n", job.size(),
               static_cast<unsigned long long>(seed), static_cast<unsigned long long>(b.cycle()));
 }
 
 // Three packets sent without waiting: decoder register, segment_prep and executor each hold one;
 // the moves (same directions) run back to back with no idle clock, one ACK each.
 TEST(CncCoreLean, PacketsSentAheadRunBackToBack) {
-  LeanBench b;
+  V1BoardBench b;
   const Move mv[3] = {{1, 40, 10, 8000}, {0, 30, 30, 9000}, {2, 12, 40, 10000}};
   for (const Move& m : mv) b.queue(motion_packet(m.code, m.sx, m.sy, m.feed));
   ASSERT_TRUE(b.wait_bytes(2, 2'000'000)) << "three ACKs expected, got " << b.tx_bytes().size();
@@ -215,7 +217,7 @@ TEST(CncCoreLean, PacketsSentAheadRunBackToBack) {
 // A v2 HELLO frame is not understood by a v1-only build: it is a 6-byte partial v1 packet, dropped
 // by the watchdog (timeouts), no answer, no motion; the v2 status stays 0; v1 works after it.
 TEST(CncCoreLean, V2FrameIsNotUnderstood) {
-  LeanBench b;
+  V1BoardBench b;
   b.send(fpgacnc::tb::v2::hello(0));
   EXPECT_TRUE(b.dut().rx_partial);
   b.idle(kWatchdog + 1000);
@@ -238,7 +240,8 @@ TEST(CncCoreLean, V2FrameIsNotUnderstood) {
 // v2 build with LINE/DWELL only: LINE_PROFILE, ARC and heater frames are unknown types.
 TEST(CncCoreLean, LinesOnlyBuildAnswersUnknownType) {
   namespace v2 = fpgacnc::tb::v2;
-  fpgacnc::tb::PinHarness<Vcnc_core_lines> b(kAxes, fpgacnc::tb::core_pins<Vcnc_core_lines>());
+  fpgacnc::tb::PinHarness<Vcnc_core_lines_2axis> b(kAxes,
+                                                   fpgacnc::tb::core_pins<Vcnc_core_lines_2axis>());
   b.dut().estop = 0;
   b.dut().adc_sdo = 0;
   fpgacnc::tb::reset_core(b);
@@ -292,7 +295,7 @@ TEST(CncCoreLean, LinesOnlyBuildAnswersUnknownType) {
 }
 
 // ---------------------------------------------------------------- lockstep (LEAN_TRIM, STEP_CFG)
-// Two lean builds driven with the same pins every clock; every output compared every clock. The
+// Two v1 builds driven with the same pins every clock; every output compared every clock. The
 // models (tb/lean.cmake) have a 2.5 Mbaud UART, a 20 000-clock watchdog and STEP high 3 / low 2,
 // DIR setup 6 / hold 4, so one random v1 session holds hundreds of moves.
 constexpr double kFastBaud = 2.5e6;
@@ -520,13 +523,14 @@ void lockstep_test(const char* name, uint64_t fallback_seed, bool cfg) {
 // LEAN_TRIM = 1 (segment_prep V1_ONLY, executor TMN_FROM_TOTAL) against LEAN_TRIM = 0, cfg port
 // writes included.
 TEST(CncCoreLean, TrimmedDatapathMatchesGeneralInLockstep) {
-  lockstep_test<Vcnc_core_lean_fast, Vcnc_core_lean_ref>("lean trim lockstep", 20261123, true);
+  lockstep_test<Vcnc_core_v1_board_fast, Vcnc_core_v1_board_untrimmed_fast>(
+      "v1-board trim lockstep", 20261123, true);
 }
 
-// STEP_CFG = 0 (fixed step timing) against the general lean build with the cfg port idle.
+// STEP_CFG = 0 (fixed step timing) against v1-board-untrimmed with the cfg port idle.
 TEST(CncCoreLean, FixedStepTimingMatchesIdleCfgPortInLockstep) {
-  lockstep_test<Vcnc_core_lean_fixed, Vcnc_core_lean_ref>("lean fixed-timing lockstep", 20261124,
-                                                          false);
+  lockstep_test<Vcnc_core_v1_board_fixed_fast, Vcnc_core_v1_board_untrimmed_fast>(
+      "v1-board-fixed lockstep", 20261124, false);
 }
 
 }  // namespace
