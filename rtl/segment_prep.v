@@ -207,15 +207,6 @@ module segment_prep #(
   wire [63:0] a_vx = araw_reg[159:96];
   wire [47:0] a_acc = araw_reg[95:48];
   wire [47:0] a_dd = araw_reg[47:0];
-  /* verilator lint_off UNUSEDSIGNAL */
-  wire signed [24:0] a_x1 = {a_dx[23], a_dx} - {a_i[23], a_i};  // |.| < 2^22: bits 23..22 = sign
-  wire signed [24:0] a_y1 = {a_dy[23], a_dy} - {a_j[23], a_j};
-  /* verilator lint_on UNUSEDSIGNAL */
-  wire [21:0] mag_i = a_i[23] ? -a_i[21:0] : a_i[21:0];  // |.| < 2^22 (decoder rule)
-  wire [21:0] mag_j = a_j[23] ? -a_j[21:0] : a_j[21:0];
-  wire [21:0] mag_x1 = a_x1[24] ? -a_x1[21:0] : a_x1[21:0];
-  wire [21:0] mag_y1 = a_y1[24] ? -a_y1[21:0] : a_y1[21:0];
-  wire [30:0] mag_z = a_dz[31] ? -a_dz[30:0] : a_dz[30:0];  // |DZ| < 2^31
   // squares (shift-add, 22 bits) and the Z products V*|DZ|, A*|DZ| (31 bits), one bit per clock
   reg [4*44-1:0] sq_mc_reg;  // 4 x 44 bits: |x0|, |y0|, |x1|, |y1|
   reg [4*22-1:0] sq_mp_reg;
@@ -231,15 +222,6 @@ module segment_prep #(
   reg [45:0] dq_reg;
   reg signed [47:0] dt_q_reg;
   reg [23:0] dt_r_reg;
-  wire [45:0] r0sq = {2'b00, sq_reg[44*0+:44]} + {2'b00, sq_reg[44*1+:44]};
-  wire [45:0] r1sq = {2'b00, sq_reg[44*2+:44]} + {2'b00, sq_reg[44*3+:44]};
-  wire [25:0] drem_shift = {drem_reg, dnd_reg[45]};
-  wire [25:0] drem_diff = drem_shift - {2'b00, a_nramp};
-  wire drem_ge = !drem_diff[25];
-  // the tangent signs at the start point (x0, y0) = (-I, -J): arc_dda's first-move directions
-  // (a zero component takes the inward sign)
-  wire arc_dx0 = (a_j == 24'sd0) ? !a_i[23] : (ccw_reg ? !a_j[23] : a_j[23]);
-  wire arc_dy0 = (a_i == 24'sd0) ? !a_j[23] : (ccw_reg ? a_i[23] : !a_i[23]);
   // axes whose DIR prep no longer knows after an arc (X, Y): no dir_fast until they move again
   reg [N_AXES-1:0] unk_reg;
 
@@ -296,18 +278,10 @@ module segment_prep #(
   reg [16:0] chk_hs_reg;  // max(hold,1) + max(setup,1) of one axis
   reg dir_fast_reg;
 
-  // |steps| and direction of the entry, masked by kind (v1: X and Y only; DWELL/kind 3: none)
-  wire [SW-1:0] abs_in;
-  wire [N_AXES-1:0] dir_in;
   wire [N_AXES-1:0] moving;
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_in
-      wire [31:0] s = in_steps[32*a+:32];
-      wire use_axis = (in_kind == K_MOTION) && (in_v2 || a < 2);
-      wire [31:0] mag = s[31] ? (~s + 32'd1) : s;
-      assign abs_in[32*a+:32] = use_axis ? mag : 32'd0;
-      assign dir_in[a] = !s[31];
       assign moving[a] = (abs_reg[32*a+:32] != 32'd0);
     end
   endgenerate
@@ -337,9 +311,6 @@ module segment_prep #(
   wire [31:0] feed32 = {16'd0, feed_reg};  // V1_ONLY uses the low 16 bits
   /* verilator lint_on UNUSEDSIGNAL */
   wire [DW-1:0] divisor = (V1_ONLY != 0) ? feed32[DW-1:0] : divisor_reg;
-  wire [DW:0] rem_shift = {rem_reg, div_in};
-  wire [DW:0] rem_diff = rem_shift - {1'b0, divisor};
-  wire rem_ge = !rem_diff[DW];  // rem_shift >= divisor
   // V1_ONLY multiplier step: total_reg = {high half, multiplier bits not yet used}
   wire [32:0] mul_hi = {1'b0, total_reg[63:32]} + (total_reg[0] ? {1'b0, quot_reg} : 33'd0);
 
@@ -348,8 +319,18 @@ module segment_prep #(
   wire accept_seg = idle_state && (in_kind != K_NUMERATORS) && !in_out && !abort;
   wire accept_out = idle_state && in_out && m_out_tready && !abort;
 
+  // The values one state uses are formed in that state's branch (block-local regs): the same
+  // logic as continuous assignments, and a simulator skips them in every other clock.
   integer i;
-  always @(posedge clk) begin
+  always @(posedge clk) begin : fsm
+    reg [SW-1:0] abs_in;  // IDLE: |steps| of the entry, masked by kind (v1: X and Y only;
+    reg [N_AXES-1:0] dir_in;  // DWELL/kind 3: none), and the directions
+    reg [DW:0] rem_shift, rem_diff;  // DIV: the restoring division step
+    reg rem_ge;  // rem_shift >= divisor
+    reg [45:0] r0sq, r1sq;  // ADIV: R0^2 and R1^2
+    reg [25:0] drem_shift, drem_diff;
+    reg drem_ge;
+    reg arc_dx0, arc_dy0;  // AFIX: the tangent signs at the start point
     init_applied_reg <= 1'b0;
     init_v2_reg      <= 1'b0;
     clamped_reg      <= 1'b0;
@@ -361,6 +342,11 @@ module segment_prep #(
           init_applied_reg <= 1'b1;
           init_v2_reg      <= in_v2;
         end else if (s_axis_tvalid && accept_seg) begin
+          for (i = 0; i < N_AXES; i = i + 1) begin
+            dir_in[i] = !in_steps[32*i+31];
+            abs_in[32*i+:32] = !((in_kind == K_MOTION) && (in_v2 || i < 2)) ? 32'd0 :
+                               in_steps[32*i+31] ? ~in_steps[32*i+:32] + 32'd1 : in_steps[32*i+:32];
+          end
           path_v1_reg  <= in_v1_motion;
           v2_reg       <= in_v2;
           code_reg     <= (in_kind == K_MOTION) ? in_code : 2'd0;
@@ -415,6 +401,11 @@ module segment_prep #(
       end
       S_ADIV: begin
         // iteration 0: |dT| and its sign; 1..46: one quotient bit each
+        r0sq = {2'b00, sq_reg[44*0+:44]} + {2'b00, sq_reg[44*1+:44]};
+        r1sq = {2'b00, sq_reg[44*2+:44]} + {2'b00, sq_reg[44*3+:44]};
+        drem_shift = {drem_reg, dnd_reg[45]};
+        drem_diff = drem_shift - {2'b00, a_nramp};
+        drem_ge = !drem_diff[25];
         if (iter_reg == 6'd0) begin
           dneg_reg <= (r1sq < r0sq);
           dnd_reg  <= (r1sq < r0sq) ? r0sq - r1sq : r1sq - r0sq;
@@ -438,6 +429,10 @@ module segment_prep #(
           dt_q_reg <= dneg_reg ? -{2'b00, dq_reg} : {2'b00, dq_reg};
           dt_r_reg <= drem_reg[23:0];
         end
+        // the tangent signs at the start point (x0, y0) = (-I, -J): arc_dda's first-move
+        // directions (a zero component takes the inward sign)
+        arc_dx0 = (a_j == 24'sd0) ? !a_i[23] : (ccw_reg ? !a_j[23] : a_j[23]);
+        arc_dy0 = (a_i == 24'sd0) ? !a_j[23] : (ccw_reg ? a_i[23] : !a_i[23]);
         // u, v move (first-move directions), the helix axis when DZ != 0; the executor's
         // HOLD/SETUP rules (the decoder allows planes other than XY and a helix only with 3 axes)
         abs_reg <= {SW{1'b0}};
@@ -449,7 +444,7 @@ module segment_prep #(
             dir_track_reg[i] <= (i == {30'd0, ax_u}) ? arc_dx0 : arc_dy0;
             unk_reg[i]       <= 1'b1;
           end else if (i == {30'd0, ax_h}) begin
-            abs_reg[32*i+:32] <= {1'b0, mag_z};
+            abs_reg[32*i+:32] <= {1'b0, a_dz[31] ? -a_dz[30:0] : a_dz[30:0]};  // |DZ| < 2^31
             dir_reg[i] <= !a_dz[31];
             if (a_dz != 32'd0) dir_track_reg[i] <= !a_dz[31];
           end
@@ -474,6 +469,9 @@ module segment_prep #(
           end
           iter_reg <= 6'd1;
         end else begin
+          rem_shift = {rem_reg, div_in};
+          rem_diff = rem_shift - {1'b0, divisor};
+          rem_ge = !rem_diff[DW];
           if (V1_ONLY == 0) dividend_reg <= {dividend_reg[30:0], 1'b0};
           else div_bit_reg <= v1_num[v1_bit_next];
           rem_reg      <= rem_ge ? rem_diff[DW-1:0] : rem_shift[DW-1:0];
@@ -686,6 +684,11 @@ module segment_prep #(
   // ARC squares and Z products (S_AMUL): iteration 0 loads; 1..31 add bit iter-1 of |x0|,
   // |y0|, |x1|, |y1| and |DZ|. (Not reset: S_AMUL always starts with the load.)
   always @(posedge clk) begin : amul_seq
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg signed [24:0] a_x1, a_y1;  // |.| < 2^22: bits 23..22 = sign
+    /* verilator lint_on UNUSEDSIGNAL */
+    reg [21:0] mag_i, mag_j, mag_x1, mag_y1;  // |.| < 2^22 (decoder rule)
+    reg [30:0] mag_z;  // |DZ| < 2^31
     reg [4*44-1:0] sq_n, mc_n;
     reg [4*22-1:0] mp_n;
     reg [94:0] ze_n, zc_n, zx_n;
@@ -695,6 +698,13 @@ module segment_prep #(
     integer k;
     if (state_reg == S_AMUL) begin
       if (iter_reg == 6'd0) begin
+        a_x1 = {a_dx[23], a_dx} - {a_i[23], a_i};
+        a_y1 = {a_dy[23], a_dy} - {a_j[23], a_j};
+        mag_i = a_i[23] ? -a_i[21:0] : a_i[21:0];
+        mag_j = a_j[23] ? -a_j[21:0] : a_j[21:0];
+        mag_x1 = a_x1[24] ? -a_x1[21:0] : a_x1[21:0];
+        mag_y1 = a_y1[24] ? -a_y1[21:0] : a_y1[21:0];
+        mag_z = a_dz[31] ? -a_dz[30:0] : a_dz[30:0];
         mc_n = {22'd0, mag_y1, 22'd0, mag_x1, 22'd0, mag_j, 22'd0, mag_i};
         mp_n = {mag_y1, mag_x1, mag_j, mag_i};
         sq_n = {4 * 44{1'b0}};
