@@ -262,6 +262,10 @@ struct JobCase {
   bool counting;
 };
 
+void PrintTo(const JobCase& c, std::ostream* os) {
+  *os << c.file << (c.counting ? " (character counting)" : " (send-response)");
+}
+
 class GrblStream : public ::testing::TestWithParam<JobCase> {};
 
 }  // namespace
