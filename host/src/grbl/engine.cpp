@@ -22,7 +22,7 @@ int error_code(const std::string& msg) {
   if (has("expected a number")) return 2;
   if (has("words on one line") || has("two '")) return 25;
   if (has("modal group")) return 21;
-  if (has("must be an integer") || has("are integers")) return 23;
+  if (has("integer")) return 23;
   if (has("negative")) return 4;
   if (has("radius")) return 34;
   if (has("needs P") || has("needs a P") || has("needs L") || has("needs both P")) return 28;
@@ -338,6 +338,8 @@ void Engine::process_line(const std::string& raw) {
     }
   } else if (alarm_ || sleep_) {
     rc = 9;
+  } else if (!std::isalpha(static_cast<unsigned char>(cmd[0]))) {
+    rc = 1;  // a value without its letter
   } else {
     rc = gcode_line(raw, check_);
   }
