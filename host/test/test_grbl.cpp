@@ -22,6 +22,7 @@
 #include "fpgacnc/grbl/settings.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/simboard/cli_board.h"
+#include "fpgacnc/simboard/runner.h"
 #include "fpgacnc/twins/twin_board.h"
 
 namespace fs = std::filesystem;
@@ -63,17 +64,24 @@ std::optional<Report> parse_report(const std::string& line) {
 // The engine with the twin board behind it, and a sender's view of it.
 class Rig {
  public:
-  explicit Rig(std::string settings_path = "", MachineConfig cfg = {})
+  // `rtl`: the Verilated board (with its e-stop input) instead of the twins.
+  explicit Rig(std::string settings_path = "", MachineConfig cfg = {}, bool rtl = false)
       : cfg_(cfg),
-        link_(fpgacnc::simboard::make_board_link(
-            std::make_unique<fpgacnc::twins::TwinBoard>(
-                fpgacnc::twins::TwinBoard::options_from_config(cfg)),
-            cfg.baud, {})) {
+        link_(rtl ? fpgacnc::simboard::make_default_link(cfg, {})
+                  : fpgacnc::simboard::make_board_link(
+                        std::make_unique<fpgacnc::twins::TwinBoard>(
+                            fpgacnc::twins::TwinBoard::options_from_config(cfg)),
+                        cfg.baud, {})) {
     grbl::Settings s = grbl::settings_from_config(cfg);
     if (!settings_path.empty()) s = grbl::load_settings(settings_path, s).value_or(s);
     grbl::EngineOptions o;
     o.v2 = fpgacnc::link::stream_v2_options(cfg);
     o.settings_path = settings_path;
+    if (rtl) {
+      auto* bl = dynamic_cast<fpgacnc::simboard::BoardLink*>(link_.get());
+      o.estop_press = [bl] { bl->board().set_estop(true); };
+      o.estop_release = [bl] { bl->board().set_estop(false); };
+    }
     engine_ = std::make_unique<grbl::Engine>(*link_, cfg, s, o);
     engine_->connect();
     engine_->take_output();  // as fpgacnc grbl: the banner goes to a sender when it connects
@@ -538,4 +546,32 @@ TEST(Grbl, FeaturesNotAvailableAndProgramPause) {
   rig.send("~");
   EXPECT_EQ(rig.next_line(), "ok");
   expect_at(rig.wait_idle(), {1120, 0, 0}, MachineConfig{});
+}
+
+// On the Verilated board the soft reset presses the e-stop: the board drops its queue at once, so
+// the reset completes long before the queued moves could have run out, and after $X the parser
+// starts at the FPGA's position (back to 0 exactly).
+TEST(Grbl, SoftResetOnTheVerilatedBoardDropsItsQueue) {
+  Rig rig("", MachineConfig{}, true);
+  // Slow 2 mm zigzag moves (0.2 s each at F600): several queued on the board at the reset.
+  std::vector<std::string> lines{"G21 G90 F600"};
+  for (int i = 1; i <= 12; ++i)
+    lines.push_back(fmt::format("G1 X{} Y{}", (i % 2) ? 2 : 0, i * 0.1));
+  for (const auto& l : lines) EXPECT_EQ(rig.command(l).back(), "ok") << l;
+  // Let the board take the frames (flush rule: the sender went quiet) and start moving.
+  ASSERT_TRUE(rig.pump_until([&] { return rig.status().mpos[0] > 0.1; }, milliseconds(2000)));
+  const auto t0 = rig.link().now();
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  const auto took = rig.link().now() - t0;
+  // The 12 moves take 2.4 s of machine time; the reset took a small part of one.
+  EXPECT_LT(took, milliseconds(150)) << std::chrono::duration<double>(took).count() << " s";
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Alarm");
+  EXPECT_LT(r.mpos[1], 0.6);
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G0 X0 Y0").back(), "ok");
+  expect_at(rig.wait_idle(), {0, 0, 0}, MachineConfig{});
 }
