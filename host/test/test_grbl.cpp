@@ -91,7 +91,8 @@ class Rig {
   fpgacnc::link::Link& link() { return *link_; }
 
   // One step of the engine; complete lines of its output are queued.
-  void pump(milliseconds wait = milliseconds(5)) {
+  void pump() { pump(step_wait); }
+  void pump(milliseconds wait) {
     engine_->step(wait);
     // Nothing in flight: let board time pass as a sender's pause would.
     if (!engine_->busy()) link_->wait_until(link_->now() + wait);
@@ -176,6 +177,9 @@ class Rig {
 
   bool polling = false;
   uint64_t polls = 0;
+  // Board time one step of the engine may wait for an answer (it returns at the first answer):
+  // long jobs take fewer, longer steps.
+  milliseconds step_wait{5};
 
  private:
   MachineConfig cfg_;
@@ -286,6 +290,7 @@ TEST_P(GrblStream, CorpusJobEndsWhereThePlanEnds) {
   MachineConfig cfg;
   Rig rig;
   rig.polling = true;
+  rig.step_wait = milliseconds(50);
   const auto lines = read_lines(path);
   StreamResult r;
   size_t max_in_flight = 0;
@@ -320,7 +325,8 @@ INSTANTIATE_TEST_SUITE_P(Corpus, GrblStream,
                                            JobCase{"cncjs/circle.gcode", true},
                                            JobCase{"cncjs/circle-inch.gcode", true},
                                            JobCase{"cncjs/arc-ijk.gcode", false},
-                                           JobCase{"cncjs/g2-arc.gcode", true}),
+                                           JobCase{"cncjs/g2-arc.gcode", true},
+                                           JobCase{"cncjs/jsdc-laser.gcode", true}),
                          [](const ::testing::TestParamInfo<JobCase>& i) {
                            std::string n = fs::path(i.param.file).stem().string() +
                                            (i.param.counting ? "_counting" : "_ping_pong");
