@@ -368,6 +368,11 @@ TEST(Grbl, BannerAndQueries) {
   ASSERT_TRUE(rig.pump_until([&] { return rig.reports().size() > n; }));
   EXPECT_NE(rig.reports().back().find("|WCO:5.000,-2.000,0.000"), std::string::npos)
       << rig.reports().back();
+  // A reset at rest: no alarm, the banner, and the work offsets kept (grbl keeps them).
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.status().state, "Idle");
+  EXPECT_EQ(rig.command("$#")[0], "[G54:5.000,-2.000,0.000]");
 }
 
 // Every error class the front end answers (interface.md's error table, docs/grbl.md).
@@ -441,11 +446,15 @@ TEST(Grbl, SettingsRoundTripThroughTheFile) {
     EXPECT_NE(std::find(a.begin(), a.end(), "$110=6000.000"), a.end());
     EXPECT_NE(std::find(a.begin(), a.end(), "$10=3"), a.end());
     EXPECT_EQ(rig.engine().config().steps_per_mm[0], 80.0);
-    // $RST=$ restores the machine's values.
+    // $RST=$ restores the machine's values and keeps the work offsets; $RST=# clears those.
+    EXPECT_EQ(rig.command("G10 L2 P2 X1.5").back(), "ok");
     a = rig.command("$RST=$");
     EXPECT_EQ(a[0], "[MSG:Restoring defaults]");
     a = rig.command("$$");
     EXPECT_NE(std::find(a.begin(), a.end(), "$100=160.000"), a.end());
+    EXPECT_EQ(rig.command("$#")[1], "[G55:1.500,0.000,0.000]");
+    EXPECT_EQ(rig.command("$RST=#").back(), "ok");
+    EXPECT_EQ(rig.command("$#")[1], "[G55:0.000,0.000,0.000]");
   }
   fs::remove_all(dir);
 }
