@@ -160,7 +160,7 @@ class V2Session {
   Link::Time status_sent_{};
   size_t status_answers_ = 0;
   protocol::v2::Status last_status_;
-  bool was_complete_ = true;
+  bool was_complete_ = false;  // complete at the last poll (the caller had nothing to send)
   bool aborting_ = false;
   std::vector<uint8_t> batch_;
   struct WaitState {
