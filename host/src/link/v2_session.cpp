@@ -283,6 +283,10 @@ bool V2Session::update(uint8_t next_seq, uint16_t free, std::optional<uint32_t> 
     return false;
   }
   if (*delta > 0) {
+    // Acknowledged frames are never sent again: their bytes go (a long line session keeps only
+    // the bookkeeping of each frame).
+    for (size_t i = win_.acked() - *delta; i < win_.acked(); ++i)
+      std::vector<uint8_t>().swap(items_[i].frame.payload);
     rep_.srtt_s = win_.srtt_s();
     rep_.max_rto_s = std::max(rep_.max_rto_s, win_.max_rto_s());
     fatal_nak_count_ = 0;
