@@ -478,7 +478,11 @@ void V2Session::request_status() {
 }
 
 void V2Session::poll(milliseconds wait) {
+  poll_once(wait);
   if (complete()) was_complete_ = true;
+}
+
+void V2Session::poll_once(milliseconds wait) {
   const size_t n = items_.size();
   // Send what the window and the credit allow.
   batch_.clear();

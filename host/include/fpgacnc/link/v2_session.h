@@ -117,6 +117,7 @@ class V2Session {
   void finish_report();
 
  private:
+  void poll_once(std::chrono::milliseconds wait);
   void handle(const protocol::v2::Frame& f);
   bool update(uint8_t next_seq, uint16_t free, std::optional<uint32_t> done);
   void go_back();
