@@ -85,6 +85,10 @@ void register_stream(CLI::App& app, StreamHooks hooks);
 // simulated board alone on a pty.
 void register_board(CLI::App& app);
 
+// fpgacnc grbl [--port DEV | --model tlm|rtl] [--listen tcp:HOST:PORT] [--settings F]: grbl
+// 1.1's protocol on a pty and TCP with the FPGA behind it (host/cli/grbl_cmd.cpp).
+void register_grbl(CLI::App& app);
+
 // fpgacnc sim FILE [--model tlm|rtl|both]: a whole job on the twins or the Verilated RTL
 // (host/cli/sim_cmd.cpp, built with systemc/).
 void register_sim(CLI::App& app);

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   // Without --port, `stream` runs the simulated board in-process (board_cmd.cpp).
   fpgacnc::cli::register_stream(app, fpgacnc::cli::simboard_stream_hooks());
   fpgacnc::cli::register_board(app);
+  fpgacnc::cli::register_grbl(app);
   fpgacnc::cli::register_sim(app);
   fpgacnc::cli::register_autotune(app, fpgacnc::cli::simboard_stream_hooks());
 

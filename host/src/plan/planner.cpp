@@ -252,6 +252,12 @@ Plan Planner::finish() {
   return std::move(plan_);
 }
 
+std::vector<PlanItem> Planner::take_items() {
+  std::vector<PlanItem> out = std::move(plan_.items);
+  plan_.items.clear();
+  return out;
+}
+
 gcode::Options gcode_options(const config::MachineConfig& cfg) {
   gcode::Options go;
   go.default_feed_mm_min = cfg.default_feed_mm_min;

@@ -11,25 +11,6 @@
 namespace fpgacnc::protocol::v2 {
 namespace {
 
-// An output command as the OUTPUT frame's fields (merged into `set`: later ones win).
-void add_output(OutputSet& set, const gcode::Output& o) {
-  switch (o.kind) {
-    case gcode::Output::Kind::kFlood:
-      set.flood = o.value != 0.0;
-      break;
-    case gcode::Output::Kind::kMist:
-      set.mist = o.value != 0.0;
-      break;
-    case gcode::Output::Kind::kFan:
-      set.fan = static_cast<uint8_t>(std::clamp(std::lround(o.value * 255.0), 0L, 255L));
-      break;
-    case gcode::Output::Kind::kDigital:
-      if (o.index >= 0 && static_cast<size_t>(o.index) < kDigitalOutputs)
-        set.dout[static_cast<size_t>(o.index)] = o.value != 0.0;
-      break;
-  }
-}
-
 // Pauses, messages and outputs keep their place in the frame list (Job::events); outputs also
 // become OUTPUT frames (consecutive ones merged into one frame).
 template <typename Item, typename Push>
@@ -70,15 +51,6 @@ constexpr int64_t kMaxSteps = std::numeric_limits<int32_t>::max();
 
 int64_t iabs(int64_t v) {
   return v < 0 ? -v : v;
-}
-
-uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
-  if (s.code == 0) return 0;
-  if (s.spindle_s < 0.0) return 255;
-  const double scaled = s.spindle_s / cfg.laser_s_max * 255.0;
-  long long p = std::llround(std::clamp(scaled, 0.0, 255.0));
-  if (p == 0 && s.spindle_s > 0.0) p = 1;
-  return static_cast<uint8_t>(p);
 }
 
 // Segment time in clocks before the min-period raise (may exceed 32 bits).
@@ -284,6 +256,33 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
 }
 
 }  // namespace
+
+void add_output(OutputSet& set, const gcode::Output& o) {
+  switch (o.kind) {
+    case gcode::Output::Kind::kFlood:
+      set.flood = o.value != 0.0;
+      break;
+    case gcode::Output::Kind::kMist:
+      set.mist = o.value != 0.0;
+      break;
+    case gcode::Output::Kind::kFan:
+      set.fan = static_cast<uint8_t>(std::clamp(std::lround(o.value * 255.0), 0L, 255L));
+      break;
+    case gcode::Output::Kind::kDigital:
+      if (o.index >= 0 && static_cast<size_t>(o.index) < kDigitalOutputs)
+        set.dout[static_cast<size_t>(o.index)] = o.value != 0.0;
+      break;
+  }
+}
+
+uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
+  if (s.code == 0) return 0;
+  if (s.spindle_s < 0.0) return 255;
+  const double scaled = s.spindle_s / cfg.laser_s_max * 255.0;
+  long long p = std::llround(std::clamp(scaled, 0.0, 255.0));
+  if (p == 0 && s.spindle_s > 0.0) p = 1;
+  return static_cast<uint8_t>(p);
+}
 
 Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r) {
   Frame fr;

@@ -106,6 +106,10 @@ class Planner {
   Planner(const config::MachineConfig& cfg, PlanOptions options);
   void add(const gcode::Command& command);
   Plan finish();  // moves the plan out
+  // The items added so far, moved out; the planner goes on from the same position (a line
+  // front end such as `fpgacnc grbl` plans as lines arrive).
+  std::vector<PlanItem> take_items();
+  const Steps4& position() const { return pos_; }  // absolute steps after the last item
 
  private:
   void add_move(const gcode::Move& m);

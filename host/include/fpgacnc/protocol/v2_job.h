@@ -116,6 +116,13 @@ inline constexpr uint64_t kV1OverheadClocks115200 = 51'981;  // host/README.md, 
 JobTimes job_times(const plan::Plan& plan, const config::MachineConfig& cfg,
                    uint64_t v1_overhead_clocks = kV1OverheadClocks115200);
 
+// The LINE / LINE_PROFILE power byte of a segment (the rule in the file comment: 0 for code 0,
+// S scaled by laser_s_max, S > 0 never 0, no S: 255).
+uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg);
+
+// An output command as the OUTPUT frame's fields (merged into `set`: later ones win).
+void add_output(OutputSet& set, const gcode::Output& o);
+
 // STEP minimum period of the configuration: max(step_high, 1) + max(step_low, 1).
 uint32_t min_period(const config::StepTiming& t);
 

@@ -1,0 +1,173 @@
+// grbl 1.1's line protocol in front of the FPGA (docs/grbl.md): what a grbl sender (CNCjs, UGS,
+// bCNC, Candle, LaserGRBL, LightBurn) sees, with protocol v2 behind it. Bytes in from the sender
+// (receive), bytes out to it (take_output); step() moves everything on. The engine owns no file
+// descriptor: `fpgacnc grbl` (host/cli/grbl_cmd.cpp) serves it on a pty or TCP, tests drive it
+// in-process.
+//
+// Lines: taken from the 128-byte receive buffer while the pipeline has room (frames planned but
+// not yet sent below one look-ahead window), so send-response and character-counting streaming
+// both work; each G-code line goes through the interpreter (grbl dialect) and the planner into
+// the look-ahead (plan::Lookahead, window W = lookahead_segments), whose finished profiles go to
+// the v2 session (link/v2_session.h) as LINE_PROFILE frames at once; `ok` when the line is
+// planned, `error:N` (grbl's codes) when refused.
+// Flush rule: the look-ahead is planned to a stop and sent when no complete line waits in the
+// receive buffer and the board has at most kLowWater FIFO frames left to run (the sender went
+// quiet or is slower than the machine), and always at G4, M0/M1/M6, M2/M30, coolant/fan outputs
+// and before a '$' command.
+// Status reports (`?`): a STATUS_QUERY to the board; the report is written when its answer
+// arrives: MPos (or WPos per $10) from the FPGA's step counters, Bf, FS, Ov and WCO.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/gcode/reader.h"
+#include "fpgacnc/grbl/settings.h"
+#include "fpgacnc/link/link.h"
+#include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/link/v2_session.h"
+#include "fpgacnc/plan/lookahead.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/protocol/v2_job.h"
+
+namespace fpgacnc::grbl {
+
+inline constexpr size_t kRxBuffer = 128;  // grbl's serial receive buffer (bytes)
+inline constexpr size_t kLineMax = 80;    // grbl's line buffer: longer lines are error:11
+inline constexpr size_t kLowWater = 2;    // board FIFO frames left that trigger a flush
+inline constexpr const char* kBanner = "Grbl 1.1h ['$' for help]";
+inline constexpr const char* kVersion = "1.1h.20190825";
+
+enum class State { kIdle, kRun, kHold, kJog, kAlarm, kCheck, kHome, kSleep };
+const char* state_name(State s);
+
+struct EngineOptions {
+  link::StreamV2Options v2;   // session timers (link time)
+  std::string settings_path;  // "" = settings not persisted
+  // Soft reset mid-job on a board with an e-stop input (the Verilated simulated board): press
+  // drops the board's queue (docs/protocol.md, E-stop); release once STATUS shows it latched.
+  // Unset: the frames already on the board run out (at most its FIFO depth) before the reset
+  // completes.
+  std::function<void()> estop_press, estop_release;
+};
+
+// Counters for tests and the exit summary.
+struct EngineStats {
+  uint64_t lines = 0;  // lines answered (ok or error)
+  uint64_t oks = 0;
+  uint64_t errors = 0;
+  uint64_t reports = 0;  // status reports written
+  uint64_t flushes = 0;  // look-ahead planned to a stop
+  uint64_t frames = 0;   // FIFO frames pushed to the session
+  uint64_t resets = 0;   // soft resets
+  uint64_t aborted = 0;  // frames given up by a soft reset (never sent)
+};
+
+class Engine {
+ public:
+  // `base`: the machine configuration; `settings` over it (settings_from_config for none).
+  Engine(link::Link& link, config::MachineConfig base, Settings settings, EngineOptions opt = {});
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  // IDENT handshake and the first session (throws link::Error); then the welcome banner, as
+  // when a sender opens the port.
+  void connect();
+  // A sender (re)opened the port: the banner again (and the startup lines).
+  void opened();
+  // Bytes from the sender (real-time commands are taken out at once, wherever they are).
+  void receive(std::string_view bytes);
+  // Everything written to the sender since the last call.
+  std::string take_output();
+  // Takes lines, plans, runs the session; waits up to `wait` of link time for a board answer
+  // when there is something in flight.
+  void step(std::chrono::milliseconds wait = std::chrono::milliseconds(0));
+  // Something is in flight or pending (motion, a report, a reset): call step() again soon.
+  bool busy() const;
+
+  State state() const;
+  const Settings& settings() const { return settings_; }
+  const config::MachineConfig& config() const { return cfg_; }
+  const EngineStats& stats() const { return stats_; }
+  // Machine position from the last STATUS (mm) and the planner's position (steps).
+  std::array<double, 4> mpos() const;
+  const plan::Steps4& planned_steps() const { return planner_->position(); }
+  size_t rx_pending() const { return rx_.size(); }
+
+ private:
+  void new_session();
+  void rebuild_pipeline(const plan::Steps4& steps);
+  void banner();
+  bool line_ready() const;
+  bool can_take_line() const;
+  void take_line();
+  void process_line(const std::string& raw);
+  int system_command(const std::string& cmd);
+  int gcode_line(const std::string& raw, bool check_only);
+  void push_items(std::vector<plan::PlanItem> items);
+  void flush_lookahead();
+  void emit_profiles();
+  void push_fifo(const protocol::v2::Frame& f, int line, double feed, double s);
+  void soft_reset();
+  void continue_reset();
+  void write_report();
+  void track_modal(const gcode::Block& b);
+  std::array<double, 3> wco() const;
+  bool motion_pending() const;
+  void say(std::string_view line);
+  void save();
+
+  link::Link& link_;
+  config::MachineConfig base_;
+  config::MachineConfig cfg_;
+  Settings settings_;
+  EngineOptions opt_;
+  link::StreamV2Report rep_;
+  protocol::v2::Ident ident_;
+  std::unique_ptr<link::V2Session> session_;
+  std::unique_ptr<gcode::Params> params_;
+  std::unique_ptr<gcode::Interpreter> interp_;
+  std::unique_ptr<plan::Planner> planner_;
+  std::unique_ptr<plan::Lookahead> la_;
+  size_t seg_index_ = 0;
+  protocol::v2::OutputSet outputs_;
+  std::string rx_;
+  std::string out_;
+  EngineStats stats_;
+
+  bool alarm_ = false;
+  bool check_ = false;
+  bool sleep_ = false;
+  bool pause_pending_ = false;  // M0/M1/M6 planned: Hold:0 once the board is at rest
+  bool held_ = false;           // at rest after M0 until '~'
+  bool resetting_ = false;
+  bool estop_pressed_ = false;
+  bool report_pending_ = false;
+  size_t report_answers_ = 0;  // session status answers when the report was asked for
+  bool report_asked_ = false;
+  bool reset_asked_ = false;
+  size_t reset_answers_ = 0;
+  uint64_t report_count_ = 0;
+  bool wco_changed_ = true;
+  // Per FIFO frame pushed (index from fifo_base_): programmed feed (mm/min) and S, for FS.
+  std::deque<std::pair<double, double>> fifo_info_;
+  size_t fifo_base_ = 0;
+  struct Modal {
+    std::string motion = "G0", wcs = "G54", plane = "G17", units = "G21", distance = "G90",
+                feed_mode = "G94", spindle = "M5", coolant = "M9";
+    int tool = 0;
+    double feed = 0.0, s = 0.0;
+  } modal_;
+};
+
+}  // namespace fpgacnc::grbl

@@ -1,0 +1,732 @@
+#include "fpgacnc/grbl/engine.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <stdexcept>
+
+#include "fpgacnc/gcode/dialect.h"
+
+namespace fpgacnc::grbl {
+namespace v2 = protocol::v2;
+using std::chrono::milliseconds;
+
+namespace {
+
+// grbl's error code for an interpreter refusal, from what the message says (docs/grbl.md,
+// "Errors"); 20 (unsupported or invalid command) when nothing more precise fits.
+int error_code(const std::string& msg) {
+  auto has = [&](const char* k) { return msg.find(k) != std::string::npos; };
+  if (has("expected a number")) return 2;
+  if (has("words on one line") || has("two '")) return 25;
+  if (has("modal group")) return 21;
+  if (has("integer")) return 23;
+  if (has("negative")) return 4;
+  if (has("radius")) return 34;
+  if (has("needs P") || has("needs a P") || has("needs L") || has("needs both P")) return 28;
+  if (has("arc") || has("G2") || has("G3")) return 33;
+  if (has("letter")) return 1;
+  return 20;
+}
+
+// The line as grbl's parser sees it: no whitespace or control characters, no comments, upper
+// case.
+std::string strip_line(const std::string& raw) {
+  std::string out;
+  int paren = 0;
+  for (char c : raw) {
+    const auto u = static_cast<unsigned char>(c);
+    if (paren) {
+      if (c == ')') --paren;
+      continue;
+    }
+    if (c == '(') {
+      ++paren;
+      continue;
+    }
+    if (c == ';') break;
+    if (u <= ' ' || u >= 0x7F) continue;
+    out.push_back(static_cast<char>(std::toupper(u)));
+  }
+  return out;
+}
+
+// What grbl 1.1's parser takes (docs/grbl.md, "G-code"): its letters, G and M codes; 0 or the
+// error code for the first word outside them.
+int grbl_words(const gcode::Block& b) {
+  static const std::string kLetters = "FGIJKLMNPRSTXYZ";
+  static const double kG[] = {0,    1,  2,    3,  4,    10,   17, 18,   19, 20, 21, 28,
+                              28.1, 30, 30.1, 40, 43.1, 49,   53, 54,   55, 56, 57, 58,
+                              59,   61, 80,   90, 91,   91.1, 92, 92.1, 93, 94};
+  static const double kM[] = {0, 1, 2, 3, 4, 5, 7, 8, 9, 30, 56};
+  bool arc = false, offsets = false;
+  for (int i = 0; i < b.count; ++i) {
+    const auto& w = b.words[static_cast<size_t>(i)];
+    if (kLetters.find(w.letter) == std::string::npos) return 20;
+    const double v = std::round(w.value * 10.0) / 10.0;
+    if (w.letter == 'G') {
+      if (v > 59 && v < 60) return 29;                                            // G59.1..G59.3
+      if (std::find(std::begin(kG), std::end(kG), v) == std::end(kG)) return 20;  // G38.x too
+      arc |= v == 2 || v == 3;
+    } else if (w.letter == 'M') {
+      if (std::find(std::begin(kM), std::end(kM), v) == std::end(kM)) return 20;
+    } else if (w.letter == 'I' || w.letter == 'J' || w.letter == 'K' || w.letter == 'R') {
+      offsets = true;
+    }
+  }
+  return arc && !offsets ? 35 : 0;
+}
+
+std::string fmt3(double v) {
+  return fmt::format("{:.3f}", v);
+}
+
+size_t frame_axes(const plan::Steps4& steps) {
+  size_t k = 2;
+  for (size_t a = 0; a < 4; ++a)
+    if (steps[a] != 0) k = std::max(k, a + 1);
+  return k;
+}
+
+}  // namespace
+
+const char* state_name(State s) {
+  switch (s) {
+    case State::kIdle:
+      return "Idle";
+    case State::kRun:
+      return "Run";
+    case State::kHold:
+      return "Hold:0";
+    case State::kJog:
+      return "Jog";
+    case State::kAlarm:
+      return "Alarm";
+    case State::kCheck:
+      return "Check";
+    case State::kHome:
+      return "Home";
+    case State::kSleep:
+      return "Sleep";
+  }
+  return "Idle";
+}
+
+Engine::Engine(link::Link& link, config::MachineConfig base, Settings settings, EngineOptions opt)
+    : link_(link),
+      base_(std::move(base)),
+      cfg_(apply_settings(base_, settings)),
+      settings_(std::move(settings)),
+      opt_(std::move(opt)) {}
+
+Engine::~Engine() = default;
+
+void Engine::connect() {
+  ident_ = link::handshake_v2(link_, opt_.v2, rep_, std::nullopt);
+  new_session();
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  rebuild_pipeline(pos);
+  banner();
+}
+
+void Engine::opened() {
+  soft_reset();
+}
+
+void Engine::new_session() {
+  session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
+  session_->start();
+  const auto& t = cfg_.step_timing;
+  for (uint8_t a = 0; a < ident_.n_axes && a < config::kAxes; ++a) {
+    session_->push({v2::config_axis(
+        0, a, static_cast<uint16_t>(t.step_high), static_cast<uint16_t>(t.step_low),
+        static_cast<uint16_t>(t.dir_setup), static_cast<uint16_t>(t.dir_hold))});
+  }
+  fifo_info_.clear();
+  fifo_base_ = 0;
+}
+
+void Engine::rebuild_pipeline(const plan::Steps4& steps) {
+  // Work offsets G54..G59 survive a reset (grbl keeps them in EEPROM).
+  std::vector<std::string> restore;
+  if (params_) {
+    const double mm = modal_.units == "G20" ? 25.4 : 1.0;  // parameters are in program units
+    for (int s = 0; s < 6; ++s) {
+      const int base = 5221 + 20 * s;
+      const double x = params_->get(base) * mm, y = params_->get(base + 1) * mm,
+                   z = params_->get(base + 2) * mm;
+      if (x != 0.0 || y != 0.0 || z != 0.0)
+        restore.push_back(fmt::format("G21 G10 L2 P{} X{:.6f} Y{:.6f} Z{:.6f}", s + 1, x, y, z));
+    }
+  }
+  params_ = std::make_unique<gcode::Params>();
+  gcode::Options go = plan::gcode_options(cfg_);
+  go.dialect = gcode::Dialect::kGrbl;
+  go.dialect_source = "fpgacnc grbl";
+  go.tool_change_pause = false;  // grbl 1.1 takes M6 and T and does nothing with them
+  gcode::DialectChoice dc;
+  dc.dialect = gcode::Dialect::kGrbl;
+  dc.reason = "fpgacnc grbl";
+  interp_ = std::make_unique<gcode::Interpreter>("grbl", go, dc, *params_);
+  planner_ = std::make_unique<plan::Planner>(cfg_, plan::PlanOptions{});
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  seg_index_ = 0;
+  modal_ = Modal{};
+  wco_changed_ = true;
+  // The parser and the planner start where the machine is (grbl's gc_sync_position).
+  std::string sync = "G53 G0";
+  bool moved = false;
+  for (size_t a = 0; a < 3; ++a) {
+    if (steps[a] == 0) continue;
+    sync += fmt::format(" {}{:.9f}", config::kAxisNames[a],
+                        static_cast<double>(steps[a]) / cfg_.steps_per_mm[a]);
+    moved = true;
+  }
+  restore.insert(restore.begin(), moved ? sync : std::string());
+  const auto& syntax = gcode::dialect_rules(gcode::Dialect::kGrbl).syntax;
+  for (const auto& line : restore) {
+    if (line.empty()) continue;
+    gcode::Reader reader("grbl", line, syntax, *params_);
+    gcode::Block b;
+    std::vector<gcode::Command> cmds;
+    while (reader.next(b)) interp_->execute(b, cmds);
+    for (const auto& c : cmds) planner_->add(c);
+    planner_->take_items();  // the machine is there already: nothing to send
+  }
+  modal_ = Modal{};
+}
+
+void Engine::say(std::string_view line) {
+  out_ += line;
+  out_ += "\r\n";
+}
+
+void Engine::banner() {
+  out_ += "\r\n";
+  say(kBanner);
+  if (alarm_) {
+    say("[MSG:'$H'|'$X' to unlock]");
+    return;
+  }
+  for (const auto& l : settings_.startup) {
+    if (l.empty()) continue;
+    const int rc = gcode_line(l, check_);
+    say(rc ? fmt::format(">{}:error:{}", l, rc) : fmt::format(">{}:ok", l));
+  }
+}
+
+std::string Engine::take_output() {
+  std::string s;
+  s.swap(out_);
+  return s;
+}
+
+void Engine::receive(std::string_view bytes) {
+  for (char ch : bytes) {
+    const auto c = static_cast<unsigned char>(ch);
+    switch (c) {
+      case '?':
+        report_pending_ = true;
+        break;
+      case 0x18:
+        soft_reset();
+        break;
+      case '~':  // cycle start: resumes after M0
+        held_ = false;
+        break;
+      case '!':  // feed hold: needs the machine-control hardware (docs/grbl.md), ignored
+        break;
+      default:
+        // 0x80..0xFF: safety door, jog cancel, overrides (not available, ignored).
+        if (c >= 0x80) break;
+        rx_.push_back(ch);
+    }
+  }
+}
+
+bool Engine::motion_pending() const {
+  return (la_ && la_->window_size() > 0) ||
+         (session_ && session_->fifo_done() < session_->fifo_pushed());
+}
+
+State Engine::state() const {
+  if (sleep_) return State::kSleep;
+  if (alarm_) return State::kAlarm;
+  if (check_) return State::kCheck;
+  if (held_) return State::kHold;
+  if (motion_pending() || pause_pending_) return State::kRun;
+  return State::kIdle;
+}
+
+bool Engine::busy() const {
+  return motion_pending() || report_pending_ || resetting_ || pause_pending_ ||
+         (line_ready() && can_take_line());
+}
+
+std::array<double, 4> Engine::mpos() const {
+  std::array<double, 4> p{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a)
+    p[a] = static_cast<double>(st.position[a]) / cfg_.steps_per_mm[a];
+  return p;
+}
+
+bool Engine::line_ready() const {
+  return rx_.find_first_of("\r\n") != std::string::npos;
+}
+
+bool Engine::can_take_line() const {
+  return !resetting_ && !held_ && !pause_pending_ &&
+         session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
+}
+
+void Engine::step(milliseconds wait) {
+  if (resetting_) continue_reset();
+  if (!resetting_) {
+    while (line_ready() && can_take_line()) take_line();
+    // Flush rule (file comment of engine.h).
+    if (la_->window_size() > 0 && !line_ready() &&
+        session_->fifo_pushed() - session_->fifo_done() <= kLowWater)
+      flush_lookahead();
+  }
+  if (report_pending_) {
+    if (!report_asked_) {
+      report_answers_ = session_->status_answers();
+      report_asked_ = true;
+    }
+    session_->request_status();
+  }
+  const bool waiting = motion_pending() || report_asked_ || resetting_;
+  session_->poll(waiting ? wait : milliseconds(0));
+  if (report_asked_ && session_->status_answers() > report_answers_) {
+    write_report();
+    report_pending_ = report_asked_ = false;
+  }
+  if (pause_pending_ && session_->complete()) {
+    pause_pending_ = false;
+    held_ = true;
+  }
+  while (fifo_base_ < session_->fifo_done() && !fifo_info_.empty()) {
+    fifo_info_.pop_front();
+    ++fifo_base_;
+  }
+}
+
+void Engine::take_line() {
+  const size_t end = rx_.find_first_of("\r\n");
+  const std::string line = rx_.substr(0, end);
+  rx_.erase(0, end + 1);
+  process_line(line);
+}
+
+void Engine::process_line(const std::string& raw) {
+  ++stats_.lines;
+  const std::string cmd = strip_line(raw);
+  bool reset_after = false;
+  int rc = 0;
+  if (cmd.size() >= kLineMax) {
+    rc = 11;
+  } else if (cmd.empty()) {
+    rc = 0;
+  } else if (cmd[0] == '$') {
+    rc = system_command(cmd);
+    if (rc == -1) {  // $C off: ok, then a reset (grbl)
+      rc = 0;
+      reset_after = true;
+    }
+  } else if (alarm_ || sleep_) {
+    rc = 9;
+  } else if (!std::isalpha(static_cast<unsigned char>(cmd[0]))) {
+    rc = 1;  // a value without its letter
+  } else {
+    rc = gcode_line(raw, check_);
+  }
+  if (rc == 0) {
+    ++stats_.oks;
+    say("ok");
+  } else {
+    ++stats_.errors;
+    say(fmt::format("error:{}", rc));
+  }
+  if (reset_after) soft_reset();
+}
+
+int Engine::gcode_line(const std::string& raw, bool check_only) {
+  std::vector<gcode::Command> cmds;
+  bool ended = false;
+  try {
+    const auto& syntax = gcode::dialect_rules(gcode::Dialect::kGrbl).syntax;
+    gcode::Reader reader("grbl", raw, syntax, *params_);
+    gcode::Block b;
+    while (reader.next(b)) {
+      if (b.kind != gcode::BlockKind::kWords) {
+        if (b.kind == gcode::BlockKind::kSystem || b.kind == gcode::BlockKind::kQuery) return 3;
+        continue;
+      }
+      if (int rc = grbl_words(b)) return rc;
+      if (!interp_->execute(b, cmds)) ended = true;
+      track_modal(b);
+    }
+  } catch (const gcode::Error& e) {
+    return error_code(e.message());
+  }
+  if (check_only) return 0;
+  try {
+    for (const auto& c : cmds) planner_->add(c);
+    push_items(planner_->take_items());
+  } catch (const std::invalid_argument&) {
+    return 33;  // a target the planner cannot turn into frames
+  }
+  if (ended) {
+    flush_lookahead();
+    say("[MSG:Pgm End]");
+    rebuild_pipeline(planner_->position());
+  }
+  return 0;
+}
+
+void Engine::push_fifo(const v2::Frame& f, int line, double feed, double s) {
+  session_->push({f, true, nullptr, nullptr, line});
+  fifo_info_.emplace_back(feed, s);
+  ++stats_.frames;
+}
+
+void Engine::emit_profiles() {
+  for (const auto& p : la_->take()) {
+    plan::Segment s;
+    s.code = p.code;
+    s.spindle_s = p.spindle_s;
+    const size_t k = frame_axes(p.steps);
+    std::array<int32_t, 4> s32{};
+    for (size_t a = 0; a < 4; ++a) s32[a] = static_cast<int32_t>(p.steps[a]);
+    const v2::Frame f =
+        v2::line_profile(0, v2::to_line_profile(p.code, v2::laser_power(s, cfg_), p.fields,
+                                                std::span<const int32_t>(s32.data(), k)));
+    push_fifo(f, p.source_line, p.v_cruise * 60.0, std::max(0.0, p.spindle_s));
+  }
+}
+
+void Engine::flush_lookahead() {
+  if (la_->window_size() == 0) return;
+  la_->stop();
+  emit_profiles();
+  ++stats_.flushes;
+}
+
+void Engine::push_items(std::vector<plan::PlanItem> items) {
+  for (auto& item : items) {
+    if (const auto* s = std::get_if<plan::Segment>(&item)) {
+      la_->push(*s, seg_index_++);
+      emit_profiles();
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      flush_lookahead();
+      const double clocks = std::round(d->seconds * static_cast<double>(cfg_.clk_hz));
+      uint64_t left = clocks > 0 && clocks < 1e15 ? static_cast<uint64_t>(clocks) : 0;
+      while (left > 0) {
+        const uint64_t t = std::min<uint64_t>(left, UINT32_MAX);
+        push_fifo(v2::dwell(0, static_cast<uint32_t>(t)), d->source_line, 0.0, 0.0);
+        left -= t;
+      }
+    } else if (std::get_if<gcode::Pause>(&item)) {
+      flush_lookahead();
+      pause_pending_ = true;
+    } else if (const auto* o = std::get_if<gcode::Output>(&item)) {
+      flush_lookahead();
+      v2::OutputSet set;
+      v2::add_output(set, *o);
+      if (!set.empty()) push_fifo(v2::output_frame(0, set), o->line, 0.0, 0.0);
+    } else if (const auto* m = std::get_if<gcode::Message>(&item)) {
+      say(fmt::format("[MSG:{}]", m->text));
+    }
+    // Heater commands: grbl has none (the grbl dialect refuses M104/M109 before this).
+  }
+}
+
+void Engine::track_modal(const gcode::Block& b) {
+  for (int i = 0; i < b.count; ++i) {
+    const auto& w = b.words[static_cast<size_t>(i)];
+    const double v = w.value;
+    const std::string g = fmt::format("G{:g}", v);
+    if (w.letter == 'G') {
+      if (v == 0 || v == 1 || v == 2 || v == 3 || v == 80 || (v > 38 && v < 39)) modal_.motion = g;
+      if (v >= 54 && v <= 59 && v == std::trunc(v)) {
+        modal_.wcs = g;
+        wco_changed_ = true;
+      }
+      if (v == 17 || v == 18 || v == 19) modal_.plane = g;
+      if (v == 20 || v == 21) modal_.units = g;
+      if (v == 90 || v == 91) modal_.distance = g;
+      if (v == 93 || v == 94) modal_.feed_mode = g;
+      if (v == 10 || v == 92 || (v > 92 && v < 93) || v == 43.1 || v == 49) wco_changed_ = true;
+    } else if (w.letter == 'M') {
+      if (v == 3 || v == 4 || v == 5) modal_.spindle = fmt::format("M{:g}", v);
+      if (v == 7 || v == 8 || v == 9) modal_.coolant = fmt::format("M{:g}", v);
+    } else if (w.letter == 'T') {
+      modal_.tool = static_cast<int>(v);
+    } else if (w.letter == 'F') {
+      modal_.feed = v;
+    } else if (w.letter == 'S') {
+      modal_.s = v;
+    }
+  }
+}
+
+std::array<double, 3> Engine::wco() const {
+  std::array<double, 3> w{};
+  const int cs = std::clamp(static_cast<int>(params_->get(5220)), 1, 9);
+  const double unit = modal_.units == "G20" ? 25.4 : 1.0;
+  for (int a = 0; a < 3; ++a) {
+    double v = params_->get(5221 + 20 * (cs - 1) + a) + params_->get(5211 + a);
+    if (a == 2) v += params_->get(5403);
+    w[static_cast<size_t>(a)] = v * unit;
+  }
+  return w;
+}
+
+void Engine::write_report() {
+  ++stats_.reports;
+  const int mask = static_cast<int>(settings_.values.at(10));
+  const bool inches = settings_.values.at(13) != 0.0;
+  const double div = inches ? 25.4 : 1.0;
+  auto vec = [&](const std::array<double, 3>& v) {
+    return inches ? fmt::format("{:.4f},{:.4f},{:.4f}", v[0] / div, v[1] / div, v[2] / div)
+                  : fmt::format("{},{},{}", fmt3(v[0]), fmt3(v[1]), fmt3(v[2]));
+  };
+  const auto m = mpos();
+  const auto off = wco();
+  std::array<double, 3> pos{m[0], m[1], m[2]};
+  std::string r = "<";
+  r += state_name(state());
+  if (mask & 1) {
+    r += "|MPos:" + vec(pos);
+  } else {
+    for (size_t a = 0; a < 3; ++a) pos[a] -= off[a];
+    r += "|WPos:" + vec(pos);
+  }
+  if (mask & 2) {
+    const size_t w = std::max<size_t>(cfg_.lookahead_segments, 2) - 1;
+    const size_t used = la_->window_size() + session_->unsent();
+    r += fmt::format("|Bf:{},{}", used >= w ? 0 : w - used,
+                     rx_.size() >= kRxBuffer ? 0 : kRxBuffer - rx_.size());
+  }
+  double feed = 0.0, s = 0.0;
+  if (state() == State::kRun && !fifo_info_.empty()) std::tie(feed, s) = fifo_info_.front();
+  r += fmt::format("|FS:{:.0f},{:.0f}", feed / div, s);
+  // WCO when it changed and every 10th report; Ov on the report after (grbl's refresh rule).
+  const uint64_t n = report_count_++;
+  if (wco_changed_ || n % 10 == 0) {
+    r += "|WCO:" + vec(off);
+    wco_changed_ = false;
+  } else if (n % 10 == 1) {
+    r += "|Ov:100,100,100";
+  }
+  r += ">";
+  say(r);
+}
+
+int Engine::system_command(const std::string& cmd) {
+  const State st = state();
+  const bool idle = st == State::kIdle || st == State::kAlarm || st == State::kCheck;
+  auto need_idle = [&]() {
+    if (idle) return 0;
+    flush_lookahead();
+    return 8;
+  };
+  if (cmd == "$") {
+    say("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]");
+    return 0;
+  }
+  if (cmd == "$G") {
+    say(fmt::format("[GC:{} {} {} {} {} {} {} {} T{} F{:.0f} S{:.0f}]", modal_.motion, modal_.wcs,
+                    modal_.plane, modal_.units, modal_.distance, modal_.feed_mode, modal_.spindle,
+                    modal_.coolant, modal_.tool, modal_.feed, modal_.s));
+    return 0;
+  }
+  if (cmd == "$$") {
+    if (int rc = need_idle()) return rc;
+    const std::string all = format_settings(settings_);
+    for (size_t b = 0, e; b < all.size(); b = e + 1) {
+      e = all.find('\n', b);
+      say(std::string_view(all).substr(b, e - b));
+    }
+    return 0;
+  }
+  if (cmd == "$#") {
+    if (int rc = need_idle()) return rc;
+    auto p3 = [&](int base) {
+      return fmt::format("{},{},{}", fmt3(params_->get(base)), fmt3(params_->get(base + 1)),
+                         fmt3(params_->get(base + 2)));
+    };
+    for (int s = 0; s < 6; ++s) say(fmt::format("[G{}:{}]", 54 + s, p3(5221 + 20 * s)));
+    say(fmt::format("[G28:{}]", p3(5161)));
+    say(fmt::format("[G30:{}]", p3(5181)));
+    say(fmt::format("[G92:{}]", p3(5211)));
+    say(fmt::format("[TLO:{}]", fmt3(params_->get(5403))));
+    say("[PRB:0.000,0.000,0.000:0]");  // no probe input: never probed
+    return 0;
+  }
+  if (cmd == "$I") {
+    say(fmt::format("[VER:{}:{}]", kVersion, settings_.info));
+    say(fmt::format("[OPT:VNM,{},{}]", std::max<size_t>(cfg_.lookahead_segments, 2) - 1,
+                    kRxBuffer));
+    return 0;
+  }
+  if (cmd.rfind("$I=", 0) == 0) {
+    if (int rc = need_idle()) return rc;
+    settings_.info = cmd.substr(3);
+    save();
+    return 0;
+  }
+  if (cmd == "$N") {
+    say("$N0=" + settings_.startup[0]);
+    say("$N1=" + settings_.startup[1]);
+    return 0;
+  }
+  if (cmd.rfind("$N0=", 0) == 0 || cmd.rfind("$N1=", 0) == 0) {
+    if (int rc = need_idle()) return rc;
+    const std::string l = cmd.substr(4);
+    if (l.size() >= kLineMax) return 14;
+    settings_.startup[cmd[2] == '0' ? 0 : 1] = l;
+    save();
+    return 0;
+  }
+  if (cmd == "$C") {
+    if (check_) {
+      say("[MSG:Disabled]");
+      return -1;
+    }
+    if (alarm_ || !idle) return alarm_ ? 9 : need_idle();
+    check_ = true;
+    say("[MSG:Enabled]");
+    return 0;
+  }
+  if (cmd == "$X") {
+    if (alarm_) {
+      alarm_ = false;
+      say("[MSG:Caution: Unlocked]");
+    }
+    return 0;
+  }
+  if (cmd == "$H") return 5;               // homing is not enabled ($22 = 0; no limit inputs yet)
+  if (cmd.rfind("$J=", 0) == 0) return 3;  // jogging needs jog cancel in hardware
+  if (cmd == "$SLP") {
+    if (int rc = need_idle()) return rc;
+    sleep_ = true;
+    say("[MSG:Sleeping]");
+    return 0;
+  }
+  if (cmd.rfind("$RST=", 0) == 0) {
+    if (int rc = need_idle()) return rc;
+    const std::string what = cmd.substr(5);
+    if (what != "$" && what != "#" && what != "*") return 3;
+    if (what == "$" || what == "*") {
+      const Settings d = settings_from_config(base_);
+      settings_.values = d.values;
+      if (what == "*") {
+        settings_.startup = {};
+        settings_.info.clear();
+      }
+      cfg_ = apply_settings(base_, settings_);
+    }
+    const plan::Steps4 pos = planner_->position();
+    if (what == "#" || what == "*") params_.reset();  // no work offsets to restore
+    rebuild_pipeline(pos);
+    save();
+    say("[MSG:Restoring defaults]");
+    return 0;
+  }
+  // $N=value
+  const size_t eq = cmd.find('=');
+  if (eq != std::string::npos && eq > 1) {
+    const std::string num = cmd.substr(1, eq - 1);
+    const std::string val = cmd.substr(eq + 1);
+    if (num.find_first_not_of("0123456789") != std::string::npos) return 3;
+    char* end = nullptr;
+    const double v = std::strtod(val.c_str(), &end);
+    if (val.empty() || *end) return 2;
+    if (int rc = need_idle()) return rc;
+    Settings next = settings_;
+    if (int rc = set_value(next, std::stoi(num), v)) return rc;
+    settings_ = std::move(next);
+    const plan::Steps4 pos = planner_->position();
+    cfg_ = apply_settings(base_, settings_);
+    // New step timing to the board, the planner at the same step position.
+    const auto& t = cfg_.step_timing;
+    for (uint8_t a = 0; a < ident_.n_axes && a < config::kAxes; ++a) {
+      session_->push({v2::config_axis(
+          0, a, static_cast<uint16_t>(t.step_high), static_cast<uint16_t>(t.step_low),
+          static_cast<uint16_t>(t.dir_setup), static_cast<uint16_t>(t.dir_hold))});
+    }
+    rebuild_pipeline(pos);
+    save();
+    return 0;
+  }
+  return 3;
+}
+
+void Engine::save() {
+  if (!opt_.settings_path.empty()) save_settings(opt_.settings_path, settings_);
+}
+
+void Engine::soft_reset() {
+  ++stats_.resets;
+  rx_.clear();  // grbl empties its receive buffer
+  const bool moving = motion_pending() && !check_;
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  stats_.aborted += session_->abandon();
+  if (moving) {
+    alarm_ = true;
+    say("ALARM:3");
+    if (opt_.estop_press && opt_.estop_release) {
+      opt_.estop_press();
+      estop_pressed_ = true;
+    }
+  }
+  if (sleep_) {
+    sleep_ = false;
+    alarm_ = true;
+  }
+  check_ = false;
+  held_ = pause_pending_ = false;
+  resetting_ = true;
+  reset_asked_ = false;
+  continue_reset();
+}
+
+void Engine::continue_reset() {
+  if (estop_pressed_) {
+    if (session_->last_status().faults & v2::kFaultEstop) {
+      opt_.estop_release();
+      estop_pressed_ = false;
+    } else {
+      session_->request_status();
+      return;
+    }
+  }
+  if (!session_->settled()) return;
+  // The board runs out what it has (no e-stop): wait until STATUS says it is not busy.
+  if (!reset_asked_) {
+    reset_answers_ = session_->status_answers();
+    reset_asked_ = true;
+  }
+  session_->request_status();
+  if (session_->status_answers() == reset_answers_) return;
+  if (session_->last_status().state & v2::kStateBusy) {
+    reset_answers_ = session_->status_answers();
+    return;
+  }
+  reset_asked_ = false;
+  resetting_ = false;
+  new_session();
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  rebuild_pipeline(pos);
+  banner();
+}
+
+}  // namespace fpgacnc::grbl

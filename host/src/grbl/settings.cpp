@@ -1,0 +1,181 @@
+#include "fpgacnc/grbl/settings.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "fpgacnc/error.h"
+
+namespace fpgacnc::grbl {
+namespace {
+
+// Settings grbl prints without decimals (masks, booleans, milliseconds, RPM).
+const std::set<int> kIntegers{1, 2, 3, 4, 5, 6, 10, 13, 20, 21, 22, 23, 26, 30, 31, 32};
+
+double us_of(uint32_t clocks, uint64_t clk_hz) {
+  return static_cast<double>(clocks) * 1e6 / static_cast<double>(clk_hz);
+}
+
+}  // namespace
+
+Settings settings_from_config(const config::MachineConfig& cfg) {
+  Settings s;
+  auto& v = s.values;
+  v[0] = us_of(cfg.step_timing.step_high, cfg.clk_hz);  // step pulse, us
+  v[1] = 25;                                            // step idle delay, ms (no enable pin)
+  for (int n : {2, 3, 4, 5, 6}) v[n] = 0;               // pin inversions (no such pins)
+  v[10] = 1;                                            // status report: MPos
+  v[11] = cfg.junction_deviation_mm;
+  v[12] = cfg.arc_tolerance_mm;
+  v[13] = 0;  // report in mm
+  for (int n : {20, 21, 22, 23}) v[n] = 0;
+  v[24] = 25.0;
+  v[25] = 500.0;
+  v[26] = 250;
+  v[27] = 1.0;
+  v[30] = cfg.laser_s_max;
+  v[31] = 0;
+  v[32] = 1;  // laser mode: S changes never stop the motion (LINE_PROFILE carries the power)
+  for (int a = 0; a < 3; ++a) {
+    v[100 + a] = cfg.steps_per_mm[static_cast<size_t>(a)];
+    v[110 + a] = cfg.max_feed_mm_min[static_cast<size_t>(a)];
+    v[120 + a] = cfg.max_accel_mm_s2[static_cast<size_t>(a)];
+    v[130 + a] = 200.0;
+  }
+  return s;
+}
+
+config::MachineConfig apply_settings(const config::MachineConfig& base, const Settings& s) {
+  config::MachineConfig cfg = base;
+  auto get = [&](int n) { return s.values.at(n); };
+  const double clocks = std::round(get(0) * static_cast<double>(cfg.clk_hz) / 1e6);
+  cfg.step_timing.step_high = cfg.step_timing.step_low =
+      static_cast<uint32_t>(std::clamp(clocks, 1.0, 65535.0));
+  cfg.junction_deviation_mm = get(11);
+  cfg.arc_tolerance_mm = get(12);
+  if (get(30) > 0) cfg.laser_s_max = get(30);
+  double rapid = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const auto i = static_cast<size_t>(a);
+    cfg.steps_per_mm[i] = get(100 + a);
+    cfg.max_feed_mm_min[i] = get(110 + a);
+    cfg.max_accel_mm_s2[i] = get(120 + a);
+    rapid = std::max(rapid, get(110 + a));
+  }
+  // G0 runs at each axis's maximum rate (grbl): the planner limits every axis to its own.
+  cfg.rapid_feed_mm_min = rapid;
+  return cfg;
+}
+
+int set_value(Settings& s, int number, double value) {
+  auto it = s.values.find(number);
+  if (it == s.values.end()) return 3;
+  if (!std::isfinite(value)) return 2;
+  if (value < 0.0) return 4;
+  if (kIntegers.count(number)) value = std::trunc(value);
+  switch (number) {
+    case 20:  // soft limits need homing, which is off
+      if (value != 0.0) return 10;
+      break;
+    case 21:  // hard limits and homing need limit inputs this controller does not have yet
+    case 22:
+      if (value != 0.0) return 3;
+      break;
+    case 0:
+    case 11:
+    case 12:
+    case 100:
+    case 101:
+    case 102:
+    case 110:
+    case 111:
+    case 112:
+    case 120:
+    case 121:
+    case 122:
+      if (value == 0.0) return 4;  // a value the planner divides by
+      break;
+    default:
+      break;
+  }
+  it->second = value;
+  return 0;
+}
+
+std::string format_settings(const Settings& s) {
+  std::string out;
+  for (const auto& [n, v] : s.values) {
+    if (kIntegers.count(n) || (n == 0 && v == std::trunc(v))) {
+      out += fmt::format("${}={}\n", n, static_cast<long long>(v));
+    } else {
+      out += fmt::format("${}={:.3f}\n", n, v);
+    }
+  }
+  return out;
+}
+
+std::optional<Settings> load_settings(const std::string& path, const Settings& defaults) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  Settings s = defaults;
+  std::string line;
+  int ln = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    auto bad = [&](const std::string& why) { throw SourceError(path, ln, 1, why); };
+    if (line[0] != '$') bad("expected '$N=value', '$N0=line', '$N1=line' or '$I=text'");
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) bad("missing '='");
+    const std::string key = line.substr(1, eq - 1);
+    const std::string val = line.substr(eq + 1);
+    if (key == "N0" || key == "N1") {
+      s.startup[key == "N0" ? 0 : 1] = val;
+    } else if (key == "I") {
+      s.info = val;
+    } else {
+      char* end = nullptr;
+      const long n = std::strtol(key.c_str(), &end, 10);
+      if (key.empty() || *end) bad(fmt::format("'{}' is not a setting number", key));
+      errno = 0;
+      const double d = std::strtod(val.c_str(), &end);
+      if (val.empty() || *end || errno) bad(fmt::format("'{}' is not a number", val));
+      const int rc = set_value(s, static_cast<int>(n), d);
+      if (rc) bad(fmt::format("${}={}: refused (grbl error:{})", n, val, rc));
+    }
+  }
+  return s;
+}
+
+void save_settings(const std::string& path, const Settings& s) {
+  const std::filesystem::path p(path);
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    if (!out) throw std::runtime_error(fmt::format("{}: cannot write the settings file", tmp));
+    out << "# fpgacnc grbl settings (docs/grbl.md); written by $N=value, $N0=, $N1=, $I=, $RST=\n";
+    out << format_settings(s);
+    out << "$N0=" << s.startup[0] << "\n$N1=" << s.startup[1] << "\n$I=" << s.info << "\n";
+    if (!out) throw std::runtime_error(fmt::format("{}: write failed", tmp));
+  }
+  std::filesystem::rename(tmp, p);
+}
+
+std::string default_settings_path() {
+  if (const char* x = std::getenv("XDG_CONFIG_HOME"); x && *x)
+    return std::string(x) + "/fpgacnc/grbl-settings.txt";
+  const char* home = std::getenv("HOME");
+  return std::string(home && *home ? home : ".") + "/.config/fpgacnc/grbl-settings.txt";
+}
+
+}  // namespace fpgacnc::grbl

@@ -1,0 +1,592 @@
+// grbl 1.1 front end (fpgacnc/grbl/engine.h) against the twin board behind its pty, driven
+// in-process as a sender would drive it, with every wait and poll paced by the board's clock
+// (link time), never by wall time. Expected answers come from grbl's documents (interface,
+// commands, settings: docs/grbl.md) and final positions from the host planner run on the same
+// file, independently of the engine.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/grbl/engine.h"
+#include "fpgacnc/grbl/settings.h"
+#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/simboard/cli_board.h"
+#include "fpgacnc/simboard/runner.h"
+#include "fpgacnc/twins/twin_board.h"
+
+namespace fs = std::filesystem;
+namespace grbl = fpgacnc::grbl;
+using fpgacnc::config::MachineConfig;
+using std::chrono::milliseconds;
+
+namespace {
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  std::vector<std::string> lines;
+  std::string l;
+  while (std::getline(in, l)) {
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    lines.push_back(l);
+  }
+  return lines;
+}
+
+struct Report {
+  std::string state;
+  std::array<double, 3> mpos{};
+};
+
+// "<Idle|MPos:1.000,2.000,3.000|...>"
+std::optional<Report> parse_report(const std::string& line) {
+  static const std::regex re(
+      R"(^<([A-Za-z]+(?::\d)?)\|MPos:(-?[\d.]+),(-?[\d.]+),(-?[\d.]+)(\|.*)?>$)");
+  std::smatch m;
+  if (!std::regex_match(line, m, re)) return std::nullopt;
+  Report r;
+  r.state = m[1];
+  for (int i = 0; i < 3; ++i) r.mpos[static_cast<size_t>(i)] = std::stod(m[i + 2]);
+  return r;
+}
+
+// The engine with the twin board behind it, and a sender's view of it.
+class Rig {
+ public:
+  // `rtl`: the Verilated board (with its e-stop input) instead of the twins.
+  explicit Rig(std::string settings_path = "", MachineConfig cfg = {}, bool rtl = false)
+      : cfg_(cfg),
+        link_(rtl ? fpgacnc::simboard::make_default_link(cfg, {})
+                  : fpgacnc::simboard::make_board_link(
+                        std::make_unique<fpgacnc::twins::TwinBoard>(
+                            fpgacnc::twins::TwinBoard::options_from_config(cfg)),
+                        cfg.baud, {})) {
+    grbl::Settings s = grbl::settings_from_config(cfg);
+    if (!settings_path.empty()) s = grbl::load_settings(settings_path, s).value_or(s);
+    grbl::EngineOptions o;
+    o.v2 = fpgacnc::link::stream_v2_options(cfg);
+    o.settings_path = settings_path;
+    if (rtl) {
+      auto* bl = dynamic_cast<fpgacnc::simboard::BoardLink*>(link_.get());
+      o.estop_press = [bl] { bl->board().set_estop(true); };
+      o.estop_release = [bl] { bl->board().set_estop(false); };
+    }
+    engine_ = std::make_unique<grbl::Engine>(*link_, cfg, s, o);
+    engine_->connect();
+    engine_->take_output();  // as fpgacnc grbl: the banner goes to a sender when it connects
+  }
+
+  grbl::Engine& engine() { return *engine_; }
+  fpgacnc::link::Link& link() { return *link_; }
+
+  // One step of the engine; complete lines of its output are queued.
+  void pump() { pump(step_wait); }
+  void pump(milliseconds wait) {
+    engine_->step(wait);
+    // Nothing in flight: let board time pass as a sender's pause would.
+    if (!engine_->busy()) link_->wait_until(link_->now() + wait);
+    partial_ += engine_->take_output();
+    for (size_t nl; (nl = partial_.find('\n')) != std::string::npos;) {
+      std::string l = partial_.substr(0, nl);
+      partial_.erase(0, nl + 1);
+      if (!l.empty() && l.back() == '\r') l.pop_back();
+      if (l.empty()) continue;
+      all_.push_back(l);
+      if (l[0] == '<') {
+        reports_.push_back(l);
+      } else {
+        lines_.push_back(l);
+      }
+    }
+  }
+  // Pumps until `pred` or `limit` of board time; false on the limit.
+  template <typename P>
+  bool pump_until(P pred, milliseconds limit = milliseconds(600'000)) {
+    const auto end = link_->now() + limit;
+    while (!pred()) {
+      if (link_->now() > end) return false;
+      maybe_poll();
+      pump();
+    }
+    return true;
+  }
+  // '?' every 100 ms of board time (10 Hz) while `polling`.
+  void maybe_poll() {
+    if (!polling) return;
+    const auto now = link_->now();
+    if (now - last_poll_ >= milliseconds(100)) {
+      engine_->receive("?");
+      last_poll_ = now;
+      ++polls;
+    }
+  }
+  void send(const std::string& bytes) { engine_->receive(bytes); }
+  // The next non-report line (ok, error:N, [..], ALARM:N, Grbl ...).
+  std::string next_line() {
+    EXPECT_TRUE(pump_until([&] { return !lines_.empty(); })) << "no answer";
+    if (lines_.empty()) return "";
+    std::string l = lines_.front();
+    lines_.pop_front();
+    return l;
+  }
+  // Sends one line and returns every line of its answer up to and including ok / error:N.
+  std::vector<std::string> command(const std::string& line) {
+    send(line + "\n");
+    std::vector<std::string> out;
+    for (;;) {
+      out.push_back(next_line());
+      const std::string& l = out.back();
+      if (l.empty() || l == "ok" || l.rfind("error:", 0) == 0) return out;
+    }
+  }
+  // A fresh status report (asked now, its answer awaited).
+  Report status() {
+    const size_t n = reports_.size();
+    send("?");
+    EXPECT_TRUE(pump_until([&] { return reports_.size() > n; })) << "no status report";
+    const auto r = parse_report(reports_.back());
+    EXPECT_TRUE(r.has_value()) << reports_.back();
+    return r.value_or(Report{});
+  }
+  Report wait_idle() {
+    Report r;
+    const auto end = link_->now() + milliseconds(3'600'000);
+    while (link_->now() < end) {
+      r = status();
+      if (r.state == "Idle") return r;
+      const auto until = link_->now() + milliseconds(100);
+      while (link_->now() < until) pump(milliseconds(20));
+    }
+    ADD_FAILURE() << "not idle: " << r.state;
+    return r;
+  }
+  const std::vector<std::string>& reports() const { return reports_; }
+  std::deque<std::string>& lines() { return lines_; }
+  const std::vector<std::string>& all() const { return all_; }
+
+  bool polling = false;
+  uint64_t polls = 0;
+  // Board time one step of the engine may wait for an answer (it returns at the first answer):
+  // long jobs take fewer, longer steps.
+  milliseconds step_wait{5};
+
+ private:
+  MachineConfig cfg_;
+  std::unique_ptr<fpgacnc::link::Link> link_;
+  std::unique_ptr<grbl::Engine> engine_;
+  std::string partial_;
+  std::deque<std::string> lines_;
+  std::vector<std::string> reports_;
+  std::vector<std::string> all_;
+  fpgacnc::link::Link::Time last_poll_{};
+};
+
+// The file's end position as the host planner computes it (grbl dialect, the same machine).
+std::array<int64_t, 3> planned_end(const std::string& path, const MachineConfig& cfg) {
+  auto go = fpgacnc::plan::gcode_options(cfg);
+  go.dialect = fpgacnc::gcode::Dialect::kGrbl;
+  go.tool_change_pause = false;
+  const auto prog = fpgacnc::gcode::parse_file(path, go);
+  const auto plan = fpgacnc::plan::plan_program(prog, cfg, {});
+  return {plan.final_steps[0], plan.final_steps[1], plan.final_steps[2]};
+}
+
+void expect_at(const Report& r, const std::array<int64_t, 3>& steps, const MachineConfig& cfg) {
+  for (size_t a = 0; a < 3; ++a) {
+    const double want = static_cast<double>(steps[a]) / cfg.steps_per_mm[a];
+    EXPECT_NEAR(r.mpos[a], want, 0.0006) << "axis " << a;
+  }
+}
+
+struct StreamResult {
+  size_t oks = 0, errors = 0;
+  std::vector<std::string> error_lines;
+};
+
+// Send-response: one line, wait for its ok/error, the next.
+StreamResult ping_pong(Rig& rig, const std::vector<std::string>& lines) {
+  StreamResult r;
+  for (const auto& l : lines) {
+    const auto ans = rig.command(l);
+    if (ans.back() == "ok") {
+      ++r.oks;
+    } else {
+      ++r.errors;
+      r.error_lines.push_back(l + " -> " + ans.back());
+    }
+  }
+  return r;
+}
+
+// Character counting: lines go out while the bytes of unanswered lines fit the 128-byte buffer.
+StreamResult char_counting(Rig& rig, const std::vector<std::string>& lines, size_t* max_in_flight) {
+  StreamResult r;
+  std::deque<size_t> in_flight;
+  size_t bytes = 0, next = 0;
+  *max_in_flight = 0;
+  while (next < lines.size() || !in_flight.empty()) {
+    while (next < lines.size() && bytes + lines[next].size() + 1 <= grbl::kRxBuffer) {
+      rig.send(lines[next] + "\n");
+      in_flight.push_back(lines[next].size() + 1);
+      bytes += in_flight.back();
+      ++next;
+    }
+    *max_in_flight = std::max(*max_in_flight, in_flight.size());
+    // The engine never holds more than the sender put in flight.
+    EXPECT_LE(rig.engine().rx_pending(), grbl::kRxBuffer);
+    const std::string a = rig.next_line();
+    if (a == "ok" || a.rfind("error:", 0) == 0) {
+      (a == "ok" ? r.oks : r.errors)++;
+      if (a != "ok") r.error_lines.push_back(a);
+      bytes -= in_flight.front();
+      in_flight.pop_front();
+    } else if (a.empty()) {
+      break;
+    }
+  }
+  return r;
+}
+
+const std::string kCorpus = FPGACNC_CORPUS_ROOT;
+
+}  // namespace
+
+// libsystemc's main() calls sc_main(); gtest_main provides main(), so this only links.
+extern "C" int sc_main(int, char*[]) {
+  return 0;
+}
+
+namespace {
+
+struct JobCase {
+  const char* file;
+  bool counting;
+};
+
+void PrintTo(const JobCase& c, std::ostream* os) {
+  *os << c.file << (c.counting ? " (character counting)" : " (send-response)");
+}
+
+class GrblStream : public ::testing::TestWithParam<JobCase> {};
+
+}  // namespace
+
+// A corpus job streamed as a sender streams it, `?` at 10 Hz of board time throughout; every
+// line is answered ok and the machine ends, at rest, where the planner puts the file's end.
+TEST_P(GrblStream, CorpusJobEndsWhereThePlanEnds) {
+  const JobCase c = GetParam();
+  const std::string path = kCorpus + "/" + c.file;
+  MachineConfig cfg;
+  Rig rig;
+  rig.polling = true;
+  rig.step_wait = milliseconds(50);
+  const auto lines = read_lines(path);
+  StreamResult r;
+  size_t max_in_flight = 0;
+  if (c.counting) {
+    r = char_counting(rig, lines, &max_in_flight);
+    EXPECT_GT(max_in_flight, 2u) << "character counting kept more than one line in flight";
+  } else {
+    r = ping_pong(rig, lines);
+  }
+  EXPECT_EQ(r.errors, 0u) << (r.error_lines.empty() ? "" : r.error_lines.front());
+  EXPECT_EQ(r.oks, lines.size());
+  const Report end = rig.wait_idle();
+  expect_at(end, planned_end(path, cfg), cfg);
+  // The report's position is the FPGA's step counter, the engine's view of it the same.
+  const auto mp = rig.engine().mpos();
+  for (size_t a = 0; a < 3; ++a) EXPECT_NEAR(end.mpos[a], mp[a], 0.0005);
+  // Polled throughout: Run seen while the job ran, each report well formed.
+  EXPECT_GT(rig.polls, 3u);
+  bool saw_run = false;
+  for (const auto& rep : rig.reports()) {
+    const auto p = parse_report(rep);
+    ASSERT_TRUE(p.has_value()) << rep;
+    saw_run |= p->state == "Run";
+    EXPECT_NE(rep.find("|FS:"), std::string::npos) << rep;
+  }
+  EXPECT_TRUE(saw_run);
+  EXPECT_GT(rig.engine().stats().frames, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, GrblStream,
+                         ::testing::Values(JobCase{"cncjs/circle.gcode", false},
+                                           JobCase{"cncjs/circle.gcode", true},
+                                           JobCase{"cncjs/circle-inch.gcode", true},
+                                           JobCase{"cncjs/arc-ijk.gcode", false},
+                                           JobCase{"cncjs/g2-arc.gcode", true},
+                                           JobCase{"cncjs/jsdc-laser.gcode", true}),
+                         [](const ::testing::TestParamInfo<JobCase>& i) {
+                           std::string n = fs::path(i.param.file).stem().string() +
+                                           (i.param.counting ? "_counting" : "_ping_pong");
+                           for (char& ch : n)
+                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           return n;
+                         });
+
+// Welcome message on connect (interface.md, "Welcome Message") and the queried messages.
+TEST(Grbl, BannerAndQueries) {
+  Rig rig;
+  rig.engine().opened();
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  auto a = rig.command("$I");
+  ASSERT_EQ(a.size(), 3u) << ::testing::PrintToString(a);
+  EXPECT_EQ(a[0].rfind("[VER:1.1", 0), 0u);
+  EXPECT_TRUE(std::regex_match(a[1], std::regex(R"(\[OPT:[A-Z]*,\d+,128\])"))) << a[1];
+  a = rig.command("$G");
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a[0], "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]");
+  a = rig.command("$#");
+  ASSERT_EQ(a.size(), 12u);
+  EXPECT_EQ(a[0], "[G54:0.000,0.000,0.000]");
+  EXPECT_EQ(a[10], "[PRB:0.000,0.000,0.000:0]");
+  a = rig.command("$N");
+  EXPECT_EQ(a[0], "$N0=");
+  EXPECT_EQ(a[1], "$N1=");
+  EXPECT_EQ(rig.command("")[0], "ok");  // an empty line is ok
+  // Modal state follows the lines; offsets appear in $# and in the report's WCO.
+  EXPECT_EQ(rig.command("G10 L2 P1 X5 Y-2")[0], "ok");
+  EXPECT_EQ(rig.command("G91 G20 M8")[0], "ok");
+  a = rig.command("$G");
+  EXPECT_EQ(a[0], "[GC:G0 G54 G17 G20 G91 G94 M5 M8 T0 F0 S0]");
+  EXPECT_EQ(rig.command("G21 G90")[0], "ok");
+  a = rig.command("$#");
+  EXPECT_EQ(a[0], "[G54:5.000,-2.000,0.000]");
+  const size_t n = rig.reports().size();
+  rig.send("?");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.reports().size() > n; }));
+  EXPECT_NE(rig.reports().back().find("|WCO:5.000,-2.000,0.000"), std::string::npos)
+      << rig.reports().back();
+  // A reset at rest: no alarm, the banner, and the work offsets kept (grbl keeps them).
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.status().state, "Idle");
+  EXPECT_EQ(rig.command("$#")[0], "[G54:5.000,-2.000,0.000]");
+}
+
+// Every error class the front end answers (interface.md's error table, docs/grbl.md).
+TEST(Grbl, ErrorCodes) {
+  Rig rig;
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"X", "error:2"},          // bad number format
+      {"$Z", "error:3"},         // not a '$' command
+      {"G1 F-5 X1", "error:4"},  // negative value
+      {"$H", "error:5"},         // homing not enabled
+      {"$20=1", "error:10"},     // soft limits need homing
+      {"G1 X1" + std::string(80, ' ') + "Y" + std::string(80, '1'), "error:11"},  // too long
+      {"G99", "error:20"},            // unsupported G code
+      {"M104 S200", "error:20"},      // unsupported M code
+      {"G1 X1 E2", "error:20"},       // a letter grbl does not have
+      {"G38.2 Z-1 F10", "error:20"},  // no probe input
+      {"G1 G0 X1", "error:21"},       // modal group violation
+      {"G1 X1 X2", "error:25"},       // repeated word
+      {"G4", "error:28"},             // missing P
+      {"G59.1", "error:29"},          // G59.x
+      {"G2 X10 Y0", "error:35"},      // arc without offsets
+      {"$J=G91 X1 F100", "error:3"},  // jogging: not available (docs/grbl.md)
+      {"$100=-1", "error:4"},
+      {"$21=1", "error:3"},  // hard limits: not available
+  };
+  for (const auto& [line, want] : cases) {
+    const auto a = rig.command(line);
+    EXPECT_EQ(a.back(), want) << line;
+  }
+  // Nothing moved.
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Idle");
+  expect_at(r, {0, 0, 0}, MachineConfig{});
+  // A line numbered in error is not executed: the next good line still works from 0.
+  EXPECT_EQ(rig.command("G0 X1")[0], "ok");
+  expect_at(rig.wait_idle(), {160, 0, 0}, MachineConfig{});
+}
+
+// $$ lists the settings; $N=value changes the machine (steps/mm moves the same G-code a
+// different number of steps), persists in the settings file, and a new engine reads it back.
+TEST(Grbl, SettingsRoundTripThroughTheFile) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("grbl_settings_{}", ::getpid());
+  fs::create_directories(dir);
+  const std::string file = (dir / "settings.txt").string();
+  {
+    Rig rig(file);
+    auto a = rig.command("$$");
+    EXPECT_EQ(a.back(), "ok");
+    EXPECT_NE(std::find(a.begin(), a.end(), "$100=160.000"), a.end());
+    EXPECT_NE(std::find(a.begin(), a.end(), "$11=0.010"), a.end());
+    EXPECT_EQ(rig.command("$100=80")[0], "ok");
+    EXPECT_EQ(rig.command("$110=6000")[0], "ok");
+    EXPECT_EQ(rig.command("$N0=G21 G90")[0], "ok");
+    EXPECT_EQ(rig.command("$10=3")[0], "ok");  // MPos and Bf
+    EXPECT_EQ(rig.command("G0 X10")[0], "ok");
+    const Report r = rig.wait_idle();
+    // 10 mm at 80 steps/mm: 800 FPGA steps, reported back as 10 mm.
+    EXPECT_NEAR(r.mpos[0], 10.0, 1e-9);
+    EXPECT_NE(rig.reports().back().find("|Bf:"), std::string::npos) << rig.reports().back();
+  }
+  ASSERT_TRUE(fs::exists(file));
+  {
+    // The board is a new one (at 0); the file's settings and startup line come back.
+    Rig rig(file);
+    rig.engine().opened();
+    EXPECT_EQ(rig.next_line(), grbl::kBanner);
+    // Stored as grbl's parser keeps a line: no spaces (interface.md: ">G54G20:ok").
+    EXPECT_EQ(rig.next_line(), ">G21G90:ok");
+    auto a = rig.command("$$");
+    EXPECT_NE(std::find(a.begin(), a.end(), "$100=80.000"), a.end());
+    EXPECT_NE(std::find(a.begin(), a.end(), "$110=6000.000"), a.end());
+    EXPECT_NE(std::find(a.begin(), a.end(), "$10=3"), a.end());
+    EXPECT_EQ(rig.engine().config().steps_per_mm[0], 80.0);
+    // $RST=$ restores the machine's values and keeps the work offsets; $RST=# clears those.
+    EXPECT_EQ(rig.command("G10 L2 P2 X1.5").back(), "ok");
+    a = rig.command("$RST=$");
+    EXPECT_EQ(a[0], "[MSG:Restoring defaults]");
+    a = rig.command("$$");
+    EXPECT_NE(std::find(a.begin(), a.end(), "$100=160.000"), a.end());
+    EXPECT_EQ(rig.command("$#")[1], "[G55:1.500,0.000,0.000]");
+    EXPECT_EQ(rig.command("$RST=#").back(), "ok");
+    EXPECT_EQ(rig.command("$#")[1], "[G55:0.000,0.000,0.000]");
+  }
+  fs::remove_all(dir);
+}
+
+// $C: every line parsed and answered, nothing moves; $C again leaves it with a reset.
+TEST(Grbl, CheckModeMovesNothing) {
+  Rig rig;
+  auto a = rig.command("$C");
+  EXPECT_EQ(a[0], "[MSG:Enabled]");
+  EXPECT_EQ(rig.status().state, "Check");
+  EXPECT_EQ(rig.command("G0 X10 Y10")[0], "ok");
+  EXPECT_EQ(rig.command("G1 X1 X2")[0], "error:25");
+  EXPECT_EQ(rig.command("G2 X20 Y10 I5 J0 F100")[0], "ok");
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Check");
+  expect_at(r, {0, 0, 0}, MachineConfig{});
+  a = rig.command("$C");
+  EXPECT_EQ(a[0], "[MSG:Disabled]");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.engine().stats().frames, 0u);
+  // The parser restarts where the machine is: G0 X1 moves 1 mm from 0.
+  EXPECT_EQ(rig.command("G0 X1")[0], "ok");
+  expect_at(rig.wait_idle(), {160, 0, 0}, MachineConfig{});
+}
+
+// Soft reset mid-job: sending stops, ALARM:3 then the banner and the unlock hint; G-code is
+// locked until $X; the position is the FPGA's and the parser starts there again.
+TEST(Grbl, SoftResetMidJobAlarmsAndResyncs) {
+  Rig rig;
+  rig.polling = true;
+  std::vector<std::string> lines{"G21 G90 F2000"};
+  for (int i = 1; i <= 200; ++i)
+    lines.push_back(fmt::format("G1 X{} Y{}", (i % 2) ? 20 : 0, i * 0.2));
+  std::deque<size_t> in_flight;
+  size_t bytes = 0, next = 0, oks = 0;
+  while (oks < 60) {
+    while (next < lines.size() && bytes + lines[next].size() + 1 <= grbl::kRxBuffer) {
+      rig.send(lines[next] + "\n");
+      in_flight.push_back(lines[next].size() + 1);
+      bytes += in_flight.back();
+      ++next;
+    }
+    const std::string a = rig.next_line();
+    ASSERT_EQ(a, "ok");
+    ++oks;
+    bytes -= in_flight.front();
+    in_flight.pop_front();
+  }
+  EXPECT_EQ(rig.status().state, "Run");
+  rig.polling = false;
+  rig.send("\x18");
+  // Lines taken before the reset keep their ok.
+  std::string l = rig.next_line();
+  while (l == "ok") l = rig.next_line();
+  EXPECT_EQ(l, "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  // Lines that were in the receive buffer are gone: no answer for them.
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Alarm");
+  EXPECT_TRUE(rig.lines().empty());
+  // Far from the job's end (Y 40): the rest was never sent.
+  EXPECT_LT(r.mpos[1], 30.0);
+  EXPECT_GT(rig.engine().stats().aborted + (lines.size() - next), 0u);
+  EXPECT_EQ(rig.command("G0 X0 Y0")[0], "error:9");
+  auto a = rig.command("$X");
+  EXPECT_EQ(a[0], "[MSG:Caution: Unlocked]");
+  EXPECT_EQ(a[1], "ok");
+  // Still where the FPGA stopped; then back to 0 exactly (the parser starts at the FPGA's
+  // position after the reset).
+  const Report after = rig.status();
+  EXPECT_EQ(after.state, "Idle");
+  for (size_t i = 0; i < 3; ++i) EXPECT_NEAR(after.mpos[i], r.mpos[i], 1e-9);
+  EXPECT_EQ(rig.command("G90 G0 X0 Y0")[0], "ok");
+  expect_at(rig.wait_idle(), {0, 0, 0}, MachineConfig{});
+}
+
+// Features that need hardware not built yet answer as grbl does without them (docs/grbl.md):
+// $H error:5, $J= error:3, feed hold and overrides ignored (the job runs to its end at 100 %),
+// M0 holds at rest until '~'.
+TEST(Grbl, FeaturesNotAvailableAndProgramPause) {
+  Rig rig;
+  EXPECT_EQ(rig.command("$H")[0], "error:5");
+  EXPECT_EQ(rig.command("$J=G91 X10 F500")[0], "error:3");
+  EXPECT_EQ(rig.command("G0 X5")[0], "ok");
+  rig.send("!\x91\x9A\x85");  // hold, feed +10 %, rapid 25 %, jog cancel: not available
+  const Report r = rig.wait_idle();
+  expect_at(r, {800, 0, 0}, MachineConfig{});
+  for (const auto& rep : rig.reports()) {
+    if (rep.find("|Ov:") != std::string::npos) {
+      EXPECT_NE(rep.find("|Ov:100,100,100"), std::string::npos) << rep;
+    }
+  }
+  // M0: Hold:0 once at rest, then '~' runs the rest.
+  EXPECT_EQ(rig.command("G0 X6")[0], "ok");
+  EXPECT_EQ(rig.command("M0")[0], "ok");
+  rig.send("G0 X7\n");
+  Report h;
+  ASSERT_TRUE(rig.pump_until([&] {
+    h = rig.status();
+    return h.state == "Hold:0";
+  }));
+  expect_at(h, {960, 0, 0}, MachineConfig{});
+  rig.send("~");
+  EXPECT_EQ(rig.next_line(), "ok");
+  expect_at(rig.wait_idle(), {1120, 0, 0}, MachineConfig{});
+}
+
+// On the Verilated board the soft reset presses the e-stop: the board drops its queue at once, so
+// the reset completes long before the queued moves could have run out, and after $X the parser
+// starts at the FPGA's position (back to 0 exactly).
+TEST(Grbl, SoftResetOnTheVerilatedBoardDropsItsQueue) {
+  Rig rig("", MachineConfig{}, true);
+  // Slow 2 mm zigzag moves (0.2 s each at F600): several queued on the board at the reset.
+  std::vector<std::string> lines{"G21 G90 F600"};
+  for (int i = 1; i <= 12; ++i)
+    lines.push_back(fmt::format("G1 X{} Y{}", (i % 2) ? 2 : 0, i * 0.1));
+  for (const auto& l : lines) EXPECT_EQ(rig.command(l).back(), "ok") << l;
+  // Let the board take the frames (flush rule: the sender went quiet) and start moving.
+  ASSERT_TRUE(rig.pump_until([&] { return rig.status().mpos[0] > 0.1; }, milliseconds(2000)));
+  const auto t0 = rig.link().now();
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  const auto took = rig.link().now() - t0;
+  // The 12 moves take 2.4 s of machine time; the reset took a small part of one.
+  EXPECT_LT(took, milliseconds(150)) << std::chrono::duration<double>(took).count() << " s";
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Alarm");
+  EXPECT_LT(r.mpos[1], 0.6);
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G0 X0 Y0").back(), "ok");
+  expect_at(rig.wait_idle(), {0, 0, 0}, MachineConfig{});
+}
