@@ -1,5 +1,5 @@
 # DE1-SoC (5CSEMA5F31C6) pin assignments for de1soc_top.
-# Original controller pins from hardware.md; LEDR and HEX pins from the Terasic DE1-SoC manual.
+# Original controller pins (docs/architecture.md "Pins"); LEDR and HEX pins from the Terasic DE1-SoC manual.
 # All I/O 3.3-V LVTTL.
 
 set_location_assignment PIN_AF14 -to clk

@@ -1,83 +1,38 @@
-// cnc_core: the board-independent controller, protocols v1 and v2 (docs/protocol.md).
+// cnc_core: the board-independent controller, protocols v1 and v2: wiring of the blocks in
+// docs/architecture.md ("Code flow in the device"), the configuration registers, the fault latch,
+// the e-stop and the status counters.
 //
-//   rx -> uart_rx -> frame_decoder -> segment_fifo -> segment_prep -> segment_executor
-//                                                       -> STEP/DIR/laser
-//   tx <- uart_tx <- response_encoder (v2 ACK/NAK/DONE/STATUS/IDENT frames, v1 0xAA per move)
-//
-// Behaviour: frame_decoder accepts v1 packets and v2 frames; validated motion, dwell and
-// numerator entries go through the block-RAM command FIFO (FIFO_DEPTH entries) to segment_prep,
-// which prepares the next segment while the executor runs the current one, so queued segments
-// follow each other with no idle clock. A v1 move's completion (seg_done of a v1 segment) queues
-// one 0xAA; a v2 segment's completion (or an applied v2 NUMERATORS entry) counts in
-// segments_done and asks for a DONE frame. init/NUMERATORS entries are applied by segment_prep
-// once the executor is idle.
-// Runtime configuration (cfg_wr/cfg_addr/cfg_wdata, one write per clock, and CONFIG_AXIS
-// frames, all four fields of an axis in one clock): per-axis step timing in clocks, address =
-// axis * 4 + field, field 0 STEP high, 1 STEP low, 2 DIR setup, 3 DIR hold (16 bits each;
-// defaults STEP_HIGH/STEP_LOW/DIR_SETUP/DIR_HOLD). Writes land in a shadow set that becomes
-// active only while the FIFO is empty and nothing is prepared or running, so a setting never
-// changes in the middle of a move. The cfg port wins over a CONFIG_AXIS frame on the same clock
-// and field.
-// Faults: a STEP timing violation (faults bit 0) and an inconsistent ARC (bit 1) are latched until
-// a FAULT_CLEAR frame.
-// Heaters (docs/heater.md): heater_block (two channels, LTC2308 on adc_*, sample tick every
-// SAMPLE_CLKS clocks) takes the heater frames from the decoder; its status is appended to STATUS
-// (16 bytes) and its faults are faults bits 5 (watchdog), 6 (channel 0), 7 (channel 1).
-// E-stop: `estop` (active high here; the board top inverts its active-low pin) is synchronized by
-// two flops and latched (faults bit 4) until a FAULT_CLEAR while it is released. While it is
-// active or latched: the laser gated low at the output, the command FIFO held flushed,
-// segment_prep and segment_executor aborted (the running segment and the prepared one are dropped:
-// no new STEP rising edge, a STEP pulse already high finishes its high time; positions and the v1
-// numerators are kept), both heaters low. Pin to laser low: 2 clocks; to heaters low: 3.
-// Machine outputs (docs/protocol.md "OUTPUT"): coolant_flood (M8), coolant_mist (M7), fan (part
-// cooling, M106 / M107: rtl/pwm.v, 256 counts a period at about FAN_PWM_HZ, duty byte d gives d
-// counts high, 255 always on) and dout[3:0] (M62..M65) are set by OUTPUT FIFO entries, applied by
-// segment_executor on the edge that ends the segment before them (no gap in the motion), counted
-// in segments_done (DONE). Low after reset; on e-stop gated low at once (the fan PWM forced off)
-// and cleared in the executor: they stay off until the next OUTPUT entry.
-// Status outputs: the v1 ones, plus the v2 counters that STATUS reports (16 bits, wrapping).
-//   packet_count counts v1 packets queued and v2 frames that passed every check.
-// rst is synchronous, active high; the board top synchronizes its reset button.
-//
-// Build options (Verilog parameters). The defaults build everything with 4 axes; PROFILES, ARCS,
-// HEATERS and OUTPUTS default to PROTO_V2 and LEAN_TRIM to 1 when PROTO_V2 = 0, so setting
-// PROTO_V2 = 0 alone gives the trimmed v1 build. spec/configs.toml names the configurations that
-// are built, linted, synthesised and timed (docs/synthesis.md has their table and resource
-// figures). Each option is 0 or 1; an illegal combination stops elaboration (below: a module named
-// cnc_core_illegal_<rule> is instantiated, which does not exist).
-//   PROTO_V2 = 0  protocol v1 only, as the original controller: packet_decoder_v1 (any first
-//                 byte other than 0xFF starts an 11-byte motion packet, 0xFF a 9-byte init; the
-//                 100 ms watchdog) hands its one-entry output register straight to segment_prep
-//                 (no frame_decoder, no CRC, no command FIFO, no response_encoder: uart_tx sends
-//                 one 0xAA per completed v1 move from a counter). A v1 packet completing while the
-//                 previous one is still waiting for segment_prep is dropped (overruns). The v2-only
-//                 status outputs are 0 (fifo_level is 1 while a decoded packet waits), the runtime
-//                 configuration is the cfg port only, and a latched fault (STEP timing violation,
-//                 e-stop) clears only at reset (v1 has no FAULT_CLEAR). Needs PROFILES = ARCS =
-//                 HEATERS = OUTPUTS = 0 (v1 cannot carry their frames).
-//   PROFILES = 0  no trapezoidal profiles: LINE_PROFILE (0x12) frames are answered NAK
-//                 UNKNOWN_TYPE; no profile_gen / dda_profile / profile products in prep and
-//                 executor; the FIFO entry drops the profile fields (177 bits).
-//   ARCS = 0      no circular DDA: ARC (0x13) frames are answered NAK UNKNOWN_TYPE; no arc_dda,
-//                 no ARC arithmetic in segment_prep; the FIFO entry drops the ARC fields (489
-//                 bits; with PROFILES = 0 as well the entry is 45 + 32 * N_AXES bits). ARCS and
-//                 PROFILES are independent (an arc runs its own pacing, never a profile).
-//   OUTPUTS = 0   no machine outputs: OUTPUT (0x15) frames are answered NAK UNKNOWN_TYPE, the
-//                 output pins are low.
-//   HEATERS = 0   no heater_block: the heater frames (0x20..0x24) are answered NAK UNKNOWN_TYPE,
-//                 heater and adc_* outputs are low, adc_sdo is ignored, STATUS still carries its
-//                 16 heater bytes (all 0: heaters idle, no faults).
-//   LEAN_TRIM = 1 (PROTO_V2 = 0 only): segment_prep is built for v1 entries only
-//                 (V1_ONLY: narrower divider and multiplier, no v2 paths) and the executor's DDAs
-//                 compute T - n themselves and keep no steps-left counter (LEAN_DDA): same pins
-//                 on every clock, fewer registers and LUTs. LEAN_TRIM = 0 keeps the general
-//                 datapath (the bench test_cnc_core_lean runs both in lockstep).
-//   STEP_CFG = 0  (PROTO_V2 = 0 only): the step timing is fixed at STEP_HIGH, STEP_LOW,
-//                 DIR_SETUP, DIR_HOLD on every axis, as on the original controller (the board top
-//                 ties cfg_wr low too): no shadow and active sets, no minimum-period scanner, and
-//                 the cfg_* port is not read. With cfg_wr held low the pins are the same on every
-//                 clock as with STEP_CFG = 1.
-//   N_AXES        2..15 (X and Y always exist; 15 is the minimum-period scanner's bound, below).
+// Contract
+//   rx / tx          the UART (BAUD, 8N1); the protocol is docs/protocol.md.
+//   step, dir, laser the motion pins (docs/timing.md); coolant_flood, coolant_mist, fan (PWM at
+//                    about FAN_PWM_HZ), dout: machine outputs set by OUTPUT entries on the edge
+//                    that ends the segment before them; low after rst and on e-stop.
+//   heater, adc_*    the two heater channels and the LTC2308 (docs/heater.md; SAMPLE_CLKS clocks a
+//                    sample tick).
+//   estop            active high, asynchronous (the board top inverts its estop_n pin): two-flop
+//                    synchronizer, latched (faults bit 4) until a FAULT_CLEAR while released. While
+//                    active or latched: FIFO held flushed, segment_prep and segment_executor
+//                    aborted (no new STEP rise; positions and v1 numerators kept), laser and
+//                    outputs low (2 clocks from the pin), heaters low (3 clocks).
+//   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
+//                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
+//                    writes a shadow set that becomes active only while the FIFO is empty and
+//                    nothing is prepared or running; the port wins over a frame on the same clock
+//                    and field.
+//   status outputs   registers; the 16-bit counters wrap. STATUS carries frames_ok, crc_errors,
+//                    length_errors, unknown_types, timeouts, frame_errors, overruns, noise_bytes,
+//                    clamped (docs/protocol.md "STATUS"); packet_count, violations and naks are
+//                    pins only. faults: bit 0 STEP timing violation, 1 arc error, 4 e-stop, 5..7
+//                    heaters; latched until FAULT_CLEAR.
+//   rst              synchronous, active high (the board top synchronizes its button).
+// Build options (docs/synthesis.md "Build options"; named configurations in spec/configs.toml):
+//   PROTO_V2 = 0 is the original v1 controller (packet_decoder_v1, no FIFO, no response_encoder,
+//   faults clear only at rst) and implies PROFILES = ARCS = HEATERS = OUTPUTS = 0; with PROTO_V2 =
+//   1 each of PROFILES, ARCS, HEATERS, OUTPUTS = 0 removes its block and answers its frames NAK
+//   UNKNOWN_TYPE. LEAN_TRIM = 1 and STEP_CFG = 0 (PROTO_V2 = 0 only) trim the v1 datapath and fix
+//   the step timing at its parameters, with the same pins on every clock. N_AXES 2..15. An illegal
+//   combination stops elaboration (a module named cnc_core_illegal_<rule> is instantiated, which
+//   does not exist).
 `default_nettype none
 `include "fpgacnc_spec.vh"
 

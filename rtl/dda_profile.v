@@ -1,4 +1,5 @@
-// dda_profile: exact DDA of one axis of a profiled segment (profile_gen is the master).
+// dda_profile: exact DDA of one axis of a profiled segment (profile_gen is the master;
+// docs/timing.md "Profiled segments", docs/motion.md).
 //
 // The axis makes n steps while the dominant axis makes n_dom (M = n_dom*2^48). It keeps
 // V_i = V*n (UQ23.48, < 2^71: V < 2^47, n < 2^24) and a remainder r = R - M with R = U*n mod M

@@ -1,4 +1,5 @@
-// entry_pack: the command-FIFO entry of a v1 packet or v2 frame, for frame_decoder.
+// entry_pack: the command-FIFO entry of a v1 packet or v2 frame, for frame_decoder (layout:
+// docs/architecture.md "Command-FIFO entry").
 //
 // Contract
 //   build     high in the clock the entry is written (frame_decoder's CHECK clock). The entry is

@@ -1,85 +1,37 @@
-// frame_decoder: one decoder for protocol v1 packets and protocol v2 frames (docs/protocol.md).
+// frame_decoder: one decoder for protocol v1 packets and v2 frames (docs/protocol.md "Telling v1
+// from v2", "Frame", "Host to device"; its place in the core: docs/architecture.md).
 //
-// Input: a byte stream (s_axis_*) from uart_rx. s_axis_tready is always high: the decoder never
-// stalls the UART.
-// First byte of a packet/frame (state HUNT):
-//   auto mode: 0x00..0x03 v1 motion (11 bytes), 0xFF v1 init (9 bytes), 0xA5 v2 frame,
-//              anything else discarded (noise strobe).
-//   v2 mode:   0xA5 v2 frame, anything else discarded (noise strobe).
-// A v2 frame with a good CRC switches to v2 mode; an accepted or duplicate RELEASE returns to auto
-// mode (as does reset).
-// v2 frame: A5, LEN, SEQ, TYPE, payload (LEN bytes), CRC high, CRC low. LEN > MAX_PAYLOAD is
-// rejected at the LEN byte (NAK BAD_LENGTH, SEQ reported as 0) and the decoder hunts again from
-// the next byte. Otherwise the whole frame is read, the CRC is folded in over LEN..CRC low
-// (crc16_ccitt, residue 0 for a good frame) and the frame is checked on the clock after its last
-// byte (the CHECK clock), in this order: CRC (BAD_CRC), TYPE (UNKNOWN_TYPE), LEN for the TYPE
-// (BAD_LENGTH), fields (BAD_FIELD: LINE / LINE_PROFILE flag bits [6:2], CONFIG_AXIS axis >=
-// N_AXES, the LINE_PROFILE field rules of docs/protocol.md: 1 <= max|steps| < 2^24, V_cruise <
-// 2^47, V_entry <= V_cruise, V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; the ARC
-// rules: code 2 or 3, flag bits 7:4 0, plane (bits 3:2) 0..2 and 0 when N_AXES < 3, start and end
-// not at the centre, |coordinates| about the centre < 2^22,
-// DZ != -2^31 (and DZ = 0 when N_AXES < 3), N_RAMP >= 1, 1 <= C_TOTAL < 2^46, V_cruise < 2^63,
-// V_entry and V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; ARC LEN must be 63; OUTPUT
-// LEN 3, mask != 0 with bit 7 clear, value bits 7 and 2 clear and only where the mask is set, fan
-// duty 0 unless mask bit 2; heater fields: see "Heater frames" below), then for
-// sequenced types SEQ against next_seq: ahead -> OUT_OF_ORDER; next_seq-1..next_seq-128 -> a
-// duplicate: ACK only, nothing executed; = next_seq -> accepted (FIFO types need a free slot, else
-// FIFO_FULL), next_seq += 1, ACK.
-// Only the CHECK clock of a frame that passed every check writes anything: nothing of a rejected
-// or cut frame reaches the FIFO or the configuration.
-//
-// Outputs
-//   m_axis_*    FIFO write, entry {arc_raw[487:0], arc, D[31:0], V_exit[47:0], V_cruise[47:0],
-//               V_entry[47:0], prof, v2, kind[1:0], code[1:0], power[7:0], t[31:0],
-//               steps[32*N_AXES-1:0]} (axis a in [32*a+:32]; 711 + 32*N_AXES bits, 839 for 4
-//               axes; the profile fields are 0 except for LINE_PROFILE, the arc fields except for
-//               ARC):
-//                 v1 motion: kind 0, v2 0, t = {16'd0, feed}, steps[0] = x, steps[1] = y,
-//                            code = byte0[1:0], power = 8'hFF
-//                 v1 init:   kind 1, v2 0, steps[0] = NUMERATOR_X, steps[1] = NUMERATOR_Y
-//                 LINE:      kind 0, v2 1, t = T, steps sign-extended (int16 when SHORT), code
-//                            = flags[1:0], power
-//                 NUMERATORS kind 1, v2 1; DWELL kind 2, v2 1, t = T, code 0, power 0.
-//                 LINE_PROFILE: kind 0, v2 1, prof 1, t = A, V_entry/V_cruise/V_exit/D, steps
-//                            sign-extended, code = flags[1:0], power.
-//                 ARC:       kind 0, v2 1, arc 1, code = flags[1:0], power, arc_raw = payload
-//                            bytes 2..62 (byte 2 in the top bits), t = the plane (flags[3:2]),
-//                            steps 0.
-//                 OUTPUT:    kind 3, v2 0 (the only entry with kind 3 and v2 0), t = {8'd0,
-//                            mask, value, fan duty} (payload bytes 0..2), the rest 0.
-//               A write strobe: m_axis_tvalid is high only in a CHECK clock in which
-//               m_axis_tready is high (the entry is written on that edge); the FIFO's tready comes
-//               from its registers. A v1 packet completing while m_axis_tready is low is dropped
-//               (v1_overrun strobe); a v2 FIFO frame is answered NAK FIFO_FULL. m_axis_tdata is
-//               defined in CHECK clocks only (don't-care, x, in any other clock).
-//   The strobes below are registered: high for the clock after the CHECK edge (after the byte
-//   edge for noise, after the LEN edge for BAD_LENGTH at once, after the watchdog edge for
-//   timeout).
-//   cfg_wr + cfg_axis + cfg_data {STEP high, STEP low, DIR setup, DIR hold} (16 bits each): an
-//               accepted CONFIG_AXIS.
-//   fault_clear, release_req, hello (IDENT wanted), status_req (STATUS wanted), ack_req (ACK wanted),
-//   nak + nak_seq + nak_reason (NAK wanted), and counter strobes frame_ok (a v2 frame that
-//   passed every check, duplicates included), crc_error, length_error, unknown_type, timeout
-//   (v1 or v2, cut short by the watchdog), noise (a byte discarded in HUNT), v1_packet (a v1
-//   packet written to the FIFO), v1_overrun (a v1 packet dropped, FIFO full).
-//   next_seq, v2_mode: registers.
-//   Heater frames (TYPE 0x20..0x24, docs/protocol.md "Heater frames"; sequenced, not queued):
-//               heat_wr strobe (registered, like cfg_wr) + heat_type, heat_len, heat_data (payload
-//               bytes 0..19, byte i in [8*i+:8]) of an accepted frame. BAD_FIELD: channel > 1;
-//               HEATER_CONFIG mode > 4, duty_max or manual > 0x8000; THERMISTOR_TABLE first + n >
-//               65; HEATER_SAFETY Tmin >= Tmax. LEN: CONFIG 20, SETPOINT 3, TABLE 4..18 even,
-//               SAFETY 13, WATCHDOG 2.
-// Latency: last byte's edge L -> CHECK clock (m_axis_tvalid) between L and L + 1, entry in the
-//   FIFO at edge L + 1, strobes high from L + 1 to L + 2.
-// Watchdog: a started packet or frame with no byte for WATCHDOG_CLKS clocks is dropped (timeout
-//   strobe; a v2 frame also gets NAK TIMEOUT, SEQ as received or 0 when the SEQ byte had not come)
-//   and the decoder hunts again; the strobe is high in the clock WATCHDOG_CLKS clocks after the
-//   last byte's clock.
-// Requires N_AXES >= 2 (v1 and NUMERATORS carry two axes), MAX_PAYLOAD <= 127.
-// Build options (cnc_core passes them): PROFILES = 0, ARCS = 0, OUTPUTS = 0, HEATERS = 0 make
-// LINE_PROFILE, ARC, OUTPUT, resp. the heater frames (0x20..0x24) unknown types (NAK UNKNOWN_TYPE, unknown_type strobe,
-// like any other unknown TYPE); their entry fields / heat_* outputs are then constant 0.
-// rst is synchronous, active high (auto mode, next_seq = 0).
+// Contract
+//   s_axis_*    bytes from uart_rx; s_axis_tready is always high (the decoder never stalls).
+//   Framing     HUNT takes 0xA5 (v2), and in auto mode also 0x00..0x03 / 0xFF (v1 motion / init);
+//               any other byte is dropped (noise). A v2 frame with a good CRC selects v2 mode; an
+//               accepted or duplicate RELEASE, or rst, returns to auto mode. LEN > MAX_PAYLOAD is
+//               rejected at the LEN byte (NAK BAD_LENGTH, SEQ 0) and HUNT resumes at the next byte.
+//   CHECK       the clock after a frame's last byte: CRC, TYPE, LEN for the TYPE, fields
+//               (frame_fields), then SEQ against next_seq (ahead: OUT_OF_ORDER; one of the 128
+//               before: duplicate, ACKed, not executed; equal: accepted, FIFO types need a free
+//               slot or FIFO_FULL). The first failing rule names the NAK reason. Only an accepted
+//               frame writes anything (FIFO entry, configuration, heater frame).
+//   m_axis_*    FIFO write strobe: m_axis_tvalid only in a CHECK clock with m_axis_tready high;
+//               m_axis_tdata (entry_pack; layout docs/architecture.md "Command-FIFO entry") is
+//               defined only then. A v1 packet meeting a full FIFO is dropped (v1_overrun).
+//   cfg_*, heat_*, fault_clear, release_req   an accepted CONFIG_AXIS / heater frame /
+//               FAULT_CLEAR / RELEASE.
+//   hello, status_req, ack_req, nak (+ nak_seq as received, nak_reason)   answer requests.
+//   frame_ok    a v2 frame that passed every check (HELLO, STATUS_QUERY, accepted, duplicate).
+//   crc_error, length_error, unknown_type   a v2 frame rejected for that reason (length_error
+//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER or FIFO_FULL.
+//   timeout     a started v1 packet or v2 frame with no byte for WATCHDOG_CLKS clocks (v2: also
+//               NAK TIMEOUT, SEQ as received or 0 before the SEQ byte).
+//   noise       a byte dropped in HUNT. v1_packet   a v1 packet written to the FIFO.
+//   next_seq, v2_mode, partial   registers.
+// Timing: last byte's edge L -> CHECK between L and L + 1, entry written on edge L + 1, the
+//   strobes above high from L + 1 to L + 2 (noise: the clock after its byte; BAD_LENGTH at the
+//   LEN byte: the clock after it; timeout: WATCHDOG_CLKS clocks after the last byte's clock).
+// Build options: PROFILES, ARCS, OUTPUTS, HEATERS = 0 make LINE_PROFILE, ARC, OUTPUT, the heater
+//   frames unknown types (their entry fields and heat_* constant 0).
+// Requires N_AXES >= 2, MAX_PAYLOAD <= 127. rst is synchronous, active high (auto mode,
+//   next_seq = 0).
 `default_nettype none
 
 `include "fpgacnc_spec.vh"

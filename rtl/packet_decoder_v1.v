@@ -1,11 +1,8 @@
-// packet_decoder_v1: byte-exact decoder of the original controller's protocol (protocol v1).
+// packet_decoder_v1: byte-exact decoder of the original controller's protocol v1 (packets:
+// docs/protocol.md "v1"), the decoder of cnc_core's PROTO_V2 = 0 builds.
 //
-// Input: a byte stream (s_axis_*) from uart_rx. s_axis_tready is always high: the decoder never
-// stalls the UART.
-// Packets (big-endian fields):
-//   init   : 9 bytes, first byte 0xFF, NUMERATOR_X uint32, NUMERATOR_Y uint32
-//   motion : 11 bytes, first byte = motion code (only bits [1:0] are used), steps_x int32,
-//            steps_y int32, feed uint16
+// Contract
+// Input: a byte stream (s_axis_*) from uart_rx; s_axis_tready is always high.
 // Output: one command per complete packet on m_axis_* (held until accepted):
 //   m_axis_tuser = 1 for init, 0 for motion
 //   m_axis_tdata = {code[1:0], a[31:0], b[31:0], feed[15:0]}
@@ -15,7 +12,7 @@
 // Watchdog: when a packet has started and no byte arrives for WATCHDOG_CLKS clocks, the partial
 // packet is dropped (timeout strobe) and the next byte starts a new packet.
 // Overrun: a packet completing while the previous command is still not accepted is dropped
-// (overrun strobe). A v1 host waits for the ACK of each move, so this only happens on misuse.
+// (overrun strobe; a v1 host waits for each move's 0xAA, so only a misbehaving host meets it).
 `default_nettype none
 
 module packet_decoder_v1 #(

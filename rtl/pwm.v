@@ -1,5 +1,6 @@
 // pwm: a PWM generator with a period of PWM_DIV * 2^PWM_BITS clocks (default 4883 * 1024 clocks:
-// 10.0 Hz at 50 MHz, a heater MOSFET's rate).
+// 10.0 Hz at 50 MHz, a heater MOSFET's rate; docs/heater.md), also the part-cooling fan's
+// (docs/protocol.md "OUTPUT").
 //
 // Contract
 //   duty        requested duty in counts, 0 .. 2^PWM_BITS (2^PWM_BITS and above: always on). It is

@@ -1,33 +1,22 @@
-// response_encoder: the device's answers (docs/protocol.md "Device to host") as a byte stream
-// for uart_tx: v2 frames ACK, NAK, DONE, STATUS, IDENT with their CRC, and protocol v1's 0xAA.
+// response_encoder: the device's answers as a byte stream for uart_tx: v2 ACK, NAK, DONE, STATUS,
+// IDENT frames with their CRC, and protocol v1's 0xAA (payloads: docs/protocol.md "Device to
+// host"; generated layout constants from fpgacnc_spec.vh).
 //
-// Requests (1-clock strobes, any clock): ident_req, status_req, nak_req (+ nak_seq,
-// nak_reason), ack_req, done_evt (a v2 FIFO entry completed), v1_ack (a v1 move completed).
-// Each frame kind has one pending flag (no queue): a request while the flag is set is merged
-// with it (a NAK keeps the latest seq/reason). When no byte is being sent the encoder starts the
-// highest-priority pending kind: IDENT, STATUS, NAK, ACK, DONE. Starting an ACK also clears a
-// pending DONE (same fields). A request on the clock a frame of its kind starts stays pending
-// (sets win over clears), so nothing that happened after the snapshot is lost.
-// v1: each v1_ack adds one 0xAA to a counter (up to 255 outstanding); the 0xAA bytes go out only
-// between frames, before any pending frame.
-// Frame: A5, LEN, SEQ (the device's frame counter: 0 for the first frame after reset, +1 per
-// frame sent), TYPE, payload, CRC-16/CCITT-FALSE over LEN..payload, high byte first (computed
-// while the bytes go out, crc16_ccitt). All payload fields are snapshotted from the live inputs
-// in one clock, the clock before the frame's first byte (0xA5) is offered.
-// Payloads (big-endian):
-//   ACK 0x80 / DONE 0x82: next_seq u8, fifo_free u16, segments_done u32
-//   NAK 0x81: nak_seq u8, nak_reason u8, next_seq u8, fifo_free u16
-//   STATUS 0x83: state u8, faults u8, fifo_level u16, next_seq u8, segments_done u32,
-//                position int32 x N_AXES (axis 0 first), counters u16 x 9 (counters[143:128]
-//                first: frames ok, CRC errors, length errors, unknown types, timeouts, UART
-//                framing errors, overruns, noise bytes, clamped segments), then HEAT_BYTES
-//                bytes of heat_status (its most significant bytes first; cnc_core: 16, the two
-//                heater channels, docs/protocol.md; 0 leaves STATUS at 27 + 4 * N_AXES bytes)
-//   IDENT 0x84: 2, N_AXES u8, FIFO_DEPTH u16, CLK_HZ u32, BAUD u32, BUILD_ID u32, next_seq u8,
-//                MAX_PAYLOAD u8
-// Output m_axis_* (to uart_tx): tdata/tvalid from registers only, held until taken.
-// Latency: request strobe sampled on edge E (pending from E) -> snapshot on edge E + 1 when
-//   nothing is being sent, 0xA5 offered from E + 1, taken by an idle uart_tx on edge E + 2.
+// Contract
+//   ident_req, status_req, nak_req (+ nak_seq, nak_reason), ack_req, done_evt, v1_ack
+//               1-clock request strobes, any clock. One pending flag per frame kind, no queue: a
+//               request while its flag is set merges with it (a NAK keeps the latest seq and
+//               reason). A request on the clock a frame of its kind starts stays pending.
+//   Order       when nothing is being sent: first every counted 0xAA (v1_ack adds one, up to 255),
+//               then the highest pending kind of IDENT, STATUS, NAK, ACK, DONE. Starting an ACK
+//               also clears a pending DONE (same fields).
+//   next_seq .. heat_status   live state; all fields of a frame are snapshotted in one clock,
+//               the clock before its 0xA5 is offered; frame_start is high in the clock after it.
+//   Device SEQ  0 after rst, +1 (mod 256) after each v2 frame's last CRC byte is taken.
+//   HEAT_BYTES  heater bytes appended to STATUS (the top bytes of heat_status; 0: none).
+//   m_axis_*    tdata / tvalid from registers only, held until taken.
+// Timing: request sampled on edge E -> snapshot on edge E + 1 when idle, 0xA5 offered from E + 1,
+//   taken by an idle uart_tx on edge E + 2. The CRC (crc16_ccitt) is formed while the bytes go out.
 // rst is synchronous, active high (nothing pending, device SEQ 0).
 `default_nettype none
 `include "fpgacnc_spec.vh"

@@ -1,9 +1,10 @@
-// segment_executor: runs prepared linear segments on N_AXES axes at a constant rate (kind LINE) or
-// with a trapezoidal speed profile (kind PROFILE), back to back.
+// segment_executor: runs prepared segments on N_AXES axes back to back: at a constant rate (kind
+// LINE), with a trapezoidal speed profile (kind PROFILE) or along an arc (kind ARC); DIR hold /
+// setup sequencing, laser, positions, machine outputs (docs/timing.md "Queued segments",
+// "Profiled segments", "ARC segments"; docs/architecture.md "Code flow in the device").
 //
-// Segment kinds (s_axis_kind, held in kind_reg for the running segment; another kind, e.g. an arc,
-// adds its own generator next to dda_linear / profile_gen, its tick gate and its end condition in
-// run_last):
+// Segment kinds (s_axis_kind, held in kind_reg for the running segment; each kind has its
+// generator, its tick gate and its end condition in run_last):
 //   0 LINE: constant rate, T clocks (below). Also DWELL and zero-length segments.
 //   2 ARC: s_axis_arc from segment_prep: arc_dda (loaded on accept, advancing only in RUN: the
 //     arc's clock 0 is tick 1). s_axis_arc_plane routes the walk's u / v steps and DIR and the

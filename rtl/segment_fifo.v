@@ -1,4 +1,6 @@
-// segment_fifo: the command FIFO between frame_decoder and segment_prep, in block RAM.
+// segment_fifo: the command FIFO between frame_decoder and segment_prep, in block RAM (entry
+// layout: docs/architecture.md "Command-FIFO entry"; `free` is the credit of docs/protocol.md
+// "Device to host").
 //
 // Contract
 //   s_axis_*   write side. s_axis_tready = (level < DEPTH), from registers only. An entry is

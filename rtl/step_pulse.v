@@ -1,16 +1,19 @@
-// step_pulse: STEP/DIR pin driver for one axis, with runtime timing in clocks.
+// step_pulse: STEP/DIR pin driver of one axis, timing in clocks set at run time (docs/timing.md
+// "STEP/DIR per move").
 //
-// step_req (1-clock strobe) -> STEP rises on the next clock edge and stays high exactly
-// cfg_high clocks (>= 1), then low for at least cfg_low clocks (>= 1) before it can rise again.
-// dir_wr (1-clock strobe) loads DIR from dir_in on the next edge. The caller (segment_executor)
-// only writes DIR when hold_ok is high and waits DIR setup clocks before the next step_req, so this
-// block only measures: hold_ok = at least cfg_hold clocks have passed since the last STEP rising
-// edge (before the first step: since reset was released). idle = STEP is low, its low time has elapsed and no step is pending: a
-// step_req now rises at once.
-// A step_req while not idle is a timing violation: it is not lost, it is issued as soon as the
-// low time allows, and violation strobes (the executor's period clamp makes this unreachable;
-// the strobe exists so a bench can prove it).
-// Timing: STEP rising edge 1 clock after step_req.
+// Contract
+//   step_req   1-clock strobe: STEP rises on the next edge, stays high exactly cfg_high clocks,
+//              then low at least cfg_low clocks before it may rise again (a setting of 0 acts
+//              as 1). A step_req while not idle is not lost: it is issued as soon as the low time
+//              allows, and violation strobes (segment_executor's period clamp keeps it from
+//              happening; the strobe lets a bench prove that).
+//   dir_wr     1-clock strobe: DIR takes dir_in on the next edge. The block does not enforce DIR
+//              hold or setup; the caller writes DIR only while hold_ok and waits DIR setup clocks
+//              before the next step_req.
+//   hold_ok    at least cfg_hold clocks since the last STEP rise (before the first step: since
+//              rst was released).
+//   idle       STEP low, its low time elapsed, no step pending: a step_req now rises at once.
+// Timing: STEP rises 1 clock after step_req.
 `default_nettype none
 
 module step_pulse (

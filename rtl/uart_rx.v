@@ -1,4 +1,5 @@
-// uart_rx: 8N1 UART receiver (LSB first, line idle high) with an AXI-Stream byte output.
+// uart_rx: 8N1 UART receiver (LSB first, line idle high) with an AXI-Stream byte output
+// (docs/protocol.md "Physical").
 //
 // Contract
 //   rxd            asynchronous pin; passes a two-flop synchronizer before any use.

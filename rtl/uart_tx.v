@@ -1,4 +1,5 @@
-// uart_tx: 8N1 UART transmitter (LSB first, line idle high) with an AXI-Stream byte input.
+// uart_tx: 8N1 UART transmitter (LSB first, line idle high) with an AXI-Stream byte input
+// (docs/protocol.md "Physical").
 //
 // Contract
 //   s_axis_*   a byte is taken on a clock edge with s_axis_tvalid and s_axis_tready high.

@@ -1,6 +1,7 @@
 // fpgacnc board [--model tlm|rtl] [--realtime] [--config F] [--fst F] [--edges F.csv]
 //               [--line-* ...]: a simulated board alone on a pseudo-terminal; prints its
-// /dev/pts/N path and serves any serial client until Ctrl-C / SIGTERM. `tlm` (default): the
+// /dev/pts/N path and serves any serial client until Ctrl-C / SIGTERM; SIGUSR1 / SIGUSR2 press /
+// release the e-stop (--model rtl). `tlm` (default): the
 // SystemC twins of cnc_core (twins::TwinBoard, event-driven, proven edge-for-edge equal to the
 // RTL); `rtl`: the Verilated cnc_core (SimBoard: heaters, line faults, FST waveforms). Also the
 // hooks that put a board behind `stream` without --port, and `stream --model both`.
@@ -180,7 +181,8 @@ void register_board(CLI::App& app) {
   sub->add_option("--model", args->model,
                   "tlm: the SystemC twins of cnc_core (default; fast, event-driven, edge-for-edge "
                   "equal to the RTL; no heaters, no line faults, no e-stop); rtl: the Verilated "
-                  "cnc_core (about 1.6 M clocks/s; heaters, --line-*, --fst)")
+                  "cnc_core (about 1.6 M clocks/s; heaters, --line-*, --fst, e-stop by SIGUSR1 / "
+                  "SIGUSR2)")
       ->check(CLI::IsMember({"tlm", "rtl"}));
   sub->add_flag("--realtime", args->realtime,
                 "tlm: simulated time follows the wall clock while the board is busy (a 5-minute "

@@ -10,8 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/protocol/v2.h"
 #include "fpgacnc/spec_vectors.h"
+#include "fpgacnc/twins/arc_walk.h"
 
 namespace {
 
@@ -200,6 +202,50 @@ TEST(SpecVectors, HostCodec) {
   }
   EXPECT_GE(decoded, 10u);
   EXPECT_GE(answered, 10u);
+}
+
+// The ARC worked frames against the integer reference walk (systemc/include/fpgacnc/twins/
+// arc_walk.h, the walk the device runs): with the frame's N_RAMP the walk lands on the end point in
+// its first pass (summed angle = the swept angle) with total cost C_TOTAL, the host's choice of
+// N_RAMP (arc::plan) is the frame's, and the profile fields end the recurrence at V_exit. One
+// frame has R0 != R1 (the radius-squared ramp of docs/protocol.md "ARC").
+TEST(SpecVectors, ArcFramesMatchTheReferenceWalk) {
+  namespace arc = fpgacnc::twins::arc;
+  size_t arcs = 0, ramps = 0;
+  for (const auto& v : spec::load_vectors()) {
+    if (v.type != static_cast<uint8_t>(v2::Type::Arc) || !v.has_answer || v.answer != "ACK")
+      continue;
+    SCOPED_TRACE(v.name + ": " + v.doc);
+    arc::Geometry g;
+    g.i = static_cast<int32_t>(v.field("i"));
+    g.j = static_cast<int32_t>(v.field("j"));
+    g.dx = static_cast<int32_t>(v.field("dx"));
+    g.dy = static_cast<int32_t>(v.field("dy"));
+    g.ccw = v.field("code") == 3;
+    const auto n_ramp = static_cast<uint32_t>(v.field("n_ramp"));
+    const auto c_total = static_cast<uint64_t>(v.field("c_total"));
+    const arc::WalkResult w = arc::walk(g, n_ramp);
+    EXPECT_TRUE(w.reached);
+    EXPECT_EQ(w.c_total, c_total);
+    EXPECT_NEAR(arc::walked_angle(g, w.moves), arc::sweep(g), 1e-6) << "first pass";
+    const arc::Plan p = arc::plan(g);
+    EXPECT_TRUE(p.ok);
+    EXPECT_EQ(p.n_ramp, n_ramp);
+    EXPECT_EQ(p.c_total, c_total);
+    const fpgacnc::plan::Recurrence r{c_total,
+                                      static_cast<uint64_t>(v.field("v_entry")),
+                                      static_cast<uint64_t>(v.field("v_cruise")),
+                                      static_cast<uint64_t>(v.field("v_exit")),
+                                      static_cast<uint64_t>(v.field("accel")),
+                                      static_cast<uint64_t>(v.field("decel_at"))};
+    EXPECT_EQ(fpgacnc::plan::simulate_recurrence(r).v_last, r.v_exit);
+    const int64_t r0 = int64_t{g.i} * g.i + int64_t{g.j} * g.j;
+    const int64_t r1 = int64_t{g.dx - g.i} * (g.dx - g.i) + int64_t{g.dy - g.j} * (g.dy - g.j);
+    ramps += r0 != r1;
+    ++arcs;
+  }
+  EXPECT_GE(arcs, 2u);
+  EXPECT_GE(ramps, 1u);
 }
 
 // The reader names file:line:column for a bad vector file.

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <pthread.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <charconv>
 #include <cstdio>
@@ -125,21 +126,39 @@ bool parse_line_fault_option(std::string_view name, std::string_view value, Line
 }
 
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud) {
-  // SIGINT/SIGTERM are taken with sigwait() here; block them before the board thread starts so
-  // that it inherits the mask and the signal always reaches this thread.
+  // SIGINT/SIGTERM (stop) and SIGUSR1/SIGUSR2 (e-stop) are taken with sigwait() here; block them
+  // before the board thread starts so that it inherits the mask and they always reach this thread.
   sigset_t set;
   sigemptyset(&set);
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGUSR1);
+  sigaddset(&set, SIGUSR2);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   board.start();
   fmt::print("simulated board ({}) on {} ({} baud)\n", board.model(), board.path(), baud);
   if (!args.fst_path.empty()) fmt::print("FST waveform: {}\n", args.fst_path);
   if (args.line_faults.any()) fmt::print("line faults: {}\n", args.line_faults.describe());
-  fmt::print("Ctrl-C (SIGINT) or SIGTERM stops it\n");
+  fmt::print(
+      "Ctrl-C (SIGINT) or SIGTERM stops it; SIGUSR1 presses the e-stop, SIGUSR2 releases it "
+      "(kill -USR1 {})\n",
+      static_cast<long>(getpid()));
   std::fflush(stdout);
   int sig = 0;
-  sigwait(&set, &sig);
+  for (;;) {
+    sigwait(&set, &sig);
+    if (sig != SIGUSR1 && sig != SIGUSR2) break;
+    // The e-stop pin (cnc_core's estop input) follows the signal until the next one; the core
+    // synchronizes and latches it on its next clocks (docs/protocol.md "The simulated board").
+    const bool pressed = sig == SIGUSR1;
+    try {
+      board.set_estop(pressed);
+      fmt::print("e-stop {} at board cycle {}\n", pressed ? "pressed" : "released", board.cycle());
+    } catch (const BoardError& e) {
+      fmt::print("e-stop ignored: {}\n", e.what());
+    }
+    std::fflush(stdout);
+  }
   board.stop();
   fmt::print("\nstopped by {}\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
   print_board_figures(board);

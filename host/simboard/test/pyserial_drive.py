@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Drive a fpgacnc board (real or simulated) with pyserial: send the original controller's init
-and motion example (protocol-v1.md) and expect the ACK byte 0xAA within TIMEOUT seconds of wall
-time (default 5: a real board ACKs after the move's 0.1 s; a simulated board needs 5 million
-clocks of simulation for it, seconds on a loaded machine).
+and motion example (docs/protocol.md "v1", "Worked examples") and expect the ACK byte 0xAA within
+TIMEOUT seconds of wall time (default 5: a real board ACKs after the move's 0.1 s; a simulated
+board needs 5 million clocks of simulation for it, seconds on a loaded machine).
 
 usage: pyserial_drive.py PORT [TIMEOUT]     exit status 0 on ACK, 1 otherwise
 """
