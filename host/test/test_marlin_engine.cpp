@@ -192,3 +192,19 @@ TEST(MarlinEngine, TemperatureWaitCompletesOnThePlant) {
   EXPECT_NEAR(std::stod(m[1]), target, cfg.heaters.ch[0].wait_tolerance_c + 0.5);
   EXPECT_EQ(m[2], "60.00");
 }
+
+// The fan (M106/M107: OUTPUT frames), relative extrusion (M83) on the fourth step channel E
+// (100 steps/mm by default) and G92 E (the interpreter's offset: the FPGA's counter is not reset).
+TEST(MarlinEngine, FanAndExtruder) {
+  Rig rig;
+  EXPECT_EQ(rig.command("M106 S128").back(), "ok");
+  EXPECT_EQ(rig.command("M83").back(), "ok");
+  EXPECT_EQ(rig.command("G1 X1 E2 F600").back(), "ok");
+  EXPECT_EQ(rig.command("G92 E0").back(), "ok");
+  EXPECT_EQ(rig.command("G1 X2 E1").back(), "ok");
+  EXPECT_EQ(rig.command("M107").back(), "ok");
+  EXPECT_EQ(rig.command("M400").back(), "ok");
+  const auto ans = rig.command("M114");
+  EXPECT_EQ(ans.at(0), "X:2.00 Y:0.00 Z:0.00 E:3.00 Count X:320 Y:0 Z:0");
+  EXPECT_GE(rig.engine().stats().frames, 4u);  // two moves, two outputs
+}
