@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fpgacnc/frontend/motion.h"
 #include "fpgacnc/gcode/dialect.h"
 #include "fpgacnc/gcode/reader.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -16,13 +17,6 @@ namespace v2 = protocol::v2;
 using std::chrono::milliseconds;
 
 namespace {
-
-size_t frame_axes(const plan::Steps4& steps) {
-  size_t k = 2;
-  for (size_t a = 0; a < 4; ++a)
-    if (steps[a] != 0) k = std::max(k, a + 1);
-  return k;
-}
 
 // The number after `letter` in a command ("M155 S2" -> 2), or nullopt.
 std::optional<double> word(const std::string& cmd, char letter) {
@@ -97,12 +91,7 @@ void Engine::connect() {
   opt_.v2.heaters = &heaters_;
   session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
   session_->start();
-  const auto& t = cfg_.step_timing;
-  for (uint8_t a = 0; a < ident_.n_axes && a < config::kAxes; ++a) {
-    session_->push({v2::config_axis(
-        0, a, static_cast<uint16_t>(t.step_high), static_cast<uint16_t>(t.step_low),
-        static_cast<uint16_t>(t.dir_setup), static_cast<uint16_t>(t.dir_hold))});
-  }
+  frontend::push_config_axes(*session_, ident_, cfg_);
   for (const auto& f : heaters_.setup) session_->push({f});
 
   params_ = std::make_unique<gcode::Params>();
@@ -116,24 +105,10 @@ void Engine::connect() {
   planner_ = std::make_unique<plan::Planner>(cfg_, plan::PlanOptions{});
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   // The parser and the planner start where the machine is.
+  plan::Steps4 pos{};
   const auto& st = session_->last_status();
-  std::string sync = "G53 G0";
-  bool moved = false;
-  for (size_t a = 0; a < 3 && a < st.position.size(); ++a) {
-    if (st.position[a] == 0) continue;
-    sync += fmt::format(" {}{:.9f}", config::kAxisNames[a],
-                        static_cast<double>(st.position[a]) / cfg_.steps_per_mm[a]);
-    moved = true;
-  }
-  if (moved) {
-    const auto& syntax = gcode::dialect_rules(gcode::Dialect::kMarlin).syntax;
-    gcode::Reader reader("marlin", sync, syntax, *params_);
-    gcode::Block b;
-    std::vector<gcode::Command> cmds;
-    while (reader.next(b)) interp_->execute(b, cmds);
-    for (const auto& c : cmds) planner_->add(c);
-    planner_->take_items();
-  }
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  frontend::sync_to(pos, cfg_, gcode::Dialect::kMarlin, *params_, *interp_, *planner_);
   say("start");
   say("echo: fpgacnc marlin front end (docs/marlin.md)");
 }
@@ -372,17 +347,7 @@ void Engine::push_fifo(const v2::Frame& f, int line) {
 }
 
 void Engine::emit_profiles() {
-  for (const auto& p : la_->take()) {
-    plan::Segment s;
-    s.code = p.code;
-    s.spindle_s = p.spindle_s;
-    const size_t k = frame_axes(p.steps);
-    std::array<int32_t, 4> s32{};
-    for (size_t a = 0; a < 4; ++a) s32[a] = static_cast<int32_t>(p.steps[a]);
-    push_fifo(v2::line_profile(0, v2::to_line_profile(p.code, v2::laser_power(s, cfg_), p.fields,
-                                                      std::span<const int32_t>(s32.data(), k))),
-              p.source_line);
-  }
+  for (const auto& p : la_->take()) push_fifo(frontend::profile_frame(p, cfg_), p.source_line);
 }
 
 void Engine::flush_lookahead() {
@@ -398,13 +363,8 @@ void Engine::push_items(std::vector<plan::PlanItem> items) {
       emit_profiles();
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
       flush_lookahead();
-      const double clocks = std::round(d->seconds * static_cast<double>(cfg_.clk_hz));
-      uint64_t left = clocks > 0 && clocks < 1e15 ? static_cast<uint64_t>(clocks) : 0;
-      while (left > 0) {
-        const uint64_t t = std::min<uint64_t>(left, UINT32_MAX);
-        push_fifo(v2::dwell(0, static_cast<uint32_t>(t)), d->source_line);
-        left -= t;
-      }
+      for (const auto& f : frontend::dwell_frames(d->seconds, cfg_.clk_hz))
+        push_fifo(f, d->source_line);
     } else if (const auto* h = std::get_if<plan::HeaterCommand>(&item)) {
       const uint8_t ch = (h->mcode == 104 || h->mcode == 109) ? heat::kHotend : heat::kBed;
       const auto& hc = cfg_.heaters.ch[ch];
