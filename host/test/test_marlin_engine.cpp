@@ -208,3 +208,57 @@ TEST(MarlinEngine, FanAndExtruder) {
   EXPECT_EQ(ans.at(0), "X:2.00 Y:0.00 Z:0.00 E:3.00 Count X:320 Y:0 Z:0");
   EXPECT_GE(rig.engine().stats().frames, 4u);  // two moves, two outputs
 }
+
+// M155 S1: a temperature line (no ok) every second of link time; S0 stops them.
+TEST(MarlinEngine, M155AutoReport) {
+  Rig rig;
+  EXPECT_EQ(rig.command("M155 S1").back(), "ok");
+  std::vector<std::string> got;
+  const auto t0 = rig.link().now();
+  while (rig.link().now() - t0 < milliseconds(2500)) {
+    const std::string l = rig.next_line(milliseconds(100));
+    if (!l.empty()) got.push_back(l);
+  }
+  size_t reports = 0;
+  for (const auto& l : got) {
+    std::smatch m;
+    EXPECT_TRUE(std::regex_match(l, m, kTemps)) << l;
+    ++reports;
+  }
+  EXPECT_GE(reports, 2u);
+  EXPECT_LE(reports, 3u);
+  EXPECT_EQ(rig.command("M155 S0").back(), "ok");
+  const auto t1 = rig.link().now();
+  size_t after = 0;
+  while (rig.link().now() - t1 < milliseconds(2500))
+    if (!rig.next_line(milliseconds(100)).empty()) ++after;
+  EXPECT_EQ(after, 0u);
+}
+
+// M112 mid-move on the Verilated board: taken at once (ahead of the queued lines), the e-stop
+// pressed: the machine stops far short of the move's end and nothing more is answered.
+TEST(MarlinEngine, M112StopsTheBoard) {
+  MachineConfig cfg;
+  Rig rig(true, cfg);
+  EXPECT_EQ(rig.command("G1 X50 F3000").back(), "ok");  // 1 s of motion
+  auto* bl = dynamic_cast<fpgacnc::simboard::BoardLink*>(&rig.link());
+  ASSERT_NE(bl, nullptr);
+  const auto t0 = rig.link().now();
+  while (bl->board().stats().position[0] < 160 && rig.link().now() - t0 < milliseconds(500))
+    rig.pump();
+  ASSERT_GE(bl->board().stats().position[0], 160) << "moving";
+  rig.engine().receive("G1 X0\nM112\n");  // M112 behind a queued move
+  EXPECT_EQ(rig.next_line(), "Error:Printer halted. kill() called!");
+  EXPECT_TRUE(rig.engine().killed());
+  auto run_for = [&](milliseconds d) {
+    const auto t = rig.link().now();
+    while (rig.link().now() - t < d) rig.pump();
+    return bl->board().stats().position[0];
+  };
+  const auto x1 = run_for(milliseconds(20));
+  const auto x2 = run_for(milliseconds(50));  // over 1 mm more (160 steps) if it still moved
+  EXPECT_EQ(x1, x2) << "still moving after M112";
+  EXPECT_LT(x2, 50 * 160) << "stopped before the move's end";
+  rig.engine().receive("M105\n");
+  EXPECT_EQ(rig.next_line(milliseconds(50)), "");  // halted: no answer
+}
