@@ -5,6 +5,8 @@
 #   BUILD_DIR/host/host_plan_bench   host planner throughput on the corpus part (if built)
 #   the make demo job: the whole jsdc-laser job at real feeds on the twin board (host planning and
 #   board simulation time), then its first 100 moves on both boards, compared
+#   fpgacnc grbl-bench: a grbl sender streaming 0.1 mm laser moves at 115200 baud into `fpgacnc
+#   grbl` on the twin board (moves/s delivered and executed, executor gaps)
 #   the virtual platform on octocat.gcode and part.gcode at their real feeds (wall, max RSS)
 #   a fresh clone's `make demo` and `make test` (BENCH_FRESH=0 skips them)
 set -euo pipefail
@@ -51,6 +53,21 @@ if [ -x "$fpgacnc" ]; then
   t4=$(date +%s.%N)
   awk -v p="$t1" -v q="$t4" -v r="$t3" 'BEGIN {
     printf "bench: make demo after the build: %.1f s wall for both steps (bar <= 60 s), of which the twin/RTL comparison %.1f s\n", q - p, q - r }'
+fi
+# Sender-side throughput of `fpgacnc grbl` (docs/grbl.md, "Throughput"): a character-counting
+# sender streams GRBL_MOVES 0.1 mm laser moves at 115200 baud (simulated line time); the
+# executor's idle clocks between segments must be 0. Run 1: the default machine (host -> FPGA
+# link 115200 baud) at F1500, within that link; run 2: F3000 with the FPGA link at 1 Mbaud; run 3:
+# F3000 on the 115200 FPGA link, which carries fewer moves/s than that feed needs (the bench says
+# so; its gaps are the expected figure, not a failure).
+if [ -x "$fpgacnc" ]; then
+  GRBL_MOVES=${GRBL_MOVES:-300}
+  for args in "--feed 1500" "--feed 3000 --board-baud 1000000"; do
+    echo "== fpgacnc grbl-bench --moves $GRBL_MOVES $args"
+    "$fpgacnc" grbl-bench --moves "$GRBL_MOVES" $args 2>/dev/null | grep -v "^simulated board" || status=1
+  done
+  echo "== fpgacnc grbl-bench --moves $GRBL_MOVES --feed 3000 (FPGA link 115200: expected to show its limit)"
+  "$fpgacnc" grbl-bench --moves "$GRBL_MOVES" --feed 3000 2>/dev/null | grep -v "^simulated board" || true
 fi
 # Virtual platform (SystemC twins, systemc/) against the Verilated RTL on the same job: the first
 # $VP_MOVES moves of the demo job with the same host schedule, simulated clocks per wall second

@@ -89,6 +89,14 @@ void register_board(CLI::App& app);
 // 1.1's protocol on a pty and TCP with the FPGA behind it (host/cli/grbl_cmd.cpp).
 void register_grbl(CLI::App& app);
 
+// fpgacnc grbl-bench [--moves N] [--feed F] [--baud B]: sender-side throughput of `fpgacnc grbl`
+// on the simulated board (host/cli/grbl_bench_cmd.cpp).
+void register_grbl_bench(CLI::App& app);
+
+// fpgacnc marlin [--port DEV | --model tlm|rtl]: Marlin's host protocol on a pty with the FPGA
+// behind it (host/cli/marlin_cmd.cpp).
+void register_marlin(CLI::App& app);
+
 // fpgacnc sim FILE [--model tlm|rtl|both]: a whole job on the twins or the Verilated RTL
 // (host/cli/sim_cmd.cpp, built with systemc/).
 void register_sim(CLI::App& app);

@@ -29,6 +29,7 @@
 #include "fpgacnc/simboard/cli_board.h"
 #include "fpgacnc/simboard/runner.h"
 #include "fpgacnc/twins/twin_board.h"
+#include "sender_port.h"
 
 namespace fpgacnc::cli {
 namespace {
@@ -36,40 +37,6 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) {
   g_stop = 1;
-}
-
-// A sender's end: the pty master or a TCP connection, with what is still to be written.
-struct Peer {
-  int fd = -1;
-  bool connected = false;
-  std::string pending;
-};
-
-void set_nonblocking(int fd) {
-  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
-}
-
-// The pty the sender opens: raw, 8-bit clean; no slave kept open by us, so POLLHUP on the
-// master tells whether a sender has it open.
-int open_sender_pty(std::string& path) {
-  const int m = ::posix_openpt(O_RDWR | O_NOCTTY);
-  if (m < 0 || ::grantpt(m) != 0 || ::unlockpt(m) != 0)
-    throw std::runtime_error(
-        fmt::format("grbl: cannot create a pseudo-terminal: {}", std::strerror(errno)));
-  path = ::ptsname(m);
-  // Raw mode on the pair (open the slave once to set it).
-  const int s = ::open(path.c_str(), O_RDWR | O_NOCTTY);
-  if (s >= 0) {
-    termios t{};
-    ::tcgetattr(s, &t);
-    ::cfmakeraw(&t);
-    ::cfsetispeed(&t, B115200);
-    ::cfsetospeed(&t, B115200);
-    ::tcsetattr(s, TCSANOW, &t);
-    ::close(s);
-  }
-  set_nonblocking(m);
-  return m;
 }
 
 // "tcp:HOST:PORT" -> a listening socket.
@@ -120,14 +87,6 @@ int listen_tcp(const std::string& spec, std::string& where) {
   where = fmt::format("{}:{}", buf, bound_port);
   set_nonblocking(fd);
   return fd;
-}
-
-void flush_peer(Peer& p) {
-  while (p.connected && !p.pending.empty()) {
-    const ssize_t n = ::write(p.fd, p.pending.data(), p.pending.size());
-    if (n <= 0) break;
-    p.pending.erase(0, static_cast<size_t>(n));
-  }
 }
 
 struct Args {

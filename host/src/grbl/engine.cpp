@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fpgacnc/frontend/motion.h"
 #include "fpgacnc/gcode/dialect.h"
 
 namespace fpgacnc::grbl {
@@ -83,13 +84,6 @@ std::string fmt3(double v) {
   return fmt::format("{:.3f}", v);
 }
 
-size_t frame_axes(const plan::Steps4& steps) {
-  size_t k = 2;
-  for (size_t a = 0; a < 4; ++a)
-    if (steps[a] != 0) k = std::max(k, a + 1);
-  return k;
-}
-
 }  // namespace
 
 const char* state_name(State s) {
@@ -140,12 +134,7 @@ void Engine::opened() {
 void Engine::new_session() {
   session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
   session_->start();
-  const auto& t = cfg_.step_timing;
-  for (uint8_t a = 0; a < ident_.n_axes && a < config::kAxes; ++a) {
-    session_->push({v2::config_axis(
-        0, a, static_cast<uint16_t>(t.step_high), static_cast<uint16_t>(t.step_low),
-        static_cast<uint16_t>(t.dir_setup), static_cast<uint16_t>(t.dir_hold))});
-  }
+  frontend::push_config_axes(*session_, ident_, cfg_);
   fifo_info_.clear();
   fifo_base_ = 0;
 }
@@ -178,25 +167,7 @@ void Engine::rebuild_pipeline(const plan::Steps4& steps) {
   modal_ = Modal{};
   wco_changed_ = true;
   // The parser and the planner start where the machine is (grbl's gc_sync_position).
-  std::string sync = "G53 G0";
-  bool moved = false;
-  for (size_t a = 0; a < 3; ++a) {
-    if (steps[a] == 0) continue;
-    sync += fmt::format(" {}{:.9f}", config::kAxisNames[a],
-                        static_cast<double>(steps[a]) / cfg_.steps_per_mm[a]);
-    moved = true;
-  }
-  restore.insert(restore.begin(), moved ? sync : std::string());
-  const auto& syntax = gcode::dialect_rules(gcode::Dialect::kGrbl).syntax;
-  for (const auto& line : restore) {
-    if (line.empty()) continue;
-    gcode::Reader reader("grbl", line, syntax, *params_);
-    gcode::Block b;
-    std::vector<gcode::Command> cmds;
-    while (reader.next(b)) interp_->execute(b, cmds);
-    for (const auto& c : cmds) planner_->add(c);
-    planner_->take_items();  // the machine is there already: nothing to send
-  }
+  frontend::sync_to(steps, cfg_, gcode::Dialect::kGrbl, *params_, *interp_, *planner_, restore);
   modal_ = Modal{};
 }
 
@@ -396,18 +367,9 @@ void Engine::push_fifo(const v2::Frame& f, int line, double feed, double s) {
 }
 
 void Engine::emit_profiles() {
-  for (const auto& p : la_->take()) {
-    plan::Segment s;
-    s.code = p.code;
-    s.spindle_s = p.spindle_s;
-    const size_t k = frame_axes(p.steps);
-    std::array<int32_t, 4> s32{};
-    for (size_t a = 0; a < 4; ++a) s32[a] = static_cast<int32_t>(p.steps[a]);
-    const v2::Frame f =
-        v2::line_profile(0, v2::to_line_profile(p.code, v2::laser_power(s, cfg_), p.fields,
-                                                std::span<const int32_t>(s32.data(), k)));
-    push_fifo(f, p.source_line, p.v_cruise * 60.0, std::max(0.0, p.spindle_s));
-  }
+  for (const auto& p : la_->take())
+    push_fifo(frontend::profile_frame(p, cfg_), p.source_line, p.v_cruise * 60.0,
+              std::max(0.0, p.spindle_s));
 }
 
 void Engine::flush_lookahead() {
@@ -424,13 +386,8 @@ void Engine::push_items(std::vector<plan::PlanItem> items) {
       emit_profiles();
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
       flush_lookahead();
-      const double clocks = std::round(d->seconds * static_cast<double>(cfg_.clk_hz));
-      uint64_t left = clocks > 0 && clocks < 1e15 ? static_cast<uint64_t>(clocks) : 0;
-      while (left > 0) {
-        const uint64_t t = std::min<uint64_t>(left, UINT32_MAX);
-        push_fifo(v2::dwell(0, static_cast<uint32_t>(t)), d->source_line, 0.0, 0.0);
-        left -= t;
-      }
+      for (const auto& f : frontend::dwell_frames(d->seconds, cfg_.clk_hz))
+        push_fifo(f, d->source_line, 0.0, 0.0);
     } else if (std::get_if<gcode::Pause>(&item)) {
       flush_lookahead();
       pause_pending_ = true;
@@ -655,12 +612,7 @@ int Engine::system_command(const std::string& cmd) {
     const plan::Steps4 pos = planner_->position();
     cfg_ = apply_settings(base_, settings_);
     // New step timing to the board, the planner at the same step position.
-    const auto& t = cfg_.step_timing;
-    for (uint8_t a = 0; a < ident_.n_axes && a < config::kAxes; ++a) {
-      session_->push({v2::config_axis(
-          0, a, static_cast<uint16_t>(t.step_high), static_cast<uint16_t>(t.step_low),
-          static_cast<uint16_t>(t.dir_setup), static_cast<uint16_t>(t.dir_hold))});
-    }
+    frontend::push_config_axes(*session_, ident_, cfg_);
     rebuild_pipeline(pos);
     save();
     return 0;

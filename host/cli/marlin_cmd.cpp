@@ -1,0 +1,134 @@
+// fpgacnc marlin [--config F] [--port DEV | --model tlm|rtl]: Marlin's host protocol for printers
+// (docs/marlin.md) on a new pseudo-terminal (its path is the first line on stdout), with the FPGA
+// behind it: a real port, or the simulated board (default: the twins; --model rtl for the
+// Verilated board with its heaters' thermal plants and e-stop). Serves until SIGINT or SIGTERM.
+#include <fmt/format.h>
+#include <poll.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "commands.h"
+#include "fpgacnc/link/serial_link.h"
+#include "fpgacnc/marlin/engine.h"
+#include "fpgacnc/simboard/cli_board.h"
+#include "fpgacnc/simboard/runner.h"
+#include "fpgacnc/twins/twin_board.h"
+#include "sender_port.h"
+
+namespace fpgacnc::cli {
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) {
+  g_stop = 1;
+}
+
+struct MarlinArgs {
+  CommonOptions common;
+  std::string port;
+  std::string model = "tlm";
+};
+
+void run_marlin(const MarlinArgs& args) {
+  const config::MachineConfig cfg = load_config(args.common);
+  Peer pty;
+  std::string pty_path;
+  pty.fd = open_sender_pty(pty_path);
+  fmt::print("{}\n", pty_path);  // first line: the pty path (scripts read it)
+
+  std::unique_ptr<link::Link> lk;
+  marlin::EngineOptions eo;
+  eo.v2 = link::stream_v2_options(cfg);
+  std::string behind;
+  if (!args.port.empty()) {
+    lk = std::make_unique<link::SerialLink>(args.port, cfg.baud);
+    behind = args.port;
+  } else if (args.model == "tlm") {
+    lk = simboard::make_board_link(
+        std::make_unique<twins::TwinBoard>(twins::TwinBoard::options_from_config(cfg)), cfg.baud,
+        {});
+    behind = "the simulated board (tlm: no heater plants, no e-stop input)";
+  } else {
+    lk = simboard::make_default_link(cfg, {});
+    behind = "the simulated board (rtl)";
+    if (auto clk = simboard::plant_clock(*lk)) {
+      eo.v2.plant_time = std::move(clk);
+      eo.v2.heater_poll = std::chrono::milliseconds(5);
+    }
+    if (auto* bl = dynamic_cast<simboard::BoardLink*>(lk.get()))
+      eo.estop_press = [bl] { bl->board().set_estop(true); };
+  }
+  fmt::print("Marlin front end for {}\n", behind);
+  std::fflush(stdout);
+
+  marlin::Engine engine(*lk, cfg, eo);
+  engine.connect();
+  const std::string banner = engine.take_output();  // to each sender when it opens the port
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGPIPE, SIG_IGN);
+  char buf[4096];
+  std::optional<std::chrono::steady_clock::time_point> banner_at;
+  while (!g_stop) {
+    const bool open_now = sender_present(pty.fd);
+    if (open_now && !pty.connected) {
+      pty.connected = true;
+      // As a board's "start" comes after the reset that opening its port causes.
+      banner_at = std::chrono::steady_clock::now() + std::chrono::milliseconds(100);
+    } else if (!open_now && pty.connected) {
+      pty.connected = false;
+      pty.pending.clear();
+      banner_at.reset();
+    }
+    if (banner_at && std::chrono::steady_clock::now() >= *banner_at) {
+      banner_at.reset();
+      pty.pending += banner;
+    }
+    if (pty.connected) {
+      pollfd q{pty.fd, POLLIN, 0};
+      ::poll(&q, 1, engine.busy() ? 0 : 20);
+      if (q.revents & POLLIN) {
+        const ssize_t n = ::read(pty.fd, buf, sizeof buf);
+        if (n > 0) engine.receive(std::string_view(buf, static_cast<size_t>(n)));
+      }
+    } else {
+      ::poll(nullptr, 0, 20);
+    }
+    engine.step(std::chrono::milliseconds(engine.busy() ? 5 : 0));
+    const std::string out = engine.take_output();
+    if (pty.connected) {
+      pty.pending += out;
+      flush_peer(pty);
+    }
+  }
+  const auto& s = engine.stats();
+  fmt::print("marlin: {} commands, {} resends asked, {} frames, {} busy lines\n", s.lines,
+             s.resends, s.frames, s.busy);
+  ::close(pty.fd);
+}
+
+}  // namespace
+
+void register_marlin(CLI::App& app) {
+  auto args = std::make_shared<MarlinArgs>();
+  auto* sub = app.add_subcommand(
+      "marlin",
+      "Serve Marlin's host protocol (printers: OctoPrint, Pronterface, Repetier-Host) on a new pty "
+      "(its path is the first line on stdout), with the FPGA behind it");
+  sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
+  sub->add_option("--port", args->port, "the controller's serial port (default: simulated board)");
+  sub->add_option("--model", args->model,
+                  "simulated board: tlm (the SystemC twins, default; no heater plants) or rtl "
+                  "(the Verilated cnc_core with its thermal plants and e-stop)")
+      ->check(CLI::IsMember({"tlm", "rtl"}));
+  sub->callback([args] { run_marlin(*args); });
+}
+
+}  // namespace fpgacnc::cli
