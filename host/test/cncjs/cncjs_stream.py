@@ -3,6 +3,7 @@
 a corpus job into `fpgacnc grbl` on the twin board; the final MPos must be the job's end.
 
 Usage: cncjs_stream.py FPGACNC INSTALL_DIR JOB CONFIG [DRIVER_OPTIONS...]
+       cncjs_stream.py --install INSTALL_DIR   (only the install: CTest fixture cncjs_install)
   INSTALL_DIR  where CNCjs is installed (`npm ci` from this folder's lock file, once: kept while
                the lock file is unchanged); the CNCjs configuration and logs go to INSTALL_DIR/run
   JOB          the G-code file; CONFIG the machine configuration for both fpgacnc commands
@@ -77,6 +78,10 @@ def planned_end(fpgacnc, job, config):
 
 
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--install":
+        install(os.path.abspath(sys.argv[2]))
+        print("PASS")
+        return
     if len(sys.argv) < 5:
         fail("usage: cncjs_stream.py FPGACNC INSTALL_DIR JOB CONFIG [DRIVER_OPTIONS...]")
     fpgacnc, dest, job, config = (os.path.abspath(a) for a in sys.argv[1:5])
