@@ -22,6 +22,7 @@
 #include "fpgacnc/grbl/settings.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/simboard/cli_board.h"
+#include "fpgacnc/simboard/runner.h"
 #include "fpgacnc/twins/twin_board.h"
 
 namespace fs = std::filesystem;
@@ -63,17 +64,24 @@ std::optional<Report> parse_report(const std::string& line) {
 // The engine with the twin board behind it, and a sender's view of it.
 class Rig {
  public:
-  explicit Rig(std::string settings_path = "", MachineConfig cfg = {})
+  // `rtl`: the Verilated board (with its e-stop input) instead of the twins.
+  explicit Rig(std::string settings_path = "", MachineConfig cfg = {}, bool rtl = false)
       : cfg_(cfg),
-        link_(fpgacnc::simboard::make_board_link(
-            std::make_unique<fpgacnc::twins::TwinBoard>(
-                fpgacnc::twins::TwinBoard::options_from_config(cfg)),
-            cfg.baud, {})) {
+        link_(rtl ? fpgacnc::simboard::make_default_link(cfg, {})
+                  : fpgacnc::simboard::make_board_link(
+                        std::make_unique<fpgacnc::twins::TwinBoard>(
+                            fpgacnc::twins::TwinBoard::options_from_config(cfg)),
+                        cfg.baud, {})) {
     grbl::Settings s = grbl::settings_from_config(cfg);
     if (!settings_path.empty()) s = grbl::load_settings(settings_path, s).value_or(s);
     grbl::EngineOptions o;
     o.v2 = fpgacnc::link::stream_v2_options(cfg);
     o.settings_path = settings_path;
+    if (rtl) {
+      auto* bl = dynamic_cast<fpgacnc::simboard::BoardLink*>(link_.get());
+      o.estop_press = [bl] { bl->board().set_estop(true); };
+      o.estop_release = [bl] { bl->board().set_estop(false); };
+    }
     engine_ = std::make_unique<grbl::Engine>(*link_, cfg, s, o);
     engine_->connect();
     engine_->take_output();  // as fpgacnc grbl: the banner goes to a sender when it connects
@@ -83,7 +91,8 @@ class Rig {
   fpgacnc::link::Link& link() { return *link_; }
 
   // One step of the engine; complete lines of its output are queued.
-  void pump(milliseconds wait = milliseconds(5)) {
+  void pump() { pump(step_wait); }
+  void pump(milliseconds wait) {
     engine_->step(wait);
     // Nothing in flight: let board time pass as a sender's pause would.
     if (!engine_->busy()) link_->wait_until(link_->now() + wait);
@@ -168,6 +177,9 @@ class Rig {
 
   bool polling = false;
   uint64_t polls = 0;
+  // Board time one step of the engine may wait for an answer (it returns at the first answer):
+  // long jobs take fewer, longer steps.
+  milliseconds step_wait{5};
 
  private:
   MachineConfig cfg_;
@@ -278,6 +290,7 @@ TEST_P(GrblStream, CorpusJobEndsWhereThePlanEnds) {
   MachineConfig cfg;
   Rig rig;
   rig.polling = true;
+  rig.step_wait = milliseconds(50);
   const auto lines = read_lines(path);
   StreamResult r;
   size_t max_in_flight = 0;
@@ -312,7 +325,8 @@ INSTANTIATE_TEST_SUITE_P(Corpus, GrblStream,
                                            JobCase{"cncjs/circle.gcode", true},
                                            JobCase{"cncjs/circle-inch.gcode", true},
                                            JobCase{"cncjs/arc-ijk.gcode", false},
-                                           JobCase{"cncjs/g2-arc.gcode", true}),
+                                           JobCase{"cncjs/g2-arc.gcode", true},
+                                           JobCase{"cncjs/jsdc-laser.gcode", true}),
                          [](const ::testing::TestParamInfo<JobCase>& i) {
                            std::string n = fs::path(i.param.file).stem().string() +
                                            (i.param.counting ? "_counting" : "_ping_pong");
@@ -354,6 +368,11 @@ TEST(Grbl, BannerAndQueries) {
   ASSERT_TRUE(rig.pump_until([&] { return rig.reports().size() > n; }));
   EXPECT_NE(rig.reports().back().find("|WCO:5.000,-2.000,0.000"), std::string::npos)
       << rig.reports().back();
+  // A reset at rest: no alarm, the banner, and the work offsets kept (grbl keeps them).
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.status().state, "Idle");
+  EXPECT_EQ(rig.command("$#")[0], "[G54:5.000,-2.000,0.000]");
 }
 
 // Every error class the front end answers (interface.md's error table, docs/grbl.md).
@@ -427,11 +446,15 @@ TEST(Grbl, SettingsRoundTripThroughTheFile) {
     EXPECT_NE(std::find(a.begin(), a.end(), "$110=6000.000"), a.end());
     EXPECT_NE(std::find(a.begin(), a.end(), "$10=3"), a.end());
     EXPECT_EQ(rig.engine().config().steps_per_mm[0], 80.0);
-    // $RST=$ restores the machine's values.
+    // $RST=$ restores the machine's values and keeps the work offsets; $RST=# clears those.
+    EXPECT_EQ(rig.command("G10 L2 P2 X1.5").back(), "ok");
     a = rig.command("$RST=$");
     EXPECT_EQ(a[0], "[MSG:Restoring defaults]");
     a = rig.command("$$");
     EXPECT_NE(std::find(a.begin(), a.end(), "$100=160.000"), a.end());
+    EXPECT_EQ(rig.command("$#")[1], "[G55:1.500,0.000,0.000]");
+    EXPECT_EQ(rig.command("$RST=#").back(), "ok");
+    EXPECT_EQ(rig.command("$#")[1], "[G55:0.000,0.000,0.000]");
   }
   fs::remove_all(dir);
 }
@@ -538,4 +561,32 @@ TEST(Grbl, FeaturesNotAvailableAndProgramPause) {
   rig.send("~");
   EXPECT_EQ(rig.next_line(), "ok");
   expect_at(rig.wait_idle(), {1120, 0, 0}, MachineConfig{});
+}
+
+// On the Verilated board the soft reset presses the e-stop: the board drops its queue at once, so
+// the reset completes long before the queued moves could have run out, and after $X the parser
+// starts at the FPGA's position (back to 0 exactly).
+TEST(Grbl, SoftResetOnTheVerilatedBoardDropsItsQueue) {
+  Rig rig("", MachineConfig{}, true);
+  // Slow 2 mm zigzag moves (0.2 s each at F600): several queued on the board at the reset.
+  std::vector<std::string> lines{"G21 G90 F600"};
+  for (int i = 1; i <= 12; ++i)
+    lines.push_back(fmt::format("G1 X{} Y{}", (i % 2) ? 2 : 0, i * 0.1));
+  for (const auto& l : lines) EXPECT_EQ(rig.command(l).back(), "ok") << l;
+  // Let the board take the frames (flush rule: the sender went quiet) and start moving.
+  ASSERT_TRUE(rig.pump_until([&] { return rig.status().mpos[0] > 0.1; }, milliseconds(2000)));
+  const auto t0 = rig.link().now();
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  const auto took = rig.link().now() - t0;
+  // The 12 moves take 2.4 s of machine time; the reset took a small part of one.
+  EXPECT_LT(took, milliseconds(150)) << std::chrono::duration<double>(took).count() << " s";
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Alarm");
+  EXPECT_LT(r.mpos[1], 0.6);
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G0 X0 Y0").back(), "ok");
+  expect_at(rig.wait_idle(), {0, 0, 0}, MachineConfig{});
 }

@@ -154,9 +154,11 @@ void Engine::rebuild_pipeline(const plan::Steps4& steps) {
   // Work offsets G54..G59 survive a reset (grbl keeps them in EEPROM).
   std::vector<std::string> restore;
   if (params_) {
+    const double mm = modal_.units == "G20" ? 25.4 : 1.0;  // parameters are in program units
     for (int s = 0; s < 6; ++s) {
       const int base = 5221 + 20 * s;
-      const double x = params_->get(base), y = params_->get(base + 1), z = params_->get(base + 2);
+      const double x = params_->get(base) * mm, y = params_->get(base + 1) * mm,
+                   z = params_->get(base + 2) * mm;
       if (x != 0.0 || y != 0.0 || z != 0.0)
         restore.push_back(fmt::format("G21 G10 L2 P{} X{:.6f} Y{:.6f} Z{:.6f}", s + 1, x, y, z));
     }
@@ -630,11 +632,8 @@ int Engine::system_command(const std::string& cmd) {
       }
       cfg_ = apply_settings(base_, settings_);
     }
-    if (what == "#" || what == "*") {
-      for (int i = 5221; i < 5221 + 20 * 6; ++i) params_->set(i, 0.0);
-    }
     const plan::Steps4 pos = planner_->position();
-    params_.reset();  // no offsets to restore
+    if (what == "#" || what == "*") params_.reset();  // no work offsets to restore
     rebuild_pipeline(pos);
     save();
     say("[MSG:Restoring defaults]");

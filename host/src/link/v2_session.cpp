@@ -283,6 +283,10 @@ bool V2Session::update(uint8_t next_seq, uint16_t free, std::optional<uint32_t> 
     return false;
   }
   if (*delta > 0) {
+    // Acknowledged frames are never sent again: their bytes go (a long line session keeps only
+    // the bookkeeping of each frame).
+    for (size_t i = win_.acked() - *delta; i < win_.acked(); ++i)
+      std::vector<uint8_t>().swap(items_[i].frame.payload);
     rep_.srtt_s = win_.srtt_s();
     rep_.max_rto_s = std::max(rep_.max_rto_s, win_.max_rto_s());
     fatal_nak_count_ = 0;
@@ -474,7 +478,11 @@ void V2Session::request_status() {
 }
 
 void V2Session::poll(milliseconds wait) {
+  poll_once(wait);
   if (complete()) was_complete_ = true;
+}
+
+void V2Session::poll_once(milliseconds wait) {
   const size_t n = items_.size();
   // Send what the window and the credit allow.
   batch_.clear();

@@ -117,6 +117,7 @@ class V2Session {
   void finish_report();
 
  private:
+  void poll_once(std::chrono::milliseconds wait);
   void handle(const protocol::v2::Frame& f);
   bool update(uint8_t next_seq, uint16_t free, std::optional<uint32_t> done);
   void go_back();
@@ -160,7 +161,7 @@ class V2Session {
   Link::Time status_sent_{};
   size_t status_answers_ = 0;
   protocol::v2::Status last_status_;
-  bool was_complete_ = true;
+  bool was_complete_ = false;  // complete at the last poll (the caller had nothing to send)
   bool aborting_ = false;
   std::vector<uint8_t> batch_;
   struct WaitState {
