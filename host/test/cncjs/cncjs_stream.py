@@ -61,7 +61,8 @@ def install(dest):
     r = subprocess.run(["node", "-e", "require('@serialport/bindings-cpp')"], cwd=dest,
                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=HANG)
     if r.returncode != 0:
-        fail("@serialport/bindings-cpp does not load (CNCjs cannot open serial ports):\n" + r.stdout)
+        fail("@serialport/bindings-cpp does not load (CNCjs cannot open serial ports):\n" +
+             r.stdout)
     with open(stamp, "w") as f:
         f.write(digest + "\n")
 
@@ -70,8 +71,8 @@ def planned_end(fpgacnc, job, config):
     """The planner's final position: per axis (mm, one step in mm) from `fpgacnc plan`."""
     r = subprocess.run([fpgacnc, "plan", job, "--config", config, "-q"], stdout=subprocess.PIPE,
                        stderr=subprocess.STDOUT, text=True, timeout=HANG)
-    m = re.search(r"final position: steps X (-?\d+) Y (-?\d+) Z (-?\d+).*?; mm X (\S+) Y (\S+) Z (\S+)",
-                  r.stdout)
+    m = re.search(r"final position: steps X (-?\d+) Y (-?\d+) Z (-?\d+).*?"
+                  r"; mm X (\S+) Y (\S+) Z (\S+)", r.stdout)
     if r.returncode != 0 or not m:
         fail(f"fpgacnc plan {job} gave no final position:\n{r.stdout}")
     return [float(m.group(i)) for i in (4, 5, 6)]
@@ -120,7 +121,8 @@ def main():
         for axis, got, want, tol in zip("XYZ", mpos, end, step):
             # MPos has 3 decimals: one step plus the rounding of the report
             if abs(got - want) > tol + 0.0005:
-                fail(f"final MPos {axis} {got} != planned {want} (tolerance one step, {tol:.5f} mm)")
+                fail(f"final MPos {axis} {got} != planned {want} "
+                     f"(tolerance one step, {tol:.5f} mm)")
     finally:
         grbl.send_signal(2)
         try:

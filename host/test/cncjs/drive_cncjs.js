@@ -86,12 +86,14 @@ function startServer() {
       { env: { ...process.env, HOME: path.resolve(args.workdir), NODE_ENV: 'production' },
         stdio: ['ignore', 'pipe', 'pipe'] });
     let out = '';
-    const timer = setTimeout(() => fail(`the CNCjs server did not listen within ${STARTUP_S} s:\n${out}`),
+    const timer = setTimeout(
+      () => fail(`the CNCjs server did not listen within ${STARTUP_S} s:\n${out}`),
       STARTUP_S * 1000);
     const onData = (d) => {
       out += d.toString();
       // eslint-disable-next-line no-control-regex
-      const m = out.replace(/\x1b\[[0-9;]*m/g, '').match(/Starting the server at http:\/\/([\d.]+):(\d+)/);
+      const m = out.replace(/\x1b\[[0-9;]*m/g, '')
+        .match(/Starting the server at http:\/\/([\d.]+):(\d+)/);
       if (m) {
         clearTimeout(timer);
         server.stdout.removeListener('data', onData);
@@ -133,8 +135,8 @@ function until(what, pred) {
 setInterval(() => {
   const what = waiter ? waiter.what : pendingCall;
   if (what && Date.now() - lastEvent > HANG_S * 1000) {
-    fail(`no event from CNCjs for ${HANG_S} s while waiting for ${what} ` +
-      `(workflow ${seen.workflow}, state ${activeState()}, sender ${JSON.stringify(senderCounts())})`);
+    fail(`no event from CNCjs for ${HANG_S} s while waiting for ${what} (workflow ` +
+      `${seen.workflow}, state ${activeState()}, sender ${JSON.stringify(senderCounts())})`);
   }
 }, 1000).unref();
 
@@ -148,7 +150,9 @@ const senderCounts = () => (seen.sender
 let expectAlarm = false;
 function onRead(line) {
   seen.reads.push(line);
-  if (/^error:/.test(line)) fail(`the board answered '${line}' (last lines: ${seen.reads.slice(-4).join(' | ')})`);
+  if (/^error:/.test(line)) {
+    fail(`the board answered '${line}' (last lines: ${seen.reads.slice(-4).join(' | ')})`);
+  }
   if (/^ALARM:/.test(line) && !expectAlarm) fail(`unexpected '${line}'`);
 }
 
@@ -185,8 +189,8 @@ function progressing(pred, what) {
       lastReceived = r;
       reportsAtLast = seen.statusReports;
     } else if (seen.workflow === 'running' && seen.statusReports - reportsAtLast > STALL_REPORTS) {
-      fail(`${STALL_REPORTS} status reports without a line acknowledged while waiting for ${what} ` +
-        `(sender ${JSON.stringify(senderCounts())}, state ${activeState()})`);
+      fail(`${STALL_REPORTS} status reports without a line acknowledged while waiting for ` +
+        `${what} (sender ${JSON.stringify(senderCounts())}, state ${activeState()})`);
     }
     return false;
   });
@@ -221,12 +225,14 @@ async function main() {
   const t0 = Date.now();
   const url = await startServer();
   const token = jwt.sign({ id: '', name: 'fpgacnc-test' }, secret, { expiresIn: '1d' });
-  const socket = io.connect(url, { query: `token=${token}`, transports: ['websocket'], reconnection: false });
+  const socket = io.connect(url,
+    { query: `token=${token}`, transports: ['websocket'], reconnection: false });
   socket.on('connect_error', (e) => fail(`cannot connect to CNCjs at ${url}: ${e.message || e}`));
   socket.on('error', (e) => fail(`socket error from CNCjs: ${e.message || JSON.stringify(e)}`));
   follow(socket);
   await until('the socket connection', () => socket.connected);
-  console.log(`CNCjs ${require(path.join(path.dirname(cncjsBin), '..', 'package.json')).version} at ${url}`);
+  const version = require(path.join(path.dirname(cncjsBin), '..', 'package.json')).version;
+  console.log(`CNCjs ${version} at ${url}`);
 
   // Open: CNCjs waits for the banner, then sends $$, polls `?` and `$G`.
   await emitCb(socket, 'open', args.pty, { controllerType: 'Grbl', baudrate: 115200 });
@@ -247,11 +253,15 @@ async function main() {
     expectAlarm = true;
     socket.emit('command', args.pty, 'reset');
     await until('Alarm after the soft reset', () => activeState() === 'Alarm');
-    await until('the banner after the soft reset', () => seen.reads.filter((l) => /^Grbl 1\.1/.test(l)).length >= 2);
+    await until('the banner after the soft reset',
+      () => seen.reads.filter((l) => /^Grbl 1\.1/.test(l)).length >= 2);
     if (seen.workflow !== 'idle') fail(`workflow ${seen.workflow} after reset, want idle`);
     const alarm = seen.reads.find((l) => /^ALARM:/.test(l));
-    console.log(`reset after ${sentAtReset} lines sent: ${alarm || 'no ALARM line'}, state Alarm, MPos ${fmt(mpos())}`);
-    if (!/^ALARM:3\b/.test(alarm || '')) fail(`want ALARM:3 (reset while in motion), have ${alarm}`);
+    console.log(`reset after ${sentAtReset} lines sent: ${alarm || 'no ALARM line'}, ` +
+      `state Alarm, MPos ${fmt(mpos())}`);
+    if (!/^ALARM:3\b/.test(alarm || '')) {
+      fail(`want ALARM:3 (reset while in motion), have ${alarm}`);
+    }
     expectAlarm = false;
     socket.emit('command', args.pty, 'unlock');
     await until('Idle after $X', () => activeState() === 'Idle' &&
@@ -271,7 +281,9 @@ async function main() {
     await progressing(() => seen.sender.received >= at, `${at} lines acknowledged`);
     socket.emit('command', args.pty, 'gcode:pause');
     await until('the workflow paused', () => seen.workflow === 'paused');
-    if (seen.sender.sent >= total) fail(`every line was sent before the pause at line ${at}: the job is too short for --pause`);
+    if (seen.sender.sent >= total) {
+      fail(`every line was sent before the pause at line ${at}: the job is too short for --pause`);
+    }
     // The lines in flight are answered; then nothing more is sent and the machine comes to rest.
     await until('the machine at rest with every line sent answered', () =>
       seen.sender.received === seen.sender.sent && activeState() === 'Idle');
@@ -294,8 +306,10 @@ async function main() {
   }
   await until('an Idle status report', () => activeState() === 'Idle');
   const sec = (Date.now() - tStart) / 1000;
-  console.log(`job done: ${s.total} lines sent and answered, ${seen.statusReports - reportsAtStart} ` +
-    `changed status reports, ${sec.toFixed(1)} s wall (all ${((Date.now() - t0) / 1000).toFixed(1)} s)`);
+  const all = (Date.now() - t0) / 1000;
+  console.log(`job done: ${s.total} lines sent and answered, ` +
+    `${seen.statusReports - reportsAtStart} changed status reports, ${sec.toFixed(1)} s wall ` +
+    `(all ${all.toFixed(1)} s)`);
   console.log(`final MPos ${fmt(mpos())}`);
   console.log(`steps/mm ${spm.join(' ')}`);
   closing = true;
