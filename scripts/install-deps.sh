@@ -13,6 +13,10 @@ PKGS=(
   python3 python3-serial librsvg2-bin time
   linuxcnc-uspace  # rs274, LinuxCNC's interpreter: the oracle test (docs/oracle.md)
 )
+# node and npm run CNCjs for the cncjs_stream test (host/test/cncjs). Debian's packages only where
+# the commands are missing: a Node.js from elsewhere (NodeSource's nodejs bundles npm) is kept.
+command -v node >/dev/null 2>&1 || PKGS+=(nodejs)
+command -v npm >/dev/null 2>&1 || PKGS+=(npm)
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then
   if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
