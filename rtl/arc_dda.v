@@ -135,22 +135,30 @@ module arc_dda (
   wire               bpos = x_zero ? y_neg : (ccw_reg ? !x_neg : x_neg);
   wire signed [47:0] x2 = {{23{x_reg[23]}}, x_reg, 1'b0};
   wire signed [47:0] y2 = {{23{y_reg[23]}}, y_reg, 1'b0};
-  wire signed [47:0] ax2 = apos ? x2 : -x2;
-  wire signed [47:0] by2 = bpos ? y2 : -y2;
-  wire signed [47:0] fa_w = f_reg + ax2 + 48'sd1;
-  wire signed [47:0] fb_w = f_reg + by2 + 48'sd1;
-  wire signed [47:0] fd_w = f_reg + ax2 + by2 + 48'sd2;
+  // 2ax = ax2o + !apos, 2by = by2o + !bpos (-v = ~v + 1): each candidate F is one sum of
+  // registers and a small constant (one carry chain, no negate in front of it)
+  wire        [47:0] ax2o = apos ? x2 : ~x2;
+  wire        [47:0] by2o = bpos ? y2 : ~y2;
+  wire        [47:0] fa_w = f_reg + ax2o + {46'd0, !apos, apos};
+  wire        [47:0] fb_w = f_reg + by2o + {46'd0, !bpos, bpos};
+  wire        [47:0] fd_w = f_reg + ax2o + by2o + {45'd0, 3'd2 + {2'd0, !apos} + {2'd0, !bpos}};
   wire        [23:0] absx = x_neg ? -x_reg : x_reg;
   wire        [23:0] absy = y_neg ? -y_reg : y_reg;
+  // |x| + |y| in one chain: (x ^ sx) + (y ^ sy) + sx + sy
+  wire        [23:0] ox = x_neg ? ~x_reg : x_reg;
+  wire        [23:0] oy = y_neg ? ~y_reg : y_reg;
+  wire        [23:0] absxy = ox + oy + {22'd0, x_neg && y_neg, x_neg != y_neg};
   // b y - a x (F_B - F_A = 2 (b y - a x)): y - x or y + x, negated when b = -1
   wire        [24:0] ymx = {y_reg[23], y_reg} - {x_reg[23], x_reg};
   wire        [24:0] ypx = {y_reg[23], y_reg} + {x_reg[23], x_reg};
   wire        [24:0] e_src = (apos == bpos) ? ymx : ypx;
   wire               e_zero = (e_src == 25'd0);
   wire               e_neg = bpos ? e_src[24] : (!e_src[24] && !e_zero);
-  wire        [24:0] acc_sum = {1'b0, acc_reg} + {1'b0, r_reg};
-  wire               carry_w = (acc_sum >= {1'b0, n_reg});
-  wire        [23:0] acc_wrap = acc_sum[23:0] - n_reg;  // < n_reg when taken: fits
+  wire        [23:0] acc_sum = acc_reg + r_reg;
+  // acc + r - n (26-bit two's complement, one chain): carry when >= 0; then < n_reg: fits
+  wire        [25:0] acc_d = {2'd0, acc_reg} + {2'd0, r_reg} + {2'b11, ~n_reg} + 26'd1;
+  wire               carry_w = !acc_d[25];
+  wire        [23:0] acc_wrap = acc_d[23:0];
 
   // ---------------- W1 ----------------
   wire signed [47:0] step_w = carry_reg ? qp1_reg : q_reg;
@@ -173,7 +181,7 @@ module arc_dda (
   wire               z_da = ((fd_reg ^ fa_reg) == {(fd_reg[46:0] | fa_reg[46:0]), 1'b0});
   wire               z_db = ((fd_reg ^ fb_reg) == {(fd_reg[46:0] | fb_reg[46:0]), 1'b0});
   wire               z_ab = ((fa_reg ^ fb_reg) == {(fa_reg[46:0] | fb_reg[46:0]), 1'b0});
-  wire unused_s = &{1'b0, s_da[46:0], s_db[46:0], s_ab[46:0]};  // only the signs are read
+  wire unused_s = &{1'b0, s_da[46:0], s_db[46:0], s_ab[46:0], acc_d[24]};  // only the signs are read
   wire signed [23:0] yb_w = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
 
   // ---------------- W2: select ----------------
@@ -220,7 +228,11 @@ module arc_dda (
   // that block: the same logic as continuous assignments, and a simulator evaluates them only on
   // the clocks the branch runs).
 
-  wire               fire = busy_reg && run && (st_reg == READY) && (u_int >= cnext_reg);
+  // U_int >= C_k from its 24-bit halves (two short chains in parallel instead of one 48-bit one:
+  // fire feeds the load enable of every register through `take`)
+  wire               u_ge_c = (u_int[47:24] > cnext_reg[47:24]) ||
+                              ((u_int[47:24] == cnext_reg[47:24]) && (u_int[23:0] >= cnext_reg[23:0]));
+  wire               fire = busy_reg && run && (st_reg == READY) && u_ge_c;
   wire               end_w = fire && (pend_end_reg || guard_reg);
   wire               take = load && !stop && (!busy_reg || end_w);
 
@@ -230,10 +242,14 @@ module arc_dda (
     /* verilator lint_off UNUSEDSIGNAL */
     reg [65:0] u_i66, v_i66, rz_i66, vz_i66;
     reg [65:0] u_hi0, u_hi1, dec_x0, dec_x1, dec_k, acc_k, rz_hi0, rz_hi1, rz_x0, rz_x1;
+    reg [48:0] vzp_h1, vzm_h1;  // [0] not read
     /* verilator lint_on UNUSEDSIGNAL */
     reg [48:0] u_frac, rz_frac;
     reg [95:0] u_next, rz_next, rz_sub;
     reg [63:0] v_plus;
+    reg [48:0] vzp_lo, vzm_lo;
+    reg [47:0] vzp_h0, vzm_h0;
+    reg [95:0] vz_plus, vz_minus;
     reg decel, dec_ok, acc_ok, z_go;
 
     xs_reg   <= 1'b0;
@@ -255,6 +271,16 @@ module arc_dda (
       dec_k   = add3({2'd0, v_reg}, ~{2'd0, vex_reg}, ~{18'd0, a_reg}, 2'd2);
       dec_ok  = !dec_k[65];  // V - V_exit - A >= 0
       v_plus  = v_reg + {16'd0, a_reg};
+      // Vz +/- Az: the 48-bit halves in parallel, the low half's carry picks the high sum
+      vzp_lo  = {1'b0, vz_reg[47:0]} + {1'b0, az_reg[47:0]};
+      vzm_lo  = {1'b0, vz_reg[47:0]} + {1'b0, ~az_reg[47:0]} + 49'd1;
+      // (the + 1 sums as {p, 1} + {q, 1}: one chain, not shared with p + q and a second chain)
+      vzp_h0  = vz_reg[95:48] + az_reg[95:48];
+      vzp_h1  = {vz_reg[95:48], 1'b1} + {az_reg[95:48], 1'b1};
+      vzm_h0  = vz_reg[95:48] + ~az_reg[95:48];
+      vzm_h1  = {vz_reg[95:48], 1'b1} + {~az_reg[95:48], 1'b1};
+      vz_plus = {vzp_lo[48] ? vzp_h1[48:1] : vzp_h0, vzp_lo[47:0]};
+      vz_minus = {vzm_lo[48] ? vzm_h1[48:1] : vzm_h0, vzm_lo[47:0]};
       acc_k   = add3({2'd0, vcr_reg}, ~{2'd0, v_reg}, ~{18'd0, a_reg}, 2'd2);
       acc_ok  = !acc_k[65];  // V_cruise - V - A >= 0
       rz_frac = {1'b0, rz_reg[47:0]} + {1'b0, vz_reg[47:0]};
@@ -280,7 +306,7 @@ module arc_dda (
       if (decel) begin
         if (dec_ok) begin
           v_reg  <= v_reg - {16'd0, a_reg};
-          vz_reg <= vz_reg - az_reg;
+          vz_reg <= vz_minus;
         end else begin
           v_reg  <= vex_reg;
           vz_reg <= vzx_reg;
@@ -288,7 +314,7 @@ module arc_dda (
       end else begin
         if (acc_ok) begin
           v_reg  <= v_plus;
-          vz_reg <= vz_reg + az_reg;
+          vz_reg <= vz_plus;
         end else begin
           v_reg  <= vcr_reg;
           vz_reg <= vzc_reg;
@@ -306,11 +332,11 @@ module arc_dda (
           bpos_reg  <= bpos;
           ax_reg    <= absx;
           ay_reg    <= absy;
-          axy_reg   <= absx + absy;
+          axy_reg   <= absxy;
           carry_reg <= carry_w;
           e_neg_reg <= e_neg;
           e_zero_reg <= e_zero;
-          accn_reg  <= carry_w ? acc_wrap : acc_sum[23:0];
+          accn_reg  <= carry_w ? acc_wrap : acc_sum;
           st_reg    <= W1;
         end
         W1: begin
