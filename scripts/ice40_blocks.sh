@@ -38,10 +38,14 @@ declare -A BLK=(
   [ltc2308_spi]="rtl/ltc2308_spi.v|"
   [heater_safety]="rtl/heater_safety.v|"
   [heater_block]="rtl/heater_block.v rtl/heater_channel.v rtl/pid_incr.v rtl/heater_safety.v rtl/pwm.v rtl/ltc2308_spi.v rtl/temp_table.v|"
-  [segment_fifo]="rtl/segment_fifo.v|-set WIDTH 775 -set DEPTH 64"
+  # the 775-bit entry of the full 2-axis build needs 49 RAM blocks of the HX8K's 32: 512 bits
+  [segment_fifo]="rtl/segment_fifo.v|-set WIDTH 512 -set DEPTH 64"
+  # with arc_dda (measured alone above) the executor does not fit: ARCS 0
   [segment_executor]="rtl/segment_executor.v rtl/dda_linear.v rtl/dda_profile.v rtl/profile_gen.v rtl/step_pulse.v rtl/arc_dda.v|-set N_AXES 2 -set ARCS 0"
 )
-blocks=${BLOCKS:-"arc_dda profile_gen dda_profile dda_linear pid_incr heater_channel heater_block frame_decoder response_encoder step_pulse uart_rx uart_tx pwm"}
+# segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
+blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder
+  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx"}
 for tool in yosys nextpnr-ice40 python3; do
   command -v "$tool" >/dev/null || { echo "ice40_blocks: $tool not found"; exit 2; }
 done
