@@ -118,7 +118,7 @@ PYEOF
     fi
     t2=$(date +%s)
     fmax=$(grep "Max frequency for clock" "$log" | tail -1 | sed -E 's/.*: *([0-9.]+) MHz.*/\1/')
-    lcs=$(grep -E "ICESTORM_LC:" "$log" | tail -1 | sed -E 's/.*ICESTORM_LC: *//')
+    lcs=$(grep -E "ICESTORM_LC: +[0-9]+/" "$log" | tail -1 | sed -E 's/.*ICESTORM_LC: *//')
     verdict=PASS
     if awk -v f="$fmax" -v r="$freq" 'BEGIN { exit !(f < r) }'; then
       verdict=FAIL
