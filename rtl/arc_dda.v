@@ -32,12 +32,14 @@
 // DIR from them ahead of the step (at the quadrant points, where an axis reverses). Outputs: *_step are one-clock pulses, registered: an event of clock c is
 // on the pins on clock c + 1 (fixed latency 1); *_dir are valid with the step and held. `last`
 // comes with the final move's step. err / late are sticky until the next load.
-// Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz, each a 48-bit fraction add
-// with carry-select integer parts; 64-bit V; 48-bit F and cost sums (x3). No carry chain feeds
-// another: every compare against a sum is one carry-save three-operand sum (add3), the W2
-// compares of the selected cost are made for all three candidates, and the candidates' magnitude
-// compares are registered in W1. Longest path: the 50-bit decel chain (U_int + V_int - D) -> the
-// V select; 47-50 MHz alone on an iCE40 HX8K (scripts/ice40_blocks.sh), routing over half of it.
+// Resources: no multipliers; adders: 96-bit U, Rz (and Rz - C2), Vz +/- Az, each a 48-bit lower
+// half with carry-select upper halves; 64-bit V; 48-bit F and cost sums (x3). No carry chain feeds
+// another, and the decisions that drive wide selects or enables start no chain longer than 33
+// bits: decel, V - V_exit - A >= 0, V_cruise - V - A >= 0 and Z's step (the signs that pick V, Vz
+// and Rz) are carry-save sums whose chains are cut in halves with carry select, picked by the
+// fraction adds' carries formed from 24-bit halves; U >= C_k (`fire`, which reaches every
+// register's load enable through a chained load) from 24-bit halves; the candidates' magnitude
+// compares are registered in W1. Timing alone on an iCE40 HX8K: docs/synthesis.md "Block timing".
 `default_nettype none
 
 module arc_dda (
@@ -135,22 +137,30 @@ module arc_dda (
   wire               bpos = x_zero ? y_neg : (ccw_reg ? !x_neg : x_neg);
   wire signed [47:0] x2 = {{23{x_reg[23]}}, x_reg, 1'b0};
   wire signed [47:0] y2 = {{23{y_reg[23]}}, y_reg, 1'b0};
-  wire signed [47:0] ax2 = apos ? x2 : -x2;
-  wire signed [47:0] by2 = bpos ? y2 : -y2;
-  wire signed [47:0] fa_w = f_reg + ax2 + 48'sd1;
-  wire signed [47:0] fb_w = f_reg + by2 + 48'sd1;
-  wire signed [47:0] fd_w = f_reg + ax2 + by2 + 48'sd2;
+  // 2ax = ax2o + !apos, 2by = by2o + !bpos (-v = ~v + 1): each candidate F is one sum of
+  // registers and a small constant (one carry chain, no negate in front of it)
+  wire        [47:0] ax2o = apos ? x2 : ~x2;
+  wire        [47:0] by2o = bpos ? y2 : ~y2;
+  wire        [47:0] fa_w = f_reg + ax2o + {46'd0, !apos, apos};
+  wire        [47:0] fb_w = f_reg + by2o + {46'd0, !bpos, bpos};
+  wire        [47:0] fd_w = f_reg + ax2o + by2o + {45'd0, 3'd2 + {2'd0, !apos} + {2'd0, !bpos}};
   wire        [23:0] absx = x_neg ? -x_reg : x_reg;
   wire        [23:0] absy = y_neg ? -y_reg : y_reg;
+  // |x| + |y| in one chain: (x ^ sx) + (y ^ sy) + sx + sy
+  wire        [23:0] ox = x_neg ? ~x_reg : x_reg;
+  wire        [23:0] oy = y_neg ? ~y_reg : y_reg;
+  wire        [23:0] absxy = ox + oy + {22'd0, x_neg && y_neg, x_neg != y_neg};
   // b y - a x (F_B - F_A = 2 (b y - a x)): y - x or y + x, negated when b = -1
   wire        [24:0] ymx = {y_reg[23], y_reg} - {x_reg[23], x_reg};
   wire        [24:0] ypx = {y_reg[23], y_reg} + {x_reg[23], x_reg};
   wire        [24:0] e_src = (apos == bpos) ? ymx : ypx;
   wire               e_zero = (e_src == 25'd0);
   wire               e_neg = bpos ? e_src[24] : (!e_src[24] && !e_zero);
-  wire        [24:0] acc_sum = {1'b0, acc_reg} + {1'b0, r_reg};
-  wire               carry_w = (acc_sum >= {1'b0, n_reg});
-  wire        [23:0] acc_wrap = acc_sum[23:0] - n_reg;  // < n_reg when taken: fits
+  wire        [23:0] acc_sum = acc_reg + r_reg;
+  // acc + r - n (26-bit two's complement, one chain): carry when >= 0; then < n_reg: fits
+  wire        [25:0] acc_d = {2'd0, acc_reg} + {2'd0, r_reg} + {2'b11, ~n_reg} + 26'd1;
+  wire               carry_w = !acc_d[25];
+  wire        [23:0] acc_wrap = acc_d[23:0];
 
   // ---------------- W1 ----------------
   wire signed [47:0] step_w = carry_reg ? qp1_reg : q_reg;
@@ -173,31 +183,28 @@ module arc_dda (
   wire               z_da = ((fd_reg ^ fa_reg) == {(fd_reg[46:0] | fa_reg[46:0]), 1'b0});
   wire               z_db = ((fd_reg ^ fb_reg) == {(fd_reg[46:0] | fb_reg[46:0]), 1'b0});
   wire               z_ab = ((fa_reg ^ fb_reg) == {(fa_reg[46:0] | fb_reg[46:0]), 1'b0});
-  wire unused_s = &{1'b0, s_da[46:0], s_db[46:0], s_ab[46:0]};  // only the signs are read
+  wire unused_s = &{1'b0, s_da[46:0], s_db[46:0], s_ab[46:0], acc_d[24]};  // only the signs are read
   wire signed [23:0] yb_w = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
 
   // ---------------- W2: select ----------------
   wire               sel_d = (!va_reg || le_da_reg) && (!vb_reg || le_db_reg);
   wire               sel_a = !sel_d && va_reg && (!vb_reg || le_ab_reg);
   wire        [47:0] s_sel = sel_d ? sd_reg : (sel_a ? sa_reg : sb_reg);
-  // the compares of the selected cost are made for all three candidates, in parallel with the
-  // selection (not after it)
+  // the compares of the selected cost, after the selection (they feed one register each)
   wire        [47:0] u_int = u_reg[95:48];
-  wire               late_sel = sel_d ? (u_int >= sd_reg) : (sel_a ? (u_int >= sa_reg) : (u_int >= sb_reg));
-  wire               guard_sel = sel_d ? (sd_reg >= ctot_reg) :
-                                         (sel_a ? (sa_reg >= ctot_reg) : (sb_reg >= ctot_reg));
-  wire               exact_sel = sel_d ? (sd_reg == ctot_reg) :
-                                         (sel_a ? (sa_reg == ctot_reg) : (sb_reg == ctot_reg));
+  wire               late_sel = (u_int >= s_sel);
+  wire               guard_sel = (s_sel >= ctot_reg);
+  wire               exact_sel = (s_sel == ctot_reg);
   wire               mx_sel = sel_d || sel_a;
   wire               my_sel = sel_d || !sel_a;
   wire               ex_sel = mx_sel ? exa_reg : ex0_reg;
   wire               ey_sel = my_sel ? eyb_reg : ey0_reg;
 
   // ---------------- pacing ----------------
-  // Every compare against a sum of registers is the sign of one three-operand sum (add3: carry-save,
-  // then a single carry chain); the compares of U(c+1) and Rz(c+1) with D*2^48 and C_TOTAL*2^48
-  // are made from the integer parts for carry 0 and 1 out of the 48-bit fraction add, in parallel
-  // with it, and that carry picks one (the integer parts are carry-select adds as well). The
+  // Every compare against a sum of registers is the sign of one carry-save three-operand sum
+  // (add3, csa1); the compares of U(c+1) and Rz(c+1) with D*2^48 and C_TOTAL*2^48 are made from
+  // the integer parts for carry 0 and 1 out of the 48-bit fraction add, in parallel with it, and
+  // that carry picks one (the integer parts are carry-select adds as well). The
   // integer-part compares are not cut at 48 bits: U and Rz stay far below that (U < 2^45 for any
   // arc, Rz < (C_TOTAL + 2^48) 2^48), so this is the same as comparing the 96-bit sums.
   function [65:0] add3;  // p + q + r + c mod 2^66
@@ -214,13 +221,38 @@ module arc_dda (
     end
   endfunction
   localparam [65:0] ZERO66 = 66'd0;
+  // p + q + r + 1 as two 66-bit operands (carry-save; the + 1 in the free bit 0 of the carries)
+  function [131:0] csa1;
+    input [65:0] p, q, r;
+    csa1 = {p ^ q ^ r, (p[64:0] & q[64:0]) | (p[64:0] & r[64:0]) | (q[64:0] & r[64:0]), 1'b1};
+  endfunction
+  // sign of s + k + 1 (66 bits): the carry chain in two 33-bit halves, the low half's carry picks
+  // the high half's sum for carry 0 or 1 (the + 1 sums as {a, 1} + {b, 1}: one chain each)
+  function sgn66p1;
+    input [131:0] sk;
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg [34:0] lo;  // only the carry out and the signs are read
+    reg [32:0] h0;
+    reg [33:0] h1;
+    /* verilator lint_on UNUSEDSIGNAL */
+    begin
+      lo = {1'b0, sk[98:66], 1'b1} + {1'b0, sk[32:0], 1'b1};
+      h0 = sk[131:99] + sk[65:33];
+      h1 = {sk[131:99], 1'b1} + {sk[65:33], 1'b1};
+      sgn66p1 = lo[34] ? h1[33] : h0[32];
+    end
+  endfunction
   // 48-bit fields in 66 bits; a sum of them with one negated field is a 50-bit signed value,
   // so bit 49 is its sign and [47:0] its value mod 2^48 (the upper bits are not read). The sums
   // are computed in the clocked block below, in the branch whose registers they feed (locals of
   // that block: the same logic as continuous assignments, and a simulator evaluates them only on
   // the clocks the branch runs).
 
-  wire               fire = busy_reg && run && (st_reg == READY) && (u_int >= cnext_reg);
+  // U_int >= C_k from its 24-bit halves (two short chains in parallel instead of one 48-bit one:
+  // fire feeds the load enable of every register through `take`)
+  wire               u_ge_c = (u_int[47:24] > cnext_reg[47:24]) ||
+                              ((u_int[47:24] == cnext_reg[47:24]) && (u_int[23:0] >= cnext_reg[23:0]));
+  wire               fire = busy_reg && run && (st_reg == READY) && u_ge_c;
   wire               end_w = fire && (pend_end_reg || guard_reg);
   wire               take = load && !stop && (!busy_reg || end_w);
 
@@ -229,11 +261,24 @@ module arc_dda (
     // pacing sums (see above); only some bits of the 66-bit ones are read
     /* verilator lint_off UNUSEDSIGNAL */
     reg [65:0] u_i66, v_i66, rz_i66, vz_i66;
-    reg [65:0] u_hi0, u_hi1, dec_x0, dec_x1, dec_k, acc_k, rz_hi0, rz_hi1, rz_x0, rz_x1;
+    reg [65:0] u_hi0, u_hi1, rz_hi0, rz_hi1;
+    reg [49:0] rcs_s, rcs_k;
+    reg [26:0] rlo1;
+    reg [25:0] rlo0, rhi1, rf_h1;
+    reg [24:0] rhi0, rf_lo, rf_h0, r_lov, r_hiv;
+    reg rcf, r_loc;
+    reg [49:0] dcs_s, dcs_k;
+    reg [26:0] dlo1;  // of the decel sums only the carries out and the signs are read
+    reg [25:0] dlo0, dhi1, uf_h1;
+    reg [24:0] dhi0, uf_lo, uf_h0;
+    reg [48:0] vzp_h1, vzm_h1;  // [0] not read
     /* verilator lint_on UNUSEDSIGNAL */
     reg [48:0] u_frac, rz_frac;
     reg [95:0] u_next, rz_next, rz_sub;
     reg [63:0] v_plus;
+    reg [48:0] vzp_lo, vzm_lo;
+    reg [47:0] vzp_h0, vzm_h0;
+    reg [95:0] vz_plus, vz_minus;
     reg decel, dec_ok, acc_ok, z_go;
 
     xs_reg   <= 1'b0;
@@ -249,22 +294,54 @@ module arc_dda (
       u_hi0   = add3(u_i66, v_i66, ZERO66, 2'd0);
       u_hi1   = add3(u_i66, v_i66, ZERO66, 2'd1);
       u_next  = {u_frac[48] ? u_hi1[47:0] : u_hi0[47:0], u_frac[47:0]};
-      dec_x0  = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd1);  // U_int + V_int - D
-      dec_x1  = add3(u_i66, v_i66, ~{18'd0, d_reg}, 2'd2);  // ... + 1
-      decel   = u_frac[48] ? !dec_x1[49] : !dec_x0[49];
-      dec_k   = add3({2'd0, v_reg}, ~{2'd0, vex_reg}, ~{18'd0, a_reg}, 2'd2);
-      dec_ok  = !dec_k[65];  // V - V_exit - A >= 0
+      // decel: U_int + V_int - D + (carry of the fraction add) >= 0 (50-bit two's complement),
+      // U_int + V_int + ~D + 1 carry-saved into dcs_s + dcs_k; the 50-bit sum's halves for carry 0
+      // and 1, the fraction add's carry from its 24-bit halves, all in parallel
+      dcs_s   = u_i66[49:0] ^ v_i66[49:0] ^ ~{2'd0, d_reg};
+      dcs_k   = {(u_i66[48:0] & v_i66[48:0]) | ((u_i66[48:0] | v_i66[48:0]) & ~{1'b0, d_reg}), 1'b1};
+      dlo0    = {1'b0, dcs_s[24:0]} + {1'b0, dcs_k[24:0]};
+      dlo1    = {1'b0, dcs_s[24:0], 1'b1} + {1'b0, dcs_k[24:0], 1'b1};
+      dhi0    = dcs_s[49:25] + dcs_k[49:25];
+      dhi1    = {dcs_s[49:25], 1'b1} + {dcs_k[49:25], 1'b1};
+      uf_lo   = {1'b0, u_reg[23:0]} + {1'b0, v_reg[23:0]};
+      uf_h0   = {1'b0, u_reg[47:24]} + {1'b0, v_reg[47:24]};
+      uf_h1   = {1'b0, u_reg[47:24], 1'b1} + {1'b0, v_reg[47:24], 1'b1};
+      decel   = !(((uf_lo[24] ? uf_h1[25] : uf_h0[24]) ? dlo1[26] : dlo0[25]) ? dhi1[25] : dhi0[24]);
+      dec_ok  = !sgn66p1(csa1({2'd0, v_reg}, ~{2'd0, vex_reg}, ~{18'd0, a_reg}));  // V - V_exit - A >= 0
       v_plus  = v_reg + {16'd0, a_reg};
-      acc_k   = add3({2'd0, vcr_reg}, ~{2'd0, v_reg}, ~{18'd0, a_reg}, 2'd2);
-      acc_ok  = !acc_k[65];  // V_cruise - V - A >= 0
+      // Vz +/- Az: the 48-bit halves in parallel, the low half's carry picks the high sum
+      vzp_lo  = {1'b0, vz_reg[47:0]} + {1'b0, az_reg[47:0]};
+      vzm_lo  = {1'b0, vz_reg[47:0]} + {1'b0, ~az_reg[47:0]} + 49'd1;
+      // (the + 1 sums as {p, 1} + {q, 1}: one chain, not shared with p + q and a second chain)
+      vzp_h0  = vz_reg[95:48] + az_reg[95:48];
+      vzp_h1  = {vz_reg[95:48], 1'b1} + {az_reg[95:48], 1'b1};
+      vzm_h0  = vz_reg[95:48] + ~az_reg[95:48];
+      vzm_h1  = {vz_reg[95:48], 1'b1} + {~az_reg[95:48], 1'b1};
+      vz_plus = {vzp_lo[48] ? vzp_h1[48:1] : vzp_h0, vzp_lo[47:0]};
+      vz_minus = {vzm_lo[48] ? vzm_h1[48:1] : vzm_h0, vzm_lo[47:0]};
+      acc_ok  = !sgn66p1(csa1({2'd0, vcr_reg}, ~{2'd0, v_reg}, ~{18'd0, a_reg}));  // V_cruise - V - A >= 0
       rz_frac = {1'b0, rz_reg[47:0]} + {1'b0, vz_reg[47:0]};
       rz_hi0  = add3(rz_i66, vz_i66, ZERO66, 2'd0);
       rz_hi1  = add3(rz_i66, vz_i66, ZERO66, 2'd1);
-      rz_x0   = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd1);  // Rz_int + Vz_int - C
-      rz_x1   = add3(rz_i66, vz_i66, ~{18'd0, ctot_reg}, 2'd2);  // ... + 1
+      // Rz_int + Vz_int - C + (carry of the fraction add), 50-bit two's complement: sign and
+      // value from 25-bit halves as for decel (carry-saved, halves for carry 0 and 1)
+      rcs_s   = rz_i66[49:0] ^ vz_i66[49:0] ^ ~{2'd0, ctot_reg};
+      rcs_k   = {(rz_i66[48:0] & vz_i66[48:0]) | ((rz_i66[48:0] | vz_i66[48:0]) & ~{1'b0, ctot_reg}),
+                 1'b1};
+      rlo0    = {1'b0, rcs_s[24:0]} + {1'b0, rcs_k[24:0]};
+      rlo1    = {1'b0, rcs_s[24:0], 1'b1} + {1'b0, rcs_k[24:0], 1'b1};
+      rhi0    = rcs_s[49:25] + rcs_k[49:25];
+      rhi1    = {rcs_s[49:25], 1'b1} + {rcs_k[49:25], 1'b1};
+      rf_lo   = {1'b0, rz_reg[23:0]} + {1'b0, vz_reg[23:0]};
+      rf_h0   = {1'b0, rz_reg[47:24]} + {1'b0, vz_reg[47:24]};
+      rf_h1   = {1'b0, rz_reg[47:24], 1'b1} + {1'b0, vz_reg[47:24], 1'b1};
+      rcf     = rf_lo[24] ? rf_h1[25] : rf_h0[24];  // = rz_frac[48]
+      r_loc   = rcf ? rlo1[26] : rlo0[25];
+      r_lov   = rcf ? rlo1[25:1] : rlo0[24:0];
+      r_hiv   = r_loc ? rhi1[25:1] : rhi0;
       rz_next = {rz_frac[48] ? rz_hi1[47:0] : rz_hi0[47:0], rz_frac[47:0]};
-      rz_sub  = {rz_frac[48] ? rz_x1[47:0] : rz_x0[47:0], rz_frac[47:0]};
-      z_go    = (rz_frac[48] ? !rz_x1[49] : !rz_x0[49]) && (zc_reg != nz_reg);
+      rz_sub  = {r_hiv[22:0], r_lov, rz_frac[47:0]};
+      z_go    = !r_hiv[24] && (zc_reg != nz_reg);
 
       // Z and U/V for the next clock
       zs_reg <= z_due_reg;
@@ -280,7 +357,7 @@ module arc_dda (
       if (decel) begin
         if (dec_ok) begin
           v_reg  <= v_reg - {16'd0, a_reg};
-          vz_reg <= vz_reg - az_reg;
+          vz_reg <= vz_minus;
         end else begin
           v_reg  <= vex_reg;
           vz_reg <= vzx_reg;
@@ -288,7 +365,7 @@ module arc_dda (
       end else begin
         if (acc_ok) begin
           v_reg  <= v_plus;
-          vz_reg <= vz_reg + az_reg;
+          vz_reg <= vz_plus;
         end else begin
           v_reg  <= vcr_reg;
           vz_reg <= vzc_reg;
@@ -306,11 +383,11 @@ module arc_dda (
           bpos_reg  <= bpos;
           ax_reg    <= absx;
           ay_reg    <= absy;
-          axy_reg   <= absx + absy;
+          axy_reg   <= absxy;
           carry_reg <= carry_w;
           e_neg_reg <= e_neg;
           e_zero_reg <= e_zero;
-          accn_reg  <= carry_w ? acc_wrap : acc_sum[23:0];
+          accn_reg  <= carry_w ? acc_wrap : acc_sum;
           st_reg    <= W1;
         end
         W1: begin

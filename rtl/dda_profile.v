@@ -37,7 +37,14 @@ module dda_profile (
   reg [55:0] a_reg;
   reg [23:0] n_reg;
 
-  wire [72:0] s = r_reg + {2'b00, v_reg};
+  // s = r + V_i as a 36-bit low half and the high half for carry 0 and 1 (carry select): the step
+  // decision (s's sign) goes on to the executor and step_pulse, so its chain is cut in two
+  wire [36:0] s_lo = {1'b0, r_reg[35:0]} + {1'b0, v_reg[35:0]};
+  wire [36:0] s_h0 = r_reg[72:36] + {2'b00, v_reg[70:36]};
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [37:0] s_h1 = {r_reg[72:36], 1'b1} + {2'b00, v_reg[70:36], 1'b1};  // [37:1]: the sum + 1
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [72:0] s = {s_lo[36] ? s_h1[37:1] : s_h0, s_lo[35:0]};
   wire        wrap = !s[72];
   wire [24:0] s_hi_m = s[72:48] - {1'b0, n_reg};
 

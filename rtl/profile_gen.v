@@ -12,8 +12,9 @@
 // remainders at clock j-1 and V_i(j-1) = V(j-1)*n_i, step from those in tick j, and apply op(j)
 // to V_i at the end of tick j. segment_prep computes U(1) = V_entry, V(1) and op(1) and loads them
 // with `load`, so tick 1 can follow the load edge directly.
-// last = U(j) >= n_dom*2^48 (registers only: a 24-bit compare): tick j is the segment's last; the
-// axes reach their exact counts in it.
+// last = U(j) >= n_dom*2^48: tick j is the segment's last; the axes reach their exact counts in
+// it. A register (last_reg: the compare of the next U and n_dom, formed on every edge), so the
+// executor's zero-gap chaining (last -> accept -> the next load) starts at a flip-flop.
 // Precomputed by segment_prep: vcma = V_cruise - A (signed 48 bits; negative: never INC) and
 // vxpa = V_exit + A. Per tick: one 72-bit add, the compare of its integer part with D (made from
 // U(c)'s integer part for carry 0 and 1, in parallel with the add's 48-bit fraction), and a
@@ -52,6 +53,7 @@ module profile_gen (
   reg [47:0] vcma_reg, vxpa_reg;
   reg [31:0] d_reg;
   reg [23:0] n_reg;
+  reg        last_reg;  // = (u_reg[71:48] >= n_reg) on every clock
 
   // U(c+1)'s integer part is U(c)'s or one more (V < 2^47): the decel compare is made for both
   // from registers, in parallel with the 48-bit fraction add, and its carry picks one (the same
@@ -64,9 +66,13 @@ module profile_gen (
   wire        dec = frac_sum[48] ? dec1 : dec0;
   wire        can_dec = ({1'b0, v_reg} >= vxpa_reg);
   wire        can_inc = !vcma_reg[47] && ({1'b0, v_reg} <= vcma_reg);
+  // last of the next clock: U's integer part after a tick is u_int or u_int + 1 (frac_sum's carry)
+  wire        ge0 = (u_reg[71:48] >= n_reg);
 
   always @(posedge clk) begin
+    last_reg <= ge0;
     if (load) begin
+      last_reg <= (n_dom == 24'd0);
       u_reg    <= {25'd0, u1};
       v_reg    <= v1;
       op_reg   <= op1;
@@ -79,6 +85,7 @@ module profile_gen (
       n_reg    <= n_dom;
     end else if (tick) begin
       u_reg <= u_next;
+      last_reg <= frac_sum[48] ? (u_int1 >= n_reg) : ge0;
       if (dec) begin
         if (can_dec) begin
           v_reg  <= v_reg - {15'd0, a_reg};
@@ -98,6 +105,7 @@ module profile_gen (
       end
     end
     if (rst) begin
+      last_reg <= 1'b1;  // 0 >= 0
       u_reg    <= 72'd0;
       v_reg    <= 47'd0;
       op_reg   <= OP_CRU;
@@ -111,7 +119,7 @@ module profile_gen (
     end
   end
 
-  assign last = (u_reg[71:48] >= n_reg);
+  assign last = last_reg;
   assign op   = op_reg;
 
 endmodule
