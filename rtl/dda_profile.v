@@ -38,15 +38,32 @@ module dda_profile (
   reg [23:0] n_reg;
 
   // s = r + V_i as a 36-bit low half and the high half for carry 0 and 1 (carry select): the step
-  // decision (s's sign) goes on to the executor and step_pulse, so its chain is cut in two
-  wire [36:0] s_lo = {1'b0, r_reg[35:0]} + {1'b0, v_reg[35:0]};
-  wire [36:0] s_h0 = r_reg[72:36] + {2'b00, v_reg[70:36]};
-  /* verilator lint_off UNUSEDSIGNAL */
-  wire [37:0] s_h1 = {r_reg[72:36], 1'b1} + {2'b00, v_reg[70:36], 1'b1};  // [37:1]: the sum + 1
-  /* verilator lint_on UNUSEDSIGNAL */
-  wire [72:0] s = {s_lo[36] ? s_h1[37:1] : s_h0, s_lo[35:0]};
-  wire        wrap = !s[72];
-  wire [24:0] s_hi_m = s[72:48] - {1'b0, n_reg};
+  // decision (s's sign) goes on to the executor and step_pulse, so its chain is cut in two. Formed
+  // only in tick clocks (x, a don't-care, in others: r_reg and step read it only with tick), so a
+  // simulator skips it while the axis is idle; synthesis keeps the plain sum.
+  reg [72:0] s;
+  reg        wrap;
+  reg [24:0] s_hi_m;
+  always @(*) begin : sum
+    reg [36:0] s_lo, s_h0;
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg [37:0] s_h1;  // [37:1]: the high half + 1
+    /* verilator lint_on UNUSEDSIGNAL */
+    s      = {73{1'bx}};
+    wrap   = 1'bx;
+    s_hi_m = {25{1'bx}};
+    s_lo   = {37{1'bx}};
+    s_h0   = {37{1'bx}};
+    s_h1   = {38{1'bx}};
+    if (tick) begin
+      s_lo   = {1'b0, r_reg[35:0]} + {1'b0, v_reg[35:0]};
+      s_h0   = r_reg[72:36] + {2'b00, v_reg[70:36]};
+      s_h1   = {r_reg[72:36], 1'b1} + {2'b00, v_reg[70:36], 1'b1};
+      s      = {s_lo[36] ? s_h1[37:1] : s_h0, s_lo[35:0]};
+      wrap   = !s[72];
+      s_hi_m = s[72:48] - {1'b0, n_reg};
+    end
+  end
 
   always @(posedge clk) begin
     if (load) begin
