@@ -25,10 +25,6 @@
 #include "commands.h"
 #include "fpgacnc/grbl/engine.h"
 #include "fpgacnc/grbl/settings.h"
-#include "fpgacnc/link/serial_link.h"
-#include "fpgacnc/simboard/cli_board.h"
-#include "fpgacnc/simboard/runner.h"
-#include "fpgacnc/twins/twin_board.h"
 #include "sender_port.h"
 
 namespace fpgacnc::cli {
@@ -91,11 +87,9 @@ int listen_tcp(const std::string& spec, std::string& where) {
 
 struct Args {
   CommonOptions common;
-  std::string port;
-  std::string model = "tlm";
+  BoardChoice board;
   std::string listen;
   std::string settings;
-  bool realtime = false;
   bool no_pty = false;
 };
 
@@ -115,34 +109,17 @@ void run(const Args& args) {
   fmt::print("{}\n", args.no_pty ? std::string("-") : pty_path);
   if (listen_fd >= 0) fmt::print("grbl on tcp {}\n", where);
 
-  std::unique_ptr<link::Link> lk;
+  BoardBehind board = open_board_behind(cfg, args.board);
   grbl::EngineOptions eo;
   eo.v2 = link::stream_v2_options(cfg);
   eo.settings_path = settings_path;
-  std::string behind;
-  if (!args.port.empty()) {
-    lk = std::make_unique<link::SerialLink>(args.port, cfg.baud);
-    behind = args.port;
-  } else if (args.model == "tlm") {
-    twins::TwinBoardOptions o = twins::TwinBoard::options_from_config(cfg);
-    o.realtime = args.realtime;
-    lk = simboard::make_board_link(std::make_unique<twins::TwinBoard>(o), cfg.baud, {});
-    behind = "the simulated board (tlm)";
-  } else {
-    if (args.realtime) throw std::invalid_argument("grbl: --realtime needs --model tlm");
-    lk = simboard::make_default_link(cfg, {});
-    behind = "the simulated board (rtl)";
-    auto* bl = dynamic_cast<simboard::BoardLink*>(lk.get());
-    if (bl) {
-      eo.estop_press = [bl] { bl->board().set_estop(true); };
-      eo.estop_release = [bl] { bl->board().set_estop(false); };
-    }
-  }
-
+  eo.estop_press = board.estop_press;
+  eo.estop_release = board.estop_release;
+  const std::string& behind = board.description;
   fmt::print("grbl 1.1 front end for {}; settings {}\n", behind, settings_path);
   std::fflush(stdout);
 
-  grbl::Engine engine(*lk, cfg, settings, eo);
+  grbl::Engine engine(*board.link, cfg, settings, eo);
   engine.connect();
   engine.take_output();  // the banner goes to each sender when it connects
 
@@ -225,17 +202,15 @@ void register_grbl(CLI::App& app) {
       "Serve grbl 1.1's protocol on a new pty (its path is the first line on stdout) and on TCP, "
       "with the FPGA behind it (a real --port, or the simulated board)");
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
-  sub->add_option("--port", args->port, "the controller's serial port (default: simulated board)");
-  sub->add_option("--model", args->model,
-                  "simulated board: tlm (the SystemC twins, default) or rtl (the Verilated "
-                  "cnc_core: soft reset mid-job presses its e-stop)")
-      ->check(CLI::IsMember({"tlm", "rtl"}));
+  add_board_options(sub, args->board,
+                    "simulated board: tlm (the SystemC twins, default) or rtl (the Verilated "
+                    "cnc_core: soft reset mid-job presses its e-stop)");
   sub->add_option("--listen", args->listen,
                   "also serve on TCP, tcp:HOST:PORT (PORT 0: any free port, printed)");
   sub->add_option("--settings", args->settings,
                   "grbl $ settings file (default $XDG_CONFIG_HOME/fpgacnc/grbl-settings.txt or "
                   "~/.config/fpgacnc/grbl-settings.txt)");
-  sub->add_flag("--realtime", args->realtime,
+  sub->add_flag("--realtime", args->board.realtime,
                 "tlm: simulated time follows the wall clock while the board is busy");
   sub->add_flag("--no-pty", args->no_pty, "serve on TCP only (first line: '-')");
   sub->callback([args] {

@@ -14,11 +14,9 @@
 #include <string>
 
 #include "commands.h"
-#include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/marlin/engine.h"
 #include "fpgacnc/simboard/cli_board.h"
 #include "fpgacnc/simboard/runner.h"
-#include "fpgacnc/twins/twin_board.h"
 #include "sender_port.h"
 
 namespace fpgacnc::cli {
@@ -31,8 +29,7 @@ void on_signal(int) {
 
 struct MarlinArgs {
   CommonOptions common;
-  std::string port;
-  std::string model = "tlm";
+  BoardChoice board;
 };
 
 void run_marlin(const MarlinArgs& args) {
@@ -42,32 +39,23 @@ void run_marlin(const MarlinArgs& args) {
   pty.fd = open_sender_pty(pty_path);
   fmt::print("{}\n", pty_path);  // first line: the pty path (scripts read it)
 
-  std::unique_ptr<link::Link> lk;
+  BoardBehind board = open_board_behind(cfg, args.board);
   marlin::EngineOptions eo;
   eo.v2 = link::stream_v2_options(cfg);
-  std::string behind;
-  if (!args.port.empty()) {
-    lk = std::make_unique<link::SerialLink>(args.port, cfg.baud);
-    behind = args.port;
-  } else if (args.model == "tlm") {
-    lk = simboard::make_board_link(
-        std::make_unique<twins::TwinBoard>(twins::TwinBoard::options_from_config(cfg)), cfg.baud,
-        {});
-    behind = "the simulated board (tlm: no heater plants, no e-stop input)";
-  } else {
-    lk = simboard::make_default_link(cfg, {});
-    behind = "the simulated board (rtl)";
-    if (auto clk = simboard::plant_clock(*lk)) {
+  eo.estop_press = board.estop_press;
+  std::string behind = board.description;
+  if (board.rtl) {
+    if (auto clk = simboard::plant_clock(*board.link)) {
       eo.v2.plant_time = std::move(clk);
       eo.v2.heater_poll = std::chrono::milliseconds(5);
     }
-    if (auto* bl = dynamic_cast<simboard::BoardLink*>(lk.get()))
-      eo.estop_press = [bl] { bl->board().set_estop(true); };
+  } else if (args.board.port.empty()) {
+    behind = "the simulated board (tlm: no heater plants, no e-stop input)";
   }
   fmt::print("Marlin front end for {}\n", behind);
   std::fflush(stdout);
 
-  marlin::Engine engine(*lk, cfg, eo);
+  marlin::Engine engine(*board.link, cfg, eo);
   engine.connect();
   const std::string banner = engine.take_output();  // to each sender when it opens the port
 
@@ -123,11 +111,9 @@ void register_marlin(CLI::App& app) {
       "Serve Marlin's host protocol (printers: OctoPrint, Pronterface, Repetier-Host) on a new pty "
       "(its path is the first line on stdout), with the FPGA behind it");
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
-  sub->add_option("--port", args->port, "the controller's serial port (default: simulated board)");
-  sub->add_option("--model", args->model,
-                  "simulated board: tlm (the SystemC twins, default; no heater plants) or rtl "
-                  "(the Verilated cnc_core with its thermal plants and e-stop)")
-      ->check(CLI::IsMember({"tlm", "rtl"}));
+  add_board_options(sub, args->board,
+                    "simulated board: tlm (the SystemC twins, default; no heater plants) or rtl "
+                    "(the Verilated cnc_core with its thermal plants and e-stop)");
   sub->callback([args] { run_marlin(*args); });
 }
 

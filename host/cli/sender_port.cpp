@@ -11,7 +11,41 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "fpgacnc/link/serial_link.h"
+#include "fpgacnc/simboard/cli_board.h"
+#include "fpgacnc/simboard/runner.h"
+#include "fpgacnc/twins/twin_board.h"
+
 namespace fpgacnc::cli {
+
+void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help) {
+  sub->add_option("--port", choice.port, "the controller's serial port (default: simulated board)");
+  sub->add_option("--model", choice.model, model_help)->check(CLI::IsMember({"tlm", "rtl"}));
+}
+
+BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoice& choice) {
+  BoardBehind b;
+  if (choice.realtime && (!choice.port.empty() || choice.model != "tlm"))
+    throw std::invalid_argument("--realtime needs the twin board (--model tlm, no --port)");
+  if (!choice.port.empty()) {
+    b.link = std::make_unique<link::SerialLink>(choice.port, cfg.baud);
+    b.description = choice.port;
+  } else if (choice.model == "tlm") {
+    twins::TwinBoardOptions o = twins::TwinBoard::options_from_config(cfg);
+    o.realtime = choice.realtime;
+    b.link = simboard::make_board_link(std::make_unique<twins::TwinBoard>(o), cfg.baud, {});
+    b.description = "the simulated board (tlm)";
+  } else {
+    b.link = simboard::make_default_link(cfg, {});
+    b.description = "the simulated board (rtl)";
+    b.rtl = true;
+    if (auto* bl = dynamic_cast<simboard::BoardLink*>(b.link.get())) {
+      b.estop_press = [bl] { bl->board().set_estop(true); };
+      b.estop_release = [bl] { bl->board().set_estop(false); };
+    }
+  }
+  return b;
+}
 
 void set_nonblocking(int fd) {
   ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);

@@ -1,10 +1,38 @@
-// The sender's side of a front end (`fpgacnc grbl`, `fpgacnc marlin`): a pseudo-terminal a
-// sender opens, and what is still to be written to it.
+// The two sides of a front end (`fpgacnc grbl`, `fpgacnc marlin`): the sender's (a
+// pseudo-terminal a sender opens, and what is still to be written to it) and the FPGA's (a real
+// port or a simulated board, chosen by the same options in both commands).
 #pragma once
 
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <memory>
 #include <string>
 
+#include "fpgacnc/config/machine.h"
+#include "fpgacnc/link/link.h"
+
 namespace fpgacnc::cli {
+
+// Where the FPGA is: --port, else the simulated board of --model (tlm: the twins, rtl: the
+// Verilated cnc_core); --realtime paces the twin board to the wall clock.
+struct BoardChoice {
+  std::string port;
+  std::string model = "tlm";
+  bool realtime = false;
+};
+// Adds --port and --model (with `model_help`) to a front end's subcommand.
+void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help);
+
+// The FPGA behind a front end, opened.
+struct BoardBehind {
+  std::unique_ptr<link::Link> link;
+  std::string description;  // "/dev/ttyUSB0", "the simulated board (tlm)", "... (rtl)"
+  bool rtl = false;         // the Verilated board (its heaters' plants and e-stop are modelled)
+  // Press / release the board's e-stop; empty where the board has no e-stop input (tlm, a port).
+  std::function<void()> estop_press, estop_release;
+};
+// Opens the board of `choice` (throws std::invalid_argument for --realtime without tlm).
+BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoice& choice);
 
 // A sender's end: the pty master or a TCP connection, with what is still to be written.
 struct Peer {

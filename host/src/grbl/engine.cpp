@@ -119,12 +119,7 @@ Engine::~Engine() = default;
 
 void Engine::connect() {
   ident_ = link::handshake_v2(link_, opt_.v2, rep_, std::nullopt);
-  new_session();
-  plan::Steps4 pos{};
-  const auto& st = session_->last_status();
-  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
-  rebuild_pipeline(pos);
-  banner();
+  restart();
 }
 
 void Engine::opened() {
@@ -137,6 +132,15 @@ void Engine::new_session() {
   frontend::push_config_axes(*session_, ident_, cfg_);
   fifo_info_.clear();
   fifo_base_ = 0;
+}
+
+void Engine::restart() {
+  new_session();
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  rebuild_pipeline(pos);
+  banner();
 }
 
 void Engine::rebuild_pipeline(const plan::Steps4& steps) {
@@ -673,12 +677,7 @@ void Engine::continue_reset() {
   }
   reset_asked_ = false;
   resetting_ = false;
-  new_session();
-  plan::Steps4 pos{};
-  const auto& st = session_->last_status();
-  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
-  rebuild_pipeline(pos);
-  banner();
+  restart();
 }
 
 }  // namespace fpgacnc::grbl

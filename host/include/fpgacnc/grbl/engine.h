@@ -106,6 +106,8 @@ class Engine {
 
  private:
   void new_session();
+  // A new session from the board's STATUS, the pipeline at its step position, the banner.
+  void restart();
   void rebuild_pipeline(const plan::Steps4& steps);
   void banner();
   bool line_ready() const;
