@@ -7,7 +7,8 @@ Usage: cncjs_stream.py FPGACNC INSTALL_DIR JOB CONFIG [DRIVER_OPTIONS...]
   INSTALL_DIR  where CNCjs is installed (`npm ci` from this folder's lock file, once: kept while
                the lock file is unchanged); the CNCjs configuration and logs go to INSTALL_DIR/run
   JOB          the G-code file; CONFIG the machine configuration for both fpgacnc commands
-  DRIVER_OPTIONS  passed to drive_cncjs.js (--reset, --pause)
+  DRIVER_OPTIONS  passed to drive_cncjs.js (--reset, --pause; with --pause the front end's twin
+                  board runs at the job's real pace, --realtime)
 
 The expected end is the host planner's final position for the same file (`fpgacnc plan`, its
 `final position:` line in steps and mm), computed without the grbl front end, the board or CNCjs;
@@ -95,8 +96,13 @@ def main():
     if os.path.exists(settings):
         os.remove(settings)  # the configuration's values, whatever an earlier run left
     t0 = time.time()
-    grbl = subprocess.Popen([fpgacnc, "grbl", "--config", config, "--settings", settings],
-                            stdout=subprocess.PIPE, text=True)
+    grbl_cmd = [fpgacnc, "grbl", "--config", config, "--settings", settings]
+    if "--pause" in extra:
+        # The twin board at the job's real pace: the front end then holds CNCjs back by its
+        # window, so lines are still unsent at the pause however fast this machine is (unpaced,
+        # the board can take the whole job before CNCjs's pause point).
+        grbl_cmd.append("--realtime")
+    grbl = subprocess.Popen(grbl_cmd, stdout=subprocess.PIPE, text=True)
     try:
         pty = grbl.stdout.readline().strip()
         if not pty.startswith("/dev/"):
