@@ -125,7 +125,7 @@ set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to HEX5[5]
 set_location_assignment PIN_AA25 -to HEX5[6]
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to HEX5[6]
 
-# Heaters and e-stop (issue 7, docs/heater.md): GPIO_0[7..9] (pins from the Terasic DE1-SoC
+# Heaters and e-stop (docs/heater.md): GPIO_0[7..9] (pins from the Terasic DE1-SoC
 # manual). heater_* drive MOSFET gate drivers; estop_n is active low (normally-closed switch to
 # ground), with the weak pull-up on so that an open wire reads as "stop".
 set_location_assignment PIN_AJ19 -to heater_hotend
