@@ -127,33 +127,14 @@ void run(const Args& args) {
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);
   char buf[4096];
-  std::optional<std::chrono::steady_clock::time_point> banner_at;
+  SenderWatch watch;
   while (!g_stop) {
-    // Is a sender on the pty? (POLLHUP on the master while no one has the slave open.)
-    if (pty.fd >= 0) {
-      pollfd q{pty.fd, POLLIN, 0};
-      ::poll(&q, 1, 0);
-      const bool open_now = !(q.revents & POLLHUP);
-      if (open_now && !pty.connected) {
-        pty.connected = true;
-        // A sender sets up its port (termios, flushes) right after opening it: the banner
-        // comes 100 ms later, as a grbl board's comes after its boot.
-        banner_at = std::chrono::steady_clock::now() + std::chrono::milliseconds(100);
-      } else if (!open_now && pty.connected) {
-        pty.connected = false;
-        pty.pending.clear();
-        banner_at.reset();
-      }
-      if (banner_at && std::chrono::steady_clock::now() >= *banner_at) {
-        banner_at.reset();
-        engine.opened();
-      }
-    }
+    if (watch.poll(pty)) engine.opened();
     std::vector<pollfd> fds;
     if (pty.connected) fds.push_back({pty.fd, POLLIN, 0});
     if (tcp.connected) fds.push_back({tcp.fd, POLLIN, 0});
     if (listen_fd >= 0) fds.push_back({listen_fd, POLLIN, 0});
-    ::poll(fds.data(), fds.size(), engine.busy() ? 0 : banner_at ? 5 : 20);
+    ::poll(fds.data(), fds.size(), engine.busy() ? 0 : watch.banner_pending() ? 5 : 20);
     for (const auto& f : fds) {
       if (!(f.revents & (POLLIN | POLLHUP | POLLERR))) continue;
       if (f.fd == listen_fd) {

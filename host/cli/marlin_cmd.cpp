@@ -63,22 +63,9 @@ void run_marlin(const MarlinArgs& args) {
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);
   char buf[4096];
-  std::optional<std::chrono::steady_clock::time_point> banner_at;
+  SenderWatch watch;
   while (!g_stop) {
-    const bool open_now = sender_present(pty.fd);
-    if (open_now && !pty.connected) {
-      pty.connected = true;
-      // As a board's "start" comes after the reset that opening its port causes.
-      banner_at = std::chrono::steady_clock::now() + std::chrono::milliseconds(100);
-    } else if (!open_now && pty.connected) {
-      pty.connected = false;
-      pty.pending.clear();
-      banner_at.reset();
-    }
-    if (banner_at && std::chrono::steady_clock::now() >= *banner_at) {
-      banner_at.reset();
-      pty.pending += banner;
-    }
+    if (watch.poll(pty)) pty.pending += banner;
     if (pty.connected) {
       pollfd q{pty.fd, POLLIN, 0};
       ::poll(&q, 1, engine.busy() ? 0 : 20);

@@ -86,4 +86,23 @@ bool sender_present(int master) {
   return !(q.revents & POLLHUP);
 }
 
+bool SenderWatch::poll(Peer& pty) {
+  if (pty.fd < 0) return false;
+  const bool open_now = sender_present(pty.fd);
+  const auto now = std::chrono::steady_clock::now();
+  if (open_now && !pty.connected) {
+    pty.connected = true;
+    banner_at_ = now + std::chrono::milliseconds(100);
+  } else if (!open_now && pty.connected) {
+    pty.connected = false;
+    pty.pending.clear();
+    banner_at_.reset();
+  }
+  if (banner_at_ && now >= *banner_at_) {
+    banner_at_.reset();
+    return true;
+  }
+  return false;
+}
+
 }  // namespace fpgacnc::cli

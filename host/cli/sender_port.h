@@ -4,8 +4,10 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "fpgacnc/config/machine.h"
@@ -50,5 +52,17 @@ int open_sender_pty(std::string& path);
 void flush_peer(Peer& p);
 // Whether a sender has the pty of `master` open now.
 bool sender_present(int master);
+// Follows whether a sender has the pty open (connected, pending cleared on close) and says when
+// to greet it: 100 ms after it opened the port, once it has set the port up (termios, flushes),
+// as a board's banner comes after the reset that opening its port causes.
+class SenderWatch {
+ public:
+  // Call once per loop; true in the one call where the banner is due.
+  bool poll(Peer& pty);
+  bool banner_pending() const { return banner_at_.has_value(); }
+
+ private:
+  std::optional<std::chrono::steady_clock::time_point> banner_at_;
+};
 
 }  // namespace fpgacnc::cli
