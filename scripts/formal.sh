@@ -38,6 +38,8 @@ JOBS=(
   "arc_stop            sat     4"
   "input_filter        prove   8"
   "input_filter        cover   16"
+  "limit_guard         prove   4"
+  "limit_guard         cover   8"
 )
 
 want=("$@")
