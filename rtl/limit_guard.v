@@ -109,10 +109,9 @@ module limit_guard #(
 
 `ifdef FORMAL
   // Formal properties (scripts/formal.sh set limit_guard, k-induction; covers). Reset in the
-  // first clock; every input free except that the switch levels, strobes and DIR behave as their
-  // sources do: rise strobes only with the level high after a low clock, DIR the level of the
-  // step (it is a register: free here). `issued` models the executor's gate (step_req = step_want
-  // && !block && !abort, abort including trip).
+  // first clock; every input free except that a rise strobe comes exactly when the level goes
+  // from low to high (input_filter). `issued` is what passes the block (the executor's step_req
+  // is step_want && !block && !abort; cnc_core's abort includes trip).
   reg f_past_valid = 1'b0;
   always @(posedge clk) f_past_valid <= 1'b1;
   always @(*) if (!f_past_valid) assume (rst);
