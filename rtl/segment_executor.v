@@ -33,6 +33,10 @@
 // clock; the next segment that needs the other direction takes the HOLD/SETUP path), and no
 // segment is accepted from IDLE until the largest DIR setup setting has passed since the last abort
 // clock (a DIR edge just before the abort still gets its setup time).
+// step_block (cnc_core's hard limits, rtl/limit_guard.v): an axis whose bit is high issues no step
+// request in that clock (its STEP does not rise on the next edge and its position does not
+// change); the segment runs on (cnc_core aborts it on the next clock). step_want is the request
+// before abort and step_block, for the limit check.
 //
 // Input (s_axis_*): one segment from segment_prep: code, laser power, v2 bit, dir_fast, per-axis
 // direction and |steps|, the per-axis DDA constant T - |steps| and the length T in clocks.
@@ -137,6 +141,8 @@ module segment_executor #(
     /* verilator lint_off SYMRSVDWORD */
     input wire abort,  // e-stop: drop everything (see above)
     /* verilator lint_on SYMRSVDWORD */
+    input wire [N_AXES-1:0] step_block,  // 1: no step request of that axis in this clock (limits)
+    output wire [N_AXES-1:0] step_want,  // each axis's step request before abort and step_block
 
     output wire [N_AXES-1:0] step,
     output wire [N_AXES-1:0] dir,
@@ -393,7 +399,8 @@ module segment_executor #(
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
-      assign step_req[a] = (dda_step[a] || prof_step[a] || arc_req[a]) && !abort;
+      assign step_want[a] = dda_step[a] || prof_step[a] || arc_req[a];
+      assign step_req[a]  = step_want[a] && !abort && !step_block[a];
 
       dda_linear #(
           .TMN_FROM_TOTAL(LEAN_DDA),
