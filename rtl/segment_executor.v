@@ -726,6 +726,7 @@ module segment_executor #(
   reg [N_AXES-1:0] f_step_q, f_dir_q;
   reg f_rst_q;  // the pins' values before a reset edge do not count as changes
   reg f_abort_q;  // abort was high in the previous clock
+  reg [N_AXES-1:0] f_block_q;  // step_block in the previous clock
   wire [N_AXES-1:0] f_dir_chg = f_rst_q ? {N_AXES{1'b0}} : (dir ^ f_dir_q);
   wire [N_AXES-1:0] f_step_rise = f_rst_q ? {N_AXES{1'b0}} : (step & ~f_step_q);
   reg [17*N_AXES-1:0] f_since_dir, f_since_step;  // clocks since the pin changed, saturating
@@ -735,6 +736,7 @@ module segment_executor #(
     f_dir_q  <= dir;
     f_rst_q  <= rst;
     f_abort_q <= abort;
+    f_block_q <= step_block;
     for (f_a = 0; f_a < N_AXES; f_a = f_a + 1) begin
       if (f_dir_chg[f_a]) f_since_dir[17*f_a+:17] <= 17'd1;
       else if (f_since_dir[17*f_a+:17] != 17'h10000)
@@ -766,6 +768,8 @@ module segment_executor #(
           // E-stop (abort): no STEP rising edge on the clock after an abort clock (held abort:
           // none at all; a pulse already high finishes its high time).
           if (f_abort_q) assert (!f_step_rise[f_g]);
+          // Hard limits: no STEP rising edge of an axis on the clock after it was blocked.
+          if (f_block_q[f_g]) assert (!f_step_rise[f_g]);
           // DIR hold, compositionally: the executor writes DIR only when step_pulse's hold_ok is
           // high, and step_pulse (set step_pulse) proves that DIR changes only on a write and that
           // hold_ok means at least DIR hold clocks since the last STEP rising edge.
