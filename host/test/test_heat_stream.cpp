@@ -131,6 +131,19 @@ TEST(HeaterCodec, StatusWithAndWithoutTheHeaterBlock) {
   EXPECT_THROW(v2::decode_status(bad, 4), v2::ProtocolError);
 }
 
+// The hard-limit fault in a job's error message names the switch (docs/machine.md).
+TEST(HeaterCodec, LimitFaultNamesTheSwitch) {
+  v2::Status s;
+  s.position = {0, 0};
+  s.faults = v2::kFaultLimit;
+  s.state = v2::kStatePosUntrusted;
+  s.limit = 0x10;  // X max
+  s.switches = 0x0100;
+  EXPECT_EQ(fpgacnc::heat::describe_faults(s, v2::kFaultLimit),
+            "hard limit: motion stopped, FIFO flushed, laser and outputs off (LIMIT alarm: X max; "
+            "switches: X max; positions not trusted (a hard limit tripped))");
+}
+
 TEST(HeaterJob, PlacesSetpointsBetweenTheFramesOfTheMoves) {
   fpgacnc::config::MachineConfig cfg;
   const auto plan = plan_of(
