@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/protocol/v2_job.h"
 
 namespace fpgacnc::heat {
 namespace v2 = protocol::v2;
@@ -60,6 +61,9 @@ uint16_t uq4(double c) {
 
 }  // namespace
 
+HeaterJob make_heater_job_impl(const plan::Plan& plan, const v2::Job& job,
+                               const config::MachineConfig& cfg);
+
 int16_t to_q4(double temp_c) {
   return static_cast<int16_t>(std::clamp<long>(std::lround(temp_c * 16.0), -32768, 32767));
 }
@@ -105,8 +109,18 @@ std::vector<int16_t> thermistor_table(const HeaterConfig& h) {
   return t;
 }
 
+HeaterJob make_heater_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
+  static const v2::Job no_job;
+  return make_heater_job_impl(plan, no_job, cfg);
+}
+
 HeaterJob make_heater_job(const plan::Plan& plan, const v2::Job& job,
                           const config::MachineConfig& cfg) {
+  return make_heater_job_impl(plan, job, cfg);
+}
+
+HeaterJob make_heater_job_impl(const plan::Plan& plan, const v2::Job& job,
+                               const config::MachineConfig& cfg) {
   HeaterJob hj;
   hj.config = cfg.heaters;
   hj.source = plan.source;

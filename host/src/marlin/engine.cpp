@@ -58,7 +58,7 @@ heat::HeaterJob heater_setup(const config::MachineConfig& cfg) {
   p.source = "marlin";
   if (cfg.heaters.ch[heat::kHotend].enabled) p.items.push_back(plan::HeaterCommand{104, 0.0, true});
   if (cfg.heaters.ch[heat::kBed].enabled) p.items.push_back(plan::HeaterCommand{140, 0.0, true});
-  heat::HeaterJob hj = heat::make_heater_job(p, v2::Job{}, cfg);
+  heat::HeaterJob hj = heat::make_heater_job(p, cfg);
   hj.actions.clear();
   return hj;
 }
