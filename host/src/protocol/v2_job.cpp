@@ -506,23 +506,8 @@ Job pack_job(const plan::MotionPlan& planned, const config::MachineConfig& cfg,
 }
 
 Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
-             const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
-  Job job = start_job(plan, cfg);
-  auto push = [&job](JobFrame jf) {
-    job.wire_bytes += kOverhead + jf.frame.payload.size();
-    job.frames.push_back(std::move(jf));
-  };
-  const HeaterHook skip = [&job](const plan::HeaterCommand&, size_t) { ++job.skipped_heater; };
-  if (cfg.motion == "profile") {
-    plan::MotionLimits lim = plan::motion_limits(cfg);
-    lim.arc_walk = arc_walk;
-    if (!lim.arc_walk && cfg.native_arcs) lim.arc_walk = plan::reference_arc_walk();
-    pack_profiles(plan::plan_profiles(plan, lim), cfg, job, push, skip);
-  } else {
-    pack_constant(plan, cfg, job, push, skip);
-  }
-  job.fifo_frames = job.frames.size();
-  return job;
+             const plan::ArcWalk& arc_walk) {
+  return pack_job(plan::plan_motion(plan, cfg, arc_walk), cfg, {.heaters = false});
 }
 
 std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq,

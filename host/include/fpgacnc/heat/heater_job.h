@@ -37,7 +37,6 @@ struct HeaterAction {
   bool wait = false;
   int mcode = 0;
   int source_line = 0;
-  size_t before_frame = 0;  // index into Job::frames this setpoint goes before (frames.size(): end)
 };
 
 struct HeaterJob {
@@ -65,7 +64,7 @@ uint16_t ticks(double seconds, double sample_s);  // rounded, saturated at 65535
 // cannot be read) and makes the setup frames of the channels they use. The v2 packer
 // (protocol/v2_job.h) calls it and places the setpoints between the job's frames.
 HeaterJob make_heater_job(const plan::Plan& plan, const config::MachineConfig& cfg);
-// TRANSITION: the old placement (before_frame) against a packed job.
+// The same, for callers outside host/ that still pass the packed job (not used).
 HeaterJob make_heater_job(const plan::Plan& plan, const protocol::v2::Job& job,
                           const config::MachineConfig& cfg);
 
