@@ -89,7 +89,8 @@ uint16_t u16_timing(uint32_t v, const char* what) {
 
 // The k of a segment: axes up to the last moving one, at least 2 (X, Y).
 // A G4 dwell as DWELL frames of at most kMaxT clocks each (split when longer).
-std::vector<JobFrame> dwell_frames(const plan::Dwell& d, uint32_t clk_hz, size_t segment_index) {
+std::vector<JobFrame> job_dwell_frames(const plan::Dwell& d, uint32_t clk_hz,
+                                       size_t segment_index) {
   const double clocks = std::round(d.seconds * static_cast<double>(clk_hz));
   if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
     throw std::invalid_argument(
@@ -213,14 +214,9 @@ void pack_profiles(const plan::ProfilePlan& pp, const config::MachineConfig& cfg
         continue;
       }
       const size_t k = frame_axes(p->steps);
-      std::array<int32_t, 4> s32{};
-      for (size_t a = 0; a < 4; ++a) {
-        s32[a] = static_cast<int32_t>(p->steps[a]);
-        job.target[a] += p->steps[a];
-      }
+      for (size_t a = 0; a < 4; ++a) job.target[a] += p->steps[a];
       JobFrame jf;
-      jf.frame = line_profile(0, to_line_profile(p->code, laser_power(s, cfg), p->fields,
-                                                 std::span<const int32_t>(s32.data(), k)));
+      jf.frame = profile_frame(*p, cfg);
       jf.segment_index = p->segment_index;
       jf.source_line = p->source_line;
       jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
@@ -238,7 +234,7 @@ void pack_profiles(const plan::ProfilePlan& pp, const config::MachineConfig& cfg
       }
       push(std::move(jf));
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_seen)) {
+      for (JobFrame& jf : job_dwell_frames(*d, cfg.clk_hz, seg_seen)) {
         job.total_t += jf.t;
         advance(plan::Steps4{}, jf.t, -1);
         ++job.dwells;
@@ -335,7 +331,7 @@ void pack_constant(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       ++job.segments;
       ++seg_index;
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_index)) {
+      for (JobFrame& jf : job_dwell_frames(*d, cfg.clk_hz, seg_index)) {
         job.total_t += jf.t;
         ++job.dwells;
         push(std::move(jf));
@@ -409,6 +405,29 @@ LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFiel
   lp.decel_at = f.d;
   lp.steps.assign(steps.begin(), steps.end());
   return lp;
+}
+
+Frame profile_frame(const plan::Profile& p, const config::MachineConfig& cfg) {
+  plan::Segment s;
+  s.code = p.code;
+  s.spindle_s = p.spindle_s;
+  std::array<int32_t, 4> s32{};
+  for (size_t a = 0; a < 4; ++a) s32[a] = static_cast<int32_t>(p.steps[a]);
+  return line_profile(0,
+                      to_line_profile(p.code, laser_power(s, cfg), p.fields,
+                                      std::span<const int32_t>(s32.data(), frame_axes(p.steps))));
+}
+
+std::vector<Frame> dwell_frames(double seconds, uint64_t clk_hz) {
+  std::vector<Frame> out;
+  const double clocks = std::round(seconds * static_cast<double>(clk_hz));
+  uint64_t left = clocks > 0 && clocks < 1e15 ? static_cast<uint64_t>(clocks) : 0;
+  while (left > 0) {
+    const uint64_t t = std::min<uint64_t>(left, kMaxT);
+    out.push_back(dwell(0, static_cast<uint32_t>(t)));
+    left -= t;
+  }
+  return out;
 }
 
 uint32_t min_period(const config::StepTiming& t) {

@@ -129,6 +129,14 @@ Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan
 LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
                             std::span<const int32_t> steps);
 
+// The LINE_PROFILE frame of one look-ahead line block (laser power from its S): what pack_job
+// makes of a block, for the front ends that plan line by line (frontend/motion.h).
+Frame profile_frame(const plan::Profile& p, const config::MachineConfig& cfg);
+
+// DWELL frames for a dwell of `seconds` (several when longer than one frame's 32-bit clocks;
+// none for 0 s or a duration out of range), for the front ends.
+std::vector<Frame> dwell_frames(double seconds, uint64_t clk_hz);
+
 // The LINE / LINE_PROFILE power byte of a segment (the rule in the file comment: 0 for code 0,
 // S scaled by laser_s_max, S > 0 never 0, no S: 255).
 uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg);
