@@ -178,6 +178,26 @@ TEST(HeaterJob, PackerPlacesSetpointsBetweenTheFramesOfTheMoves) {
   EXPECT_EQ(motion.heater_frames, 0u);
 }
 
+TEST(HeaterJob, SetpointGoesBeforeTheOutputsPackedForTheNextSegment) {
+  // The rule of pack_job (v2_job.h): a setpoint goes before the first frame of the segment that
+  // follows it, so before an OUTPUT frame already packed for that segment; M106 and M107 around
+  // it stay one OUTPUT frame (consecutive outputs merge).
+  fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";
+  const auto plan = plan_of("G1 X1 F600\nM106 S255\nM104 S200\nM107\nG1 X2\n", cfg);
+  const auto job = v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
+  const size_t setup = job.heaters.setup.size();
+  ASSERT_EQ(job.frames.size(), setup + 5u);
+  const v2::Type want[] = {v2::Type::Numerators, v2::Type::Line, v2::Type::HeaterSetpoint,
+                           v2::Type::Output, v2::Type::Line};
+  for (size_t i = 0; i < 5; ++i)
+    EXPECT_EQ(job.frames[setup + i].frame.type, static_cast<uint8_t>(want[i])) << "frame " << i;
+  EXPECT_EQ(job.outputs, 1u);
+  const auto fan = v2::decode_output(job.frames[setup + 3].frame).fan;
+  ASSERT_TRUE(fan.has_value());
+  EXPECT_EQ(*fan, 0);
+}
+
 TEST(HeaterJob, BadHeaterWordsAreLineColErrors) {
   fpgacnc::config::MachineConfig cfg;
   struct Case {

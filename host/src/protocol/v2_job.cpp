@@ -436,7 +436,7 @@ uint32_t min_period(const config::StepTiming& t) {
 
 namespace {
 
-// CONFIG_AXIS for the 4 axes and the NUMERATORS frame; `push` appends a FIFO frame.
+// A job with CONFIG_AXIS for the 4 axes and its first frame, NUMERATORS.
 Job start_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
   Job job;
   const auto& st = cfg.step_timing;
