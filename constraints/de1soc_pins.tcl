@@ -162,3 +162,19 @@ set_location_assignment PIN_AG17 -to dout[2]
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to dout[2]
 set_location_assignment PIN_AA18 -to dout[3]
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to dout[3]
+
+# Limit switches (docs/machine.md): GPIO_0[17..20] (pins from the Terasic DE1-SoC manual),
+# normally-closed switches to ground with the weak pull-up on, so that a pressed switch or an open
+# wire reads high (asserted). Which are wired: de1soc_top's LIMIT_ENABLE.
+set_location_assignment PIN_AA19 -to lim_x_min
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to lim_x_min
+set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_x_min
+set_location_assignment PIN_AE17 -to lim_x_max
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to lim_x_max
+set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_x_max
+set_location_assignment PIN_AC20 -to lim_y_min
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to lim_y_min
+set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_y_min
+set_location_assignment PIN_AH19 -to lim_y_max
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to lim_y_max
+set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_y_max

@@ -14,6 +14,15 @@
 //                    active or latched: FIFO held flushed, segment_prep and segment_executor
 //                    aborted (no new STEP rise; positions and v1 numerators kept), laser and
 //                    outputs low (2 clocks from the pin), heaters low (3 clocks).
+//   limit_min, limit_max   per-axis limit switches, asynchronous (docs/machine.md): input_filter
+//                    (LIMIT_ACTIVE_LOW, LIMIT_FILTER_CLKS; a switch not in LIMIT_ENABLE reads
+//                    released), then limit_guard: a switch rising while the executor is busy, or
+//                    a step request toward an asserted switch, trips the alarm (faults bit 2,
+//                    limit_trip): that step is not issued, no STEP rises from the clock after
+//                    the trip, and as for the e-stop the FIFO is flushed, prep and executor
+//                    aborted (positions kept), laser and outputs low; heaters keep running. The
+//                    alarm clears on a FAULT_CLEAR while the switch that tripped is released;
+//                    STATUS state bit 4 (positions not trusted) stays set until rst.
 //   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
 //                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
 //                    writes a shadow set that becomes active only while the FIFO is empty and
@@ -22,8 +31,8 @@
 //   status outputs   registers; the 16-bit counters wrap. STATUS carries frames_ok, crc_errors,
 //                    length_errors, unknown_types, timeouts, frame_errors, overruns, noise_bytes,
 //                    clamped (docs/protocol.md "STATUS"); packet_count, violations and naks are
-//                    pins only. faults: bit 0 STEP timing violation, 1 arc error, 4 e-stop, 5..7
-//                    heaters; latched until FAULT_CLEAR.
+//                    pins only. faults: bit 0 STEP timing violation, 1 arc error, 2 hard limit,
+//                    4 e-stop, 5..7 heaters; latched until FAULT_CLEAR.
 //   rst              synchronous, active high (the board top synchronizes its button).
 // Build options (docs/synthesis.md "Build options"; named configurations in spec/configs.toml):
 //   PROTO_V2 = 0 is the original v1 controller (packet_decoder_v1, no FIFO, no response_encoder,
@@ -60,7 +69,11 @@ module cnc_core #(
     parameter OUTPUTS           = PROTO_V2,
     parameter FAN_PWM_HZ        = 1000,                // fan PWM frequency (256 counts a period)
     parameter LEAN_TRIM         = (PROTO_V2 == 0) ? 1 : 0,  // 1: PROTO_V2 = 0 only
-    parameter STEP_CFG          = 1                    // 0: PROTO_V2 = 0 only
+    parameter STEP_CFG          = 1,                   // 0: PROTO_V2 = 0 only
+    // hard limits (docs/machine.md): bit a = min switch of axis a, bit 16 + a = max switch
+    parameter LIMIT_FILTER_CLKS = `FPGACNC_DEF_LIMIT_FILTER_CLKS,  // debounce, clocks
+    parameter [31:0] LIMIT_ENABLE     = `FPGACNC_DEF_LIMIT_ENABLE,      // switches wired
+    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW   // asserted at a low pin
 ) (
     input wire clk,
     input wire rst,
@@ -78,6 +91,8 @@ module cnc_core #(
     output wire [3:0] dout,           // digital outputs (M62..M65 P0..P3)
 
     input  wire       estop,       // e-stop, active high, asynchronous
+    input  wire [N_AXES-1:0] limit_min,  // limit switches, asynchronous (LIMIT_* parameters)
+    input  wire [N_AXES-1:0] limit_max,
     output wire [1:0] heater,      // 0 hot end, 1 bed
     output wire       adc_convst,  // LTC2308
     output wire       adc_sck,
@@ -116,7 +131,9 @@ module cnc_core #(
     output wire [        15:0] unknown_types,
     output wire [        15:0] noise_bytes,
     output wire [        15:0] clamped,        // v2 segments whose T was raised
-    output wire [        15:0] naks            // NAK frames requested
+    output wire [        15:0] naks,           // NAK frames requested
+    output wire [2*N_AXES-1:0] limit_state,    // filtered switches {max, min}, 1 = asserted
+    output wire                limit_trip      // the hard-limit alarm (faults bit 2)
 );
 
   // FIFO entry (segment_prep header, LINE_PROFILE and ARC fields): 839 bits for 4 axes
@@ -196,6 +213,9 @@ module cnc_core #(
     if (PROTO_V2 != 0 && STEP_CFG == 0) begin : g_v2_step_cfg
       cnc_core_illegal_STEP_CFG_0_needs_PROTO_V2_0 u_err ();
     end
+    if (LIMIT_FILTER_CLKS < 0 || LIMIT_FILTER_CLKS > 16777215) begin : g_bad_limit_filter
+      cnc_core_illegal_LIMIT_FILTER_CLKS_not_0_to_2p24m1 u_err ();
+    end
   endgenerate
 
   // ---------------------------------------------------------------- UART in
@@ -239,6 +259,7 @@ module cnc_core #(
   wire dec_hello, dec_status, dec_ack;  // requests to response_encoder (v2 only)
   wire [7:0] dec_nak_seq, dec_nak_reason;
   wire estop_stop;  // e-stop active or latched (below)
+  wire motion_abort;  // e-stop or hard-limit alarm: FIFO flushed, prep and executor aborted
 
   generate
     if (V2_EN != 0) begin : g_v2
@@ -305,7 +326,7 @@ module cnc_core #(
       ) u_fifo (
           .clk          (clk),
           .rst          (rst),
-          .flush        (estop_stop),
+          .flush        (motion_abort),
           .s_axis_tdata (dec_tdata[FIFO_W-1:0]),
           .s_axis_tvalid(dec_tvalid),
           .s_axis_tready(fifo_s_tready),
@@ -389,6 +410,52 @@ module cnc_core #(
     end
   end
   assign estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
+
+  // ---------------------------------------------------------------- hard limits
+  localparam [N_AXES-1:0] LIM_EN_MIN = LIMIT_ENABLE[N_AXES-1:0];
+  localparam [N_AXES-1:0] LIM_EN_MAX = LIMIT_ENABLE[16+N_AXES-1:16];
+  localparam [N_AXES-1:0] LIM_LOW_MIN = LIMIT_ACTIVE_LOW[N_AXES-1:0];
+  localparam [N_AXES-1:0] LIM_LOW_MAX = LIMIT_ACTIVE_LOW[16+N_AXES-1:16];
+  wire [2*N_AXES-1:0] lim_q, lim_strobe;
+  wire [N_AXES-1:0] lim_min_w = lim_q[N_AXES-1:0] & LIM_EN_MIN;
+  wire [N_AXES-1:0] lim_max_w = lim_q[2*N_AXES-1:N_AXES] & LIM_EN_MAX;
+  wire [N_AXES-1:0] exec_step_want, exec_step_block;
+  wire limit_trip_w, limit_untrusted, limit_trip_max;
+  wire [3:0] limit_trip_axis;
+
+  input_filter #(
+      .N          (2 * N_AXES),
+      .FILTER_CLKS(LIMIT_FILTER_CLKS),
+      .ACTIVE_LOW ({LIM_LOW_MAX, LIM_LOW_MIN})
+  ) u_limit_filter (
+      .clk   (clk),
+      .rst   (rst),
+      .din   ({limit_max, limit_min}),
+      .q     (lim_q),
+      .strobe(lim_strobe)
+  );
+
+  limit_guard #(
+      .N_AXES(N_AXES)
+  ) u_limit_guard (
+      .clk      (clk),
+      .rst      (rst),
+      .lim_min  (lim_min_w),
+      .lim_max  (lim_max_w),
+      .rise_min (lim_strobe[N_AXES-1:0] & lim_min_w),
+      .rise_max (lim_strobe[2*N_AXES-1:N_AXES] & lim_max_w),
+      .step_want(exec_step_want),
+      .dir      (dir),
+      .busy     (exec_busy),
+      .clear    (dec_fault_clear),
+      .block    (exec_step_block),
+      .trip     (limit_trip_w),
+      .trip_axis(limit_trip_axis),
+      .trip_max (limit_trip_max),
+      .untrusted(limit_untrusted)
+  );
+  assign limit_state = {lim_max_w, lim_min_w};
+  assign limit_trip  = limit_trip_w;
 
   // ---------------------------------------------------------------- configuration
   // active step timing (all axes) and the minimum dominant period, as used by prep and executor
@@ -513,7 +580,8 @@ module cnc_core #(
   wire [56*N_AXES-1:0] seg_p_acc;
   wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
   wire [1:0] seg_arc_plane;  // and their plane (0 XY, 1 ZX, 2 YZ)
-  wire motion_abort = estop_stop;  // e-stop: prep and executor drop what they hold, stay idle
+  // e-stop or limit alarm: prep and executor drop what they hold, stay idle
+  assign motion_abort = estop_stop || limit_trip_w;
   wire out_tvalid, out_tready;  // OUTPUT entries: segment_prep -> segment_executor
   wire [23:0] out_tdata;
 
@@ -584,7 +652,7 @@ module cnc_core #(
   wire [7:0] exec_fan_duty;
   wire out_done;
   wire [15:0] out_done_n;
-  assign laser = exec_laser && !estop_stop;  // also low at once (the executor's own is registered)
+  assign laser = exec_laser && !motion_abort;  // also low at once (the executor's own is registered)
 
   segment_executor #(
       .N_AXES        (N_AXES),
@@ -630,6 +698,8 @@ module cnc_core #(
       .cfg_dir_setup  (cfg_setup),
       .cfg_dir_hold   (cfg_hold),
       .abort          (motion_abort),
+      .step_block     (exec_step_block),
+      .step_want      (exec_step_want),
       .step           (step),
       .dir            (dir),
       .laser          (exec_laser),
@@ -651,10 +721,10 @@ module cnc_core #(
   );
 
   // ---------------------------------------------------------------- machine outputs
-  // low at once on e-stop (the executor clears its levels from the next edge)
-  assign coolant_flood = exec_flood && !estop_stop;
-  assign coolant_mist  = exec_mist && !estop_stop;
-  assign dout          = exec_dout & {4{!estop_stop}};
+  // low at once on e-stop or a limit alarm (the executor clears its levels from the next edge)
+  assign coolant_flood = exec_flood && !motion_abort;
+  assign coolant_mist  = exec_mist && !motion_abort;
+  assign dout          = exec_dout & {4{!motion_abort}};
   generate
     if (FAN_OK == 0) begin : g_fan_bad
       // FAN_PWM_HZ must be at least 1, at most CLK_HZ / 256, and reachable within 1 %
@@ -671,7 +741,7 @@ module cnc_core #(
       reg fan_hold_reg;
       always @(posedge clk) begin
         if (fan_start) fan_hold_reg <= 1'b0;
-        if (estop_stop) fan_hold_reg <= 1'b1;
+        if (motion_abort) fan_hold_reg <= 1'b1;
         if (rst) fan_hold_reg <= 1'b0;
       end
       pwm #(
@@ -681,12 +751,12 @@ module cnc_core #(
           .clk         (clk),
           .rst         (rst),
           .duty        ((exec_fan_duty == 8'hFF) ? 9'd256 : {1'b0, exec_fan_duty}),
-          .force_off   (estop_stop),
+          .force_off   (motion_abort),
           .out         (fan_pwm),
           .period_start(fan_start),
           .active      (fan_active_nc)
       );
-      assign fan = fan_pwm && !estop_stop && !(fan_hold_reg && !fan_start);
+      assign fan = fan_pwm && !motion_abort && !(fan_hold_reg && !fan_start);
     end else begin : g_nofan
       assign fan = 1'b0;
       wire unused_fan = &{1'b0, exec_fan_duty};
@@ -807,14 +877,21 @@ module cnc_core #(
   wire [7:0] enc_tdata;
   wire enc_tvalid, tx_tready;
   wire [7:0] faults_w = {heat_faults1 != 8'd0, heat_faults0 != 8'd0, heat_wd_fault, estop_latch_reg,
-                         2'd0, fault_arc_reg, fault_step_reg};
+                         1'b0, limit_trip_w, fault_arc_reg, fault_step_reg};
 
   generate
     if (V2_EN != 0) begin : g_enc
       /* verilator lint_off UNUSEDSIGNAL */
       wire enc_frame_start;  // not needed here
       /* verilator lint_on UNUSEDSIGNAL */
-      wire [7:0] state_w = {4'd0, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
+      wire [7:0] state_w = {3'd0, limit_untrusted, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
+      // STATUS limit byte {0, 0, 0, max, axis} of the last trip, switch states u16 (bit a = min
+      // of axis a, bit 8 + a = max; axes 0..7)
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire [15:0] lim_min16 = {{(16 - N_AXES) {1'b0}}, lim_min_w};  // axes 8..14 not reported
+      wire [15:0] lim_max16 = {{(16 - N_AXES) {1'b0}}, lim_max_w};
+      /* verilator lint_on UNUSEDSIGNAL */
+      wire [23:0] limits_w = {3'd0, limit_trip_max, limit_trip_axis, lim_max16[7:0], lim_min16[7:0]};
       wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
                                     unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,
                                     noise_bytes_reg, clamped_reg};
@@ -846,6 +923,7 @@ module cnc_core #(
           .faults       (faults_w),
           .position     (position),
           .counters     (counters_w),
+          .limits       (limits_w),
           .heat_status  (heat_status),
           .m_axis_tdata (enc_tdata),
           .m_axis_tvalid(enc_tvalid),
@@ -870,7 +948,8 @@ module cnc_core #(
       wire unused_v2 = &{1'b0, dec_hello, dec_status, dec_ack, dec_nak, dec_nak_seq, dec_nak_reason,
                          fifo_free_w, segments_done_reg, heat_status, v2_seg_done, v2_init_done,
                          frames_ok_reg, crc_errors_reg, length_errors_reg, unknown_types_reg,
-                         noise_bytes_reg, clamped_reg};
+                         noise_bytes_reg, clamped_reg, limit_untrusted, limit_trip_axis,
+                         limit_trip_max};
     end
   endgenerate
 

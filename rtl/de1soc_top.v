@@ -15,15 +15,24 @@
 // Machine outputs (OUTPUT frames, docs/protocol.md "OUTPUT"; pins in docs/architecture.md):
 // coolant_flood GPIO_0[10], coolant_mist GPIO_0[11], fan GPIO_0[12] (PWM at about FAN_PWM_HZ),
 // dout[0..3] GPIO_0[13..16]; high = on, all low after reset and on e-stop.
+// Limit switches (docs/machine.md): lim_x_min GPIO_0[17], lim_x_max GPIO_0[18], lim_y_min
+// GPIO_0[19], lim_y_max GPIO_0[20], weak pull-ups on: a normally-closed switch to ground reads
+// high when pressed or when its wire breaks (LIMIT_ACTIVE_LOW 0). LIMIT_ENABLE (bit 0 x min, 1 y
+// min, 16 x max, 17 y max) says which are wired; the default (spec/protocol.toml) is none, so a
+// board without switches (whose pulled-up pins read "pressed") still moves.
 // The reset button is synchronized (two flops) and released synchronously.
 // Its cnc_core is the configuration full-2axis of spec/configs.toml (fpgacnc_configs.vh).
 `default_nettype none
 `include "fpgacnc_configs.vh"
+`include "fpgacnc_spec.vh"
 
 module de1soc_top #(
     parameter CLK_HZ = 50_000_000,
     parameter BAUD   = 115_200,
-    parameter FAN_PWM_HZ = 1000
+    parameter FAN_PWM_HZ = 1000,
+    parameter LIMIT_FILTER_CLKS = `FPGACNC_DEF_LIMIT_FILTER_CLKS,
+    parameter [31:0] LIMIT_ENABLE = `FPGACNC_DEF_LIMIT_ENABLE,
+    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW
 ) (
     input  wire       clk,
     input  wire       rst_n,
@@ -46,6 +55,10 @@ module de1soc_top #(
     output wire [6:0] HEX4,
     output wire [6:0] HEX5,
     input  wire       estop_n,
+    input  wire       lim_x_min,
+    input  wire       lim_x_max,
+    input  wire       lim_y_min,
+    input  wire       lim_y_max,
     output wire       heater_hotend,
     output wire       heater_bed,
     output wire       ADC_CONVST,
@@ -74,6 +87,8 @@ module de1soc_top #(
   wire rx_partial;
   wire [31:0] segments_done;
   wire [1:0] heater_w;
+  wire [3:0] limit_state;
+  wire limit_trip;
   assign heater_hotend = heater_w[0];
   assign heater_bed    = heater_w[1];
 
@@ -88,7 +103,10 @@ module de1soc_top #(
       .OUTPUTS   (`FPGACNC_CFG_FULL_2AXIS_OUTPUTS),
       .LEAN_TRIM (`FPGACNC_CFG_FULL_2AXIS_LEAN_TRIM),
       .STEP_CFG  (`FPGACNC_CFG_FULL_2AXIS_STEP_CFG),
-      .FAN_PWM_HZ(FAN_PWM_HZ)
+      .FAN_PWM_HZ(FAN_PWM_HZ),
+      .LIMIT_FILTER_CLKS(LIMIT_FILTER_CLKS),
+      .LIMIT_ENABLE     (LIMIT_ENABLE),
+      .LIMIT_ACTIVE_LOW (LIMIT_ACTIVE_LOW)
   ) u_core (
       .clk         (clk),
       .rst         (rst),
@@ -102,6 +120,8 @@ module de1soc_top #(
       .fan          (fan),
       .dout         (dout),
       .estop       (!estop_n),
+      .limit_min   ({lim_y_min, lim_x_min}),
+      .limit_max   ({lim_y_max, lim_x_max}),
       .heater      (heater_w),
       .adc_convst  (ADC_CONVST),
       .adc_sck     (ADC_SCK),
@@ -137,7 +157,9 @@ module de1soc_top #(
       .unknown_types(unknown_types),
       .noise_bytes  (noise_bytes),
       .clamped      (clamped),
-      .naks         (naks)
+      .naks         (naks),
+      .limit_state  (limit_state),
+      .limit_trip   (limit_trip)
   );
 
   // The status the board does not display.
@@ -146,7 +168,7 @@ module de1soc_top #(
                          numerator_y, packet_count[15:8], frame_errors[15:1], timeouts[15:1],
                          overruns[15:1], violations, last_feed[15:8], fifo_level, next_seq,
                          segments_done, faults[7:1], frames_ok, crc_errors, length_errors,
-                         unknown_types, noise_bytes, clamped, naks};
+                         unknown_types, noise_bytes, clamped, naks, limit_state, limit_trip};
   /* verilator lint_on UNUSEDSIGNAL */
 
   reg [HB_W-1:0] hb_cnt_reg;

@@ -10,7 +10,7 @@
 //   Order       when nothing is being sent: first every counted 0xAA (v1_ack adds one, up to 255),
 //               then the highest pending kind of IDENT, STATUS, NAK, ACK, DONE. Starting an ACK
 //               also clears a pending DONE (same fields).
-//   next_seq .. heat_status   live state; all fields of a frame are snapshotted in one clock,
+//   next_seq .. heat_status   live state (limits: STATUS bytes 27 + 4 N_AXES .. + 2); all fields of a frame are snapshotted in one clock,
 //               the clock before its 0xA5 is offered; frame_start is high in the clock after it.
 //   Device SEQ  0 after rst, +1 (mod 256) after each v2 frame's last CRC byte is taken.
 //   HEAT_BYTES  heater bytes appended to STATUS (the top bytes of heat_status; 0: none).
@@ -50,6 +50,7 @@ module response_encoder #(
     input wire [         7:0] faults,
     input wire [32*N_AXES-1:0] position,
     input wire [   16*9-1:0] counters,
+    input wire [        23:0] limits,  // limit byte, then the switch states u16 (docs/protocol.md)
     /* verilator lint_off UNUSEDSIGNAL */
     input wire [127:0] heat_status,  // its top HEAT_BYTES bytes are sent
     /* verilator lint_on UNUSEDSIGNAL */
@@ -108,7 +109,7 @@ module response_encoder #(
   /* verilator lint_off UNUSEDSIGNAL */
   wire [8*(3+STATUS_BASE)+127:0] img_status_full = {SLEN8, dseq_reg, `FPGACNC_T_STATUS, state,
                                                    faults, fifo_level, next_seq, segments_done,
-                                                   pos_be, counters, heat_status};
+                                                   pos_be, counters, limits, heat_status};
   /* verilator lint_on UNUSEDSIGNAL */
   wire [8*(3+STATUS_LEN)-1:0] img_status = img_status_full[8*(3+STATUS_BASE)+127-:8*(3+STATUS_LEN)];
   wire [8*21-1:0] img_ident = {`FPGACNC_LEN_IDENT, dseq_reg, `FPGACNC_T_IDENT, `FPGACNC_VERSION,

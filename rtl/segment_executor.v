@@ -33,6 +33,10 @@
 // clock; the next segment that needs the other direction takes the HOLD/SETUP path), and no
 // segment is accepted from IDLE until the largest DIR setup setting has passed since the last abort
 // clock (a DIR edge just before the abort still gets its setup time).
+// step_block (cnc_core's hard limits, rtl/limit_guard.v): an axis whose bit is high issues no step
+// request in that clock (its STEP does not rise on the next edge and its position does not
+// change); the segment runs on (cnc_core aborts it on the next clock). step_want is the request
+// before abort and step_block, for the limit check.
 //
 // Input (s_axis_*): one segment from segment_prep: code, laser power, v2 bit, dir_fast, per-axis
 // direction and |steps|, the per-axis DDA constant T - |steps| and the length T in clocks.
@@ -137,6 +141,8 @@ module segment_executor #(
     /* verilator lint_off SYMRSVDWORD */
     input wire abort,  // e-stop: drop everything (see above)
     /* verilator lint_on SYMRSVDWORD */
+    input wire [N_AXES-1:0] step_block,  // 1: no step request of that axis in this clock (limits)
+    output wire [N_AXES-1:0] step_want,  // each axis's step request before abort and step_block
 
     output wire [N_AXES-1:0] step,
     output wire [N_AXES-1:0] dir,
@@ -393,7 +399,8 @@ module segment_executor #(
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
       assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
-      assign step_req[a] = (dda_step[a] || prof_step[a] || arc_req[a]) && !abort;
+      assign step_want[a] = dda_step[a] || prof_step[a] || arc_req[a];
+      assign step_req[a]  = step_want[a] && !abort && !step_block[a];
 
       dda_linear #(
           .TMN_FROM_TOTAL(LEAN_DDA),
@@ -719,6 +726,7 @@ module segment_executor #(
   reg [N_AXES-1:0] f_step_q, f_dir_q;
   reg f_rst_q;  // the pins' values before a reset edge do not count as changes
   reg f_abort_q;  // abort was high in the previous clock
+  reg [N_AXES-1:0] f_block_q;  // step_block in the previous clock
   wire [N_AXES-1:0] f_dir_chg = f_rst_q ? {N_AXES{1'b0}} : (dir ^ f_dir_q);
   wire [N_AXES-1:0] f_step_rise = f_rst_q ? {N_AXES{1'b0}} : (step & ~f_step_q);
   reg [17*N_AXES-1:0] f_since_dir, f_since_step;  // clocks since the pin changed, saturating
@@ -728,6 +736,7 @@ module segment_executor #(
     f_dir_q  <= dir;
     f_rst_q  <= rst;
     f_abort_q <= abort;
+    f_block_q <= step_block;
     for (f_a = 0; f_a < N_AXES; f_a = f_a + 1) begin
       if (f_dir_chg[f_a]) f_since_dir[17*f_a+:17] <= 17'd1;
       else if (f_since_dir[17*f_a+:17] != 17'h10000)
@@ -759,6 +768,8 @@ module segment_executor #(
           // E-stop (abort): no STEP rising edge on the clock after an abort clock (held abort:
           // none at all; a pulse already high finishes its high time).
           if (f_abort_q) assert (!f_step_rise[f_g]);
+          // Hard limits: no STEP rising edge of an axis on the clock after it was blocked.
+          if (f_block_q[f_g]) assert (!f_step_rise[f_g]);
           // DIR hold, compositionally: the executor writes DIR only when step_pulse's hold_ok is
           // high, and step_pulse (set step_pulse) proves that DIR changes only on a write and that
           // hold_ok means at least DIR hold clocks since the last STEP rising edge.

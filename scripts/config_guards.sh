@@ -73,13 +73,15 @@ illegal "$both" "PROTO_V2=0 HEATERS=1" HEATERS_needs_PROTO_V2_1
 illegal "$both" "PROTO_V2=0 OUTPUTS=1" OUTPUTS_needs_PROTO_V2_1
 illegal "$both" "LEAN_TRIM=1" LEAN_TRIM_needs_PROTO_V2_0
 illegal "$both" "N_AXES=2 STEP_CFG=0" STEP_CFG_0_needs_PROTO_V2_0
+illegal "$both" "LIMIT_FILTER_CLKS=16777216" LIMIT_FILTER_CLKS_not_0_to_2p24m1
 
 legal "$both" ""
 legal "$both yosys" "PROTO_V2=0"
 legal "$both" "N_AXES=2 PROTO_V2=0 LEAN_TRIM=0 STEP_CFG=0"
 legal "$both" "N_AXES=3 PROFILES=0 ARCS=1 HEATERS=0 OUTPUTS=0"
+legal "$both" "N_AXES=3 LIMIT_FILTER_CLKS=0 LIMIT_ENABLE=458759 LIMIT_ACTIVE_LOW=65537"
 
 if [ $fail -eq 0 ]; then
-  echo "config_guards: $checked elaborations as expected (15 illegal combinations refused by name, 4 legal ones accepted)"
+  echo "config_guards: $checked elaborations as expected (16 illegal combinations refused by name, 5 legal ones accepted)"
 fi
 exit $fail

@@ -8,6 +8,8 @@
 #             case from the initial state and temporal induction, up to induction length k.
 #             Z3 does not finish the base case of frame_decoder or segment_executor in 17 minutes;
 #             the bit-level engine proves them in seconds.
+#   cover d : every cover statement reached within d clocks from reset (yosys-smtbmc -c; a trace
+#             per cover in <workdir>/<set>.cover*.vcd); fails when one is unreachable.
 # Usage: scripts/formal.sh [workdir] [set...]   (default workdir build/formal, all sets)
 # Prints a table (set, method, result, seconds); exits non-zero when any set fails.
 set -uo pipefail
@@ -34,6 +36,10 @@ JOBS=(
   "segment_fifo        prove   8"
   "heater_channel      sat     6"
   "arc_stop            sat     4"
+  "input_filter        prove   8"
+  "input_filter        cover   16"
+  "limit_guard         prove   4"
+  "limit_guard         cover   8"
 )
 
 want=("$@")
@@ -43,6 +49,7 @@ for job in "${JOBS[@]}"; do
   read -r set mode depth <<<"$job"
   if [ ${#want[@]} -gt 0 ] && [[ " ${want[*]} " != *" $set "* ]]; then continue; fi
   log="$work/$set.log"
+  [ "$mode" = cover ] && log="$work/$set.cover.log"
   t0=$(date +%s.%N)
   result=PASS
   # The .ys scripts read the RTL (paths relative to the repository root) and run prep.
@@ -58,7 +65,12 @@ for job in "${JOBS[@]}"; do
     result=ERROR
   else
     smt="$work/$set.smt2"
-    if ! yosys-smtbmc -s "$SOLVER" --presat -t "$depth" --dump-vcd "$work/$set.bmc.vcd" "$smt" \
+    if [ "$mode" = cover ]; then
+      if ! yosys-smtbmc -s "$SOLVER" -c -t "$depth" --dump-vcd "$work/$set.cover.vcd" "$smt" \
+          >"$log" 2>&1; then
+        result="FAIL(cover)"
+      fi
+    elif ! yosys-smtbmc -s "$SOLVER" --presat -t "$depth" --dump-vcd "$work/$set.bmc.vcd" "$smt" \
         >"$log" 2>&1; then
       result=FAIL
     elif [ "$mode" = prove ] && ! yosys-smtbmc -s "$SOLVER" -i -t "$depth" \
@@ -72,6 +84,7 @@ for job in "${JOBS[@]}"; do
   case $mode in
     prove) method="prove k=$depth" ;;
     sat) method="sat-induct k<=$depth" ;;
+    cover) method="cover d=$depth" ;;
     *) method="bmc depth $depth" ;;
   esac
   rows+=("$(printf '%-18s %-16s %-16s %6s' "$set" "$method" "$result" "$secs")")

@@ -309,7 +309,7 @@ TEST(CncCoreV2, BurstZeroGapExactSchedule) {
   ASSERT_TRUE(b.wait_msgs(1, 80 * kByteClocks));
   const auto& st = b.msgs().back();
   ASSERT_EQ(st.type, v2::kStatus);
-  ASSERT_EQ(st.payload.size(), 59u);  // 43 + the heater block (docs/protocol.md)
+  ASSERT_EQ(st.payload.size(), 62u);  // 46 + the heater block (docs/protocol.md)
   EXPECT_EQ(st.u8(0), 0x02u) << "state: idle, v2 mode, no fault";
   EXPECT_EQ(st.u8(1), 0u) << "faults";
   EXPECT_EQ(st.u16(2), 0u) << "FIFO level";

@@ -1,6 +1,6 @@
 // System bench of the heaters in cnc_core through its pins (BAUD 3 Mbaud, SAMPLE_CLKS 4096,
 // heater PWM period 1024 clocks): the worked heater frames of docs/protocol.md byte exact and
-// ACKed, the thermistor table loaded by frames, STATUS with the heater block (59 bytes) and the
+// ACKed, the thermistor table loaded by frames, STATUS with the heater block (62 bytes) and the
 // fault bits, every BAD_FIELD / BAD_LENGTH rule NAKed with nothing applied, and the e-stop pin:
 // STEP stops, laser and heaters low within 3 clocks, FIFO flushed, fault latched until cleared.
 #include <gtest/gtest.h>
@@ -143,8 +143,8 @@ TEST(HeaterCore, WorkedFramesTableAndStatus) {
   b.idle(3 * kSample);
   const auto st = b.status();
   ASSERT_EQ(st.type, v2::kStatus);
-  ASSERT_EQ(st.payload.size(), 59u) << "STATUS with the heater block";
-  const size_t h0 = 43, h1 = 51;
+  ASSERT_EQ(st.payload.size(), 62u) << "STATUS with the heater block";
+  const size_t h0 = 46, h1 = 54;
   EXPECT_EQ(st.u8(1), 0u) << "no fault";
   // Bed (channel 1): 25 degC read through the ADC and the table, setpoint 60, PID enabled.
   const double bed_t = static_cast<int16_t>(st.u16(h1)) / 16.0;

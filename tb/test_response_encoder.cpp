@@ -212,6 +212,7 @@ TEST(ResponseEncoder, IdentAndStatusFields) {
     const int lo = 16 * (8 - i);
     m.counters[lo / 32] |= static_cast<uint32_t>(ctr[i]) << (lo % 32);
   }
+  m.limits = 0x13A5C3;  // limit byte 0x13 (axis 3, max), switch states 0xA5C3
   m.ident_req = 1;
   m.status_req = 1;
   b.tick();
@@ -234,7 +235,7 @@ TEST(ResponseEncoder, IdentAndStatusFields) {
   EXPECT_TRUE(st.crc_ok);
   EXPECT_EQ(st.type, v2::kStatus);
   EXPECT_EQ(st.seq, 1u);
-  ASSERT_EQ(st.payload.size(), 43u);
+  ASSERT_EQ(st.payload.size(), 46u);  // 30 + 4 * 4 (docs/protocol.md), no heater block
   EXPECT_EQ(st.u8(0), 0x05u);
   EXPECT_EQ(st.u8(1), 0x01u);
   EXPECT_EQ(st.u16(2), 24u);
@@ -243,6 +244,8 @@ TEST(ResponseEncoder, IdentAndStatusFields) {
   for (int a = 0; a < 4; ++a)
     EXPECT_EQ(static_cast<int32_t>(st.u32(9 + 4 * a)), pos[a]) << "axis " << a;
   for (int i = 0; i < 9; ++i) EXPECT_EQ(st.u16(25 + 2 * i), ctr[i]) << "counter " << i;
+  EXPECT_EQ(st.u8(43), 0x13u) << "limit byte";
+  EXPECT_EQ(st.u16(44), 0xA5C3u) << "switch states";
 }
 
 // All requests on one clock: IDENT, STATUS, NAK, ACK in that order; the DONE is merged into the

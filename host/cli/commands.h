@@ -106,4 +106,9 @@ void register_sim(CLI::App& app);
 // default link (the simulated board).
 void register_autotune(CLI::App& app, StreamHooks hooks);
 
+// fpgacnc status [--port DEV] [--config F]: one STATUS decoded (state, faults, the hard-limit
+// alarm and switches, positions, counters; host/cli/status_cmd.cpp). Without --port: the hooks'
+// default link (the simulated board).
+void register_status(CLI::App& app, StreamHooks hooks);
+
 }  // namespace fpgacnc::cli

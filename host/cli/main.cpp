@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   fpgacnc::cli::register_marlin(app);
   fpgacnc::cli::register_sim(app);
   fpgacnc::cli::register_autotune(app, fpgacnc::cli::simboard_stream_hooks());
+  fpgacnc::cli::register_status(app, fpgacnc::cli::simboard_stream_hooks());
 
   try {
     app.parse(argc, argv);

@@ -115,11 +115,11 @@ TEST(HeaterCodec, StatusWithAndWithoutTheHeaterBlock) {
   s.position = {1, -2, 3, -4};
   s.counters[0] = 7;
   const auto plain = v2::status(1, s);
-  EXPECT_EQ(plain.payload.size(), 43u);
+  EXPECT_EQ(plain.payload.size(), 46u);
   EXPECT_EQ(v2::decode_status(plain, 4), s);
   s.heaters = {{3200, 3200, 0x1234, 0xC4, 0}, {-906, 960, 0, 0x04, v2::kHeaterMinTemp}};
   const auto full = v2::status(1, s);
-  EXPECT_EQ(full.payload.size(), 59u);
+  EXPECT_EQ(full.payload.size(), 62u);
   const auto d = v2::decode_status(full, 4);
   EXPECT_EQ(d, s);
   EXPECT_DOUBLE_EQ(d.heaters[0].temp_c(), 200.0);
@@ -130,6 +130,19 @@ TEST(HeaterCodec, StatusWithAndWithoutTheHeaterBlock) {
   auto bad = full;
   bad.payload.pop_back();
   EXPECT_THROW(v2::decode_status(bad, 4), v2::ProtocolError);
+}
+
+// The hard-limit fault in a job's error message names the switch (docs/machine.md).
+TEST(HeaterCodec, LimitFaultNamesTheSwitch) {
+  v2::Status s;
+  s.position = {0, 0};
+  s.faults = v2::kFaultLimit;
+  s.state = v2::kStatePosUntrusted;
+  s.limit = 0x10;  // X max
+  s.switches = 0x0100;
+  EXPECT_EQ(fpgacnc::heat::describe_faults(s, v2::kFaultLimit),
+            "hard limit: motion stopped, FIFO flushed, laser and outputs off (LIMIT alarm: X max; "
+            "switches: X max; positions not trusted (a hard limit tripped))");
 }
 
 TEST(HeaterJob, PackerPlacesSetpointsBetweenTheFramesOfTheMoves) {

@@ -137,9 +137,24 @@ TEST(V2Codec, DeviceFramesRoundTrip) {
   st.done = 0xDEADBEEF;
   st.position = {-5, 7, 1 << 30, -(1 << 30)};
   for (size_t i = 0; i < v2::kCounters; ++i) st.counters[i] = static_cast<uint16_t>(1000 * i + 1);
+  st.limit = 0x11;       // Y max
+  st.switches = 0x0201;  // X min, Y max
   const auto sb = v2::encode(v2::status(4, st));
-  EXPECT_EQ(sb.size(), 6u + 43u);
+  EXPECT_EQ(sb.size(), 6u + 46u);
+  // docs/protocol.md: the limit byte and the switch states (big-endian) follow the counters.
+  EXPECT_EQ(sb[4 + 43], 0x11u);
+  EXPECT_EQ(sb[4 + 44], 0x02u);
+  EXPECT_EQ(sb[4 + 45], 0x01u);
   EXPECT_EQ(v2::decode_status(parse_one(sb), 4), st);
+  st.faults = v2::kFaultLimit;
+  st.state = v2::kStatePosUntrusted;
+  EXPECT_EQ(v2::describe_limits(st, 4),
+            "LIMIT alarm: Y max; switches: X min, Y max; positions not trusted (a hard limit "
+            "tripped)");
+  st.switches = 0;
+  st.state = 0;
+  st.faults = 0;
+  EXPECT_EQ(v2::describe_limits(st, 4), "switches: none");
   const auto d = v2::decode_credit(parse_one(v2::encode(v2::done(9, {1, 2, 3}))));
   EXPECT_EQ(d, (v2::Credit{1, 2, 3}));
   const v2::Frame numf = v2::numerators(5, 18'750'000, 7'500'000);

@@ -109,11 +109,11 @@
 `define FPGACNC_T_DONE 8'h82
 `define FPGACNC_LEN_DONE 8'd7
 `define FPGACNC_LENI_DONE 7
-// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block; see below
+// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, limit switches, heater block; see below
 `define FPGACNC_T_STATUS 8'h83
-`define FPGACNC_LEN_STATUS_HEADER 8'd27
+`define FPGACNC_LEN_STATUS_HEADER 8'd30
 `define FPGACNC_LEN_STATUS_PER_AXIS 8'd4
-`define FPGACNC_LENI_STATUS_HEADER 27
+`define FPGACNC_LENI_STATUS_HEADER 30
 `define FPGACNC_LENI_STATUS_PER_AXIS 4
 // IDENT: version u8, N_AXES u8, FIFO depth u16, CLK_HZ u32, BAUD u32, build id u32, next_seq u8, MAX_PAYLOAD u8
 `define FPGACNC_T_IDENT 8'h84
@@ -149,10 +149,14 @@
 `define FPGACNC_STATE_FAULT_BIT 2
 // the e-stop input is active now
 `define FPGACNC_STATE_ESTOP_BIT 3
+// positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR)
+`define FPGACNC_STATE_POS_UNTRUSTED_BIT 4
 // STEP timing violation (in an ARC also a step within DIR setup of a DIR change)
 `define FPGACNC_FAULT_STEP_TIMING_BIT 0
 // an ARC frame inconsistent with its walk
 `define FPGACNC_FAULT_ARC_BIT 1
+// hard limit: a limit switch tripped while moving (the limit byte names it)
+`define FPGACNC_FAULT_LIMIT_BIT 2
 // e-stop
 `define FPGACNC_FAULT_ESTOP_BIT 4
 // heater watchdog (host silent)
@@ -297,5 +301,11 @@
 `define FPGACNC_DEF_DIR_SETUP 200
 // DIR_HOLD: clocks from a STEP to a DIR change
 `define FPGACNC_DEF_DIR_HOLD 200
+// LIMIT_FILTER_CLKS: limit switch debounce, clocks a new level must be stable (1 ms at 50 MHz)
+`define FPGACNC_DEF_LIMIT_FILTER_CLKS 50_000
+// LIMIT_ENABLE: limit switches wired, bit a = min of axis a, bit 16 + a = max (0: none; a board enables those it has)
+`define FPGACNC_DEF_LIMIT_ENABLE 0
+// LIMIT_ACTIVE_LOW: switches asserted at a low pin, bits as LIMIT_ENABLE (0: high = asserted, a normally-closed switch to ground with a pull-up)
+`define FPGACNC_DEF_LIMIT_ACTIVE_LOW 0
 
 `endif  // FPGACNC_SPEC_VH

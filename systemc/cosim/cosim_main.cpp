@@ -74,6 +74,9 @@ SC_MODULE(RtlHarness) {
   // Machine outputs (OUTPUT frames), compared as pin edges.
   sc_core::sc_signal<bool> coolant_flood, coolant_mist, fan;
   sc_core::sc_signal<uint32_t> dout;
+  // Limit switches: none (the twins have none; cnc_core's default LIMIT_ENABLE is 0 anyway).
+  sc_core::sc_signal<uint32_t> limit_min, limit_max, limit_state;
+  sc_core::sc_signal<bool> limit_trip;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -120,6 +123,10 @@ SC_MODULE(RtlHarness) {
     dut.clamped(clamped);
     dut.naks(naks);
     dut.estop(estop);
+    dut.limit_min(limit_min);
+    dut.limit_max(limit_max);
+    dut.limit_state(limit_state);
+    dut.limit_trip(limit_trip);
     dut.heater(heater);
     dut.adc_convst(adc_convst);
     dut.adc_sck(adc_sck);

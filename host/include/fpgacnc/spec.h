@@ -101,9 +101,9 @@ inline constexpr size_t kLenNak = 5;
 // DONE: the same 7 bytes as ACK: sent when v2 segments complete
 inline constexpr uint8_t kTypeDone = 0x82;
 inline constexpr size_t kLenDone = 7;
-// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, heater block; see below
+// STATUS: state, faults, FIFO level, next_seq, done, positions, counters, limit switches, heater block; see below
 inline constexpr uint8_t kTypeStatus = 0x83;
-inline constexpr size_t kLenStatusHeader = 27;
+inline constexpr size_t kLenStatusHeader = 30;
 inline constexpr size_t kLenStatusPerAxis = 4;
 // IDENT: version u8, N_AXES u8, FIFO depth u16, CLK_HZ u32, BAUD u32, build id u32, next_seq u8, MAX_PAYLOAD u8
 inline constexpr uint8_t kTypeIdent = 0x84;
@@ -181,10 +181,14 @@ inline constexpr uint8_t kStateV2 = 0x02;
 inline constexpr uint8_t kStateFault = 0x04;
 // bit 3: the e-stop input is active now
 inline constexpr uint8_t kStateEstop = 0x08;
+// bit 4: positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR)
+inline constexpr uint8_t kStatePosUntrusted = 0x10;
 // bit 0: STEP timing violation (in an ARC also a step within DIR setup of a DIR change)
 inline constexpr uint8_t kFaultStepTiming = 0x01;
 // bit 1: an ARC frame inconsistent with its walk
 inline constexpr uint8_t kFaultArc = 0x02;
+// bit 2: hard limit: a limit switch tripped while moving (the limit byte names it)
+inline constexpr uint8_t kFaultLimit = 0x04;
 // bit 4: e-stop
 inline constexpr uint8_t kFaultEstop = 0x10;
 // bit 5: heater watchdog (host silent)
@@ -327,6 +331,12 @@ inline constexpr uint32_t kDefaultStepLow = 100;
 inline constexpr uint32_t kDefaultDirSetup = 200;
 // DIR_HOLD: clocks from a STEP to a DIR change
 inline constexpr uint32_t kDefaultDirHold = 200;
+// LIMIT_FILTER_CLKS: limit switch debounce, clocks a new level must be stable (1 ms at 50 MHz)
+inline constexpr uint32_t kDefaultLimitFilterClks = 50000;
+// LIMIT_ENABLE: limit switches wired, bit a = min of axis a, bit 16 + a = max (0: none; a board enables those it has)
+inline constexpr uint32_t kDefaultLimitEnable = 0;
+// LIMIT_ACTIVE_LOW: switches asserted at a low pin, bits as LIMIT_ENABLE (0: high = asserted, a normally-closed switch to ground with a pull-up)
+inline constexpr uint32_t kDefaultLimitActiveLow = 0;
 
 // ---- simulation time bases (CMake reads the same numbers from spec/spec.cmake)
 // SAMPLE_CLKS of the simulated board's Verilated core (one plant second)

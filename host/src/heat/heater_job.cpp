@@ -211,6 +211,10 @@ std::string describe_faults(const protocol::v2::Status& stt, uint8_t bad) {
   }
   if (bad & v2::kFaultWatchdog) add("heater watchdog: the device heard no frame for too long");
   if (bad & v2::kFaultEstop) add("e-stop: motion stopped, FIFO flushed, heaters off");
+  if (bad & v2::kFaultLimit) {
+    add("hard limit: motion stopped, FIFO flushed, laser and outputs off (" +
+        v2::describe_limits(stt, stt.position.size()) + ")");
+  }
   return what;
 }
 

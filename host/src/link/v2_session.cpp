@@ -323,14 +323,16 @@ void V2Session::check_stuck(size_t acked, size_t same) const {
 void V2Session::check_faults(const v2::Status& stt) {
   if (aborting_) return;                    // abandoned: the caller pressed the e-stop itself
   if (win_.acked() < clear_items_) return;  // faults of a previous job, FAULT_CLEAR not yet taken
-  const uint8_t bad =
-      stt.faults & (v2::kFaultEstop | v2::kFaultWatchdog | v2::kFaultHotend | v2::kFaultBed);
+  const uint8_t bad = stt.faults & (v2::kFaultEstop | v2::kFaultWatchdog | v2::kFaultHotend |
+                                    v2::kFaultBed | v2::kFaultLimit);
   if (!bad) return;
   const std::string what = heat::describe_faults(stt, bad);
+  // A hard limit alone leaves the heaters on (docs/machine.md).
+  const bool heaters_off = (bad & ~v2::kFaultLimit) != 0;
   throw Error(
-      fmt::format("{}: job stopped at G-code line {}: {} (the device switched the heaters "
-                  "off and latched the fault; the next job clears it)",
-                  name_, current_line(), what));
+      fmt::format("{}: job stopped at G-code line {}: {} (the device {}latched the fault; "
+                  "the next job clears it)",
+                  name_, current_line(), what, heaters_off ? "switched the heaters off and " : ""));
 }
 
 void V2Session::wait_status(const v2::Status& stt) {

@@ -3,6 +3,9 @@
 // STATUS from the device (decoders for the host, builders for fake devices and tests).
 #include <fmt/format.h>
 
+#include <string>
+#include <string_view>
+
 #include "fpgacnc/protocol/v2.h"
 #include "v2_bytes.h"
 
@@ -72,7 +75,7 @@ Ident decode_ident(const Frame& f) {
 }
 
 Status decode_status(const Frame& f, size_t n_axes) {
-  if (n_axes > (kMaxPayload - 27) / 4) {
+  if (n_axes > (kMaxPayload - spec::kLenStatusHeader) / spec::kLenStatusPerAxis) {
     throw ProtocolError(fmt::format("STATUS: {} axes cannot fit a frame", n_axes));
   }
   const size_t base = status_payload_size(n_axes);
@@ -95,6 +98,9 @@ Status decode_status(const Frame& f, size_t n_axes) {
     c = get16(p, i);
     i += 2;
   }
+  s.limit = p[i];
+  s.switches = get16(p, i + 1);
+  i += 3;
   // Heater block.
   for (; i + kHeaterStatusBytes <= p.size(); i += kHeaterStatusBytes) {
     HeaterStatus h;
@@ -139,6 +145,8 @@ Frame status(uint8_t dev_seq, const Status& s) {
   put32(p, s.done);
   for (const int32_t x : s.position) put32(p, static_cast<uint32_t>(x));
   for (const uint16_t c : s.counters) put16(p, c);
+  p.push_back(s.limit);
+  put16(p, s.switches);
   for (const auto& h : s.heaters) {
     put16(p, static_cast<uint16_t>(h.temp_q4));
     put16(p, static_cast<uint16_t>(h.setpoint_q4));
@@ -182,6 +190,30 @@ ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {
   check_or_throw(f, Type::ConfigAxis, n_axes);
   const auto& p = f.payload;
   return ConfigAxis{p[0], get16(p, 1), get16(p, 3), get16(p, 5), get16(p, 7)};
+}
+
+std::string limit_switch_name(uint8_t limit) {
+  static constexpr std::string_view kNames = "XYZABCUVW";
+  const unsigned axis = limit & 0x0F;
+  const std::string name =
+      axis < kNames.size() ? std::string(1, kNames[axis]) : fmt::format("axis {}", axis);
+  return name + ((limit & 0x10) ? " max" : " min");
+}
+
+std::string describe_limits(const Status& s, size_t n_axes) {
+  std::string out;
+  if (s.faults & kFaultLimit) out = "LIMIT alarm: " + limit_switch_name(s.limit) + "; ";
+  std::string sw;
+  for (size_t a = 0; a < n_axes && a < 8; ++a) {
+    for (const bool max : {false, true}) {
+      if (!((s.switches >> (a + (max ? 8 : 0))) & 1u)) continue;
+      sw +=
+          (sw.empty() ? "" : ", ") + limit_switch_name(static_cast<uint8_t>(a | (max ? 0x10 : 0)));
+    }
+  }
+  out += "switches: " + (sw.empty() ? std::string("none") : sw);
+  if (s.state & kStatePosUntrusted) out += "; positions not trusted (a hard limit tripped)";
+  return out;
 }
 
 }  // namespace fpgacnc::protocol::v2

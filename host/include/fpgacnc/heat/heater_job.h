@@ -71,8 +71,8 @@ HeaterJob make_heater_job(const plan::Plan& plan, const protocol::v2::Job& job,
 // "bed 59.9/60.0 C 41%  hotend 24.1/off" from a STATUS heater block ("" when none).
 std::string format_heaters(const protocol::v2::Status& s);
 
-// The faults in `bad` (device fault bits: heater channels, watchdog, e-stop) with the channel
-// details of `s` and a hint at the likely cause, for error messages.
+// The faults in `bad` (device fault bits: heater channels, watchdog, e-stop, hard limit) with the
+// channel details of `s` and a hint at the likely cause, for error messages.
 std::string describe_faults(const protocol::v2::Status& s, uint8_t bad);
 
 }  // namespace fpgacnc::heat

@@ -161,8 +161,11 @@ constexpr uint8_t kStateBusy = spec::kStateBusy;
 constexpr uint8_t kStateV2 = spec::kStateV2;
 constexpr uint8_t kStateFault = spec::kStateFault;
 constexpr uint8_t kStateEstop = spec::kStateEstop;  // the e-stop input is active now
+constexpr uint8_t kStatePosUntrusted =
+    spec::kStatePosUntrusted;  // a hard limit tripped since reset
 // STATUS fault bits.
 constexpr uint8_t kFaultStepTiming = spec::kFaultStepTiming;
+constexpr uint8_t kFaultLimit = spec::kFaultLimit;  // hard limit (Status::limit names the switch)
 constexpr uint8_t kFaultEstop = spec::kFaultEstop;
 constexpr uint8_t kFaultWatchdog = spec::kFaultWatchdog;  // heater watchdog (host silent)
 constexpr uint8_t kFaultHotend = spec::kFaultHotend;  // channel 0 fault (its own byte says which)
@@ -205,16 +208,25 @@ constexpr size_t kHeaterStatusBytes = spec::kStatusHeaterChannelBytes;
 // "MINTEMP|RUNAWAY" (or "none").
 std::string heater_fault_names(uint8_t faults);
 
-struct Status {  // 27 + 4 * n_axes bytes, + 16 with the heater block
+struct Status {  // 30 + 4 * n_axes bytes, + 16 with the heater block
   uint8_t state = 0, faults = 0;
   uint16_t fifo_level = 0;
   uint8_t next_seq = 0;
   uint32_t done = 0;
   std::vector<int32_t> position;
   std::array<uint16_t, kCounters> counters{};
+  uint8_t limit = 0;      // the switch of the last hard-limit trip: bits 3..0 axis, bit 4 max
+  uint16_t switches = 0;  // filtered limit switches now: bit a min of axis a, bit 8 + a max
   std::vector<HeaterStatus> heaters;  // empty: the device sent no heater block
   bool operator==(const Status&) const = default;
 };
+
+// "X max" for a limit byte (axes named X Y Z A B C U V W, then by number).
+std::string limit_switch_name(uint8_t limit);
+// The hard-limit part of a STATUS for people: "LIMIT alarm: X max" when latched, the switches
+// asserted now ("switches: X max, Y min" or "switches: none") and "positions not trusted" when
+// a limit tripped since reset. n_axes: the device's (IDENT).
+std::string describe_limits(const Status& s, size_t n_axes);
 
 // Without the heater block; decode_status accepts this size or this + 16.
 size_t status_payload_size(size_t n_axes);

@@ -252,6 +252,10 @@ class ResponseEncoderTwin : public sc_core::sc_module {
              {s.dec.frames_ok, s.dec.crc_errors, s.dec.length_errors, s.dec.unknown_types,
               s.dec.timeouts, s.frame_errors, s.dec.overruns, s.dec.noise, s.clamped})
           put16(pl, c);
+        // Limit byte and switch states: the twins have no limit switches (inputs inactive, as
+        // cnc_core's with its pins low or LIMIT_ENABLE 0), so never a trip.
+        pl.push_back(0);
+        put16(pl, 0);
         if (p_.heater_block) {
           // State after edge d - 1 (the snapshot's convention).
           const bool evaluated =
