@@ -92,6 +92,8 @@ void register_grbl(CLI::App& app) {
                   "~/.config/fpgacnc/grbl-settings.txt)");
   sub->add_flag("--realtime", args->board.realtime,
                 "tlm: simulated time follows the wall clock while the board is busy");
+  sub->add_option("--speed", args->board.speed,
+                  "with --realtime: simulated seconds per wall second (default 1)");
   sub->callback([args] {
     check_sender_choice(args->senders, "grbl");
     run(*args);

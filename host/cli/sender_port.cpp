@@ -33,12 +33,15 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
   BoardBehind b;
   if (choice.realtime && (!choice.port.empty() || choice.model != "tlm"))
     throw std::invalid_argument("--realtime needs the twin board (--model tlm, no --port)");
+  if (!(choice.speed > 0.0) || (choice.speed != 1.0 && !choice.realtime))
+    throw std::invalid_argument("--speed: a number > 0, with --realtime");
   if (!choice.port.empty()) {
     b.link = std::make_unique<link::SerialLink>(choice.port, cfg.baud);
     b.description = choice.port;
   } else if (choice.model == "tlm") {
     twins::TwinBoardOptions o = twins::TwinBoard::options_from_config(cfg);
     o.realtime = choice.realtime;
+    o.realtime_speed = choice.speed;
     b.link = simboard::make_board_link(std::make_unique<twins::TwinBoard>(o), cfg.baud, {});
     b.description = "the simulated board (tlm)";
   } else {

@@ -22,6 +22,7 @@ struct BoardChoice {
   std::string port;
   std::string model = "tlm";
   bool realtime = false;
+  double speed = 1.0;  // with realtime: simulated seconds per wall second
 };
 // Adds --port and --model (with `model_help`) to a front end's subcommand.
 void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help);

@@ -510,13 +510,14 @@ void TwinBoard::session(VirtualBoard& vb) {
     }
     publish(false);
     if (opt_.realtime) {
+      const double rate = static_cast<double>(opt_.clk_hz) * opt_.realtime_speed;  // clocks/s
       const auto at =
-          t_ref + std::chrono::duration_cast<wall_clock::duration>(std::chrono::duration<double>(
-                      static_cast<double>(e - c_ref) / static_cast<double>(opt_.clk_hz)));
+          t_ref + std::chrono::duration_cast<wall_clock::duration>(
+                      std::chrono::duration<double>(static_cast<double>(e - c_ref) / rate));
       if (wall_clock::now() < at) {
         wait_input(std::min(at, wall_clock::now() + std::chrono::milliseconds(10)));
         const double el = std::chrono::duration<double>(wall_clock::now() - t_ref).count();
-        const auto wall_cycle = c_ref + static_cast<Cycle>(el * static_cast<double>(opt_.clk_hz));
+        const auto wall_cycle = c_ref + static_cast<Cycle>(el * rate);
         now = std::max(now, std::min(e, wall_cycle));
         continue;
       }
