@@ -1,15 +1,13 @@
-// fpgacnc marlin [--config F] [--port DEV | --model tlm|rtl]: Marlin's host protocol for printers
-// (docs/marlin.md) on a new pseudo-terminal (its path is the first line on stdout), with the FPGA
-// behind it: a real port, or the simulated board (default: the twins; --model rtl for the
-// Verilated board with its heaters' thermal plants and e-stop). Serves until SIGINT or SIGTERM.
+// fpgacnc marlin [--config F] [--port DEV | --model tlm|rtl] [--listen tcp:HOST:PORT] [--no-pty]:
+// Marlin's host protocol for printers (docs/marlin.md) on a new pseudo-terminal (its path is the
+// first line on stdout) and on TCP, with the FPGA behind it: a real port, or the simulated board
+// (default: the twins; --model rtl for the Verilated board with its heaters' thermal plants and
+// e-stop). Serves until SIGINT or SIGTERM.
 #include <fmt/format.h>
-#include <poll.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <csignal>
 #include <memory>
-#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -30,14 +28,15 @@ void on_signal(int) {
 struct MarlinArgs {
   CommonOptions common;
   BoardChoice board;
+  SenderChoice senders;
 };
 
 void run_marlin(const MarlinArgs& args) {
   const config::MachineConfig cfg = load_config(args.common);
-  Peer pty;
-  std::string pty_path;
-  pty.fd = open_sender_pty(pty_path);
-  fmt::print("{}\n", pty_path);  // first line: the pty path (scripts read it)
+  SenderSide senders(args.senders);
+  // First line: the pty path (scripts read it), before the board prints its own line.
+  fmt::print("{}\n", args.senders.no_pty ? std::string("-") : senders.pty_path());
+  if (!senders.tcp_where().empty()) fmt::print("marlin on tcp {}\n", senders.tcp_where());
 
   BoardBehind board = open_board_behind(cfg, args.board);
   marlin::EngineOptions eo;
@@ -62,31 +61,16 @@ void run_marlin(const MarlinArgs& args) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);
-  char buf[4096];
-  SenderWatch watch;
   while (!g_stop) {
-    if (watch.poll(pty)) pty.pending += banner;
-    if (pty.connected) {
-      pollfd q{pty.fd, POLLIN, 0};
-      ::poll(&q, 1, engine.busy() ? 0 : 20);
-      if (q.revents & POLLIN) {
-        const ssize_t n = ::read(pty.fd, buf, sizeof buf);
-        if (n > 0) engine.receive(std::string_view(buf, static_cast<size_t>(n)));
-      }
-    } else {
-      ::poll(nullptr, 0, 20);
-    }
+    senders.poll(
+        engine.busy() ? 0 : 20, [&](Peer& p) { p.pending += banner; },
+        [&](std::string_view bytes) { engine.receive(bytes); });
     engine.step(std::chrono::milliseconds(engine.busy() ? 5 : 0));
-    const std::string out = engine.take_output();
-    if (pty.connected) {
-      pty.pending += out;
-      flush_peer(pty);
-    }
+    senders.send(engine.take_output());
   }
   const auto& s = engine.stats();
   fmt::print("marlin: {} commands, {} resends asked, {} frames, {} busy lines\n", s.lines,
              s.resends, s.frames, s.busy);
-  ::close(pty.fd);
 }
 
 }  // namespace
@@ -96,12 +80,16 @@ void register_marlin(CLI::App& app) {
   auto* sub = app.add_subcommand(
       "marlin",
       "Serve Marlin's host protocol (printers: OctoPrint, Pronterface, Repetier-Host) on a new pty "
-      "(its path is the first line on stdout), with the FPGA behind it");
+      "(its path is the first line on stdout) and on TCP, with the FPGA behind it");
   sub->add_option("--config", args->common.config_path, "machine configuration (TOML)");
   add_board_options(sub, args->board,
                     "simulated board: tlm (the SystemC twins, default; no heater plants) or rtl "
                     "(the Verilated cnc_core with its thermal plants and e-stop)");
-  sub->callback([args] { run_marlin(*args); });
+  add_sender_options(sub, args->senders);
+  sub->callback([args] {
+    check_sender_choice(args->senders, "marlin");
+    run_marlin(*args);
+  });
 }
 
 }  // namespace fpgacnc::cli

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/link/link.h"
@@ -21,6 +22,7 @@ struct BoardChoice {
   std::string port;
   std::string model = "tlm";
   bool realtime = false;
+  double speed = 1.0;  // with realtime: simulated seconds per wall second
 };
 // Adds --port and --model (with `model_help`) to a front end's subcommand.
 void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help);
@@ -63,6 +65,49 @@ class SenderWatch {
 
  private:
   std::optional<std::chrono::steady_clock::time_point> banner_at_;
+};
+
+// Where the senders connect: the pty (unless --no-pty) and --listen tcp:HOST:PORT.
+struct SenderChoice {
+  std::string listen;
+  bool no_pty = false;
+};
+// Adds --listen and --no-pty to a front end's subcommand.
+void add_sender_options(CLI::App* sub, SenderChoice& choice);
+// Throws std::invalid_argument naming `command` for --no-pty without --listen.
+void check_sender_choice(const SenderChoice& choice, const std::string& command);
+
+// "tcp:HOST:PORT" -> a listening socket (non-blocking); `where` gets the bound address
+// ("127.0.0.1:5123", PORT 0: the port chosen). Throws std::invalid_argument for a malformed
+// spec or an unknown host, std::runtime_error when it cannot listen.
+int listen_tcp(const std::string& spec, std::string& where);
+
+// The senders' side of a front end: its pty (unless none) and, with a listen spec, a TCP
+// listener whose one connection at a time is a second sender (a new one replaces it). Every
+// answer goes to every connected sender.
+class SenderSide {
+ public:
+  // Opens the pty (unless no_pty) and the listener (listen: "" or tcp:HOST:PORT); throws as
+  // open_sender_pty() and listen_tcp().
+  explicit SenderSide(const SenderChoice& choice);
+  ~SenderSide();
+  SenderSide(const SenderSide&) = delete;
+  SenderSide& operator=(const SenderSide&) = delete;
+  const std::string& pty_path() const { return pty_path_; }  // "" without a pty
+  const std::string& tcp_where() const { return where_; }    // "" without a listener
+  // Waits up to `timeout_ms` (less while a banner is due) for a sender's bytes or connection;
+  // calls `opened(peer)` when a sender has opened the pty (banner time, SenderWatch) or a TCP
+  // client was accepted, and `received(bytes)` for what senders wrote.
+  void poll(int timeout_ms, const std::function<void(Peer&)>& opened,
+            const std::function<void(std::string_view)>& received);
+  // Queues `out` to every connected sender and writes what it can.
+  void send(const std::string& out);
+
+ private:
+  Peer pty_, tcp_;
+  int listen_fd_ = -1;
+  std::string pty_path_, where_;
+  SenderWatch watch_;
 };
 
 }  // namespace fpgacnc::cli

@@ -4,7 +4,19 @@
 // machine's steps/mm (160 steps/mm on X and Y by default).
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
 #include <deque>
+#include <map>
 #include <regex>
 #include <set>
 #include <string>
@@ -261,4 +273,155 @@ TEST(MarlinEngine, M112StopsTheBoard) {
   EXPECT_LT(x2, 50 * 160) << "stopped before the move's end";
   rig.engine().receive("M105\n");
   EXPECT_EQ(rig.next_line(milliseconds(50)), "");  // halted: no answer
+}
+
+// M115 as Marlin's G-code reference gives it: one FIRMWARE_NAME line (PROTOCOL_VERSION,
+// MACHINE_TYPE, EXTRUDER_COUNT, UUID), then "Cap:NAME:0|1" lines, then ok. The capabilities this
+// front end has are announced (hosts switch features on them): AUTOREPORT_TEMP (M155),
+// EMERGENCY_PARSER (M108/M112 out of band), THERMAL_PROTECTION (the FPGA's heater safety), ARCS.
+TEST(MarlinEngine, M115FirmwareAndCapabilities) {
+  Rig rig;
+  const auto ans = rig.command("M115");
+  ASSERT_GE(ans.size(), 3u);
+  EXPECT_TRUE(
+      std::regex_match(ans[0], std::regex(R"(FIRMWARE_NAME:Marlin[^:]* PROTOCOL_VERSION:1\.0 )"
+                                          R"(MACHINE_TYPE:\S+ EXTRUDER_COUNT:1 )"
+                                          R"(UUID:[0-9a-f]{8}(-[0-9a-f]{4}){3}-[0-9a-f]{12})")))
+      << ans[0];
+  std::map<std::string, int> caps;
+  const std::regex cap(R"(Cap:([A-Z_]+):([01]))");
+  for (size_t i = 1; i + 1 < ans.size(); ++i) {
+    std::smatch m;
+    ASSERT_TRUE(std::regex_match(ans[i], m, cap)) << ans[i];
+    EXPECT_TRUE(caps.emplace(m[1], std::stoi(m[2])).second) << "twice: " << ans[i];
+  }
+  EXPECT_EQ(ans.back(), "ok");
+  EXPECT_EQ(caps["AUTOREPORT_TEMP"], 1);
+  EXPECT_EQ(caps["EMERGENCY_PARSER"], 1);
+  EXPECT_EQ(caps["THERMAL_PROTECTION"], 1);
+  EXPECT_EQ(caps["ARCS"], 1);
+  EXPECT_EQ(caps.count("SDCARD"), 1u);  // features it lacks are listed as 0
+  EXPECT_EQ(caps["SDCARD"], 0);
+  EXPECT_EQ(caps["EEPROM"], 0);
+}
+
+// M108 while M109 waits on the Verilated board's hot-end plant: the wait ends at the next STATUS
+// (the M109 line gets its ok far below the target), the setpoint stays (M105 shows it, the hot
+// end keeps heating), and the M108 line itself is answered ok in its turn.
+TEST(MarlinEngine, M108EndsTheHeatingWait) {
+  MachineConfig cfg;
+  Rig rig(true, cfg);
+  rig.engine().receive("M109 S200\n");
+  size_t temp_lines = 0;
+  double before_c = 0.0;
+  while (temp_lines < 2) {  // the wait has begun and reports (one line a plant second)
+    const std::string l = rig.next_line();
+    ASSERT_FALSE(l.empty());
+    ASSERT_NE(l.rfind("ok", 0), 0u) << "M109 ended before M108";
+    std::smatch m;
+    if (std::regex_match(l, m, kTemps)) ++temp_lines, before_c = std::stod(m[1]);
+  }
+  ASSERT_LT(before_c, 150.0);
+  const auto t0 = rig.link().now();
+  rig.engine().receive("M108\n");
+  std::string l;
+  do {
+    l = rig.next_line(milliseconds(1000));
+  } while (std::regex_match(l, kTemps) || l == "echo:busy: processing");
+  EXPECT_EQ(l, "ok") << "M109's ok";
+  EXPECT_LT(rig.link().now() - t0, milliseconds(50)) << "link time from M108 to M109's ok";
+  EXPECT_EQ(rig.next_line(milliseconds(1000)), "ok") << "M108's own ok";
+  const auto t = rig.command("M105");
+  std::smatch m;
+  const std::string body = t.at(0).substr(3);
+  ASSERT_TRUE(std::regex_match(body, m, kTemps)) << t.at(0);
+  EXPECT_EQ(m[2], "200.00") << "the setpoint stays";
+  EXPECT_LT(std::stod(m[1]), 200.0 - cfg.heaters.ch[0].wait_tolerance_c);
+}
+
+// `fpgacnc marlin --no-pty --listen tcp:127.0.0.1:0` (the twin board behind it): a host on TCP
+// waits for "start" and streams a short job as numbered, checksummed lines (send-response);
+// M114 then gives the FPGA's step counters for the job's end (160 steps/mm on X and Y). The wall
+// limits only stop a hung front end; the figures are the board's.
+TEST(MarlinTcp, ClientStreamsAShortJob) {
+  int out[2];
+  ASSERT_EQ(::pipe(out), 0);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::dup2(out[1], 1);
+    ::close(out[0]);
+    ::close(out[1]);
+    ::execl(FPGACNC_EXE, FPGACNC_EXE, "marlin", "--no-pty", "--listen", "tcp:127.0.0.1:0",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::close(out[1]);
+  struct Child {
+    pid_t pid;
+    int fd;
+    ~Child() {
+      ::kill(pid, SIGTERM);
+      int st = 0;
+      ::waitpid(pid, &st, 0);
+      ::close(fd);
+    }
+  } child{pid, out[0]};
+  // Reads one line from `fd` (hang guard: 60 s of wall time).
+  auto read_line = [](int fd, std::string& buf) {
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    for (;;) {
+      if (const auto nl = buf.find('\n'); nl != std::string::npos) {
+        std::string l = buf.substr(0, nl);
+        buf.erase(0, nl + 1);
+        if (!l.empty() && l.back() == '\r') l.pop_back();
+        return l;
+      }
+      if (std::chrono::steady_clock::now() > give_up) return std::string("<hung>");
+      pollfd p{fd, POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char b[4096];
+      const ssize_t n = ::read(fd, b, sizeof b);
+      if (n <= 0) return std::string("<closed>");
+      buf.append(b, static_cast<size_t>(n));
+    }
+  };
+  std::string obuf;
+  EXPECT_EQ(read_line(child.fd, obuf), "-");  // no pty
+  const std::string where = read_line(child.fd, obuf);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_match(where, m, std::regex(R"(marlin on tcp 127\.0\.0\.1:(\d+))")))
+      << where;
+  const int port = std::stoi(m[1]);
+  ASSERT_GT(port, 0);
+
+  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(s, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a), 0) << std::strerror(errno);
+  std::string sbuf;
+  std::vector<std::string> got;
+  for (std::string l; (l = read_line(s, sbuf)) != "start";) {
+    ASSERT_NE(l.front(), '<') << l;  // hung or closed before the banner
+  }
+  const std::vector<std::string> prog = {"M110 N0",  "G21",      "G90", "G1 X1 F3000",
+                                         "G1 X2 Y1", "G1 X3 Y2", "M400"};
+  for (size_t i = 0; i < prog.size(); ++i) {
+    const std::string line = numbered(static_cast<long>(i), prog[i]) + "\n";
+    ASSERT_EQ(::write(s, line.data(), line.size()), static_cast<ssize_t>(line.size()));
+    for (std::string l;;) {
+      l = read_line(s, sbuf);
+      ASSERT_NE(l.front(), '<') << prog[i] << ": " << l;
+      ASSERT_EQ(l.rfind("Resend", 0), std::string::npos) << prog[i] << ": " << l;
+      if (l.rfind("ok", 0) == 0) break;
+    }
+  }
+  const std::string m114 = numbered(static_cast<long>(prog.size()), "M114") + "\n";
+  ASSERT_EQ(::write(s, m114.data(), m114.size()), static_cast<ssize_t>(m114.size()));
+  EXPECT_EQ(read_line(s, sbuf), "X:3.00 Y:2.00 Z:0.00 E:0.00 Count X:480 Y:320 Z:0");
+  EXPECT_EQ(read_line(s, sbuf), "ok");
+  ::close(s);
 }

@@ -189,6 +189,7 @@ void TwinBoard::stop() {
   stop_ = true;
   wake();
   while (!session_done_.load()) std::this_thread::sleep_for(std::chrono::microseconds(200));
+  notify_progress();
 }
 
 uint64_t TwinBoard::cycle() const {
@@ -233,6 +234,8 @@ void TwinBoard::set_host_deadline(int64_t cycle) {
   if (cycle >= 0) {
     const uint64_t one = 1;
     [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+    // Already reached (the board may have looked before the store): signal it here.
+    if (static_cast<int64_t>(this->cycle()) >= cycle) notify_progress();
   }
 }
 
@@ -384,7 +387,25 @@ void TwinBoard::session(VirtualBoard& vb) {
     act = std::max(act, start - 2);  // the last frame's stop bit ends on start - 1
     never_active = false;
   };
+  Cycle notified_deadline = -1;
+  bool notified_quiet = false;
   auto publish = [&](bool quiet) {
+    // The host's waits end on these (Board::progress_fd): quiet, or its deadline reached.
+    struct Notify {
+      const TwinBoard& b;
+      bool signal = false;
+      ~Notify() {
+        if (signal) b.notify_progress();
+      }
+    } notify{*this};
+    const bool now_quiet = quiet && out.empty();
+    if (now_quiet && !notified_quiet) notify.signal = true;
+    notified_quiet = now_quiet;
+    const Cycle d = host_deadline_.load();
+    if (d >= 0 && d != notified_deadline && now >= d) {
+      notified_deadline = d;
+      notify.signal = true;
+    }
     std::lock_guard<std::mutex> l(mu_);
     st_.cycles = static_cast<uint64_t>(now);
     st_.bytes_in = bytes_in;
@@ -489,13 +510,14 @@ void TwinBoard::session(VirtualBoard& vb) {
     }
     publish(false);
     if (opt_.realtime) {
+      const double rate = static_cast<double>(opt_.clk_hz) * opt_.realtime_speed;  // clocks/s
       const auto at =
-          t_ref + std::chrono::duration_cast<wall_clock::duration>(std::chrono::duration<double>(
-                      static_cast<double>(e - c_ref) / static_cast<double>(opt_.clk_hz)));
+          t_ref + std::chrono::duration_cast<wall_clock::duration>(
+                      std::chrono::duration<double>(static_cast<double>(e - c_ref) / rate));
       if (wall_clock::now() < at) {
         wait_input(std::min(at, wall_clock::now() + std::chrono::milliseconds(10)));
         const double el = std::chrono::duration<double>(wall_clock::now() - t_ref).count();
-        const auto wall_cycle = c_ref + static_cast<Cycle>(el * static_cast<double>(opt_.clk_hz));
+        const auto wall_cycle = c_ref + static_cast<Cycle>(el * rate);
         now = std::max(now, std::min(e, wall_cycle));
         continue;
       }

@@ -1,16 +1,18 @@
 #include "fpgacnc/simboard/runner.h"
 
 #include <fmt/format.h>
-#include <cmath>
+#include <poll.h>
+#include <unistd.h>
 
-#include <thread>
+#include <cmath>
 
 namespace fpgacnc::simboard {
 
 namespace {
-// Wall-time slice between looks at the board while a wait runs (the board thread advances
-// meanwhile; the deadline is decided on the board's cycle count, not on these slices).
-constexpr std::chrono::milliseconds kSlice{1};
+// Wall-time bound of one wait for the board's signal (Board::progress_fd) or a byte: the board
+// signals every event that can end a wait, so this only bounds the cost of a signal lost to a
+// race; no decision is taken on it (the deadline is decided on the board's cycle count).
+constexpr std::chrono::milliseconds kRecheck{50};
 // Safety net (wall time) for bytes the board has written to the pty that do not arrive: the
 // kernel delivers them within microseconds; this only names a broken pty instead of hanging.
 constexpr std::chrono::seconds kInFlightLimit{30};
@@ -22,6 +24,7 @@ BoardLink::BoardLink(BoardOptions options)
 BoardLink::BoardLink(std::unique_ptr<Board> board, uint32_t baud) : board_(std::move(board)) {
   board_->start();
   serial_ = std::make_unique<link::SerialLink>(board_->path(), baud);
+  serial_fd_ = serial_->native_fd();
 }
 
 SimBoard& BoardLink::board() {
@@ -70,10 +73,20 @@ std::optional<uint8_t> BoardLink::take(std::chrono::milliseconds wall) {
   return b;
 }
 
+void BoardLink::clear_progress() {
+  uint64_t v;
+  [[maybe_unused]] ssize_t n = ::read(board_->progress_fd(), &v, sizeof v);
+}
+
+void BoardLink::await_progress(bool or_byte) {
+  pollfd p[2] = {{board_->progress_fd(), POLLIN, 0}, {serial_fd_, POLLIN, 0}};
+  ::poll(p, or_byte ? 2 : 1, static_cast<int>(kRecheck.count()));
+}
+
 std::optional<uint8_t> BoardLink::take_in_flight(uint64_t upto) {
   const auto give_up = std::chrono::steady_clock::now() + kInFlightLimit;
   while (upto > consumed_) {
-    if (auto b = take(kSlice)) return b;
+    if (auto b = take(kRecheck)) return b;
     if (std::chrono::steady_clock::now() > give_up) {
       throw link::Error(fmt::format(
           "{}: {} bytes written by the simulated board did not arrive on the pty within {} s",
@@ -96,6 +109,7 @@ std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
   // a long move to its end before the host's poll).
   hold_board_at(deadline);
   for (;;) {
+    clear_progress();  // before the looks: a signal after them ends await_progress() at once
     if (auto b = take(std::chrono::milliseconds(0))) return b;
     // The cycle first: every answer byte decoded up to it is counted in bytes_to_host() by now.
     const uint64_t cycle = board_->cycle();
@@ -106,13 +120,14 @@ std::optional<uint8_t> BoardLink::read_byte_until(Time deadline) {
       skipped_ += deadline - t;  // nothing can arrive before the host writes: skip the rest
       return std::nullopt;
     }
-    if (auto b = take(kSlice)) return b;
+    await_progress(true);
   }
 }
 
 void BoardLink::wait_until(Time deadline) {
   hold_board_at(deadline);
   for (;;) {
+    clear_progress();
     const Time t = now();
     if (t >= deadline) return;
     // Bytes still on their way to the host do not make the board busy: only the board's own
@@ -122,17 +137,18 @@ void BoardLink::wait_until(Time deadline) {
       skipped_ += deadline - now();
       return;
     }
-    std::this_thread::sleep_for(kSlice);
+    await_progress(false);
   }
 }
 
 bool BoardLink::wait_idle(std::chrono::milliseconds timeout) {
   const Time deadline = now() + timeout;
   for (;;) {
+    clear_progress();
     const bool frozen = board_->frozen();
     if ((frozen || board_->bytes_from_host() == written_) && board_->idle_for_host()) return true;
     if (now() >= deadline) return false;
-    std::this_thread::sleep_for(kSlice);
+    await_progress(false);
   }
 }
 

@@ -344,6 +344,19 @@ SimBoard::~SimBoard() {
   if (wake_ >= 0) ::close(wake_);
 }
 
+Board::Board() : progress_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
+  if (progress_ < 0) sys_fail("eventfd");
+}
+
+Board::~Board() {
+  ::close(progress_);
+}
+
+void Board::notify_progress() const {
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(progress_, &one, sizeof one);
+}
+
 BoardPty open_board_pty() {
   BoardPty p;
   p.master = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
@@ -424,6 +437,25 @@ void SimBoard::publish_locked() {
   pub_cycle_.store(model_->cycle, std::memory_order_release);
 }
 
+void SimBoard::set_host_deadline(int64_t cycle) {
+  host_deadline_.store(cycle);
+  // Already reached (the board thread may have looked before the store): signal it here.
+  if (cycle >= 0 && pub_cycle_.load() >= static_cast<uint64_t>(cycle)) notify_progress();
+}
+
+void SimBoard::notify_host(bool quiet) {
+  bool signal = false;
+  if (quiet && !notified_quiet_) signal = true;
+  notified_quiet_ = quiet;
+  std::atomic_thread_fence(std::memory_order_seq_cst);  // the cycle published before the look
+  const int64_t d = host_deadline_.load();
+  if (d >= 0 && d != notified_deadline_ && pub_cycle_.load() >= static_cast<uint64_t>(d)) {
+    notified_deadline_ = d;
+    signal = true;
+  }
+  if (signal) notify_progress();
+}
+
 bool SimBoard::quiet_locked() const {
   const Model& s = *model_;
   return s.driver.idle() && s.out.empty() && s.inbox.empty() &&
@@ -483,6 +515,7 @@ void SimBoard::step_loop(int block_ms) {
     publish_locked();
   }
   quiet_.store(quiet);
+  notify_host(quiet);
   if (quiet) {
     // Nothing in flight: block without advancing clocks until the host writes (or a wake-up).
     pollfd p[2] = {{master_, static_cast<short>(paused_ ? 0 : POLLIN), 0}, {wake_, POLLIN, 0}};
@@ -510,6 +543,7 @@ void SimBoard::step_loop(int block_ms) {
   run_chunk(opt_.poll_interval_cycles);
   flush_out();
   publish_locked();
+  notify_host(false);
   sim_wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -533,6 +567,7 @@ void SimBoard::stop() {
   [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
   thread_.join();
   thread_live_ = false;
+  notify_progress();
 }
 
 void SimBoard::pause() {
@@ -540,6 +575,7 @@ void SimBoard::pause() {
   const uint64_t one = 1;
   [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
   OtherThreadLock l(*this);  // the chunk in progress ends; none follows
+  notify_progress();
 }
 
 void SimBoard::resume() {

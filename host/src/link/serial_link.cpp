@@ -137,6 +137,15 @@ bool SerialLink::using_posix_fallback() const {
   return impl_->fd >= 0;
 }
 
+int SerialLink::native_fd() const {
+  if (impl_->fd >= 0) return impl_->fd;
+  int fd = -1;
+  if (sp_get_port_handle(impl_->sp, &fd) != SP_OK) {
+    throw Error(fmt::format("serial port {}: no descriptor: {}", port_, sp_message()));
+  }
+  return fd;
+}
+
 void SerialLink::write(std::span<const uint8_t> bytes) {
   if (impl_->sp) {
     const auto r = sp_blocking_write(impl_->sp, bytes.data(), bytes.size(), 0);

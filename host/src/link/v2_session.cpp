@@ -237,6 +237,12 @@ void V2Session::add_message(const gcode::Message* m) {
   messages_.emplace_back(items_.size(), m);
 }
 
+bool V2Session::cancel_heater_wait() {
+  if (next_wait_ >= waits_.size()) return false;
+  cancel_wait_ = true;
+  return true;
+}
+
 bool V2Session::complete() const {
   return win_.acked() == items_.size() && done_count_ == fifo_before_.back() &&
          next_wait_ == waits_.size() && next_pause_ == pauses_.size();
@@ -338,8 +344,8 @@ void V2Session::check_faults(const v2::Status& stt) {
 void V2Session::wait_status(const v2::Status& stt) {
   if (next_wait_ >= waits_.size()) return;
   const size_t w = waits_[next_wait_];
-  // Not accepted yet, or the FIFO not drained.
-  if (win_.acked() <= w || done_count_ < fifo_before_[w]) return;
+  // Not accepted yet, or the FIFO not drained (a cancelled wait ends once accepted).
+  if (win_.acked() <= w || (!cancel_wait_ && done_count_ < fifo_before_[w])) return;
   const auto* a = items_[w].heater;
   if (stt.heaters.size() <= a->channel) {
     throw Error(fmt::format("{}: M{} at line {}{}: the device reports no heaters in STATUS", name_,
@@ -349,14 +355,15 @@ void V2Session::wait_status(const v2::Status& stt) {
   const auto& hc = hj_->config.ch[a->channel];
   const double now = plant_now();
   const double temp = h.temp_c();
-  bool done = false, skipped = false;
+  bool done = cancel_wait_, skipped = false;
   if (!ws_.started) {
     ws_.started = true;
     ws_.start_plant = now;
     ws_.start_c = temp;
     ws_.start_wall = clock_type::now();
     // S waits only when heating (Marlin): off, or already above the target.
-    if (a->target_c <= 0.0 || temp > a->target_c + hc.wait_tolerance_c) done = skipped = true;
+    if (!done && (a->target_c <= 0.0 || temp > a->target_c + hc.wait_tolerance_c))
+      done = skipped = true;
   }
   if (!done) {
     if (std::fabs(temp - a->target_c) <= hc.wait_tolerance_c) {
@@ -389,8 +396,10 @@ void V2Session::wait_status(const v2::Status& stt) {
     r.end_c = temp;
     r.wall_s = std::chrono::duration<double>(clock_type::now() - ws_.start_wall).count();
     r.skipped = skipped;
+    r.cancelled = cancel_wait_;
     rep_.heater_waits.push_back(r);
     ++next_wait_;
+    cancel_wait_ = false;
     ws_ = WaitState{};
     win_.touch(link_.now());
   }

@@ -118,10 +118,61 @@ void Engine::receive(std::string_view bytes) {
     if (ch == '\n' || ch == '\r') {
       // Emergency parser (as Marlin's): M112 acts as soon as its line is in, queued or not.
       const size_t prev = rx_.find_last_of("\r\n");
-      if (mcode(command_of(prev == std::string::npos ? rx_ : rx_.substr(prev + 1))) == 112) halt();
+      // M108 ends a heating wait the same way (the line itself is answered `ok` when its turn
+      // comes, after the wait).
+      const int m = mcode(command_of(prev == std::string::npos ? rx_ : rx_.substr(prev + 1)));
+      if (m == 112) halt();
+      if (m == 108) cancel_heating();
     }
     if (!killed_) rx_.push_back(ch);
   }
+}
+
+void Engine::cancel_heating() {
+  if (killed_ || wait_ != Wait::kHeat || !session_) return;
+  if (session_->cancel_heater_wait()) session_->request_status();  // ends at this STATUS
+}
+
+std::vector<std::string> Engine::firmware_report() const {
+  // Marlin's M115: the firmware line, then one Cap: line per capability (1: supported).
+  const int extruders = cfg_.heaters.ch[heat::kHotend].enabled ? 1 : 0;
+  std::vector<std::string> r = {fmt::format(
+      "FIRMWARE_NAME:Marlin (fpgacnc front end) PROTOCOL_VERSION:1.0 MACHINE_TYPE:fpgacnc "
+      "EXTRUDER_COUNT:{} UUID:00000000-0000-0000-0000-000000000000",
+      extruders)};
+  const std::pair<const char*, bool> caps[] = {{"SERIAL_XON_XOFF", false},
+                                               {"BINARY_FILE_TRANSFER", false},
+                                               {"EEPROM", false},
+                                               {"VOLUMETRIC", false},
+                                               {"AUTOREPORT_POS", false},
+                                               {"AUTOREPORT_TEMP", true},
+                                               {"PROGRESS", false},
+                                               {"PRINT_JOB", false},
+                                               {"AUTOLEVEL", false},
+                                               {"RUNOUT", false},
+                                               {"Z_PROBE", false},
+                                               {"LEVELING_DATA", false},
+                                               {"BUILD_PERCENT", false},
+                                               {"SOFTWARE_POWER", false},
+                                               {"TOGGLE_LIGHTS", false},
+                                               {"CASE_LIGHT_BRIGHTNESS", false},
+                                               {"EMERGENCY_PARSER", true},
+                                               {"HOST_ACTION_COMMANDS", false},
+                                               {"PROMPT_SUPPORT", false},
+                                               {"SDCARD", false},
+                                               {"REPEAT", false},
+                                               {"SD_WRITE", false},
+                                               {"AUTOREPORT_SD_STATUS", false},
+                                               {"LONG_FILENAME", false},
+                                               {"THERMAL_PROTECTION", true},
+                                               {"MOTION_MODES", false},
+                                               {"ARCS", true},
+                                               {"BABYSTEPPING", false},
+                                               {"CHAMBER_TEMPERATURE", false},
+                                               {"COOLER_TEMPERATURE", false},
+                                               {"MEATPACK", false}};
+  for (const auto& [name, on] : caps) r.push_back(fmt::format("Cap:{}:{}", name, on ? 1 : 0));
+  return r;
 }
 
 bool Engine::line_ready() const {
@@ -297,6 +348,13 @@ void Engine::run_command(const std::string& cmd) {
       return;
     case 112:
       halt();
+      return;
+    case 108:  // acted on when its line came in (receive); nothing left to do in turn
+      say("ok");
+      return;
+    case 115:
+      for (const auto& l : firmware_report()) say(l);
+      say("ok");
       return;
     default:
       break;

@@ -7,8 +7,9 @@ Usage: cncjs_stream.py FPGACNC INSTALL_DIR JOB CONFIG [DRIVER_OPTIONS...]
   INSTALL_DIR  where CNCjs is installed (`npm ci` from this folder's lock file, once: kept while
                the lock file is unchanged); the CNCjs configuration and logs go to INSTALL_DIR/run
   JOB          the G-code file; CONFIG the machine configuration for both fpgacnc commands
-  DRIVER_OPTIONS  passed to drive_cncjs.js (--reset, --pause; with --pause the front end's twin
-                  board runs at the job's real pace, --realtime)
+  DRIVER_OPTIONS  passed to drive_cncjs.js (--reset, --pause; with either the front end's twin
+                  board is paced by the wall clock: --realtime, 10 times the job's real pace
+                  with --reset)
 
 The expected end is the host planner's final position for the same file (`fpgacnc plan`, its
 `final position:` line in steps and mm), computed without the grbl front end, the board or CNCjs;
@@ -97,11 +98,16 @@ def main():
         os.remove(settings)  # the configuration's values, whatever an earlier run left
     t0 = time.time()
     grbl_cmd = [fpgacnc, "grbl", "--config", config, "--settings", settings]
-    if "--pause" in extra:
+    if "--pause" in extra or "--reset" in extra:
         # The twin board at the job's real pace: the front end then holds CNCjs back by its
-        # window, so lines are still unsent at the pause however fast this machine is (unpaced,
-        # the board can take the whole job before CNCjs's pause point).
+        # window, so the machine is still running at the pause or the soft reset however fast
+        # this machine is (unpaced, the board can run the whole job before CNCjs's pause or
+        # reset arrives: no Alarm after a reset at rest).
         grbl_cmd.append("--realtime")
+        if "--reset" in extra:
+            # 60 s of board time: 6 s a run. The reset follows CNCjs's 4 Hz status report that
+            # shows Run (2.5 s of board time), long before the job's end.
+            grbl_cmd += ["--speed", "10"]
     grbl = subprocess.Popen(grbl_cmd, stdout=subprocess.PIPE, text=True)
     try:
         pty = grbl.stdout.readline().strip()

@@ -23,6 +23,9 @@ class SerialLink : public Link {
   std::string name() const override { return port_; }
   // True when libserialport refused the device and the POSIX termios fallback is in use.
   bool using_posix_fallback() const;
+  // The open port's file descriptor, for poll() beside other descriptors (read through
+  // read_byte() only).
+  int native_fd() const;
 
  private:
   struct Impl;

@@ -94,7 +94,8 @@ struct HeaterWaitReport {
   double end_plant_s = 0.0;  // plant time (StreamV2Options::plant_time) at the end of the wait
   double end_c = 0.0;        // temperature at the end of the wait
   double wall_s = 0.0;
-  bool skipped = false;  // above the target already (S waits only when heating)
+  bool skipped = false;    // above the target already (S waits only when heating)
+  bool cancelled = false;  // ended by the host (Marlin's M108) before the temperature settled
 };
 
 struct StreamV2Report {

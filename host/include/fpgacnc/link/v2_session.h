@@ -91,6 +91,11 @@ class V2Session {
   // One round: sends what the window and credit allow, handles the answers, runs the timers;
   // waits up to `wait` (link time) for an answer when nothing went out.
   void poll(std::chrono::milliseconds wait = std::chrono::milliseconds(20));
+  // Ends the heater wait in progress (the next M109/M190 setpoint pushed; Marlin's M108) at the
+  // next STATUS once its setpoint is acknowledged, without waiting for the FIFO or the
+  // temperature (the setpoint stays); the wait's report says `cancelled`. False when no wait is
+  // pending.
+  bool cancel_heater_wait();
   // Everything pushed is acknowledged and done, every wait and pause passed.
   bool complete() const;
   // poll() until complete().
@@ -146,7 +151,8 @@ class V2Session {
   std::vector<std::pair<size_t, const gcode::Pause*>> pauses_;
   std::vector<std::pair<size_t, const gcode::Message*>> messages_;
   size_t next_wait_ = 0, next_pause_ = 0, next_message_ = 0;
-  size_t clear_items_ = 0;  // faults are checked once these are acknowledged
+  bool cancel_wait_ = false;  // cancel_heater_wait(): the wait at next_wait_ ends
+  size_t clear_items_ = 0;    // faults are checked once these are acknowledged
 
   SendWindow win_;
   uint32_t done0_ = 0;

@@ -13,9 +13,11 @@
 // board has run every move), M104/M140 (setpoints: HEATER_SETPOINT frames, sequenced, ahead of
 // the motion in the FIFO as in Marlin), M109/M190 (setpoint, then the session's heater wait:
 // FIFO drained, temperature in band for wait_settle_s of plant time), M106/M107 (the fan output,
-// an OUTPUT frame in the FIFO), M110, M112 (emergency stop). While M109/M190/M400 wait the host
-// gets "echo:busy: processing" every 2 s and a temperature line every second of the heaters'
-// clock (the simulated plant's time on the Verilated board, link time otherwise).
+// an OUTPUT frame in the FIFO), M110, M112 (emergency stop), M108 (ends an M109/M190 wait; the
+// setpoint stays), M115 (firmware name and capabilities). M112 and M108 act as soon as their line
+// is in, ahead of the lines queued before them (Marlin's emergency parser). While M109/M190/M400
+// wait the host gets "echo:busy: processing" every 2 s and a temperature line every second of the
+// heaters' clock (the simulated plant's time on the Verilated board, link time otherwise).
 #pragma once
 
 #include <array>
@@ -77,6 +79,8 @@ class Engine {
   bool killed() const { return killed_; }
   const EngineStats& stats() const { return stats_; }
   const LineChecker& lines() const { return checker_; }
+  // M115's answer lines before its `ok`: FIRMWARE_NAME... and the Cap: lines.
+  std::vector<std::string> firmware_report() const;
   // The FPGA's position from the last STATUS (mm).
   std::array<double, 4> position_mm() const;
 
@@ -95,6 +99,7 @@ class Engine {
   void ask_status(After after);
   std::string temps() const;
   void halt();
+  void cancel_heating();
   void say(std::string_view line);
 
   link::Link& link_;

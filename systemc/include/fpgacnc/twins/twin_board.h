@@ -26,7 +26,8 @@
 // most one poll interval later), until the client has read every answer byte and then
 // `host_grace` has passed without a write, and (c) at the host's next timer
 // (set_host_deadline: a STATUS poll during a long move), for `host_grace`. With realtime, simulated
-// time follows the wall clock (50 M clocks per second at 50 MHz) while the board is busy; no holds.
+// time follows the wall clock (50 M clocks per second at 50 MHz, times realtime_speed) while the
+// board is busy; no holds.
 //
 // No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
 // e-stop input (set_estop throws BoardError). The SystemC kernel runs in a thread of its own, one
@@ -56,8 +57,9 @@ struct TwinBoardOptions {
   uint32_t baud = 115200;
   // Step timing per axis; unset: the RTL defaults (100/100/200/200 clocks).
   std::optional<std::array<config::StepTiming, simboard::kBoardAxes>> step_timing;
-  bool realtime = false;   // pace simulated time to the wall clock while busy
-  bool record_tx = false;  // also record TX pin edges
+  bool realtime = false;        // pace simulated time to the wall clock while busy
+  double realtime_speed = 1.0;  // with realtime: simulated seconds per wall second (> 0)
+  bool record_tx = false;       // also record TX pin edges
   std::chrono::microseconds host_grace{300};
   uint32_t poll_interval_cycles = 1024;  // SimBoard's: the latest clock an answer is written
 };

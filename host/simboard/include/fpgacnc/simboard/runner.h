@@ -67,6 +67,11 @@ class BoardLink : public link::Link {
   // Idle for the host (see above); reads the board in the order that makes the answer safe.
   bool idle() const;
   std::optional<uint8_t> take(std::chrono::milliseconds wall);
+  // Clears the board's progress signal (Board::progress_fd); then waits (wall time, bounded)
+  // until it is signalled again or, with `or_byte`, a byte is readable on the pty. Every wait
+  // clears first, looks at the board, then waits: a signal after the look is never lost.
+  void clear_progress();
+  void await_progress(bool or_byte);
   // The next byte while fewer than `upto` bytes have been taken: waits (wall time, bounded) for
   // bytes the board has written but the pty has not delivered yet; nullopt once `upto` are
   // taken; throws link::Error naming the port if they never come.
@@ -74,6 +79,7 @@ class BoardLink : public link::Link {
 
   std::unique_ptr<Board> board_;
   std::unique_ptr<link::SerialLink> serial_;
+  int serial_fd_ = -1;     // the SerialLink's descriptor (polled beside progress_fd)
   uint64_t written_ = 0;   // bytes written to the pty by this link
   uint64_t consumed_ = 0;  // bytes read (or discarded) from the pty by this link
   Time skipped_{0};

@@ -144,7 +144,10 @@ BoardPty open_board_pty();
 // pty protocol with the same time policy (see SimBoard above) and record the same edges.
 class Board {
  public:
-  virtual ~Board() = default;
+  Board();  // creates the progress eventfd (BoardError on failure)
+  virtual ~Board();
+  Board(const Board&) = delete;
+  Board& operator=(const Board&) = delete;
   virtual const std::string& path() const = 0;  // slave side of the pty (/dev/pts/N)
   virtual void start() = 0;                     // own thread; throws BoardError if running
   virtual void stop() = 0;                      // joins the thread; the pty stays open
@@ -171,7 +174,19 @@ class Board {
   // The clock at which the host's next timer fires (a poll, a retransmission, a timeout), set
   // by the host's link before it waits. A board that jumps from event to event stops there and
   // gives the host its grace to act, as a board that runs clock by clock does; -1: none.
-  virtual void set_host_deadline(int64_t cycle) { (void)cycle; }
+  virtual void set_host_deadline(int64_t cycle) = 0;
+  // An eventfd (non-blocking) the board signals whenever a wait of the host's may have ended:
+  // its clock reached the host's deadline (set_host_deadline), it went quiet (idle_for_host()
+  // may have turned true), it froze (paused, stopped). Answer bytes wake the host through the
+  // pty itself. A host link polls it together with the pty and clears it (read) before it looks
+  // at the board, so that no signal is lost between its look and its next poll.
+  int progress_fd() const { return progress_; }
+
+ protected:
+  void notify_progress() const;
+
+ private:
+  int progress_ = -1;
 };
 
 class SimBoard : public Board {
@@ -234,6 +249,9 @@ class SimBoard : public Board {
   }
   uint64_t bytes_to_host() const override { return pub_to_host_.load(std::memory_order_acquire); }
   bool frozen() const override { return paused() || !running(); }
+  // The Verilated board runs clock by clock and does not stop at the host's deadline; it
+  // signals progress_fd() at the end of the chunk of clocks that reaches it.
+  void set_host_deadline(int64_t cycle) override;
   std::vector<Edge> edges() const override;        // copy
   std::vector<uint64_t> move_done_cycles() const;  // copy
   // Line logs (copies; empty unless line_faults.log): every frame put on the rx line, every
@@ -289,6 +307,10 @@ class SimBoard : public Board {
   std::atomic<uint64_t> pub_cycle_{0};
   std::atomic<uint64_t> pub_from_host_{0};
   std::atomic<uint64_t> pub_to_host_{0};
+  std::atomic<int64_t> host_deadline_{-1};
+  int64_t notified_deadline_ = -1;  // board thread: the deadline last signalled
+  bool notified_quiet_ = false;     // board thread: quiet signalled since the last activity
+  void notify_host(bool quiet);     // board thread, after publish_locked()
   std::chrono::steady_clock::time_point t_start_{};
   bool started_clock_ = false;
   double sim_wall_s_ = 0.0;
