@@ -27,6 +27,7 @@
 #include "fpgacnc/twins/v2_frames.h"
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
 namespace spec = fpgacnc::spec;
 
 namespace {

@@ -600,8 +600,8 @@ void executor_abort_tests(ExecBench& b) {
   const auto edges = b.pins.take_sorted();
   std::vector<uint64_t> laser, rises;
   for (const auto& e : edges) {
-    if (e.signal == fpgacnc::simboard::kLaser) laser.push_back(e.cycle);
-    if (e.signal == fpgacnc::simboard::step_signal(0) && e.value == 1) rises.push_back(e.cycle);
+    if (e.signal == fpgacnc::models::kLaser) laser.push_back(e.cycle);
+    if (e.signal == fpgacnc::models::step_signal(0) && e.value == 1) rises.push_back(e.cycle);
   }
   check_eq(laser.size(), 2u, "abort: laser rise and fall");
   if (laser.size() == 2) check_eq(laser[1], 537u, "abort: laser low from the abort edge");
@@ -642,10 +642,10 @@ void executor_tests(ExecBench& b) {
   check_eq(b.exec.seg_start_cycles.at(4), e4 + 51, "late segment: R = valid + 1");
   check_eq(b.exec.zero_gap, 2u, "two zero-gap starts");
   const auto edges = b.pins.take_sorted();
-  std::vector<fpgacnc::simboard::Edge> laser, dir_x;
+  std::vector<fpgacnc::models::Edge> laser, dir_x;
   for (const auto& e : edges) {
-    if (e.signal == fpgacnc::simboard::kLaser) laser.push_back(e);
-    if (e.signal == fpgacnc::simboard::dir_signal(0)) dir_x.push_back(e);
+    if (e.signal == fpgacnc::models::kLaser) laser.push_back(e);
+    if (e.signal == fpgacnc::models::dir_signal(0)) dir_x.push_back(e);
   }
   // Laser: one rise on R1, stays high through segment 2 (code 2, power 10), falls on e2.
   check_eq(laser.size(), 2u, "laser: one pulse over two back-to-back cutting segments");
@@ -704,7 +704,7 @@ void worked_example(const RunResult& r) {
   check_eq(r.acks.size(), 1u, "one ACK");
   check_eq(r.acks.at(0), R + 5'000'000 + kRespStart + 1, "ACK start edge = R + T + 3");
   // Edges: DIR X at D; laser at R; first X step at R + 15625; last steps at R + T.
-  std::vector<fpgacnc::simboard::Edge> x_steps, y_steps;
+  std::vector<fpgacnc::models::Edge> x_steps, y_steps;
   bool dir_ok = false, laser_ok = false;
   for (const auto& e : r.edges) {
     if (e.signal == 4 && e.cycle == static_cast<uint64_t>(D) && e.value == 1) dir_ok = true;
@@ -865,7 +865,7 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
     for (int a = 0; a < 2; ++a) {
       std::vector<Cycle> rises;
       for (const auto& e : r.edges)
-        if (e.signal == fpgacnc::simboard::step_signal(a) && e.value == 1 &&
+        if (e.signal == fpgacnc::models::step_signal(a) && e.value == 1 &&
             static_cast<Cycle>(e.cycle) > start && static_cast<Cycle>(e.cycle) <= end)
           rises.push_back(static_cast<Cycle>(e.cycle));
       const auto ideal = ideal_steps(m.pr, n[a], n_dom);
