@@ -22,7 +22,6 @@
 
 namespace sb = fpgacnc::simboard;
 namespace models = fpgacnc::models;
-namespace tb = fpgacnc::tb;
 using namespace std::chrono_literals;
 
 namespace {
