@@ -121,7 +121,7 @@ quartus:
 	./scripts/quartus.sh
 
 format:
-	find host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
+	find models host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
 
 clean:
 	rm -rf $(BUILD)
