@@ -2,12 +2,16 @@
 // examples and v2 test vectors, docs/timing.md), each v2 block twin driven alone through its
 // sockets (frame_decoder: every NAK reason and the SEQ rules; response_encoder: priorities and
 // the ACK test vector; segment_executor: queued segments), and small jobs on the virtual board
-// whose edge times follow from the documented latencies. Plain checks; exit status 1 on any
-// failure.
+// whose edge times follow from the documented latencies. One GoogleTest per block; the blocks and
+// the board run in one simulation (SystemC elaborates once a process), run by the first test that
+// needs it, which keeps each block's checks and failures for the block's test.
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
+#include <map>
 #include <systemc>
 
 #include "fpgacnc/protocol/v1.h"
@@ -18,13 +22,21 @@
 namespace {
 
 using namespace fpgacnc::twins;
-int failures = 0;
+
+// The checks of one block: how many ran, and the description of each that failed.
+struct Record {
+  size_t checks = 0;
+  std::vector<std::string> failures;
+};
+Record* current = nullptr;  // the block whose checks run now
 
 void check(bool ok, const std::string& what) {
-  if (!ok) {
-    ++failures;
-    fmt::print("FAIL: {}\n", what);
+  if (current == nullptr) {
+    ADD_FAILURE() << "a check outside a block: " << what;
+    return;
   }
+  ++current->checks;
+  if (!ok) current->failures.push_back(what);
 }
 template <class A, class B>
 void check_eq(const A& a, const B& b, const std::string& what) {
@@ -885,11 +897,23 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
              static_cast<double>(1.0L - worst));
 }
 
-}  // namespace
+// Runs `body` with its checks kept in `r`.
+void in_block(Record& r, const std::function<void()>& body) {
+  current = &r;
+  body();
+  current = nullptr;
+}
 
-int sc_main(int, char*[]) {
-  arithmetic();
-  v2_arithmetic();
+// A block's test: its checks ran and none failed.
+void expect_passed(const Record& r) {
+  EXPECT_GT(r.checks, 0u) << "no check of this block ran";
+  for (const std::string& f : r.failures) ADD_FAILURE() << f;
+}
+
+// The simulation of the block benches and the virtual board's jobs, once; each block's checks by
+// name.
+std::map<std::string, Record> run_simulation() {
+  std::map<std::string, Record> rec;
   DecoderBench dec_bench("decoder_bench");
   EncoderBench enc_bench("encoder_bench");
   ExecBench exec_bench("exec_bench");
@@ -916,27 +940,80 @@ int sc_main(int, char*[]) {
     DecoderBench& d;
     EncoderBench& e;
     ExecBench& x;
-    Blocks(sc_core::sc_module_name n, DecoderBench& d, EncoderBench& e, ExecBench& x)
-        : sc_module(n), d(d), e(e), x(x) {
+    std::map<std::string, Record>& rec;
+    Blocks(sc_core::sc_module_name n, DecoderBench& d, EncoderBench& e, ExecBench& x,
+           std::map<std::string, Record>& rec)
+        : sc_module(n), d(d), e(e), x(x), rec(rec) {
       SC_THREAD(run);
     }
     void run() {
-      decoder_tests(d);
-      spec_vector_tests(d);
-      encoder_tests(e);
-      executor_tests(x);
-      executor_abort_tests(x);
+      in_block(rec["frame_decoder"], [&] { decoder_tests(d); });
+      in_block(rec["spec_vectors"], [&] { spec_vector_tests(d); });
+      in_block(rec["response_encoder"], [&] { encoder_tests(e); });
+      in_block(rec["segment_executor"], [&] { executor_tests(x); });
+      in_block(rec["segment_executor_abort"], [&] { executor_abort_tests(x); });
     }
-  } blocks("blocks", dec_bench, enc_bench, exec_bench);
+  } blocks("blocks", dec_bench, enc_bench, exec_bench, rec);
   sc_core::sc_start();
+  const char* jobs[] = {"board_worked_example", "board_zero_move_and_watchdog", "board_spiral",
+                        "board_profile_job"};
   if (results.size() == 4) {
-    worked_example(results[0]);
-    zero_move_and_watchdog(results[1]);
-    spiral(results[2], spiral_t, spiral_pos, results[2].statuses);
-    profile_job(results[3], profile_pos);
+    in_block(rec[jobs[0]], [&] { worked_example(results[0]); });
+    in_block(rec[jobs[1]], [&] { zero_move_and_watchdog(results[1]); });
+    in_block(rec[jobs[2]], [&] { spiral(results[2], spiral_t, spiral_pos, results[2].statuses); });
+    in_block(rec[jobs[3]], [&] { profile_job(results[3], profile_pos); });
   } else {
-    check(false, "all jobs ran");
+    for (const char* j : jobs) in_block(rec[j], [&] { check(false, "all jobs ran"); });
   }
-  fmt::print("twins_unit: {}\n", failures ? "FAILED" : "all checks passed");
-  return failures ? 1 : 0;
+  return rec;
+}
+
+const Record& simulated(const std::string& block) {
+  static const std::map<std::string, Record> rec = run_simulation();
+  return rec.at(block);
+}
+
+TEST(TwinsUnit, V1Arithmetic) {
+  Record r;
+  in_block(r, arithmetic);
+  expect_passed(r);
+}
+TEST(TwinsUnit, V2Arithmetic) {
+  Record r;
+  in_block(r, v2_arithmetic);
+  expect_passed(r);
+}
+TEST(TwinsUnit, FrameDecoder) {
+  expect_passed(simulated("frame_decoder"));
+}
+TEST(TwinsUnit, FrameDecoderSpecVectors) {
+  expect_passed(simulated("spec_vectors"));
+}
+TEST(TwinsUnit, ResponseEncoder) {
+  expect_passed(simulated("response_encoder"));
+}
+TEST(TwinsUnit, SegmentExecutor) {
+  expect_passed(simulated("segment_executor"));
+}
+TEST(TwinsUnit, SegmentExecutorAbort) {
+  expect_passed(simulated("segment_executor_abort"));
+}
+TEST(TwinsUnit, BoardWorkedExample) {
+  expect_passed(simulated("board_worked_example"));
+}
+TEST(TwinsUnit, BoardZeroMoveAndWatchdog) {
+  expect_passed(simulated("board_zero_move_and_watchdog"));
+}
+TEST(TwinsUnit, BoardSpiral) {
+  expect_passed(simulated("board_spiral"));
+}
+TEST(TwinsUnit, BoardProfileJob) {
+  expect_passed(simulated("board_profile_job"));
+}
+
+}  // namespace
+
+int sc_main(int argc, char* argv[]) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
 }
