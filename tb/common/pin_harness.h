@@ -1,5 +1,5 @@
 // PinHarness<Model>: drives a Verilated top through its pins, one clock per tick(): rx from a
-// models::UartDriver, tx decoded by a models::UartMonitor, STEP/DIR sampled into a StepMonitor. The model-specific
+// UartDriver, tx decoded by a UartMonitor, STEP/DIR sampled into a StepMonitor. The model-specific
 // parts (reset polarity, how STEP/DIR are packed, extra idle inputs) come from a PinAccess of
 // small captureless lambdas, so the same harness serves cnc_core (rst, step/dir buses) and the
 // DE1-SoC top (rst_n, step_x/dir_x ...). A bench adds its own per-clock checks by overriding
