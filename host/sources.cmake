@@ -8,3 +8,12 @@ set(FPGACNC_HOST_GCODE_SOURCES
     src/gcode/reader.cpp
     src/gcode/tool_table.cpp
     src/gcode/expr.cpp)
+
+# The protocol v2 codec (fpgacnc/protocol/v2.h), one file per frame family: the host library and
+# the fuzz build (fuzz_v2_codec) both read this list.
+set(FPGACNC_HOST_V2_CODEC_SOURCES
+    src/protocol/v2_frame.cpp
+    src/protocol/v2_control.cpp
+    src/protocol/v2_motion.cpp
+    src/protocol/v2_heater.cpp
+    src/protocol/v2_check.cpp)

@@ -126,79 +126,21 @@ module arc_dda (
   // outputs
   reg xs_reg, xd_reg, ys_reg, yd_reg, zs_reg, zd_reg, last_reg, err_reg, late_reg;
 
-  // ---------------- W0: candidates ----------------
-  wire               x_zero = (x_reg == 24'sd0);
-  wire               y_zero = (y_reg == 24'sd0);
-  wire               x_neg = x_reg[23];
-  wire               y_neg = y_reg[23];
-  // a = sign(t_x), t_x = ccw ? -y : y; inward (-sign x) when y == 0
-  wire               apos = y_zero ? x_neg : (ccw_reg ? y_neg : !y_neg);
-  // b = sign(t_y), t_y = ccw ? x : -x; inward (-sign y) when x == 0
-  wire               bpos = x_zero ? y_neg : (ccw_reg ? !x_neg : x_neg);
-  wire signed [47:0] x2 = {{23{x_reg[23]}}, x_reg, 1'b0};
-  wire signed [47:0] y2 = {{23{y_reg[23]}}, y_reg, 1'b0};
-  // 2ax = ax2o + !apos, 2by = by2o + !bpos (-v = ~v + 1): each candidate F is one sum of
-  // registers and a small constant (one carry chain, no negate in front of it)
-  wire        [47:0] ax2o = apos ? x2 : ~x2;
-  wire        [47:0] by2o = bpos ? y2 : ~y2;
-  wire        [47:0] fa_w = f_reg + ax2o + {46'd0, !apos, apos};
-  wire        [47:0] fb_w = f_reg + by2o + {46'd0, !bpos, bpos};
-  wire        [47:0] fd_w = f_reg + ax2o + by2o + {45'd0, 3'd2 + {2'd0, !apos} + {2'd0, !bpos}};
-  wire        [23:0] absx = x_neg ? -x_reg : x_reg;
-  wire        [23:0] absy = y_neg ? -y_reg : y_reg;
-  // |x| + |y| in one chain: (x ^ sx) + (y ^ sy) + sx + sy
-  wire        [23:0] ox = x_neg ? ~x_reg : x_reg;
-  wire        [23:0] oy = y_neg ? ~y_reg : y_reg;
-  wire        [23:0] absxy = ox + oy + {22'd0, x_neg && y_neg, x_neg != y_neg};
-  // b y - a x (F_B - F_A = 2 (b y - a x)): y - x or y + x, negated when b = -1
-  wire        [24:0] ymx = {y_reg[23], y_reg} - {x_reg[23], x_reg};
-  wire        [24:0] ypx = {y_reg[23], y_reg} + {x_reg[23], x_reg};
-  wire        [24:0] e_src = (apos == bpos) ? ymx : ypx;
-  wire               e_zero = (e_src == 25'd0);
-  wire               e_neg = bpos ? e_src[24] : (!e_src[24] && !e_zero);
-  wire        [23:0] acc_sum = acc_reg + r_reg;
-  // acc + r - n (26-bit two's complement, one chain): carry when >= 0; then < n_reg: fits
-  wire        [25:0] acc_d = {2'd0, acc_reg} + {2'd0, r_reg} + {2'b11, ~n_reg} + 26'd1;
-  wire               carry_w = !acc_d[25];
-  wire        [23:0] acc_wrap = acc_d[23:0];
-
-  // ---------------- W1 ----------------
-  wire signed [47:0] step_w = carry_reg ? qp1_reg : q_reg;
-  wire               ramp = (m_reg < n_reg);
-  wire signed [23:0] xa_w = apos_reg ? x_reg + 24'sd1 : x_reg - 24'sd1;
-  // |p| <= |q| for the candidates' F, without taking magnitudes: by the signs sp, sq; with equal
-  // signs by the sign of q - p (dneg, dzero), known without a wide subtract: F_A - F_D = -(2 b y
-  // + 1), F_B - F_D = -(2 a x + 1), F_B - F_A = 2 (b y - a x) (W0); with opposite signs by
-  // S = p + q (sneg, szero; no overflow). Zero test of a sum without its carries: p + q = 0 (mod
-  // 2^48) iff p ^ q == (p | q) << 1.
+  // ---------------- W0, W1, W2 ----------------
+  // The candidates, compares and the selection are formed in the clocked block below, in the
+  // state's branch whose registers they feed (locals of that block: the same logic as continuous
+  // assignments, and a simulator evaluates them only in the clocks of that state).
+  //
+  // W1: |p| <= |q| for the candidates' F, without taking magnitudes: by the signs sp, sq; with
+  // equal signs by the sign of q - p (dneg, dzero), known without a wide subtract: F_A - F_D =
+  // -(2 b y + 1), F_B - F_D = -(2 a x + 1), F_B - F_A = 2 (b y - a x) (W0); with opposite signs
+  // by S = p + q (sneg, szero; no overflow). Zero test of a sum without its carries: p + q = 0
+  // (mod 2^48) iff p ^ q == (p | q) << 1.
   function mag_le;
     input sp, sq, dneg, dzero, sneg, szero;
     mag_le = (sp == sq) ? (sp ? (dneg || dzero) : !dneg) : (sp ? !sneg : (sneg || szero));
   endfunction
-  wire               by2_neg = bpos_reg ? y_neg : (!y_neg && !y_zero);  // 2 b y < 0
-  wire               ax2_neg = apos_reg ? x_neg : (!x_neg && !x_zero);  // 2 a x < 0
-  wire        [47:0] s_da = fd_reg + fa_reg;
-  wire        [47:0] s_db = fd_reg + fb_reg;
-  wire        [47:0] s_ab = fa_reg + fb_reg;
-  wire               z_da = ((fd_reg ^ fa_reg) == {(fd_reg[46:0] | fa_reg[46:0]), 1'b0});
-  wire               z_db = ((fd_reg ^ fb_reg) == {(fd_reg[46:0] | fb_reg[46:0]), 1'b0});
-  wire               z_ab = ((fa_reg ^ fb_reg) == {(fa_reg[46:0] | fb_reg[46:0]), 1'b0});
-  wire unused_s = &{1'b0, s_da[46:0], s_db[46:0], s_ab[46:0], acc_d[24]};  // only the signs are read
-  wire signed [23:0] yb_w = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
-
-  // ---------------- W2: select ----------------
-  wire               sel_d = (!va_reg || le_da_reg) && (!vb_reg || le_db_reg);
-  wire               sel_a = !sel_d && va_reg && (!vb_reg || le_ab_reg);
-  wire        [47:0] s_sel = sel_d ? sd_reg : (sel_a ? sa_reg : sb_reg);
-  // the compares of the selected cost, after the selection (they feed one register each)
   wire        [47:0] u_int = u_reg[95:48];
-  wire               late_sel = (u_int >= s_sel);
-  wire               guard_sel = (s_sel >= ctot_reg);
-  wire               exact_sel = (s_sel == ctot_reg);
-  wire               mx_sel = sel_d || sel_a;
-  wire               my_sel = sel_d || !sel_a;
-  wire               ex_sel = mx_sel ? exa_reg : ex0_reg;
-  wire               ey_sel = my_sel ? eyb_reg : ey0_reg;
 
   // ---------------- pacing ----------------
   // Every compare against a sum of registers is the sign of one carry-save three-operand sum
@@ -280,6 +222,19 @@ module arc_dda (
     reg [47:0] vzp_h0, vzm_h0;
     reg [95:0] vz_plus, vz_minus;
     reg decel, dec_ok, acc_ok, z_go;
+    // W0, W1, W2 (see above); of the sums s_* only the signs are read
+    reg x_zero, y_zero, x_neg, y_neg, apos, bpos, e_zero, e_neg, carry_w, ramp;
+    reg [47:0] x2, y2, ax2o, by2o, s_sel;
+    reg signed [47:0] step_w;
+    reg [23:0] ox, oy, acc_sum;
+    reg [24:0] ymx, ypx, e_src;
+    reg by2_neg, ax2_neg, z_da, z_db, z_ab;
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg [47:0] s_da, s_db, s_ab;
+    reg [25:0] acc_d;  // bit 24 not read
+    /* verilator lint_on UNUSEDSIGNAL */
+    reg signed [23:0] xa_w, yb_w;
+    reg sel_d, sel_a, mx_sel, my_sel;
 
     xs_reg   <= 1'b0;
     ys_reg   <= 1'b0;
@@ -373,24 +328,63 @@ module arc_dda (
       end
 
       case (st_reg)
-        W0: begin
-          fa_reg    <= fa_w;
-          fb_reg    <= fb_w;
-          fd_reg    <= fd_w;
+        W0: begin  // candidates
+          x_zero  = (x_reg == 24'sd0);
+          y_zero  = (y_reg == 24'sd0);
+          x_neg   = x_reg[23];
+          y_neg   = y_reg[23];
+          // a = sign(t_x), t_x = ccw ? -y : y; inward (-sign x) when y == 0
+          apos    = y_zero ? x_neg : (ccw_reg ? y_neg : !y_neg);
+          // b = sign(t_y), t_y = ccw ? x : -x; inward (-sign y) when x == 0
+          bpos    = x_zero ? y_neg : (ccw_reg ? !x_neg : x_neg);
+          x2      = {{23{x_reg[23]}}, x_reg, 1'b0};
+          y2      = {{23{y_reg[23]}}, y_reg, 1'b0};
+          // 2ax = ax2o + !apos, 2by = by2o + !bpos (-v = ~v + 1): each candidate F is one sum of
+          // registers and a small constant (one carry chain, no negate in front of it)
+          ax2o    = apos ? x2 : ~x2;
+          by2o    = bpos ? y2 : ~y2;
+          // |x| + |y| in one chain: (x ^ sx) + (y ^ sy) + sx + sy
+          ox      = x_neg ? ~x_reg : x_reg;
+          oy      = y_neg ? ~y_reg : y_reg;
+          // b y - a x (F_B - F_A = 2 (b y - a x)): y - x or y + x, negated when b = -1
+          ymx     = {y_reg[23], y_reg} - {x_reg[23], x_reg};
+          ypx     = {y_reg[23], y_reg} + {x_reg[23], x_reg};
+          e_src   = (apos == bpos) ? ymx : ypx;
+          e_zero  = (e_src == 25'd0);
+          e_neg   = bpos ? e_src[24] : (!e_src[24] && !e_zero);
+          acc_sum = acc_reg + r_reg;
+          // acc + r - n (26-bit two's complement, one chain): carry when >= 0; then < n_reg: fits
+          acc_d   = {2'd0, acc_reg} + {2'd0, r_reg} + {2'b11, ~n_reg} + 26'd1;
+          carry_w = !acc_d[25];
+          fa_reg    <= f_reg + ax2o + {46'd0, !apos, apos};
+          fb_reg    <= f_reg + by2o + {46'd0, !bpos, bpos};
+          fd_reg    <= f_reg + ax2o + by2o + {45'd0, 3'd2 + {2'd0, !apos} + {2'd0, !bpos}};
           va_reg    <= !y_zero;
           vb_reg    <= !x_zero;
           apos_reg  <= apos;
           bpos_reg  <= bpos;
-          ax_reg    <= absx;
-          ay_reg    <= absy;
-          axy_reg   <= absxy;
+          ax_reg    <= x_neg ? -x_reg : x_reg;
+          ay_reg    <= y_neg ? -y_reg : y_reg;
+          axy_reg   <= ox + oy + {22'd0, x_neg && y_neg, x_neg != y_neg};
           carry_reg <= carry_w;
           e_neg_reg <= e_neg;
           e_zero_reg <= e_zero;
-          accn_reg  <= carry_w ? acc_wrap : acc_sum;
+          accn_reg  <= carry_w ? acc_d[23:0] : acc_sum;
           st_reg    <= W1;
         end
-        W1: begin
+        W1: begin  // compares, ramp step, cumulative costs, end-point tests
+          step_w  = carry_reg ? qp1_reg : q_reg;
+          ramp    = (m_reg < n_reg);
+          xa_w    = apos_reg ? x_reg + 24'sd1 : x_reg - 24'sd1;
+          yb_w    = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
+          by2_neg = bpos_reg ? y_reg[23] : (!y_reg[23] && (y_reg != 24'sd0));  // 2 b y < 0
+          ax2_neg = apos_reg ? x_reg[23] : (!x_reg[23] && (x_reg != 24'sd0));  // 2 a x < 0
+          s_da    = fd_reg + fa_reg;
+          s_db    = fd_reg + fb_reg;
+          s_ab    = fa_reg + fb_reg;
+          z_da    = ((fd_reg ^ fa_reg) == {(fd_reg[46:0] | fa_reg[46:0]), 1'b0});
+          z_db    = ((fd_reg ^ fb_reg) == {(fd_reg[46:0] | fb_reg[46:0]), 1'b0});
+          z_ab    = ((fa_reg ^ fb_reg) == {(fa_reg[46:0] | fb_reg[46:0]), 1'b0});
           le_da_reg <= mag_le(fd_reg[47], fa_reg[47], !by2_neg, 1'b0, s_da[47], z_da);
           le_db_reg <= mag_le(fd_reg[47], fb_reg[47], !ax2_neg, 1'b0, s_db[47], z_db);
           le_ab_reg <= mag_le(fa_reg[47], fb_reg[47], e_neg_reg, e_zero_reg, s_ab[47], z_ab);
@@ -406,7 +400,15 @@ module arc_dda (
           ey0_reg <= (y_reg == y1_reg);
           st_reg  <= W2;
         end
-        W2: begin
+        W2: begin  // select
+          ramp    = (m_reg < n_reg);
+          xa_w    = apos_reg ? x_reg + 24'sd1 : x_reg - 24'sd1;
+          yb_w    = bpos_reg ? y_reg + 24'sd1 : y_reg - 24'sd1;
+          sel_d   = (!va_reg || le_da_reg) && (!vb_reg || le_db_reg);
+          sel_a   = !sel_d && va_reg && (!vb_reg || le_ab_reg);
+          s_sel   = sel_d ? sd_reg : (sel_a ? sa_reg : sb_reg);
+          mx_sel  = sel_d || sel_a;
+          my_sel  = sel_d || !sel_a;
           mvx_reg <= mx_sel;
           mvy_reg <= my_sel;
           f_reg <= sel_d ? fd2_reg : (sel_a ? fa2_reg : fb2_reg);
@@ -417,10 +419,11 @@ module arc_dda (
             m_reg   <= m_reg + 24'd1;
           end
           cnext_reg <= s_sel;
-          pend_end_reg <= ex_sel && ey_sel;
-          guard_reg <= guard_sel;
-          exact_reg <= exact_sel;
-          if (late_sel) late_reg <= 1'b1;
+          pend_end_reg <= (mx_sel ? exa_reg : ex0_reg) && (my_sel ? eyb_reg : ey0_reg);
+          // the compares of the selected cost, after the selection (they feed one register each)
+          guard_reg <= (s_sel >= ctot_reg);
+          exact_reg <= (s_sel == ctot_reg);
+          if (u_int >= s_sel) late_reg <= 1'b1;
           st_reg <= READY;
         end
         default: begin  // READY

@@ -51,26 +51,25 @@ module dda_linear #(
   reg [63:0] tmn_reg;
   reg [31:0] left_reg;
 
-  wire        wrap = !s_reg[64];                          // r + n >= T
+  wire        wrap = !s_reg[64];  // r + n >= T
   wire        active = tick && (STEP_GUARD == 0 || left_reg != 32'd0);
-  wire [64:0] s_wrap = s_reg - {1'b0, tmn_reg};           // s - (T - n)
-  wire [64:0] s_next = s_reg + {33'd0, n_reg};            // s + n
-  wire [64:0] s_load = (TMN_FROM_TOTAL != 0) ? {33'd0, steps} - {1'b0, total}  // n - T: r = 0
-                                              : 65'd0 - {1'b0, tmn};          // -(T - n)
-  wire [63:0] tmn_load = (TMN_FROM_TOTAL != 0) ? total - {32'd0, steps} : tmn;
 
+  // The 65-bit sums are written in the branches whose registers they feed: the same logic as
+  // continuous assignments, and a simulator evaluates them only on the clocks that branch runs
+  // (docs/architecture.md "Simulation speed").
   always @(posedge clk) begin
     if (load) begin
-      s_reg    <= s_load;
+      s_reg    <= (TMN_FROM_TOTAL != 0) ? {33'd0, steps} - {1'b0, total}  // n - T: r = 0
+                                        : 65'd0 - {1'b0, tmn};           // -(T - n)
       n_reg    <= steps;
-      tmn_reg  <= tmn_load;
+      tmn_reg  <= (TMN_FROM_TOTAL != 0) ? total - {32'd0, steps} : tmn;
       left_reg <= steps;
     end else if (active) begin
       if (wrap) begin
-        s_reg    <= s_wrap;
+        s_reg    <= s_reg - {1'b0, tmn_reg};  // s - (T - n)
         left_reg <= left_reg - 32'd1;
       end else begin
-        s_reg <= s_next;
+        s_reg <= s_reg + {33'd0, n_reg};  // s + n
       end
     end
     if (rst) begin

@@ -86,8 +86,8 @@ if [ ${#TARGETS[@]} -eq 0 ]; then
     if [ -x "$BUILD/$t" ]; then
       TARGETS+=("$t")
     else
-      echo "fuzz.sh: NOTE: $t not built (host/src/protocol/v2.cpp missing: the v2 codec is not" \
-           "merged yet)"
+      echo "fuzz.sh: NOTE: $t not built (no v2 codec sources: FPGACNC_HOST_V2_CODEC_SOURCES in" \
+           "host/sources.cmake)"
     fi
   done
 fi

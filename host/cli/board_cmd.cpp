@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/simboard/cli_board.h"
@@ -94,7 +95,8 @@ void compare_boards(const plan::Plan& p, const config::MachineConfig& cfg,
   if (proto == "v1") {
     script.v1 = twins::job_packets(protocol::v1::pack_job(p), cfg.clk_hz, o.max_moves);
   } else {
-    script.v2 = twins::job_script(protocol::v2::pack_job(p, cfg), o.max_moves);
+    script.v2 = twins::job_script(
+        protocol::v2::pack_job(plan::plan_motion(p, cfg), cfg, {.heaters = false}), o.max_moves);
     // The twins report idle heaters in STATUS, the Verilated board its plants: no STATUS.
     script.v2->status_at_end = false;
   }

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -11,6 +12,7 @@
 
 #include "commands.h"
 #include "fpgacnc/plan/lookahead.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/plan/speed_plot.h"
 #include "fpgacnc/plan/stepfile.h"
@@ -154,8 +156,54 @@ plan::SpeedSeries board_speed_series(const std::string& path, const config::Mach
   return s;
 }
 
+// Job time estimates (seconds) at the same feeds: v1 stop-and-wait (each move at its v1 feed
+// word, T = floor(NUMERATOR_dom / feed) * n_dom over X/Y, plus kV1OverheadClocks115200 per move
+// for the packet, the ACK and the host turnaround; dwells added), v2 constant feed (sum of LINE
+// and DWELL T, zero gap), v2 planned (sum of the exact LINE_PROFILE clock counts and DWELL T).
+struct JobTimes {
+  double v1_s = 0.0, v2_constant_s = 0.0, v2_profile_s = 0.0;
+  uint64_t v1_moves = 0, v2_lines = 0, v2_profiles = 0;
+  uint64_t v1_clocks = 0, v2_constant_clocks = 0, v2_profile_clocks = 0;
+};
+constexpr uint64_t kV1OverheadClocks115200 = 51'981;  // host/README.md, measured
+
+JobTimes job_times(const plan::Plan& p, const config::MachineConfig& cfg) {
+  const uint64_t v1_overhead_clocks = kV1OverheadClocks115200;
+  JobTimes t;
+  const double clk = static_cast<double>(cfg.clk_hz);
+  uint64_t v1 = 0;
+  for (const auto& item : p.items) {
+    if (const auto* s = std::get_if<plan::Segment>(&item)) {
+      const bool x_dom = std::llabs(s->steps[0]) >= std::llabs(s->steps[1]);
+      const int64_t n = std::max(std::llabs(s->steps[0]), std::llabs(s->steps[1]));
+      const uint32_t num = p.numerator[x_dom ? 0 : 1];
+      v1 += static_cast<uint64_t>(num / std::max<uint16_t>(s->feed_v1, 1)) *
+                static_cast<uint64_t>(n) +
+            v1_overhead_clocks;
+      ++t.v1_moves;
+    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
+      v1 += static_cast<uint64_t>(std::llround(d->seconds * clk));
+    }
+  }
+  t.v1_clocks = v1;
+  config::MachineConfig c = cfg;
+  c.motion = "constant";
+  const protocol::v2::PackOptions motion_only{.heaters = false};
+  const auto jc = protocol::v2::pack_job(plan::plan_motion(p, c), c, motion_only);
+  c.motion = "profile";
+  const auto jp = protocol::v2::pack_job(plan::plan_motion(p, c), c, motion_only);
+  t.v2_lines = jc.lines;
+  t.v2_profiles = jp.profiles;
+  t.v2_constant_clocks = jc.total_t;
+  t.v2_profile_clocks = jp.total_t;
+  t.v1_s = static_cast<double>(v1) / clk;
+  t.v2_constant_s = static_cast<double>(jc.total_t) / clk;
+  t.v2_profile_s = static_cast<double>(jp.total_t) / clk;
+  return t;
+}
+
 void print_times(const plan::Plan& p, const config::MachineConfig& cfg) {
-  const auto t = protocol::v2::job_times(p, cfg);
+  const auto t = job_times(p, cfg);
   fmt::print(
       "job time, same feeds ({}; accel X {} Y {} Z {} E {} mm/s^2, junction deviation {} mm, "
       "window {}):\n",
@@ -163,8 +211,7 @@ void print_times(const plan::Plan& p, const config::MachineConfig& cfg) {
       cfg.max_accel_mm_s2[3], cfg.junction_deviation_mm, cfg.lookahead_segments);
   fmt::print("  {:<42} {:>8} {:>14} {:>12}\n", "mode", "frames", "clocks", "seconds");
   fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n",
-             fmt::format("v1 stop-and-wait, X/Y only (+{} clk/move)",
-                         protocol::v2::kV1OverheadClocks115200),
+             fmt::format("v1 stop-and-wait, X/Y only (+{} clk/move)", kV1OverheadClocks115200),
              t.v1_moves, t.v1_clocks, t.v1_s);
   fmt::print("  {:<42} {:>8} {:>14} {:>12.3f}\n", "v2 constant feed (LINE, zero gap)", t.v2_lines,
              t.v2_constant_clocks, t.v2_constant_s);
@@ -185,7 +232,9 @@ void run_plan(const PlanArgs& a) {
   // Packing validates every segment for v1 (and v2 when asked) before anything is written.
   const auto bytes = protocol::v1::job_bytes(p);
   std::optional<protocol::v2::Job> job2;
-  if (!a.v2_hex_out.empty() || cfg.motion == "profile") job2 = protocol::v2::pack_job(p, cfg);
+  // The motion frames only: heater commands are listed, not checked (no heaters needed to plan).
+  if (!a.v2_hex_out.empty() || cfg.motion == "profile")
+    job2 = protocol::v2::pack_job(plan::plan_motion(p, cfg), cfg, {.heaters = false});
   if (!a.quiet) {
     size_t idx = 0;
     std::string out;
@@ -227,7 +276,7 @@ void run_plan(const PlanArgs& a) {
   if (!a.speed_svg.empty()) {
     config::MachineConfig c = cfg;
     c.motion = "constant";
-    const auto jc = protocol::v2::pack_job(p, c);
+    const auto jc = protocol::v2::pack_job(plan::plan_motion(p, c), c, {.heaters = false});
     const auto pp = plan::plan_profiles(p, cfg);
     const std::string title = fmt::format(
         "{}: path speed against time (accel X/Y {}/{} mm/s^2, junction deviation {} mm)",

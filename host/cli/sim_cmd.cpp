@@ -13,6 +13,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/simboard/plot.h"
@@ -98,7 +99,9 @@ void run_sim(const SimArgs& a) {
                script.v1.size() - 1,
                a.max_moves != SIZE_MAX ? fmt::format(" (first {})", a.max_moves) : "", a.model);
   } else {
-    const protocol::v2::Job job = protocol::v2::pack_job(p, cfg);
+    // The twins' job script carries the motion frames (the virtual board has no heater plants).
+    const protocol::v2::Job job =
+        protocol::v2::pack_job(plan::plan_motion(p, cfg), cfg, {.heaters = false});
     script.v2 = twins::job_script(job, a.max_moves);
     fmt::print(
         "sim {}: {} LINE/DWELL frames{} (sum of T {} clocks for the whole job), model {}, "

@@ -32,6 +32,7 @@
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -128,12 +129,13 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     return;
   }
   std::optional<protocol::v2::Job> job2;
-  std::optional<heat::HeaterJob> heaters;
+  const heat::HeaterJob* heaters = nullptr;
   std::optional<protocol::v1::Job> job1;
   std::string v1_error;
   if (cfg.protocol != "v1") {
-    job2 = protocol::v2::pack_job(p, cfg);
-    heaters = heat::make_heater_job(p, *job2, cfg);  // M104/M109/M140/M190: line:col errors
+    // Plan, then pack (M104/M109/M140/M190 checked: line:col errors).
+    job2 = protocol::v2::pack_job(plan::plan_motion(p, cfg), cfg);
+    heaters = &job2->heaters;
   }
   if (cfg.protocol == "v1") {
     job1 = protocol::v1::pack_job(p);
@@ -169,7 +171,6 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     ProgressBar bar("frames");
     o2.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
     if (port.empty() && hooks.configure_v2) hooks.configure_v2(*lk, o2);
-    o2.heaters = heaters ? &*heaters : nullptr;
     // Pauses (M0/M1, M6, M600): at rest, ask the operator (a terminal), go on (a simulated
     // board without a terminal) or stop (a real machine without a terminal).
     std::string mode = a.pause_mode;
@@ -233,6 +234,8 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
     link::StreamV2Report r;
     try {
       r = link::stream_v2_job(*lk, *job2, o2, choice.ident);
+      r.final_steps = p.final_steps;
+      r.final_mm = p.final_mm;
     } catch (const link::Error&) {
       try {
         write_heater_plot();  // up to the error: shows what happened

@@ -15,6 +15,7 @@
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
+#include "stream_plan.h"
 
 namespace lk = fpgacnc::link;
 namespace v2 = fpgacnc::protocol::v2;
@@ -131,31 +132,70 @@ TEST(HeaterCodec, StatusWithAndWithoutTheHeaterBlock) {
   EXPECT_THROW(v2::decode_status(bad, 4), v2::ProtocolError);
 }
 
-TEST(HeaterJob, PlacesSetpointsBetweenTheFramesOfTheMoves) {
+TEST(HeaterJob, PackerPlacesSetpointsBetweenTheFramesOfTheMoves) {
   fpgacnc::config::MachineConfig cfg;
   const auto plan = plan_of(
       "M140 S60\nM104 S200\nG1 X10 F6000\nG4 P0.1\nM190 S60\nG1 X20\nM104 S0\nG1 X30\nM109 "
       "S210\n",
       cfg);
-  const auto job = v2::pack_job(plan, cfg);
-  const auto hj = heat::make_heater_job(plan, job, cfg);
+  const auto job = v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
+  const auto& hj = job.heaters;
   ASSERT_EQ(hj.actions.size(), 5u);
-  // Frames: 0 NUMERATORS, 1 LINE X10, 2 DWELL, 3 LINE X20, 4 LINE X30.
-  ASSERT_EQ(job.frames.size(), 5u);
-  const size_t want_before[] = {1, 1, 3, 4, 5};
-  const int want_m[] = {140, 104, 190, 104, 109};
-  for (size_t i = 0; i < 5; ++i) {
-    EXPECT_EQ(hj.actions[i].before_frame, want_before[i]) << "action " << i;
-    EXPECT_EQ(hj.actions[i].mcode, want_m[i]) << "action " << i;
+  // Setup: per channel CONFIG, SAFETY, 9 table chunks; one WATCHDOG.
+  const size_t setup = 2u * 11u + 1u;
+  EXPECT_EQ(hj.setup.size(), setup);
+  ASSERT_EQ(job.frames.size(), setup + 5u + 5u);
+  for (size_t i = 0; i < setup; ++i) {
+    EXPECT_FALSE(job.frames[i].fifo) << i;
+    EXPECT_EQ(job.frames[i].frame, hj.setup[i]) << i;
   }
+  // Then: NUMERATORS, M140, M104, X10, dwell, M190, X20, M104 S0, X30, M109 (-1: a FIFO frame).
+  const int want_heater[] = {-1, 0, 1, -1, -1, 2, -1, 3, -1, 4};
+  for (size_t i = 0; i < 10; ++i) {
+    const auto& jf = job.frames[setup + i];
+    EXPECT_EQ(jf.heater, want_heater[i]) << "frame " << i;
+    EXPECT_EQ(jf.fifo, want_heater[i] < 0) << "frame " << i;
+    if (want_heater[i] < 0) continue;
+    const auto& a = hj.actions[static_cast<size_t>(want_heater[i])];
+    EXPECT_EQ(jf.frame, v2::heater_setpoint(0, a.channel, a.target_q4)) << "frame " << i;
+  }
+  EXPECT_EQ(job.frames[setup].frame.type, static_cast<uint8_t>(v2::Type::Numerators));
+  EXPECT_EQ(job.frames[setup + 4].frame.type, static_cast<uint8_t>(v2::Type::Dwell));
+  EXPECT_EQ(job.fifo_frames, 5u);
+  EXPECT_EQ(job.heater_frames, setup + 5u);
+  const int want_m[] = {140, 104, 190, 104, 109};
+  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(hj.actions[i].mcode, want_m[i]) << "action " << i;
   EXPECT_EQ(hj.actions[0].channel, heat::kBed);
   EXPECT_EQ(hj.actions[1].channel, heat::kHotend);
   EXPECT_TRUE(hj.actions[2].wait);
   EXPECT_FALSE(hj.actions[3].wait);
   EXPECT_EQ(hj.actions[3].target_q4, 0);
   EXPECT_EQ(hj.actions[4].target_q4, 210 * 16);
-  // Setup: per channel CONFIG, SAFETY, 9 table chunks; one WATCHDOG.
-  EXPECT_EQ(hj.setup.size(), 2u * 11u + 1u);
+  // Not packed: counted, nothing checked.
+  const auto motion = v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg, {.heaters = false});
+  EXPECT_EQ(motion.frames.size(), 5u);
+  EXPECT_EQ(motion.skipped_heater, 5u);
+  EXPECT_EQ(motion.heater_frames, 0u);
+}
+
+TEST(HeaterJob, SetpointGoesBeforeTheOutputsPackedForTheNextSegment) {
+  // The rule of pack_job (v2_job.h): a setpoint goes before the first frame of the segment that
+  // follows it, so before an OUTPUT frame already packed for that segment; M106 and M107 around
+  // it stay one OUTPUT frame (consecutive outputs merge).
+  fpgacnc::config::MachineConfig cfg;
+  cfg.motion = "constant";
+  const auto plan = plan_of("G1 X1 F600\nM106 S255\nM104 S200\nM107\nG1 X2\n", cfg);
+  const auto job = v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
+  const size_t setup = job.heaters.setup.size();
+  ASSERT_EQ(job.frames.size(), setup + 5u);
+  const v2::Type want[] = {v2::Type::Numerators, v2::Type::Line, v2::Type::HeaterSetpoint,
+                           v2::Type::Output, v2::Type::Line};
+  for (size_t i = 0; i < 5; ++i)
+    EXPECT_EQ(job.frames[setup + i].frame.type, static_cast<uint8_t>(want[i])) << "frame " << i;
+  EXPECT_EQ(job.outputs, 1u);
+  const auto fan = v2::decode_output(job.frames[setup + 3].frame).fan;
+  ASSERT_TRUE(fan.has_value());
+  EXPECT_EQ(*fan, 0);
 }
 
 TEST(HeaterJob, BadHeaterWordsAreLineColErrors) {
@@ -174,9 +214,8 @@ TEST(HeaterJob, BadHeaterWordsAreLineColErrors) {
   int k = 0;
   for (const auto& c : cases) {
     const auto plan = plan_file(c.gcode, cfg, fmt::format("fpgacnc_heat_bad_{}.gcode", k++));
-    const auto job = v2::pack_job(plan, cfg);
     try {
-      heat::make_heater_job(plan, job, cfg);
+      v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
       ADD_FAILURE() << "no error for " << c.gcode;
     } catch (const fpgacnc::gcode::Error& e) {
       const std::string w = e.what();
@@ -187,16 +226,16 @@ TEST(HeaterJob, BadHeaterWordsAreLineColErrors) {
   cfg.heaters.hotend().enabled = false;
   const auto plan = plan_file("G1 X1\nM104 S200\n", cfg, "fpgacnc_heat_bad_off.gcode");
   try {
-    heat::make_heater_job(plan, v2::pack_job(plan, cfg), cfg);
+    v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
     ADD_FAILURE() << "no error for a disabled hot end";
   } catch (const fpgacnc::gcode::Error& e) {
     EXPECT_NE(std::string(e.what()).find(":2:1: error: M104: the hotend heater is disabled"),
               std::string::npos)
         << e.what();
   }
-  // Nothing is sent: stream_v2 validates before the first byte.
+  // Nothing is sent: the packer validates before the first byte.
   FakeV2Device dev(heater_device());
-  EXPECT_THROW(lk::stream_v2(dev, plan, cfg, heat_options()), fpgacnc::gcode::Error);
+  EXPECT_THROW(fpgacnc::test::stream_plan(dev, plan, cfg, heat_options()), fpgacnc::gcode::Error);
   EXPECT_TRUE(dev.written().empty()) << dev.written().size() << " bytes written";
 }
 
@@ -214,7 +253,7 @@ TEST(HeaterStream, SetpointsInOrderWithMotionAndWaitsWait) {
   opt.on_status = [&](const v2::Status& s) {
     if (!s.heaters.empty()) ++statuses;
   };
-  const auto r = lk::stream_v2(dev, plan, cfg, opt);
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, opt);
   fmt::print("{}", lk::format_report(r));
   EXPECT_TRUE(r.position_ok);
   EXPECT_GT(statuses, 0u);
@@ -250,7 +289,7 @@ TEST(HeaterStream, WaitSkippedWhenAboveTheTarget) {
   fpgacnc::config::MachineConfig cfg;
   const auto plan = plan_of("M140 S80\nM190 S80\nM140 S60\nM190 S60\nG1 X1 F600\n", cfg);
   FakeV2Device dev(heater_device());
-  const auto r = lk::stream_v2(dev, plan, cfg, heat_options());
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, heat_options());
   ASSERT_EQ(r.heater_waits.size(), 2u);
   EXPECT_FALSE(r.heater_waits[0].skipped);
   EXPECT_TRUE(r.heater_waits[1].skipped) << "M190 S60 at 80 degC should not wait (S: heating only)";
@@ -267,7 +306,7 @@ TEST(HeaterStream, HeaterFaultStopsTheJobNamingTheLine) {
   d.inject_after = std::chrono::microseconds(100'000);
   FakeV2Device dev(d);
   try {
-    lk::stream_v2(dev, plan, cfg, heat_options());
+    fpgacnc::test::stream_plan(dev, plan, cfg, heat_options());
     FAIL() << "a MINTEMP fault did not stop the job";
   } catch (const lk::Error& e) {
     const std::string w = e.what();
@@ -287,7 +326,7 @@ TEST(HeaterStream, WaitTimeoutNamesTheLine) {
   d.heater_tau = std::chrono::microseconds(100'000'000);  // barely heats
   FakeV2Device dev(d);
   try {
-    lk::stream_v2(dev, plan, cfg, heat_options());
+    fpgacnc::test::stream_plan(dev, plan, cfg, heat_options());
     FAIL() << "no timeout";
   } catch (const lk::Error& e) {
     const std::string w = e.what();

@@ -533,9 +533,9 @@ TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
 
 namespace {
 
-// Stand-in for the arc helper's reference walk (systemc/include/fpgacnc/models/arc_walk.h, not yet
-// in this branch): C_TOTAL ~ R * arc length in steps (the cross-product cost), N_RAMP 1. The
-// planner only uses C_TOTAL as its path unit; the device checks it against its own walk.
+// A stand-in for the reference walk (fpgacnc/models/arc_walk.h): C_TOTAL ~ R * arc length in steps
+// (the cross-product cost), N_RAMP 1. The planner only uses C_TOTAL as its path unit; the device
+// checks it against its own walk.
 std::optional<std::pair<uint32_t, uint64_t>> fake_walk(const pl::ArcFields& f) {
   const double r0 = std::hypot(f.i, f.j), r1 = std::hypot(f.dx - f.i, f.dy - f.j);
   const double a0 = std::atan2(-f.j, -f.i), a1 = std::atan2(f.dy - f.j, f.dx - f.i);

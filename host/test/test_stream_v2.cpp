@@ -16,6 +16,7 @@
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
+#include "stream_plan.h"
 
 namespace lk = fpgacnc::link;
 namespace v2 = fpgacnc::protocol::v2;
@@ -104,7 +105,7 @@ TEST(StreamV2, CleanJobRunsEveryFrameOnceInOrder) {
   std::vector<std::pair<size_t, size_t>> progress;
   auto so = clean_options();
   so.progress = [&](size_t d, size_t t) { progress.emplace_back(d, t); };
-  const auto r = lk::stream_v2(dev, plan, cfg, so);
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
   expect_executed_in_order(dev, job);
   ASSERT_EQ(dev.configs().size(), 4u);
   for (uint8_t a = 0; a < 4; ++a) {
@@ -143,7 +144,7 @@ TEST(StreamV2, TinyFifoAndSlowDeviceNeverOverflow) {
   o.fifo_depth = 2;
   o.exec_period = std::chrono::microseconds(2000);
   FakeV2Device dev(o);
-  const auto r = lk::stream_v2(dev, plan, cfg, clean_options());
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, clean_options());
   expect_executed_in_order(dev, job);
   EXPECT_EQ(dev.stats().fifo_full, 0u);
   EXPECT_EQ(dev.stats().max_fifo_level, 2u);
@@ -166,7 +167,7 @@ TEST(StreamV2, LongCreditWaitIsNotATimeout) {
   auto so = clean_options();
   so.retransmit_timeout = milliseconds(100);
   so.idle_poll = milliseconds(100);
-  const auto r = lk::stream_v2(dev, plan, cfg, so);
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
   expect_executed_in_order(dev, job);
   EXPECT_EQ(r.timeouts, 0u);
   EXPECT_EQ(r.retransmissions, 0u);
@@ -181,7 +182,7 @@ TEST(StreamV2, SequenceAndDoneCountersWrapAround) {
   o.initial_next_seq = 250;
   o.initial_done = 0xFFFFFFF0u;
   FakeV2Device dev(o);
-  const auto r = lk::stream_v2(dev, plan, cfg, clean_options());
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, clean_options());
   expect_executed_in_order(dev, job);
   EXPECT_EQ(dev.done(), static_cast<uint32_t>(0xFFFFFFF0u + job.frames.size()));
   EXPECT_EQ(dev.next_seq(), static_cast<uint8_t>(250 + 4 + job.frames.size() + 1));
@@ -211,7 +212,7 @@ TEST_P(StreamV2Faults, JobCompletesEverySegmentExactlyOnce) {
   o.faults.stall_after_bytes = 3000;
   o.faults.stall = milliseconds(200);
   FakeV2Device dev(o);
-  const auto r = lk::stream_v2(dev, plan, cfg, fast_options());
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, fast_options());
   expect_executed_in_order(dev, job);
   EXPECT_TRUE(r.position_ok);
   const auto& st = dev.stats();
@@ -250,7 +251,7 @@ TEST(StreamV2, StallLongerThanTheRetransmitTimeoutResends) {
   o.faults.stall_after_bytes = 500;
   o.faults.stall = milliseconds(200);
   FakeV2Device dev(o);
-  const auto r = lk::stream_v2(dev, plan, cfg, fast_options());  // 60 ms timeout
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, fast_options());  // 60 ms timeout
   expect_executed_in_order(dev, job);
   EXPECT_GE(r.timeouts, 1u);
   EXPECT_GT(r.retransmissions, 0u);
@@ -269,7 +270,7 @@ TEST(StreamV2, WithoutDoneFramesStatusPollsCompleteTheJob) {
   o.fifo_depth = 8;
   o.exec_period = std::chrono::microseconds(1000);
   FakeV2Device dev(o);
-  const auto r = lk::stream_v2(dev, plan, cfg, clean_options());
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, clean_options());
   expect_executed_in_order(dev, job);
   EXPECT_GT(r.status_polls, 2u) << "2 are the start and end queries";
   EXPECT_TRUE(r.position_ok);
@@ -282,7 +283,7 @@ TEST(StreamV2, RefusesAJobWithMoreAxesThanTheDevice) {
   o.n_axes = 2;
   FakeV2Device dev(o);
   try {
-    lk::stream_v2(dev, plan, cfg, fast_options());
+    fpgacnc::test::stream_plan(dev, plan, cfg, fast_options());
     FAIL() << "a 3-axis job was accepted by a 2-axis device";
   } catch (const lk::Error& e) {
     EXPECT_NE(std::string(e.what()).find("3 axes"), std::string::npos) << e.what();
@@ -291,7 +292,7 @@ TEST(StreamV2, RefusesAJobWithMoreAxesThanTheDevice) {
   EXPECT_TRUE(dev.executed().empty());
   // The same job in 2 axes is fine.
   const auto plan2 = plan_of("G1 X1 Y1 F600\nG1 X0\n", cfg);
-  const auto r = lk::stream_v2(dev, plan2, cfg, fast_options());
+  const auto r = fpgacnc::test::stream_plan(dev, plan2, cfg, fast_options());
   EXPECT_TRUE(r.position_ok);
   EXPECT_EQ(dev.configs().size(), 2u) << "CONFIG_AXIS only for the device's axes";
 }
@@ -315,7 +316,7 @@ TEST(StreamV2, DeviceWithoutProfilesOrArcsNamesTheConfigKey) {
     const auto job = v2::pack_job(plan, cfg);
     ASSERT_GT(c.type == 0x12 ? job.profiles : job.arcs, 0u);
     try {
-      lk::stream_v2(dev, plan, cfg, fast_options());
+      fpgacnc::test::stream_plan(dev, plan, cfg, fast_options());
       FAIL() << "type 0x" << std::hex << int{c.type} << " was refused but the job completed";
     } catch (const lk::Error& e) {
       std::printf("%s\n", e.what());
@@ -327,7 +328,7 @@ TEST(StreamV2, DeviceWithoutProfilesOrArcsNamesTheConfigKey) {
     if (c.type == 0x12) fixed.motion = "constant";
     if (c.type == 0x13) fixed.native_arcs = false;
     FakeV2Device dev2(o);
-    const auto r = lk::stream_v2(dev2, plan_of(g, fixed), fixed, fast_options());
+    const auto r = fpgacnc::test::stream_plan(dev2, plan_of(g, fixed), fixed, fast_options());
     EXPECT_TRUE(r.position_ok) << c.key;
   }
 }
@@ -337,7 +338,7 @@ TEST(StreamV2, RefusesAJobPlannedForAnotherClock) {
   cfg.clk_hz = 100'000'000;
   FakeV2Device dev(FakeV2Device::Options{});
   try {
-    lk::stream_v2(dev, plan_of("G1 X1 F600\n", cfg), cfg, fast_options());
+    fpgacnc::test::stream_plan(dev, plan_of("G1 X1 F600\n", cfg), cfg, fast_options());
     FAIL() << "a job planned for 100 MHz was sent to a 50 MHz device";
   } catch (const lk::Error& e) {
     EXPECT_NE(std::string(e.what()).find("50000000 Hz"), std::string::npos) << e.what();
@@ -354,7 +355,7 @@ TEST(StreamV2, DeviceThatNeverAnswersIsAnError) {
   EXPECT_THROW(lk::select_protocol(dev, "v2", so), lk::Error);
   EXPECT_EQ(dev.stats().hellos, 3u);
   const auto cfg = test_cfg();
-  EXPECT_THROW(lk::stream_v2(dev, plan_of("G1 X1 F600\n", cfg), cfg, so), lk::Error);
+  EXPECT_THROW(fpgacnc::test::stream_plan(dev, plan_of("G1 X1 F600\n", cfg), cfg, so), lk::Error);
 }
 
 TEST(SelectProtocol, AutoPicksV2WhenIdentComes) {

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "../../test/stream_plan.h"
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/planner.h"
@@ -68,7 +69,7 @@ TEST_P(CorpusArcs, EndPositionsThroughThePty) {
   sb::BoardLink link(sb::SimBoard::options_from_config(cfg));
   const auto choice = lk::select_protocol(link, "auto", so);
   ASSERT_EQ(choice.protocol, "v2");
-  const lk::StreamV2Report rep = lk::stream_v2(link, p, cfg, so, choice.ident);
+  const lk::StreamV2Report rep = fpgacnc::test::stream_plan(link, p, cfg, so, choice.ident);
   EXPECT_TRUE(link.wait_idle(1000ms)) << "board still busy 1 s of board time after the job";
   link.board().stop();
   const sb::BoardStats st = link.board().stats();

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 
+#include "../../test/stream_plan.h"
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/heat/autotune_link.h"
 #include "fpgacnc/heat/heater_job.h"
@@ -113,7 +114,7 @@ TEST(HeaterBoard, PartGcodeStartWithHeaters) {
   size_t statuses = 0;
   o.on_status = [&](const v2::Status&) { ++statuses; };
   const auto t0 = std::chrono::steady_clock::now();
-  const auto r = lk::stream_v2(link, p, cfg, o);
+  const auto r = fpgacnc::test::stream_plan(link, p, cfg, o);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   fmt::print("{}", lk::format_report(r));
   fmt::print(
@@ -165,7 +166,7 @@ TEST(HeaterBoard, SensorOpenDuringWarmUpStopsTheJob) {
     }
   };
   try {
-    lk::stream_v2(link, p, cfg, o);
+    fpgacnc::test::stream_plan(link, p, cfg, o);
     FAIL() << "an open bed sensor did not stop the job";
   } catch (const lk::Error& e) {
     const std::string w = e.what();

@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "../../test/stream_plan.h"
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/planner.h"
@@ -85,7 +86,7 @@ V2Run run_v2(const plan::Plan& p, const cfgns::MachineConfig& cfg, const sb::Boa
   const auto choice = lk::select_protocol(link, "auto", so);
   r.protocol = choice.protocol;
   if (choice.protocol != "v2") return r;
-  r.rep = lk::stream_v2(link, p, cfg, so, choice.ident);
+  r.rep = fpgacnc::test::stream_plan(link, p, cfg, so, choice.ident);
   EXPECT_TRUE(link.wait_idle(1000ms)) << "board still busy 1 s of board time after the job";
   link.board().stop();
   r.stats = link.board().stats();
@@ -296,7 +297,7 @@ TEST(V2System, V1AfterV2OnTheSameBoard) {
   lk::StreamV2Options so;
   const auto c = lk::select_protocol(link, "auto", so);
   ASSERT_EQ(c.protocol, "v2");
-  const auto r2 = lk::stream_v2(link, p, cfg, so, c.ident);
+  const auto r2 = fpgacnc::test::stream_plan(link, p, cfg, so, c.ident);
   EXPECT_TRUE(r2.released);
   EXPECT_TRUE(r2.position_ok);
   lk::StreamOptions o1;

@@ -372,7 +372,7 @@ void Engine::push_fifo(const v2::Frame& f, int line, double feed, double s) {
 
 void Engine::emit_profiles() {
   for (const auto& p : la_->take())
-    push_fifo(frontend::profile_frame(p, cfg_), p.source_line, p.v_cruise * 60.0,
+    push_fifo(v2::profile_frame(p, cfg_), p.source_line, p.v_cruise * 60.0,
               std::max(0.0, p.spindle_s));
 }
 
@@ -390,7 +390,7 @@ void Engine::push_items(std::vector<plan::PlanItem> items) {
       emit_profiles();
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
       flush_lookahead();
-      for (const auto& f : frontend::dwell_frames(d->seconds, cfg_.clk_hz))
+      for (const auto& f : v2::dwell_frames(d->seconds, cfg_.clk_hz))
         push_fifo(f, d->source_line, 0.0, 0.0);
     } else if (std::get_if<gcode::Pause>(&item)) {
       flush_lookahead();

@@ -105,54 +105,18 @@ std::vector<int16_t> thermistor_table(const HeaterConfig& h) {
   return t;
 }
 
-HeaterJob make_heater_job(const plan::Plan& plan, const v2::Job& job,
+HeaterJob make_heater_job(const plan::Plan& plan, const v2::Job& /*job*/,
                           const config::MachineConfig& cfg) {
+  return make_heater_job(plan, cfg);
+}
+
+HeaterJob make_heater_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
   HeaterJob hj;
   hj.config = cfg.heaters;
   hj.source = plan.source;
-  // Walk plan items and job frames together: a heater command goes before the first frame of
-  // the next segment or dwell.
-  size_t seg = 0;    // segments seen
-  size_t dwell = 0;  // dwell items seen
-  // Dwell ordinal of each frame (-1 for others): a DWELL frame starts a new dwell item unless
-  // it continues a split one (same line, split, right after another DWELL).
-  std::vector<long> dwell_of(job.frames.size(), -1);
-  {
-    long d = -1;
-    for (size_t i = 0; i < job.frames.size(); ++i) {
-      const auto& jf = job.frames[i];
-      if (jf.frame.type != static_cast<uint8_t>(v2::Type::Dwell)) continue;
-      const bool cont = i > 0 && jf.split &&
-                        job.frames[i - 1].frame.type == static_cast<uint8_t>(v2::Type::Dwell) &&
-                        job.frames[i - 1].source_line == jf.source_line;
-      if (!cont) ++d;
-      dwell_of[i] = d;
-    }
-  }
-  auto position = [&]() {
-    // First frame that belongs to a later segment or dwell (NUMERATORS, index 0, always before).
-    for (size_t i = 1; i < job.frames.size(); ++i) {
-      const auto& jf = job.frames[i];
-      if (dwell_of[i] >= 0) {
-        if (static_cast<size_t>(dwell_of[i]) >= dwell) return i;
-      } else if (jf.segment_index >= seg) {
-        return i;
-      }
-    }
-    return job.frames.size();
-  };
   for (const auto& item : plan.items) {
-    if (std::holds_alternative<plan::Segment>(item)) {
-      ++seg;
-      continue;
-    }
-    if (std::holds_alternative<plan::Dwell>(item)) {
-      const auto& d = std::get<plan::Dwell>(item);
-      if (std::round(d.seconds * static_cast<double>(cfg.clk_hz)) > 0) ++dwell;
-      continue;
-    }
     const auto* hp = std::get_if<plan::HeaterCommand>(&item);
-    if (!hp) continue;  // pauses, outputs and messages
+    if (!hp) continue;
     const auto& h = *hp;
     HeaterAction a;
     a.mcode = h.mcode;
@@ -181,7 +145,6 @@ HeaterJob make_heater_job(const plan::Plan& plan, const v2::Job& job,
     }
     a.target_c = h.s;
     a.target_q4 = to_q4(h.s);
-    a.before_frame = position();
     hj.used[a.channel] = true;
     hj.actions.push_back(a);
   }

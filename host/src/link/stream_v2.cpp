@@ -1,6 +1,7 @@
 #include "fpgacnc/link/stream_v2.h"
 
 #include "fpgacnc/link/v2_session.h"
+#include "fpgacnc/plan/motion_plan.h"
 
 #include <fmt/format.h>
 
@@ -78,24 +79,12 @@ StreamV2Options stream_v2_options(const config::MachineConfig& cfg) {
   return o;
 }
 
-StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
-                         const StreamV2Options& options, std::optional<v2::Ident> ident) {
-  const v2::Job job = v2::pack_job(plan, cfg);  // throws before any byte
-  // Heater commands: validated (line:col errors) and placed before any byte is sent.
-  const heat::HeaterJob heaters = heat::make_heater_job(plan, job, cfg);
-  StreamV2Options opt = options;
-  opt.heaters = &heaters;
-  StreamV2Report r = stream_v2_job(link, job, opt, ident);
-  r.final_steps = plan.final_steps;
-  r.final_mm = plan.final_mm;
-  return r;
-}
-
-StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Options& opt,
+StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Options& options,
                              std::optional<v2::Ident> ident) {
   StreamV2Report rep;
-  const heat::HeaterJob* hj = opt.heaters && opt.heaters->any() ? opt.heaters : nullptr;
-  rep.skipped_heater = hj ? 0 : job.skipped_heater;
+  StreamV2Options opt = options;
+  opt.heaters = job.heaters.any() ? &job.heaters : nullptr;
+  rep.skipped_heater = job.skipped_heater;
   rep.t_raised = job.t_raised;
   rep.total_t = job.total_t;
   rep.target = job.target;
@@ -103,7 +92,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   rep.profiles = job.profiles;
   rep.arcs = job.arcs;
   rep.dwells = job.dwells;
-  rep.fifo_frames = job.frames.size();
+  rep.fifo_frames = job.fifo_frames;
+  rep.heater_frames = job.heater_frames;
   const auto t0 = clock_type::now();
 
   // 1. Handshake; the job must fit the device.
@@ -111,32 +101,26 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   check_job_fits(link, id, job);
   const size_t n_axes = id.n_axes;
 
-  // 2. The session: CONFIG_AXIS per device axis, heater setup, then the FIFO frames with each
-  // heater setpoint, pause and message before the frame it precedes in the program.
+  // 2. The session: CONFIG_AXIS per device axis, then the job's frames in their order, each
+  // pause and message before the frame it precedes in the program.
   V2Session session(link, opt, id, rep);
   session.start();
   for (size_t a = 0; a < job.config.size() && a < n_axes; ++a) session.push({job.config[a]});
-  if (hj) {
-    for (const auto& f : hj->setup) session.push({f});
-    rep.heater_frames += hj->setup.size();
-  }
-  size_t ai = 0, ei = 0;
-  auto before = [&](size_t frame) {
-    for (; hj && ai < hj->actions.size() && hj->actions[ai].before_frame <= frame; ++ai) {
-      const auto& a = hj->actions[ai];
-      session.push({v2::heater_setpoint(0, a.channel, a.target_q4), false, nullptr, &a});
-      ++rep.heater_frames;
-    }
+  size_t ei = 0;
+  auto events_before = [&](size_t frame) {
     for (; ei < job.events.size() && job.events[ei].before_frame <= frame; ++ei) {
       if (const auto* p = std::get_if<gcode::Pause>(&job.events[ei].what)) session.add_pause(p);
       if (const auto* m = std::get_if<gcode::Message>(&job.events[ei].what)) session.add_message(m);
     }
   };
   for (size_t j = 0; j < job.frames.size(); ++j) {
-    before(j);
-    session.push({job.frames[j].frame, true, &job.frames[j]});
+    events_before(j);
+    const v2::JobFrame& jf = job.frames[j];
+    const heat::HeaterAction* ha =
+        jf.heater >= 0 ? &job.heaters.actions.at(static_cast<size_t>(jf.heater)) : nullptr;
+    session.push({jf.frame, jf.fifo, jf.fifo ? &jf : nullptr, ha});
   }
-  before(SIZE_MAX);
+  events_before(SIZE_MAX);
 
   // 3. Until every frame is done.
   session.drain();
@@ -177,6 +161,15 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   session.finish_report();
   rep.elapsed = clock_type::now() - t0;
   return rep;
+}
+
+StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
+                         const StreamV2Options& options, std::optional<v2::Ident> ident) {
+  const v2::Job job = v2::pack_job(plan::plan_motion(plan, cfg), cfg);  // throws before any byte
+  StreamV2Report r = stream_v2_job(link, job, options, ident);
+  r.final_steps = plan.final_steps;
+  r.final_mm = plan.final_mm;
+  return r;
 }
 
 std::string format_report(const StreamV2Report& r) {

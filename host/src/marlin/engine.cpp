@@ -58,7 +58,7 @@ heat::HeaterJob heater_setup(const config::MachineConfig& cfg) {
   p.source = "marlin";
   if (cfg.heaters.ch[heat::kHotend].enabled) p.items.push_back(plan::HeaterCommand{104, 0.0, true});
   if (cfg.heaters.ch[heat::kBed].enabled) p.items.push_back(plan::HeaterCommand{140, 0.0, true});
-  heat::HeaterJob hj = heat::make_heater_job(p, v2::Job{}, cfg);
+  heat::HeaterJob hj = heat::make_heater_job(p, cfg);
   hj.actions.clear();
   return hj;
 }
@@ -347,7 +347,7 @@ void Engine::push_fifo(const v2::Frame& f, int line) {
 }
 
 void Engine::emit_profiles() {
-  for (const auto& p : la_->take()) push_fifo(frontend::profile_frame(p, cfg_), p.source_line);
+  for (const auto& p : la_->take()) push_fifo(v2::profile_frame(p, cfg_), p.source_line);
 }
 
 void Engine::flush_lookahead() {
@@ -363,8 +363,7 @@ void Engine::push_items(std::vector<plan::PlanItem> items) {
       emit_profiles();
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
       flush_lookahead();
-      for (const auto& f : frontend::dwell_frames(d->seconds, cfg_.clk_hz))
-        push_fifo(f, d->source_line);
+      for (const auto& f : v2::dwell_frames(d->seconds, cfg_.clk_hz)) push_fifo(f, d->source_line);
     } else if (const auto* h = std::get_if<plan::HeaterCommand>(&item)) {
       const uint8_t ch = (h->mcode == 104 || h->mcode == 109) ? heat::kHotend : heat::kBed;
       const auto& hc = cfg_.heaters.ch[ch];

@@ -89,7 +89,8 @@ uint16_t u16_timing(uint32_t v, const char* what) {
 
 // The k of a segment: axes up to the last moving one, at least 2 (X, Y).
 // A G4 dwell as DWELL frames of at most kMaxT clocks each (split when longer).
-std::vector<JobFrame> dwell_frames(const plan::Dwell& d, uint32_t clk_hz, size_t segment_index) {
+std::vector<JobFrame> job_dwell_frames(const plan::Dwell& d, uint32_t clk_hz,
+                                       size_t segment_index) {
   const double clocks = std::round(d.seconds * static_cast<double>(clk_hz));
   if (!std::isfinite(clocks) || clocks < 0.0 || clocks > 1e15) {
     throw std::invalid_argument(
@@ -128,13 +129,11 @@ void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
 // (docs/timing.md).
 constexpr uint64_t kArcExtraTicks = 2;
 
-void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job& job,
-                   const std::function<void(JobFrame)>& push,
-                   const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
-  plan::MotionLimits lim = plan::motion_limits(cfg);
-  lim.arc_walk = arc_walk;
-  if (!lim.arc_walk && cfg.native_arcs) lim.arc_walk = plan::reference_arc_walk();
-  const plan::ProfilePlan pp = plan::plan_profiles(plan, lim);
+// A heater command met between the frames: `heater` packs it (or counts it as skipped).
+using HeaterHook = std::function<void(const plan::HeaterCommand&, size_t next_segment)>;
+
+void pack_profiles(const plan::ProfilePlan& pp, const config::MachineConfig& cfg, Job& job,
+                   const std::function<void(JobFrame)>& push, const HeaterHook& heater) {
   job.profile_stats = pp.stats;
   size_t seg_seen = 0;
   size_t last_seg = SIZE_MAX;
@@ -215,14 +214,9 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
         continue;
       }
       const size_t k = frame_axes(p->steps);
-      std::array<int32_t, 4> s32{};
-      for (size_t a = 0; a < 4; ++a) {
-        s32[a] = static_cast<int32_t>(p->steps[a]);
-        job.target[a] += p->steps[a];
-      }
+      for (size_t a = 0; a < 4; ++a) job.target[a] += p->steps[a];
       JobFrame jf;
-      jf.frame = line_profile(0, to_line_profile(p->code, laser_power(s, cfg), p->fields,
-                                                 std::span<const int32_t>(s32.data(), k)));
+      jf.frame = profile_frame(*p, cfg);
       jf.segment_index = p->segment_index;
       jf.source_line = p->source_line;
       jf.t = static_cast<uint32_t>(std::min<uint64_t>(p->clocks, kMaxT));
@@ -240,14 +234,14 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
       }
       push(std::move(jf));
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_seen)) {
+      for (JobFrame& jf : job_dwell_frames(*d, cfg.clk_hz, seg_seen)) {
         job.total_t += jf.t;
         advance(plan::Steps4{}, jf.t, -1);
         ++job.dwells;
         push(std::move(jf));
       }
     } else if (!record_event(job, item, seg_seen, push)) {
-      ++job.skipped_heater;
+      heater(std::get<plan::HeaterCommand>(item), seg_seen);
     }
   }
   job.total_t += job.reversal_gap_clocks;
@@ -255,105 +249,9 @@ void pack_profiles(const plan::Plan& plan, const config::MachineConfig& cfg, Job
   job.split_moves = pp.stats.split_moves;
 }
 
-}  // namespace
-
-void add_output(OutputSet& set, const gcode::Output& o) {
-  switch (o.kind) {
-    case gcode::Output::Kind::kFlood:
-      set.flood = o.value != 0.0;
-      break;
-    case gcode::Output::Kind::kMist:
-      set.mist = o.value != 0.0;
-      break;
-    case gcode::Output::Kind::kFan:
-      set.fan = static_cast<uint8_t>(std::clamp(std::lround(o.value * 255.0), 0L, 255L));
-      break;
-    case gcode::Output::Kind::kDigital:
-      if (o.index >= 0 && static_cast<size_t>(o.index) < kDigitalOutputs)
-        set.dout[static_cast<size_t>(o.index)] = o.value != 0.0;
-      break;
-  }
-}
-
-uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
-  if (s.code == 0) return 0;
-  if (s.spindle_s < 0.0) return 255;
-  const double scaled = s.spindle_s / cfg.laser_s_max * 255.0;
-  long long p = std::llround(std::clamp(scaled, 0.0, 255.0));
-  if (p == 0 && s.spindle_s > 0.0) p = 1;
-  return static_cast<uint8_t>(p);
-}
-
-Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r) {
-  Frame fr;
-  fr.seq = seq;
-  fr.type = kTypeArc;
-  auto& p = fr.payload;
-  p.push_back(static_cast<uint8_t>(g.code | (g.plane << 2)));  // flags: code, plane bits 3:2
-  p.push_back(power);
-  put_be(p, static_cast<uint32_t>(g.i), 3);
-  put_be(p, static_cast<uint32_t>(g.j), 3);
-  put_be(p, static_cast<uint32_t>(g.dx), 3);
-  put_be(p, static_cast<uint32_t>(g.dy), 3);
-  put_be(p, static_cast<uint32_t>(g.dz), 4);
-  put_be(p, g.n_ramp, 3);
-  put_be(p, g.c_total, 6);
-  put_be(p, r.v_entry, 8);
-  put_be(p, r.v_cruise, 8);
-  put_be(p, r.v_exit, 8);
-  put_be(p, r.a, 6);
-  put_be(p, r.d, 6);
-  return fr;
-}
-
-LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
-                            std::span<const int32_t> steps) {
-  LineProfile lp;
-  lp.code = code;
-  lp.power = power;
-  lp.v_entry = f.v_entry;
-  lp.v_cruise = f.v_cruise;
-  lp.v_exit = f.v_exit;
-  lp.accel = f.a;
-  lp.decel_at = f.d;
-  lp.steps.assign(steps.begin(), steps.end());
-  return lp;
-}
-
-uint32_t min_period(const config::StepTiming& t) {
-  return std::max<uint32_t>(t.step_high, 1) + std::max<uint32_t>(t.step_low, 1);
-}
-
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
-             const decltype(plan::MotionLimits::arc_walk)& arc_walk) {
-  Job job;
-  const auto& st = cfg.step_timing;
-  const uint16_t sh = u16_timing(st.step_high, "step_high");
-  const uint16_t sl = u16_timing(st.step_low, "step_low");
-  const uint16_t ds = u16_timing(st.dir_setup, "dir_setup");
-  const uint16_t dh = u16_timing(st.dir_hold, "dir_hold");
-  for (uint8_t a = 0; a < config::kAxes; ++a)
-    job.config.push_back(config_axis(0, a, sh, sl, ds, dh));
-  for (const auto& f : job.config) job.wire_bytes += kOverhead + f.payload.size();
-  job.min_period = min_period(st);
-  job.numerator = plan.numerator;
-  job.clk_hz = cfg.clk_hz;
-
-  auto push = [&job](JobFrame jf) {
-    job.wire_bytes += kOverhead + jf.frame.payload.size();
-    job.frames.push_back(std::move(jf));
-  };
-  {
-    JobFrame jf;
-    jf.frame = numerators(0, plan.numerator[0], plan.numerator[1]);
-    push(std::move(jf));
-  }
-
-  if (cfg.motion == "profile") {
-    pack_profiles(plan, cfg, job, push, arc_walk);
-    return job;
-  }
-
+// motion = "constant": one LINE frame per planned segment (split when too long).
+void pack_constant(const plan::Plan& plan, const config::MachineConfig& cfg, Job& job,
+                   const std::function<void(JobFrame)>& push, const HeaterHook& heater) {
   size_t seg_index = 0;
   for (const auto& item : plan.items) {
     if (const auto* s = std::get_if<plan::Segment>(&item)) {
@@ -433,50 +331,202 @@ Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
       ++job.segments;
       ++seg_index;
     } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      for (JobFrame& jf : dwell_frames(*d, cfg.clk_hz, seg_index)) {
+      for (JobFrame& jf : job_dwell_frames(*d, cfg.clk_hz, seg_index)) {
         job.total_t += jf.t;
         ++job.dwells;
         push(std::move(jf));
       }
     } else if (!record_event(job, item, seg_index, push)) {
-      ++job.skipped_heater;
+      heater(std::get<plan::HeaterCommand>(item), seg_index);
     }
   }
+}
+
+}  // namespace
+
+void add_output(OutputSet& set, const gcode::Output& o) {
+  switch (o.kind) {
+    case gcode::Output::Kind::kFlood:
+      set.flood = o.value != 0.0;
+      break;
+    case gcode::Output::Kind::kMist:
+      set.mist = o.value != 0.0;
+      break;
+    case gcode::Output::Kind::kFan:
+      set.fan = static_cast<uint8_t>(std::clamp(std::lround(o.value * 255.0), 0L, 255L));
+      break;
+    case gcode::Output::Kind::kDigital:
+      if (o.index >= 0 && static_cast<size_t>(o.index) < kDigitalOutputs)
+        set.dout[static_cast<size_t>(o.index)] = o.value != 0.0;
+      break;
+  }
+}
+
+uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
+  if (s.code == 0) return 0;
+  if (s.spindle_s < 0.0) return 255;
+  const double scaled = s.spindle_s / cfg.laser_s_max * 255.0;
+  long long p = std::llround(std::clamp(scaled, 0.0, 255.0));
+  if (p == 0 && s.spindle_s > 0.0) p = 1;
+  return static_cast<uint8_t>(p);
+}
+
+Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r) {
+  Frame fr;
+  fr.seq = seq;
+  fr.type = kTypeArc;
+  auto& p = fr.payload;
+  p.push_back(static_cast<uint8_t>(g.code | (g.plane << 2)));  // flags: code, plane bits 3:2
+  p.push_back(power);
+  put_be(p, static_cast<uint32_t>(g.i), 3);
+  put_be(p, static_cast<uint32_t>(g.j), 3);
+  put_be(p, static_cast<uint32_t>(g.dx), 3);
+  put_be(p, static_cast<uint32_t>(g.dy), 3);
+  put_be(p, static_cast<uint32_t>(g.dz), 4);
+  put_be(p, g.n_ramp, 3);
+  put_be(p, g.c_total, 6);
+  put_be(p, r.v_entry, 8);
+  put_be(p, r.v_cruise, 8);
+  put_be(p, r.v_exit, 8);
+  put_be(p, r.a, 6);
+  put_be(p, r.d, 6);
+  return fr;
+}
+
+LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
+                            std::span<const int32_t> steps) {
+  LineProfile lp;
+  lp.code = code;
+  lp.power = power;
+  lp.v_entry = f.v_entry;
+  lp.v_cruise = f.v_cruise;
+  lp.v_exit = f.v_exit;
+  lp.accel = f.a;
+  lp.decel_at = f.d;
+  lp.steps.assign(steps.begin(), steps.end());
+  return lp;
+}
+
+Frame profile_frame(const plan::Profile& p, const config::MachineConfig& cfg) {
+  plan::Segment s;
+  s.code = p.code;
+  s.spindle_s = p.spindle_s;
+  std::array<int32_t, 4> s32{};
+  for (size_t a = 0; a < 4; ++a) s32[a] = static_cast<int32_t>(p.steps[a]);
+  return line_profile(0,
+                      to_line_profile(p.code, laser_power(s, cfg), p.fields,
+                                      std::span<const int32_t>(s32.data(), frame_axes(p.steps))));
+}
+
+std::vector<Frame> dwell_frames(double seconds, uint64_t clk_hz) {
+  std::vector<Frame> out;
+  const double clocks = std::round(seconds * static_cast<double>(clk_hz));
+  uint64_t left = clocks > 0 && clocks < 1e15 ? static_cast<uint64_t>(clocks) : 0;
+  while (left > 0) {
+    const uint64_t t = std::min<uint64_t>(left, kMaxT);
+    out.push_back(dwell(0, static_cast<uint32_t>(t)));
+    left -= t;
+  }
+  return out;
+}
+
+uint32_t min_period(const config::StepTiming& t) {
+  return std::max<uint32_t>(t.step_high, 1) + std::max<uint32_t>(t.step_low, 1);
+}
+
+namespace {
+
+// A job with CONFIG_AXIS for the 4 axes and its first frame, NUMERATORS.
+Job start_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
+  Job job;
+  const auto& st = cfg.step_timing;
+  const uint16_t sh = u16_timing(st.step_high, "step_high");
+  const uint16_t sl = u16_timing(st.step_low, "step_low");
+  const uint16_t ds = u16_timing(st.dir_setup, "dir_setup");
+  const uint16_t dh = u16_timing(st.dir_hold, "dir_hold");
+  for (uint8_t a = 0; a < config::kAxes; ++a)
+    job.config.push_back(config_axis(0, a, sh, sl, ds, dh));
+  for (const auto& f : job.config) job.wire_bytes += kOverhead + f.payload.size();
+  job.min_period = min_period(st);
+  job.numerator = plan.numerator;
+  job.clk_hz = cfg.clk_hz;
+  JobFrame jf;
+  jf.frame = numerators(0, plan.numerator[0], plan.numerator[1]);
+  job.wire_bytes += kOverhead + jf.frame.payload.size();
+  job.frames.push_back(std::move(jf));
   return job;
 }
 
-JobTimes job_times(const plan::Plan& plan, const config::MachineConfig& cfg,
-                   uint64_t v1_overhead_clocks) {
-  JobTimes t;
-  const double clk = static_cast<double>(cfg.clk_hz);
-  uint64_t v1 = 0;
-  for (const auto& item : plan.items) {
-    if (const auto* s = std::get_if<plan::Segment>(&item)) {
-      const bool x_dom = iabs(s->steps[0]) >= iabs(s->steps[1]);
-      const int64_t n = std::max(iabs(s->steps[0]), iabs(s->steps[1]));
-      const uint32_t num = plan.numerator[x_dom ? 0 : 1];
-      v1 += static_cast<uint64_t>(num / std::max<uint16_t>(s->feed_v1, 1)) *
-                static_cast<uint64_t>(n) +
-            v1_overhead_clocks;
-      ++t.v1_moves;
-    } else if (const auto* d = std::get_if<plan::Dwell>(&item)) {
-      v1 += static_cast<uint64_t>(std::llround(d->seconds * clk));
-    }
+// A heater command's place: before the first frame of the segment or dwell that follows it,
+// and so before the OUTPUT frames already packed for that segment (`next_segment`), after the
+// heater frames before them. Events at or after that place move with the frames.
+void place_heater(Job& job, const plan::HeaterCommand& h, size_t next_segment, int index) {
+  size_t at = job.frames.size();
+  while (at > 1 && job.frames[at - 1].fifo &&
+         job.frames[at - 1].frame.type == static_cast<uint8_t>(Type::Output) &&
+         job.frames[at - 1].segment_index == next_segment) {
+    --at;
   }
-  t.v1_clocks = v1;
-  config::MachineConfig c = cfg;
-  c.motion = "constant";
-  const Job jc = pack_job(plan, c);
-  c.motion = "profile";
-  const Job jp = pack_job(plan, c);
-  t.v2_lines = jc.lines;
-  t.v2_profiles = jp.profiles;
-  t.v2_constant_clocks = jc.total_t;
-  t.v2_profile_clocks = jp.total_t;
-  t.v1_s = static_cast<double>(v1) / clk;
-  t.v2_constant_s = static_cast<double>(jc.total_t) / clk;
-  t.v2_profile_s = static_cast<double>(jp.total_t) / clk;
-  return t;
+  JobFrame jf;
+  jf.fifo = false;
+  jf.heater = index;
+  jf.segment_index = next_segment;
+  jf.source_line = h.source_line;
+  job.frames.insert(job.frames.begin() + static_cast<std::ptrdiff_t>(at), std::move(jf));
+  for (auto& e : job.events) {
+    if (e.before_frame >= at) ++e.before_frame;
+  }
+}
+
+}  // namespace
+
+Job pack_job(const plan::MotionPlan& planned, const config::MachineConfig& cfg,
+             const PackOptions& options) {
+  Job job = start_job(planned.plan, cfg);
+  auto push = [&job](JobFrame jf) {
+    job.wire_bytes += kOverhead + jf.frame.payload.size();
+    job.frames.push_back(std::move(jf));
+  };
+  int heaters = 0;
+  const HeaterHook heater = [&](const plan::HeaterCommand& h, size_t next_segment) {
+    if (!options.heaters) {
+      ++job.skipped_heater;
+      return;
+    }
+    place_heater(job, h, next_segment, heaters++);
+  };
+  if (planned.profiles) {
+    pack_profiles(*planned.profiles, cfg, job, push, heater);
+  } else {
+    pack_constant(planned.plan, cfg, job, push, heater);
+  }
+  if (heaters > 0) {
+    // Validated after the motion (its errors first), in program order: the k-th placeholder
+    // is the k-th heater command.
+    job.heaters = heat::make_heater_job(planned.plan, cfg);
+    for (auto& jf : job.frames) {
+      if (jf.heater < 0) continue;
+      const heat::HeaterAction& a = job.heaters.actions.at(static_cast<size_t>(jf.heater));
+      jf.frame = heater_setpoint(0, a.channel, a.target_q4);
+    }
+    std::vector<JobFrame> setup;
+    for (const Frame& f : job.heaters.setup) {
+      JobFrame jf;
+      jf.frame = f;
+      jf.fifo = false;
+      setup.push_back(std::move(jf));
+    }
+    job.frames.insert(job.frames.begin(), setup.begin(), setup.end());
+    for (auto& e : job.events) e.before_frame += setup.size();
+    job.heater_frames = setup.size() + static_cast<size_t>(heaters);
+  }
+  job.fifo_frames = job.frames.size() - job.heater_frames;
+  return job;
+}
+
+Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
+             const plan::ArcWalk& arc_walk) {
+  return pack_job(plan::plan_motion(plan, cfg, arc_walk), cfg, {.heaters = false});
 }
 
 std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq,

@@ -23,7 +23,10 @@
 #include "fpgacnc/heat/heater_config.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2.h"
-#include "fpgacnc/protocol/v2_job.h"
+
+namespace fpgacnc::protocol::v2 {
+struct Job;
+}
 
 namespace fpgacnc::heat {
 
@@ -34,7 +37,6 @@ struct HeaterAction {
   bool wait = false;
   int mcode = 0;
   int source_line = 0;
-  size_t before_frame = 0;  // index into Job::frames this setpoint goes before (frames.size(): end)
 };
 
 struct HeaterJob {
@@ -57,9 +59,12 @@ std::vector<int16_t> thermistor_table(const HeaterConfig& h);
 int16_t to_q4(double temp_c);
 uint16_t ticks(double seconds, double sample_s);  // rounded, saturated at 65535
 
-// Validates the plan's heater commands (throws gcode::Error "FILE:LINE:COL: error: ...") and
-// places them between the job's FIFO frames. `source`: G-code file (for the column of the bad
-// word; column 0 when it cannot be read).
+// Validates the plan's heater commands in program order (throws gcode::Error
+// "FILE:LINE:COL: error: ..."; the column of the bad word is read from plan.source, 0 when it
+// cannot be read) and makes the setup frames of the channels they use. The v2 packer
+// (protocol/v2_job.h) calls it and places the setpoints between the job's frames.
+HeaterJob make_heater_job(const plan::Plan& plan, const config::MachineConfig& cfg);
+// The same, for callers outside host/ that still pass the packed job (not used).
 HeaterJob make_heater_job(const plan::Plan& plan, const protocol::v2::Job& job,
                           const config::MachineConfig& cfg);
 

@@ -4,7 +4,8 @@
 //     longer than MAX_PAYLOAD is refused before anything sequenced is sent), STATUS_QUERY ->
 //     STATUS (waits while the device is still busy; `segments done` and the position at the
 //     start; a latched fault is cleared with FAULT_CLEAR and reported);
-//  2. CONFIG_AXIS for each device axis, then the FIFO frames (NUMERATORS, LINE, DWELL) while
+//  2. CONFIG_AXIS for each device axis, then the job's frames in the packer's order (heater
+//     setup, NUMERATORS, LINE / LINE_PROFILE / ARC / DWELL / OUTPUT, HEATER_SETPOINT) while
 //     credit = free - (FIFO frames sent, not yet acknowledged) > 0 and fewer than 127 frames are
 //     unacknowledged;
 //  3. go-back-N: on a NAK, or when nothing was acknowledged for the retransmission timeout, send
@@ -18,8 +19,8 @@
 //     silent;
 //  4. complete when `segments done` has counted every FIFO frame; then STATUS_QUERY (final
 //     position compared with the job's target) and RELEASE (back to auto mode).
-// Heaters (fpgacnc/heat/heater_job.h): the heater setup frames follow CONFIG_AXIS; each
-// M104/M109/M140/M190 is a HEATER_SETPOINT between the FIFO frames where it stands in the program.
+// Heaters: the packer (protocol/v2_job.h) has put the heater setup frames and each
+// M104/M109/M140/M190's HEATER_SETPOINT in the job's frames; the streamer only gates them.
 // After an M109/M190 setpoint nothing more is sent until the FIFO has drained and STATUS shows
 // the temperature within the channel's tolerance for its settle time (plant seconds). While a job
 // uses heaters STATUS is polled every `heater_poll` (progress line, faults, device watchdog); a
@@ -61,8 +62,10 @@ struct StreamV2Options {
   // Called when `segments done` advances: (FIFO frames done, FIFO frames in the job).
   std::function<void(size_t, size_t)> progress;
   // ---- Heaters ----
-  // The job's heater commands and setup frames (stream_v2() makes them from the plan); null or
-  // empty: no heater frames are sent.
+  // The heater commands of what is streamed (their channels' configuration for the M109/M190
+  // waits, the G-code file for messages). stream_v2_job sets it to the job's; a session whose
+  // frames are pushed by a front end (V2Session) is given it by that front end. Null or empty:
+  // no heater gate.
   const heat::HeaterJob* heaters = nullptr;
   std::chrono::milliseconds heater_poll{250};  // STATUS_QUERY period while heaters are in use
   // Plant time in seconds for M109/M190 settle times and timeouts (the simulated board runs its
@@ -125,7 +128,7 @@ struct StreamV2Report {
   uint64_t rx_abandoned = 0;
   uint8_t faults_cleared = 0;  // fault bits latched before the job (cleared)
   bool released = false;       // RELEASE acknowledged
-  size_t skipped_heater = 0;   // heater commands not sent (no heater job given)
+  size_t skipped_heater = 0;   // heater commands not sent (not packed: PackOptions::heaters)
   size_t heater_frames = 0;    // heater setup + setpoint frames of the session
   std::vector<HeaterWaitReport> heater_waits;
   size_t t_raised = 0;
@@ -140,11 +143,15 @@ struct StreamV2Report {
   std::array<double, 4> final_mm{};
 };
 
-// Streams a packed job. `ident`: the IDENT already received by select_protocol (skips HELLO).
+// Streams a packed job (protocol/v2_job.h): its frames in their order, nothing added. The report's
+// final_steps / final_mm are the caller's (the plan's). `ident`: the IDENT already received by
+// select_protocol (skips HELLO).
 StreamV2Report stream_v2_job(Link& link, const protocol::v2::Job& job,
                              const StreamV2Options& options,
                              std::optional<protocol::v2::Ident> ident = std::nullopt);
-// Packs `plan` (throws std::invalid_argument before any byte) and streams it.
+
+// The last three stages in one call (plan::plan_motion, protocol::v2::pack_job, stream_v2_job;
+// final position from `plan`), kept for tb/bench_protocol.cpp; host code calls the stages.
 StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
                          const StreamV2Options& options,
                          std::optional<protocol::v2::Ident> ident = std::nullopt);

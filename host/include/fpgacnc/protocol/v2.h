@@ -1,7 +1,10 @@
 // Protocol v2 codec (docs/protocol.md, "v2"): CRC-16/CCITT-FALSE, frame encoder, a resyncing
 // byte-stream parser, decoders of the device's answers and builders of the host's frames.
 // Byte-exact with the worked examples of docs/protocol.md (host/test/test_v2_codec.cpp).
-// Independent of the planner: the fuzz targets (fuzz/) link this file alone.
+// Independent of the planner: the fuzz targets (fuzz/) link the codec alone. Its sources, one per
+// frame family, are host/src/protocol/v2_frame.cpp (framing), v2_control.cpp (control frames and
+// the device's answers), v2_motion.cpp (FIFO frames), v2_heater.cpp and v2_check.cpp (the
+// device's field rules); host/sources.cmake lists them.
 //
 // Frame: A5 LEN SEQ TYPE payload[LEN] CRC_hi CRC_lo, CRC over LEN..payload, LEN <= 64.
 #pragma once

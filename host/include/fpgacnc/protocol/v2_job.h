@@ -1,12 +1,13 @@
-// Protocol v2 packer: a plan -> the frames of a v2 session (docs/protocol.md, "v2").
+// Protocol v2 packer: a planned job (plan/motion_plan.h) -> the frames of a v2 session, in the
+// order they are sent (docs/protocol.md, "v2"; docs/architecture.md, "Code flow of a job on the
+// host"). The packer plans nothing: it turns what the plan stage gives it into frames.
 //
-// - cfg.motion == "profile": the plan goes through the look-ahead planner
-//   (plan::plan_profiles, docs/motion.md) and every block becomes a LINE_PROFILE frame (TYPE
-//   0x12, docs/protocol.md; SHORT and k as for LINE); its JobFrame.t is the exact clock count of
-//   the hardware recurrence (an ARC frame's: the walk's last-move clock + 2, the segment's length;
-//   saturated at UINT32_MAX; total_t sums the exact counts and the DIR
-//   hold/setup pauses at reversals, reversal_gap_clocks). The rest of
-//   this list is the "constant" mode.
+// - A profiled plan (motion = "profile"): every look-ahead block becomes a LINE_PROFILE frame
+//   (TYPE 0x12, docs/protocol.md; SHORT and k as for LINE) or an ARC frame; its JobFrame.t is
+//   the exact clock count of the hardware recurrence (an ARC frame's: the walk's last-move clock
+//   + 2, the segment's length; saturated at UINT32_MAX; total_t sums the exact counts and the DIR
+//   hold/setup pauses at reversals, reversal_gap_clocks). The rest of this list is the
+//   "constant" mode.
 // - Every planned segment becomes a LINE frame: SHORT (int16 steps) when every count fits,
 //   else int32; k = axes up to the last moving one, at least 2 (X, Y); Z and E are driven.
 // - Laser power: 0 for code 0 (rapid / laser off); else the S word in force scaled by
@@ -18,8 +19,11 @@
 //   (min_period = STEP high + STEP low, 0 counting as 1: the device would clamp otherwise) and a
 //   move whose T exceeds UINT32_MAX (or whose steps exceed int32) is split into equal parts.
 // - G4 dwell -> DWELL frames (T = round(seconds * clk_hz), split above UINT32_MAX; 0 s: none).
-// - Heater commands are not packed here (counted as skipped): the streamer sends the heater
-//   frames and holds the motion at M109/M190 (fpgacnc/link/stream_v2.h).
+// - Heater commands (PackOptions::heaters, heat/heater_job.h): validated against the machine's
+//   heater channels (line:col errors), the setup frames of the used channels first, then each
+//   M104/M109/M140/M190 as a HEATER_SETPOINT frame before the first frame of the segment or
+//   dwell that follows it in the program. Heater frames are sequenced but not queued on the
+//   device (JobFrame::fifo false); the streamer holds the motion after an M109/M190 setpoint.
 // The whole job is packed and validated before the first byte is sent.
 #pragma once
 
@@ -29,15 +33,19 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/heat/heater_job.h"
 #include "fpgacnc/plan/lookahead.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2.h"
 
 namespace fpgacnc::protocol::v2 {
 
-// One FIFO frame of a job (its SEQ is assigned when it is sent).
+// One sequenced frame of a job after CONFIG_AXIS (its SEQ is assigned when it is sent).
 struct JobFrame {
   Frame frame;
+  bool fifo = true;          // queued on the device; false: a heater frame (acted on when received)
+  int heater = -1;           // HEATER_SETPOINT: index into Job::heaters.actions
   size_t segment_index = 0;  // plan segment it comes from (NUMERATORS: 0; dwell: next segment)
   int source_line = 0;
   uint32_t t = 0;        // LINE / DWELL length in clocks
@@ -56,15 +64,22 @@ struct JobEvent {
 struct Job {
   // CONFIG_AXIS for axes 0..3 (the streamer sends those below the device's N_AXES).
   std::vector<Frame> config;
-  // FIFO frames in order: NUMERATORS, then LINE / DWELL.
+  // Frames in the order they are sent after CONFIG_AXIS: the heater setup frames (when heater
+  // commands are packed), NUMERATORS, then LINE / LINE_PROFILE / ARC / DWELL / OUTPUT with
+  // each HEATER_SETPOINT in its place.
   std::vector<JobFrame> frames;
+  size_t fifo_frames = 0;  // frames with JobFrame::fifo (the device's `segments done` counts them)
+  size_t heater_frames = 0;  // heater setup and setpoint frames
+  // The heater commands packed (actions in program order, used channels, the heater
+  // configuration for the streamer's M109/M190 waits); empty when none or not packed.
+  heat::HeaterJob heaters;
   size_t lines = 0;
   size_t short_lines = 0;
   size_t dwells = 0;          // DWELL frames
   size_t segments = 0;        // plan segments packed
   size_t split_moves = 0;     // segments sent as more than one LINE
   size_t t_raised = 0;        // LINE frames whose T was raised to n_dom * min_period
-  size_t skipped_heater = 0;  // heater commands v2 cannot carry yet
+  size_t skipped_heater = 0;  // heater commands not packed (PackOptions::heaters false)
   // Pauses, messages and outputs in frame order; outputs are also OUTPUT frames (consecutive
   // ones merged: `outputs` counts the frames).
   std::vector<JobEvent> events;
@@ -80,19 +95,30 @@ struct Job {
   size_t max_axes = 0;      // largest k of any LINE (the device must have at least that many)
   uint32_t min_period = 0;  // clocks
   uint64_t total_t = 0;     // sum of T of every LINE and DWELL (job time without gaps)
-  uint64_t wire_bytes = 0;  // bytes of config + FIFO frames
+  uint64_t wire_bytes = 0;  // bytes of config + FIFO frames (heater frames not counted)
   plan::Steps4 target{};    // sum of the LINE steps per axis
   std::array<uint32_t, 2> numerator{};
   uint64_t clk_hz = 0;  // clock the T values are counted in (the device must run at it)
 };
 
+struct PackOptions {
+  // Pack the heater commands (validated; setup and setpoint frames). false: they are counted in
+  // Job::skipped_heater and nothing about them is checked (a twin board's job script, whose
+  // board has no heater plants).
+  bool heaters = true;
+};
+
 // Throws std::invalid_argument naming the segment (and line) for something v2 cannot carry
-// (step timing over 65535 clocks, motion code > 3, a segment that cannot be split).
-// `arc_walk` (motion = "profile" only): the arc walk; when given, or when cfg.native_arcs and
-// the arc helper's reference walk is built in (plan::reference_arc_walk), G2/G3 in XY go out as
-// ARC frames (docs/motion.md), else as chords.
+// (step timing over 65535 clocks, motion code > 3, a segment that cannot be split), then
+// gcode::Error (FILE:LINE:COL) for a heater command the machine cannot run.
+Job pack_job(const plan::MotionPlan& planned, const config::MachineConfig& cfg,
+             const PackOptions& options = {});
+
+// The motion frames of `plan` in one call (plan::plan_motion, then pack_job without heater
+// commands), for the twins' and benches' harnesses outside host/ whose boards have no heater
+// plants; host code calls the two stages itself.
 Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
-             const decltype(plan::MotionLimits::arc_walk)& arc_walk = {});
+             const plan::ArcWalk& arc_walk = {});
 
 // ARC frame (TYPE 0x13, docs/protocol.md "ARC", 63-byte payload, big-endian): built here until
 // the codec has an ARC builder (arc helper). Power 0 = laser off; code = 2 (G2) or 3 (G3).
@@ -103,18 +129,13 @@ Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan
 LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,
                             std::span<const int32_t> steps);
 
-// Job time estimates (seconds) at the same feeds: v1 stop-and-wait (each move at its v1 feed
-// word, T = floor(NUMERATOR_dom / feed) * n_dom over X/Y, plus `v1_overhead_clocks` per move for
-// the packet, the ACK and the host turnaround; dwells added), v2 constant feed (sum of LINE and
-// DWELL T, zero gap), v2 planned (sum of the exact LINE_PROFILE clock counts and DWELL T).
-struct JobTimes {
-  double v1_s = 0.0, v2_constant_s = 0.0, v2_profile_s = 0.0;
-  uint64_t v1_moves = 0, v2_lines = 0, v2_profiles = 0;
-  uint64_t v1_clocks = 0, v2_constant_clocks = 0, v2_profile_clocks = 0;
-};
-inline constexpr uint64_t kV1OverheadClocks115200 = 51'981;  // host/README.md, measured
-JobTimes job_times(const plan::Plan& plan, const config::MachineConfig& cfg,
-                   uint64_t v1_overhead_clocks = kV1OverheadClocks115200);
+// The LINE_PROFILE frame of one look-ahead line block (laser power from its S): what pack_job
+// makes of a block, for the front ends that plan line by line (frontend/motion.h).
+Frame profile_frame(const plan::Profile& p, const config::MachineConfig& cfg);
+
+// DWELL frames for a dwell of `seconds` (several when longer than one frame's 32-bit clocks;
+// none for 0 s or a duration out of range), for the front ends.
+std::vector<Frame> dwell_frames(double seconds, uint64_t clk_hz);
 
 // The LINE / LINE_PROFILE power byte of a segment (the rule in the file comment: 0 for code 0,
 // S scaled by laser_s_max, S > 0 never 0, no S: 255).

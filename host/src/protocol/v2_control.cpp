@@ -1,0 +1,187 @@
+// Control frames and the device's answers (docs/protocol.md "Frame types"): HELLO,
+// STATUS_QUERY, FAULT_CLEAR, RELEASE and CONFIG_AXIS from the host; ACK, DONE, NAK, IDENT and
+// STATUS from the device (decoders for the host, builders for fake devices and tests).
+#include <fmt/format.h>
+
+#include "fpgacnc/protocol/v2.h"
+#include "v2_bytes.h"
+
+namespace fpgacnc::protocol::v2 {
+using detail::check_or_throw;
+using detail::expect;
+using detail::get16;
+using detail::get32;
+using detail::make;
+using detail::put16;
+using detail::put32;
+
+namespace {
+
+Frame credit_frame(uint8_t dev_seq, Type type, const Credit& c) {
+  std::vector<uint8_t> p;
+  p.reserve(7);
+  p.push_back(c.next_seq);
+  put16(p, c.free);
+  put32(p, c.done);
+  return make(dev_seq, type, std::move(p));
+}
+
+Credit credit_from(const Frame& f) {
+  return Credit{f.payload[0], get16(f.payload, 1), get32(f.payload, 3)};
+}
+
+}  // namespace
+
+// ---- Device -> host ----
+
+size_t status_payload_size(size_t n_axes) {
+  return spec::kLenStatusHeader + spec::kLenStatusPerAxis * n_axes;
+}
+
+Credit decode_credit(const Frame& f) {
+  if (f.type != static_cast<uint8_t>(Type::Ack) && f.type != static_cast<uint8_t>(Type::Done)) {
+    throw ProtocolError(fmt::format("expected an ACK or DONE frame, got {}", type_name(f.type)));
+  }
+  if (f.payload.size() != spec::kLenAck) {
+    throw ProtocolError(fmt::format("{}: payload of {} bytes, expected {}", type_name(f.type),
+                                    f.payload.size(), spec::kLenAck));
+  }
+  return credit_from(f);
+}
+
+Nak decode_nak(const Frame& f) {
+  expect(f, Type::Nak, spec::kLenNak);
+  const uint8_t r = f.payload[1];
+  if (r < 1 || r > 7) throw ProtocolError(fmt::format("NAK: unknown reason {}", r));
+  return Nak{f.payload[0], static_cast<NakReason>(r), f.payload[2], get16(f.payload, 3)};
+}
+
+Ident decode_ident(const Frame& f) {
+  expect(f, Type::Ident, spec::kLenIdent);
+  const auto& p = f.payload;
+  Ident i;
+  i.version = p[0];
+  i.n_axes = p[1];
+  i.fifo_depth = get16(p, 2);
+  i.clk_hz = get32(p, 4);
+  i.baud = get32(p, 8);
+  i.build_id = get32(p, 12);
+  i.next_seq = p[16];
+  i.max_payload = p[17];
+  return i;
+}
+
+Status decode_status(const Frame& f, size_t n_axes) {
+  if (n_axes > (kMaxPayload - 27) / 4) {
+    throw ProtocolError(fmt::format("STATUS: {} axes cannot fit a frame", n_axes));
+  }
+  const size_t base = status_payload_size(n_axes);
+  const size_t with_heaters = base + kHeaterChannels * kHeaterStatusBytes;
+  expect(f, Type::Status, f.payload.size() == with_heaters ? with_heaters : base);
+  const auto& p = f.payload;
+  Status s;
+  s.state = p[0];
+  s.faults = p[1];
+  s.fifo_level = get16(p, 2);
+  s.next_seq = p[4];
+  s.done = get32(p, 5);
+  size_t i = 9;
+  s.position.resize(n_axes);
+  for (auto& x : s.position) {
+    x = static_cast<int32_t>(get32(p, i));
+    i += 4;
+  }
+  for (auto& c : s.counters) {
+    c = get16(p, i);
+    i += 2;
+  }
+  // Heater block.
+  for (; i + kHeaterStatusBytes <= p.size(); i += kHeaterStatusBytes) {
+    HeaterStatus h;
+    h.temp_q4 = static_cast<int16_t>(get16(p, i));
+    h.setpoint_q4 = static_cast<int16_t>(get16(p, i + 2));
+    h.duty_q15 = get16(p, i + 4);
+    h.mode = p[i + 6];
+    h.faults = p[i + 7];
+    s.heaters.push_back(h);
+  }
+  return s;
+}
+
+Frame ack(uint8_t dev_seq, const Credit& c) {
+  return credit_frame(dev_seq, Type::Ack, c);
+}
+Frame done(uint8_t dev_seq, const Credit& c) {
+  return credit_frame(dev_seq, Type::Done, c);
+}
+
+Frame nak(uint8_t dev_seq, const Nak& n) {
+  std::vector<uint8_t> p{n.seq, static_cast<uint8_t>(n.reason), n.next_seq};
+  put16(p, n.free);
+  return make(dev_seq, Type::Nak, std::move(p));
+}
+
+Frame ident(uint8_t dev_seq, const Ident& i) {
+  std::vector<uint8_t> p{i.version, i.n_axes};
+  put16(p, i.fifo_depth);
+  put32(p, i.clk_hz);
+  put32(p, i.baud);
+  put32(p, i.build_id);
+  p.push_back(i.next_seq);
+  p.push_back(i.max_payload);
+  return make(dev_seq, Type::Ident, std::move(p));
+}
+
+Frame status(uint8_t dev_seq, const Status& s) {
+  std::vector<uint8_t> p{s.state, s.faults};
+  put16(p, s.fifo_level);
+  p.push_back(s.next_seq);
+  put32(p, s.done);
+  for (const int32_t x : s.position) put32(p, static_cast<uint32_t>(x));
+  for (const uint16_t c : s.counters) put16(p, c);
+  for (const auto& h : s.heaters) {
+    put16(p, static_cast<uint16_t>(h.temp_q4));
+    put16(p, static_cast<uint16_t>(h.setpoint_q4));
+    put16(p, h.duty_q15);
+    p.push_back(h.mode);
+    p.push_back(h.faults);
+  }
+  if (p.size() > kMaxPayload) {
+    throw std::invalid_argument(
+        fmt::format("STATUS frame: {} axes do not fit a frame", s.position.size()));
+  }
+  return make(dev_seq, Type::Status, std::move(p));
+}
+
+// ---- Host -> device ----
+
+Frame hello(uint8_t seq) {
+  return make(seq, Type::Hello);
+}
+Frame status_query(uint8_t seq) {
+  return make(seq, Type::StatusQuery);
+}
+Frame fault_clear(uint8_t seq) {
+  return make(seq, Type::FaultClear);
+}
+Frame release(uint8_t seq) {
+  return make(seq, Type::Release);
+}
+
+Frame config_axis(uint8_t seq, uint8_t axis, uint16_t step_high, uint16_t step_low,
+                  uint16_t dir_setup, uint16_t dir_hold) {
+  std::vector<uint8_t> p{axis};
+  put16(p, step_high);
+  put16(p, step_low);
+  put16(p, dir_setup);
+  put16(p, dir_hold);
+  return make(seq, Type::ConfigAxis, std::move(p));
+}
+
+ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {
+  check_or_throw(f, Type::ConfigAxis, n_axes);
+  const auto& p = f.payload;
+  return ConfigAxis{p[0], get16(p, 1), get16(p, 3), get16(p, 5), get16(p, 7)};
+}
+
+}  // namespace fpgacnc::protocol::v2
