@@ -20,14 +20,10 @@ deps:
 configure: deps
 	@if [ ! -f $(BUILD)/CMakeCache.txt ]; then cmake -S . -B $(BUILD) $(CMAKE_FLAGS); fi
 
-# After an RTL edit Verilator may regenerate a model under new (hash-named DepSet) file names;
-# CMake reads the new list only when it re-runs, at the next build, so that build can fail to link
-# stale objects. On a failure the build goes on past errors (-k: every model is regenerated), then
-# runs once more with the lists re-read; a real error fails all three.
+# An RTL edit re-runs Verilator while CMake configures (fpgacnc_verilate() in CMakeLists.txt), so
+# a build compiles the models' current file lists the first time.
 build: configure
-	@cmake --build $(BUILD) -j $(JOBS) || { \
-	  echo "make build: failed; building again (Verilator renames generated files after some RTL edits)"; \
-	  cmake --build $(BUILD) -j $(JOBS) -- -k >/dev/null 2>&1; cmake --build $(BUILD) -j $(JOBS); }
+	cmake --build $(BUILD) -j $(JOBS)
 
 # Regenerate the files written from spec/protocol.toml and spec/configs.toml (Verilog and C++
 # headers, spec.cmake, the worked-frame vectors, the configurations for CMake and the scripts, the
@@ -101,12 +97,9 @@ bench: build
 
 # The whole job at its real feeds through the pty into the twin board (--model tlm, the default),
 # then its first moves into the Verilated board and the twin board, compared (fails on any
-# difference). Builds only the fpgacnc command (with the retry of `build`).
+# difference). Builds only the fpgacnc command.
 demo: configure
-	@cmake --build $(BUILD) -j $(JOBS) --target fpgacnc || { \
-	  echo "make demo: build failed; building again (Verilator renames generated files after some RTL edits)"; \
-	  cmake --build $(BUILD) -j $(JOBS) --target fpgacnc -- -k >/dev/null 2>&1; \
-	  cmake --build $(BUILD) -j $(JOBS) --target fpgacnc; }
+	cmake --build $(BUILD) -j $(JOBS) --target fpgacnc
 	$(BUILD)/host/fpgacnc stream $(DEMO_JOB) $(DEMO_ARGS)
 	$(BUILD)/host/fpgacnc stream $(DEMO_JOB) --model both --max-moves $(DEMO_RTL_MOVES) $(DEMO_RTL_ARGS)
 
@@ -128,7 +121,7 @@ quartus:
 	./scripts/quartus.sh
 
 format:
-	find host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
+	find models host tb systemc -name '*.cpp' -o -name '*.h' -o -name '*.hpp' | xargs clang-format -i
 
 clean:
 	rm -rf $(BUILD)

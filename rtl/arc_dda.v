@@ -1,5 +1,5 @@
 // arc_dda: circular / helical DDA for one ARC segment (docs/motion.md "Arcs", ARC frame in
-// docs/protocol.md). The integer reference is systemc/include/fpgacnc/twins/arc_walk.h; this block
+// docs/protocol.md). The integer reference is models/include/fpgacnc/models/arc_walk.h; this block
 // produces the identical edge list.
 //
 // Walk: 8-connected lattice walk around the centre, coordinates x, y relative to the centre

@@ -18,7 +18,7 @@ fpgacnc_bench(test_de1soc_top LABEL system
 add_executable(bench_core ${CMAKE_CURRENT_SOURCE_DIR}/bench_core.cpp)
 fpgacnc_warnings(bench_core)
 target_include_directories(bench_core PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
-target_link_libraries(bench_core PRIVATE vcore vexec fpgacnc_spec fmt::fmt)
+target_link_libraries(bench_core PRIVATE vcore vexec fpgacnc_spec fpgacnc_models fmt::fmt)
 
 # Protocol benchmark (make bench; not built by `make` / `make test`): v1 stop-and-wait against
 # the v2 sliding window with the host's streamers, through the pins at 115 200 and 1 000 000 baud.
@@ -29,5 +29,5 @@ if(FPGACNC_BUILD_HOST)
   add_executable(bench_protocol EXCLUDE_FROM_ALL ${CMAKE_CURRENT_SOURCE_DIR}/bench_protocol.cpp)
   fpgacnc_warnings(bench_protocol)
   target_include_directories(bench_protocol PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
-  target_link_libraries(bench_protocol PRIVATE vcore vcore_1m fpgacnc_host fmt::fmt)
+  target_link_libraries(bench_protocol PRIVATE vcore vcore_1m fpgacnc_host fpgacnc_models fmt::fmt)
 endif()

@@ -6,5 +6,4 @@ fpgacnc_verilated(vcore_limits TOP cnc_core PREFIX Vcnc_core_limits CONFIG full-
                   ARGS -GBAUD=3000000 -GLIMIT_FILTER_CLKS=500 -GLIMIT_ENABLE=196611
                        -GLIMIT_ACTIVE_LOW=1)
 fpgacnc_bench(test_limits LABEL system SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_limits.cpp
-              LIBS vcore_limits fmt::fmt)
-target_include_directories(test_limits PRIVATE ${PROJECT_SOURCE_DIR}/systemc/include)
+              LIBS vcore_limits fpgacnc_models fmt::fmt)

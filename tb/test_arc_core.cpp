@@ -2,7 +2,7 @@
 // (R0^2, R1^2, floor(dT / N_RAMP), V*|DZ|) -> segment_executor (arc_dda) -> step_pulse pins.
 // Arcs in the three planes (XY, ZX, YZ: the walk's u / v and helix steps on their axes). Every
 // arc's STEP edges (time and DIR level at the rise) equal the integer reference walk
-// (systemc/include/fpgacnc/twins/arc_walk.h) at a fixed latency of 2 clocks from the arc's first
+// (models/include/fpgacnc/models/arc_walk.h) at a fixed latency of 2 clocks from the arc's first
 // clock (seg_start); zero gap where the directions continue (LINE -> ARC, ARC -> ARC, ARC ->
 // LINE_PROFILE, ARC -> LINE at the minimum STEP period), an arc segment lasting c_last + 2 clocks
 // (its last STEP on its last edge); end positions exact; no STEP/DIR timing violation; BAD_FIELD /
@@ -22,11 +22,11 @@
 #include "common/seed.h"
 #include "common/step_monitor.h"
 #include "common/v2_frames.h"
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 
 namespace {
 
-namespace arc = fpgacnc::twins::arc;
+namespace arc = fpgacnc::models::arc;
 namespace v2 = fpgacnc::tb::v2;
 
 constexpr int kAxes = 4;

@@ -1,5 +1,5 @@
 // Bench for arc_dda (circular / helical DDA): the RTL against the integer reference
-// walk (systemc/include/fpgacnc/twins/arc_walk.h) edge for edge, and the geometry and speed of
+// walk (models/include/fpgacnc/models/arc_walk.h) edge for edge, and the geometry and speed of
 // the walk against the real-valued ideal arc:
 //  - every visited lattice point within 1 step of the ideal arc (radius linear in the swept angle
 //    from R0 to R1, LinuxCNC's rule for slightly inconsistent arcs), the walk turns exactly the
@@ -22,11 +22,11 @@
 
 #include "common/arc_rtl.h"
 #include "common/seed.h"
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 
 namespace {
 
-namespace arc = fpgacnc::twins::arc;
+namespace arc = fpgacnc::models::arc;
 
 using fpgacnc::tb::ArcRtl;
 

@@ -29,16 +29,16 @@
 #include "common/core_pins.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
-#include "common/uart_bits.h"
 #include "common/v1_packets.h"
 #include "common/v2_frames.h"
+#include "fpgacnc/models/uart_bits.h"
 
 namespace {
 
+using fpgacnc::models::UartDriver;
 using fpgacnc::tb::AxisTiming;
 using fpgacnc::tb::init_packet;
 using fpgacnc::tb::motion_packet;
-using fpgacnc::tb::UartDriver;
 
 constexpr int kAxes = 2;
 constexpr uint32_t kDefaultNumerator = 18'750'000;

@@ -1,9 +1,10 @@
 // heater_block benches (docs/heater.md): the Verilated block (SAMPLE_CLKS 4096: one simulated
 // second per 4096 clocks, PWM period 1024 clocks) in a loop with the plant models of
-// tb/common/thermal_plant.h through the LTC2308 pin model: at each sample tick the plant advances
-// one second with the duty the heater pin actually had over the last second (high clocks / 4096),
-// the sensor reading is updated (bed: 1 s old) and the ADC master converts its thermistor
-// voltage. Frames go straight into the block's frame port (the decoder is tested elsewhere).
+// models/include/fpgacnc/models/thermal_plant.h through the LTC2308 pin model: at each sample tick
+// the plant advances one second with the duty the heater pin actually had over the last second
+// (high clocks / 4096), the sensor reading is updated (bed: 1 s old) and the ADC master converts
+// its thermistor voltage. Frames go straight into the block's frame port (the decoder is tested
+// elsewhere).
 //   Safety: every fault injected (sensor open, sensor short, heater disconnected during warm-up,
 //   runaway while holding, host silent, e-stop): heater pin low within the documented time, fault
 //   latched and in the status bytes, nothing restarts until FAULT_CLEAR and a new setpoint.
@@ -21,16 +22,16 @@
 #include <vector>
 
 #include "Vheater_block.h"
-#include "common/ltc2308_model.h"
-#include "common/pid_ref.h"
-#include "common/thermal_plant.h"
+#include "fpgacnc/models/ltc2308_model.h"
+#include "fpgacnc/models/pid_ref.h"
+#include "fpgacnc/models/thermal_plant.h"
 #include "fpgacnc/spec.h"
 #include "verilated.h"
 
 namespace {
 
 using namespace fpgacnc;
-namespace th = fpgacnc::thermal;
+namespace th = fpgacnc::models::thermal;
 
 constexpr uint64_t kSampleClks = fpgacnc::spec::kBenchSampleClks;
 constexpr int kPwmBits = 10;
@@ -161,7 +162,7 @@ class HeatBench {
   bool pin(int ch) const { return (m->heater >> ch) & 1; }
 
   th::Thermistor therm;
-  tb::Ltc2308Model adc{50e6};
+  models::Ltc2308Model adc{50e6};
   th::BedPlant bed;
   th::HotEndPlant hot;
   th::DelayedSensor bed_sensor{1, 20.0};

@@ -10,15 +10,15 @@
 
 #include "Vcnc_core_heat.h"
 #include "common/core_pins.h"
-#include "common/ltc2308_model.h"
-#include "common/thermal_plant.h"
 #include "common/v2_frames.h"
+#include "fpgacnc/models/ltc2308_model.h"
+#include "fpgacnc/models/thermal_plant.h"
 #include "fpgacnc/spec.h"
 
 namespace {
 
 namespace v2 = fpgacnc::tb::v2;
-namespace th = fpgacnc::thermal;
+namespace th = fpgacnc::models::thermal;
 
 constexpr int kAxes = 4;
 constexpr uint64_t kByteClocks = 167;  // 10 bits at 3 Mbaud
@@ -70,7 +70,7 @@ class HeatCore : public fpgacnc::tb::PinHarness<Vcnc_core_heat> {
   v2::DeviceMsg status() { return exchange(v2::status_query()); }
 
   th::Thermistor therm;
-  fpgacnc::tb::Ltc2308Model adc{50e6};
+  fpgacnc::models::Ltc2308Model adc{50e6};
   double temp[2] = {20.0, 25.0};
   std::vector<v2::DeviceMsg> msgs;
   uint64_t step_rises_after = 0;  // STEP rises after `watch_from`

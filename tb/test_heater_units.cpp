@@ -1,12 +1,13 @@
 // Unit benches of the heater blocks (docs/heater.md):
 //   pwm          duty sequence against a per-clock model, duty taken only at period boundaries,
 //                force_off latency;
-//   pid_incr     the controller output against the double-precision law (tb/common/pid_ref.h)
+//   pid_incr     the controller output against the double-precision law
+//   (models/include/fpgacnc/models/pid_ref.h)
 //                over long random error sequences in every mode: u equal exactly, the PWM duty
 //                floor(u * 2^PWM_BITS) (the documented bound: at most one count below u_ref);
 //   ltc2308_spi  against the LTC2308 pin model: codes of random voltages on both channels, no
 //                timing violation, the documented read time;
-//   temp_table   random tables and codes against thermal::table_lookup (bit exact).
+//   temp_table   random tables and codes against models::thermal::table_lookup (bit exact).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,16 +20,16 @@
 #include "Vpid_incr.h"
 #include "Vpwm.h"
 #include "Vtemp_table.h"
-#include "common/ltc2308_model.h"
-#include "common/pid_ref.h"
 #include "common/seed.h"
-#include "common/thermal_plant.h"
+#include "fpgacnc/models/ltc2308_model.h"
+#include "fpgacnc/models/pid_ref.h"
+#include "fpgacnc/models/thermal_plant.h"
 #include "verilated.h"
 
 namespace {
 
 using namespace fpgacnc;
-using thermal::HeatMode;
+using models::thermal::HeatMode;
 
 template <class M>
 class Dut {
@@ -110,8 +111,8 @@ struct PidRaw {
   uint16_t umax, hyst, manual;
 };
 
-thermal::PidCoeffs coeffs_of(const PidRaw& r) {
-  thermal::PidCoeffs c;
+models::thermal::PidCoeffs coeffs_of(const PidRaw& r) {
+  models::thermal::PidCoeffs c;
   c.mode = static_cast<HeatMode>(r.mode);
   c.kp = r.kp / 16777216.0;
   c.ki = r.ki / 16777216.0;
@@ -177,9 +178,9 @@ TEST(PidIncr, EqualsDoubleReferenceOverRandomSequences) {
     const int mode_pick = static_cast<int>(rng() % 10);
     r.mode = mode_pick < 6 ? 4 : static_cast<int>(mode_pick - 6 + 1);  // 4 x6, 1..4
     const double scale = std::pow(10.0, std::uniform_real_distribution<double>(-3.0, 1.0)(rng));
-    r.kp = thermal::to_q8_24(scale * std::uniform_real_distribution<double>(0.0, 1.0)(rng));
-    r.ki = thermal::to_q8_24(scale * std::uniform_real_distribution<double>(0.0, 0.1)(rng));
-    r.kd = thermal::to_q8_24(scale * std::uniform_real_distribution<double>(0.0, 5.0)(rng));
+    r.kp = models::thermal::to_q8_24(scale * std::uniform_real_distribution<double>(0.0, 1.0)(rng));
+    r.ki = models::thermal::to_q8_24(scale * std::uniform_real_distribution<double>(0.0, 0.1)(rng));
+    r.kd = models::thermal::to_q8_24(scale * std::uniform_real_distribution<double>(0.0, 5.0)(rng));
     if (s == 0) {  // the extreme corner: maximum gains
       r.kp = r.ki = r.kd = 0xFFFFFFFFu;
     }
@@ -188,7 +189,7 @@ TEST(PidIncr, EqualsDoubleReferenceOverRandomSequences) {
     r.manual = static_cast<uint16_t>(rng() % 0x9000 > 0x8000 ? 0x8000 : rng() % 0x8001);
     b.set(r);
     b.restart();
-    thermal::PidRef ref(coeffs_of(r));
+    models::thermal::PidRef ref(coeffs_of(r));
     ref.restart();
     int set = static_cast<int>(rng() % 4000);
     double temp = static_cast<double>(rng() % 4000);
@@ -235,10 +236,15 @@ TEST(PidIncr, EqualsDoubleReferenceOverRandomSequences) {
 
 TEST(PidIncr, DisabledOutputsZeroAndRestartsWithoutKick) {
   PidBench b;
-  PidRaw r{4, thermal::to_q8_24(0.4), thermal::to_q8_24(0.02), thermal::to_q8_24(2.0), 0x8000, 16,
+  PidRaw r{4,
+           models::thermal::to_q8_24(0.4),
+           models::thermal::to_q8_24(0.02),
+           models::thermal::to_q8_24(2.0),
+           0x8000,
+           16,
            0};
   b.set(r);
-  thermal::PidRef ref(coeffs_of(r));
+  models::thermal::PidRef ref(coeffs_of(r));
   int clocks;
   for (int k = 0; k < 50; ++k) {
     const double u_ref = ref.step(60.0, 20.0 + k * 0.5);
@@ -259,7 +265,7 @@ TEST(Ltc2308Spi, ReadsBothChannelsAgainstThePinModel) {
   const uint64_t seed = tb::test_seed(5, "Ltc2308Spi");
   std::mt19937_64 rng(seed);
   Dut<Vltc2308_spi> d;
-  tb::Ltc2308Model adc(50e6);
+  models::Ltc2308Model adc(50e6);
   d.m->start = 0;
   d.m->adc_sdo = 0;
   d.reset();
@@ -285,9 +291,9 @@ TEST(Ltc2308Spi, ReadsBothChannelsAgainstThePinModel) {
       ASSERT_LT(d.cycle - t0, 5000u) << "no done";
     }
     read_clocks = d.cycle - t0 + 1;
-    ASSERT_EQ(d.m->code_a, thermal::adc_code(adc.volts[0]))
+    ASSERT_EQ(d.m->code_a, models::thermal::adc_code(adc.volts[0]))
         << "read " << r << " channel 0, " << adc.volts[0] << " V";
-    ASSERT_EQ(d.m->code_b, thermal::adc_code(adc.volts[1]))
+    ASSERT_EQ(d.m->code_b, models::thermal::adc_code(adc.volts[1]))
         << "read " << r << " channel 1, " << adc.volts[1] << " V";
     for (int i = 0; i < static_cast<int>(rng() % 50); ++i) clock();
   }
@@ -319,13 +325,13 @@ TEST(TempTable, InterpolationIsBitExact) {
   d.m->start = 0;
   for (int i = 0; i < 6; ++i) d.tick();
   EXPECT_EQ(d.m->temp, 0x8000) << "lookup before the table's last entry was written";
-  std::array<thermal::Table, 2> tabs{};
-  tabs[0] = thermal::thermistor_table();
+  std::array<models::thermal::Table, 2> tabs{};
+  tabs[0] = models::thermal::thermistor_table();
   for (auto& v : tabs[1]) v = static_cast<int16_t>(rng() % 65536);  // any s16, steep steps
   tabs[1][0] = 32767;
   tabs[1][1] = -32768;
   for (int ch = 0; ch < 2; ++ch) {
-    for (int i = 0; i < thermal::kTableEntries; ++i) {
+    for (int i = 0; i < models::thermal::kTableEntries; ++i) {
       d.m->wr = 1;
       d.m->wr_ch = static_cast<uint8_t>(ch);
       d.m->wr_idx = static_cast<uint8_t>(i);
@@ -350,7 +356,7 @@ TEST(TempTable, InterpolationIsBitExact) {
       ASSERT_LT(k, 20);
     }
     latency = k;
-    const int expect = thermal::table_lookup(tabs[static_cast<size_t>(ch)], code);
+    const int expect = models::thermal::table_lookup(tabs[static_cast<size_t>(ch)], code);
     ASSERT_EQ(static_cast<int16_t>(d.m->temp), expect) << "channel " << ch << " code " << code;
   }
   std::printf("temp_table: 20000 lookups bit exact, start to done %d clocks\n", latency);

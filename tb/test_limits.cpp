@@ -17,12 +17,12 @@
 #include "Vcnc_core_limits.h"
 #include "common/pin_harness.h"
 #include "common/v2_frames.h"
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 
 namespace {
 
 namespace v2 = fpgacnc::tb::v2;
-namespace arc = fpgacnc::twins::arc;
+namespace arc = fpgacnc::models::arc;
 using Model = Vcnc_core_limits;
 
 constexpr int kAxes = 2;

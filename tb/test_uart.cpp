@@ -37,12 +37,12 @@
 #include <string>
 #include <vector>
 
-#include "common/uart_bits.h"
+#include "fpgacnc/models/uart_bits.h"
 
 namespace {
 
-using fpgacnc::tb::UartDriver;
-using fpgacnc::tb::UartMonitor;
+using fpgacnc::models::UartDriver;
+using fpgacnc::models::UartMonitor;
 
 constexpr uint64_t kClkHz = 50'000'000;
 constexpr uint64_t kDefaultSeed = 0x5eed'0ca7;

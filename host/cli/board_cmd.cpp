@@ -74,7 +74,7 @@ std::unique_ptr<twins::TwinBoard> make_twin_board(const config::MachineConfig& c
 
 void print_lockstep(const twins::LockstepRun& r, double clk_hz) {
   const auto& s = r.stats;
-  const auto n = simboard::net_steps(r.edges);
+  const auto n = models::net_steps(r.edges);
   fmt::print(
       "{} board: {} cycles ({:.3f} s of machine time) in {:.2f} s wall ({:.2f} M clocks/s), {} "
       "batches, {} answer bytes, {} edges (TX included), {} moves done, net steps X {} Y {} Z {} "

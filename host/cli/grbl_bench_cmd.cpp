@@ -24,8 +24,8 @@
 #include "commands.h"
 #include "fpgacnc/grbl/engine.h"
 #include "fpgacnc/grbl/settings.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/simboard/cli_board.h"
-#include "fpgacnc/simboard/edges.h"
 #include "fpgacnc/simboard/runner.h"
 #include "fpgacnc/twins/twin_board.h"
 
@@ -148,7 +148,7 @@ int run_bench(const BenchArgs& a) {
   const simboard::Board& board = bl->any_board();
   const double clk = board.clk_hz();
   const auto edges = board.edges();
-  const auto on = simboard::high_intervals(edges, simboard::kLaser, board.cycle());
+  const auto on = models::high_intervals(edges, models::kLaser, board.cycle());
   uint64_t gaps = 0, idle = 0, longest = 0;
   for (size_t i = 1; i < on.size(); ++i) {
     const uint64_t g = on[i].begin - on[i - 1].end;

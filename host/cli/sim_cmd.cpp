@@ -59,10 +59,10 @@ void report(const std::string& model, const twins::RunResult& r, const plan::Pla
         "segments started with zero idle clocks, {} clamped\n",
         model, r.device_frames, r.naks, r.retransmitted, r.segments_done, r.zero_gap, r.clamped);
   if (!r.error.empty()) fmt::print("simulated board ({}): host error: {}\n", model, r.error);
-  const auto pulses = simboard::step_pulses(r.edges);
+  const auto pulses = models::step_pulses(r.edges);
   fmt::print("step pulses ({}): X {} Y {} Z {} E {}\n", model, pulses[0], pulses[1], pulses[2],
              pulses[3]);
-  const auto n = simboard::net_steps(r.edges);
+  const auto n = models::net_steps(r.edges);
   const bool ok = n[0] == plan.final_steps[0] && n[1] == plan.final_steps[1];
   fmt::print(
       "net steps from the edges ({}): X {} Y {} (planned final target X {} Y {}: {}); position "
@@ -141,7 +141,7 @@ void run_sim(const SimArgs& a) {
     fmt::print("plot written to {}\n", a.plot_path);
   }
   if (!a.edges_csv.empty()) {
-    simboard::write_edges_csv(a.edges_csv, r.edges, static_cast<double>(cfg.clk_hz));
+    models::write_edges_csv(a.edges_csv, r.edges, static_cast<double>(cfg.clk_hz));
     fmt::print("edges written to {}\n", a.edges_csv);
   }
 }

@@ -1,6 +1,6 @@
 // Heater host side: configuration keys, thermistor curve, relay autotune analysis on a pure C++
 // first-order-plus-dead-time model of the reference bed (docs/heater.md; this file's own model,
-// independent of tb/common/thermal_plant.h).
+// independent of models/include/fpgacnc/models/thermal_plant.h).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -9,11 +9,11 @@
 #include <deque>
 #include <random>
 
-#include "common/thermal_plant.h"
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/heat/autotune.h"
 #include "fpgacnc/heat/heater_config.h"
 #include "fpgacnc/heat/heater_job.h"
+#include "fpgacnc/models/thermal_plant.h"
 
 namespace heat = fpgacnc::heat;
 using fpgacnc::config::parse_machine_config;
@@ -218,11 +218,12 @@ TEST(Autotune, RelayOnTheReferenceBedModel) {
   EXPECT_NEAR(r.mean_c, 60.0, 1.0);
 }
 
-// The same relay test on heat-rtl's bed plant (tb/common/thermal_plant.h) as the device sees it:
-// 1 s ticks, the reading one tick old, through the thermistor, the 12-bit ADC and the host's
-// 65-entry table with the RTL's interpolation (Q11.4), relay 0/12 V = duty 0.5 of the 24 V supply.
+// The same relay test on heat-rtl's bed plant (models/include/fpgacnc/models/thermal_plant.h) as
+// the device sees it: 1 s ticks, the reading one tick old, through the thermistor, the 12-bit ADC
+// and the host's 65-entry table with the RTL's interpolation (Q11.4), relay 0/12 V = duty 0.5 of
+// the 24 V supply.
 TEST(Autotune, RelayOnTheThermalPlantBedThroughAdcAndTable) {
-  namespace th = fpgacnc::thermal;
+  namespace th = fpgacnc::models::thermal;
   fpgacnc::config::MachineConfig cfg;
   const auto host_table = heat::thermistor_table(cfg.heaters.bed());
   th::Table table{};

@@ -9,10 +9,10 @@
 #include <random>
 #include <string>
 
+#include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
-#include "fpgacnc/twins/arc_walk.h"
 
 namespace pl = fpgacnc::plan;
 namespace v2 = fpgacnc::protocol::v2;
@@ -533,9 +533,9 @@ TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
 
 namespace {
 
-// Stand-in for the arc helper's reference walk (systemc/include/fpgacnc/twin/arc_walk.h, not yet
-// in this branch): C_TOTAL ~ R * arc length in steps (the cross-product cost), N_RAMP 1. The
-// planner only uses C_TOTAL as its path unit; the device checks it against its own walk.
+// A stand-in for the reference walk (fpgacnc/models/arc_walk.h): C_TOTAL ~ R * arc length in steps
+// (the cross-product cost), N_RAMP 1. The planner only uses C_TOTAL as its path unit; the device
+// checks it against its own walk.
 std::optional<std::pair<uint32_t, uint64_t>> fake_walk(const pl::ArcFields& f) {
   const double r0 = std::hypot(f.i, f.j), r1 = std::hypot(f.dx - f.i, f.dy - f.j);
   const double a0 = std::atan2(-f.j, -f.i), a1 = std::atan2(f.dy - f.j, f.dx - f.i);
@@ -670,8 +670,8 @@ TEST(Lookahead, ArcsThatCannotGoNativeStayChords) {
 
 namespace {
 // The ARC block of a profile through the arc helper's clock-exact model (arc_walk.h run()).
-fpgacnc::twins::arc::RunResult run_arc(const pl::Profile& p) {
-  namespace ta = fpgacnc::twins::arc;
+fpgacnc::models::arc::RunResult run_arc(const pl::Profile& p) {
+  namespace ta = fpgacnc::models::arc;
   ta::Frame fr;
   fr.g = {p.arc_fields.i, p.arc_fields.j, p.arc_fields.dx, p.arc_fields.dy, p.arc_fields.code == 3};
   fr.dz = p.arc_fields.dz;
@@ -705,7 +705,7 @@ TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
     lim.arc_walk = pl::reference_arc_walk();
     for (const auto& p : profiles_of(pl::plan_profiles(plan, lim))) {
       if (!p.arc) continue;
-      namespace ta = fpgacnc::twins::arc;
+      namespace ta = fpgacnc::models::arc;
       const ta::Geometry g{p.arc_fields.i, p.arc_fields.j, p.arc_fields.dx, p.arc_fields.dy,
                            p.arc_fields.code == 3};
       const auto w = ta::walk(g, p.arc_fields.n_ramp);

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/plan/lookahead.h"
 #include "fpgacnc/protocol/v2.h"
 #include "fpgacnc/spec_vectors.h"
-#include "fpgacnc/twins/arc_walk.h"
 
 namespace {
 
@@ -204,13 +204,13 @@ TEST(SpecVectors, HostCodec) {
   EXPECT_GE(answered, 10u);
 }
 
-// The ARC worked frames against the integer reference walk (systemc/include/fpgacnc/twins/
-// arc_walk.h, the walk the device runs): with the frame's N_RAMP the walk lands on the end point in
-// its first pass (summed angle = the swept angle) with total cost C_TOTAL, the host's choice of
-// N_RAMP (arc::plan) is the frame's, and the profile fields end the recurrence at V_exit. One
-// frame has R0 != R1 (the radius-squared ramp of docs/protocol.md "ARC").
+// The ARC worked frames against the integer reference walk (fpgacnc/models/arc_walk.h, the walk the
+// device runs): with the frame's N_RAMP the walk lands on the end point in its first pass (summed
+// angle = the swept angle) with total cost C_TOTAL, the host's choice of N_RAMP (arc::plan) is the
+// frame's, and the profile fields end the recurrence at V_exit. One frame has R0 != R1 (the
+// radius-squared ramp of docs/protocol.md "ARC").
 TEST(SpecVectors, ArcFramesMatchTheReferenceWalk) {
-  namespace arc = fpgacnc::twins::arc;
+  namespace arc = fpgacnc::models::arc;
   size_t arcs = 0, ramps = 0;
   for (const auto& v : spec::load_vectors()) {
     if (v.type != static_cast<uint8_t>(v2::Type::Arc) || !v.has_answer || v.answer != "ACK")

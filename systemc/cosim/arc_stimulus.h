@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <random>
 
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 
 namespace fpgacnc::twins {
 
@@ -27,8 +27,8 @@ struct ArcStimulus {
 // reported violations, as on the device), a trapezoid in cost units (entry / exit from cruise/8,
 // A reaching cruise within 1..2 C_TOTAL, D by the stopping rule or random). One in bad_in has
 // C_TOTAL + 1 (*bad set): the walk reaches its end point first, `arc error` (faults bit 1).
-inline arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus& o = {},
-                                   bool* bad = nullptr) {
+inline models::arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus& o = {},
+                                           bool* bad = nullptr) {
   const auto pick = [&g](uint32_t lo, uint32_t hi) {
     return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
   };
@@ -38,7 +38,7 @@ inline arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus& o = {}
     const double r = o.r_log_max > 0 ? std::exp(u * std::log(o.r_log_max)) : o.r_min + o.r_span * u;
     const double cx = u01(g) - 0.5, cy = u01(g) - 0.5, a0 = u01(g) * 2 * M_PI;
     const bool full = u01(g) < 0.2;
-    arc::Frame f;
+    models::arc::Frame f;
     f.g.ccw = u01(g) < 0.5;
     const int64_t sx = std::llround(cx + r * std::cos(a0)),
                   sy = std::llround(cy + r * std::sin(a0));
@@ -54,11 +54,11 @@ inline arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus& o = {}
     const double r0 = std::hypot(double(f.g.i), double(f.g.j));
     const double r1 = std::hypot(double(f.g.dx) - f.g.i, double(f.g.dy) - f.g.j);
     if (std::fabs(r1 - r0) > 2.0) continue;
-    const arc::Plan pl = arc::plan(f.g);
+    const models::arc::Plan pl = models::arc::plan(f.g);
     if (!pl.ok) continue;
     f.n_ramp = pl.n_ramp;
     f.c_total = pl.c_total;
-    const double len = arc::ideal_length(f.g), k = double(f.c_total) / len;
+    const double len = models::arc::ideal_length(f.g), k = double(f.c_total) / len;
     const double two48 = std::ldexp(1.0, 48), n = double(f.c_total);
     f.v_cruise = static_cast<uint64_t>(k * two48 / pick(o.cps_lo, o.cps_hi));
     auto from8 = [&] { return f.v_cruise / 8 + pick(0, 7) * (f.v_cruise / 8); };
@@ -83,8 +83,8 @@ inline arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus& o = {}
 // segment_prep's m_axis_arc (rtl/segment_prep.v: arc_dda's load inputs, LSB first, 945 bits):
 // put(lsb, value, width) for each field.
 template <class Put>
-void put_arc_load(const arc::Frame& f, Put&& put) {
-  const arc::Derived d = arc::derive(f);
+void put_arc_load(const models::arc::Frame& f, Put&& put) {
+  const models::arc::Derived d = models::arc::derive(f);
   const auto u = [](int64_t v, int w) {
     return static_cast<unsigned __int128>(static_cast<uint64_t>(v) & ((~0ull) >> (64 - w)));
   };

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/spec.h"
 #include "fpgacnc/twins/timing.h"
 
@@ -21,7 +21,7 @@ struct BlockEvent {
 };
 struct BlockRun {
   std::vector<BlockEvent> events;
-  std::vector<simboard::Edge> edges;   // uart_tx: tx edges
+  std::vector<models::Edge> edges;     // uart_tx: tx edges
   std::array<uint64_t, 2> counters{};  // decoder: timeouts, overruns; prep: numerators x, y
 };
 

@@ -5,13 +5,19 @@
 // executor busy for a while after each segment so that init commands wait); the
 // RTL side is the Verilated C++ block models of tb/ (cosim_blocks_rtl.cpp), the twins run here
 // in SystemC with the bench as their neighbours. Every output event (edge and values) and the
-// tx edges must be identical; the first difference is printed with its cycle.
+// tx edges must be identical; the first difference is reported with its cycle. One GoogleTest per
+// block: the twins of the blocks whose tests run are simulated once (SystemC elaborates once a
+// process), then each test runs its block's RTL jobs and compares. Options after GoogleTest's:
+// --seed, --seeds.
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
+#include <set>
 #include <systemc>
 
 #include "arc_stimulus.h"
@@ -27,6 +33,7 @@
 #include "fpgacnc/twins/v2_frames.h"
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
 namespace spec = fpgacnc::spec;
 
 namespace {
@@ -640,24 +647,51 @@ PrepJob prep_job(std::mt19937_64& g, size_t n) {
   return j;
 }
 
-}  // namespace
+// The options (sc_main) and the kinds of block job, in the order of their tests.
+uint64_t g_seed = 11, g_seeds = 10;
+enum Kind : int { kUartRx = 0, kUartTx = 1, kFrameDecoder = 2, kSegmentPrep = 3, kEncoder = 4 };
+const std::map<std::string, int> kTestKind = {{"UartRx", kUartRx},
+                                              {"UartTx", kUartTx},
+                                              {"FrameDecoder", kFrameDecoder},
+                                              {"SegmentPrep", kSegmentPrep},
+                                              {"ResponseEncoder", kEncoder}};
 
-int sc_main(int argc, char* argv[]) {
-  uint64_t seed = 11, seeds = 10;
-  fpgacnc::cosim::Options opts("cosim_blocks");
-  opts.u64("--seed", &seed).u64("--seeds", &seeds);
-  if (!opts.parse(argc, argv)) return 2;
-  seed = opts.seed(seed, seeds);
-  struct Case {
-    std::string name;
-    UartRxJob rx;
-    UartTxJob tx;
-    FrameJob dec;
-    PrepJob prep;
-    int kind;
-    BlockRun twin;
-    EncoderJob enc{};
-  };
+struct Case {
+  std::string name;
+  UartRxJob rx;
+  UartTxJob tx;
+  FrameJob dec;
+  PrepJob prep;
+  int kind;
+  BlockRun twin;
+  EncoderJob enc{};
+};
+
+// The kinds whose tests run in this process (GoogleTest's filter).
+std::set<int> selected_kinds() {
+  std::set<int> kinds;
+  const testing::UnitTest* u = testing::UnitTest::GetInstance();
+  for (int i = 0; i < u->total_test_suite_count(); ++i) {
+    const testing::TestSuite* suite = u->GetTestSuite(i);
+    for (int j = 0; j < suite->total_test_count(); ++j) {
+      const testing::TestInfo* t = suite->GetTestInfo(j);
+      const auto k = kTestKind.find(t->name());
+      if (t->should_run() && k != kTestKind.end()) kinds.insert(k->second);
+    }
+  }
+  return kinds;
+}
+
+// Every seed's jobs of every kind are drawn (so a seed gives the same jobs whichever tests run);
+// the twins run the jobs of the selected kinds.
+struct TwinRuns {
+  std::vector<Case> cases;
+  uint64_t arc_fifo_writes = 0;
+};
+
+TwinRuns run_twins() {
+  const uint64_t seed = g_seed, seeds = g_seeds;
+  const std::set<int> kinds = selected_kinds();
   std::vector<Case> cases;
   for (uint64_t s = 0; s < seeds; ++s) {
     std::mt19937_64 g(seed + s);
@@ -685,6 +719,7 @@ int sc_main(int argc, char* argv[]) {
     e.enc = encoder_job(g, 300);
     cases.push_back(std::move(e));
   }
+  std::erase_if(cases, [&](const Case& c) { return !kinds.count(c.kind); });
   BlockBench b("bench");
   b.body = [&] {
     for (Case& c : cases) {
@@ -800,19 +835,33 @@ int sc_main(int argc, char* argv[]) {
     }
   };
   sc_core::sc_start();
-  int bad = 0;
-  size_t events = 0, prof_segments = 0, arc_segments = 0;
-  for (Case& c : cases) {
-    BlockRun r = c.kind == 0   ? rtl_uart_rx(c.rx)
-                 : c.kind == 1 ? rtl_uart_tx(c.tx)
-                 : c.kind == 2 ? rtl_frame_decoder(c.dec)
-                 : c.kind == 4 ? rtl_encoder(c.enc)
-                               : rtl_prep(c.prep);
+  return TwinRuns{std::move(cases), b.arc_fifo_writes};
+}
+
+TwinRuns& twin_runs() {
+  static TwinRuns runs = run_twins();
+  return runs;
+}
+
+// The RTL block model runs each job of `kind`; every event and edge must equal the twin's.
+void compare_kind(int kind) {
+  TwinRuns& runs = twin_runs();
+  size_t jobs = 0, events = 0, prof_segments = 0, arc_segments = 0;
+  bool differ = false;
+  for (Case& c : runs.cases) {
+    if (c.kind != kind) continue;
+    ++jobs;
+    BlockRun r = c.kind == kUartRx         ? rtl_uart_rx(c.rx)
+                 : c.kind == kUartTx       ? rtl_uart_tx(c.tx)
+                 : c.kind == kFrameDecoder ? rtl_frame_decoder(c.dec)
+                 : c.kind == kEncoder      ? rtl_encoder(c.enc)
+                                           : rtl_prep(c.prep);
     events += r.events.size() + r.edges.size();
     for (const auto& e : r.events)
       prof_segments +=
-          c.kind == 3 && (e.v[0] >> 60) == (kEvProf >> 60) && (e.v[0] >> 40 & 0xff) == 0;
-    for (const auto& e : r.events) arc_segments += c.kind == 3 && e.v[0] == (kEvWide | 2ull << 8);
+          c.kind == kSegmentPrep && (e.v[0] >> 60) == (kEvProf >> 60) && (e.v[0] >> 40 & 0xff) == 0;
+    for (const auto& e : r.events)
+      arc_segments += c.kind == kSegmentPrep && e.v[0] == (kEvWide | 2ull << 8);
     const std::string d = compare(r, c.twin);
     if (!d.empty() && std::getenv("COSIM_DEBUG")) {
       sort_events(r);
@@ -831,14 +880,43 @@ int sc_main(int argc, char* argv[]) {
       }
     }
     if (!d.empty()) {
-      ++bad;
-      fmt::print("FAIL {}: first difference: {}\n", c.name, d);
+      differ = true;
+      ADD_FAILURE() << c.name << ": first difference: " << d;
     }
   }
-  fmt::print(
-      "cosim_blocks: {} block jobs, {} events ({} prepared PROFILE segments, {} ARC FIFO writes, "
-      "{} prepared ARC segments): {}\n",
-      cases.size(), events, prof_segments, b.arc_fifo_writes, arc_segments,
-      bad ? "DIFFER" : "all identical");
-  return bad ? 1 : 0;
+  EXPECT_EQ(jobs, (kind == kUartRx ? 2 : 1) * g_seeds) << "block jobs run";
+  EXPECT_GT(events, 0u) << "events compared";
+  fmt::print("cosim_blocks: {} block jobs, {} events", jobs, events);
+  if (kind == kFrameDecoder) fmt::print(" ({} ARC FIFO writes)", runs.arc_fifo_writes);
+  if (kind == kSegmentPrep)
+    fmt::print(" ({} prepared PROFILE segments, {} prepared ARC segments)", prof_segments,
+               arc_segments);
+  fmt::print(": {}\n", differ ? "DIFFER" : "all identical");
+}
+
+TEST(CosimBlocks, UartRx) {
+  compare_kind(kUartRx);
+}
+TEST(CosimBlocks, UartTx) {
+  compare_kind(kUartTx);
+}
+TEST(CosimBlocks, FrameDecoder) {
+  compare_kind(kFrameDecoder);
+}
+TEST(CosimBlocks, SegmentPrep) {
+  compare_kind(kSegmentPrep);
+}
+TEST(CosimBlocks, ResponseEncoder) {
+  compare_kind(kEncoder);
+}
+
+}  // namespace
+
+int sc_main(int argc, char* argv[]) {
+  testing::InitGoogleTest(&argc, argv);
+  fpgacnc::cosim::Options opts("cosim_blocks");
+  opts.u64("--seed", &g_seed).u64("--seeds", &g_seeds);
+  if (!opts.parse(argc, argv)) return 2;
+  if (!testing::GTEST_FLAG(list_tests)) g_seed = opts.seed(g_seed, g_seeds);
+  return RUN_ALL_TESTS();
 }

@@ -83,7 +83,7 @@ BlockRun rtl_uart_tx(const UartTxJob& j) {
       if (++k < j.offers.size()) offer = c + j.offers[k].second;
     }
     if (m->txd != prev) {
-      r.edges.push_back(simboard::Edge{static_cast<uint64_t>(c), simboard::kTx, m->txd});
+      r.edges.push_back(models::Edge{static_cast<uint64_t>(c), models::kTx, m->txd});
       prev = m->txd;
     }
     if (k >= j.offers.size() && !m->busy) {

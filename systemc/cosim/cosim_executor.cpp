@@ -29,6 +29,7 @@
 #include "fpgacnc/twins/segment_executor.h"
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
 
 namespace {
 
@@ -564,9 +565,9 @@ int sc_main(int argc, char* argv[]) {
              rtl.edges[k].signal == t.edges[k].signal)
         ++k;
       for (size_t x = k > 8 ? k - 8 : 0; x < k + 6; ++x) {
-        auto pr = [](const std::vector<fpgacnc::simboard::Edge>& v, size_t x) {
+        auto pr = [](const std::vector<fpgacnc::models::Edge>& v, size_t x) {
           return x < v.size() ? fmt::format("{} {} {}", v[x].cycle,
-                                            fpgacnc::simboard::signal_name(v[x].signal), v[x].value)
+                                            fpgacnc::models::signal_name(v[x].signal), v[x].value)
                               : std::string("-");
         };
         fmt::print("  {:30} | {}\n", pr(rtl.edges, x), pr(t.edges, x));

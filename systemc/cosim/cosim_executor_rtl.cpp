@@ -6,7 +6,7 @@
 #include "Vsegment_executor.h"
 #include "arc_stimulus.h"
 #include "executor_job.h"
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/edges.h"
 #include "verilated.h"
 
 namespace fpgacnc::twins {
@@ -129,8 +129,8 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (sig != prev) {
       for (uint8_t s = 0; s < 9; ++s)
         if ((sig ^ prev) >> s & 1u)
-          r.edges.push_back(fpgacnc::simboard::Edge{static_cast<uint64_t>(c), s,
-                                                    static_cast<uint8_t>(sig >> s & 1u)});
+          r.edges.push_back(fpgacnc::models::Edge{static_cast<uint64_t>(c), s,
+                                                  static_cast<uint8_t>(sig >> s & 1u)});
       prev = sig;
     }
     if (m->seg_start) r.seg_start.push_back(c);

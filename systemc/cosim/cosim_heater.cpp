@@ -22,16 +22,16 @@
 #include <systemc>
 #include <vector>
 
-#include "common/thermal_plant.h"
 #include "cosim_args.h"
 #include "cosim_heater_job.h"
+#include "fpgacnc/models/thermal_plant.h"
 #include "fpgacnc/twins/heater.h"
 #include "fpgacnc/twins/tlm_common.h"
 
 namespace {
 
 using namespace fpgacnc::cosim::heater;
-namespace th = fpgacnc::thermal;
+namespace th = fpgacnc::models::thermal;
 
 // ------------------------------------------------------------------------------------ twins
 // The heater twins behind a TLM target: each write carries one Event (in cycle order); an eval

@@ -11,15 +11,15 @@
 
 #include "Vheater_block_pub.h"
 #include "Vheater_block_pub___024root.h"
-#include "common/ltc2308_model.h"
-#include "common/pid_ref.h"
-#include "common/thermal_plant.h"
 #include "cosim_heater_job.h"
+#include "fpgacnc/models/ltc2308_model.h"
+#include "fpgacnc/models/pid_ref.h"
+#include "fpgacnc/models/thermal_plant.h"
 #include "verilated.h"
 
 namespace fpgacnc::cosim::heater {
 
-namespace th = fpgacnc::thermal;
+namespace th = fpgacnc::models::thermal;
 
 namespace {
 std::vector<uint8_t> be(std::initializer_list<int> bytes16) {  // 16-bit big-endian fields
@@ -110,7 +110,7 @@ RtlRun run_rtl(uint64_t seed, int seconds) {
   auto ctx = std::make_unique<VerilatedContext>();
   auto m = std::make_unique<Vheater_block_pub>(ctx.get());
   auto* r = m->rootp;
-  fpgacnc::tb::Ltc2308Model adc(50e6);
+  fpgacnc::models::Ltc2308Model adc(50e6);
   th::Thermistor therm;
   double temp[2] = {20.0, 20.0};
   int fault_mode[2] = {0, 0};  // 0 ok, 1 open, 2 short

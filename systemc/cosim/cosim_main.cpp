@@ -36,6 +36,7 @@
 #include "fpgacnc/twins/virtual_board.h"
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <array>
 #include <vector>
 
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/twins/run_result.h"
 #include "fpgacnc/twins/timing.h"
 
@@ -24,7 +24,7 @@ struct ExecSegment {
   bool prof = false;  // kind PROFILE: total, tmn, period 0 and dir_fast 0, as segment_prep sends
   ProfileParams profile{};
   bool arc = false;  // kind ARC: steps X = Y = 1, Z = |DZ|, the start directions, as prep sends
-  arc::Frame arc_frame{};
+  models::arc::Frame arc_frame{};
 };
 struct ExecOffer {
   ExecSegment seg;

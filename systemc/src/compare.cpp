@@ -6,8 +6,8 @@ namespace fpgacnc::twins {
 
 namespace {
 
-std::string edge_text(const simboard::Edge& e) {
-  return fmt::format("cycle {} {} -> {}", e.cycle, simboard::signal_name(e.signal), e.value);
+std::string edge_text(const models::Edge& e) {
+  return fmt::format("cycle {} {} -> {}", e.cycle, models::signal_name(e.signal), e.value);
 }
 
 std::string compare_cycles(const char* what, const std::vector<Cycle>& rtl,

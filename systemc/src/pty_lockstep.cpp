@@ -13,8 +13,8 @@ namespace {
 
 using wall_clock = std::chrono::steady_clock;
 
-std::string describe(const simboard::Edge& e) {
-  return fmt::format("cycle {} {} -> {}", e.cycle, simboard::signal_name(e.signal), e.value);
+std::string describe(const models::Edge& e) {
+  return fmt::format("cycle {} {} -> {}", e.cycle, models::signal_name(e.signal), e.value);
 }
 
 }  // namespace
@@ -99,12 +99,12 @@ LockstepRun run_lockstep(simboard::Board& board, const HostScript& script, uint6
 }
 
 std::vector<std::pair<uint64_t, uint8_t>> tx_bytes_from_edges(
-    const std::vector<simboard::Edge>& edges, double clk_hz, double baud) {
+    const std::vector<models::Edge>& edges, double clk_hz, double baud) {
   // The TX level after each edge; a byte starts on a fall while idle and is sampled at the bit
   // centres (as the board's UART monitor samples it).
   std::vector<std::pair<uint64_t, int>> tx;
   for (const auto& e : edges)
-    if (e.signal == simboard::kTx) tx.emplace_back(e.cycle, e.value);
+    if (e.signal == models::kTx) tx.emplace_back(e.cycle, e.value);
   const double cpb = clk_hz / baud;
   std::vector<std::pair<uint64_t, uint8_t>> out;
   size_t i = 0;

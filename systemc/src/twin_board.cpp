@@ -107,7 +107,7 @@ TwinBoardOptions TwinBoard::options_from_config(const config::MachineConfig& cfg
   TwinBoardOptions o;
   o.clk_hz = cfg.clk_hz;
   o.baud = cfg.baud;
-  std::array<config::StepTiming, simboard::kBoardAxes> t;
+  std::array<config::StepTiming, models::kBoardAxes> t;
   t.fill(cfg.step_timing);
   o.step_timing = t;
   return o;
@@ -207,8 +207,8 @@ simboard::BoardStats TwinBoard::stats() const {
   return s;
 }
 
-std::vector<simboard::Edge> TwinBoard::edges() const {
-  std::vector<simboard::Edge> e;
+std::vector<models::Edge> TwinBoard::edges() const {
+  std::vector<models::Edge> e;
   uint64_t now;
   {
     std::lock_guard<std::mutex> l(mu_);
@@ -221,8 +221,8 @@ std::vector<simboard::Edge> TwinBoard::edges() const {
   return e;
 }
 
-std::array<int64_t, simboard::kBoardAxes> TwinBoard::net_steps() const {
-  return simboard::net_steps(edges());
+std::array<int64_t, models::kBoardAxes> TwinBoard::net_steps() const {
+  return models::net_steps(edges());
 }
 
 void TwinBoard::set_estop(bool) {
@@ -311,7 +311,7 @@ void TwinBoard::session(VirtualBoard& vb) {
   wall_clock::time_point t_ref = t0;
   double waited_s = 0.0;
   std::vector<uint8_t> in;
-  std::vector<simboard::Edge> batch_out;
+  std::vector<models::Edge> batch_out;
 
   auto read_input = [&] {
     uint8_t buf[4096];
@@ -442,12 +442,12 @@ void TwinBoard::session(VirtualBoard& vb) {
       hold_at = -1;
     }
     vb.tx_bytes_.clear();
-    for (const simboard::Edge& e : vb.pins_.take_sorted()) {
-      if (e.signal < simboard::kDir0) {
+    for (const models::Edge& e : vb.pins_.take_sorted()) {
+      if (e.signal < models::kDir0) {
         act = std::max(act, static_cast<Cycle>(e.cycle) - (e.value ? 0 : 1));
         never_active = false;
       }
-      if (e.signal != simboard::kTx || opt_.record_tx) batch_out.push_back(e);
+      if (e.signal != models::kTx || opt_.record_tx) batch_out.push_back(e);
     }
     if (!vb.entry_ends_.empty()) {
       act = std::max(act, vb.entry_ends_.back() - 1);
@@ -555,7 +555,7 @@ void TwinBoard::session(VirtualBoard& vb) {
   sort_edges(edges_);
   st_.edges = static_cast<uint64_t>(
       std::upper_bound(edges_.begin(), edges_.end(), static_cast<uint64_t>(now),
-                       [](uint64_t c, const simboard::Edge& e) { return c < e.cycle; }) -
+                       [](uint64_t c, const models::Edge& e) { return c < e.cycle; }) -
       edges_.begin());
 }
 

@@ -20,7 +20,7 @@
 
 #include "fpgacnc/gcode/interpreter.h"
 
-namespace arc = fpgacnc::twins::arc;
+namespace arc = fpgacnc::models::arc;
 namespace gc = fpgacnc::gcode;
 
 int main(int argc, char* argv[]) {

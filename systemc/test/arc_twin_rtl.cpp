@@ -24,6 +24,7 @@
 namespace {
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
 
 struct Rec {
   Cycle edge;

@@ -330,8 +330,8 @@ class ClockwiseExecutorTwin : public sc_core::sc_module {
       end = run + static_cast<Cycle>(s.total);
       dropped = end >= cut;
       if (s.code != 0 && s.power != 0) {  // laser low from the abort edge (combinational gate)
-        pins_.add(run, simboard::kLaser, 1);
-        pins_.add(std::min(end, cut), simboard::kLaser, 0);
+        pins_.add(run, models::kLaser, 1);
+        pins_.add(std::min(end, cut), models::kLaser, 0);
       }
       for (int a = 0; a < kAxes && !s.arc; ++a) {
         if (s.steps[a] == 0) continue;

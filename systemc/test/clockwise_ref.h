@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins::ref {
@@ -68,16 +68,16 @@ inline ProfileRun run_profile(const ProfileParams& p,
 
 namespace arc {
 
-using twins::arc::derive;
-using twins::arc::Derived;
-using twins::arc::Event;
-using twins::arc::FRAC;
-using twins::arc::Frame;
-using twins::arc::Move;
-using twins::arc::RunResult;
-using twins::arc::u128;
-using twins::arc::WALK_CLOCKS;
-using twins::arc::Walker;
+using models::arc::derive;
+using models::arc::Derived;
+using models::arc::Event;
+using models::arc::FRAC;
+using models::arc::Frame;
+using models::arc::Move;
+using models::arc::RunResult;
+using models::arc::u128;
+using models::arc::WALK_CLOCKS;
+using models::arc::Walker;
 
 class Dda {
  public:

@@ -34,9 +34,9 @@
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/error.h"
 #include "fpgacnc/heat/heater_job.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
-#include "fpgacnc/simboard/edges.h"
 #include "fpgacnc/twins/virtual_board.h"
 
 // libsystemc's main() calls sc_main(); this file has its own main(), so this only links.
@@ -171,7 +171,7 @@ void run_corpus() {
     jobs.emplace_back(path, tw::TwinJob{std::move(script), p.timing, [path](tw::RunResult&& r) {
                                           Outcome& out = outcomes()[path];
                                           out.ran = true;
-                                          out.net = fpgacnc::simboard::net_steps(r.edges);
+                                          out.net = fpgacnc::models::net_steps(r.edges);
                                           out.host_error = r.error;
                                           out.cycles = r.end_cycle;
                                           out.edges = r.edges.size();

@@ -42,6 +42,7 @@
 extern char** environ;
 
 namespace sb = fpgacnc::simboard;
+namespace models = fpgacnc::models;
 namespace tw = fpgacnc::twins;
 namespace cfgns = fpgacnc::config;
 namespace plan = fpgacnc::plan;
@@ -105,7 +106,7 @@ void expect_same(const tw::HostScript& script, const cfgns::MachineConfig& cfg,
   EXPECT_EQ(d, "") << "rtl and tlm boards differ behind the pty";
   // The comparison is not vacuous: answers and motion were there.
   EXPECT_GE(a.received.size(), min_answers);
-  EXPECT_GT(sb::step_pulses(a.edges)[0] + sb::step_pulses(a.edges)[1], 1000u);
+  EXPECT_GT(models::step_pulses(a.edges)[0] + models::step_pulses(a.edges)[1], 1000u);
   EXPECT_EQ(a.stats.cycles, b.stats.cycles) << "board time at the end";
   EXPECT_EQ(a.stats.moves_done, b.stats.moves_done);
   std::printf(
@@ -170,7 +171,7 @@ TEST(TwinBoardPty, CorpusJobNetStepsMatchPlan) {
   board.stop();
   ASSERT_EQ(board.error(), "");
   const auto n = board.net_steps();
-  for (int a = 0; a < sb::kBoardAxes; ++a) {
+  for (int a = 0; a < models::kBoardAxes; ++a) {
     EXPECT_EQ(n[static_cast<size_t>(a)], p.final_steps[static_cast<size_t>(a)]) << "axis " << a;
   }
   const auto st = board.stats();

@@ -12,14 +12,16 @@
 
 #include "../cosim/arc_stimulus.h"
 #include "clockwise_ref.h"
-#include "fpgacnc/twins/arc_walk.h"
-#include "fpgacnc/twins/ramp.h"
+#include "fpgacnc/models/arc_walk.h"
+#include "fpgacnc/models/ramp.h"
 #include "fpgacnc/twins/timing.h"
 #include "fpgacnc/twins/tlm_common.h"
 
 namespace {
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
+namespace ramp = fpgacnc::models::ramp;
 using u128 = unsigned __int128;
 int failures = 0;
 
@@ -325,15 +327,15 @@ void pin_recorder(std::mt19937_64& g) {
     rec.record_tx = pick(g, 0, 1) == 1;
     std::vector<Edge> all;
     const size_t n = round < 3 ? pick(g, 300'000, 600'000) : pick(g, 0, 3000);
-    std::array<uint64_t, fpgacnc::simboard::kSignalCount> t{};
+    std::array<uint64_t, fpgacnc::models::kSignalCount> t{};
     const bool messy = pick(g, 0, 3) == 0;
     for (size_t i = 0; i < n; ++i) {
-      const auto s = static_cast<uint8_t>(pick(g, 0, fpgacnc::simboard::kSignalCount - 1));
+      const auto s = static_cast<uint8_t>(pick(g, 0, fpgacnc::models::kSignalCount - 1));
       t[s] += pick(g, 0, 3);
       const uint64_t c = messy && pick(g, 0, 9) == 0 ? pick(g, 0, t[s] + 10) : t[s];
       const auto v = static_cast<uint8_t>(pick(g, 0, 1));
       rec.add(static_cast<Cycle>(c), s, v);
-      if (s != fpgacnc::simboard::kTx || rec.record_tx) all.push_back(Edge{c, s, v});
+      if (s != fpgacnc::models::kTx || rec.record_tx) all.push_back(Edge{c, s, v});
     }
     std::sort(all.begin(), all.end(), [](const Edge& a, const Edge& b) {
       if (a.cycle != b.cycle) return a.cycle < b.cycle;
@@ -343,7 +345,7 @@ void pin_recorder(std::mt19937_64& g) {
     std::vector<Edge> want;
     for (size_t i = 0; i < all.size(); ++i) {
       const Edge e = all[i];
-      if (e.signal == fpgacnc::simboard::kLaser && i + 1 < all.size() &&
+      if (e.signal == fpgacnc::models::kLaser && i + 1 < all.size() &&
           all[i + 1].cycle == e.cycle && all[i + 1].signal == e.signal &&
           all[i + 1].value != e.value) {
         ++i;

@@ -21,6 +21,7 @@
 namespace {
 
 using namespace fpgacnc::twins;
+namespace arc = fpgacnc::models::arc;
 int failures = 0;
 
 void fail(const std::string& what) {

@@ -2,12 +2,16 @@
 // examples and v2 test vectors, docs/timing.md), each v2 block twin driven alone through its
 // sockets (frame_decoder: every NAK reason and the SEQ rules; response_encoder: priorities and
 // the ACK test vector; segment_executor: queued segments), and small jobs on the virtual board
-// whose edge times follow from the documented latencies. Plain checks; exit status 1 on any
-// failure.
+// whose edge times follow from the documented latencies. One GoogleTest per block; the blocks and
+// the board run in one simulation (SystemC elaborates once a process), run by the first test that
+// needs it, which keeps each block's checks and failures for the block's test.
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
+#include <map>
 #include <systemc>
 
 #include "fpgacnc/protocol/v1.h"
@@ -18,13 +22,21 @@
 namespace {
 
 using namespace fpgacnc::twins;
-int failures = 0;
+
+// The checks of one block: how many ran, and the description of each that failed.
+struct Record {
+  size_t checks = 0;
+  std::vector<std::string> failures;
+};
+Record* current = nullptr;  // the block whose checks run now
 
 void check(bool ok, const std::string& what) {
-  if (!ok) {
-    ++failures;
-    fmt::print("FAIL: {}\n", what);
+  if (current == nullptr) {
+    ADD_FAILURE() << "a check outside a block: " << what;
+    return;
   }
+  ++current->checks;
+  if (!ok) current->failures.push_back(what);
 }
 template <class A, class B>
 void check_eq(const A& a, const B& b, const std::string& what) {
@@ -600,8 +612,8 @@ void executor_abort_tests(ExecBench& b) {
   const auto edges = b.pins.take_sorted();
   std::vector<uint64_t> laser, rises;
   for (const auto& e : edges) {
-    if (e.signal == fpgacnc::simboard::kLaser) laser.push_back(e.cycle);
-    if (e.signal == fpgacnc::simboard::step_signal(0) && e.value == 1) rises.push_back(e.cycle);
+    if (e.signal == fpgacnc::models::kLaser) laser.push_back(e.cycle);
+    if (e.signal == fpgacnc::models::step_signal(0) && e.value == 1) rises.push_back(e.cycle);
   }
   check_eq(laser.size(), 2u, "abort: laser rise and fall");
   if (laser.size() == 2) check_eq(laser[1], 537u, "abort: laser low from the abort edge");
@@ -642,10 +654,10 @@ void executor_tests(ExecBench& b) {
   check_eq(b.exec.seg_start_cycles.at(4), e4 + 51, "late segment: R = valid + 1");
   check_eq(b.exec.zero_gap, 2u, "two zero-gap starts");
   const auto edges = b.pins.take_sorted();
-  std::vector<fpgacnc::simboard::Edge> laser, dir_x;
+  std::vector<fpgacnc::models::Edge> laser, dir_x;
   for (const auto& e : edges) {
-    if (e.signal == fpgacnc::simboard::kLaser) laser.push_back(e);
-    if (e.signal == fpgacnc::simboard::dir_signal(0)) dir_x.push_back(e);
+    if (e.signal == fpgacnc::models::kLaser) laser.push_back(e);
+    if (e.signal == fpgacnc::models::dir_signal(0)) dir_x.push_back(e);
   }
   // Laser: one rise on R1, stays high through segment 2 (code 2, power 10), falls on e2.
   check_eq(laser.size(), 2u, "laser: one pulse over two back-to-back cutting segments");
@@ -704,7 +716,7 @@ void worked_example(const RunResult& r) {
   check_eq(r.acks.size(), 1u, "one ACK");
   check_eq(r.acks.at(0), R + 5'000'000 + kRespStart + 1, "ACK start edge = R + T + 3");
   // Edges: DIR X at D; laser at R; first X step at R + 15625; last steps at R + T.
-  std::vector<fpgacnc::simboard::Edge> x_steps, y_steps;
+  std::vector<fpgacnc::models::Edge> x_steps, y_steps;
   bool dir_ok = false, laser_ok = false;
   for (const auto& e : r.edges) {
     if (e.signal == 4 && e.cycle == static_cast<uint64_t>(D) && e.value == 1) dir_ok = true;
@@ -865,7 +877,7 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
     for (int a = 0; a < 2; ++a) {
       std::vector<Cycle> rises;
       for (const auto& e : r.edges)
-        if (e.signal == fpgacnc::simboard::step_signal(a) && e.value == 1 &&
+        if (e.signal == fpgacnc::models::step_signal(a) && e.value == 1 &&
             static_cast<Cycle>(e.cycle) > start && static_cast<Cycle>(e.cycle) <= end)
           rises.push_back(static_cast<Cycle>(e.cycle));
       const auto ideal = ideal_steps(m.pr, n[a], n_dom);
@@ -885,11 +897,23 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
              static_cast<double>(1.0L - worst));
 }
 
-}  // namespace
+// Runs `body` with its checks kept in `r`.
+void in_block(Record& r, const std::function<void()>& body) {
+  current = &r;
+  body();
+  current = nullptr;
+}
 
-int sc_main(int, char*[]) {
-  arithmetic();
-  v2_arithmetic();
+// A block's test: its checks ran and none failed.
+void expect_passed(const Record& r) {
+  EXPECT_GT(r.checks, 0u) << "no check of this block ran";
+  for (const std::string& f : r.failures) ADD_FAILURE() << f;
+}
+
+// The simulation of the block benches and the virtual board's jobs, once; each block's checks by
+// name.
+std::map<std::string, Record> run_simulation() {
+  std::map<std::string, Record> rec;
   DecoderBench dec_bench("decoder_bench");
   EncoderBench enc_bench("encoder_bench");
   ExecBench exec_bench("exec_bench");
@@ -916,27 +940,80 @@ int sc_main(int, char*[]) {
     DecoderBench& d;
     EncoderBench& e;
     ExecBench& x;
-    Blocks(sc_core::sc_module_name n, DecoderBench& d, EncoderBench& e, ExecBench& x)
-        : sc_module(n), d(d), e(e), x(x) {
+    std::map<std::string, Record>& rec;
+    Blocks(sc_core::sc_module_name n, DecoderBench& d, EncoderBench& e, ExecBench& x,
+           std::map<std::string, Record>& rec)
+        : sc_module(n), d(d), e(e), x(x), rec(rec) {
       SC_THREAD(run);
     }
     void run() {
-      decoder_tests(d);
-      spec_vector_tests(d);
-      encoder_tests(e);
-      executor_tests(x);
-      executor_abort_tests(x);
+      in_block(rec["frame_decoder"], [&] { decoder_tests(d); });
+      in_block(rec["spec_vectors"], [&] { spec_vector_tests(d); });
+      in_block(rec["response_encoder"], [&] { encoder_tests(e); });
+      in_block(rec["segment_executor"], [&] { executor_tests(x); });
+      in_block(rec["segment_executor_abort"], [&] { executor_abort_tests(x); });
     }
-  } blocks("blocks", dec_bench, enc_bench, exec_bench);
+  } blocks("blocks", dec_bench, enc_bench, exec_bench, rec);
   sc_core::sc_start();
+  const char* jobs[] = {"board_worked_example", "board_zero_move_and_watchdog", "board_spiral",
+                        "board_profile_job"};
   if (results.size() == 4) {
-    worked_example(results[0]);
-    zero_move_and_watchdog(results[1]);
-    spiral(results[2], spiral_t, spiral_pos, results[2].statuses);
-    profile_job(results[3], profile_pos);
+    in_block(rec[jobs[0]], [&] { worked_example(results[0]); });
+    in_block(rec[jobs[1]], [&] { zero_move_and_watchdog(results[1]); });
+    in_block(rec[jobs[2]], [&] { spiral(results[2], spiral_t, spiral_pos, results[2].statuses); });
+    in_block(rec[jobs[3]], [&] { profile_job(results[3], profile_pos); });
   } else {
-    check(false, "all jobs ran");
+    for (const char* j : jobs) in_block(rec[j], [&] { check(false, "all jobs ran"); });
   }
-  fmt::print("twins_unit: {}\n", failures ? "FAILED" : "all checks passed");
-  return failures ? 1 : 0;
+  return rec;
+}
+
+const Record& simulated(const std::string& block) {
+  static const std::map<std::string, Record> rec = run_simulation();
+  return rec.at(block);
+}
+
+TEST(TwinsUnit, V1Arithmetic) {
+  Record r;
+  in_block(r, arithmetic);
+  expect_passed(r);
+}
+TEST(TwinsUnit, V2Arithmetic) {
+  Record r;
+  in_block(r, v2_arithmetic);
+  expect_passed(r);
+}
+TEST(TwinsUnit, FrameDecoder) {
+  expect_passed(simulated("frame_decoder"));
+}
+TEST(TwinsUnit, FrameDecoderSpecVectors) {
+  expect_passed(simulated("spec_vectors"));
+}
+TEST(TwinsUnit, ResponseEncoder) {
+  expect_passed(simulated("response_encoder"));
+}
+TEST(TwinsUnit, SegmentExecutor) {
+  expect_passed(simulated("segment_executor"));
+}
+TEST(TwinsUnit, SegmentExecutorAbort) {
+  expect_passed(simulated("segment_executor_abort"));
+}
+TEST(TwinsUnit, BoardWorkedExample) {
+  expect_passed(simulated("board_worked_example"));
+}
+TEST(TwinsUnit, BoardZeroMoveAndWatchdog) {
+  expect_passed(simulated("board_zero_move_and_watchdog"));
+}
+TEST(TwinsUnit, BoardSpiral) {
+  expect_passed(simulated("board_spiral"));
+}
+TEST(TwinsUnit, BoardProfileJob) {
+  expect_passed(simulated("board_profile_job"));
+}
+
+}  // namespace
+
+int sc_main(int argc, char* argv[]) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
 }

@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "Varc_dda.h"
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 #include "verilated.h"
 
 namespace fpgacnc::tb {
 
-namespace arc = fpgacnc::twins::arc;
+namespace arc = fpgacnc::models::arc;
 
 class ArcRtl {
  public:

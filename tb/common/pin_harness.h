@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "common/step_monitor.h"
-#include "common/uart_bits.h"
+#include "fpgacnc/models/uart_bits.h"
 #include "verilated.h"
 
 namespace fpgacnc::tb {
@@ -91,7 +91,7 @@ class PinHarness {
   Model& dut() { return *m_; }
   StepMonitor& mon() { return mon_; }
   uint64_t cycle() const { return cycle_; }
-  const std::vector<UartMonitor::Byte>& tx_bytes() const { return tx_bytes_; }
+  const std::vector<models::UartMonitor::Byte>& tx_bytes() const { return tx_bytes_; }
 
  protected:
   // Called after every sampled clock edge.
@@ -101,12 +101,12 @@ class PinHarness {
   PinAccess<Model> pins_;
   std::unique_ptr<VerilatedContext> ctx_;
   std::unique_ptr<Model> m_;
-  UartDriver drv_;
-  UartMonitor umon_;
+  models::UartDriver drv_;
+  models::UartMonitor umon_;
   StepMonitor mon_;
   bool monitors_;
   uint64_t cycle_ = 0;
-  std::vector<UartMonitor::Byte> tx_bytes_;
+  std::vector<models::UartMonitor::Byte> tx_bytes_;
 };
 
 }  // namespace fpgacnc::tb

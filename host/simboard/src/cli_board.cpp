@@ -163,10 +163,10 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
   fmt::print("\nstopped by {}\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
   print_board_figures(board);
   const auto edges = board.edges();
-  const auto n = net_steps(edges);
+  const auto n = models::net_steps(edges);
   fmt::print("net steps from the edges: X {} Y {} Z {} E {}\n", n[0], n[1], n[2], n[3]);
   if (!args.edges_csv.empty()) {
-    write_edges_csv(args.edges_csv, edges, board.clk_hz());
+    models::write_edges_csv(args.edges_csv, edges, board.clk_hz());
     fmt::print("edges written to {}\n", args.edges_csv);
   }
   pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
@@ -220,12 +220,12 @@ bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::Mach
   b.stop();
   print_board_figures(b);
   const auto edges = b.edges();
-  const auto n = net_steps(edges);
+  const auto n = models::net_steps(edges);
   // v2 drives all four axes; v1 carries X and Y only, so Z/E that never stepped while the plan
   // moves them are reported as not driven rather than as a mismatch.
   const bool xy_ok = n[0] == plan.final_steps[0] && n[1] == plan.final_steps[1];
   const bool ze_ok = n[2] == plan.final_steps[2] && n[3] == plan.final_steps[3];
-  const auto pulses = step_pulses(edges);
+  const auto pulses = models::step_pulses(edges);
   const bool ze_idle = pulses[2] == 0 && pulses[3] == 0;
   const char* verdict = !xy_ok    ? "MISMATCH"
                         : ze_ok   ? "match"
@@ -245,7 +245,7 @@ bool report_board_run(link::Link& lk, const plan::Plan& plan, const config::Mach
   }
   if (!outputs.fst_path.empty()) fmt::print("FST waveform written to {}\n", outputs.fst_path);
   if (!outputs.edges_csv.empty()) {
-    write_edges_csv(outputs.edges_csv, edges, b.clk_hz());
+    models::write_edges_csv(outputs.edges_csv, edges, b.clk_hz());
     fmt::print("edges written to {}\n", outputs.edges_csv);
   }
   return true;

@@ -42,7 +42,7 @@ struct Run {
 
 // Walks the edges; a point is kept when it is `tol_steps` away from the last kept point, at
 // every laser change and at the end, so the SVG stays small for millions of steps.
-std::vector<Run> executed_runs(std::span<const Edge> edges, std::array<double, 2> spm,
+std::vector<Run> executed_runs(std::span<const models::Edge> edges, std::array<double, 2> spm,
                                double tol_steps, Bounds* bounds) {
   std::vector<Run> runs;
   int64_t x = 0, y = 0, kx = 0, ky = 0;
@@ -57,9 +57,9 @@ std::vector<Run> executed_runs(std::span<const Edge> edges, std::array<double, 2
     kx = x;
     ky = y;
   };
-  for (const Edge& e : edges) {
-    if (e.signal >= kDir0 && e.signal < kDir0 + kBoardAxes) {
-      const uint32_t bit = 1u << (e.signal - kDir0);
+  for (const models::Edge& e : edges) {
+    if (e.signal >= models::kDir0 && e.signal < models::kDir0 + models::kBoardAxes) {
+      const uint32_t bit = 1u << (e.signal - models::kDir0);
       dir = e.value ? (dir | bit) : (dir & ~bit);
     } else if (e.signal < 2 && e.value) {
       const int64_t d = (dir >> e.signal) & 1u ? 1 : -1;
@@ -67,7 +67,7 @@ std::vector<Run> executed_runs(std::span<const Edge> edges, std::array<double, 2
       if (bounds) bounds->add(static_cast<double>(x) / spm[0], static_cast<double>(y) / spm[1]);
       const double dx = static_cast<double>(x - kx), dy = static_cast<double>(y - ky);
       if (dx * dx + dy * dy >= tol_steps * tol_steps) keep();
-    } else if (e.signal == kLaser && static_cast<bool>(e.value) != laser) {
+    } else if (e.signal == models::kLaser && static_cast<bool>(e.value) != laser) {
       if (x != kx || y != ky) keep();
       laser = e.value;
       runs.push_back(Run{laser, {mm(x, y)}});
@@ -120,7 +120,7 @@ void check_plot_path(const std::string& path) {
   }
 }
 
-void write_plot_svg(const std::string& path, std::span<const Edge> edges,
+void write_plot_svg(const std::string& path, std::span<const models::Edge> edges,
                     std::span<const CommandedSegment> commanded, const PlotOptions& o) {
   check_plot_path(path);
   const bool png = path.size() > 4 && path.compare(path.size() - 4, 4, ".png") == 0;

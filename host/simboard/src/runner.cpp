@@ -185,7 +185,7 @@ BoardRunResult run_plan_on_board(const plan::Plan& plan, const BoardOptions& boa
   r.stats = lk.board().stats();
   r.edges = lk.board().edges();
   r.move_done_cycles = lk.board().move_done_cycles();
-  r.net_steps = net_steps(r.edges);
+  r.net_steps = models::net_steps(r.edges);
   return r;
 }
 

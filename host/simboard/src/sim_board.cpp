@@ -17,9 +17,9 @@
 #include <cstring>
 #include <deque>
 
-#include "common/ltc2308_model.h"
-#include "common/thermal_plant.h"
-#include "common/uart_bits.h"
+#include "fpgacnc/models/ltc2308_model.h"
+#include "fpgacnc/models/thermal_plant.h"
+#include "fpgacnc/models/uart_bits.h"
 
 namespace fpgacnc::simboard {
 
@@ -29,11 +29,11 @@ using Vcnc_core_trace = Vcnc_core_board_trace;
 
 // Heater plants on the heater pins and thermistors on the ADC pins (see sim_board.h).
 struct ThermalWorld {
-  thermal::BedPlant bed;
-  thermal::HotEndPlant hotend;
-  thermal::DelayedSensor bed_sensor;
-  thermal::Thermistor ntc;
-  tb::Ltc2308Model adc;
+  models::thermal::BedPlant bed;
+  models::thermal::HotEndPlant hotend;
+  models::thermal::DelayedSensor bed_sensor;
+  models::thermal::Thermistor ntc;
+  models::Ltc2308Model adc;
   std::array<double, 2> sensed;  // thermistor temperature per channel (0 hot end, 1 bed)
   std::array<uint64_t, 2> high{};
   std::array<double, 2> last_duty{};
@@ -99,8 +99,8 @@ struct SimBoard::Model {
   std::unique_ptr<VerilatedFstC> fst;
   LineFaultInjector line;  // faults on the serial line (all off by default)
   RxLine driver;           // host -> board bits on the rx pin
-  tb::UartMonitor monitor;
-  EdgeRecorder rec;
+  models::UartMonitor monitor;
+  models::EdgeRecorder rec;
   uint64_t cycle = 0;        // rising edges since reset release
   uint64_t last_active = 0;  // last cycle with something in flight
   // A tx byte is decoded at the middle of its stop bit; the core may start the next byte of a
@@ -155,7 +155,7 @@ template <class M>
 uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quiet_cycles) {
   VerilatedFstC* fst = s.fst.get();
   RxLine& drv = s.driver;
-  tb::UartMonitor& mon = s.monitor;
+  models::UartMonitor& mon = s.monitor;
   bool drv_idle = drv.idle();
   uint64_t cyc = s.cycle;
   uint64_t last_active = s.last_active;
@@ -230,7 +230,7 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
   m.rst = 0;
   clock_once(m, s.fst.get(), s.trace_time);
   if (o.step_timing) {
-    for (int a = 0; a < kBoardAxes; ++a) {
+    for (int a = 0; a < models::kBoardAxes; ++a) {
       const auto& t = (*o.step_timing)[static_cast<size_t>(a)];
       const uint32_t v[4] = {t.step_high, t.step_low, t.dir_setup, t.dir_hold};
       for (int f = 0; f < 4; ++f) {
@@ -258,7 +258,7 @@ void fill_stats(const M& m, BoardStats& st) {
   st.frame_errors = m.frame_errors;
   st.timeouts = m.timeouts;
   st.violations = m.violations;
-  for (int a = 0; a < kBoardAxes; ++a) {
+  for (int a = 0; a < models::kBoardAxes; ++a) {
     st.position[static_cast<size_t>(a)] = static_cast<int32_t>(m.position[a]);
   }
 }
@@ -269,7 +269,7 @@ BoardOptions SimBoard::options_from_config(const config::MachineConfig& cfg) {
   BoardOptions o;
   o.clk_hz = static_cast<double>(cfg.clk_hz);
   o.baud = cfg.baud;
-  std::array<config::StepTiming, kBoardAxes> t;
+  std::array<config::StepTiming, models::kBoardAxes> t;
   t.fill(cfg.step_timing);
   o.step_timing = t;
   return o;
@@ -312,8 +312,8 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
   model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges, opt_.line_faults,
                                    opt_.initial_c);
   model_->sig_mask = 0x1ff;
-  if (opt_.record_tx) model_->sig_mask |= 1u << kTx;
-  if (opt_.record_rx) model_->sig_mask |= 1u << kRx;
+  if (opt_.record_tx) model_->sig_mask |= 1u << models::kTx;
+  if (opt_.record_rx) model_->sig_mask |= 1u << models::kRx;
   if (!opt_.fst_path.empty()) {
     model_->ctx->traceEverOn(true);
     model_->core_trace = std::make_unique<Vcnc_core_trace>(model_->ctx.get(), "cnc_core");
@@ -653,7 +653,7 @@ bool SimBoard::idle_for_host() const {
   return paused_.load() || !thread_live_.load() || quiet_locked();
 }
 
-std::vector<Edge> SimBoard::edges() const {
+std::vector<models::Edge> SimBoard::edges() const {
   OtherThreadLock l(*this);
   return model_->rec.edges();
 }
@@ -673,7 +673,7 @@ std::vector<TxByteRecord> SimBoard::tx_line_log() const {
   return model_->line.tx_log();
 }
 
-std::array<int64_t, kBoardAxes> SimBoard::net_steps() const {
+std::array<int64_t, models::kBoardAxes> SimBoard::net_steps() const {
   OtherThreadLock l(*this);
   return model_->rec.net_steps();
 }

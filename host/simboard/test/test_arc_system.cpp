@@ -20,6 +20,7 @@
 #include "fpgacnc/simboard/sim_board.h"
 
 namespace sb = fpgacnc::simboard;
+namespace models = fpgacnc::models;
 namespace lk = fpgacnc::link;
 namespace v2 = fpgacnc::protocol::v2;
 namespace cfgns = fpgacnc::config;
@@ -72,7 +73,7 @@ TEST_P(CorpusArcs, EndPositionsThroughThePty) {
   EXPECT_TRUE(link.wait_idle(1000ms)) << "board still busy 1 s of board time after the job";
   link.board().stop();
   const sb::BoardStats st = link.board().stats();
-  const auto net = sb::net_steps(link.board().edges());
+  const auto net = models::net_steps(link.board().edges());
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   EXPECT_TRUE(rep.position_ok);
   EXPECT_EQ(rep.status_end.done - rep.status_start.done, job.frames.size());

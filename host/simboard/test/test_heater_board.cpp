@@ -1,8 +1,8 @@
 // Heaters on the simulated board (label system): the Verilated cnc_core with its heater block,
-// the LTC2308 pin model on its ADC pins and the plant models of tb/common/thermal_plant.h on its
-// heater pins, with the scaled thermal time base (one plant second per SimBoard::kSampleClks =
-// 102 400 clocks, docs/heater.md "Simulated board"). Host side: the v2 streamer with heaters and
-// the relay autotune, over the board's pty.
+// the LTC2308 pin model on its ADC pins and the plant models of
+// models/include/fpgacnc/models/thermal_plant.h on its heater pins, with the scaled thermal time
+// base (one plant second per SimBoard::kSampleClks = 102 400 clocks, docs/heater.md "Simulated
+// board"). Host side: the v2 streamer with heaters and the relay autotune, over the board's pty.
 //  - autotune of the bed through the board: critical period within 15 % of the reference 53 s;
 //  - the start of part.gcode with a printer start sequence (M140/M104/M190/M109): waits, then the
 //    first moves; the figures (warm-up times) are printed;

@@ -15,13 +15,13 @@
 #include <cstdlib>
 #include <random>
 
-#include "common/uart_bits.h"
+#include "fpgacnc/models/uart_bits.h"
 #include "fpgacnc/simboard/cli_board.h"
 #include "fpgacnc/simboard/line_faults.h"
 #include "fpgacnc/simboard/sim_board.h"
 
 namespace sb = fpgacnc::simboard;
-namespace tb = fpgacnc::tb;
+namespace models = fpgacnc::models;
 using namespace std::chrono_literals;
 
 namespace {
@@ -368,7 +368,7 @@ TEST(LineFaultOptions, ParseAndReject) {
 
 struct RawRun {
   sb::BoardStats stats;
-  std::vector<sb::Edge> edges;
+  std::vector<models::Edge> edges;
   std::vector<uint64_t> move_done;
   std::vector<sb::RxFrameRecord> rx_log;
   std::vector<sb::TxByteRecord> tx_log;
@@ -442,36 +442,36 @@ std::vector<uint8_t> example_job() {
   return v;
 }
 
-std::vector<sb::Edge> without_rx(const std::vector<sb::Edge>& e) {
-  std::vector<sb::Edge> r;
+std::vector<models::Edge> without_rx(const std::vector<models::Edge>& e) {
+  std::vector<models::Edge> r;
   std::copy_if(e.begin(), e.end(), std::back_inserter(r),
-               [](const sb::Edge& x) { return x.signal != sb::kRx; });
+               [](const models::Edge& x) { return x.signal != models::kRx; });
   return r;
 }
 
 // Level of the rx pin at `cycle` from the recorded rx edges (high before the first edge).
 class RxPin {
  public:
-  explicit RxPin(const std::vector<sb::Edge>& e) {
+  explicit RxPin(const std::vector<models::Edge>& e) {
     for (const auto& x : e)
-      if (x.signal == sb::kRx) edges_.push_back(x);
+      if (x.signal == models::kRx) edges_.push_back(x);
   }
   int at(uint64_t cycle) const {
     auto it = std::upper_bound(edges_.begin(), edges_.end(), cycle,
-                               [](uint64_t c, const sb::Edge& x) { return c < x.cycle; });
+                               [](uint64_t c, const models::Edge& x) { return c < x.cycle; });
     return it == edges_.begin() ? 1 : std::prev(it)->value;
   }
 
  private:
-  std::vector<sb::Edge> edges_;
+  std::vector<models::Edge> edges_;
 };
 
-void expect_same_edges(const std::vector<sb::Edge>& a, const std::vector<sb::Edge>& b,
+void expect_same_edges(const std::vector<models::Edge>& a, const std::vector<models::Edge>& b,
                        int64_t shift) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
     ASSERT_EQ(static_cast<int64_t>(b[i].cycle), static_cast<int64_t>(a[i].cycle) + shift)
-        << "edge " << i << " (" << sb::signal_name(a[i].signal) << ")";
+        << "edge " << i << " (" << models::signal_name(a[i].signal) << ")";
     ASSERT_EQ(a[i].signal, b[i].signal) << i;
     ASSERT_EQ(a[i].value, b[i].value) << i;
   }
@@ -535,8 +535,8 @@ TEST(BoardLineFaults, BitErrorsToBoardReachThePin) {
   EXPECT_EQ(r.stats.line.frames_flipped_to_board, frames_hit);
   ASSERT_GT(frames_hit, 0u) << "seed " << o.line_faults.seed << " flipped nothing";
   // Decode the pin as a receiver would.
-  tb::UartMonitor mon(kClk, kBaud);
-  std::vector<tb::UartMonitor::Byte> seen;
+  models::UartMonitor mon(kClk, kBaud);
+  std::vector<models::UartMonitor::Byte> seen;
   const uint64_t end = r.rx_log.back().start_cycle + 5000;
   for (uint64_t c = 1; c < end; ++c) {
     if (auto b = mon.sample(pin.at(c), c)) seen.push_back(*b);
@@ -591,7 +591,7 @@ TEST(BoardLineFaults, DroppedAndDuplicatedBytes) {
   EXPECT_GT(dups, 0u);
   // The pin carries exactly the logged frames.
   const RxPin pin(r.edges);
-  tb::UartMonitor mon(kClk, kBaud);
+  models::UartMonitor mon(kClk, kBaud);
   std::vector<uint8_t> seen;
   const uint64_t end = r.rx_log.back().start_cycle + 5000;
   for (uint64_t c = 1; c < end; ++c) {

@@ -25,6 +25,7 @@
 #include "fpgacnc/simboard/sim_board.h"
 
 namespace sb = fpgacnc::simboard;
+namespace models = fpgacnc::models;
 namespace lk = fpgacnc::link;
 namespace cfgns = fpgacnc::config;
 namespace plan = fpgacnc::plan;
@@ -37,8 +38,8 @@ const std::vector<uint8_t> kInit = {0xFF, 0x01, 0x1E, 0x1A, 0x30, 0x01, 0x1E, 0x
 const std::vector<uint8_t> kMotion = {0x01, 0x00, 0x00, 0x01, 0x40, 0xFF,
                                       0xFF, 0xFF, 0x60, 0x04, 0xB0};
 
-size_t count_edges(const std::vector<sb::Edge>& e, uint8_t signal, uint8_t value) {
-  return static_cast<size_t>(std::count_if(e.begin(), e.end(), [&](const sb::Edge& x) {
+size_t count_edges(const std::vector<models::Edge>& e, uint8_t signal, uint8_t value) {
+  return static_cast<size_t>(std::count_if(e.begin(), e.end(), [&](const models::Edge& x) {
     return x.signal == signal && x.value == value;
   }));
 }
@@ -68,16 +69,16 @@ TEST(SimBoard, PtyRoundTripOriginalExample) {
   board.stop();
   const auto e = board.edges();
   // 320 X steps with DIR X high, 160 Y steps with DIR Y low.
-  EXPECT_EQ(count_edges(e, sb::step_signal(0), 1), 320u);
-  EXPECT_EQ(count_edges(e, sb::step_signal(1), 1), 160u);
-  EXPECT_EQ(count_edges(e, sb::dir_signal(0), 1), 1u);
-  EXPECT_EQ(count_edges(e, sb::dir_signal(1), 1), 0u);
+  EXPECT_EQ(count_edges(e, models::step_signal(0), 1), 320u);
+  EXPECT_EQ(count_edges(e, models::step_signal(1), 1), 160u);
+  EXPECT_EQ(count_edges(e, models::dir_signal(0), 1), 1u);
+  EXPECT_EQ(count_edges(e, models::dir_signal(1), 1), 0u);
   const auto n = board.net_steps();
   EXPECT_EQ(n[0], 320);
   EXPECT_EQ(n[1], -160);
   // G1: the laser was on for exactly one interval, during the move.
   const auto st = board.stats();
-  const auto laser = sb::high_intervals(e, sb::kLaser, st.cycles);
+  const auto laser = models::high_intervals(e, models::kLaser, st.cycles);
   ASSERT_EQ(laser.size(), 1u);
   for (const auto& x : e) {
     if (x.signal < 2 && x.value) {
@@ -244,12 +245,12 @@ struct Rise {
   uint64_t cycle;
   int dir;
 };
-std::vector<Rise> rises(const std::vector<sb::Edge>& e, int axis) {
+std::vector<Rise> rises(const std::vector<models::Edge>& e, int axis) {
   std::vector<Rise> r;
   int dir = 0;
   for (const auto& x : e) {
-    if (x.signal == sb::dir_signal(axis)) dir = x.value;
-    if (x.signal == sb::step_signal(axis) && x.value) r.push_back(Rise{x.cycle, dir ? 1 : -1});
+    if (x.signal == models::dir_signal(axis)) dir = x.value;
+    if (x.signal == models::step_signal(axis) && x.value) r.push_back(Rise{x.cycle, dir ? 1 : -1});
   }
   return r;
 }
@@ -313,13 +314,13 @@ void run_corpus_job(const std::string& name, const cfgns::MachineConfig& cfg, lo
 
   // Laser high exactly during cutting moves. The moves run one at a time (stop-and-wait), so
   // the k-th segment owns the next |steps_x| X rises and |steps_y| Y rises, in order.
-  const auto laser = sb::high_intervals(r.edges, sb::kLaser, r.stats.cycles);
+  const auto laser = models::high_intervals(r.edges, models::kLaser, r.stats.cycles);
   const auto rx = rises(r.edges, 0), ry = rises(r.edges, 1);
   size_t ix = 0, iy = 0, il = 0, cutting_with_steps = 0, bad_dir = 0, steps_outside = 0,
          rapid_steps_lit = 0;
   auto lit = [&](uint64_t c) {
     auto it = std::upper_bound(laser.begin(), laser.end(), c,
-                               [](uint64_t v, const sb::Interval& i) { return v < i.begin; });
+                               [](uint64_t v, const models::Interval& i) { return v < i.begin; });
     if (it == laser.begin()) return false;
     --it;
     return c >= it->begin && c < it->end;
@@ -479,15 +480,15 @@ TEST(SimBoardFailure, StoppedBoardTimesOut) {
 }
 
 TEST(SimBoardPlot, WritesSvgWithLegend) {
-  sb::EdgeRecorder rec;
+  models::EdgeRecorder rec;
   // Two X steps forward with DIR high, laser on.
-  rec.add(1, sb::dir_signal(0), 1);
-  rec.add(5, sb::kLaser, 1);
-  rec.add(10, sb::step_signal(0), 1);
-  rec.add(12, sb::step_signal(0), 0);
-  rec.add(20, sb::step_signal(0), 1);
-  rec.add(22, sb::step_signal(0), 0);
-  rec.add(22, sb::kLaser, 0);
+  rec.add(1, models::dir_signal(0), 1);
+  rec.add(5, models::kLaser, 1);
+  rec.add(10, models::step_signal(0), 1);
+  rec.add(12, models::step_signal(0), 0);
+  rec.add(20, models::step_signal(0), 1);
+  rec.add(22, models::step_signal(0), 0);
+  rec.add(22, models::kLaser, 0);
   EXPECT_EQ(rec.net_steps()[0], 2);
   std::vector<sb::CommandedSegment> cmd = {{0, 0, 2.0 / 160, 0, true}};
   const auto dir = std::filesystem::temp_directory_path();

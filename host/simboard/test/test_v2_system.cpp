@@ -26,6 +26,7 @@
 #include "fpgacnc/simboard/sim_board.h"
 
 namespace sb = fpgacnc::simboard;
+namespace models = fpgacnc::models;
 namespace lk = fpgacnc::link;
 namespace v2 = fpgacnc::protocol::v2;
 namespace cfgns = fpgacnc::config;
@@ -72,7 +73,7 @@ plan::Plan plan_of(const std::string& g, const cfgns::MachineConfig& cfg) {
 struct V2Run {
   lk::StreamV2Report rep;
   sb::BoardStats stats;
-  std::vector<sb::Edge> edges;
+  std::vector<models::Edge> edges;
   std::vector<uint64_t> move_done;
   std::string protocol;
 };
@@ -94,10 +95,10 @@ V2Run run_v2(const plan::Plan& p, const cfgns::MachineConfig& cfg, const sb::Boa
   return r;
 }
 
-std::vector<uint64_t> rises(const std::vector<sb::Edge>& e) {
+std::vector<uint64_t> rises(const std::vector<models::Edge>& e) {
   std::vector<uint64_t> c;
   for (const auto& x : e) {
-    if (x.signal < sb::kDir0 && x.value) c.push_back(x.cycle);
+    if (x.signal < models::kDir0 && x.value) c.push_back(x.cycle);
   }
   return c;
 }
@@ -183,8 +184,8 @@ TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
   EXPECT_EQ(r.rep.status_end.done - r.rep.status_start.done, job.frames.size());
   EXPECT_EQ(r.rep.status_end.counters[v2::kClamped], 0u);
 
-  const auto steps = sb::step_pulses(r.edges);
-  const auto net = sb::net_steps(r.edges);
+  const auto steps = models::step_pulses(r.edges);
+  const auto net = models::net_steps(r.edges);
   for (size_t a = 0; a < 4; ++a) {
     EXPECT_EQ(steps[a], pulses_want[a]) << "STEP pulses, axis " << a;
     EXPECT_EQ(net[a], p.final_steps[a]) << "net steps, axis " << a;
@@ -279,8 +280,8 @@ TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
   EXPECT_EQ(r.rep.status_end.done - r.rep.status_start.done, job.frames.size());
   EXPECT_EQ(r.move_done.size(), job.lines);
   EXPECT_TRUE(r.rep.position_ok);
-  const auto steps = sb::step_pulses(r.edges);
-  const auto net = sb::net_steps(r.edges);
+  const auto steps = models::step_pulses(r.edges);
+  const auto net = models::net_steps(r.edges);
   for (size_t a = 0; a < 4; ++a) {
     EXPECT_EQ(steps[a], pulses_want[a]) << "STEP pulses, axis " << a;
     EXPECT_EQ(net[a], p.final_steps[a]) << "net steps, axis " << a;

@@ -50,8 +50,9 @@ HeaterConfig default_bed() {
 
 HeaterConfig default_hotend() {
   HeaterConfig h;
-  // The reference relay rule on the hot-end model of tb/common/thermal_plant.h (relay 0/24 V at
-  // 200 degC: Pu 12.5 s, a 2.95 degC, Ku 5.17 V/degC): 20 -> 200 degC with 0.4 degC overshoot.
+  // The reference relay rule on the hot-end model of models/include/fpgacnc/models/thermal_plant.h
+  // (relay 0/24 V at 200 degC: Pu 12.5 s, a 2.95 degC, Ku 5.17 V/degC): 20 -> 200 degC with 0.4
+  // degC overshoot.
   h.kp_v_per_c = 3.1;
   h.ti_s = 6.2;
   h.td_s = 1.5;

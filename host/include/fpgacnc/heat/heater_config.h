@@ -5,8 +5,8 @@
 //
 // Defaults: the bed is the reference heated bed (24 V supply, step-response tuning Kp 9.7 V/degC,
 // Ti 20 s, Td 5 s); the hot end is a 40 W / 24 V cartridge (tuned on the hot-end plant model of
-// tb/common/thermal_plant.h, see docs/heater.md). Both use a 100k NTC (beta 3950) read through the
-// LTC2308 with a 4.7 kOhm pull-up.
+// models/include/fpgacnc/models/thermal_plant.h, see docs/heater.md). Both use a 100k NTC (beta
+// 3950) read through the LTC2308 with a 4.7 kOhm pull-up.
 #pragma once
 
 #include <array>

@@ -81,8 +81,9 @@ struct ProfileRun {
   std::vector<std::pair<uint64_t, uint64_t>> knots;
 };
 
-// Throws std::invalid_argument when the fields break the device's limits (docs/protocol.md, LINE_PROFILE) or the
-// segment would never end. Cost: O(phases * log) (binary searches over 128-bit quadratics).
+// Throws std::invalid_argument when the fields break the device's limits (docs/protocol.md,
+// LINE_PROFILE) or the segment would never end. Cost: O(phases * log) (binary searches over 128-bit
+// quadratics).
 ProfileRun simulate_profile(const ProfileFields& f, bool record_knots = false);
 ProfileRun simulate_recurrence(const Recurrence& r, bool record_knots = false);
 // Same by stepping every clock (reference for tests; only for short segments).
@@ -206,7 +207,7 @@ ProfilePlan plan_profiles(const Plan& plan, const config::MachineConfig& cfg);
 // ARC blocks where push_arc accepts them (counted in stats.arcs; else chords, arcs_as_chords).
 ProfilePlan plan_profiles(const Plan& plan, const MotionLimits& lim);
 
-// The integer reference walk of the circular DDA (fpgacnc/twins/arc_walk.h, arc::plan) as an
+// The integer reference walk of the circular DDA (fpgacnc/models/arc_walk.h, arc::plan) as an
 // arc_walk.
 decltype(MotionLimits::arc_walk) reference_arc_walk();
 

@@ -358,9 +358,9 @@ uint16_t decode_heater_watchdog(const Frame& f);
 // walk's (u, v) axes and the helix axis are XY / Z (G17, plane 0), ZX / Y (G18, 1), YZ / X (G19,
 // 2). Geometry in steps relative to the start, in (u, v): centre (i, j), end (dx, dy; 0, 0 = full
 // circle), dz steps of the helix axis over the arc (G18: i, dx along Z, j, dy along X). n_ramp and
-// c_total come from the reference walk (fpgacnc::twins::arc::plan in systemc/include/fpgacnc/twins/
-// arc_walk.h). Speeds in UQ16.48 cost units per clock, accel in 2^-48 cost units per clock^2,
-// decel_at (D) in cost units.
+// c_total come from the reference walk (fpgacnc::models::arc::plan in
+// models/include/fpgacnc/models/arc_walk.h). Speeds in UQ16.48 cost units per clock, accel in 2^-48
+// cost units per clock^2, decel_at (D) in cost units.
 constexpr size_t kArcPayload = spec::kLenArc;
 constexpr int32_t kArcCoordLimit = 1 << spec::kArcCoordBits;  // |i|, |j|, |dx - i|, |dy - j| below
 constexpr uint32_t kArcNRampMax = (1u << spec::kArcNRampBits) - 1;

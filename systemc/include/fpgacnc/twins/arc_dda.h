@@ -9,13 +9,13 @@
 // end_edge starts with zero gap, as the RTL's `ending`) and err / late.
 #pragma once
 
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/twins/tlm_common.h"
 
 namespace fpgacnc::twins {
 
 struct ArcLoad {
-  arc::Frame frame;
+  models::arc::Frame frame;
   Cycle end_edge = 0;  // out
   bool err = false;    // out
   bool late = false;   // out
@@ -40,11 +40,11 @@ class ArcDdaTwin : public sc_core::sc_module {
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     ArcLoad& l = payload<ArcLoad>(gp);
     const Cycle edge_l = clk_.at(delay);
-    arc::Dda dda(l.frame);
+    models::arc::Dda dda(l.frame);
     Cycle last = edge_l;
     while (!dda.done()) {
       dda.skip_quiet(~uint64_t{0});
-      const arc::Event ev = dda.clock();
+      const models::arc::Event ev = dda.clock();
       const Cycle e = edge_l + static_cast<Cycle>(ev.clock) + 1;
       if (ev.dx) send(x_step, ev.dx > 0, e);
       if (ev.dy) send(y_step, ev.dy > 0, e);

@@ -244,7 +244,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
   bool arc_fields_ok() const {
     std::array<uint8_t, spec::kArcRawBytes> raw{};
     std::copy(payload_.begin() + 2, payload_.begin() + 2 + spec::kArcRawBytes, raw.begin());
-    const arc::Frame f = v2::arc_frame_from_raw(raw, true);
+    const models::arc::Frame f = v2::arc_frame_from_raw(raw, true);
     const int64_t x1 = int64_t{f.g.dx} - f.g.i, y1 = int64_t{f.g.dy} - f.g.j;
     constexpr int64_t kC = int64_t{1} << spec::kArcCoordBits;
     const auto c22 = [](int64_t v) { return v > -kC && v < kC; };

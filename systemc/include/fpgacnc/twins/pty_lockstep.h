@@ -22,9 +22,9 @@
 namespace fpgacnc::twins {
 
 struct LockstepRun {
-  std::string model;                  // Board::model()
-  std::vector<uint8_t> received;      // answer bytes as the host read them from the pty
-  std::vector<simboard::Edge> edges;  // the board's edges (with TX when it records them)
+  std::string model;                // Board::model()
+  std::vector<uint8_t> received;    // answer bytes as the host read them from the pty
+  std::vector<models::Edge> edges;  // the board's edges (with TX when it records them)
   simboard::BoardStats stats;
   size_t batches = 0;
   size_t packets = 0;
@@ -39,7 +39,7 @@ LockstepRun run_lockstep(simboard::Board& board, const HostScript& script, uint6
 
 // Answer bytes decoded from the TX edges: (start cycle, byte) (8N1 at `clk_hz / baud`).
 std::vector<std::pair<uint64_t, uint8_t>> tx_bytes_from_edges(
-    const std::vector<simboard::Edge>& edges, double clk_hz, double baud);
+    const std::vector<models::Edge>& edges, double clk_hz, double baud);
 
 // "" when both runs have identical edge lists (STEP/DIR/LASER and TX: every answer bit at its
 // clock), identical answer bytes at identical start clocks and identical bytes read by the host;

@@ -8,7 +8,7 @@
 
 #include <optional>
 
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/twins/host_schedule.h"
 #include "fpgacnc/twins/run_result.h"
 
@@ -77,18 +77,18 @@ class RtlDriver {
       for (uint8_t s = 0; s < 10; ++s)
         if (ch >> s & 1u)
           r_.edges.push_back(
-              simboard::Edge{static_cast<uint64_t>(c), s, static_cast<uint8_t>(sig >> s & 1u)});
+              models::Edge{static_cast<uint64_t>(c), s, static_cast<uint8_t>(sig >> s & 1u)});
       prev_sig_ = sig;
     }
     if (outputs_ && o.outputs != prev_out_) {
-      static constexpr uint8_t kSig[7] = {
-          simboard::kFlood,     simboard::kMist,      simboard::kFan,      simboard::kDout0,
-          simboard::kDout0 + 1, simboard::kDout0 + 2, simboard::kDout0 + 3};
+      static constexpr uint8_t kSig[7] = {models::kFlood,    models::kMist,      models::kFan,
+                                          models::kDout0,    models::kDout0 + 1, models::kDout0 + 2,
+                                          models::kDout0 + 3};
       const uint32_t ch = o.outputs ^ prev_out_;
       for (int b = 0; b < 7; ++b)
         if (ch >> b & 1u)
-          r_.edges.push_back(simboard::Edge{static_cast<uint64_t>(c), kSig[b],
-                                            static_cast<uint8_t>(o.outputs >> b & 1u)});
+          r_.edges.push_back(models::Edge{static_cast<uint64_t>(c), kSig[b],
+                                          static_cast<uint8_t>(o.outputs >> b & 1u)});
       prev_out_ = o.outputs;
     }
     if (o.packet_count != prev_count_) {

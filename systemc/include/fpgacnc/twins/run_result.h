@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins {
 
 struct RunResult {
-  std::vector<simboard::Edge> edges;  // STEP/DIR/LASER (and TX) by (cycle, signal)
+  std::vector<models::Edge> edges;    // STEP/DIR/LASER (and TX) by (cycle, signal)
   std::vector<Cycle> acks;            // start edge of each ACK byte the host received
   std::vector<Cycle> packet_done;     // decoder: edge after which packet_done is high
   std::vector<Cycle> seg_start;       // executor: edge after which seg_start is high

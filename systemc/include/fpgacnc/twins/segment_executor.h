@@ -231,10 +231,10 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (active != 0 && b > horizon) break;
       if ((active > 0) != level) {
         level = active > 0;
-        pins_.add(b, simboard::kFan, level ? 1 : 0);
+        pins_.add(b, models::kFan, level ? 1 : 0);
       }
       if (active > 0 && active < 256) {
-        pins_.add(b + active * div, simboard::kFan, 0);
+        pins_.add(b + active * div, models::kFan, 0);
         level = false;
       }
     }
@@ -271,7 +271,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // Abort: nothing lands on an edge >= cut (the walk stops; returns -1 when the arc's end edge
   // R + ticks is >= cut: the segment is dropped).
   Cycle run_arc(const Segment& s, Cycle r, Cycle cut) {
-    arc::Dda dda(s.arc_frame);
+    models::arc::Dda dda(s.arc_frame);
     // the physical axes of the walk's u, v and the helix (the plane)
     const ArcAxes pl = arc_axes(s.plane);
     const std::array<int, 3> axis{pl.u, pl.v, pl.h};
@@ -343,7 +343,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
             pend[k] = true;
           }
       }
-      const arc::Event ev = dda.clock();
+      const models::arc::Event ev = dda.clock();
       const Cycle e = t + 2;
       bool viol = false;
       const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
@@ -470,8 +470,8 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       end = run + static_cast<Cycle>(s.total);
       dropped = end >= cut;
       if (s.code != 0 && s.power != 0) {  // laser low from the abort edge (combinational gate)
-        pins_.add(run, simboard::kLaser, 1);
-        pins_.add(std::min(end, cut), simboard::kLaser, 0);
+        pins_.add(run, models::kLaser, 1);
+        pins_.add(std::min(end, cut), models::kLaser, 0);
       }
       for (int a = 0; a < kAxes && !s.arc; ++a) {
         if (s.steps[a] == 0) continue;
@@ -507,9 +507,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     if (record_outputs) {
       for (int b : {0, 1, 3, 4, 5, 6}) {
         if (((pend_lvl_ ^ lvl_) >> b & 1) == 0) continue;
-        const int sig = b == 0   ? int{simboard::kFlood}
-                        : b == 1 ? int{simboard::kMist}
-                                 : int{simboard::kDout0} + b - 3;
+        const int sig = b == 0   ? int{models::kFlood}
+                        : b == 1 ? int{models::kMist}
+                                 : int{models::kDout0} + b - 3;
         pins_.add(pend_edge_, static_cast<uint8_t>(sig), static_cast<uint8_t>(pend_lvl_ >> b & 1));
       }
     }

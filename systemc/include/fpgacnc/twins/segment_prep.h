@@ -144,10 +144,10 @@ class SegmentPrepTwin : public sc_core::sc_module {
         s.arc = true;
         s.plane = static_cast<uint8_t>(c.t & 3);
         s.arc_frame = v2::arc_frame_from_raw(c.arc_raw, (c.code & 1) != 0);
-        const arc::Frame& f = s.arc_frame;
+        const models::arc::Frame& f = s.arc_frame;
         const ArcAxes ax = arc_axes(s.plane);
         // u, v: the tangent signs at the start (-I, -J), a zero component inward (arc_dda's rule)
-        const std::array<bool, 2> d0 = arc::start_dirs(f.g);
+        const std::array<bool, 2> d0 = models::arc::start_dirs(f.g);
         abs = {};
         abs[ax.u] = abs[ax.v] = 1;
         s.dir = {};

@@ -75,7 +75,7 @@ class StepPulseTwin : public sc_core::sc_module {
     }
     if (gp.get_address() == kDirWrite) {
       const bool d = payload<PulseCmd>(gp).dir;
-      if (d != dir_) pins_.add(e, simboard::dir_signal(axis_), d ? 1 : 0);
+      if (d != dir_) pins_.add(e, models::dir_signal(axis_), d ? 1 : 0);
       dir_ = d;
       return;
     }
@@ -85,8 +85,8 @@ class StepPulseTwin : public sc_core::sc_module {
       violation_cycles.push_back(rise);
       violation_strobes.push_back(e);
     }
-    pins_.add(rise, simboard::step_signal(axis_), 1);
-    pins_.add(rise + high, simboard::step_signal(axis_), 0);
+    pins_.add(rise, models::step_signal(axis_), 1);
+    pins_.add(rise + high, models::step_signal(axis_), 0);
     last_rise_ = rise;
     idle_from_ = rise + high + low - 1;
     position += dir_ ? 1 : -1;

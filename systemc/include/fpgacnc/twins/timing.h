@@ -11,8 +11,8 @@
 #include <numeric>
 #include <vector>
 
+#include "fpgacnc/models/ramp.h"
 #include "fpgacnc/spec.h"
-#include "fpgacnc/twins/ramp.h"
 
 namespace fpgacnc::twins {
 
@@ -84,9 +84,9 @@ struct BitTimer {
   int64_t tx_boundary(int64_t m) const { return ceil_div(static_cast<__int128>(m) * mod, inc); }
 };
 
-// The host-side UART sender used by every harness (tb/common/uart_bits.h UartDriver in integer
-// form): bit i of a frame starts round(i * CLK_HZ / BAUD) clocks (halves down) after the start
-// edge; a frame is 10 bits and frames of a packet follow back to back.
+// The host-side UART sender used by every harness (models/include/fpgacnc/models/uart_bits.h
+// UartDriver in integer form): bit i of a frame starts round(i * CLK_HZ / BAUD) clocks (halves
+// down) after the start edge; a frame is 10 bits and frames of a packet follow back to back.
 struct SenderTiming {
   uint64_t clk_hz, baud;
   int64_t boundary(int i) const {
@@ -373,9 +373,9 @@ inline ProfileRun run_profile(const ProfileParams& p,
     for (int a = 0; a < kAxes; ++a)
       if (k[a] < abs_steps[a]) target = std::min(target, next[a]);
     if (limit != 0 && (step != 0 || v != 0) && u < target) {
-      const uint64_t i = ramp::last_below(u, v, step, falling, target, limit);
+      const uint64_t i = models::ramp::last_below(u, v, step, falling, target, limit);
       if (i != 0) {
-        u = ramp::sum(u, v, step, falling, i);
+        u = models::ramp::sum(u, v, step, falling, i);
         const uint64_t v_end = falling ? v - step * i : v + step * i;
         // V passed V_cruise on one of the skipped clocks (only a start above V_cruise can do that
         // while falling)

@@ -20,14 +20,14 @@
 #include <stdexcept>
 #include <vector>
 
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/arc_walk.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/spec.h"
-#include "fpgacnc/twins/arc_walk.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins {
 
-using simboard::Edge;
+using models::Edge;
 
 // Maps clock cycles to sc_time. `base` is the sc_time of cycle 0 (a harness that runs several
 // jobs in one elaboration starts each at a later base).
@@ -130,7 +130,7 @@ struct Segment {  // segment_prep -> segment_executor (valid from the delay's ed
   // prep's products itself); steps X = Y = 1, Z = |DZ|, dir X / Y the tangent signs at the start,
   // Z the sign of DZ; total = period = tmn = 0, dir_fast = 0.
   bool arc = false;
-  arc::Frame arc_frame{};
+  models::arc::Frame arc_frame{};
   uint8_t plane = 0;  // ARC: 0 XY, 1 ZX, 2 YZ (arc_axes)
 };
 // segment_executor -> step_pulse: write = step request on the delay's edge (the DDA tick);
@@ -193,8 +193,8 @@ T& payload(tlm::tlm_generic_payload& gp) {
   return *reinterpret_cast<T*>(gp.get_data_ptr());
 }
 
-// The board's pins as an edge list (signal numbers of simboard/edges.h). Twins add edges out of
-// time order (a move's steps are computed when it is accepted); take_sorted() orders them by
+// The board's pins as an edge list (signal numbers of fpgacnc/models/edges.h). Twins add edges out
+// of time order (a move's steps are computed when it is accepted); take_sorted() orders them by
 // (cycle, signal, value) as the RTL recorder sees them, a laser fall and rise on the same edge
 // cancelling (back-to-back cutting segments keep the pin high).
 // Storage: 8 bytes per edge (cycle < 2^56), one stream per signal in chunks that are never
@@ -209,7 +209,7 @@ inline void drop_laser_pairs(std::vector<Edge>& edges) {
   size_t w = 0;
   for (size_t i = 0; i < edges.size(); ++i) {
     const Edge e = edges[i];
-    if (e.signal == simboard::kLaser && i + 1 < edges.size() && edges[i + 1].cycle == e.cycle &&
+    if (e.signal == models::kLaser && i + 1 < edges.size() && edges[i + 1].cycle == e.cycle &&
         edges[i + 1].signal == e.signal && edges[i + 1].value != e.value) {
       ++i;
       continue;
@@ -223,7 +223,7 @@ class PinRecorder {
  public:
   bool record_tx = false;
   void add(Cycle c, uint8_t signal, uint8_t value) {
-    if (signal == simboard::kTx && !record_tx) return;
+    if (signal == models::kTx && !record_tx) return;
     if (signal >= kSignals || c < 0 || c >= (Cycle{1} << 56))
       throw std::logic_error("twins: pin edge out of range");
     streams_[signal].push((static_cast<uint64_t>(c) << 8) | value);
@@ -300,7 +300,7 @@ class PinRecorder {
   }
 
  private:
-  static constexpr int kSignals = simboard::kSignalCount;
+  static constexpr int kSignals = models::kSignalCount;
   struct Stream {
     std::vector<std::vector<uint64_t>> chunks;
     size_t size = 0;

@@ -4,7 +4,7 @@
 // Serial side: any client opens path() (/dev/pts/N, raw). Bytes written to the pty enter the
 // twin uart_rx as 8N1 frames at simulated clocks; every byte the twin uart_tx sends is written
 // back to the pty. STEP/DIR/LASER edges (and TX when asked) are recorded with their clocks
-// (simboard::Edge), with the same cycle numbering as SimBoard (cycle 0 = the last settle edge
+// (models::Edge), with the same cycle numbering as SimBoard (cycle 0 = the last settle edge
 // after the step timing writes; the first host byte starts on cycle 1).
 //
 // Time policy: SimBoard's (sim_board.h). A quiet board (nothing in flight: no rx bytes on the
@@ -56,7 +56,7 @@ struct TwinBoardOptions {
   uint64_t clk_hz = 50'000'000;  // must divide 1e12 (whole ps per clock)
   uint32_t baud = 115200;
   // Step timing per axis; unset: the RTL defaults (100/100/200/200 clocks).
-  std::optional<std::array<config::StepTiming, simboard::kBoardAxes>> step_timing;
+  std::optional<std::array<config::StepTiming, models::kBoardAxes>> step_timing;
   bool realtime = false;        // pace simulated time to the wall clock while busy
   double realtime_speed = 1.0;  // with realtime: simulated seconds per wall second (> 0)
   bool record_tx = false;       // also record TX pin edges
@@ -84,8 +84,8 @@ class TwinBoard : public simboard::Board {
   uint64_t cycle() const override;
   double clk_hz() const override { return static_cast<double>(opt_.clk_hz); }
   simboard::BoardStats stats() const override;
-  std::vector<simboard::Edge> edges() const override;
-  std::array<int64_t, simboard::kBoardAxes> net_steps() const override;
+  std::vector<models::Edge> edges() const override;
+  std::array<int64_t, models::kBoardAxes> net_steps() const override;
   void set_estop(bool pressed) override;
   bool idle_for_host() const override;
   bool wait_quiet(std::chrono::milliseconds timeout) const override;
@@ -111,7 +111,7 @@ class TwinBoard : public simboard::Board {
   simboard::BoardStats st_{};
   // Recorded so far, in drained batches (sorted on request and at the session's end); while the
   // board runs, stats().edges counts the batches (a laser pair split over two batches counts).
-  std::vector<simboard::Edge> edges_;
+  std::vector<models::Edge> edges_;
   std::string error_;
   bool running_ = false;
   std::atomic<bool> stop_{false};

@@ -54,7 +54,7 @@ class UartTxTwin : public sc_core::sc_module {
     for (int i = 0; i < 10; ++i) {
       const int b = (bits >> i) & 1;
       if (b != level) {
-        pins_.add(stream_ + timer_.tx_boundary(10 * index_ + i), simboard::kTx,
+        pins_.add(stream_ + timer_.tx_boundary(10 * index_ + i), models::kTx,
                   static_cast<uint8_t>(b));
         level = b;
       }

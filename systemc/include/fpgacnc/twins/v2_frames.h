@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "fpgacnc/twins/arc_walk.h"
+#include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/twins/timing.h"
 
 namespace fpgacnc::twins::v2 {
@@ -75,7 +75,7 @@ inline std::vector<uint8_t> line_profile_payload(uint8_t code, uint8_t power,
 // ARC (docs/protocol.md, 63 bytes): flags (as given: code 2 / 3 in bits 1:0, bits 7:2 reserved),
 // power, I, J, DX, DY int24, DZ int32, N_RAMP u24, C_TOTAL u48, V_entry, V_cruise, V_exit u64,
 // A u48, D u48 (big-endian; fields wider than their slot are cut to it).
-inline std::vector<uint8_t> arc_payload(uint8_t flags, uint8_t power, const arc::Frame& f) {
+inline std::vector<uint8_t> arc_payload(uint8_t flags, uint8_t power, const models::arc::Frame& f) {
   std::vector<uint8_t> p{flags, power};
   auto put = [&p](uint64_t v, int bytes) {
     for (int b = bytes - 1; b >= 0; --b) p.push_back(static_cast<uint8_t>(v >> (8 * b)));
@@ -95,7 +95,8 @@ inline std::vector<uint8_t> arc_payload(uint8_t flags, uint8_t power, const arc:
   return p;
 }
 // The entry's arc_raw (payload bytes 2..62) as an arc::Frame (int24 fields sign-extended).
-inline arc::Frame arc_frame_from_raw(const std::array<uint8_t, spec::kArcRawBytes>& r, bool ccw) {
+inline models::arc::Frame arc_frame_from_raw(const std::array<uint8_t, spec::kArcRawBytes>& r,
+                                             bool ccw) {
   auto get = [&r](int at, int bytes) {
     uint64_t v = 0;
     for (int b = 0; b < bytes; ++b) v = v << 8 | r[static_cast<size_t>(at + b)];
@@ -105,7 +106,7 @@ inline arc::Frame arc_frame_from_raw(const std::array<uint8_t, spec::kArcRawByte
     const auto v = static_cast<uint32_t>(get(at, 3));
     return static_cast<int32_t>(v << 8) >> 8;
   };
-  arc::Frame f;
+  models::arc::Frame f;
   f.g.i = s24(0);
   f.g.j = s24(3);
   f.g.dx = s24(6);

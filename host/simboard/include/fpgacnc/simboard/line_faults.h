@@ -150,7 +150,7 @@ class LineFaultInjector {
 };
 
 // The host -> board line: UART frames (8N1, LSB first, idle high) with the bit timing of
-// tb::UartDriver (bit i starts round(i * clk_hz / baud) clocks after the start bit), the
+// models::UartDriver (bit i starts round(i * clk_hz / baud) clocks after the start bit), the
 // injector's bit flips and stalls. tick(cycle) gives the rx level for `cycle`.
 class RxLine {
  public:

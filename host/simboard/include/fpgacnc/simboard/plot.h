@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/plan/planner.h"
-#include "fpgacnc/simboard/edges.h"
 
 namespace fpgacnc::simboard {
 
@@ -39,7 +39,7 @@ void check_plot_path(const std::string& path);
 
 // Writes the plot. `edges` are the board's recorded edges (STEP/DIR/LASER). Throws
 // std::runtime_error naming the file (cannot create, or .png without rsvg-convert).
-void write_plot_svg(const std::string& path, std::span<const Edge> edges,
+void write_plot_svg(const std::string& path, std::span<const models::Edge> edges,
                     std::span<const CommandedSegment> commanded, const PlotOptions& options);
 
 }  // namespace fpgacnc::simboard

@@ -95,9 +95,9 @@ struct BoardRunOptions {
 struct BoardRunResult {
   link::StreamReport report;
   BoardStats stats;
-  std::vector<Edge> edges;
+  std::vector<models::Edge> edges;
   std::vector<uint64_t> move_done_cycles;
-  std::array<int64_t, kBoardAxes> net_steps{};
+  std::array<int64_t, models::kBoardAxes> net_steps{};
   std::string port;
 };
 

@@ -2,8 +2,8 @@
 // DE1-SoC board. Any serial client (the host's SerialLink, a terminal, pyserial) opens path()
 // (/dev/pts/N) and talks to the RTL exactly as to the real board over a USB-UART:
 //   - bytes written to the pty reach the core's `rx` pin as 8N1 UART bits at the baud rate
-//     (tb::UartDriver, fractional bit timing: 434.03 clocks per bit at 50 MHz / 115200);
-//   - `tx` is sampled every clock (tb::UartMonitor) and each decoded byte is written back to
+//     (models::UartDriver, fractional bit timing: 434.03 clocks per bit at 50 MHz / 115200);
+//   - `tx` is sampled every clock (models::UartMonitor) and each decoded byte is written back to
 //     the pty master;
 //   - every STEP/DIR/LASER edge (and TX edges when asked) is recorded with its clock cycle;
 //   - with an FST path the traced model (Vcnc_core_trace) writes a waveform.
@@ -46,15 +46,15 @@
 // instead of 50 000 000, and the heater PWM at 1024 clocks per period (HEAT_PWM_DIV 1), so one
 // plant second passes every 2.048 ms of simulated time (488x faster than the board's motion time;
 // at about 5 M clocks/s one plant second is about 20 ms of wall time). The plants of
-// tb/common/thermal_plant.h are attached to the heater pins (duty = share of high clocks over the
-// tick; bed: the reference FOPDT with its sensor one tick old; hot end: the 40 W model) and the
-// thermistors (100k/3950, 4.7k to 3.3 V) to the LTC2308 pin model (tb/common/ltc2308_model.h) on
-// the ADC pins: channel 0 the hot end, 1 the bed. The plants advance once per tick. While a
-// heater pin has been high during the last tick or a plant is more than 0.5 degC above ambient,
-// the board counts as active (its clock runs without host traffic), so temperatures evolve as on
-// a real board; at ambient with the heaters off it is quiet as before. Faults can be injected:
-// a sensor open (the ADC reads the divider supply) or short (0 V), a heater disconnected (its pin
-// no longer heats), the e-stop input.
+// models/include/fpgacnc/models/thermal_plant.h are attached to the heater pins (duty = share of
+// high clocks over the tick; bed: the reference FOPDT with its sensor one tick old; hot end: the 40
+// W model) and the thermistors (100k/3950, 4.7k to 3.3 V) to the LTC2308 pin model
+// (models/include/fpgacnc/models/ltc2308_model.h) on the ADC pins: channel 0 the hot end, 1 the
+// bed. The plants advance once per tick. While a heater pin has been high during the last tick or a
+// plant is more than 0.5 degC above ambient, the board counts as active (its clock runs without
+// host traffic), so temperatures evolve as on a real board; at ambient with the heaters off it is
+// quiet as before. Faults can be injected: a sensor open (the ADC reads the divider supply) or
+// short (0 V), a heater disconnected (its pin no longer heats), the e-stop input.
 #pragma once
 
 #include <array>
@@ -70,7 +70,7 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/edges.h"
 #include "fpgacnc/simboard/line_faults.h"
 #include "fpgacnc/spec.h"
 
@@ -89,7 +89,7 @@ struct BoardOptions {
   uint32_t baud = 115200;
   // Step timing per axis written through the cfg port after reset (address axis * 4 + field).
   // Unset: the RTL defaults (100/100/200/200 clocks).
-  std::optional<std::array<config::StepTiming, kBoardAxes>> step_timing;
+  std::optional<std::array<config::StepTiming, models::kBoardAxes>> step_timing;
   std::string fst_path;    // "" = no waveform (untraced model, fastest)
   bool record_tx = false;  // also record TX pin edges
   bool record_rx = false;  // also record RX pin edges (the line as the core sees it)
@@ -124,8 +124,8 @@ struct BoardStats {
   uint16_t frame_errors = 0;  // core counters
   uint16_t timeouts = 0;
   uint16_t violations = 0;
-  std::array<int64_t, kBoardAxes> position{};  // core's position registers
-  LineFaultStats line;                         // injected line faults (all 0 when off)
+  std::array<int64_t, models::kBoardAxes> position{};  // core's position registers
+  LineFaultStats line;                                 // injected line faults (all 0 when off)
 };
 
 // The pseudo-terminal of a simulated board: the master side (non-blocking) that the board reads
@@ -154,8 +154,8 @@ class Board {
   virtual uint64_t cycle() const = 0;           // clocks since reset release
   virtual double clk_hz() const = 0;
   virtual BoardStats stats() const = 0;
-  virtual std::vector<Edge> edges() const = 0;  // sorted by (cycle, signal)
-  virtual std::array<int64_t, kBoardAxes> net_steps() const = 0;
+  virtual std::vector<models::Edge> edges() const = 0;  // sorted by (cycle, signal)
+  virtual std::array<int64_t, models::kBoardAxes> net_steps() const = 0;
   virtual void set_estop(bool pressed) = 0;  // throws BoardError when the model has no e-stop
   // Nothing in flight and every answer byte already written to the pty: nothing more comes
   // until the host writes (bytes the host wrote that the board has not read yet count as
@@ -252,13 +252,13 @@ class SimBoard : public Board {
   // The Verilated board runs clock by clock and does not stop at the host's deadline; it
   // signals progress_fd() at the end of the chunk of clocks that reaches it.
   void set_host_deadline(int64_t cycle) override;
-  std::vector<Edge> edges() const override;        // copy
-  std::vector<uint64_t> move_done_cycles() const;  // copy
+  std::vector<models::Edge> edges() const override;  // copy
+  std::vector<uint64_t> move_done_cycles() const;    // copy
   // Line logs (copies; empty unless line_faults.log): every frame put on the rx line, every
   // byte decoded from tx with what was delivered.
   std::vector<RxFrameRecord> rx_line_log() const;
   std::vector<TxByteRecord> tx_line_log() const;
-  std::array<int64_t, kBoardAxes> net_steps() const override;
+  std::array<int64_t, models::kBoardAxes> net_steps() const override;
   void write_edges_csv(const std::string& path) const;
   // One-line summary of stats() for reports.
   std::string stats_line() const;

@@ -1,6 +1,7 @@
-// Edge recorder of the simulated board: every change of STEP[n], DIR[n], LASER (and, when asked,
-// TX, RX) with the clock cycle at which the Verilated core drove it (RX: at which the line drove
-// the core's rx pin).
+// The board's pins as an edge list, shared by the simulated board (the Verilated core), the twins
+// and the co-simulations: every change of STEP[n], DIR[n], LASER, the machine outputs (and, when
+// asked, TX, RX) with the clock cycle at which the board drove it (RX: at which the line drove the
+// core's rx pin).
 #pragma once
 
 #include <array>
@@ -9,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace fpgacnc::simboard {
+namespace fpgacnc::models {
 
 inline constexpr int kBoardAxes = 4;  // cnc_core N_AXES (X, Y, Z, E); v1 drives X and Y
 
@@ -74,7 +75,7 @@ class EdgeRecorder {
   const std::vector<Edge>& edges() const { return edges_; }
   // Cycles of the core's seg_done strobes (one per completed move, in order).
   const std::vector<uint64_t>& move_done_cycles() const { return move_done_; }
-  std::array<int64_t, kBoardAxes> net_steps() const { return simboard::net_steps(edges_); }
+  std::array<int64_t, kBoardAxes> net_steps() const { return models::net_steps(edges_); }
   void write_csv(const std::string& path, double clk_hz) const {
     write_edges_csv(path, edges_, clk_hz);
   }
@@ -88,4 +89,4 @@ class EdgeRecorder {
   std::vector<uint64_t> move_done_;
 };
 
-}  // namespace fpgacnc::simboard
+}  // namespace fpgacnc::models

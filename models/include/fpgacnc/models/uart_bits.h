@@ -13,7 +13,7 @@
 #include <deque>
 #include <optional>
 
-namespace fpgacnc::tb {
+namespace fpgacnc::models {
 
 class UartDriver {
  public:
@@ -118,4 +118,4 @@ class UartMonitor {
   uint8_t bits_ = 0;
 };
 
-}  // namespace fpgacnc::tb
+}  // namespace fpgacnc::models

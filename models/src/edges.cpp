@@ -1,4 +1,4 @@
-#include "fpgacnc/simboard/edges.h"
+#include "fpgacnc/models/edges.h"
 
 #include <fmt/format.h>
 
@@ -6,7 +6,7 @@
 #include <memory>
 #include <stdexcept>
 
-namespace fpgacnc::simboard {
+namespace fpgacnc::models {
 
 std::string signal_name(uint8_t signal) {
   static constexpr char kAxis[] = {'x', 'y', 'z', 'e'};
@@ -79,4 +79,4 @@ void write_edges_csv(const std::string& path, std::span<const Edge> edges, doubl
   if (std::ferror(f.get())) throw std::runtime_error(fmt::format("{}: error: write error", path));
 }
 
-}  // namespace fpgacnc::simboard
+}  // namespace fpgacnc::models

@@ -1,12 +1,13 @@
-// Pin-level model of the LTC2308 ADC (the DE1-SoC's on-board ADC) for the Verilated benches.
-// Header-only. Driven once per FPGA clock with the master's pins (CONVST, SCK, SDI) as they are
-// after the clock edge; returns SDO for the next edge. Input voltages per channel are set by the
-// bench (volts[]), or supplied on demand by a callback (the closed-loop benches).
+// Pin-level model of the LTC2308 ADC (the DE1-SoC's on-board ADC) for the Verilated benches and the
+// simulated board. Header-only. Driven once per FPGA clock with the master's pins (CONVST, SCK,
+// SDI) as they are after the clock edge; returns SDO for the next edge. Input voltages per channel
+// are set by the bench (volts[]), or supplied on demand by a callback (the closed-loop benches).
 //
 // Behaviour (LTC2308 data sheet, single-ended unipolar use):
 // - A CONVST rising edge samples the input of the channel named by the last complete 6-bit input
 //   word (S/D, O/S, S1, S0, UNI, SLP; single-ended channel = S1*4 + S0*2 + O/S) and converts for
-//   tCONV (1.6 us, worst case). Code = floor(V / 1 mV) clamped to 0..4095 (thermal::adc_code).
+//   tCONV (1.6 us, worst case). Code = floor(V / 1 mV) clamped to 0..4095
+//   (models::thermal::adc_code).
 // - After the conversion the MSB is on SDO; each SCK falling edge shifts the next bit out (12
 //   bits, then 0). SDI is latched on SCK rising edges: the first 6 bits after a CONVST rise form
 //   the word for the NEXT conversion.
@@ -24,9 +25,9 @@
 #include <string>
 #include <vector>
 
-#include "common/thermal_plant.h"
+#include "fpgacnc/models/thermal_plant.h"
 
-namespace fpgacnc::tb {
+namespace fpgacnc::models {
 
 class Ltc2308Model {
  public:
@@ -53,7 +54,7 @@ class Ltc2308Model {
       if (converting()) violation("CONVST rising during a conversion");
       const int ch = channel_of(word_);
       const double v = (ch < 0) ? 0.0 : (source ? source(ch) : volts[static_cast<size_t>(ch)]);
-      result_ = thermal::adc_code(v);
+      result_ = models::thermal::adc_code(v);
       conversions.push_back({cycle_, ch, result_});
       conv_end_ = cycle_ + tconv_clks_;
       convst_rise_ = cycle_;
@@ -118,4 +119,4 @@ class Ltc2308Model {
   std::string first_violation_;
 };
 
-}  // namespace fpgacnc::tb
+}  // namespace fpgacnc::models

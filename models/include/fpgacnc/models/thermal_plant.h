@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <deque>
 
-namespace fpgacnc::thermal {
+namespace fpgacnc::models::thermal {
 
 // ------------------------------------------------------------------------------------ bed
 struct BedParams {
@@ -222,4 +222,4 @@ inline int table_lookup(const Table& t, int code) {
   return a + (((b - a) * f) >> kTableShift);  // >> of a negative int: arithmetic (C++20)
 }
 
-}  // namespace fpgacnc::thermal
+}  // namespace fpgacnc::models::thermal

@@ -37,9 +37,9 @@
 #include <cstdlib>
 #include <vector>
 
-#include "fpgacnc/twins/ramp.h"
+#include "fpgacnc/models/ramp.h"
 
-namespace fpgacnc::twins::arc {
+namespace fpgacnc::models::arc {
 
 using u128 = unsigned __int128;
 using i128 = __int128;
@@ -492,4 +492,4 @@ inline RunResult run(const Frame& f, uint64_t max_clocks = 0) {
   return res;
 }
 
-}  // namespace fpgacnc::twins::arc
+}  // namespace fpgacnc::models::arc

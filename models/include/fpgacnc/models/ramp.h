@@ -1,13 +1,13 @@
-// Closed-form ramps for the event-driven twins (run_profile in timing.h, arc::Dda in arc_walk.h):
-// a register Q that adds R per clock while R itself changes by a constant step per clock, and the
-// search for the last clock before Q reaches a threshold. Header-only, no SystemC.
+// Closed-form ramps for the event-driven models (run_profile in the twins' timing.h, arc::Dda in
+// arc_walk.h): a register Q that adds R per clock while R itself changes by a constant step per
+// clock, and the search for the last clock before Q reaches a threshold. Header-only, no SystemC.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
-namespace fpgacnc::twins::ramp {
+namespace fpgacnc::models::ramp {
 
 using u128 = unsigned __int128;
 
@@ -85,4 +85,4 @@ inline uint64_t last_below(u128 q, u128 r, u128 step, bool falling, u128 target,
   return last_true(hi, ok);
 }
 
-}  // namespace fpgacnc::twins::ramp
+}  // namespace fpgacnc::models::ramp

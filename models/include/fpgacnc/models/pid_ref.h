@@ -21,7 +21,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace fpgacnc::thermal {
+namespace fpgacnc::models::thermal {
 
 enum class HeatMode : int { kOff = 0, kManual = 1, kOnOff = 2, kP = 3, kPid = 4 };
 
@@ -131,4 +131,4 @@ class PidRef {
   double e2_ = 0.0;
 };
 
-}  // namespace fpgacnc::thermal
+}  // namespace fpgacnc::models::thermal
