@@ -14,8 +14,8 @@
 //   with integrate = !((u(k-1) >= umax && e > 0) || (u(k-1) == 0 && e < 0)); first sample:
 //   e1 = e2 = e, u(k-1) = 0. P: clamp(kp*e, 0, umax). ON_OFF: e > hyst -> umax, e < -hyst -> 0,
 //   else u(k-1) (0 on a first sample). MANUAL: min(manual, umax). Every product is exact (Q.28),
-//   sums are 56-bit: u(k) equals the double-precision law (models/include/fpgacnc/models/pid_ref.h) with the same
-//   coefficients exactly.
+//   sums are 56-bit: u(k) equals the double-precision law
+//   (models/include/fpgacnc/models/pid_ref.h) with the same coefficients exactly.
 // Multiplies: one sequential shift-add multiplier (32 x 20 bits, one bit per clock): no DSP
 // block, no `*`, no `/`. Latency: start at edge S -> done high after edge S + 3 + 22 * products:
 //   PID 69 clocks (3 products; 47 without the integral), P 25, other modes 2 (the bench measures
