@@ -32,6 +32,7 @@
 #include "fpgacnc/link/link.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
 
@@ -116,7 +117,8 @@ Figures run(double baud, const std::string& protocol, const plan::Plan& plan,
   } else {
     auto opt = link::stream_v2_options(cfg);
     opt.release = true;
-    const auto rep = link::stream_v2(link, plan, cfg, opt);
+    const auto job = protocol::v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
+    const auto rep = link::stream_v2_job(link, job, opt);
     if (!rep.position_ok)
       throw std::runtime_error("v2 bench: final position differs from the plan");
     segments = rep.lines;
@@ -136,7 +138,7 @@ Figures run(double baud, const std::string& protocol, const plan::Plan& plan,
 }
 
 double line_frame_bytes(const plan::Plan& plan, const config::MachineConfig& cfg) {
-  const auto job = protocol::v2::pack_job(plan, cfg);
+  const auto job = protocol::v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg);
   double bytes = 0;
   size_t lines = 0;
   for (const auto& jf : job.frames) {

@@ -12,6 +12,13 @@
 
 namespace fpgacnc::test {
 
+// The motion frames of `p`: plan, then pack without heater commands (the tests' boards and
+// checks that have no heater plants).
+inline protocol::v2::Job pack_motion(const plan::Plan& p, const config::MachineConfig& cfg,
+                                     const plan::ArcWalk& arc_walk = {}) {
+  return protocol::v2::pack_job(plan::plan_motion(p, cfg, arc_walk), cfg, {.heaters = false});
+}
+
 inline link::StreamV2Report stream_plan(link::Link& link, const plan::Plan& p,
                                         const config::MachineConfig& cfg,
                                         const link::StreamV2Options& options,

@@ -11,8 +11,10 @@
 
 #include "fpgacnc/models/arc_walk.h"
 #include "fpgacnc/plan/lookahead.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
+#include "stream_plan.h"
 
 namespace pl = fpgacnc::plan;
 namespace v2 = fpgacnc::protocol::v2;
@@ -438,7 +440,7 @@ TEST(Packer, ProfileJobFromCorpusFiles) {
       continue;
     }
     ++planned;
-    const auto job = v2::pack_job(plan, c);
+    const auto job = v2::pack_job(fpgacnc::plan::plan_motion(plan, c), c, {.heaters = false});
     EXPECT_EQ(job.profile_stats.exit_overshoot, 0u) << name;
     EXPECT_EQ(job.lines, 0u) << name;
     EXPECT_GT(job.profiles, 0u) << name;
@@ -468,7 +470,7 @@ TEST(Packer, ProfileJobFromCorpusFiles) {
     }
     EXPECT_EQ(profile_frames, job.profiles + job.arcs) << name;
     c.motion = "constant";
-    const auto jc = v2::pack_job(plan, c);
+    const auto jc = fpgacnc::test::pack_motion(plan, c);
     c.motion = "profile";
     EXPECT_EQ(jc.profiles, 0u);
     std::printf("%s: %zu LINE_PROFILE frames, %.3f s planned vs %.3f s constant feed\n",
@@ -513,14 +515,14 @@ TEST(Packer, ConstantModeUnchangedByTheProfileCode) {
   c.laser_requires_m3 = false;
   const auto plan =
       pl::plan_program(fpgacnc::gcode::parse_string("G1 X2 Y-1 F1341.64\nG4 P0.001\n"), c, {});
-  const auto job = v2::pack_job(plan, c);
+  const auto job = fpgacnc::test::pack_motion(plan, c);
   EXPECT_EQ(job.profiles, 0u);
   ASSERT_EQ(job.lines, 1u);
   // 2.236 mm at 1341.64 mm/min = 0.1 s = 5 000 000 clocks
   EXPECT_NEAR(static_cast<double>(job.frames[1].t), 5e6, 10.0);
   EXPECT_EQ(job.frames[1].frame.type, 0x10);
   c.motion = "profile";
-  const auto jp = v2::pack_job(plan, c);
+  const auto jp = fpgacnc::test::pack_motion(plan, c);
   ASSERT_EQ(jp.profiles, 1u);
   EXPECT_EQ(jp.frames[1].frame.type, static_cast<uint8_t>(v2::Type::LineProfile));
   EXPECT_EQ(jp.frames[2].frame.type, 0x11);  // DWELL after the stop
@@ -629,7 +631,7 @@ TEST(Lookahead, NativeArcsRespectTangentialCentripetalAndJunctionLimits) {
         << "junction " << k;
   }
   // Packed: ARC frames for the arcs, LINE_PROFILE for the lines; constant mode keeps chords.
-  const auto job = v2::pack_job(plan, c, fake_walk);
+  const auto job = fpgacnc::test::pack_motion(plan, c, fake_walk);
   EXPECT_EQ(job.arcs, 4u);
   EXPECT_EQ(job.profiles, 3u);
   EXPECT_EQ(job.target, plan.final_steps);
@@ -639,7 +641,7 @@ TEST(Lookahead, NativeArcsRespectTangentialCentripetalAndJunctionLimits) {
     }
   }
   c.motion = "constant";
-  EXPECT_EQ(v2::pack_job(plan, c, fake_walk).arcs, 0u);
+  EXPECT_EQ(fpgacnc::test::pack_motion(plan, c, fake_walk).arcs, 0u);
 }
 
 TEST(Lookahead, ArcsThatCannotGoNativeStayChords) {
@@ -695,7 +697,7 @@ TEST(Lookahead, ReferenceWalkArcsFromTheCorpus) {
        {"arc-ijk.gcode", "g2-arc.gcode", "circle.gcode", "circle-inch.gcode",
         "full-circle-without-xyz.gcode", "Circle_Diamond_Square_Calibration.gcode"}) {
     const auto plan = pl::plan_gcode_file(std::string(FPGACNC_CORPUS_DIR) + "/" + name, c, {});
-    const auto job = v2::pack_job(plan, c);
+    const auto job = v2::pack_job(fpgacnc::plan::plan_motion(plan, c), c, {.heaters = false});
     EXPECT_EQ(job.target, plan.final_steps) << name;
     EXPECT_EQ(job.profile_stats.exit_overshoot, 0u) << name;
     arcs += job.arcs;
@@ -758,7 +760,7 @@ TEST(Packer, ProfileJobTimeCountsReversalPauses) {
   const auto plan = pl::plan_program(
       fpgacnc::gcode::parse_string("G21 G90\nM3 S1000\nG1 X5 Y2 F3000\nX10 Y0\nX10 Y8\nG0 X0 Y0\n"),
       c, {});
-  const auto job = v2::pack_job(plan, c);
+  const auto job = fpgacnc::test::pack_motion(plan, c);
   std::vector<uint64_t> clocks;
   for (const auto& p : profiles_of(pl::plan_profiles(plan, c))) clocks.push_back(p.clocks);
   EXPECT_EQ(clocks, (std::vector<uint64_t>{7'249'937, 7'113'612, 10'222'727, 14'483'012}));

@@ -98,7 +98,7 @@ void expect_executed_in_order(const FakeV2Device& dev, const v2::Job& job) {
 TEST(StreamV2, CleanJobRunsEveryFrameOnceInOrder) {
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(300), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.fifo_depth = 16;
   FakeV2Device dev(o);
@@ -139,7 +139,7 @@ TEST(StreamV2, CleanJobRunsEveryFrameOnceInOrder) {
 TEST(StreamV2, TinyFifoAndSlowDeviceNeverOverflow) {
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(60, false), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.fifo_depth = 2;
   o.exec_period = std::chrono::microseconds(2000);
@@ -158,7 +158,7 @@ TEST(StreamV2, LongCreditWaitIsNotATimeout) {
   // timer (regression: it used to time out at once and shrink the window).
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(6, false), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.fifo_depth = 2;
   o.exec_period = std::chrono::microseconds(250'000);
@@ -177,7 +177,7 @@ TEST(StreamV2, LongCreditWaitIsNotATimeout) {
 TEST(StreamV2, SequenceAndDoneCountersWrapAround) {
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(400, false), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.initial_next_seq = 250;
   o.initial_done = 0xFFFFFFF0u;
@@ -198,7 +198,7 @@ TEST_P(StreamV2Faults, JobCompletesEverySegmentExactlyOnce) {
   std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(600), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.fifo_depth = 32;
   o.exec_period = std::chrono::microseconds(100);
@@ -246,7 +246,7 @@ INSTANTIATE_TEST_SUITE_P(Seeds, StreamV2Faults, ::testing::Values(1u, 2u, 3u));
 TEST(StreamV2, StallLongerThanTheRetransmitTimeoutResends) {
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(200, false), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.faults.stall_after_bytes = 500;
   o.faults.stall = milliseconds(200);
@@ -264,7 +264,7 @@ TEST(StreamV2, WithoutDoneFramesStatusPollsCompleteTheJob) {
   // frame arrives, before it runs) and, once the host has nothing left to send, from STATUS.
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(60, false), cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.send_done = false;
   o.fifo_depth = 8;
@@ -313,7 +313,7 @@ TEST(StreamV2, DeviceWithoutProfilesOrArcsNamesTheConfigKey) {
     o.unknown_types = {c.type};
     FakeV2Device dev(o);
     const auto plan = plan_of(g, cfg);
-    const auto job = v2::pack_job(plan, cfg);
+    const auto job = fpgacnc::test::pack_motion(plan, cfg);
     ASSERT_GT(c.type == 0x12 ? job.profiles : job.arcs, 0u);
     try {
       fpgacnc::test::stream_plan(dev, plan, cfg, fast_options());

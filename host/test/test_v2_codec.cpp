@@ -8,6 +8,7 @@
 #include <string>
 
 #include "fpgacnc/protocol/v2.h"
+#include "stream_plan.h"
 
 namespace v2 = fpgacnc::protocol::v2;
 using Bytes = std::vector<uint8_t>;
@@ -542,7 +543,7 @@ TEST(V2Packer, WorkedExampleMoveIsTheDocsLineFrame) {
   cfg.laser_requires_m3 = false;
   // 2 mm x -1 mm at 600 * sqrt(5) mm/min: 0.1 s = 5 000 000 clocks.
   const auto plan = plan_str("G1 X2 Y-1 F1341.6407865\n", cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   ASSERT_EQ(job.frames.size(), 2u);
   EXPECT_EQ(job.frames[0].frame, v2::numerators(0, 18'750'000, 18'750'000));
   v2::Frame f = job.frames[1].frame;
@@ -564,7 +565,7 @@ TEST(V2Packer, AxesPowerAndRapids) {
   cfg.motion = "constant";             // the LINE packer
   const auto plan =
       plan_str("G0 X1\nM3 S500\nG1 X2 F600\nG1 Z1\nG1 E5\nS1\nG1 X300\nM5\nG1 X0\n", cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   const auto l = lines_of(job);
   ASSERT_EQ(l.size(), 6u);
   // G0: code 0, power 0, at the rapid feed: 1 mm at 3000 mm/min = 0.02 s.
@@ -591,7 +592,7 @@ TEST(V2Packer, TooFastIsRaisedToTheStepRate) {
   cfg.laser_requires_m3 = false;
   cfg.max_feed_mm_min = {1e7, 1e7, 1e7, 1e7};
   // 100 mm at 1e6 mm/min: 300 000 clocks for 16 000 steps: below 16 000 * 200.
-  const auto job = v2::pack_job(plan_str("G1 X100 F1000000\n", cfg), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan_str("G1 X100 F1000000\n", cfg), cfg);
   const auto l = lines_of(job);
   ASSERT_EQ(l.size(), 1u);
   EXPECT_EQ(l[0].t, 16'000u * 200u);
@@ -607,7 +608,7 @@ TEST(V2Packer, LongMovesAndDwellsAreSplitExactly) {
   cfg.laser_requires_m3 = false;
   // 100 mm at 1 mm/min: 6000 s = 3e11 clocks -> 70 LINE frames of at most UINT32_MAX.
   const auto plan = plan_str("G1 X100 Y-33.3 F1\nG4 P100\nG4 P0\nG4 P1.5\n", cfg);
-  const auto job = v2::pack_job(plan, cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
   const auto l = lines_of(job);
   const double len = std::hypot(100.0, 5328.0 / 160.0);  // Y: -5328 steps
   const uint64_t want_t = static_cast<uint64_t>(std::llround(len / 1.0 * 60.0 * 50e6));
@@ -647,7 +648,7 @@ TEST(V2Packer, StepFileSegmentsKeepV1Timing) {
   s.steps = {320, -160, 0, 0};
   s.feed_v1 = 1200;
   p.items.emplace_back(s);
-  const auto l = lines_of(v2::pack_job(p, cfg));
+  const auto l = lines_of(fpgacnc::test::pack_motion(p, cfg));
   ASSERT_EQ(l.size(), 1u);
   EXPECT_EQ(l[0], (v2::Line{1, 255, 5'000'000, true, {320, -160}}));
 }
@@ -660,15 +661,15 @@ TEST(V2Packer, RejectsWhatV2CannotCarry) {
   s.code = 4;
   s.steps = {1, 0, 0, 0};
   p.items.emplace_back(s);
-  EXPECT_THROW(v2::pack_job(p, cfg), std::invalid_argument);
+  EXPECT_THROW(fpgacnc::test::pack_motion(p, cfg), std::invalid_argument);
   cfg.step_timing.dir_setup = 70'000;
-  EXPECT_THROW(v2::pack_job(fpgacnc::plan::Plan{}, cfg), std::invalid_argument);
+  EXPECT_THROW(fpgacnc::test::pack_motion(fpgacnc::plan::Plan{}, cfg), std::invalid_argument);
 }
 
 TEST(V2Packer, SessionFramesCarryConsecutiveSequenceNumbers) {
   fpgacnc::config::MachineConfig cfg;
   cfg.motion = "constant";  // the LINE packer
-  const auto job = v2::pack_job(plan_str("G1 X1 F600\nG1 Y1\n", cfg), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan_str("G1 X1 F600\nG1 Y1\n", cfg), cfg);
   const auto frames = v2::session_frames(job, 254, 2);
   ASSERT_EQ(frames.size(), 2u + job.frames.size() + 1u);
   for (size_t i = 0; i < frames.size(); ++i) {

@@ -27,6 +27,7 @@
 
 #include "Vcnc_core_sc.h"
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -435,7 +436,8 @@ Job corpus_v2_job(const std::string& path, size_t max_frames, double feed_overri
   fpgacnc::config::MachineConfig cfg;
   cfg.rapid_feed_mm_min = 12'000.0;
   const auto plan = fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
-  const auto packed = fpgacnc::protocol::v2::pack_job(plan, cfg);
+  const auto packed = fpgacnc::protocol::v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg,
+                                                      {.heaters = false});
   Job j;
   j.name = fmt::format("{} as v2 frames (first {} LINE/DWELL, feed override {}%)", path, max_frames,
                        feed_override);

@@ -35,6 +35,7 @@
 #include "fpgacnc/error.h"
 #include "fpgacnc/heat/heater_job.h"
 #include "fpgacnc/models/edges.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/twins/virtual_board.h"
@@ -155,8 +156,10 @@ void run_corpus() {
       plan::PlanOptions po;
       po.feed_override_pct = cfg.feed_override_pct;
       const plan::Plan pl = plan::plan_input_file(kCorpus + "/" + e.path, cfg, po);
-      const fpgacnc::protocol::v2::Job job = fpgacnc::protocol::v2::pack_job(pl, cfg);
-      const fpgacnc::heat::HeaterJob heaters = fpgacnc::heat::make_heater_job(pl, job, cfg);
+      // The twin board has no heater plants: the motion frames, the heater commands counted.
+      const fpgacnc::protocol::v2::Job job =
+          fpgacnc::protocol::v2::pack_job(plan::plan_motion(pl, cfg), cfg, {.heaters = false});
+      const fpgacnc::heat::HeaterJob heaters = fpgacnc::heat::make_heater_job(pl, cfg);
       o.heaters = heaters.actions.size();
       o.clk_hz = static_cast<double>(cfg.clk_hz);
       o.final_steps = pl.final_steps;

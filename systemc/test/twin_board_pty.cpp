@@ -32,6 +32,7 @@
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -58,6 +59,11 @@ namespace {
 size_t moves() {
   const char* e = std::getenv("FPGACNC_TWIN_PTY_MOVES");
   return e ? static_cast<size_t>(std::strtoull(e, nullptr, 10)) : 30;
+}
+
+// The job's motion frames, planned then packed (the boards here have no heater plants).
+fpgacnc::protocol::v2::Job pack_motion(const plan::Plan& p, const cfgns::MachineConfig& cfg) {
+  return fpgacnc::protocol::v2::pack_job(plan::plan_motion(p, cfg), cfg, {.heaters = false});
 }
 
 // The demo job 25 times faster than written (examples/demo-machine.toml: feed override 2500 %,
@@ -127,7 +133,7 @@ TEST(TwinBoardPty, V2SameAsVerilatedBoard) {
   const auto cfg = job_config();
   const auto p = job_plan(cfg);
   tw::HostScript s;
-  s.v2 = tw::job_script(fpgacnc::protocol::v2::pack_job(p, cfg), moves());
+  s.v2 = tw::job_script(pack_motion(p, cfg), moves());
   s.v2->status_at_end = false;
   expect_same(s, cfg, moves());
 }
@@ -139,7 +145,7 @@ TEST(TwinBoardPty, V2ArcsSameAsVerilatedBoard) {
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
   const auto p = plan::plan_input_file(std::string(FPGACNC_CORPUS_DIR) + "/circle.gcode", cfg, po);
-  const auto job = fpgacnc::protocol::v2::pack_job(p, cfg);
+  const auto job = pack_motion(p, cfg);
   tw::HostScript s;
   s.v2 = tw::job_script(job);
   s.v2->status_at_end = false;
@@ -162,7 +168,7 @@ TEST(TwinBoardPty, CorpusJobNetStepsMatchPlan) {
     auto o2 = fpgacnc::link::stream_v2_options(cfg);
     const auto choice = fpgacnc::link::select_protocol(lk, "auto", o2);
     ASSERT_EQ(choice.protocol, "v2");
-    const auto job = fpgacnc::protocol::v2::pack_job(p, cfg);
+    const auto job = pack_motion(p, cfg);
     const auto rep = fpgacnc::link::stream_v2_job(lk, job, o2, choice.ident);
     EXPECT_TRUE(rep.position_ok);
     motion_frames = rep.lines + rep.profiles + rep.arcs + rep.dwells;

@@ -46,7 +46,7 @@ TEST_P(CorpusArcs, EndPositionsThroughThePty) {
   plan::PlanOptions po;
   po.feed_override_pct = 50000.0;
   const plan::Plan p = plan::plan_program(fpgacnc::gcode::parse_file(path), cfg, po);
-  const v2::Job job = v2::pack_job(p, cfg);
+  const v2::Job job = fpgacnc::test::pack_motion(p, cfg);
   if (job.arcs == 0) GTEST_SKIP() << "no ARC frame (arc walk not built in?)";
   size_t arcs = 0;
   for (const auto& jf : job.frames) {

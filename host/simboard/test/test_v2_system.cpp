@@ -155,7 +155,7 @@ TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
   cfgns::MachineConfig cfg;
   cfg.motion = "constant";  // LINE frames: constant feed, the gap-free join at full speed
   const plan::Plan p = plan_of(spiral_gcode(n), cfg);
-  const v2::Job job = v2::pack_job(p, cfg);
+  const v2::Job job = fpgacnc::test::pack_motion(p, cfg);
   ASSERT_EQ(job.lines, n);
   uint64_t sum_t = 0;
   std::vector<uint64_t> t;
@@ -250,7 +250,7 @@ TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
   // constant-feed job is the shorter one to simulate (planned trapezoids: about twice as long).
   cfg.motion = "constant";
   const plan::Plan p = plan_of(spiral_gcode(n, 50), cfg);
-  const v2::Job job = v2::pack_job(p, cfg);
+  const v2::Job job = fpgacnc::test::pack_motion(p, cfg);
   std::array<uint64_t, 4> pulses_want{};
   for (const auto& jf : job.frames) {
     if (jf.frame.type != static_cast<uint8_t>(v2::Type::Line)) continue;

@@ -105,11 +105,6 @@ std::vector<int16_t> thermistor_table(const HeaterConfig& h) {
   return t;
 }
 
-HeaterJob make_heater_job(const plan::Plan& plan, const v2::Job& /*job*/,
-                          const config::MachineConfig& cfg) {
-  return make_heater_job(plan, cfg);
-}
-
 HeaterJob make_heater_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
   HeaterJob hj;
   hj.config = cfg.heaters;

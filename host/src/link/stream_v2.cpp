@@ -163,15 +163,6 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   return rep;
 }
 
-StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
-                         const StreamV2Options& options, std::optional<v2::Ident> ident) {
-  const v2::Job job = v2::pack_job(plan::plan_motion(plan, cfg), cfg);  // throws before any byte
-  StreamV2Report r = stream_v2_job(link, job, options, ident);
-  r.final_steps = plan.final_steps;
-  r.final_mm = plan.final_mm;
-  return r;
-}
-
 std::string format_report(const StreamV2Report& r) {
   std::string s;
   s += fmt::format("v2 device: N_AXES {}, FIFO {}, clk {} Hz, baud {}, build 0x{:08X}\n",

@@ -524,11 +524,6 @@ Job pack_job(const plan::MotionPlan& planned, const config::MachineConfig& cfg,
   return job;
 }
 
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
-             const plan::ArcWalk& arc_walk) {
-  return pack_job(plan::plan_motion(plan, cfg, arc_walk), cfg, {.heaters = false});
-}
-
 std::vector<std::vector<uint8_t>> session_frames(const Job& job, uint8_t first_seq,
                                                  size_t device_axes) {
   std::vector<std::vector<uint8_t>> out;

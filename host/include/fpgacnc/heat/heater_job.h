@@ -64,9 +64,6 @@ uint16_t ticks(double seconds, double sample_s);  // rounded, saturated at 65535
 // cannot be read) and makes the setup frames of the channels they use. The v2 packer
 // (protocol/v2_job.h) calls it and places the setpoints between the job's frames.
 HeaterJob make_heater_job(const plan::Plan& plan, const config::MachineConfig& cfg);
-// The same, for callers outside host/ that still pass the packed job (not used).
-HeaterJob make_heater_job(const plan::Plan& plan, const protocol::v2::Job& job,
-                          const config::MachineConfig& cfg);
 
 // "bed 59.9/60.0 C 41%  hotend 24.1/off" from a STATUS heater block ("" when none).
 std::string format_heaters(const protocol::v2::Status& s);

@@ -151,12 +151,6 @@ StreamV2Report stream_v2_job(Link& link, const protocol::v2::Job& job,
                              const StreamV2Options& options,
                              std::optional<protocol::v2::Ident> ident = std::nullopt);
 
-// The last three stages in one call (plan::plan_motion, protocol::v2::pack_job, stream_v2_job;
-// final position from `plan`), kept for tb/bench_protocol.cpp; host code calls the stages.
-StreamV2Report stream_v2(Link& link, const plan::Plan& plan, const config::MachineConfig& cfg,
-                         const StreamV2Options& options,
-                         std::optional<protocol::v2::Ident> ident = std::nullopt);
-
 // Flushes input, sends HELLO and waits `timeout` (link time) for an IDENT (other frames and bytes
 // ignored).
 std::optional<protocol::v2::Ident> probe_v2(Link& link, std::chrono::milliseconds timeout,

@@ -114,12 +114,6 @@ struct PackOptions {
 Job pack_job(const plan::MotionPlan& planned, const config::MachineConfig& cfg,
              const PackOptions& options = {});
 
-// The motion frames of `plan` in one call (plan::plan_motion, then pack_job without heater
-// commands), for the twins' and benches' harnesses outside host/ whose boards have no heater
-// plants; host code calls the two stages itself.
-Job pack_job(const plan::Plan& plan, const config::MachineConfig& cfg,
-             const plan::ArcWalk& arc_walk = {});
-
 // ARC frame (TYPE 0x13, docs/protocol.md "ARC", 63-byte payload, big-endian): built here until
 // the codec has an ARC builder (arc helper). Power 0 = laser off; code = 2 (G2) or 3 (G3).
 constexpr uint8_t kTypeArc = 0x13;
