@@ -636,7 +636,7 @@ TEST(Lookahead, NativeArcsRespectTangentialCentripetalAndJunctionLimits) {
   EXPECT_EQ(job.profiles, 3u);
   EXPECT_EQ(job.target, plan.final_steps);
   for (const auto& jf : job.frames) {
-    if (jf.frame.type == v2::kTypeArc) {
+    if (jf.frame.type == static_cast<uint8_t>(v2::Type::Arc)) {
       EXPECT_EQ(jf.frame.payload.size(), 63u);
     }
   }

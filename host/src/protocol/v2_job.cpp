@@ -121,10 +121,6 @@ size_t frame_axes(const plan::Steps4& steps) {
   return k;
 }
 
-void put_be(std::vector<uint8_t>& p, uint64_t v, int bytes) {
-  for (int i = bytes - 1; i >= 0; --i) p.push_back(static_cast<uint8_t>(v >> (8 * i)));
-}
-
 // An ARC segment lasts the walk's last-move clock c_last (Profile::clocks) + 2 ticks
 // (docs/timing.md).
 constexpr uint64_t kArcExtraTicks = 2;
@@ -372,25 +368,23 @@ uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
 }
 
 Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r) {
-  Frame fr;
-  fr.seq = seq;
-  fr.type = kTypeArc;
-  auto& p = fr.payload;
-  p.push_back(static_cast<uint8_t>(g.code | (g.plane << 2)));  // flags: code, plane bits 3:2
-  p.push_back(power);
-  put_be(p, static_cast<uint32_t>(g.i), 3);
-  put_be(p, static_cast<uint32_t>(g.j), 3);
-  put_be(p, static_cast<uint32_t>(g.dx), 3);
-  put_be(p, static_cast<uint32_t>(g.dy), 3);
-  put_be(p, static_cast<uint32_t>(g.dz), 4);
-  put_be(p, g.n_ramp, 3);
-  put_be(p, g.c_total, 6);
-  put_be(p, r.v_entry, 8);
-  put_be(p, r.v_cruise, 8);
-  put_be(p, r.v_exit, 8);
-  put_be(p, r.a, 6);
-  put_be(p, r.d, 6);
-  return fr;
+  Arc a;
+  a.code = g.code;
+  a.power = power;
+  a.plane = static_cast<ArcPlane>(g.plane);
+  a.i = g.i;
+  a.j = g.j;
+  a.dx = g.dx;
+  a.dy = g.dy;
+  a.dz = g.dz;
+  a.n_ramp = g.n_ramp;
+  a.c_total = g.c_total;
+  a.v_entry = r.v_entry;
+  a.v_cruise = r.v_cruise;
+  a.v_exit = r.v_exit;
+  a.accel = r.a;
+  a.decel_at = r.d;
+  return arc(seq, a);  // the codec's builder: its field rules, then the payload
 }
 
 LineProfile to_line_profile(uint8_t code, uint8_t power, const plan::ProfileFields& f,

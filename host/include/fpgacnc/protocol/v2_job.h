@@ -114,9 +114,8 @@ struct PackOptions {
 Job pack_job(const plan::MotionPlan& planned, const config::MachineConfig& cfg,
              const PackOptions& options = {});
 
-// ARC frame (TYPE 0x13, docs/protocol.md "ARC", 63-byte payload, big-endian): built here until
-// the codec has an ARC builder (arc helper). Power 0 = laser off; code = 2 (G2) or 3 (G3).
-constexpr uint8_t kTypeArc = 0x13;
+// The ARC frame of one planned arc (the codec's v2::arc builder, docs/protocol.md "ARC"); throws
+// std::invalid_argument for fields the device would reject.
 Frame arc_frame(uint8_t seq, uint8_t power, const plan::ArcFields& g, const plan::Recurrence& r);
 
 // The LINE_PROFILE of one planned block (codec: v2::line_profile builds the frame).
