@@ -460,8 +460,12 @@ void Engine::write_report() {
   const auto m = mpos();
   const auto off = wco();
   std::array<double, 3> pos{m[0], m[1], m[2]};
+  // State and position come from the same STATUS: a DONE that arrived after it (in the same
+  // poll) must not make a report say Idle beside the position of a move still running.
+  State st = state();
+  if (st == State::kIdle && (session_->last_status().state & v2::kStateBusy)) st = State::kRun;
   std::string r = "<";
-  r += state_name(state());
+  r += state_name(st);
   if (mask & 1) {
     r += "|MPos:" + vec(pos);
   } else {
@@ -475,7 +479,7 @@ void Engine::write_report() {
                      rx_.size() >= kRxBuffer ? 0 : kRxBuffer - rx_.size());
   }
   double feed = 0.0, s = 0.0;
-  if (state() == State::kRun && !fifo_info_.empty()) std::tie(feed, s) = fifo_info_.front();
+  if (st == State::kRun && !fifo_info_.empty()) std::tie(feed, s) = fifo_info_.front();
   r += fmt::format("|FS:{:.0f},{:.0f}", feed / div, s);
   // WCO when it changed and every 10th report; Ov on the report after (grbl's refresh rule).
   const uint64_t n = report_count_++;
