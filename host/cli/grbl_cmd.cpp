@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <csignal>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -18,11 +17,6 @@
 
 namespace fpgacnc::cli {
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) {
-  g_stop = 1;
-}
 
 struct Args {
   CommonOptions common;
@@ -57,16 +51,7 @@ void run(const Args& args) {
   engine.connect();
   engine.take_output();  // the banner goes to each sender when it connects
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGPIPE, SIG_IGN);
-  while (!g_stop) {
-    senders.poll(
-        engine.busy() ? 0 : 20, [&](Peer&) { engine.opened(); },
-        [&](std::string_view bytes) { engine.receive(bytes); });
-    engine.step(std::chrono::milliseconds(engine.busy() ? 5 : 0));
-    senders.send(engine.take_output());
-  }
+  serve(senders, engine, [&](Peer&) { engine.opened(); });
   const auto& s = engine.stats();
   fmt::print(
       "grbl: {} lines ({} ok, {} errors), {} status reports, {} frames, {} flushes, {} "

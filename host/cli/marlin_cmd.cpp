@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <csignal>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -19,11 +18,6 @@
 
 namespace fpgacnc::cli {
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) {
-  g_stop = 1;
-}
 
 struct MarlinArgs {
   CommonOptions common;
@@ -58,16 +52,7 @@ void run_marlin(const MarlinArgs& args) {
   engine.connect();
   const std::string banner = engine.take_output();  // to each sender when it opens the port
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGPIPE, SIG_IGN);
-  while (!g_stop) {
-    senders.poll(
-        engine.busy() ? 0 : 20, [&](Peer& p) { p.pending += banner; },
-        [&](std::string_view bytes) { engine.receive(bytes); });
-    engine.step(std::chrono::milliseconds(engine.busy() ? 5 : 0));
-    senders.send(engine.take_output());
-  }
+  serve(senders, engine, [&](Peer& p) { p.pending += banner; });
   const auto& s = engine.stats();
   fmt::print("marlin: {} commands, {} resends asked, {} frames, {} busy lines\n", s.lines,
              s.resends, s.frames, s.busy);

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -23,6 +24,23 @@
 #include "fpgacnc/twins/twin_board.h"
 
 namespace fpgacnc::cli {
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_stop_signal(int) {
+  g_stop = 1;
+}
+}  // namespace
+
+void stop_on_signals() {
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+bool stop_requested() {
+  return g_stop != 0;
+}
 
 void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help) {
   sub->add_option("--port", choice.port, "the controller's serial port (default: simulated board)");

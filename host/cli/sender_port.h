@@ -110,4 +110,22 @@ class SenderSide {
   SenderWatch watch_;
 };
 
+// SIGINT and SIGTERM end serve() (SIGPIPE is ignored: a sender that goes away is seen by poll).
+void stop_on_signals();
+bool stop_requested();
+
+// A front end's loop until SIGINT or SIGTERM: the senders' bytes to the engine, the engine
+// stepped (waiting up to 5 ms for the board while it is busy, else for the senders up to 20 ms),
+// its output to every sender. `opened(peer)` greets a sender that opened the port.
+template <typename Engine>
+void serve(SenderSide& senders, Engine& engine, const std::function<void(Peer&)>& opened) {
+  stop_on_signals();
+  while (!stop_requested()) {
+    senders.poll(engine.busy() ? 0 : 20, opened,
+                 [&](std::string_view bytes) { engine.receive(bytes); });
+    engine.step(std::chrono::milliseconds(engine.busy() ? 5 : 0));
+    senders.send(engine.take_output());
+  }
+}
+
 }  // namespace fpgacnc::cli
