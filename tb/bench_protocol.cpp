@@ -154,6 +154,9 @@ double line_frame_bytes(const plan::Plan& plan, const config::MachineConfig& cfg
 int main(int argc, char** argv) {
   const int moves = argc > 1 ? std::stoi(argv[1]) : 400;
   config::MachineConfig cfg;
+  // Both protocols at constant feed (v2 LINE frames, as v1's moves): the comparison is of the
+  // links, not of planning.
+  cfg.motion = "constant";
   const auto short_plan = make_plan(cfg, moves, 0.1, 3000);
   const auto tiny_plan = make_plan(cfg, moves, 1.0 / 160.0, 60000);
   fmt::print("protocol bench: {} moves per run, cnc_core at 50 MHz\n", moves);
