@@ -6,12 +6,15 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "fake_v2_device.h"
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/grbl/settings.h"
 #include "fpgacnc/plan/planner.h"
+#include "fpgacnc/plan/stepfile.h"
 #include "stream_plan.h"
 
 namespace pl = fpgacnc::plan;
@@ -157,4 +160,52 @@ TEST(SoftLimits, RefusedJobSendsNothing) {
       pl::TravelError);
   EXPECT_TRUE(dev.written().empty()) << dev.written().size() << " bytes written";
   std::filesystem::remove(path);
+}
+
+TEST(SoftLimits, StepFileSegmentLeavingTheTravelIsRefused) {
+  // Two segments of +9000 X steps at 160 steps/mm: 56.25 mm, then 112.5 mm (12.5 beyond 100).
+  std::stringstream csv(
+      "segment,line,motion,x_mm,y_mm,steps_x,steps_y,length_mm,feed\n"
+      "0,1,1,0,0,9000,0,56.25,100\n"
+      "1,2,1,56.25,0,9000,0,56.25,100\n");
+  try {
+    pl::read_step_file(csv, "job.csv", box());
+    ADD_FAILURE() << "no TravelError";
+  } catch (const pl::TravelError& e) {
+    const std::string w = e.what();
+    EXPECT_TRUE(has(w, "job.csv:3: error: segment leaves the travel")) << w;
+    EXPECT_TRUE(has(w, "X reaches 112.500 mm, 12.500 mm beyond its max 100.000 mm")) << w;
+  }
+}
+
+TEST(SoftLimits, GrblSettingsMapOntoTheTravel) {
+  namespace grbl = fpgacnc::grbl;
+  MachineConfig c;
+  c.travel[0] = {true, 10.0, 310.0};
+  grbl::Settings s = grbl::settings_from_config(c);
+  EXPECT_EQ(s.values.at(20), 1.0);
+  EXPECT_EQ(s.values.at(130), 300.0);
+  EXPECT_EQ(s.values.at(131), 200.0);  // grbl's default: Y has no travel
+  // $130 moves X's max from its min; Y stays without soft limit (the configuration gives X).
+  EXPECT_EQ(grbl::set_value(s, 130, 100.0), 0);
+  MachineConfig a = grbl::apply_settings(c, s);
+  EXPECT_TRUE(a.travel[0].enabled);
+  EXPECT_EQ(a.travel[0].min_mm, 10.0);
+  EXPECT_EQ(a.travel[0].max_mm, 110.0);
+  EXPECT_FALSE(a.travel[1].enabled);
+  // $20=0: off.
+  EXPECT_EQ(grbl::set_value(s, 20, 0.0), 0);
+  EXPECT_FALSE(grbl::apply_settings(c, s).travel[0].enabled);
+  // No travel configured: $20 lists 0; $20=5 is stored as 1 and gives grbl's [-$13x, 0].
+  const MachineConfig none;
+  grbl::Settings n = grbl::settings_from_config(none);
+  EXPECT_EQ(n.values.at(20), 0.0);
+  EXPECT_EQ(grbl::set_value(n, 20, 5.0), 0);
+  EXPECT_EQ(n.values.at(20), 1.0);
+  EXPECT_EQ(grbl::set_value(n, 132, 80.0), 0);
+  const MachineConfig g = grbl::apply_settings(none, n);
+  EXPECT_EQ(g.travel[2].min_mm, -80.0);
+  EXPECT_EQ(g.travel[2].max_mm, 0.0);
+  EXPECT_EQ(g.travel[0].min_mm, -200.0);
+  EXPECT_FALSE(g.travel[3].enabled);
 }

@@ -78,15 +78,17 @@ config::MachineConfig apply_settings(const config::MachineConfig& base, const Se
   }
   // G0 runs at each axis's maximum rate (grbl): the planner limits every axis to its own.
   cfg.rapid_feed_mm_min = rapid;
-  // $20 on: each of X, Y, Z travels $130-$132 mm from the configuration's min (grbl's own
-  // [-$13x, 0] for an axis the configuration gives no travel); off: no soft limits on X, Y, Z.
+  // $20 on: an axis the configuration gives a travel travels $130-$132 mm from its min; when
+  // the configuration gives none on X, Y, Z, each gets grbl's own [-$13x, 0]. Off: none on X, Y, Z.
+  const bool configured = base.travel[config::kX].enabled || base.travel[config::kY].enabled ||
+                          base.travel[config::kZ].enabled;
   for (int a = 0; a < 3; ++a) {
     config::Travel& t = cfg.travel[static_cast<size_t>(a)];
     if (get(20) == 0) {
       t.enabled = false;
     } else if (t.enabled) {
       t.max_mm = t.min_mm + get(130 + a);
-    } else {
+    } else if (!configured) {
       t = {true, -get(130 + a), 0.0};
     }
   }

@@ -152,6 +152,22 @@ std::optional<TravelViolation> check_travel(const gcode::Move& m,
   return std::nullopt;
 }
 
+std::optional<TravelViolation> check_travel_steps(const Steps4& position,
+                                                  const config::MachineConfig& cfg) {
+  for (size_t a = 0; a < 4; ++a) {
+    const config::Travel& t = cfg.travel[a];
+    if (!t.enabled) continue;
+    const double spm = cfg.steps_per_mm[a];
+    const double mm = static_cast<double>(position[a]) / spm;
+    const int axis = static_cast<int>(a);
+    if (position[a] > std::llround(t.max_mm * spm))
+      return TravelViolation{axis, true, false, mm, t.max_mm};
+    if (position[a] < std::llround(t.min_mm * spm))
+      return TravelViolation{axis, false, false, mm, t.min_mm};
+  }
+  return std::nullopt;
+}
+
 std::string describe(const TravelViolation& v, char fourth_axis) {
   const char name =
       v.axis == config::kE ? fourth_axis : config::kAxisNames[static_cast<size_t>(v.axis)];

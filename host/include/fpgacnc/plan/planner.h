@@ -119,6 +119,9 @@ struct TravelViolation {
 };
 std::optional<TravelViolation> check_travel(const gcode::Move& move,
                                             const config::MachineConfig& cfg);
+// The same test for a position in steps (a step file's segment end).
+std::optional<TravelViolation> check_travel_steps(const Steps4& position,
+                                                  const config::MachineConfig& cfg);
 // "X reaches 312.500 mm, 12.500 mm beyond its max 300.000 mm" (the arc's extent said so).
 std::string describe(const TravelViolation& v, char fourth_axis = 'E');
 
