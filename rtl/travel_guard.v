@@ -16,7 +16,7 @@
 //                  accepts a motion frame only with ok): queued += delta on the next edge.
 //   resync, pos    the queue was flushed (e-stop, hard limit, abort): queued <= pos (the position
 //                  counters, axis a in [32*a+:32]) on the next edge; wins over accept.
-//   queued         the queued end position per axis (0 after rst, as the position counters).
+// The queued end position per axis is 0 after rst, as the position counters are.
 // A disabled axis is never refused; its queued end still follows the entries (wrapping at 32
 // bits as the position counters do), so enabling it later checks from where the queue ends.
 // Requires 1 <= N_AXES <= 15. rst is synchronous, active high.
@@ -40,8 +40,7 @@ module travel_guard #(
     input wire                   resync,
     input wire [32*N_AXES-1:0]   pos,
 
-    output wire                  ok,
-    output wire [32*N_AXES-1:0]  queued
+    output wire                  ok
 );
 
   generate
@@ -92,8 +91,7 @@ module travel_guard #(
     end
   end
 
-  assign ok     = &in_ok;
-  assign queued = queued_reg;
+  assign ok = &in_ok;
 
 `ifdef FORMAL
   // Formal properties (scripts/formal.sh set travel_guard, k-induction; covers). Reset in the

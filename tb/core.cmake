@@ -8,7 +8,8 @@ fpgacnc_verilated(vexec TOP segment_executor
 fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
 fpgacnc_verilated(vframe TOP frame_decoder
                   SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/frame_fields.v
-                          ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
+                          ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v
+                          ${FPGACNC_RTL_DIR}/travel_guard.v)
 fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo.v
                   ARGS -GWIDTH=40 -GDEPTH=16)
 fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/crc16_ccitt.v)

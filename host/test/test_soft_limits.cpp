@@ -13,8 +13,11 @@
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/grbl/settings.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/plan/stepfile.h"
+#include "fpgacnc/protocol/v2.h"
+#include "fpgacnc/protocol/v2_job.h"
 #include "stream_plan.h"
 
 namespace pl = fpgacnc::plan;
@@ -208,4 +211,30 @@ TEST(SoftLimits, GrblSettingsMapOntoTheTravel) {
   EXPECT_EQ(g.travel[2].max_mm, 0.0);
   EXPECT_EQ(g.travel[0].min_mm, -200.0);
   EXPECT_FALSE(g.travel[3].enabled);
+}
+
+TEST(SoftLimits, ConfigTravelFramesAndNakTravel) {
+  namespace v2 = fpgacnc::protocol::v2;
+  // X in [0, 100] mm at 160 steps/mm is [0, 16000] steps; Y [0, 50] mm: [0, 8000]. Sent for the
+  // configured axes only, big-endian int32 after the axis and the enable flag.
+  const auto plan = pl::plan_program(fpgacnc::gcode::parse_string("G0 X1\n"), box(), {});
+  const auto job = v2::pack_job(pl::plan_motion(plan, box()), box(), {.heaters = false});
+  ASSERT_EQ(job.travel.size(), 2u);
+  EXPECT_EQ(job.travel[0].type, fpgacnc::spec::kTypeConfigTravel);
+  EXPECT_EQ(job.travel[0].payload,
+            (std::vector<uint8_t>{0, 1, 0, 0, 0, 0, 0x00, 0x00, 0x3E, 0x80}));
+  EXPECT_EQ(job.travel[1].payload,
+            (std::vector<uint8_t>{1, 1, 0, 0, 0, 0, 0x00, 0x00, 0x1F, 0x40}));
+  const MachineConfig none;
+  const auto plain = pl::plan_program(fpgacnc::gcode::parse_string("G0 X1\n"), none, {});
+  EXPECT_TRUE(v2::pack_job(pl::plan_motion(plain, none), none, {.heaters = false}).travel.empty());
+  // The device's field rules as the host models them.
+  EXPECT_FALSE(v2::check_host_frame(v2::config_travel(0, 3, true, -5, 5), 4));
+  EXPECT_EQ(v2::check_host_frame(v2::config_travel(0, 4, true, -5, 5), 4), v2::NakReason::BadField);
+  EXPECT_EQ(v2::check_host_frame(v2::config_travel(0, 0, true, 5, -5), 4), v2::NakReason::BadField);
+  EXPECT_FALSE(v2::check_host_frame(v2::config_travel(0, 0, false, 5, -5), 4));
+  // NAK TRAVEL decodes and has its name.
+  const v2::Frame nak{1, fpgacnc::spec::kTypeNak, {7, fpgacnc::spec::kNakTravel, 7, 0, 60}};
+  EXPECT_EQ(v2::decode_nak(nak).reason, v2::NakReason::Travel);
+  EXPECT_EQ(v2::nak_reason_name(fpgacnc::spec::kNakTravel), "TRAVEL");
 }
