@@ -503,10 +503,12 @@ module frame_decoder #(
   end
 
   // ---------------------------------------------------------------- soft limits
-  // The steps of the frame whose last byte is being taken (v2), or of the v1 packet in its CHECK
-  // clock: LINE from byte 6, LINE_PROFILE from byte 28 (int16 with flag bit 7, else int32;
-  // axes beyond LEN 0), ARC's DX, DY (int24) and DZ (int32) on the axes of its plane, v1 motion
-  // X and Y at bytes 0 and 4; 0 for anything else.
+  // trav_delta_reg: the steps of the frame being received, formed on the edge that takes its
+  // first CRC byte (the payload is complete then; the check reads them on the next byte's edge),
+  // or of a v1 packet in its CHECK clock (the queued end follows it on the next edge): LINE from
+  // byte 6, LINE_PROFILE from byte 28 (int16 with flag bit 7, else int32; axes beyond LEN 0),
+  // ARC's DX, DY (int24) and DZ (int32) on the axes of its plane, v1 motion X and Y at bytes 0
+  // and 4; 0 for anything else.
   function [31:0] be32p;
     input integer i;
     begin
@@ -519,44 +521,44 @@ module frame_decoder #(
       be24s = {{8{pay_reg[8*i+7]}}, pay_reg[8*i+:8], pay_reg[8*(i+1)+:8], pay_reg[8*(i+2)+:8]};
     end
   endfunction
-  wire v2_load = take && st_reg == ST_CRC2;
-  wire v1_load = chk_reg && chk_v1_reg;
   localparam TW = 32 * ((N_AXES < 3) ? 3 : N_AXES);  // X, Y, Z at least (an ARC's axes)
-  reg [32*N_AXES-1:0] trav_delta;
-  always @(*) begin : travel_delta
+  reg [32*N_AXES-1:0] trav_delta_reg;
+  always @(posedge clk) begin : travel_delta
     reg [31:0] du, dv, dh;
     /* verilator lint_off UNUSEDSIGNAL */
     reg [TW-1:0] wide;  // Z of an ARC unused with 2 axes
     /* verilator lint_on UNUSEDSIGNAL */
     integer a, base;
-    wide = {TW{1'b0}};
-    base = 6;
-    a = 0;
-    du = be24s(8);
-    dv = be24s(11);
-    dh = be32p(14);
-    if (v1_load) begin
-      if (!is_init_reg) wide[63:0] = {be32p(4), be32p(0)};
-    end else if (t_line || t_lprof) begin
-      if (!t_line) base = 28;
-      for (a = 0; a < N_AXES; a = a + 1) begin
-        if (pay_reg[7]) begin
-          if ({1'b0, len_reg} >= base[8:0] + 9'd2 + 9'd2 * a[8:0])
-            wide[32*a+:32] = {{16{pay_reg[8*(base+2*a)+7]}}, pay_reg[8*(base+2*a)+:8],
-                              pay_reg[8*(base+2*a+1)+:8]};
-        end else if ({1'b0, len_reg} >= base[8:0] + 9'd4 + 9'd4 * a[8:0]) begin
-          wide[32*a+:32] = be32p(base + 4 * a);
+    if ((take && st_reg == ST_CRC1) || (chk_reg && chk_v1_reg)) begin
+      wide = {TW{1'b0}};
+      base = 6;
+      du   = be24s(8);
+      dv   = be24s(11);
+      dh   = be32p(14);
+      if (chk_reg && chk_v1_reg) begin
+        if (!is_init_reg) wide[63:0] = {be32p(4), be32p(0)};
+      end else if (t_line || t_lprof) begin
+        if (!t_line) base = 28;
+        for (a = 0; a < N_AXES; a = a + 1) begin
+          if (pay_reg[7]) begin
+            if ({1'b0, len_reg} >= base[8:0] + 9'd2 + 9'd2 * a[8:0])
+              wide[32*a+:32] = {{16{pay_reg[8*(base+2*a)+7]}}, pay_reg[8*(base+2*a)+:8],
+                                pay_reg[8*(base+2*a+1)+:8]};
+          end else if ({1'b0, len_reg} >= base[8:0] + 9'd4 + 9'd4 * a[8:0]) begin
+            wide[32*a+:32] = be32p(base + 4 * a);
+          end
         end
+      end else if (t_arc) begin
+        // planes (flags bits 3:2): XY u=X v=Y h=Z; ZX u=Z v=X h=Y; YZ u=Y v=Z h=X
+        case (pay_reg[3:2])
+          2'd0: wide[95:0] = {dh, dv, du};
+          2'd1: wide[95:0] = {du, dh, dv};
+          default: wide[95:0] = {dv, du, dh};
+        endcase
       end
-    end else if (t_arc) begin
-      // planes (flags bits 3:2): XY u=X v=Y h=Z; ZX u=Z v=X h=Y; YZ u=Y v=Z h=X
-      case (pay_reg[3:2])
-        2'd0: wide[95:0] = {dh, dv, du};
-        2'd1: wide[95:0] = {du, dh, dv};
-        default: wide[95:0] = {dv, du, dh};
-      endcase
+      trav_delta_reg <= wide[32*N_AXES-1:0];
     end
-    trav_delta = wide[32*N_AXES-1:0];
+    if (rst) trav_delta_reg <= {32 * N_AXES{1'b0}};
   end
 
   travel_guard #(
@@ -569,8 +571,8 @@ module frame_decoder #(
       .cfg_en  (pay_reg[8]),
       .cfg_min (be32p(2)),
       .cfg_max (be32p(6)),
-      .load    (v2_load || v1_load),
-      .delta   (trav_delta),
+      .check   (take && st_reg == ST_CRC2),
+      .delta   (trav_delta_reg),
       .accept  ((v2_accept && moves) || v1_packet_reg),
       .resync  (travel_resync),
       .pos     (position),
