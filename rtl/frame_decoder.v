@@ -528,24 +528,25 @@ module frame_decoder #(
     /* verilator lint_off UNUSEDSIGNAL */
     reg [TW-1:0] wide;  // Z of an ARC unused with 2 axes
     /* verilator lint_on UNUSEDSIGNAL */
-    integer a, base;
+    integer a;
     if ((take && st_reg == ST_CRC1) || (chk_reg && chk_v1_reg)) begin
       wide = {TW{1'b0}};
-      base = 6;
       du   = be24s(8);
       dv   = be24s(11);
       dh   = be32p(14);
       if (chk_reg && chk_v1_reg) begin
         if (!is_init_reg) wide[63:0] = {be32p(4), be32p(0)};
       end else if (t_line || t_lprof) begin
-        if (!t_line) base = 28;
+        // constant offsets only (LINE from byte 6, LINE_PROFILE from byte 28)
         for (a = 0; a < N_AXES; a = a + 1) begin
           if (pay_reg[7]) begin
-            if ({1'b0, len_reg} >= base[8:0] + 9'd2 + 9'd2 * a[8:0])
-              wide[32*a+:32] = {{16{pay_reg[8*(base+2*a)+7]}}, pay_reg[8*(base+2*a)+:8],
-                                pay_reg[8*(base+2*a+1)+:8]};
-          end else if ({1'b0, len_reg} >= base[8:0] + 9'd4 + 9'd4 * a[8:0]) begin
-            wide[32*a+:32] = be32p(base + 4 * a);
+            if ({1'b0, len_reg} >= (t_line ? 9'd8 : 9'd30) + 9'd2 * a[8:0])
+              wide[32*a+:32] = t_line ? {{16{pay_reg[8*(6+2*a)+7]}}, pay_reg[8*(6+2*a)+:8],
+                                         pay_reg[8*(7+2*a)+:8]}
+                                      : {{16{pay_reg[8*(28+2*a)+7]}}, pay_reg[8*(28+2*a)+:8],
+                                         pay_reg[8*(29+2*a)+:8]};
+          end else if ({1'b0, len_reg} >= (t_line ? 9'd10 : 9'd32) + 9'd4 * a[8:0]) begin
+            wide[32*a+:32] = t_line ? be32p(6 + 4 * a) : be32p(28 + 4 * a);
           end
         end
       end else if (t_arc) begin
