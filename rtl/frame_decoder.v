@@ -26,7 +26,7 @@
 //   hello, status_req, ack_req, nak (+ nak_seq as received, nak_reason)   answer requests.
 //   frame_ok    a v2 frame that passed every check (HELLO, STATUS_QUERY, accepted, duplicate).
 //   crc_error, length_error, unknown_type   a v2 frame rejected for that reason (length_error
-//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER or FIFO_FULL.
+//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER, FIFO_FULL or TRAVEL.
 //   timeout     a started v1 packet or v2 frame with no byte for WATCHDOG_CLKS clocks (v2: also
 //               NAK TIMEOUT, SEQ as received or 0 before the SEQ byte).
 //   noise       a byte dropped in HUNT. v1_packet   a v1 packet written to the FIFO.
