@@ -71,6 +71,7 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
       b.estop_release = [bl] { bl->board().set_estop(false); };
     }
   }
+  if (const auto* bd = simboard::any_board_of(*b.link)) b.limit_switches = bd->limit_switches();
   return b;
 }
 

@@ -34,6 +34,8 @@ struct BoardBehind {
   bool rtl = false;         // the Verilated board (its heaters' plants and e-stop are modelled)
   // Press / release the board's e-stop; empty where the board has no e-stop input (tlm, a port).
   std::function<void()> estop_press, estop_release;
+  // The board's limit switches (simboard::Board::limit_switches; 0 for tlm and a port).
+  uint16_t limit_switches = 0;
 };
 // Opens the board of `choice` (throws std::invalid_argument for --realtime without tlm).
 BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoice& choice);
