@@ -35,6 +35,7 @@ void run_marlin(const MarlinArgs& args) {
   BoardBehind board = open_board_behind(cfg, args.board);
   marlin::EngineOptions eo;
   eo.v2 = link::stream_v2_options(cfg);
+  eo.limit_switches = board.limit_switches;
   eo.estop_press = board.estop_press;
   std::string behind = board.description;
   if (board.rtl) {

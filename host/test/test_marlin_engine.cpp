@@ -60,6 +60,7 @@ class Rig {
       auto* bl = dynamic_cast<fpgacnc::simboard::BoardLink*>(link_.get());
       o.estop_press = [bl] { bl->board().set_estop(true); };
     }
+    o.limit_switches = fpgacnc::simboard::any_board_of(*link_)->limit_switches();
     engine_ = std::make_unique<marlin::Engine>(*link_, cfg, o);
     engine_->connect();
     pump();
@@ -424,4 +425,23 @@ TEST(MarlinTcp, ClientStreamsAShortJob) {
   EXPECT_EQ(read_line(s, sbuf), "X:3.00 Y:2.00 Z:0.00 E:0.00 Count X:480 Y:320 Z:0");
   EXPECT_EQ(read_line(s, sbuf), "ok");
   ::close(s);
+}
+
+// M119 on the Verilated board (X, Y, Z min and max wired): Marlin's "Reporting endstop status"
+// with one line per switch, TRIGGERED for the one held (after its 1 ms debounce, board time).
+TEST(MarlinEngine, M119ReportsTheHeldSwitch) {
+  Rig rig(true);
+  auto& board = *fpgacnc::simboard::board_of(rig.link());
+  board.set_limit(2, true, true);  // Z max
+  rig.link().wait_until(rig.link().now() + milliseconds(5));
+  const auto r = rig.command("M119");
+  const std::vector<std::string> want = {"Reporting endstop status",
+                                         "x_min: open",
+                                         "x_max: open",
+                                         "y_min: open",
+                                         "y_max: open",
+                                         "z_min: open",
+                                         "z_max: TRIGGERED",
+                                         "ok"};
+  EXPECT_EQ(r, want);
 }
