@@ -1,13 +1,15 @@
 // fpgacnc board [--model tlm|rtl] [--realtime] [--config F] [--fst F] [--edges F.csv]
 //               [--line-* ...]: a simulated board alone on a pseudo-terminal; prints its
 // /dev/pts/N path and serves any serial client until Ctrl-C / SIGTERM; SIGUSR1 / SIGUSR2 press /
-// release the e-stop (--model rtl). `tlm` (default): the
+// release the e-stop (--model rtl), --endstop places simulated endstops (rtl). `tlm` (default): the
 // SystemC twins of cnc_core (twins::TwinBoard, event-driven, proven edge-for-edge equal to the
 // RTL); `rtl`: the Verilated cnc_core (SimBoard: heaters, line faults, FST waveforms). Also the
 // hooks that put a board behind `stream` without --port, and `stream --model both`.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -70,6 +72,30 @@ std::unique_ptr<twins::TwinBoard> make_twin_board(const config::MachineConfig& c
   o.realtime = realtime;
   o.record_tx = record_tx;
   return std::make_unique<twins::TwinBoard>(o);
+}
+
+// "x-max=200": the X max switch pressed from 200 mm on (steps from the configuration).
+simboard::Endstop parse_endstop(const std::string& v, const config::MachineConfig& cfg) {
+  const size_t eq = v.find('=');
+  const std::string sw = v.substr(0, eq);
+  const std::string axes = "xyz";
+  simboard::Endstop e;
+  const bool ok_name = sw.size() == 5 && axes.find(sw[0]) != std::string::npos &&
+                       (sw.substr(1) == "-min" || sw.substr(1) == "-max");
+  char* end = nullptr;
+  const std::string num = eq == std::string::npos ? "" : v.substr(eq + 1);
+  const double mm = std::strtod(num.c_str(), &end);
+  if (!ok_name || num.empty() || *end || !std::isfinite(mm)) {
+    throw std::invalid_argument(
+        fmt::format("--endstop {}: expected AXIS-SIDE=MM with AXIS x, y or z and SIDE min or max "
+                    "(e.g. x-max=200)",
+                    v));
+  }
+  e.axis = static_cast<int>(axes.find(sw[0]));
+  e.max_side = sw.substr(1) == "-max";
+  e.position =
+      static_cast<int64_t>(std::llround(mm * cfg.steps_per_mm[static_cast<size_t>(e.axis)]));
+  return e;
 }
 
 void print_lockstep(const twins::LockstepRun& r, double clk_hz) {
@@ -172,6 +198,7 @@ StreamHooks simboard_stream_hooks() {
 void register_board(CLI::App& app) {
   struct Args {
     simboard::BoardCommandArgs board;
+    std::vector<std::string> endstops;
     std::string model = "tlm";
     bool realtime = false;
   };
@@ -193,6 +220,11 @@ void register_board(CLI::App& app) {
   sub->add_option("--fst", args->board.fst_path, "write an FST waveform of the core (rtl)");
   sub->add_option("--edges", args->board.edges_csv,
                   "write the STEP/DIR/LASER edge list (CSV) at exit");
+  sub->add_option("--endstop", args->endstops,
+                  "rtl: a simulated endstop, AXIS-SIDE=MM (x-max=200, z-min=-5): the switch is "
+                  "pressed while the axis is at or beyond MM (machine position from reset); "
+                  "SIGHUP pulls the carriages off their endstops by hand (repeatable)")
+      ->type_name("AXIS-SIDE=MM");
   add_line_fault_options(*sub, [args](const std::string& name, const std::string& v) {
     apply_line_fault(args->board.line_faults, name, v);
   });
@@ -204,6 +236,9 @@ void register_board(CLI::App& app) {
     if (args->model == "tlm") {
       check_tlm_options("fpgacnc board --model tlm", !args->board.fst_path.empty(),
                         args->board.line_faults.any());
+      if (!args->endstops.empty())
+        throw std::invalid_argument(
+            "fpgacnc board: --endstop: the twin board has no limit switches; use --model rtl");
       board = make_twin_board(cfg, args->realtime);
     } else {
       if (args->realtime) {
@@ -214,6 +249,7 @@ void register_board(CLI::App& app) {
       simboard::BoardOptions o = simboard::SimBoard::options_from_config(cfg);
       o.fst_path = args->board.fst_path;
       o.line_faults = args->board.line_faults;
+      for (const auto& e : args->endstops) o.endstops.push_back(parse_endstop(e, cfg));
       board = std::make_unique<simboard::SimBoard>(o);
     }
     const int rc = simboard::run_board_command(args->board, *board, cfg.baud);

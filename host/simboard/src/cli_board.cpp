@@ -134,6 +134,7 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
   sigaddset(&set, SIGTERM);
   sigaddset(&set, SIGUSR1);
   sigaddset(&set, SIGUSR2);
+  sigaddset(&set, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   board.start();
   fmt::print("simulated board ({}) on {} ({} baud)\n", board.model(), board.path(), baud);
@@ -141,12 +142,21 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
   if (args.line_faults.any()) fmt::print("line faults: {}\n", args.line_faults.describe());
   fmt::print(
       "Ctrl-C (SIGINT) or SIGTERM stops it; SIGUSR1 presses the e-stop, SIGUSR2 releases it "
-      "(kill -USR1 {})\n",
+      "(kill -USR1 {}); SIGHUP pulls the carriages off their endstops\n",
       static_cast<long>(getpid()));
   std::fflush(stdout);
   int sig = 0;
   for (;;) {
     sigwait(&set, &sig);
+    if (sig == SIGHUP) {
+      // The operator pulls the carriages off their simulated endstops
+      // (SimBoard::pull_off_endstops).
+      auto* sb = dynamic_cast<SimBoard*>(&board);
+      const int n = sb ? sb->pull_off_endstops() : 0;
+      fmt::print("SIGHUP: {} endstop(s) released by hand at board cycle {}\n", n, board.cycle());
+      std::fflush(stdout);
+      continue;
+    }
     if (sig != SIGUSR1 && sig != SIGUSR2) break;
     // The e-stop pin (cnc_core's estop input) follows the signal until the next one; the core
     // synchronizes and latches it on its next clocks (docs/protocol.md "The simulated board").

@@ -52,7 +52,8 @@ bool parse_line_fault_option(std::string_view name, std::string_view value, Line
 // "simulated board (MODEL) on /dev/pts/N (115200 baud)", serves any serial client until SIGINT
 // or SIGTERM, then prints its figures (and writes the edge list). SIGUSR1 presses the board's
 // e-stop input, SIGUSR2 releases it (Board::set_estop; a board without one prints why and goes
-// on). Returns the exit status.
+// on); SIGHUP pulls the carriages off their simulated endstops (SimBoard::pull_off_endstops).
+// Returns the exit status.
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud);
 // The figures of a board (cycles, machine time, clocks/s, bytes, edges, moves; line faults and
 // heaters for the Verilated board).
