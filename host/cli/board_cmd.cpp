@@ -7,9 +7,7 @@
 // hooks that put a board behind `stream` without --port, and `stream --model both`.
 #include <fmt/format.h>
 
-#include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -72,30 +70,6 @@ std::unique_ptr<twins::TwinBoard> make_twin_board(const config::MachineConfig& c
   o.realtime = realtime;
   o.record_tx = record_tx;
   return std::make_unique<twins::TwinBoard>(o);
-}
-
-// "x-max=200": the X max switch pressed from 200 mm on (steps from the configuration).
-simboard::Endstop parse_endstop(const std::string& v, const config::MachineConfig& cfg) {
-  const size_t eq = v.find('=');
-  const std::string sw = v.substr(0, eq);
-  const std::string axes = "xyz";
-  simboard::Endstop e;
-  const bool ok_name = sw.size() == 5 && axes.find(sw[0]) != std::string::npos &&
-                       (sw.substr(1) == "-min" || sw.substr(1) == "-max");
-  char* end = nullptr;
-  const std::string num = eq == std::string::npos ? "" : v.substr(eq + 1);
-  const double mm = std::strtod(num.c_str(), &end);
-  if (!ok_name || num.empty() || *end || !std::isfinite(mm)) {
-    throw std::invalid_argument(
-        fmt::format("--endstop {}: expected AXIS-SIDE=MM with AXIS x, y or z and SIDE min or max "
-                    "(e.g. x-max=200)",
-                    v));
-  }
-  e.axis = static_cast<int>(axes.find(sw[0]));
-  e.max_side = sw.substr(1) == "-max";
-  e.position =
-      static_cast<int64_t>(std::llround(mm * cfg.steps_per_mm[static_cast<size_t>(e.axis)]));
-  return e;
 }
 
 void print_lockstep(const twins::LockstepRun& r, double clk_hz) {
@@ -249,7 +223,8 @@ void register_board(CLI::App& app) {
       simboard::BoardOptions o = simboard::SimBoard::options_from_config(cfg);
       o.fst_path = args->board.fst_path;
       o.line_faults = args->board.line_faults;
-      for (const auto& e : args->endstops) o.endstops.push_back(parse_endstop(e, cfg));
+      for (const auto& e : args->endstops)
+        o.endstops.push_back(simboard::parse_endstop_option(e, cfg));
       board = std::make_unique<simboard::SimBoard>(o);
     }
     const int rc = simboard::run_board_command(args->board, *board, cfg.baud);

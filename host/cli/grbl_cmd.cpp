@@ -52,7 +52,8 @@ void run(const Args& args) {
   engine.connect();
   engine.take_output();  // the banner goes to each sender when it connects
 
-  serve(senders, engine, [&](Peer&) { engine.opened(); });
+  serve(
+      senders, engine, [&](Peer&) { engine.opened(); }, board.pull_off);
   const auto& s = engine.stats();
   fmt::print(
       "grbl: {} lines ({} ok, {} errors), {} status reports, {} frames, {} flushes, {} "

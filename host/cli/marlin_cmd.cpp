@@ -53,7 +53,8 @@ void run_marlin(const MarlinArgs& args) {
   engine.connect();
   const std::string banner = engine.take_output();  // to each sender when it opens the port
 
-  serve(senders, engine, [&](Peer& p) { p.pending += banner; });
+  serve(
+      senders, engine, [&](Peer& p) { p.pending += banner; }, board.pull_off);
   const auto& s = engine.stats();
   fmt::print("marlin: {} commands, {} resends asked, {} frames, {} busy lines\n", s.lines,
              s.resends, s.frames, s.busy);

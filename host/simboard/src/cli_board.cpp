@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "fpgacnc/simboard/plot.h"
@@ -123,6 +125,49 @@ bool parse_line_fault_option(std::string_view name, std::string_view value, Line
     return false;
   }
   return true;
+}
+
+Endstop parse_endstop_option(std::string_view v, const config::MachineConfig& cfg) {
+  const size_t eq = v.find('=');
+  const std::string sw(v.substr(0, eq));
+  const std::string axes = "xyz";
+  const bool ok_name = sw.size() == 5 && axes.find(sw[0]) != std::string::npos &&
+                       (sw.substr(1) == "-min" || sw.substr(1) == "-max");
+  const std::string num(eq == std::string_view::npos ? std::string_view() : v.substr(eq + 1));
+  char* end = nullptr;
+  const double mm = std::strtod(num.c_str(), &end);
+  if (!ok_name || num.empty() || *end || !std::isfinite(mm)) {
+    throw std::invalid_argument(
+        fmt::format("--endstop {}: expected AXIS-SIDE=MM with AXIS x, y or z and SIDE min or max "
+                    "(e.g. x-max=200)",
+                    v));
+  }
+  Endstop e;
+  e.axis = static_cast<int>(axes.find(sw[0]));
+  e.max_side = sw.substr(1) == "-max";
+  e.position =
+      static_cast<int64_t>(std::llround(mm * cfg.steps_per_mm[static_cast<size_t>(e.axis)]));
+  return e;
+}
+
+uint16_t parse_limit_switches_option(std::string_view value) {
+  uint16_t bits = 0;
+  size_t b = 0;
+  while (b < value.size()) {
+    size_t e = value.find(',', b);
+    if (e == std::string_view::npos) e = value.size();
+    const std::string sw(value.substr(b, e - b));
+    const std::string axes = "xyz";
+    if (sw.size() != 5 || axes.find(sw[0]) == std::string::npos ||
+        (sw.substr(1) != "-min" && sw.substr(1) != "-max")) {
+      throw std::invalid_argument(fmt::format(
+          "--limit-switches {}: '{}' is not a switch (x-min, x-max, y-min, y-max, z-min, z-max)",
+          value, sw));
+    }
+    bits = static_cast<uint16_t>(bits | (1u << (axes.find(sw[0]) + (sw[2] == 'a' ? 8 : 0))));
+    b = e + 1;
+  }
+  return bits;
 }
 
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud) {

@@ -186,7 +186,7 @@ void Engine::banner() {
   out_ += "\r\n";
   say(kBanner);
   // grbl's start-up check with hard limits: a switch held at reset keeps the alarm.
-  if (opt_.limit_switches && (session_->last_status().switches & opt_.limit_switches)) {
+  if (session_->last_status().switches) {
     alarm_ = true;
     say("[MSG:Check Limits]");
   }
@@ -494,7 +494,8 @@ void Engine::write_report() {
   if (st == State::kRun && !fifo_info_.empty()) std::tie(feed, s) = fifo_info_.front();
   r += fmt::format("|FS:{:.0f},{:.0f}", feed / div, s);
   // Pn: the limit pins asserted now (grbl 1.1: X, Y, Z letters; omitted when none).
-  if (const uint16_t sw = session_->last_status().switches & opt_.limit_switches) {
+  // (STATUS reports only the switches the board wires.)
+  if (const uint16_t sw = session_->last_status().switches) {
     r += "|Pn:";
     for (int a = 0; a < 3; ++a)
       if ((sw >> a) & 0x101u) r += "XYZ"[a];
