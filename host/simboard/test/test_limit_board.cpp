@@ -83,7 +83,7 @@ TEST(LimitBoard, JobRunsIntoEndstop) {
   sb::BoardLink link(bo);
   auto& board = link.board();
   const auto p = plan::plan_program(
-      fpgacnc::gcode::parse_string("G1 X20 F1200\nG1 X0\n", "overrun.gcode"), cfg, {});
+      fpgacnc::gcode::parse_string("G1 X20 F6000\nG1 X0\n", "overrun.gcode"), cfg, {});
   lk::StreamV2Options o = lk::stream_v2_options(cfg);
   try {
     fpgacnc::test::stream_plan(link, p, cfg, o);
