@@ -139,7 +139,6 @@ class Rig {
     if (now - last_poll_ >= milliseconds(100)) {
       engine_->receive("?");
       last_poll_ = now;
-      ++polls;
     }
   }
   void send(const std::string& bytes) { engine_->receive(bytes); }
@@ -187,7 +186,6 @@ class Rig {
   const std::vector<std::string>& all() const { return all_; }
 
   bool polling = false;
-  uint64_t polls = 0;
   // Board time one step of the engine may wait for an answer (it returns at the first answer):
   // long jobs take fewer, longer steps.
   milliseconds step_wait{5};
@@ -318,16 +316,18 @@ TEST_P(GrblStream, CorpusJobEndsWhereThePlanEnds) {
   // The report's position is the FPGA's step counter, the engine's view of it the same.
   const auto mp = rig.engine().mpos();
   for (size_t a = 0; a < 3; ++a) EXPECT_NEAR(end.mpos[a], mp[a], 0.0005);
-  // Polled throughout: Run seen while the job ran, each report well formed.
-  EXPECT_GT(rig.polls, 3u);
-  bool saw_run = false;
+  // Polled throughout at 10 Hz of board time (while the lines went out, then by wait_idle() until
+  // Idle): several reports said Run, each well formed. How many polls fall while the lines go
+  // out is not counted: a short job's lines are all taken in a few steps of the engine, and how
+  // much board time those steps cover depends on how far the board ran while the host worked.
+  size_t runs = 0;
   for (const auto& rep : rig.reports()) {
     const auto p = parse_report(rep);
     ASSERT_TRUE(p.has_value()) << rep;
-    saw_run |= p->state == "Run";
+    runs += p->state == "Run" ? 1 : 0;
     EXPECT_NE(rep.find("|FS:"), std::string::npos) << rep;
   }
-  EXPECT_TRUE(saw_run);
+  EXPECT_GT(runs, 3u);
   EXPECT_GT(rig.engine().stats().frames, 0u);
 }
 
