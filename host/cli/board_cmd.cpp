@@ -1,7 +1,7 @@
 // fpgacnc board [--model tlm|rtl] [--realtime] [--config F] [--fst F] [--edges F.csv]
 //               [--line-* ...]: a simulated board alone on a pseudo-terminal; prints its
 // /dev/pts/N path and serves any serial client until Ctrl-C / SIGTERM; SIGUSR1 / SIGUSR2 press /
-// release the e-stop (--model rtl). `tlm` (default): the
+// release the e-stop (--model rtl), --endstop places simulated endstops (rtl). `tlm` (default): the
 // SystemC twins of cnc_core (twins::TwinBoard, event-driven, proven edge-for-edge equal to the
 // RTL); `rtl`: the Verilated cnc_core (SimBoard: heaters, line faults, FST waveforms). Also the
 // hooks that put a board behind `stream` without --port, and `stream --model both`.
@@ -172,6 +172,7 @@ StreamHooks simboard_stream_hooks() {
 void register_board(CLI::App& app) {
   struct Args {
     simboard::BoardCommandArgs board;
+    std::vector<std::string> endstops;
     std::string model = "tlm";
     bool realtime = false;
   };
@@ -193,6 +194,11 @@ void register_board(CLI::App& app) {
   sub->add_option("--fst", args->board.fst_path, "write an FST waveform of the core (rtl)");
   sub->add_option("--edges", args->board.edges_csv,
                   "write the STEP/DIR/LASER edge list (CSV) at exit");
+  sub->add_option("--endstop", args->endstops,
+                  "rtl: a simulated endstop, AXIS-SIDE=MM (x-max=200, z-min=-5): the switch is "
+                  "pressed while the axis is at or beyond MM (machine position from reset); "
+                  "SIGHUP pulls the carriages off their endstops by hand (repeatable)")
+      ->type_name("AXIS-SIDE=MM");
   add_line_fault_options(*sub, [args](const std::string& name, const std::string& v) {
     apply_line_fault(args->board.line_faults, name, v);
   });
@@ -204,6 +210,9 @@ void register_board(CLI::App& app) {
     if (args->model == "tlm") {
       check_tlm_options("fpgacnc board --model tlm", !args->board.fst_path.empty(),
                         args->board.line_faults.any());
+      if (!args->endstops.empty())
+        throw std::invalid_argument(
+            "fpgacnc board: --endstop: the twin board has no limit switches; use --model rtl");
       board = make_twin_board(cfg, args->realtime);
     } else {
       if (args->realtime) {
@@ -214,6 +223,8 @@ void register_board(CLI::App& app) {
       simboard::BoardOptions o = simboard::SimBoard::options_from_config(cfg);
       o.fst_path = args->board.fst_path;
       o.line_faults = args->board.line_faults;
+      for (const auto& e : args->endstops)
+        o.endstops.push_back(simboard::parse_endstop_option(e, cfg));
       board = std::make_unique<simboard::SimBoard>(o);
     }
     const int rc = simboard::run_board_command(args->board, *board, cfg.baud);

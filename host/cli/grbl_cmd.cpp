@@ -43,6 +43,7 @@ void run(const Args& args) {
   eo.settings_path = settings_path;
   eo.estop_press = board.estop_press;
   eo.estop_release = board.estop_release;
+  eo.limit_switches = board.limit_switches;
   const std::string& behind = board.description;
   fmt::print("grbl 1.1 front end for {}; settings {}\n", behind, settings_path);
   std::fflush(stdout);
@@ -51,7 +52,8 @@ void run(const Args& args) {
   engine.connect();
   engine.take_output();  // the banner goes to each sender when it connects
 
-  serve(senders, engine, [&](Peer&) { engine.opened(); });
+  serve(
+      senders, engine, [&](Peer&) { engine.opened(); }, board.pull_off);
   const auto& s = engine.stats();
   fmt::print(
       "grbl: {} lines ({} ok, {} errors), {} status reports, {} frames, {} flushes, {} "

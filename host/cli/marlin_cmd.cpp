@@ -35,6 +35,7 @@ void run_marlin(const MarlinArgs& args) {
   BoardBehind board = open_board_behind(cfg, args.board);
   marlin::EngineOptions eo;
   eo.v2 = link::stream_v2_options(cfg);
+  eo.limit_switches = board.limit_switches;
   eo.estop_press = board.estop_press;
   std::string behind = board.description;
   if (board.rtl) {
@@ -52,7 +53,8 @@ void run_marlin(const MarlinArgs& args) {
   engine.connect();
   const std::string banner = engine.take_output();  // to each sender when it opens the port
 
-  serve(senders, engine, [&](Peer& p) { p.pending += banner; });
+  serve(
+      senders, engine, [&](Peer& p) { p.pending += banner; }, board.pull_off);
   const auto& s = engine.stats();
   fmt::print("marlin: {} commands, {} resends asked, {} frames, {} busy lines\n", s.lines,
              s.resends, s.frames, s.busy);

@@ -27,8 +27,12 @@ namespace fpgacnc::cli {
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_hangup = 0;
 void on_stop_signal(int) {
   g_stop = 1;
+}
+void on_hangup_signal(int) {
+  g_hangup = 1;
 }
 }  // namespace
 
@@ -36,6 +40,13 @@ void stop_on_signals() {
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
   std::signal(SIGPIPE, SIG_IGN);
+  std::signal(SIGHUP, on_hangup_signal);
+}
+
+bool take_hangup() {
+  if (!g_hangup) return false;
+  g_hangup = 0;
+  return true;
 }
 
 bool stop_requested() {
@@ -45,6 +56,14 @@ bool stop_requested() {
 void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help) {
   sub->add_option("--port", choice.port, "the controller's serial port (default: simulated board)");
   sub->add_option("--model", choice.model, model_help)->check(CLI::IsMember({"tlm", "rtl"}));
+  sub->add_option("--endstop", choice.endstops,
+                  "rtl: a simulated endstop, AXIS-SIDE=MM (x-max=200): the switch is pressed while "
+                  "the axis is at or beyond MM; SIGHUP pulls the carriages off (repeatable)")
+      ->type_name("AXIS-SIDE=MM");
+  sub->add_option("--limit-switches", choice.limit_switches,
+                  "--port: the limit switches the board wires (its LIMIT_ENABLE), e.g. "
+                  "x-min,x-max,y-min,y-max (M119, $21)")
+      ->type_name("LIST");
 }
 
 BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoice& choice) {
@@ -53,9 +72,15 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
     throw std::invalid_argument("--realtime needs the twin board (--model tlm, no --port)");
   if (!(choice.speed > 0.0) || (choice.speed != 1.0 && !choice.realtime))
     throw std::invalid_argument("--speed: a number > 0, with --realtime");
+  if (!choice.endstops.empty() && (!choice.port.empty() || choice.model != "rtl"))
+    throw std::invalid_argument("--endstop needs the Verilated board (--model rtl, no --port)");
+  if (!choice.limit_switches.empty() && choice.port.empty())
+    throw std::invalid_argument(
+        "--limit-switches is for a real board (--port); the simulated boards report their own");
   if (!choice.port.empty()) {
     b.link = std::make_unique<link::SerialLink>(choice.port, cfg.baud);
     b.description = choice.port;
+    b.limit_switches = simboard::parse_limit_switches_option(choice.limit_switches);
   } else if (choice.model == "tlm") {
     twins::TwinBoardOptions o = twins::TwinBoard::options_from_config(cfg);
     o.realtime = choice.realtime;
@@ -63,14 +88,23 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
     b.link = simboard::make_board_link(std::make_unique<twins::TwinBoard>(o), cfg.baud, {});
     b.description = "the simulated board (tlm)";
   } else {
-    b.link = simboard::make_default_link(cfg, {});
+    simboard::BoardOptions o = simboard::SimBoard::options_from_config(cfg);
+    for (const auto& e : choice.endstops)
+      o.endstops.push_back(simboard::parse_endstop_option(e, cfg));
+    b.link = simboard::make_board_link(std::make_unique<simboard::SimBoard>(o), cfg.baud, {});
     b.description = "the simulated board (rtl)";
     b.rtl = true;
     if (auto* bl = dynamic_cast<simboard::BoardLink*>(b.link.get())) {
       b.estop_press = [bl] { bl->board().set_estop(true); };
       b.estop_release = [bl] { bl->board().set_estop(false); };
+      b.pull_off = [bl] {
+        const int n = bl->board().pull_off_endstops();
+        fmt::print("SIGHUP: {} endstop(s) released by hand\n", n);
+        std::fflush(stdout);
+      };
     }
   }
+  if (const auto* bd = simboard::any_board_of(*b.link)) b.limit_switches = bd->limit_switches();
   return b;
 }
 

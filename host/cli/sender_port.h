@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/link/link.h"
@@ -22,9 +23,12 @@ struct BoardChoice {
   std::string port;
   std::string model = "tlm";
   bool realtime = false;
-  double speed = 1.0;  // with realtime: simulated seconds per wall second
+  double speed = 1.0;                 // with realtime: simulated seconds per wall second
+  std::vector<std::string> endstops;  // --endstop (rtl): simulated endstops
+  std::string limit_switches;         // --limit-switches (--port): the switches the board wires
 };
-// Adds --port and --model (with `model_help`) to a front end's subcommand.
+// Adds --port, --model (with `model_help`), --endstop and --limit-switches to a front end's
+// subcommand.
 void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help);
 
 // The FPGA behind a front end, opened.
@@ -34,6 +38,10 @@ struct BoardBehind {
   bool rtl = false;         // the Verilated board (its heaters' plants and e-stop are modelled)
   // Press / release the board's e-stop; empty where the board has no e-stop input (tlm, a port).
   std::function<void()> estop_press, estop_release;
+  // The board's limit switches (simboard::Board::limit_switches; 0 for tlm and a port).
+  uint16_t limit_switches = 0;
+  // The operator pulls the carriages off their simulated endstops (rtl with --endstop; SIGHUP).
+  std::function<void()> pull_off;
 };
 // Opens the board of `choice` (throws std::invalid_argument for --realtime without tlm).
 BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoice& choice);
@@ -110,17 +118,22 @@ class SenderSide {
   SenderWatch watch_;
 };
 
-// SIGINT and SIGTERM end serve() (SIGPIPE is ignored: a sender that goes away is seen by poll).
+// SIGINT and SIGTERM end serve() (SIGPIPE is ignored: a sender that goes away is seen by poll);
+// SIGHUP is taken as a pull-off request (take_hangup()).
 void stop_on_signals();
 bool stop_requested();
+bool take_hangup();
 
 // A front end's loop until SIGINT or SIGTERM: the senders' bytes to the engine, the engine
 // stepped (waiting up to 5 ms for the board while it is busy, else for the senders up to 20 ms),
-// its output to every sender. `opened(peer)` greets a sender that opened the port.
+// its output to every sender. `opened(peer)` greets a sender that opened the port; `hangup`
+// runs on SIGHUP (BoardBehind::pull_off).
 template <typename Engine>
-void serve(SenderSide& senders, Engine& engine, const std::function<void(Peer&)>& opened) {
+void serve(SenderSide& senders, Engine& engine, const std::function<void(Peer&)>& opened,
+           const std::function<void()>& hangup = {}) {
   stop_on_signals();
   while (!stop_requested()) {
+    if (take_hangup() && hangup) hangup();
     senders.poll(engine.busy() ? 0 : 20, opened,
                  [&](std::string_view bytes) { engine.receive(bytes); });
     engine.step(std::chrono::milliseconds(engine.busy() ? 5 : 0));

@@ -2,6 +2,7 @@
 // as a printer host drives it, every wait paced by the board's clock (link time). Expected
 // answers come from Marlin's G-code reference (M105, M114, M110, Resend) and positions from the
 // machine's steps/mm (160 steps/mm on X and Y by default).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <arpa/inet.h>
@@ -60,6 +61,7 @@ class Rig {
       auto* bl = dynamic_cast<fpgacnc::simboard::BoardLink*>(link_.get());
       o.estop_press = [bl] { bl->board().set_estop(true); };
     }
+    o.limit_switches = fpgacnc::simboard::any_board_of(*link_)->limit_switches();
     engine_ = std::make_unique<marlin::Engine>(*link_, cfg, o);
     engine_->connect();
     pump();
@@ -424,4 +426,46 @@ TEST(MarlinTcp, ClientStreamsAShortJob) {
   EXPECT_EQ(read_line(s, sbuf), "X:3.00 Y:2.00 Z:0.00 E:0.00 Count X:480 Y:320 Z:0");
   EXPECT_EQ(read_line(s, sbuf), "ok");
   ::close(s);
+}
+
+// M119 on the Verilated board (X, Y, Z min and max wired): Marlin's "Reporting endstop status"
+// with one line per switch, TRIGGERED for the one held (after its 1 ms debounce, board time).
+TEST(MarlinEngine, M119ReportsTheHeldSwitch) {
+  Rig rig(true);
+  auto& board = *fpgacnc::simboard::board_of(rig.link());
+  board.set_limit(2, true, true);  // Z max
+  rig.link().wait_until(rig.link().now() + milliseconds(5));
+  const auto r = rig.command("M119");
+  const std::vector<std::string> want = {"Reporting endstop status",
+                                         "x_min: open",
+                                         "x_max: open",
+                                         "y_min: open",
+                                         "y_max: open",
+                                         "z_min: open",
+                                         "z_max: TRIGGERED",
+                                         "ok"};
+  EXPECT_EQ(r, want);
+}
+
+// A limit switch hit while moving on the Verilated board: the FPGA stops every axis; the front
+// end reports Marlin's endstop hit with the axis at the board's position, then halts.
+TEST(MarlinEngine, EndstopHitWhileMovingHalts) {
+  MachineConfig cfg;
+  Rig rig(true, cfg);
+  EXPECT_EQ(rig.command("G1 X50 F3000").back(), "ok");  // 1 s of motion
+  auto& board = *fpgacnc::simboard::board_of(rig.link());
+  const auto t0 = rig.link().now();
+  while (board.stats().position[0] < 160 && rig.link().now() - t0 < milliseconds(500)) rig.pump();
+  ASSERT_GE(board.stats().position[0], 160) << "moving";
+  board.set_limit(0, true, true);  // X max
+  const std::string hit = rig.next_line(milliseconds(1000));
+  const auto x = board.stats().position[0];
+  EXPECT_EQ(hit, fmt::format("echo:endstops hit:  X:{:.2f}", static_cast<double>(x) / 160.0));
+  const std::string halt = rig.next_line(milliseconds(100));
+  EXPECT_EQ(halt.rfind("Error:Printer halted. kill() called! (LIMIT alarm: X max", 0), 0u) << halt;
+  EXPECT_TRUE(rig.engine().killed());
+  EXPECT_LT(x, 50 * 160) << "stopped before the move's end";
+  const auto t1 = rig.link().now();
+  while (rig.link().now() - t1 < milliseconds(50)) rig.pump();
+  EXPECT_EQ(board.stats().position[0], x) << "still moving after the trip";
 }

@@ -229,6 +229,10 @@ void TwinBoard::set_estop(bool) {
   throw BoardError("twin board (--model tlm): no e-stop input is modelled; use --model rtl");
 }
 
+uint64_t TwinBoard::set_limit(int, bool, bool) {
+  throw BoardError("the twin board has no limit switches; use --model rtl");
+}
+
 void TwinBoard::set_host_deadline(int64_t cycle) {
   host_deadline_.store(cycle);
   if (cycle >= 0) {

@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "fpgacnc/simboard/plot.h"
@@ -125,6 +127,49 @@ bool parse_line_fault_option(std::string_view name, std::string_view value, Line
   return true;
 }
 
+Endstop parse_endstop_option(std::string_view v, const config::MachineConfig& cfg) {
+  const size_t eq = v.find('=');
+  const std::string sw(v.substr(0, eq));
+  const std::string axes = "xyz";
+  const bool ok_name = sw.size() == 5 && axes.find(sw[0]) != std::string::npos &&
+                       (sw.substr(1) == "-min" || sw.substr(1) == "-max");
+  const std::string num(eq == std::string_view::npos ? std::string_view() : v.substr(eq + 1));
+  char* end = nullptr;
+  const double mm = std::strtod(num.c_str(), &end);
+  if (!ok_name || num.empty() || *end || !std::isfinite(mm)) {
+    throw std::invalid_argument(
+        fmt::format("--endstop {}: expected AXIS-SIDE=MM with AXIS x, y or z and SIDE min or max "
+                    "(e.g. x-max=200)",
+                    v));
+  }
+  Endstop e;
+  e.axis = static_cast<int>(axes.find(sw[0]));
+  e.max_side = sw.substr(1) == "-max";
+  e.position =
+      static_cast<int64_t>(std::llround(mm * cfg.steps_per_mm[static_cast<size_t>(e.axis)]));
+  return e;
+}
+
+uint16_t parse_limit_switches_option(std::string_view value) {
+  uint16_t bits = 0;
+  size_t b = 0;
+  while (b < value.size()) {
+    size_t e = value.find(',', b);
+    if (e == std::string_view::npos) e = value.size();
+    const std::string sw(value.substr(b, e - b));
+    const std::string axes = "xyz";
+    if (sw.size() != 5 || axes.find(sw[0]) == std::string::npos ||
+        (sw.substr(1) != "-min" && sw.substr(1) != "-max")) {
+      throw std::invalid_argument(fmt::format(
+          "--limit-switches {}: '{}' is not a switch (x-min, x-max, y-min, y-max, z-min, z-max)",
+          value, sw));
+    }
+    bits = static_cast<uint16_t>(bits | (1u << (axes.find(sw[0]) + (sw[2] == 'a' ? 8 : 0))));
+    b = e + 1;
+  }
+  return bits;
+}
+
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud) {
   // SIGINT/SIGTERM (stop) and SIGUSR1/SIGUSR2 (e-stop) are taken with sigwait() here; block them
   // before the board thread starts so that it inherits the mask and they always reach this thread.
@@ -134,6 +179,7 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
   sigaddset(&set, SIGTERM);
   sigaddset(&set, SIGUSR1);
   sigaddset(&set, SIGUSR2);
+  sigaddset(&set, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   board.start();
   fmt::print("simulated board ({}) on {} ({} baud)\n", board.model(), board.path(), baud);
@@ -141,12 +187,21 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
   if (args.line_faults.any()) fmt::print("line faults: {}\n", args.line_faults.describe());
   fmt::print(
       "Ctrl-C (SIGINT) or SIGTERM stops it; SIGUSR1 presses the e-stop, SIGUSR2 releases it "
-      "(kill -USR1 {})\n",
+      "(kill -USR1 {}); SIGHUP pulls the carriages off their endstops\n",
       static_cast<long>(getpid()));
   std::fflush(stdout);
   int sig = 0;
   for (;;) {
     sigwait(&set, &sig);
+    if (sig == SIGHUP) {
+      // The operator pulls the carriages off their simulated endstops
+      // (SimBoard::pull_off_endstops).
+      auto* sb = dynamic_cast<SimBoard*>(&board);
+      const int n = sb ? sb->pull_off_endstops() : 0;
+      fmt::print("SIGHUP: {} endstop(s) released by hand at board cycle {}\n", n, board.cycle());
+      std::fflush(stdout);
+      continue;
+    }
     if (sig != SIGUSR1 && sig != SIGUSR2) break;
     // The e-stop pin (cnc_core's estop input) follows the signal until the next one; the core
     // synchronizes and latches it on its next clocks (docs/protocol.md "The simulated board").

@@ -117,6 +117,14 @@ struct SimBoard::Model {
   uint64_t bytes_to_pty = 0;  // written to the pty master
   uint64_t trace_time = 0;
   ThermalWorld heat;
+  // Limit switches: pins as the core's limit_state orders them (bit a min, bit 4 + a max).
+  uint8_t lim_manual = 0;   // set_limit()
+  uint8_t lim_endstop = 0;  // endstops
+  uint8_t lim_pins = 0;     // manual | endstop: what the pins carry
+  uint8_t lim_wired = 0;    // the switches LIMIT_ENABLE wires
+  std::vector<Endstop> endstops;
+  std::array<int64_t, models::kBoardAxes> steps{};  // STEP rising edges counted (endstops)
+  std::vector<LimitEvent> lim_events;
 
   Model(double clk_hz, double baud, size_t reserve, const LineFaults& faults,
         const std::array<double, 2>& initial_c)
@@ -130,6 +138,44 @@ struct SimBoard::Model {
 };
 
 namespace {
+
+constexpr uint8_t pin_bit(int axis, bool max_side) {
+  return static_cast<uint8_t>(1u << (axis + (max_side ? 4 : 0)));
+}
+
+// Drives the limit pins with manual | endstop; records the changes, sampled on edge `edge`.
+template <class M>
+void drive_limits(M& m, SimBoard::Model& s, uint64_t edge, bool by_endstop) {
+  const uint8_t pins = static_cast<uint8_t>(s.lim_manual | s.lim_endstop);
+  uint8_t diff = static_cast<uint8_t>(pins ^ s.lim_pins);
+  while (diff) {
+    const int b = __builtin_ctz(diff);
+    diff = static_cast<uint8_t>(diff & (diff - 1));
+    s.lim_events.push_back({edge, b & 3, b >= 4, ((pins >> b) & 1u) != 0, by_endstop});
+  }
+  s.lim_pins = pins;
+  m.limit_min = static_cast<uint8_t>(pins & 0xfu);
+  m.limit_max = static_cast<uint8_t>(pins >> 4);
+}
+
+// After STEP edges: the step counts and the endstops they press or release.
+template <class M>
+void update_endstops(M& m, SimBoard::Model& s, uint32_t sig, uint32_t prev, uint64_t cyc) {
+  const uint32_t rise = sig & ~prev & 0xfu;
+  if (!rise) return;
+  for (int a = 0; a < models::kBoardAxes; ++a) {
+    if ((rise >> a) & 1u) s.steps[static_cast<size_t>(a)] += ((prev >> (4 + a)) & 1u) ? 1 : -1;
+  }
+  uint8_t e = 0;
+  for (const Endstop& es : s.endstops) {
+    const int64_t p = s.steps[static_cast<size_t>(es.axis)];
+    if (es.max_side ? p >= es.position : p <= es.position) e |= pin_bit(es.axis, es.max_side);
+  }
+  if (e != s.lim_endstop) {
+    s.lim_endstop = e;
+    drive_limits(m, s, cyc + 1, true);
+  }
+}
 
 [[noreturn]] void sys_fail(const std::string& what) {
   throw BoardError(fmt::format("simulated board: {}: {}", what, std::strerror(errno)));
@@ -189,6 +235,7 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
         diff &= diff - 1;
         s.rec.add(cyc, static_cast<uint8_t>(b), static_cast<uint8_t>((sig >> b) & 1u));
       }
+      if (!s.endstops.empty()) update_endstops(m, s, sig, prev, cyc);
       prev = sig;
     }
     if (m.seg_done) [[unlikely]]
@@ -204,7 +251,7 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
     // rx_partial: a packet or frame was cut short; the clock runs on so that the decoder's 100 ms
     // watchdog drops it (and NAKs a v2 frame with TIMEOUT) as on the real board.
     if (m.busy || m.step || m.rx_partial || !drv_idle || tx == 0 || mon.busy() ||
-        cyc < s.tx_stop_end || h.active) {
+        cyc < s.tx_stop_end || h.active || ((s.lim_pins ^ m.limit_state) & s.lim_wired)) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;
@@ -223,6 +270,8 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
   m.rx = 1;
   m.cfg_wr = 0;
   m.estop = 0;
+  m.limit_min = 0;
+  m.limit_max = 0;
   m.adc_sdo = 0;
   m.clk = 0;
   m.eval();
@@ -312,6 +361,18 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
   model_ = std::make_unique<Model>(opt_.clk_hz, opt_.baud, opt_.reserve_edges, opt_.line_faults,
                                    opt_.initial_c);
   model_->sig_mask = 0x1ff;
+  model_->lim_wired =
+      static_cast<uint8_t>((kLimitEnable & 0xfu) | (((kLimitEnable >> 16) & 0xfu) << 4));
+  for (const Endstop& e : opt_.endstops) {
+    if (e.axis < 0 || e.axis >= models::kBoardAxes ||
+        !((kLimitSwitches >> (e.axis + (e.max_side ? 8 : 0))) & 1u)) {
+      throw BoardError(fmt::format(
+          "simulated board: endstop on {}: no such limit switch (the Verilated board wires X, Y "
+          "and Z min and max)",
+          limit_switch_name(e.axis, e.max_side)));
+    }
+  }
+  model_->endstops = opt_.endstops;
   if (opt_.record_tx) model_->sig_mask |= 1u << models::kTx;
   if (opt_.record_rx) model_->sig_mask |= 1u << models::kRx;
   if (!opt_.fst_path.empty()) {
@@ -330,6 +391,19 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
   }
   open_pty();
   reset_and_configure();
+  // Endstops the axes already rest on (step counts 0) are pressed from the start.
+  uint8_t e = 0;
+  for (const Endstop& es : opt_.endstops) {
+    if (es.max_side ? es.position <= 0 : es.position >= 0) e |= pin_bit(es.axis, es.max_side);
+  }
+  if (e) {
+    model_->lim_endstop = e;
+    if (model_->core)
+      drive_limits(*model_->core, *model_, 1, true);
+    else
+      drive_limits(*model_->core_trace, *model_, 1, true);
+    model_->never_active = false;
+  }
 }
 
 SimBoard::~SimBoard() {
@@ -731,6 +805,79 @@ void SimBoard::set_estop(bool pressed) {
   OtherThreadLock l(*this);
   if (model_->core) model_->core->estop = pressed;
   if (model_->core_trace) model_->core_trace->estop = pressed;
+}
+
+}  // namespace fpgacnc::simboard
+
+namespace fpgacnc::simboard {
+
+// ---- Limit switches ----
+
+std::string limit_switch_name(int axis, bool max_side) {
+  static const char* kAxes[] = {"X", "Y", "Z", "A"};
+  const std::string a = axis >= 0 && axis < 4 ? kAxes[axis] : fmt::format("axis {}", axis);
+  return a + (max_side ? " max" : " min");
+}
+
+uint64_t SimBoard::set_limit(int axis, bool max_side, bool pressed) {
+  if (axis < 0 || axis >= models::kBoardAxes ||
+      !((kLimitSwitches >> (axis + (max_side ? 8 : 0))) & 1u)) {
+    throw BoardError(fmt::format(
+        "simulated board: no {} limit switch (the Verilated board wires X, Y and Z min and max)",
+        limit_switch_name(axis, max_side)));
+  }
+  uint64_t edge;
+  {
+    OtherThreadLock l(*this);
+    Model& s = *model_;
+    const uint8_t bit = pin_bit(axis, max_side);
+    s.lim_manual = static_cast<uint8_t>(pressed ? (s.lim_manual | bit) : (s.lim_manual & ~bit));
+    edge = s.cycle + 1;
+    if (s.core)
+      drive_limits(*s.core, s, edge, false);
+    else
+      drive_limits(*s.core_trace, s, edge, false);
+    s.never_active = false;
+    s.last_active = s.cycle;  // the debounce filter runs from here (see the file comment)
+  }
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  return edge;
+}
+
+int SimBoard::pull_off_endstops() {
+  int released = 0;
+  {
+    OtherThreadLock l(*this);
+    Model& s = *model_;
+    for (const Endstop& es : s.endstops) {
+      if (!(s.lim_endstop & pin_bit(es.axis, es.max_side))) continue;
+      s.steps[static_cast<size_t>(es.axis)] = es.position + (es.max_side ? -1 : 1);
+      s.lim_endstop = static_cast<uint8_t>(s.lim_endstop & ~pin_bit(es.axis, es.max_side));
+      ++released;
+    }
+    if (!released) return 0;
+    if (s.core)
+      drive_limits(*s.core, s, s.cycle + 1, true);
+    else
+      drive_limits(*s.core_trace, s, s.cycle + 1, true);
+    s.never_active = false;
+    s.last_active = s.cycle;
+  }
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  return released;
+}
+
+std::vector<LimitEvent> SimBoard::limit_events() const {
+  OtherThreadLock l(*this);
+  return model_->lim_events;
+}
+
+uint16_t SimBoard::limit_state() const {
+  OtherThreadLock l(*this);
+  const uint8_t v = model_->core ? model_->core->limit_state : model_->core_trace->limit_state;
+  return static_cast<uint16_t>((v & 0xfu) | ((v >> 4) << 8));
 }
 
 }  // namespace fpgacnc::simboard

@@ -113,7 +113,9 @@ Engine::Engine(link::Link& link, config::MachineConfig base, Settings settings, 
       base_(std::move(base)),
       cfg_(apply_settings(base_, settings)),
       settings_(std::move(settings)),
-      opt_(std::move(opt)) {}
+      opt_(std::move(opt)) {
+  if (!opt_.limit_switches) settings_.values[21] = 0.0;  // no switches: no hard limits
+}
 
 Engine::~Engine() = default;
 
@@ -183,6 +185,11 @@ void Engine::say(std::string_view line) {
 void Engine::banner() {
   out_ += "\r\n";
   say(kBanner);
+  // grbl's start-up check with hard limits: a switch held at reset keeps the alarm.
+  if (session_->last_status().switches) {
+    alarm_ = true;
+    say("[MSG:Check Limits]");
+  }
   if (alarm_) {
     say("[MSG:'$H'|'$X' to unlock]");
     return;
@@ -224,6 +231,7 @@ void Engine::receive(std::string_view bytes) {
 }
 
 bool Engine::motion_pending() const {
+  if (limit_alarm_) return false;  // the board stopped and flushed everything
   return (la_ && la_->window_size() > 0) ||
          (session_ && session_->fifo_done() < session_->fifo_pushed());
 }
@@ -255,7 +263,7 @@ bool Engine::line_ready() const {
 }
 
 bool Engine::can_take_line() const {
-  return !resetting_ && !critical_ && !held_ && !pause_pending_ &&
+  return !resetting_ && !critical_ && !held_ && !pause_pending_ && !limit_alarm_ &&
          session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
 }
 
@@ -276,7 +284,11 @@ void Engine::step(milliseconds wait) {
     session_->request_status();
   }
   const bool waiting = motion_pending() || report_asked_ || resetting_;
-  session_->poll(waiting ? wait : milliseconds(0));
+  try {
+    session_->poll(waiting ? wait : milliseconds(0));
+  } catch (const link::Error&) {
+    on_session_error();
+  }
   if (report_asked_ && session_->status_answers() > report_answers_) {
     write_report();
     report_pending_ = report_asked_ = false;
@@ -497,6 +509,13 @@ void Engine::write_report() {
   double feed = 0.0, s = 0.0;
   if (st == State::kRun && !fifo_info_.empty()) std::tie(feed, s) = fifo_info_.front();
   r += fmt::format("|FS:{:.0f},{:.0f}", feed / div, s);
+  // Pn: the limit pins asserted now (grbl 1.1: X, Y, Z letters; omitted when none).
+  // (STATUS reports only the switches the board wires.)
+  if (const uint16_t sw = session_->last_status().switches) {
+    r += "|Pn:";
+    for (int a = 0; a < 3; ++a)
+      if ((sw >> a) & 0x101u) r += "XYZ"[a];
+  }
   // WCO when it changed and every 10th report; Ov on the report after (grbl's refresh rule).
   const uint64_t n = report_count_++;
   if (wco_changed_ || n % 10 == 0) {
@@ -586,6 +605,9 @@ int Engine::system_command(const std::string& cmd) {
     return 0;
   }
   if (cmd == "$X") {
+    if (alarm_ && (session_->last_status().faults & v2::kFaultLimit)) {
+      if (int rc = clear_limit_alarm()) return rc;
+    }
     if (alarm_) {
       alarm_ = false;
       say("[MSG:Caution: Unlocked]");
@@ -631,7 +653,7 @@ int Engine::system_command(const std::string& cmd) {
     if (val.empty() || *end) return 2;
     if (int rc = need_idle()) return rc;
     Settings next = settings_;
-    if (int rc = set_value(next, std::stoi(num), v)) return rc;
+    if (int rc = set_value(next, std::stoi(num), v, opt_.limit_switches != 0)) return rc;
     settings_ = std::move(next);
     const plan::Steps4 pos = planner_->position();
     cfg_ = apply_settings(base_, settings_);
@@ -648,6 +670,43 @@ void Engine::save() {
   if (!opt_.settings_path.empty()) save_settings(opt_.settings_path, settings_);
 }
 
+void Engine::on_session_error() {
+  const auto& st = session_->last_status();
+  if (!(st.faults & v2::kFaultLimit)) throw;
+  session_->abandon();  // latched faults are no longer errors; nothing more is sent
+  if (alarm_) return;   // a FAULT_CLEAR refused while the switch is held: still in alarm
+  // grbl's hard-limit alarm: a critical alarm; lines wait until a soft reset.
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  alarm_ = limit_alarm_ = true;
+  held_ = pause_pending_ = false;
+  say("ALARM:1");
+  say("[MSG:Reset to continue]");
+}
+
+int Engine::clear_limit_alarm() {
+  new_session();  // its first frame is FAULT_CLEAR (V2Session::start)
+  const auto end = link_.now() + opt_.v2.answer_timeout;
+  try {
+    while (!session_->settled() && link_.now() < end) session_->poll(milliseconds(20));
+    const size_t answers = session_->status_answers();
+    while (session_->status_answers() == answers && link_.now() < end) {
+      session_->request_status();
+      session_->poll(milliseconds(20));
+    }
+  } catch (const link::Error&) {
+    on_session_error();
+  }
+  if (session_->last_status().faults & v2::kFaultLimit) {
+    say("[MSG:Check Limits]");
+    return 9;
+  }
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  rebuild_pipeline(pos);
+  return 0;
+}
+
 void Engine::soft_reset() {
   ++stats_.resets;
   if (critical_) {
@@ -656,6 +715,7 @@ void Engine::soft_reset() {
   }
   rx_.clear();  // grbl empties its receive buffer
   const bool moving = motion_pending() && !check_;
+  limit_alarm_ = false;  // a reset ends the critical alarm (the FAULT_CLEAR comes with it)
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   stats_.aborted += session_->abandon();
   if (moving) {

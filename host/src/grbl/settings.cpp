@@ -95,7 +95,7 @@ config::MachineConfig apply_settings(const config::MachineConfig& base, const Se
   return cfg;
 }
 
-int set_value(Settings& s, int number, double value) {
+int set_value(Settings& s, int number, double value, bool hard_limits) {
   auto it = s.values.find(number);
   if (it == s.values.end()) return 3;
   if (!std::isfinite(value)) return 2;
@@ -105,8 +105,10 @@ int set_value(Settings& s, int number, double value) {
     case 20:  // a flag in grbl: any non-zero value is on
       value = value != 0.0 ? 1.0 : 0.0;
       break;
-    case 21:  // hard limits and homing need limit inputs this controller does not have yet
-    case 22:
+    case 21:  // hard limits: only where the board has limit switches
+      if (value != 0.0 && !hard_limits) return 3;
+      break;
+    case 22:  // homing is not built yet
       if (value != 0.0) return 3;
       break;
     case 0:
@@ -169,7 +171,8 @@ std::optional<Settings> load_settings(const std::string& path, const Settings& d
       errno = 0;
       const double d = std::strtod(val.c_str(), &end);
       if (val.empty() || *end || errno) bad(fmt::format("'{}' is not a number", val));
-      const int rc = set_value(s, static_cast<int>(n), d);
+      // $21=1 is kept as stored; the engine lowers it where the board has no switches.
+      const int rc = set_value(s, static_cast<int>(n), d, true);
       if (rc) bad(fmt::format("${}={}: refused (grbl error:{})", n, val, rc));
     }
   }

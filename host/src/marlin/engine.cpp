@@ -246,7 +246,25 @@ void Engine::step(milliseconds wait) {
     session_->request_status();
     auto_at_ = now + auto_report_;
   }
-  session_->poll(busy() ? wait : milliseconds(0));
+  try {
+    session_->poll(busy() ? wait : milliseconds(0));
+  } catch (const link::Error&) {
+    // A hard limit while moving: the board stopped every axis and flushed its queue. Reported as
+    // Marlin reports an endstop hit, then halted as after kill() (restart to go on).
+    const auto& st = session_->last_status();
+    if (!(st.faults & protocol::v2::kFaultLimit)) throw;
+    const size_t a = st.limit & 0x0fu;
+    const double mm = a < st.position.size() && a < 4
+                          ? static_cast<double>(st.position[a]) / cfg_.steps_per_mm[a]
+                          : 0.0;
+    say(fmt::format("echo:endstops hit:  {}:{:.2f}", a < 4 ? "XYZE"[a] : '?', mm));
+    killed_ = true;
+    rx_.clear();
+    session_->abandon();
+    say(fmt::format("Error:Printer halted. kill() called! ({})",
+                    protocol::v2::describe_limits(st, session_->ident().n_axes)));
+    return;
+  }
   const size_t answers = session_->status_answers();
   if (auto_pending_ && answers > auto_answers_) {
     auto_pending_ = false;
@@ -262,6 +280,19 @@ void Engine::step(milliseconds wait) {
         if (after_ == After::kTemps) {
           ++stats_.reports;
           say("ok " + temps());
+        } else if (after_ == After::kEndstops) {
+          // Marlin's M119: the switches wired, from the filtered levels in STATUS.
+          say("Reporting endstop status");
+          const uint16_t sw = session_->last_status().switches;
+          for (int a = 0; a < 3; ++a) {
+            for (int side = 0; side < 2; ++side) {
+              const int bit = a + 8 * side;
+              if (!((opt_.limit_switches >> bit) & 1u)) continue;
+              say(fmt::format("{}_{}: {}", "xyz"[a], side ? "max" : "min",
+                              ((sw >> bit) & 1u) ? "TRIGGERED" : "open"));
+            }
+          }
+          say("ok");
         } else {
           const auto p = position_mm();
           const auto& st = session_->last_status();
@@ -328,6 +359,9 @@ void Engine::run_command(const std::string& cmd) {
       return;
     case 114:
       ask_status(After::kPosition);
+      return;
+    case 119:
+      ask_status(After::kEndstops);
       return;
     case 110:
       if (const auto n = word(cmd, 'N')) checker_.set_last_line(static_cast<long>(*n));

@@ -59,6 +59,10 @@ struct EngineOptions {
   // Unset: the frames already on the board run out (at most its FIFO depth) before the reset
   // completes.
   std::function<void()> estop_press, estop_release;
+  // The board's limit switches (bits as STATUS's switch u16: bit a min of axis a, bit 8 + a
+  // max), from the board model (simboard::Board::limit_switches): 0 = none. With switches, `$21=1`
+  // is accepted; a hard-limit alarm is reported whatever it says (docs/grbl.md).
+  uint16_t limit_switches = 0;
 };
 
 // Counters for tests and the exit summary.
@@ -125,6 +129,12 @@ class Engine {
   void push_fifo(const protocol::v2::Frame& f, int line, double feed, double s);
   void soft_reset();
   void continue_reset();
+  // The session threw: a hard-limit alarm on the board (ALARM:1 while running; quietly while
+  // already in alarm) is handled, anything else rethrown.
+  void on_session_error();
+  // `$X` while the board's limit alarm may be latched: FAULT_CLEAR through a new session;
+  // 0 when it cleared, 9 while the switch is still held.
+  int clear_limit_alarm();
   void write_report();
   void track_modal(const gcode::Block& b);
   std::array<double, 3> wco() const;
@@ -154,6 +164,8 @@ class Engine {
   // Soft-limit alarm (ALARM:2): no line is taken until a soft reset, which answers the refused
   // line's `ok` before the banner (grbl's critical event).
   bool critical_ = false;
+  bool limit_alarm_ =
+      false;  // ALARM:1 given: lines wait until a soft reset (grbl's critical alarm)
   bool check_ = false;
   bool sleep_ = false;
   bool pause_pending_ = false;  // M0/M1/M6 planned: Hold:0 once the board is at rest

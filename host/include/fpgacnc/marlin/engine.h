@@ -52,6 +52,9 @@ struct EngineOptions {
   // M112 on a board with an e-stop input (the Verilated simulated board). Unset: the session is
   // abandoned and the frames already on the board run out (at most its FIFO depth).
   std::function<void()> estop_press;
+  // The board's limit switches (bits as STATUS's switch u16: bit a min of axis a, bit 8 + a
+  // max; simboard::Board::limit_switches), listed by M119; 0 = none.
+  uint16_t limit_switches = 0;
 };
 
 struct EngineStats {
@@ -86,7 +89,7 @@ class Engine {
 
  private:
   enum class Wait { kNone, kStatus, kDrain, kHeat };
-  enum class After { kNone, kTemps, kPosition };
+  enum class After { kNone, kTemps, kPosition, kEndstops };
   bool line_ready() const;
   bool can_take_line() const;
   void take_line();

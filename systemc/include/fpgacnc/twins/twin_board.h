@@ -30,9 +30,10 @@
 // board is busy; no holds.
 //
 // No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
-// e-stop input (set_estop throws BoardError). The SystemC kernel runs in a thread of its own, one
-// per process, elaborated by the first TwinBoard; later TwinBoards run as further sessions in it
-// (one at a time, with the same clock, baud and watchdog).
+// e-stop input (set_estop throws BoardError), no limit switches (set_limit throws BoardError). The
+// SystemC kernel runs in a thread of its own, one per process, elaborated by the first TwinBoard;
+// later TwinBoards run as further sessions in it (one at a time, with the same clock, baud and
+// watchdog).
 #pragma once
 
 #include <array>
@@ -87,6 +88,9 @@ class TwinBoard : public simboard::Board {
   std::vector<models::Edge> edges() const override;
   std::array<int64_t, models::kBoardAxes> net_steps() const override;
   void set_estop(bool pressed) override;
+  // No limit switches are modelled: set_limit throws BoardError, limit_switches() is 0.
+  uint64_t set_limit(int axis, bool max_side, bool pressed) override;
+  uint16_t limit_switches() const override { return 0; }
   bool idle_for_host() const override;
   bool wait_quiet(std::chrono::milliseconds timeout) const override;
   // Published with the quiet state: while idle_for_host() is true they are current.

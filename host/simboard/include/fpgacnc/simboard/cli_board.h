@@ -48,11 +48,20 @@ std::span<const LineFaultOption> line_fault_options();
 // value (not a number, probability outside [0, 1], stall of 0 clocks).
 bool parse_line_fault_option(std::string_view name, std::string_view value, LineFaults& faults);
 
+// --endstop AXIS-SIDE=MM (x-max=200, z-min=-5): a simulated endstop of the Verilated board at MM
+// (steps from `cfg`'s steps/mm). Throws std::invalid_argument naming the option for a bad value.
+Endstop parse_endstop_option(std::string_view value, const config::MachineConfig& cfg);
+// --limit-switches x-min,x-max,...: the switches a real board wires (its LIMIT_ENABLE), as
+// STATUS's switch bits (bit a min of axis a, bit 8 + a max); "" = none. Throws
+// std::invalid_argument naming the option for an unknown name.
+uint16_t parse_limit_switches_option(std::string_view value);
+
 // `fpgacnc board`: starts `board` (not started yet) in its own thread, prints
 // "simulated board (MODEL) on /dev/pts/N (115200 baud)", serves any serial client until SIGINT
 // or SIGTERM, then prints its figures (and writes the edge list). SIGUSR1 presses the board's
 // e-stop input, SIGUSR2 releases it (Board::set_estop; a board without one prints why and goes
-// on). Returns the exit status.
+// on); SIGHUP pulls the carriages off their simulated endstops (SimBoard::pull_off_endstops).
+// Returns the exit status.
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud);
 // The figures of a board (cycles, machine time, clocks/s, bytes, edges, moves; line faults and
 // heaters for the Verilated board).

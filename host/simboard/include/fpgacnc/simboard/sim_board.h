@@ -55,6 +55,18 @@
 // host traffic), so temperatures evolve as on a real board; at ambient with the heaters off it is
 // quiet as before. Faults can be injected: a sensor open (the ADC reads the divider supply) or
 // short (0 V), a heater disconnected (its pin no longer heats), the e-stop input.
+//
+// Limit switches (docs/machine.md "Simulated board"). The Verilated core is built with the X, Y
+// and Z min and max switches wired (LIMIT_ENABLE = kLimitEnable, spec/protocol.toml
+// sim.simboard_limit_enable; the board's default filter and polarity: a pin high is a switch
+// pressed). Nothing drives them unless asked, so the board behaves as before. set_limit() presses
+// or releases one from outside; BoardOptions::endstops place simulated endstops at travel ends:
+// an endstop's pin is high while its axis's step count (the STEP rising edges counted at the pins)
+// is at or beyond its position (pull_off_endstops() moves a carriage off by hand). A pin changed
+// between clock chunks or after a STEP edge reaches the core's synchronizer on the next clock edge
+// (limit_events() records that edge, "p" in docs/machine.md "Timing"). While a wired switch's pin
+// differs from the core's filtered level the board counts as active (its clock runs through the
+// debounce filter without host traffic).
 #pragma once
 
 #include <array>
@@ -82,6 +94,27 @@ class BoardError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A simulated endstop: the switch (axis 0..3, min or max) is pressed while the axis's step count
+// is at or below (min) / at or above (max) `position` steps.
+struct Endstop {
+  int axis = 0;
+  bool max_side = false;
+  int64_t position = 0;
+};
+
+// A limit pin changed: `cycle` is the first clock edge that samples the new level (the pin
+// reaches the synchronizer on that edge).
+struct LimitEvent {
+  uint64_t cycle = 0;
+  int axis = 0;
+  bool max_side = false;
+  bool pressed = false;
+  bool endstop = false;  // by an endstop (else by set_limit)
+};
+
+// "X min", "Z max": a switch's name as STATUS messages and the CLI write it.
+std::string limit_switch_name(int axis, bool max_side);
+
 struct BoardOptions {
   // The Verilated model is built for 50 MHz and 115200 baud (cnc_core parameters): any other
   // value is rejected by the constructor with a BoardError.
@@ -98,6 +131,8 @@ struct BoardOptions {
   LineFaults line_faults;  // serial line fault injection (default: none)
   // Heaters: plant temperatures at reset (0 hot end, 1 bed), degC; ambient is 20 degC.
   std::array<double, 2> initial_c{20.0, 20.0};
+  // Simulated endstops at travel ends (see the file comment); SimBoard only.
+  std::vector<Endstop> endstops;
 };
 
 enum class SensorFault { kNone, kOpen, kShort };
@@ -157,6 +192,13 @@ class Board {
   virtual std::vector<models::Edge> edges() const = 0;  // sorted by (cycle, signal)
   virtual std::array<int64_t, models::kBoardAxes> net_steps() const = 0;
   virtual void set_estop(bool pressed) = 0;  // throws BoardError when the model has no e-stop
+  // Presses (or releases) the limit switch of `axis` (0..3) on its min or max side; returns the
+  // first clock edge that samples the new pin level. Throws BoardError when the model has no
+  // limit switches or that switch is not wired (limit_switches()).
+  virtual uint64_t set_limit(int axis, bool max_side, bool pressed) = 0;
+  // The switches wired, bits as STATUS's switch u16: bit a the min switch of axis a, bit 8 + a
+  // its max switch (0: none).
+  virtual uint16_t limit_switches() const = 0;
   // Nothing in flight and every answer byte already written to the pty: nothing more comes
   // until the host writes (bytes the host wrote that the board has not read yet count as
   // written only once stats().bytes_in counts them).
@@ -195,6 +237,11 @@ class SimBoard : public Board {
   static constexpr uint64_t kQuietCycles = 32;
   // Heater sample tick of the Verilated core (cnc_core SAMPLE_CLKS, see the file comment).
   static constexpr uint64_t kSampleClks = spec::kSimboardSampleClks;
+  // cnc_core LIMIT_ENABLE of the Verilated core (bit a min, bit 16 + a max) and the same
+  // switches as STATUS numbers them (bit a min, bit 8 + a max).
+  static constexpr uint32_t kLimitEnable = static_cast<uint32_t>(spec::kSimboardLimitEnable);
+  static constexpr uint16_t kLimitSwitches =
+      static_cast<uint16_t>((kLimitEnable & 0xffu) | (((kLimitEnable >> 16) & 0xffu) << 8));
 
   // Creates the pty and the model, resets the core and writes the step timing. Throws
   // BoardError.
@@ -270,6 +317,18 @@ class SimBoard : public Board {
   void inject_sensor(int channel, SensorFault f);
   void disconnect_heater(int channel, bool disconnected);
   void set_estop(bool pressed) override;
+
+  // ---- Limit switches ----
+  uint64_t set_limit(int axis, bool max_side, bool pressed) override;
+  uint16_t limit_switches() const override { return kLimitSwitches; }
+  std::vector<LimitEvent> limit_events() const;  // copy, in order
+  // The operator pulls every carriage that stands on one of its endstops back by hand to one
+  // step inside it (the counted carriage position moves, the core's position registers do not:
+  // they are not trusted after a trip anyway), so the endstop releases. Returns how many
+  // endstops were released.
+  int pull_off_endstops();
+  // The core's filtered switch levels now (bits as limit_switches()).
+  uint16_t limit_state() const;
 
   // Implementation detail (model, UART driver/monitor, recorder), defined in sim_board.cpp.
   struct Model;
