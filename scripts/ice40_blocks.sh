@@ -43,7 +43,7 @@ declare -A BLK=(
   # the 775-bit entry of the full 2-axis build needs 49 RAM blocks of the HX8K's 32: 512 bits
   [segment_fifo]="rtl/segment_fifo.v|-set WIDTH 512 -set DEPTH 64"
   # with arc_dda (measured alone above) the executor does not fit: ARCS 0
-  [segment_executor]="rtl/segment_executor.v rtl/dda_linear.v rtl/dda_profile.v rtl/profile_gen.v rtl/step_pulse.v rtl/arc_dda.v|-set N_AXES 2 -set ARCS 0"
+  [segment_executor]="rtl/segment_executor.v rtl/axis_channel.v rtl/dir_sequencer.v rtl/dda_linear.v rtl/dda_profile.v rtl/profile_gen.v rtl/step_pulse.v rtl/arc_dda.v|-set N_AXES 2 -set ARCS 0"
 )
 # segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
 blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder

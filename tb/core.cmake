@@ -1,7 +1,8 @@
 # Verilated models of the core blocks, shared by the benches, the simulated board and the
 # benchmarks.
 fpgacnc_verilated(vexec TOP segment_executor
-                  SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/dda_linear.v
+                  SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/axis_channel.v
+                          ${FPGACNC_RTL_DIR}/dir_sequencer.v ${FPGACNC_RTL_DIR}/dda_linear.v
                           ${FPGACNC_RTL_DIR}/profile_gen.v ${FPGACNC_RTL_DIR}/dda_profile.v
                           ${FPGACNC_RTL_DIR}/arc_dda.v
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
