@@ -6,7 +6,9 @@ fpgacnc_verilated(vexec TOP segment_executor
                           ${FPGACNC_RTL_DIR}/profile_gen.v ${FPGACNC_RTL_DIR}/dda_profile.v
                           ${FPGACNC_RTL_DIR}/arc_dda.v
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
-fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
+fpgacnc_verilated(vprep TOP segment_prep
+                  SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v ${FPGACNC_RTL_DIR}/prep_profile.v
+                          ${FPGACNC_RTL_DIR}/prep_arc.v ${FPGACNC_RTL_DIR}/prep_dir_tracker.v)
 fpgacnc_verilated(vframe TOP frame_decoder
                   SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/frame_fields.v
                           ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
