@@ -2,6 +2,10 @@
 // LINE), with a trapezoidal speed profile (kind PROFILE) or along an arc (kind ARC); DIR hold /
 // setup sequencing, laser, positions, machine outputs (docs/timing.md "Queued segments",
 // "Profiled segments", "ARC segments"; docs/architecture.md "Code flow in the device").
+// This module sequences the segments (state IDLE / HOLD / SETUP / RUN / ZERO, the tick counter,
+// laser, seg_start / seg_done), routes an arc's steps by plane and applies OUTPUT entries; the DIR
+// targets, pending DIR writes and the DIR setup / post-abort waits are rtl/dir_sequencer.v, each
+// axis's DDAs, step_pulse and position rtl/axis_channel.v.
 //
 // Segment kinds (s_axis_kind, held in kind_reg for the running segment; each kind has its
 // generator, its tick gate and its end condition in run_last):

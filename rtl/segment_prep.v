@@ -1,4 +1,7 @@
 // segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
+// This module is the state machine that sequences the preparation, the entry decode and the LINE /
+// v1 arithmetic (divider, clamp, multiplier, T - n); the LINE_PROFILE products are rtl/prep_profile.v,
+// the ARC arithmetic rtl/prep_arc.v, the DIR tracking and dir_fast rtl/prep_dir_tracker.v.
 //
 // Input (s_axis_*): one FIFO entry, width ENTRY_W = `FPGACNC_ENTRY_W + 32*N_AXES (839 for 4 axes),
 //   { arc_raw[487:0], arc[0], D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
@@ -37,7 +40,7 @@
 // NUMERATORS are applied only while the executor is idle (exec_idle) and no prepared segment waits,
 // so they never change the timing of a move that is queued or running; init_applied strobes for
 // one clock with init_v2 = the entry's v2 bit.
-// Direction tracking: prep keeps, per axis, the DIR level the executor will have when the segment
+// Direction tracking (prep_dir_tracker): prep keeps, per axis, the DIR level the executor will have when the segment
 // being prepared starts (after reset 0 = DIR low; updated for the moving axes of every prepared
 // segment). m_axis_dir_fast = 1 iff every moving axis that reverses has
 // P >= max(DIR hold, 1) + max(DIR setup, 1); the executor may then start the segment with no gap
@@ -49,14 +52,14 @@
 //   LINE_PROFILE    : 25 + N_AXES  (MAX N_AXES - 1, PMUL 25, PINIT 1)
 //   ARC             : 80            (AMUL 32, ADIV 47, AFIX 1)
 // The next entry is accepted on the edge after the executor takes the prepared segment.
-// PROFILE arithmetic (m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
+// PROFILE arithmetic (prep_profile; m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
 // exact products V_entry*n_a, V_cruise*n_a, V_exit*n_a (71 bits) and A*n_a (56 bits) by a
 // shift-add multiplier over the 24 bits of n_a (all axes and products in parallel: 4*N_AXES
 // adders of at most 71 bits); vcma = V_cruise - A, vxpa = V_exit + A; and the first master update
 // (profile_gen): U(1) = V_entry, V(1) and op(1) from V(0) = V_entry with "decelerating" = (D == 0)
 // (U(1) < 1 step). m_axis_total = 0, m_axis_period = 0, m_axis_dir_fast = 0 (a reversing axis
 // always waits DIR hold/setup before a profiled segment), m_axis_tmn = 0.
-// ARC arithmetic (m_axis_kind = 2; m_axis_arc = arc_dda's load inputs, LSB first: ccw 1, I, J,
+// ARC arithmetic (prep_arc; m_axis_kind = 2; m_axis_arc = arc_dda's load inputs, LSB first: ccw 1, I, J,
 // DX, DY 24 each, DZ 32, N_RAMP 24, dt_q 48, dt_r 24, C_TOTAL 48, V_entry, V_cruise, V_exit 64
 // each, A 48, D 48, V_entry*|DZ|, V_cruise*|DZ|, V_exit*|DZ|, A*|DZ| 96 each; 945 bits): shift-add
 // squares of |x0|, |y0|, |x1|, |y1| (22 bits each, 4 adders of 44 bits) and the Z products (31 bits
