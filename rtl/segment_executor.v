@@ -2,6 +2,10 @@
 // LINE), with a trapezoidal speed profile (kind PROFILE) or along an arc (kind ARC); DIR hold /
 // setup sequencing, laser, positions, machine outputs (docs/timing.md "Queued segments",
 // "Profiled segments", "ARC segments"; docs/architecture.md "Code flow in the device").
+// This module sequences the segments (state IDLE / HOLD / SETUP / RUN / ZERO, the tick counter,
+// laser, seg_start / seg_done), routes an arc's steps by plane and applies OUTPUT entries; the DIR
+// targets, pending DIR writes and the DIR setup / post-abort waits are rtl/dir_sequencer.v, each
+// axis's DDAs, step_pulse and position rtl/axis_channel.v.
 //
 // Segment kinds (s_axis_kind, held in kind_reg for the running segment; each kind has its
 // generator, its tick gate and its end condition in run_last):
@@ -50,7 +54,7 @@
 // the last tick; the segment ends on edge R + T.
 //
 // Accept edge A (s_axis_tvalid && s_axis_tready). A moving axis "reverses" when its direction
-// differs from the DIR level the executor has written or will write (dir_tgt_reg).
+// differs from the DIR level the executor has written or will write (dir_sequencer's dir_tgt).
 //   - T = 0: completes at once. From idle: seg_done high after A, idle again (a next segment can
 //     be accepted on A + 1). Accepted during a last tick (A = R + T of the running one, whose
 //     seg_done is high after A): state ZERO for one clock, its seg_done high after A + 1, idle
@@ -170,53 +174,48 @@ module segment_executor #(
   localparam [2:0] S_IDLE = 3'd0, S_HOLD = 3'd1, S_SETUP = 3'd2, S_RUN = 3'd3, S_ZERO = 3'd4;
   localparam [1:0] K_LINE = 2'd0, K_PROFILE = 2'd1, K_ARC = 2'd2;
 
+  generate
+    if (PROFILES != 0 && PROFILES != 1) begin : g_bad_profiles
+      segment_executor_illegal_PROFILES_not_0_or_1 u_err ();
+    end
+    if (ARCS != 0 && ARCS != 1) begin : g_bad_arcs
+      segment_executor_illegal_ARCS_not_0_or_1 u_err ();
+    end
+    if (ARCS != 0 && N_AXES < 2) begin : g_bad_arc_axes
+      segment_executor_illegal_ARCS_need_N_AXES_2 u_err ();
+    end
+    if (OUTPUTS != 0 && OUTPUTS != 1) begin : g_bad_outputs
+      segment_executor_illegal_OUTPUTS_not_0_or_1 u_err ();
+    end
+  endgenerate
+
   reg [2:0] state_reg;
   reg [1:0] code_reg;
   reg [1:0] kind_reg;
   reg [7:0] power_reg;
   reg v2_reg;
-  reg [N_AXES-1:0] dir_tgt_reg;  // DIR level written or pending per axis
-  reg [N_AXES-1:0] pend_reg;  // DIR write pending
-  reg [15:0] setup_cnt_reg;
-  reg [15:0] settle_reg;  // after an abort: clocks before a segment is accepted from IDLE again
-  reg [15:0] setup_max_reg;  // the largest DIR setup setting of all axes (registered)
-  // The largest setting, one compare deep: every pair of axes compared in parallel, the axis that
-  // is >= every lower-numbered axis and > every higher-numbered one wins (exactly one), an AND-OR
-  // selects it (a compare chain over the axes was the iCE40 critical path).
-  reg [15:0] setup_max_w;
-  reg [N_AXES-1:0] sm_win;
-  reg sm_zero;
-  integer sm_i, sm_j;
-  always @(*) begin
-    sm_win = {N_AXES{1'b1}};
-    sm_zero = 1'b1;
-    for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1) begin
-      for (sm_j = 0; sm_j < N_AXES; sm_j = sm_j + 1) begin
-        if (sm_j < sm_i && !(cfg_dir_setup[16*sm_i+:16] > cfg_dir_setup[16*sm_j+:16]))
-          sm_win[sm_i] = 1'b0;
-        if (sm_j > sm_i && !(cfg_dir_setup[16*sm_i+:16] >= cfg_dir_setup[16*sm_j+:16]))
-          sm_win[sm_i] = 1'b0;
-      end
-      if (cfg_dir_setup[16*sm_i+:16] != 16'd0) sm_zero = 1'b0;
-    end
-    setup_max_w = 16'd0;
-    for (sm_i = 0; sm_i < N_AXES; sm_i = sm_i + 1)
-      setup_max_w = setup_max_w | (cfg_dir_setup[16*sm_i+:16] & {16{sm_win[sm_i]}});
-  end
-  always @(posedge clk) setup_max_reg <= sm_zero ? 16'd1 : setup_max_w;
-  reg [N_AXES-1:0] setup_axes_reg;  // axes whose DIR was written on leaving HOLD
   reg [63:0] left_reg;  // ticks left including the current one
   reg last_reg;  // the current tick is the last (left_reg == 1)
   reg laser_reg;
   reg seg_start_reg;
   reg seg_done_reg;
   reg seg_done_v2_reg;
-  reg [32*N_AXES-1:0] pos_reg;
 
-  wire [N_AXES-1:0] dda_step, prof_step, pulse_idle, pulse_hold_ok, pulse_violation;
+  wire [N_AXES-1:0] pulse_idle, pulse_hold_ok, pulse_violation;
   wire [N_AXES-1:0] moving;
   wire prof_last;
   wire [1:0] prof_op;
+
+`ifdef FORMAL
+  wire [N_AXES-1:0] f_setup_axes;  // the DIR sequencer's registers, for the invariants below
+  wire [15:0] f_setup_cnt, f_settle, f_setup_max;
+`endif
+  // the DIR sequencer's outputs (rtl/dir_sequencer.v)
+  wire [N_AXES-1:0] dir_tgt;  // DIR level written or pending per axis
+  wire [N_AXES-1:0] rev;  // moving axes of the input segment that reverse
+  wire [N_AXES-1:0] pend;  // DIR write pending
+  wire [N_AXES-1:0] dir_wr;
+  wire hold_clear, setup_ok, settled, arc_dir_viol;
 
   wire tick = (state_reg == S_RUN);
   wire line_tick = tick && (kind_reg == K_LINE);
@@ -231,35 +230,20 @@ module segment_executor #(
   reg arc_end_reg;
   wire run_last = tick && ((kind_reg == K_PROFILE) ? prof_last :
                            (kind_reg == K_ARC) ? arc_end_reg : last_reg);
-  wire ready = !abort && (((state_reg == S_IDLE) && (settle_reg == 16'd0)) || run_last);
+  wire ready = !abort && (((state_reg == S_IDLE) && settled) || run_last);
   wire accept = ready && s_axis_tvalid;
   wire prof_in = (PROFILES != 0) && (s_axis_kind == K_PROFILE);
   wire arc_in = (ARCS != 0) && (s_axis_kind == K_ARC);
-  wire [N_AXES-1:0] rev = (s_axis_dir ^ dir_tgt_reg) & moving;
   wire zero_len = !prof_in && !arc_in && (s_axis_total == 64'd0);
   wire cutting = (s_axis_code != 2'd0) && (s_axis_power != 8'd0);
-  wire [N_AXES-1:0] arc_ann;  // ARC: the next X / Y move's direction differs from dir_tgt_reg
+  wire [N_AXES-1:0] arc_ann;  // ARC: the next X / Y move's direction differs from dir_tgt
   wire [N_AXES-1:0] arc_req;  // ARC: step requests of arc_dda
-  // an arc step request (registered in arc_dda, not yet seen by step_pulse's hold_ok) counts as a
-  // STEP rise: no DIR write of that axis in its clock (an in-arc reversal at a quadrant point)
-  wire [N_AXES-1:0] hold_ok = pulse_hold_ok & ~arc_req;
-  wire hold_clear = ((pend_reg & ~hold_ok) == {N_AXES{1'b0}});
-  // DIR writes: in HOLD all pending axes together once every hold has elapsed; otherwise (a write
-  // pending during RUN) each axis as soon as its own hold has elapsed.
-  wire [N_AXES-1:0] dir_wr = {N_AXES{!abort}} & ((state_reg == S_HOLD) ? (pend_reg & {N_AXES{hold_clear}})
-                                                                       : (pend_reg & hold_ok));
   // ARC: X / Y reverse inside the arc (at the quadrant points). arc_dda announces the direction of
   // the next X / Y move from the second clock of the move (at least 3 clocks before it can fire);
-  // when it differs from dir_tgt_reg a DIR write becomes pending and is done as soon as the axis's
-  // DIR hold has elapsed (dir_wr above). A STEP of the arc whose direction is not on the DIR pin
+  // when it differs from dir_tgt a DIR write becomes pending and is done as soon as the axis's
+  // DIR hold has elapsed (dir_sequencer). A STEP of the arc whose direction is not on the DIR pin
   // yet, or that comes less than DIR setup after the DIR change, is a timing violation (reported,
   // not delayed; the host keeps arcs slow enough near the quadrant points, docs/protocol.md).
-
-
-  // SETUP ends when the clocks since the DIR write (setup_cnt_reg, 1 in the first SETUP clock)
-  // reach the DIR setup of every axis written on leaving HOLD: one compare per axis in parallel
-  // (the run starts on edge D + max(largest setup, 1)).
-  wire [N_AXES-1:0] step_req;
 
   generate
     if (PROFILES != 0) begin : g_prof
@@ -287,9 +271,7 @@ module segment_executor #(
       // the profile fields are not used without profiles
       wire unused_prof = &{1'b0, s_axis_prof_u1, s_axis_prof_v1, s_axis_prof_op1,
                            s_axis_prof_accel, s_axis_prof_vcruise, s_axis_prof_vexit,
-                           s_axis_prof_vcma, s_axis_prof_vxpa, s_axis_prof_decel_at,
-                           s_axis_prof_n_dom, s_axis_prof_v0, s_axis_prof_vc, s_axis_prof_vx,
-                           s_axis_prof_acc, prof_op, prof_tick};
+                           s_axis_prof_vcma, s_axis_prof_vxpa, s_axis_prof_decel_at};
     end
   endgenerate
 
@@ -299,8 +281,6 @@ module segment_executor #(
   wire arc_busy_nc, arc_zd_nc, arc_last_nc, arc_errs_nc, arc_late_nc;
   /* verilator lint_on UNUSEDSIGNAL */
   wire [1:0] arc_sd;  // the direction of the arc's X / Y step on arc_req (1: +)
-  /* verilator lint_off UNUSEDSIGNAL */
-  /* verilator lint_on UNUSEDSIGNAL */
   generate
     if (ARCS != 0) begin : g_arc
     arc_dda u_arc (
@@ -382,102 +362,93 @@ module segment_executor #(
   assign arc_req = (u_mask_reg & {N_AXES{arc_xs}}) | (v_mask_reg & {N_AXES{arc_ys}}) |
                    (h_mask_reg & {N_AXES{arc_zs}});
   assign arc_ann = {N_AXES{arc_tick && arc_dvalid}} &
-                   ((u_mask_reg & ({N_AXES{arc_nx}} ^ dir_tgt_reg)) |
-                    (v_mask_reg & ({N_AXES{arc_ny}} ^ dir_tgt_reg)));
-  localparam integer NSW = (N_AXES >= 3) ? 3 : 2;  // axes an arc's u / v can be on
-  reg [16*NSW-1:0] since_wr_reg;  // clocks since the last DIR write per axis (saturating)
-  reg arc_dir_viol_reg;
+                   ((u_mask_reg & ({N_AXES{arc_nx}} ^ dir_tgt)) |
+                    (v_mask_reg & ({N_AXES{arc_ny}} ^ dir_tgt)));
   reg arc_err_reg;
 
-  generate
-    if (LEAN_DDA != 0) begin : g_no_tmn
-      wire unused_tmn = &{1'b0, s_axis_tmn};  // the DDAs compute T - n from s_axis_total
-    end
-  endgenerate
+  dir_sequencer #(
+      .N_AXES(N_AXES)
+  ) u_dirseq (
+      .clk          (clk),
+      .rst          (rst),
+      .abort        (abort),
+      .accept       (accept),
+      .seg_dir      (s_axis_dir),
+      .moving       (moving),
+      .in_hold      (state_reg == S_HOLD),
+      .in_setup     (state_reg == S_SETUP),
+      .arc_ann      (arc_ann),
+      .arc_req      (arc_req),
+      .arc_uv       (arc_uv),
+      .arc_sdir     (arc_sdir),
+      .pulse_hold_ok(pulse_hold_ok),
+      .dir          (dir),
+      .cfg_dir_setup(cfg_dir_setup),
+      .dir_tgt      (dir_tgt),
+      .rev          (rev),
+      .pend         (pend),
+      .dir_wr       (dir_wr),
+      .hold_clear   (hold_clear),
+      .setup_ok     (setup_ok),
+      .settled      (settled),
+      .arc_dir_viol (arc_dir_viol)
+`ifdef FORMAL
+      ,
+      .f_setup_axes (f_setup_axes),
+      .f_setup_cnt  (f_setup_cnt),
+      .f_settle     (f_settle),
+      .f_setup_max  (f_setup_max)
+`endif
+  );
 
+  // one channel per axis: its DDAs, STEP / DIR pins and position (rtl/axis_channel.v)
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis
-      assign moving[a] = (s_axis_steps[32*a+:32] != 32'd0);
-      assign step_want[a] = dda_step[a] || prof_step[a] || arc_req[a];
-      assign step_req[a]  = step_want[a] && !abort && !step_block[a];
-
-      dda_linear #(
-          .TMN_FROM_TOTAL(LEAN_DDA),
-          .STEP_GUARD    ((LEAN_DDA != 0) ? 0 : 1)
-      ) u_dda (
-          .clk  (clk),
-          .rst  (rst),
-          .load (accept),
-          .steps(s_axis_steps[32*a+:32]),
-          .tmn  (s_axis_tmn[64*a+:64]),
-          .total(s_axis_total),
-          .tick (line_tick),
-          .step (dda_step[a])
+      axis_channel #(
+          .PROFILES(PROFILES),
+          .LEAN_DDA(LEAN_DDA)
+      ) u_chan (
+          .clk          (clk),
+          .rst          (rst),
+          .load         (accept),
+          .prof_load    (accept && prof_in),
+          .steps        (s_axis_steps[32*a+:32]),
+          .tmn          (s_axis_tmn[64*a+:64]),
+          .total        (s_axis_total),
+          .prof_n_dom   (s_axis_prof_n_dom),
+          .prof_v0      (s_axis_prof_v0[71*a+:71]),
+          .prof_vc      (s_axis_prof_vc[71*a+:71]),
+          .prof_vx      (s_axis_prof_vx[71*a+:71]),
+          .prof_acc     (s_axis_prof_acc[56*a+:56]),
+          .line_tick    (line_tick),
+          .prof_tick    (prof_tick),
+          .prof_op      (prof_op),
+          .arc_req      (arc_req[a]),
+          .abort        (abort),
+          .step_block   (step_block[a]),
+          .cfg_step_high(cfg_step_high[16*a+:16]),
+          .cfg_step_low (cfg_step_low[16*a+:16]),
+          .cfg_dir_hold (cfg_dir_hold[16*a+:16]),
+          .dir_in       (dir_tgt[a]),
+          .dir_wr       (dir_wr[a]),
+          .moving       (moving[a]),
+          .step_want    (step_want[a]),
+          .step         (step[a]),
+          .dir          (dir[a]),
+          .idle         (pulse_idle[a]),
+          .hold_ok      (pulse_hold_ok[a]),
+          .violation    (pulse_violation[a]),
+          .position     (position[32*a+:32])
       );
-
-      if (PROFILES != 0) begin : g_pdda
-          dda_profile u_pdda (
-              .clk  (clk),
-              .rst  (rst),
-              .load (accept && prof_in),
-              .n_dom(s_axis_prof_n_dom),
-              .v0   (s_axis_prof_v0[71*a+:71]),
-              .vc   (s_axis_prof_vc[71*a+:71]),
-              .vx   (s_axis_prof_vx[71*a+:71]),
-              .acc  (s_axis_prof_acc[56*a+:56]),
-              .tick (prof_tick),
-              .op   (prof_op),
-              .step (prof_step[a])
-          );
-      end else begin : g_nopdda
-        assign prof_step[a] = 1'b0;
-      end
-
-      step_pulse u_pulse (
-          .clk      (clk),
-          .rst      (rst),
-          .cfg_high (cfg_step_high[16*a+:16]),
-          .cfg_low  (cfg_step_low[16*a+:16]),
-          .cfg_hold (cfg_dir_hold[16*a+:16]),
-          .step_req (step_req[a]),
-          .dir_in   (dir_tgt_reg[a]),
-          .dir_wr   (dir_wr[a]),
-          .step     (step[a]),
-          .dir      (dir[a]),
-          .idle     (pulse_idle[a]),
-          .hold_ok  (pulse_hold_ok[a]),
-          .violation(pulse_violation[a])
-      );
-
-      always @(posedge clk) begin
-        if (step_req[a])
-          pos_reg[32*a+:32] <= dir[a] ? pos_reg[32*a+:32] + 32'd1 : pos_reg[32*a+:32] - 32'd1;
-        if (rst) pos_reg[32*a+:32] <= 32'd0;
-      end
     end
   endgenerate
 
-  integer k;
   always @(posedge clk) begin : seq
-    reg setup_ok;  // SETUP: every axis written on leaving HOLD has had its DIR setup
     seg_start_reg <= 1'b0;
     seg_done_reg  <= 1'b0;
-    pend_reg      <= (pend_reg & ~dir_wr) | (accept ? rev : arc_ann);
-    if (!accept) dir_tgt_reg <= dir_tgt_reg ^ arc_ann;
-    arc_err_reg      <= arc_tick && arc_ending && arc_end_err && !abort;
-    arc_end_reg      <= arc_tick && arc_ending && !abort;
-    arc_dir_viol_reg <= 1'b0;
-    for (k = 0; k < NSW; k = k + 1) begin
-      if (dir_wr[k]) since_wr_reg[16*k+:16] <= 16'd1;
-      else if (since_wr_reg[16*k+:16] != 16'hFFFF)
-        since_wr_reg[16*k+:16] <= since_wr_reg[16*k+:16] + 16'd1;
-      // an arc step of u / v whose direction is not on the DIR pin yet, or within DIR setup of
-      // the change
-      if (arc_req[k] && arc_uv[k] && !abort &&
-          (arc_sdir[k] != dir[k] || since_wr_reg[16*k+:16] < cfg_dir_setup[16*k+:16]))
-        arc_dir_viol_reg <= 1'b1;
-    end
+    arc_err_reg   <= arc_tick && arc_ending && arc_end_err && !abort;
+    arc_end_reg   <= arc_tick && arc_ending && !abort;
 
     // tick counter: loaded on accept, counts down during RUN
     if (accept) begin
@@ -497,11 +468,10 @@ module segment_executor #(
                     axis_bit(1) : (s_axis_arc_plane == 2'd2) ? axis_bit(0) : {N_AXES{1'b0}};
     end
     if (accept) begin
-      kind_reg    <= prof_in ? K_PROFILE : arc_in ? K_ARC : K_LINE;
-      code_reg    <= s_axis_code;
-      power_reg   <= s_axis_power;
-      v2_reg      <= s_axis_v2;
-      dir_tgt_reg <= (dir_tgt_reg & ~moving) | (s_axis_dir & moving);
+      kind_reg  <= prof_in ? K_PROFILE : arc_in ? K_ARC : K_LINE;
+      code_reg  <= s_axis_code;
+      power_reg <= s_axis_power;
+      v2_reg    <= s_axis_v2;
     end
 
     case (state_reg)
@@ -510,7 +480,7 @@ module segment_executor #(
           if (zero_len) begin
             seg_done_reg    <= 1'b1;
             seg_done_v2_reg <= s_axis_v2;
-          end else if ((rev | pend_reg) != {N_AXES{1'b0}}) begin
+          end else if ((rev | pend) != {N_AXES{1'b0}}) begin
             state_reg <= S_HOLD;
           end else begin
             state_reg     <= S_RUN;
@@ -520,22 +490,13 @@ module segment_executor #(
         end
       end
       S_HOLD: begin
-        if (hold_clear) begin
-          setup_cnt_reg  <= 16'd1;
-          setup_axes_reg <= pend_reg;
-          state_reg      <= S_SETUP;
-        end
+        if (hold_clear) state_reg <= S_SETUP;  // DIR written on this edge
       end
       S_SETUP: begin
-        setup_ok = 1'b1;
-        for (k = 0; k < N_AXES; k = k + 1)
-          if (setup_axes_reg[k] && setup_cnt_reg < cfg_dir_setup[16*k+:16]) setup_ok = 1'b0;
         if (setup_ok) begin
           state_reg     <= S_RUN;
           seg_start_reg <= 1'b1;
           laser_reg     <= (code_reg != 2'd0) && (power_reg != 8'd0);
-        end else begin
-          setup_cnt_reg <= setup_cnt_reg + 16'd1;
         end
       end
       S_RUN: begin
@@ -565,12 +526,8 @@ module segment_executor #(
       default: state_reg <= S_IDLE;
     endcase
 
-    if (settle_reg != 16'd0) settle_reg <= settle_reg - 16'd1;
     if (abort) begin
-      settle_reg    <= setup_max_reg;  // a DIR edge just before the abort gets its setup time
       state_reg     <= S_IDLE;
-      pend_reg      <= {N_AXES{1'b0}};  // pending DIR writes are cancelled: DIR keeps its level
-      dir_tgt_reg   <= dir;
       laser_reg     <= 1'b0;
       seg_start_reg <= 1'b0;
       seg_done_reg  <= 1'b0;
@@ -582,22 +539,15 @@ module segment_executor #(
       code_reg        <= 2'd0;
       power_reg       <= 8'd0;
       v2_reg          <= 1'b0;
-      dir_tgt_reg     <= {N_AXES{1'b0}};
-      pend_reg        <= {N_AXES{1'b0}};
-      setup_cnt_reg   <= 16'd0;
-      settle_reg      <= 16'd0;
-      setup_axes_reg  <= {N_AXES{1'b0}};
       left_reg        <= 64'd0;
       last_reg        <= 1'b0;
       laser_reg       <= 1'b0;
       seg_start_reg   <= 1'b0;
       seg_done_reg    <= 1'b0;
       seg_done_v2_reg <= 1'b0;
-      since_wr_reg    <= {NSW{16'hFFFF}};
       u_mask_reg      <= axis_bit(0);  // plane 0 (XY)
       v_mask_reg      <= axis_bit(1);
       h_mask_reg      <= axis_bit(2);
-      arc_dir_viol_reg <= 1'b0;
       arc_err_reg     <= 1'b0;
       arc_end_reg     <= 1'b0;
     end
@@ -683,8 +633,7 @@ module segment_executor #(
   assign seg_start     = seg_start_reg;
   assign seg_done      = seg_done_reg;
   assign seg_done_v2   = seg_done_v2_reg;
-  assign position      = pos_reg;
-  assign violation     = (|pulse_violation) || arc_dir_viol_reg;
+  assign violation     = (|pulse_violation) || arc_dir_viol;
   assign arc_err       = arc_err_reg;
 
 `ifdef FORMAL
@@ -775,16 +724,16 @@ module segment_executor #(
           // hold_ok means at least DIR hold clocks since the last STEP rising edge.
           if (dir_wr[f_g]) assert (pulse_hold_ok[f_g]);
           // Induction invariants: DIR writes happen only on leaving HOLD; in SETUP the written axes
-          // changed DIR exactly setup_cnt_reg - 1 clocks ago, every other axis (and every axis in
+          // changed DIR exactly f_setup_cnt - 1 clocks ago, every other axis (and every axis in
           // any other state) at least DIR setup clocks ago.
-          if (state_reg != S_HOLD) assert (!pend_reg[f_g]);
+          if (state_reg != S_HOLD) assert (!pend[f_g]);
           assert (f_since_dir[17*f_g+:17] <= 17'h10000);
-          assert ((dir[f_g] != dir_tgt_reg[f_g]) == pend_reg[f_g]);
-          if (state_reg == S_SETUP && setup_axes_reg[f_g])
-            assert (f_sd + 17'd1 == {1'b0, setup_cnt_reg} && setup_cnt_reg != 16'd0);
-          else assert (f_sd + {1'b0, settle_reg} >= f_setup);
-          if (state_reg != S_IDLE) assert (settle_reg == 16'd0);
-          if (f_past_valid && !f_rst_q) assert (setup_max_reg >= f_setup);
+          assert ((dir[f_g] != dir_tgt[f_g]) == pend[f_g]);
+          if (state_reg == S_SETUP && f_setup_axes[f_g])
+            assert (f_sd + 17'd1 == {1'b0, f_setup_cnt} && f_setup_cnt != 16'd0);
+          else assert (f_sd + {1'b0, f_settle} >= f_setup);
+          if (state_reg != S_IDLE) assert (f_settle == 16'd0);
+          if (f_past_valid && !f_rst_q) assert (f_setup_max >= f_setup);
         end
     end
   endgenerate

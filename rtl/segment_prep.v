@@ -1,4 +1,7 @@
 // segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
+// This module is the state machine that sequences the preparation, the entry decode and the LINE /
+// v1 arithmetic (divider, clamp, multiplier, T - n); the LINE_PROFILE products are rtl/prep_profile.v,
+// the ARC arithmetic rtl/prep_arc.v, the DIR tracking and dir_fast rtl/prep_dir_tracker.v.
 //
 // Input (s_axis_*): one FIFO entry, width ENTRY_W = `FPGACNC_ENTRY_W + 32*N_AXES (839 for 4 axes),
 //   { arc_raw[487:0], arc[0], D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
@@ -37,7 +40,7 @@
 // NUMERATORS are applied only while the executor is idle (exec_idle) and no prepared segment waits,
 // so they never change the timing of a move that is queued or running; init_applied strobes for
 // one clock with init_v2 = the entry's v2 bit.
-// Direction tracking: prep keeps, per axis, the DIR level the executor will have when the segment
+// Direction tracking (prep_dir_tracker): prep keeps, per axis, the DIR level the executor will have when the segment
 // being prepared starts (after reset 0 = DIR low; updated for the moving axes of every prepared
 // segment). m_axis_dir_fast = 1 iff every moving axis that reverses has
 // P >= max(DIR hold, 1) + max(DIR setup, 1); the executor may then start the segment with no gap
@@ -49,14 +52,14 @@
 //   LINE_PROFILE    : 25 + N_AXES  (MAX N_AXES - 1, PMUL 25, PINIT 1)
 //   ARC             : 80            (AMUL 32, ADIV 47, AFIX 1)
 // The next entry is accepted on the edge after the executor takes the prepared segment.
-// PROFILE arithmetic (m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
+// PROFILE arithmetic (prep_profile; m_axis_kind = 1): n_dom = max |steps_a| (m_axis_prof_n_dom); per axis the
 // exact products V_entry*n_a, V_cruise*n_a, V_exit*n_a (71 bits) and A*n_a (56 bits) by a
 // shift-add multiplier over the 24 bits of n_a (all axes and products in parallel: 4*N_AXES
 // adders of at most 71 bits); vcma = V_cruise - A, vxpa = V_exit + A; and the first master update
 // (profile_gen): U(1) = V_entry, V(1) and op(1) from V(0) = V_entry with "decelerating" = (D == 0)
 // (U(1) < 1 step). m_axis_total = 0, m_axis_period = 0, m_axis_dir_fast = 0 (a reversing axis
 // always waits DIR hold/setup before a profiled segment), m_axis_tmn = 0.
-// ARC arithmetic (m_axis_kind = 2; m_axis_arc = arc_dda's load inputs, LSB first: ccw 1, I, J,
+// ARC arithmetic (prep_arc; m_axis_kind = 2; m_axis_arc = arc_dda's load inputs, LSB first: ccw 1, I, J,
 // DX, DY 24 each, DZ 32, N_RAMP 24, dt_q 48, dt_r 24, C_TOTAL 48, V_entry, V_cruise, V_exit 64
 // each, A 48, D 48, V_entry*|DZ|, V_cruise*|DZ|, V_exit*|DZ|, A*|DZ| 96 each; 945 bits): shift-add
 // squares of |x0|, |y0|, |x1|, |y1| (22 bits each, 4 adders of 44 bits) and the Z products (31 bits
@@ -186,58 +189,12 @@ module segment_prep #(
   wire [`FPGACNC_E_ARC_RAW_W-1:0] in_arc_raw =
       s_axis_tdata[SW+`FPGACNC_E_ARC_RAW+:`FPGACNC_E_ARC_RAW_W];
 
-  // ARC registers: the raw frame fields (big-endian order, I first) and the derived values
+  // ARC (rtl/prep_arc.v), PROFILE (rtl/prep_profile.v) and the DIR tracker (rtl/prep_dir_tracker.v):
+  // the kind of the segment being prepared selects the path
   reg arc_reg;
-  reg [1:0] plane_reg;  // 0 XY, 1 ZX, 2 YZ
-  // the physical axes of the walk's u, v and of the helix
-  wire [1:0] ax_u = (plane_reg == 2'd1) ? 2'd2 : (plane_reg == 2'd2) ? 2'd1 : 2'd0;
-  wire [1:0] ax_v = (plane_reg == 2'd1) ? 2'd0 : (plane_reg == 2'd2) ? 2'd2 : 2'd1;
-  wire [1:0] ax_h = (plane_reg == 2'd1) ? 2'd1 : (plane_reg == 2'd2) ? 2'd0 : 2'd2;
-  reg ccw_reg;
-  reg [487:0] araw_reg;
-  wire signed [23:0] a_i = araw_reg[487:464];
-  wire signed [23:0] a_j = araw_reg[463:440];
-  wire signed [23:0] a_dx = araw_reg[439:416];
-  wire signed [23:0] a_dy = araw_reg[415:392];
-  wire [31:0] a_dz = araw_reg[391:360];
-  wire [23:0] a_nramp = araw_reg[359:336];
-  wire [47:0] a_ctot = araw_reg[335:288];
-  wire [63:0] a_ve = araw_reg[287:224];
-  wire [63:0] a_vc = araw_reg[223:160];
-  wire [63:0] a_vx = araw_reg[159:96];
-  wire [47:0] a_acc = araw_reg[95:48];
-  wire [47:0] a_dd = araw_reg[47:0];
-  // squares (shift-add, 22 bits) and the Z products V*|DZ|, A*|DZ| (31 bits), one bit per clock
-  reg [4*44-1:0] sq_mc_reg;  // 4 x 44 bits: |x0|, |y0|, |x1|, |y1|
-  reg [4*22-1:0] sq_mp_reg;
-  reg [4*44-1:0] sq_reg;
-  reg [94:0] zmc_e_reg, zmc_c_reg, zmc_x_reg;
-  reg [78:0] zmc_a_reg;
-  reg [30:0] zmp_reg;
-  reg [95:0] vz_e_reg, vz_c_reg, vz_x_reg, az_reg;
-  // dT = R1^2 - R0^2 (|dT| < 2^45), floor division by N_RAMP (restoring, 46 bits)
-  reg dneg_reg;
-  reg [45:0] dnd_reg;
-  reg [24:0] drem_reg;
-  reg [45:0] dq_reg;
-  reg signed [47:0] dt_q_reg;
-  reg [23:0] dt_r_reg;
-  // axes whose DIR prep no longer knows after an arc (X, Y): no dir_fast until they move again
-  reg [N_AXES-1:0] unk_reg;
-
-  localparam [1:0] OP_INC = 2'd0, OP_DEC = 2'd1, OP_CRU = 2'd2, OP_EXIT = 2'd3;
-  // profile registers
   reg prof_reg;
-  reg [46:0] ve_reg, vc_reg, vx_reg;
-  reg [31:0] pa_reg, d_reg;
-  reg [46:0] v1_reg;
-  reg [1:0] op1_reg;
-  reg [47:0] vcma_reg, vxpa_reg;
-  reg [70:0] mc_ve_reg, mc_vc_reg, mc_vx_reg;  // shifted multiplicands
-  reg [55:0] mc_a_reg;
-  reg [24*N_AXES-1:0] pm_reg;  // per-axis multipliers (n_a), shifted right
-  reg [71*N_AXES-1:0] p_v0_reg, p_vc_reg, p_vx_reg;
-  reg [56*N_AXES-1:0] p_a_reg;
+  wire [32*N_AXES-1:0] arc_fix_abs;  // AFIX: the arc's start
+  wire [N_AXES-1:0] arc_fix_dir, arc_fix_trk, arc_fix_unk;
 
   reg [3:0] state_reg;
   reg [31:0] num_x_reg, num_y_reg;
@@ -270,13 +227,6 @@ module segment_prep #(
 
   reg [64*N_AXES-1:0] tmn_reg;
 
-  // direction tracking and dir_fast
-  reg [N_AXES-1:0] dir_track_reg;  // DIR when the segment being prepared starts
-  reg [N_AXES-1:0] rev_reg;  // moving axes that reverse
-  reg fast_reg;  // no reversing axis checked so far has P < hold' + setup'
-  reg chk_rev_reg;  // the axis in chk_hs_reg reverses
-  reg [16:0] chk_hs_reg;  // max(hold,1) + max(setup,1) of one axis
-  reg dir_fast_reg;
 
   wire [N_AXES-1:0] moving;
   genvar a;
@@ -295,12 +245,6 @@ module segment_prep #(
   wire scan_gt = (V1_ONLY != 0) ? (abs_y > abs_x) : (scan_val > n_dom_reg);
   wire [31:0] n_dom = (V1_ONLY != 0) ? (dom_y_reg ? abs_y : abs_x) : n_dom_reg;
 
-  // dir_fast: the axes are checked one per clock during the multiplier's iterations (two stages:
-  // hold' + setup' of axis scan_idx_reg into chk_hs_reg, then the compare with P).
-  wire [15:0] chk_hold = cfg_dir_hold[16*scan_idx_reg+:16];
-  wire [15:0] chk_setup = cfg_dir_setup[16*scan_idx_reg+:16];
-  wire [16:0] chk_hs = {1'b0, (chk_hold == 16'd0) ? 16'd1 : chk_hold} +
-                       {1'b0, (chk_setup == 16'd0) ? 16'd1 : chk_setup};
 
   // V1_ONLY: iteration k (1..32) takes dividend bit 32 - k of the dominant numerator, selected
   // one clock ahead into div_bit_reg (the select does not precede the subtract)
@@ -327,10 +271,6 @@ module segment_prep #(
     reg [N_AXES-1:0] dir_in;  // DWELL/kind 3: none), and the directions
     reg [DW:0] rem_shift, rem_diff;  // DIV: the restoring division step
     reg rem_ge;  // rem_shift >= divisor
-    reg [45:0] r0sq, r1sq;  // ADIV: R0^2 and R1^2
-    reg [25:0] drem_shift, drem_diff;
-    reg drem_ge;
-    reg arc_dx0, arc_dy0;  // AFIX: the tangent signs at the start point
     init_applied_reg <= 1'b0;
     init_v2_reg      <= 1'b0;
     clamped_reg      <= 1'b0;
@@ -358,14 +298,6 @@ module segment_prep #(
           feed_reg     <= in_v1_motion ? in_t[15:0] : 16'd0;
           prof_reg     <= in_prof;
           arc_reg      <= in_arc;
-          plane_reg    <= in_arc ? in_t[1:0] : 2'd0;
-          ccw_reg      <= in_code[0];
-          araw_reg     <= in_arc_raw;
-          ve_reg       <= in_ve;
-          vc_reg       <= in_vc;
-          vx_reg       <= in_vx;
-          pa_reg       <= in_t;
-          d_reg        <= in_d;
           n_dom_reg    <= abs_in[31:0];
           scan_idx_reg <= {{(AXW - 1) {1'b0}}, 1'b1};
           rem_reg      <= {DW{1'b0}};
@@ -400,59 +332,22 @@ module segment_prep #(
         end
       end
       S_ADIV: begin
-        // iteration 0: |dT| and its sign; 1..46: one quotient bit each
-        r0sq = {2'b00, sq_reg[44*0+:44]} + {2'b00, sq_reg[44*1+:44]};
-        r1sq = {2'b00, sq_reg[44*2+:44]} + {2'b00, sq_reg[44*3+:44]};
-        drem_shift = {drem_reg, dnd_reg[45]};
-        drem_diff = drem_shift - {2'b00, a_nramp};
-        drem_ge = !drem_diff[25];
+        // iteration 0: |dT| and its sign; 1..46: one quotient bit each (prep_arc)
         if (iter_reg == 6'd0) begin
-          dneg_reg <= (r1sq < r0sq);
-          dnd_reg  <= (r1sq < r0sq) ? r0sq - r1sq : r1sq - r0sq;
-          drem_reg <= 25'd0;
-          dq_reg   <= 46'd0;
           iter_reg <= 6'd1;
         end else begin
-          dnd_reg  <= {dnd_reg[44:0], 1'b0};
-          drem_reg <= drem_ge ? drem_diff[24:0] : drem_shift[24:0];
-          dq_reg   <= {dq_reg[44:0], drem_ge};
           iter_reg <= iter_reg + 6'd1;
           if (iter_reg == 6'd46) state_reg <= S_AFIX;
         end
       end
       S_AFIX: begin
-        // floor: dT < 0 with a remainder gives q = -Q - 1, r = N_RAMP - R
-        if (dneg_reg && drem_reg != 25'd0) begin
-          dt_q_reg <= -{2'b00, dq_reg} - 48'sd1;
-          dt_r_reg <= a_nramp - drem_reg[23:0];
-        end else begin
-          dt_q_reg <= dneg_reg ? -{2'b00, dq_reg} : {2'b00, dq_reg};
-          dt_r_reg <= drem_reg[23:0];
-        end
-        // the tangent signs at the start point (x0, y0) = (-I, -J): arc_dda's first-move
-        // directions (a zero component takes the inward sign)
-        arc_dx0 = (a_j == 24'sd0) ? !a_i[23] : (ccw_reg ? !a_j[23] : a_j[23]);
-        arc_dy0 = (a_i == 24'sd0) ? !a_j[23] : (ccw_reg ? a_i[23] : !a_i[23]);
-        // u, v move (first-move directions), the helix axis when DZ != 0; the executor's
-        // HOLD/SETUP rules (the decoder allows planes other than XY and a helix only with 3 axes)
-        abs_reg <= {SW{1'b0}};
-        dir_reg <= {N_AXES{1'b0}};
-        for (i = 0; i < N_AXES; i = i + 1) begin
-          if (i == {30'd0, ax_u} || i == {30'd0, ax_v}) begin
-            abs_reg[32*i+:32] <= 32'd1;
-            dir_reg[i]       <= (i == {30'd0, ax_u}) ? arc_dx0 : arc_dy0;
-            dir_track_reg[i] <= (i == {30'd0, ax_u}) ? arc_dx0 : arc_dy0;
-            unk_reg[i]       <= 1'b1;
-          end else if (i == {30'd0, ax_h}) begin
-            abs_reg[32*i+:32] <= {1'b0, a_dz[31] ? -a_dz[30:0] : a_dz[30:0]};  // |DZ| < 2^31
-            dir_reg[i] <= !a_dz[31];
-            if (a_dz != 32'd0) dir_track_reg[i] <= !a_dz[31];
-          end
-        end
+        // floor division (prep_arc); the arc's start: u, v and the helix axis (prep_arc), the
+        // executor's HOLD/SETUP rules apply at the arc's start (prep_dir_tracker: dir_fast 0)
+        abs_reg   <= arc_fix_abs;
+        dir_reg   <= arc_fix_dir;
         total_reg <= 64'd0;
-        quot_reg <= 32'd0;
-        tmn_reg <= {64 * N_AXES{1'b0}};
-        dir_fast_reg <= 1'b0;
+        quot_reg  <= 32'd0;
+        tmn_reg   <= {64 * N_AXES{1'b0}};
         state_reg <= S_OUT;
       end
       S_DIV: begin
@@ -506,10 +401,7 @@ module segment_prep #(
         if (iter_reg == 6'd0) begin
           mcand_reg    <= {32'd0, quot_reg};
           iter_reg     <= 6'd1;
-          rev_reg      <= (dir_reg ^ dir_track_reg) & moving;
-          scan_idx_reg <= {AXW{1'b0}};
-          fast_reg     <= 1'b1;
-          chk_rev_reg  <= 1'b0;
+          scan_idx_reg <= {AXW{1'b0}};  // prep_dir_tracker: the dir_fast check's axis
         end else begin
           if (V1_ONLY != 0) begin
             total_reg <= {mul_hi, total_reg[31:1]};
@@ -519,11 +411,7 @@ module segment_prep #(
             mcand_reg  <= {mcand_reg[62:0], 1'b0};
           end
           iter_reg   <= iter_reg + 6'd1;
-          // axis k: sum in iteration k + 1, compare in k + 2 (the last axis repeats harmlessly)
-          chk_hs_reg  <= chk_hs;
-          chk_rev_reg <= rev_reg[scan_idx_reg];
           if (scan_idx_reg != AX_LAST) scan_idx_reg <= scan_idx_reg + 1'b1;
-          if (chk_rev_reg && quot_reg < {15'd0, chk_hs_reg}) fast_reg <= 1'b0;
           if (iter_reg == 6'd32) state_reg <= S_SUB;
         end
       end
@@ -531,34 +419,12 @@ module segment_prep #(
         for (i = 0; i < N_AXES; i = i + 1)
           tmn_reg[64*i+:64] <= (prof_reg || V1_ONLY != 0) ? 64'd0
                                                             : total_reg - {32'd0, abs_reg[32*i+:32]};
-        dir_fast_reg  <= fast_reg && !prof_reg && ((moving & unk_reg) == {N_AXES{1'b0}});
-        unk_reg       <= unk_reg & ~moving;
         if (prof_reg) begin
-          // PINIT: the first master update, from V(0) = V_entry; decelerating iff D == 0
+          // PINIT: the first master update (prep_profile)
           total_reg <= 64'd0;
           quot_reg  <= 32'd0;
-          vcma_reg  <= {1'b0, vc_reg} - {16'd0, pa_reg};
-          vxpa_reg  <= {1'b0, vx_reg} + {16'd0, pa_reg};
-          if (d_reg == 32'd0) begin
-            if ({1'b0, ve_reg} >= {1'b0, vx_reg} + {16'd0, pa_reg}) begin
-              v1_reg  <= ve_reg - {15'd0, pa_reg};
-              op1_reg <= OP_DEC;
-            end else begin
-              v1_reg  <= vx_reg;
-              op1_reg <= OP_EXIT;
-            end
-          end else begin
-            if ({1'b0, ve_reg} + {16'd0, pa_reg} <= {1'b0, vc_reg}) begin
-              v1_reg  <= ve_reg + {15'd0, pa_reg};
-              op1_reg <= OP_INC;
-            end else begin
-              v1_reg  <= vc_reg;
-              op1_reg <= OP_CRU;
-            end
-          end
         end
-        dir_track_reg <= (dir_track_reg & ~moving) | (dir_reg & moving);
-        state_reg     <= S_OUT;
+        state_reg <= S_OUT;
       end
       S_OUT: begin
         if (m_axis_tready) state_reg <= S_IDLE;
@@ -566,13 +432,9 @@ module segment_prep #(
       default: state_reg <= S_IDLE;
     endcase
 
-    // An abort drops segments whose DIR this block already tracked (prepared, waiting or running):
-    // the pins' DIR is unknown again, so no segment gets dir_fast before each axis has moved in
-    // a prepared non-arc segment (the executor's HOLD/SETUP path compares the real pins).
-    if (abort) begin
-      state_reg <= S_IDLE;
-      unk_reg   <= {N_AXES{1'b1}};
-    end
+    // An abort drops the entry being prepared or waiting (prep_dir_tracker: every axis's DIR
+    // unknown again)
+    if (abort) state_reg <= S_IDLE;
 
     if (rst) begin
       state_reg        <= S_IDLE;
@@ -601,159 +463,87 @@ module segment_prep #(
       mcand_reg        <= 64'd0;
       total_reg        <= 64'd0;
       tmn_reg          <= {64 * N_AXES{1'b0}};
-      dir_track_reg    <= {N_AXES{1'b0}};
-      rev_reg          <= {N_AXES{1'b0}};
-      fast_reg         <= 1'b0;
-      chk_rev_reg      <= 1'b0;
-      chk_hs_reg       <= 17'd0;
-      dir_fast_reg     <= 1'b0;
       prof_reg         <= 1'b0;
       arc_reg          <= 1'b0;
-      plane_reg        <= 2'd0;
-      unk_reg          <= {N_AXES{1'b0}};
-      ve_reg           <= 47'd0;
-      vc_reg           <= 47'd0;
-      vx_reg           <= 47'd0;
-      pa_reg           <= 32'd0;
-      d_reg            <= 32'd0;
-      v1_reg           <= 47'd0;
-      op1_reg          <= OP_CRU;
-      vcma_reg         <= 48'd0;
-      vxpa_reg         <= 48'd0;
     end
   end
 
-  // The multipliers' datapaths, each register written by one guarded assignment: Verilator then
-  // updates it in place and skips the block on the clocks it is idle (a register assigned in
-  // several places of a clocked block is copied through a shadow on every clock).
-  // PROFILE products (S_PMUL): iteration 0 loads, 1..24 add bit iter-1 of every n_a.
-  always @(posedge clk) begin : pmul_seq
-    reg [71*N_AXES-1:0] v0_n, vc_n, vx_n;
-    reg [56*N_AXES-1:0] a_n;
-    reg [24*N_AXES-1:0] pm_n;
-    reg [70:0] mce_n, mcc_n, mcx_n;
-    reg [55:0] mca_n;
-    integer k;
-    if (rst || state_reg == S_PMUL) begin
-      v0_n  = {71 * N_AXES{1'b0}};
-      vc_n  = {71 * N_AXES{1'b0}};
-      vx_n  = {71 * N_AXES{1'b0}};
-      a_n   = {56 * N_AXES{1'b0}};
-      pm_n  = {24 * N_AXES{1'b0}};
-      mce_n = 71'd0;
-      mcc_n = 71'd0;
-      mcx_n = 71'd0;
-      mca_n = 56'd0;
-      if (!rst && iter_reg == 6'd0) begin
-        mce_n = {24'd0, ve_reg};
-        mcc_n = {24'd0, vc_reg};
-        mcx_n = {24'd0, vx_reg};
-        mca_n = {24'd0, pa_reg};
-        for (k = 0; k < N_AXES; k = k + 1) pm_n[24*k+:24] = abs_reg[32*k+:24];
-      end else if (!rst) begin
-        for (k = 0; k < N_AXES; k = k + 1) begin
-          v0_n[71*k+:71] = p_v0_reg[71*k+:71];
-          vc_n[71*k+:71] = p_vc_reg[71*k+:71];
-          vx_n[71*k+:71] = p_vx_reg[71*k+:71];
-          a_n[56*k+:56]  = p_a_reg[56*k+:56];
-          if (pm_reg[24*k]) begin
-            v0_n[71*k+:71] = p_v0_reg[71*k+:71] + mc_ve_reg;
-            vc_n[71*k+:71] = p_vc_reg[71*k+:71] + mc_vc_reg;
-            vx_n[71*k+:71] = p_vx_reg[71*k+:71] + mc_vx_reg;
-            a_n[56*k+:56]  = p_a_reg[56*k+:56] + mc_a_reg;
-          end
-          pm_n[24*k+:24] = {1'b0, pm_reg[24*k+1+:23]};
-        end
-        mce_n = {mc_ve_reg[69:0], 1'b0};
-        mcc_n = {mc_vc_reg[69:0], 1'b0};
-        mcx_n = {mc_vx_reg[69:0], 1'b0};
-        mca_n = {mc_a_reg[54:0], 1'b0};
-      end
-      p_v0_reg  <= v0_n;
-      p_vc_reg  <= vc_n;
-      p_vx_reg  <= vx_n;
-      p_a_reg   <= a_n;
-      pm_reg    <= pm_n;
-      mc_ve_reg <= mce_n;
-      mc_vc_reg <= mcc_n;
-      mc_vx_reg <= mcx_n;
-      mc_a_reg  <= mca_n;
-    end
-  end
+  wire load_seg = s_axis_tvalid && accept_seg;  // IDLE takes a segment entry
 
-  // ARC squares and Z products (S_AMUL): iteration 0 loads; 1..31 add bit iter-1 of |x0|,
-  // |y0|, |x1|, |y1| and |DZ|. (Not reset: S_AMUL always starts with the load.)
-  always @(posedge clk) begin : amul_seq
-    /* verilator lint_off UNUSEDSIGNAL */
-    reg signed [24:0] a_x1, a_y1;  // |.| < 2^22: bits 23..22 = sign
-    /* verilator lint_on UNUSEDSIGNAL */
-    reg [21:0] mag_i, mag_j, mag_x1, mag_y1;  // |.| < 2^22 (decoder rule)
-    reg [30:0] mag_z;  // |DZ| < 2^31
-    reg [4*44-1:0] sq_n, mc_n;
-    reg [4*22-1:0] mp_n;
-    reg [94:0] ze_n, zc_n, zx_n;
-    reg [78:0] za_n;
-    reg [30:0] zp_n;
-    reg [95:0] ve_n, vc_n, vx_n, az_n;
-    integer k;
-    if (state_reg == S_AMUL) begin
-      if (iter_reg == 6'd0) begin
-        a_x1 = {a_dx[23], a_dx} - {a_i[23], a_i};
-        a_y1 = {a_dy[23], a_dy} - {a_j[23], a_j};
-        mag_i = a_i[23] ? -a_i[21:0] : a_i[21:0];
-        mag_j = a_j[23] ? -a_j[21:0] : a_j[21:0];
-        mag_x1 = a_x1[24] ? -a_x1[21:0] : a_x1[21:0];
-        mag_y1 = a_y1[24] ? -a_y1[21:0] : a_y1[21:0];
-        mag_z = a_dz[31] ? -a_dz[30:0] : a_dz[30:0];
-        mc_n = {22'd0, mag_y1, 22'd0, mag_x1, 22'd0, mag_j, 22'd0, mag_i};
-        mp_n = {mag_y1, mag_x1, mag_j, mag_i};
-        sq_n = {4 * 44{1'b0}};
-        ze_n = {31'd0, a_ve};
-        zc_n = {31'd0, a_vc};
-        zx_n = {31'd0, a_vx};
-        za_n = {31'd0, a_acc};
-        zp_n = mag_z;
-        ve_n = 96'd0;
-        vc_n = 96'd0;
-        vx_n = 96'd0;
-        az_n = 96'd0;
-      end else begin
-        for (k = 0; k < 4; k = k + 1) begin
-          sq_n[44*k+:44] = sq_mp_reg[22*k] ? sq_reg[44*k+:44] + sq_mc_reg[44*k+:44]
-                                           : sq_reg[44*k+:44];
-          mp_n[22*k+:22] = {1'b0, sq_mp_reg[22*k+1+:21]};
-          mc_n[44*k+:44] = {sq_mc_reg[44*k+:43], 1'b0};
-        end
-        ve_n = vz_e_reg;
-        vc_n = vz_c_reg;
-        vx_n = vz_x_reg;
-        az_n = az_reg;
-        if (zmp_reg[0]) begin
-          ve_n = vz_e_reg + {1'b0, zmc_e_reg};
-          vc_n = vz_c_reg + {1'b0, zmc_c_reg};
-          vx_n = vz_x_reg + {1'b0, zmc_x_reg};
-          az_n = az_reg + {17'd0, zmc_a_reg};
-        end
-        zp_n = {1'b0, zmp_reg[30:1]};
-        ze_n = {zmc_e_reg[93:0], 1'b0};
-        zc_n = {zmc_c_reg[93:0], 1'b0};
-        zx_n = {zmc_x_reg[93:0], 1'b0};
-        za_n = {zmc_a_reg[77:0], 1'b0};
-      end
-      sq_reg    <= sq_n;
-      sq_mp_reg <= mp_n;
-      sq_mc_reg <= mc_n;
-      zmc_e_reg <= ze_n;
-      zmc_c_reg <= zc_n;
-      zmc_x_reg <= zx_n;
-      zmc_a_reg <= za_n;
-      zmp_reg   <= zp_n;
-      vz_e_reg  <= ve_n;
-      vz_c_reg  <= vc_n;
-      vz_x_reg  <= vx_n;
-      az_reg    <= az_n;
-    end
-  end
+  prep_profile #(
+      .N_AXES(N_AXES)
+  ) u_prof (
+      .clk     (clk),
+      .rst     (rst),
+      .load    (load_seg),
+      .in_ve   (in_ve),
+      .in_vc   (in_vc),
+      .in_vx   (in_vx),
+      .in_accel(in_t),
+      .in_d    (in_d),
+      .mul_run (state_reg == S_PMUL),
+      .iter    (iter_reg),
+      .abs     (abs_reg),
+      .init    (state_reg == S_SUB && prof_reg),
+      .u1      (m_axis_prof_u1),
+      .v1      (m_axis_prof_v1),
+      .op1     (m_axis_prof_op1),
+      .accel   (m_axis_prof_accel),
+      .vcruise (m_axis_prof_vcruise),
+      .vexit   (m_axis_prof_vexit),
+      .vcma    (m_axis_prof_vcma),
+      .vxpa    (m_axis_prof_vxpa),
+      .decel_at(m_axis_prof_decel_at),
+      .v0      (m_axis_prof_v0),
+      .vc      (m_axis_prof_vc),
+      .vx      (m_axis_prof_vx),
+      .acc     (m_axis_prof_acc)
+  );
+
+  prep_arc #(
+      .N_AXES(N_AXES)
+  ) u_arc (
+      .clk     (clk),
+      .rst     (rst),
+      .load    (load_seg),
+      .in_arc  (in_arc),
+      .in_plane(in_t[1:0]),
+      .in_ccw  (in_code[0]),
+      .in_raw  (in_arc_raw),
+      .mul_run (state_reg == S_AMUL),
+      .div_run (state_reg == S_ADIV),
+      .fix     (state_reg == S_AFIX),
+      .iter    (iter_reg),
+      .arc     (m_axis_arc),
+      .plane   (m_axis_arc_plane),
+      .fix_abs (arc_fix_abs),
+      .fix_dir (arc_fix_dir),
+      .fix_trk (arc_fix_trk),
+      .fix_unk (arc_fix_unk)
+  );
+
+  prep_dir_tracker #(
+      .N_AXES(N_AXES)
+  ) u_dirtrk (
+      .clk          (clk),
+      .rst          (rst),
+      .abort        (abort),
+      .mul_start    (state_reg == S_MUL && iter_reg == 6'd0),
+      .mul_step     (state_reg == S_MUL && iter_reg != 6'd0),
+      .sub          (state_reg == S_SUB),
+      .afix         (state_reg == S_AFIX),
+      .dir          (dir_reg),
+      .moving       (moving),
+      .prof         (prof_reg),
+      .period       (quot_reg),
+      .scan_idx     (scan_idx_reg),
+      .fix_dir      (arc_fix_dir),
+      .fix_trk      (arc_fix_trk),
+      .fix_unk      (arc_fix_unk),
+      .cfg_dir_setup(cfg_dir_setup),
+      .cfg_dir_hold (cfg_dir_hold),
+      .dir_fast     (m_axis_dir_fast)
+  );
 
   assign s_axis_tready   = accept_seg || accept_init || accept_out;
   assign m_out_tvalid    = s_axis_tvalid && accept_out;
@@ -761,7 +551,6 @@ module segment_prep #(
   assign m_axis_code     = code_reg;
   assign m_axis_power    = power_reg;
   assign m_axis_v2       = v2_reg;
-  assign m_axis_dir_fast = dir_fast_reg;
   assign m_axis_dir      = dir_reg;
   assign m_axis_steps    = abs_reg;
   assign m_axis_tmn      = tmn_reg;
@@ -769,23 +558,7 @@ module segment_prep #(
   assign m_axis_period   = quot_reg;
   assign m_axis_feed     = feed_reg;
   assign m_axis_kind     = arc_reg ? 2'd2 : {1'b0, prof_reg};
-  assign m_axis_arc_plane = plane_reg;
-  assign m_axis_arc = {az_reg, vz_x_reg, vz_c_reg, vz_e_reg, a_dd, a_acc, a_vx, a_vc, a_ve, a_ctot,
-                       dt_r_reg, dt_q_reg, a_nramp, a_dz, a_dy, a_dx, a_j, a_i, ccw_reg};
-  assign m_axis_prof_u1  = ve_reg;
-  assign m_axis_prof_v1  = v1_reg;
-  assign m_axis_prof_op1 = op1_reg;
-  assign m_axis_prof_accel    = pa_reg;
-  assign m_axis_prof_vcruise  = vc_reg;
-  assign m_axis_prof_vexit    = vx_reg;
-  assign m_axis_prof_vcma     = vcma_reg;
-  assign m_axis_prof_vxpa     = vxpa_reg;
-  assign m_axis_prof_decel_at = d_reg;
   assign m_axis_prof_n_dom    = n_dom_reg[23:0];
-  assign m_axis_prof_v0       = p_v0_reg;
-  assign m_axis_prof_vc       = p_vc_reg;
-  assign m_axis_prof_vx       = p_vx_reg;
-  assign m_axis_prof_acc      = p_a_reg;
   assign m_axis_tvalid   = (state_reg == S_OUT);
   assign numerator_x     = num_x_reg;
   assign numerator_y     = num_y_reg;

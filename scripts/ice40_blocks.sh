@@ -30,7 +30,7 @@ declare -A BLK=(
   [heater_channel]="rtl/heater_channel.v rtl/pid_incr.v rtl/heater_safety.v rtl/pwm.v|"
   [frame_decoder]="rtl/frame_decoder.v rtl/frame_fields.v rtl/entry_pack.v rtl/crc16_ccitt.v rtl/travel_guard.v|-set N_AXES 2"
   [response_encoder]="rtl/response_encoder.v rtl/crc16_ccitt.v|-set N_AXES 2 -set HEAT_BYTES 16"
-  [segment_prep]="rtl/segment_prep.v|-set N_AXES 2"
+  [segment_prep]="rtl/segment_prep.v rtl/prep_profile.v rtl/prep_arc.v rtl/prep_dir_tracker.v|-set N_AXES 2"
   [step_pulse]="rtl/step_pulse.v|"
   [uart_rx]="rtl/uart_rx.v|"
   [uart_tx]="rtl/uart_tx.v|"
@@ -44,7 +44,7 @@ declare -A BLK=(
   # the 775-bit entry of the full 2-axis build needs 49 RAM blocks of the HX8K's 32: 512 bits
   [segment_fifo]="rtl/segment_fifo.v|-set WIDTH 512 -set DEPTH 64"
   # with arc_dda (measured alone above) the executor does not fit: ARCS 0
-  [segment_executor]="rtl/segment_executor.v rtl/dda_linear.v rtl/dda_profile.v rtl/profile_gen.v rtl/step_pulse.v rtl/arc_dda.v|-set N_AXES 2 -set ARCS 0"
+  [segment_executor]="rtl/segment_executor.v rtl/axis_channel.v rtl/dir_sequencer.v rtl/dda_linear.v rtl/dda_profile.v rtl/profile_gen.v rtl/step_pulse.v rtl/arc_dda.v|-set N_AXES 2 -set ARCS 0"
 )
 # segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
 blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder

@@ -1,11 +1,14 @@
 # Verilated models of the core blocks, shared by the benches, the simulated board and the
 # benchmarks.
 fpgacnc_verilated(vexec TOP segment_executor
-                  SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/dda_linear.v
+                  SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/axis_channel.v
+                          ${FPGACNC_RTL_DIR}/dir_sequencer.v ${FPGACNC_RTL_DIR}/dda_linear.v
                           ${FPGACNC_RTL_DIR}/profile_gen.v ${FPGACNC_RTL_DIR}/dda_profile.v
                           ${FPGACNC_RTL_DIR}/arc_dda.v
                           ${FPGACNC_RTL_DIR}/step_pulse.v)
-fpgacnc_verilated(vprep TOP segment_prep SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v)
+fpgacnc_verilated(vprep TOP segment_prep
+                  SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v ${FPGACNC_RTL_DIR}/prep_profile.v
+                          ${FPGACNC_RTL_DIR}/prep_arc.v ${FPGACNC_RTL_DIR}/prep_dir_tracker.v)
 fpgacnc_verilated(vframe TOP frame_decoder
                   SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/frame_fields.v
                           ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v
