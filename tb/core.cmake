@@ -18,7 +18,7 @@ fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo
 fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
 fpgacnc_verilated(vencoder TOP response_encoder
                   SOURCES ${FPGACNC_RTL_DIR}/response_encoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
-fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis SOURCES ${FPGACNC_CORE_RTL})
+fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis PGO SOURCES ${FPGACNC_CORE_RTL})
 # cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
 fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m CONFIG full-4axis
                   SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=3000000)
