@@ -23,6 +23,10 @@
 //                    aborted (positions kept), laser and outputs low; heaters keep running. The
 //                    alarm clears on a FAULT_CLEAR while the switch that tripped is released;
 //                    STATUS state bit 4 (positions not trusted) stays set until rst.
+//   soft limits      (v2) CONFIG_TRAVEL sets an axis's travel in steps (off after rst); a LINE,
+//                    LINE_PROFILE or ARC whose end leaves it is answered NAK TRAVEL and not queued
+//                    (frame_decoder's travel_guard); its queued end position resyncs to the
+//                    position counters while the FIFO is held flushed (e-stop, hard limit).
 //   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
 //                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
 //                    writes a shadow set that becomes active only while the FIFO is empty and
@@ -301,6 +305,8 @@ module cnc_core #(
           .nak          (dec_nak),
           .nak_seq      (dec_nak_seq),
           .nak_reason   (dec_nak_reason),
+          .travel_resync(motion_abort),
+          .position     (position),
           .next_seq     (dec_next_seq),
           .v2_mode      (dec_v2_mode),
           .partial      (rx_partial),

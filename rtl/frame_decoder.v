@@ -17,10 +17,16 @@
 //               defined only then. A v1 packet meeting a full FIFO is dropped (v1_overrun).
 //   cfg_*, heat_*, fault_clear, release_req   an accepted CONFIG_AXIS / heater frame /
 //               FAULT_CLEAR / RELEASE.
+//   Soft limits  travel_guard: an accepted CONFIG_TRAVEL sets an axis's travel; a LINE,
+//               LINE_PROFILE or ARC whose end (queued end + its steps) leaves the travel of an
+//               enabled axis is answered NAK TRAVEL and not queued (after the SEQ rules, before
+//               FIFO_FULL). The queued end follows every FIFO motion entry (v1 packets too: they
+//               are never refused, v1 has no NAK) and is set to `position` on every clock of
+//               `travel_resync` (the queue is flushed) and at rst.
 //   hello, status_req, ack_req, nak (+ nak_seq as received, nak_reason)   answer requests.
 //   frame_ok    a v2 frame that passed every check (HELLO, STATUS_QUERY, accepted, duplicate).
 //   crc_error, length_error, unknown_type   a v2 frame rejected for that reason (length_error
-//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER or FIFO_FULL.
+//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER, FIFO_FULL or TRAVEL.
 //   timeout     a started v1 packet or v2 frame with no byte for WATCHDOG_CLKS clocks (v2: also
 //               NAK TIMEOUT, SEQ as received or 0 before the SEQ byte).
 //   noise       a byte dropped in HUNT. v1_packet   a v1 packet written to the FIFO.
@@ -74,6 +80,9 @@ module frame_decoder #(
     output wire [7:0] nak_seq,
     output wire [7:0] nak_reason,
 
+    input wire                   travel_resync,  // the FIFO is flushed (e-stop, hard limit)
+    input wire [32*N_AXES-1:0]   position,       // the position counters (axis a in [32*a+:32])
+
     output wire [7:0] next_seq,
     output wire       v2_mode,
     output wire       partial,     // a packet or frame has started and is not complete yet
@@ -103,7 +112,7 @@ module frame_decoder #(
                    T_NUM = `FPGACNC_T_NUMERATORS, T_REL = `FPGACNC_T_RELEASE,
                    T_LINE = `FPGACNC_T_LINE, T_DWELL = `FPGACNC_T_DWELL,
                    T_LPROF = `FPGACNC_T_LINE_PROFILE, T_ARC = `FPGACNC_T_ARC,
-                   T_OUT = `FPGACNC_T_OUTPUT;
+                   T_OUT = `FPGACNC_T_OUTPUT, T_CTRAV = `FPGACNC_T_CONFIG_TRAVEL;
   localparam [7:0] T_HCFG = `FPGACNC_T_HEATER_CONFIG, T_HSET = `FPGACNC_T_HEATER_SETPOINT,
                    T_HTAB = `FPGACNC_T_THERMISTOR_TABLE, T_HSAF = `FPGACNC_T_HEATER_SAFETY,
                    T_HWD = `FPGACNC_T_HEATER_WATCHDOG;
@@ -111,7 +120,7 @@ module frame_decoder #(
   localparam [7:0] R_BAD_CRC = `FPGACNC_NAK_BAD_CRC, R_BAD_LENGTH = `FPGACNC_NAK_BAD_LENGTH,
                    R_UNKNOWN_TYPE = `FPGACNC_NAK_UNKNOWN_TYPE, R_TIMEOUT = `FPGACNC_NAK_TIMEOUT,
                    R_OUT_OF_ORDER = `FPGACNC_NAK_OUT_OF_ORDER, R_FIFO_FULL = `FPGACNC_NAK_FIFO_FULL,
-                   R_BAD_FIELD = `FPGACNC_NAK_BAD_FIELD;
+                   R_BAD_FIELD = `FPGACNC_NAK_BAD_FIELD, R_TRAVEL = `FPGACNC_NAK_TRAVEL;
 
   localparam integer MAXP_I = MAX_PAYLOAD;
   localparam [7:0] MAXP = MAXP_I[7:0];
@@ -174,6 +183,7 @@ module frame_decoder #(
   wire t_rel = (type_reg == T_REL);
   wire t_line = (type_reg == T_LINE);
   wire t_dwell = (type_reg == T_DWELL);
+  wire t_ctrav = (type_reg == T_CTRAV);
   // ---- heater frames
   wire t_hcfg = (type_reg == T_HCFG);
   wire t_hset = (type_reg == T_HSET);
@@ -187,14 +197,18 @@ module frame_decoder #(
   // TYPE and LEN rules, formed (block-local regs) and registered on the edge that takes the
   // frame's last byte, as the field rules are: LEN, TYPE and the flag byte are complete then and
   // stay until the CHECK clock, the only clock that reads them.
-  reg known_reg, len_ok_reg;
+  reg known_reg, len_ok_reg, ctrav_ok_reg;
   always @(posedge clk) begin : len_rules
     reg short_steps, line_len_ok, prof_len_ok, heat_len_ok;
     reg [7:0] len_m6, len_m28;
     if (rst) begin
-      known_reg  <= 1'b0;
-      len_ok_reg <= 1'b0;
+      known_reg    <= 1'b0;
+      len_ok_reg   <= 1'b0;
+      ctrav_ok_reg <= 1'b0;
     end else if (take && st_reg == ST_CRC2) begin
+      // CONFIG_TRAVEL: axis < N_AXES, flag bits 7:1 0, and MIN <= MAX when enabled
+      ctrav_ok_reg <= pb(0) < NAX8 && pay_reg[15:9] == 7'd0 &&
+                      (!pay_reg[8] || $signed(be32p(2)) <= $signed(be32p(6)));
       short_steps = pay_reg[7];  // flag bit 7: int16 step fields
       len_m6 = len_reg - 8'd6;
       line_len_ok = (len_reg >= `FPGACNC_LEN_LINE_HEADER) &&
@@ -212,9 +226,10 @@ module frame_decoder #(
                     (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
                     (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
       known_reg <= t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
-               t_lprof || t_arc || t_out || t_heat;
+               t_lprof || t_arc || t_out || t_heat || t_ctrav;
       len_ok_reg <= ((t_hello || t_status || t_fclr || t_rel) && len_reg == 8'd0) ||
                 (t_cfg && len_reg == `FPGACNC_LEN_CONFIG_AXIS) ||
+                (t_ctrav && len_reg == `FPGACNC_LEN_CONFIG_TRAVEL) ||
                 (t_num && len_reg == `FPGACNC_LEN_NUMERATORS) ||
                 (t_dwell && len_reg == `FPGACNC_LEN_DWELL) || (t_line && line_len_ok) ||
                 (t_lprof && prof_len_ok) || (t_arc && len_reg == `FPGACNC_LEN_ARC) ||
@@ -224,7 +239,8 @@ module frame_decoder #(
   // The field rules (frame_fields) are evaluated on the edge that takes the frame's last byte:
   // payload, LEN and TYPE are complete then and stay until the CHECK clock, so field_ok holds the
   // rules of the frame being checked.
-  wire field_ok;
+  wire field_ok_f;
+  wire field_ok = field_ok_f && (!t_ctrav || ctrav_ok_reg);
   frame_fields #(
       .N_AXES(N_AXES),
       .PB    (PB)
@@ -244,18 +260,20 @@ module frame_decoder #(
       .t_htab (t_htab),
       .t_hsaf (t_hsaf),
       .t_hwd  (t_hwd),
-      .ok     (field_ok)
+      .ok     (field_ok_f)
   );
   wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
-                   t_out || t_heat;
+                   t_out || t_heat || t_ctrav;
   wire to_fifo = t_num || t_line || t_dwell || t_lprof || t_arc || t_out;
   wire [7:0] seq_diff = seq_reg - next_seq_reg;
   wire seq_new = (seq_diff == 8'd0);
   wire seq_dup = seq_diff[7];  // next_seq - 128 .. next_seq - 1
 
   wire v2_chk = chk_reg && !chk_v1_reg;
+  wire moves = t_line || t_lprof || t_arc;  // the frames travel_guard checks
+  wire travel_ok;
   wire v2_accept = v2_chk && (crc == 16'd0) && known_reg && len_ok_reg && field_ok && sequenced && seq_new &&
-                   (!to_fifo || m_axis_tready);
+                   (!moves || travel_ok) && (!to_fifo || m_axis_tready);
   wire v1_write = chk_reg && chk_v1_reg && m_axis_tready;
 
   // The FIFO entry (entry_pack), packed in the CHECK clock only (don't-care in other clocks: the
@@ -346,6 +364,10 @@ module frame_decoder #(
           frame_ok_reg <= 1'b1;
           ack_reg      <= 1'b1;
           if (t_rel) v2_mode_reg <= 1'b0;
+        end else if (moves && !travel_ok) begin
+          nak_reg        <= 1'b1;
+          nak_seq_reg    <= seq_reg;
+          nak_reason_reg <= R_TRAVEL;
         end else if (to_fifo && !m_axis_tready) begin
           nak_reg        <= 1'b1;
           nak_seq_reg    <= seq_reg;
@@ -479,6 +501,84 @@ module frame_decoder #(
                        pb(5), pb(6), pb(7), pb(8)};
     end
   end
+
+  // ---------------------------------------------------------------- soft limits
+  // trav_delta_reg: the steps of the frame being received, formed on the edge that takes its
+  // first CRC byte (the payload is complete then; the check reads them on the next byte's edge),
+  // or of a v1 packet in its CHECK clock (the queued end follows it on the next edge): LINE from
+  // byte 6, LINE_PROFILE from byte 28 (int16 with flag bit 7, else int32; axes beyond LEN 0),
+  // ARC's DX, DY (int24) and DZ (int32) on the axes of its plane, v1 motion X and Y at bytes 0
+  // and 4; 0 for anything else.
+  function [31:0] be32p;
+    input integer i;
+    begin
+      be32p = {pay_reg[8*i+:8], pay_reg[8*(i+1)+:8], pay_reg[8*(i+2)+:8], pay_reg[8*(i+3)+:8]};
+    end
+  endfunction
+  function [31:0] be24s;  // the big-endian int24 at byte i, sign-extended
+    input integer i;
+    begin
+      be24s = {{8{pay_reg[8*i+7]}}, pay_reg[8*i+:8], pay_reg[8*(i+1)+:8], pay_reg[8*(i+2)+:8]};
+    end
+  endfunction
+  localparam TW = 32 * ((N_AXES < 3) ? 3 : N_AXES);  // X, Y, Z at least (an ARC's axes)
+  reg [32*N_AXES-1:0] trav_delta_reg;
+  always @(posedge clk) begin : travel_delta
+    reg [31:0] du, dv, dh;
+    /* verilator lint_off UNUSEDSIGNAL */
+    reg [TW-1:0] wide;  // Z of an ARC unused with 2 axes
+    /* verilator lint_on UNUSEDSIGNAL */
+    integer a;
+    if ((take && st_reg == ST_CRC1) || (chk_reg && chk_v1_reg)) begin
+      wide = {TW{1'b0}};
+      du   = be24s(8);
+      dv   = be24s(11);
+      dh   = be32p(14);
+      if (chk_reg && chk_v1_reg) begin
+        if (!is_init_reg) wide[63:0] = {be32p(4), be32p(0)};
+      end else if (t_line || t_lprof) begin
+        // constant offsets only (LINE from byte 6, LINE_PROFILE from byte 28)
+        for (a = 0; a < N_AXES; a = a + 1) begin
+          if (pay_reg[7]) begin
+            if ({1'b0, len_reg} >= (t_line ? 9'd8 : 9'd30) + 9'd2 * a[8:0])
+              wide[32*a+:32] = t_line ? {{16{pay_reg[8*(6+2*a)+7]}}, pay_reg[8*(6+2*a)+:8],
+                                         pay_reg[8*(7+2*a)+:8]}
+                                      : {{16{pay_reg[8*(28+2*a)+7]}}, pay_reg[8*(28+2*a)+:8],
+                                         pay_reg[8*(29+2*a)+:8]};
+          end else if ({1'b0, len_reg} >= (t_line ? 9'd10 : 9'd32) + 9'd4 * a[8:0]) begin
+            wide[32*a+:32] = t_line ? be32p(6 + 4 * a) : be32p(28 + 4 * a);
+          end
+        end
+      end else if (t_arc) begin
+        // planes (flags bits 3:2): XY u=X v=Y h=Z; ZX u=Z v=X h=Y; YZ u=Y v=Z h=X
+        case (pay_reg[3:2])
+          2'd0: wide[95:0] = {dh, dv, du};
+          2'd1: wide[95:0] = {du, dh, dv};
+          default: wide[95:0] = {dv, du, dh};
+        endcase
+      end
+      trav_delta_reg <= wide[32*N_AXES-1:0];
+    end
+    if (rst) trav_delta_reg <= {32 * N_AXES{1'b0}};
+  end
+
+  travel_guard #(
+      .N_AXES(N_AXES)
+  ) u_travel (
+      .clk     (clk),
+      .rst     (rst),
+      .cfg_wr  (v2_accept && t_ctrav),
+      .cfg_axis(pay_reg[3:0] | {4{pay_reg[7:4] != 4'd0}}),  // axis >= 16: none
+      .cfg_en  (pay_reg[8]),
+      .cfg_min (be32p(2)),
+      .cfg_max (be32p(6)),
+      .check   (take && st_reg == ST_CRC2),
+      .delta   (trav_delta_reg),
+      .accept  ((v2_accept && moves) || v1_packet_reg),
+      .resync  (travel_resync),
+      .pos     (position),
+      .ok      (travel_ok)
+  );
 
   assign s_axis_tready = 1'b1;
   assign m_axis_tdata  = entry;

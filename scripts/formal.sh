@@ -40,6 +40,8 @@ JOBS=(
   "input_filter        cover   16"
   "limit_guard         prove   4"
   "limit_guard         cover   8"
+  "travel_guard        prove   4"
+  "travel_guard        cover   8"
 )
 
 want=("$@")

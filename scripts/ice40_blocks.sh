@@ -28,7 +28,7 @@ declare -A BLK=(
   [dda_linear]="rtl/dda_linear.v|"
   [pid_incr]="rtl/pid_incr.v|"
   [heater_channel]="rtl/heater_channel.v rtl/pid_incr.v rtl/heater_safety.v rtl/pwm.v|"
-  [frame_decoder]="rtl/frame_decoder.v rtl/frame_fields.v rtl/entry_pack.v rtl/crc16_ccitt.v|-set N_AXES 2"
+  [frame_decoder]="rtl/frame_decoder.v rtl/frame_fields.v rtl/entry_pack.v rtl/crc16_ccitt.v rtl/travel_guard.v|-set N_AXES 2"
   [response_encoder]="rtl/response_encoder.v rtl/crc16_ccitt.v|-set N_AXES 2 -set HEAT_BYTES 16"
   [segment_prep]="rtl/segment_prep.v rtl/prep_profile.v rtl/prep_arc.v rtl/prep_dir_tracker.v|-set N_AXES 2"
   [step_pulse]="rtl/step_pulse.v|"
@@ -36,6 +36,7 @@ declare -A BLK=(
   [uart_tx]="rtl/uart_tx.v|"
   [input_filter]="rtl/input_filter.v|-set N 4 -set FILTER_CLKS 50000"
   [limit_guard]="rtl/limit_guard.v|-set N_AXES 2"
+  [travel_guard]="rtl/travel_guard.v|-set N_AXES 2"
   [pwm]="rtl/pwm.v|-set PWM_BITS 8 -set PWM_DIV 195"
   [ltc2308_spi]="rtl/ltc2308_spi.v|"
   [heater_safety]="rtl/heater_safety.v|"
@@ -47,7 +48,7 @@ declare -A BLK=(
 )
 # segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
 blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder
-  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard"}
+  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard travel_guard"}
 for tool in yosys nextpnr-ice40 python3; do
   command -v "$tool" >/dev/null || { echo "ice40_blocks: $tool not found"; exit 2; }
 done

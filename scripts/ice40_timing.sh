@@ -99,7 +99,7 @@ endmodule
 VEOF
 
 # The cnc_core file set (CMakeLists.txt FPGACNC_CORE_RTL).
-core_rtl="rtl/uart_rx.v rtl/uart_tx.v rtl/crc16_ccitt.v rtl/frame_fields.v rtl/entry_pack.v rtl/frame_decoder.v rtl/segment_fifo.v"
+core_rtl="rtl/uart_rx.v rtl/uart_tx.v rtl/crc16_ccitt.v rtl/frame_fields.v rtl/entry_pack.v rtl/travel_guard.v rtl/frame_decoder.v rtl/segment_fifo.v"
 core_rtl="$core_rtl rtl/response_encoder.v rtl/prep_profile.v rtl/prep_arc.v rtl/prep_dir_tracker.v"
 core_rtl="$core_rtl rtl/segment_prep.v rtl/dda_linear.v"
 core_rtl="$core_rtl rtl/profile_gen.v rtl/dda_profile.v rtl/arc_dda.v"

@@ -11,13 +11,14 @@ fpgacnc_verilated(vprep TOP segment_prep
                           ${FPGACNC_RTL_DIR}/prep_arc.v ${FPGACNC_RTL_DIR}/prep_dir_tracker.v)
 fpgacnc_verilated(vframe TOP frame_decoder
                   SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/frame_fields.v
-                          ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
+                          ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v
+                          ${FPGACNC_RTL_DIR}/travel_guard.v)
 fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo.v
                   ARGS -GWIDTH=40 -GDEPTH=16)
 fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
 fpgacnc_verilated(vencoder TOP response_encoder
                   SOURCES ${FPGACNC_RTL_DIR}/response_encoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
-fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis SOURCES ${FPGACNC_CORE_RTL})
+fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis PGO SOURCES ${FPGACNC_CORE_RTL})
 # cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
 fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m CONFIG full-4axis
                   SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=3000000)

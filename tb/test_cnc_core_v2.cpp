@@ -352,6 +352,71 @@ TEST(CncCoreV2, BadCrcNakNothingMoves) {
   EXPECT_EQ(b.dut().next_seq, 1u);
 }
 
+// Soft limits (docs/machine.md "Soft limits"): CONFIG_TRAVEL X [-100, 100], Y [0, 50] steps; a
+// LINE whose end leaves them is NAK TRAVEL and never queued (only the accepted lines run: their
+// steps and segments done are counted); one ending exactly on both limits is accepted; bad
+// CONFIG_TRAVEL fields are BAD_FIELD; after an e-stop flush the queued end is the position
+// counters' (a LINE that fits only from there is accepted, one that fits only from the flushed
+// queue's end is refused).
+TEST(CncCoreV2, SoftLimitsNakTravelAndResync) {
+  V2Bench b;
+  hello(b);
+  if (HasFatalFailure()) return;
+  auto expect_nak = [&](const std::vector<uint8_t>& f, uint8_t seq, uint8_t reason,
+                        const char* why) {
+    b.send_frame(f);
+    ASSERT_TRUE(b.wait_msgs(1, 40 * kByteClocks)) << why;
+    const auto& m = b.msgs().back();
+    ASSERT_EQ(m.type, v2::kNak) << why;
+    EXPECT_EQ(m.u8(0), seq) << why;
+    EXPECT_EQ(m.u8(1), reason) << why;
+    EXPECT_EQ(m.u8(2), seq) << why << ": next_seq unchanged";
+  };
+  auto expect_ack = [&](const std::vector<uint8_t>& f, const char* why) {
+    b.send_frame(f);
+    ASSERT_TRUE(b.wait_msgs(1, 40 * kByteClocks)) << why;
+    EXPECT_EQ(b.msgs().back().type, v2::kAck) << why;
+  };
+  // Bad fields first: axis 4 of 4, a reserved flag bit, MIN > MAX while enabled.
+  expect_nak(v2::config_travel(0, 4, true, -100, 100), 0, v2::kBadField, "axis 4");
+  expect_nak(v2::config_travel(0, 0, true, -100, 100, 0x02), 0, v2::kBadField, "flag bit 1");
+  expect_nak(v2::config_travel(0, 0, true, 100, -100), 0, v2::kBadField, "min > max");
+  expect_nak(v2::frame(v2::kConfigTravel, 0, {0, 1, 0, 0}), 0, v2::kBadLength, "LEN 4");
+  // Off after reset: anything goes until CONFIG_TRAVEL.
+  expect_ack(v2::config_travel(0, 0, true, -100, 100), "travel X");
+  expect_ack(v2::config_travel(1, 1, true, 0, 50), "travel Y");
+  expect_ack(v2::line(2, 1, 0, 20'000, {60, 20}, true), "X 60 Y 20");
+  expect_nak(v2::line(3, 1, 0, 20'000, {41, 0}, true), 3, v2::kTravel, "X 101");
+  expect_nak(v2::line(3, 1, 0, 20'000, {0, 31}, false), 3, v2::kTravel, "Y 51 (int32 steps)");
+  expect_ack(v2::line(3, 1, 0, 20'000, {40, -20}, true), "X 100 Y 0: on both limits");
+  expect_nak(v2::line(4, 1, 0, 20'000, {0, -1}, true), 4, v2::kTravel, "Y -1");
+  // Z has no travel: any Z move passes.
+  expect_ack(v2::line(4, 0, 0, 20'000, {0, 0, -50}, false), "Z -50");
+  b.settle(200'000);
+  EXPECT_EQ(b.dut().segments_done, 3u);
+  EXPECT_EQ(b.mon().axis(0).rises.size(), 100u);
+  EXPECT_EQ(b.mon().axis(1).rises.size(), 40u);
+  EXPECT_EQ(static_cast<int32_t>(b.dut().position[0]), 100);
+  EXPECT_EQ(static_cast<int32_t>(b.dut().position[1]), 0);
+  // A long move toward X -100, stopped half-way by the e-stop: the FIFO is flushed.
+  expect_ack(v2::line(5, 1, 0, 2'000'000, {-200}, false), "X -100, slowly");
+  expect_ack(v2::line(6, 1, 0, 20'000, {50}, true), "then X -50 (flushed)");
+  b.idle(700'000);
+  b.dut().estop = 1;
+  b.idle(1000);
+  b.dut().estop = 0;
+  b.idle(100);
+  const auto p = static_cast<int32_t>(b.dut().position[0]);
+  ASSERT_GT(p, -50);  // so that the line below fits only from the position, not from X -50
+  ASSERT_LT(p, 100);
+  expect_ack(v2::fault_clear(7), "FAULT_CLEAR");
+  // From the queue's end before the flush (X -50) this would end at -50 - (p + 100) < -100.
+  expect_ack(v2::line(8, 1, 0, 2'000'000, {-(p + 100)}, false), "to X -100 from the position");
+  expect_nak(v2::line(9, 1, 0, 20'000, {-1}, true), 9, v2::kTravel, "X -101");
+  b.settle(2'000'000);
+  EXPECT_EQ(static_cast<int32_t>(b.dut().position[0]), -100);
+}
+
 // NUMERATORS (a FIFO entry: DONE counts it), RELEASE, then v1 with the new numerators and 0xAA.
 TEST(CncCoreV2, NumeratorsReleaseThenV1) {
   V2Bench b;

@@ -394,7 +394,6 @@ TEST(Grbl, ErrorCodes) {
       {"$Z", "error:3"},         // not a '$' command
       {"G1 F-5 X1", "error:4"},  // negative value
       {"$H", "error:5"},         // homing not enabled
-      {"$20=1", "error:10"},     // soft limits need homing
       {"G1 X1" + std::string(80, ' ') + "Y" + std::string(80, '1'), "error:11"},  // too long
       {"G99", "error:20"},            // unsupported G code
       {"M104 S200", "error:20"},      // unsupported M code
@@ -541,6 +540,67 @@ TEST(Grbl, SoftResetMidJobAlarmsAndResyncs) {
   for (size_t i = 0; i < 3; ++i) EXPECT_NEAR(after.mpos[i], r.mpos[i], 1e-9);
   EXPECT_EQ(rig.command("G90 G0 X0 Y0")[0], "ok");
   expect_at(rig.wait_idle(), {0, 0, 0}, MachineConfig{});
+}
+
+// Soft limits (docs/grbl.md, "Soft limits"): $20=1 with $130 = 50 and no [travel] in the
+// configuration is grbl's own travel, X in [-50, 0]. A line that leaves it raises ALARM:2 and
+// [MSG:Reset to continue], sends nothing and takes no further line until a soft reset, which
+// answers its ok, then the banner and the unlock hint; the machine stays where it was.
+TEST(Grbl, SoftLimitLineRaisesAlarm2AndMovesNothing) {
+  Rig rig;
+  EXPECT_EQ(rig.command("$20=1")[0], "ok");
+  EXPECT_EQ(rig.command("$130=50")[0], "ok");
+  auto a = rig.command("$$");
+  EXPECT_NE(std::find(a.begin(), a.end(), "$20=1"), a.end());
+  EXPECT_NE(std::find(a.begin(), a.end(), "$130=50.000"), a.end());
+  EXPECT_EQ(rig.command("G0 X-20")[0], "ok");
+  expect_at(rig.wait_idle(), {-20 * 160, 0, 0}, MachineConfig{});
+  const uint64_t frames = rig.engine().stats().frames;
+  rig.send("G0 X-50.5\nG0 X-30\n");
+  EXPECT_EQ(rig.next_line(), "ALARM:2");
+  EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
+  Report r = rig.status();
+  EXPECT_EQ(r.state, "Alarm");
+  expect_at(r, {-20 * 160, 0, 0}, MachineConfig{});
+  // The next line waits unanswered (grbl blocks everything but reports and the reset).
+  EXPECT_TRUE(rig.lines().empty());
+  EXPECT_EQ(rig.engine().stats().frames, frames);
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ok");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.command("G0 X-30")[0], "error:9");
+  EXPECT_EQ(rig.command("$X")[0], "[MSG:Caution: Unlocked]");
+  // The parser restarts at the machine's position: X-30 is 10 mm further, inside.
+  EXPECT_EQ(rig.command("G0 X-30")[0], "ok");
+  expect_at(rig.wait_idle(), {-30 * 160, 0, 0}, MachineConfig{});
+  // Y's travel is [-200, 0] ($131 = 200). A clockwise half circle from (-30, 0) about
+  // (-30, -10) passes X -20: inside.
+  EXPECT_EQ(rig.command("G2 X-30 Y-20 I0 J-10 F1000")[0], "ok");
+  expect_at(rig.wait_idle(), {-30 * 160, -20 * 160, 0}, MachineConfig{});
+  // From (-30, -20) about (-30, -45), radius 25, counter-clockwise to (-30, -70): through
+  // 180 deg at X -55, 5 mm beyond -50, while both ends are inside.
+  rig.send("G3 X-30 Y-70 I0 J-25\n");
+  EXPECT_EQ(rig.next_line(), "ALARM:2");
+  EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ok");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.command("$X")[1], "ok");
+  // Check mode checks soft limits too; $20=0 turns them off.
+  EXPECT_EQ(rig.command("$C")[0], "[MSG:Enabled]");
+  rig.send("G0 X5\n");
+  EXPECT_EQ(rig.next_line(), "ALARM:2");
+  EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ok");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.command("$X")[1], "ok");
+  EXPECT_EQ(rig.command("$20=0")[0], "ok");
+  EXPECT_EQ(rig.command("G0 X5")[0], "ok");
+  expect_at(rig.wait_idle(), {5 * 160, -20 * 160, 0}, MachineConfig{});
 }
 
 // Features that need hardware not built yet answer as grbl does without them (docs/grbl.md):

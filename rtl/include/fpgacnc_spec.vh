@@ -57,6 +57,10 @@
 `define FPGACNC_T_RELEASE 8'h06
 `define FPGACNC_LEN_RELEASE 8'd0
 `define FPGACNC_LENI_RELEASE 0
+// CONFIG_TRAVEL: axis u8, flags u8 (bit 0 enable), MIN int32, MAX int32: the axis's travel in steps (soft limits), see below
+`define FPGACNC_T_CONFIG_TRAVEL 8'h07
+`define FPGACNC_LEN_CONFIG_TRAVEL 8'd10
+`define FPGACNC_LENI_CONFIG_TRAVEL 10
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 `define FPGACNC_T_LINE 8'h10
 `define FPGACNC_LEN_LINE_HEADER 8'd6
@@ -135,6 +139,8 @@
 `define FPGACNC_NAK_FIFO_FULL 8'd6
 // reserved flag bits set, axis number >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field out of range, a heater field out of range (see "Heater frames")
 `define FPGACNC_NAK_BAD_FIELD 8'd7
+// a LINE, LINE_PROFILE or ARC whose end leaves the travel of an axis with soft limits on (CONFIG_TRAVEL); not queued
+`define FPGACNC_NAK_TRAVEL 8'd8
 
 // ---- STATUS
 // bytes per heater channel in STATUS
@@ -212,6 +218,8 @@
 `define FPGACNC_THERMISTOR_CHUNK 8
 // HEATER_CONFIG modes 0 OFF, 1 MANUAL, 2 ON_OFF, 3 P, 4 PID
 `define FPGACNC_HEATER_MODES 5
+// CONFIG_TRAVEL flags bit 0: soft limits on for the axis (bits 7:1 must be 0; on needs MIN <= MAX)
+`define FPGACNC_TRAVEL_ENABLE 1
 // Q1.15 duty 100 % (largest duty_max and manual duty)
 `define FPGACNC_DUTY_ONE 16'h8000
 // coolant flood (M8 on, M9 off)

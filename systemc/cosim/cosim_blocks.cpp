@@ -494,6 +494,18 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
         p = config_axis_payload(
             static_cast<uint8_t>(pick(g, 0, 5)),
             AxisTiming{pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535), pick(g, 0, 65535)});
+      } else if (ty < 21) {  // CONFIG_TRAVEL: soft limits the LINE / ARC frames then meet
+        type = kConfigTravel;
+        const auto lim = [&] {
+          return static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)) >> pick(g, 0, 31);
+        };
+        int32_t lo = lim(), hi = lim();
+        if (lo > hi && pick(g, 0, 7) != 0) std::swap(lo, hi);  // MIN > MAX: BAD_FIELD if on
+        const uint32_t fk = pick(g, 0, 15);
+        const uint8_t flags = fk < 11 ? 1 : fk < 15 ? 0 : static_cast<uint8_t>(pick(g, 2, 255));
+        p = {static_cast<uint8_t>(pick(g, 0, 5)), flags};
+        put32(p, static_cast<uint32_t>(lo));
+        put32(p, static_cast<uint32_t>(hi));
       } else if (ty == 29) {  // OUTPUT: good, or random bytes (BAD_FIELD mostly)
         type = kOutput;
         if (pick(g, 0, 3) == 0) {
@@ -512,7 +524,7 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
       } else {
         // 0x14 is an unknown type (0x13 is ARC, above)
         const uint8_t types[] = {kHello, kStatusQuery, kFaultClear, kRelease, 0x12,
-                                 0x14,   0x25,         0x2F,        0x07,     0x83};
+                                 0x14,   0x25,         0x2F,        0x08,     0x83};
         type = types[pick(g, 0, 9)];
       }
       if (pick(g, 0, 19) == 0) p.resize(pick(g, 0, 20));  // wrong length for the type
@@ -528,6 +540,66 @@ FrameJob frame_job(std::mt19937_64& g, size_t packets) {
   for (int k = 0; k < 6; ++k) {
     const Cycle a = pick(g, 0, static_cast<uint32_t>(std::min<Cycle>(t, 0xFFFF'FFFF)));
     j.full.push_back({a, a + pick(g, 0, 3000)});
+  }
+  return j;
+}
+
+// Soft limits (docs/machine.md): CONFIG_TRAVEL frames (random travels, on or off, changed now and
+// then) and LINE frames (int16 or int32 steps on 0..4 axes) whose ends fall inside and outside
+// them, every frame with the SEQ the decoder expects (the job follows which frames a device
+// accepts: a refused LINE, NAK TRAVEL, leaves next_seq); bytes back to back or with random gaps;
+// the FIFO never full (NAK FIFO_FULL would leave next_seq too).
+FrameJob travel_job(std::mt19937_64& g, size_t lines) {
+  using namespace fpgacnc::twins::v2;
+  FrameJob j;
+  Cycle t = pick(g, 1, 20);
+  uint8_t seq = 0;
+  struct Tr {
+    bool on = false;
+    int32_t lo = 0, hi = 0;
+  };
+  std::array<Tr, kAxes> tr{};
+  std::array<int32_t, kAxes> queued{};
+  auto put = [&](const std::vector<uint8_t>& b) {
+    for (uint8_t x : b) {
+      j.bytes.push_back({t, x});
+      t += pick(g, 0, 3) ? pick(g, 1, 3) : pick(g, 4, 200);
+    }
+  };
+  auto config = [&](int a) {
+    const auto v = [&] {
+      return static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)) >> pick(g, 14, 30);
+    };
+    Tr x{pick(g, 0, 4) != 0, v(), v()};
+    if (x.lo > x.hi) std::swap(x.lo, x.hi);
+    std::vector<uint8_t> p{static_cast<uint8_t>(a), static_cast<uint8_t>(x.on ? 1 : 0)};
+    put32(p, static_cast<uint32_t>(x.lo));
+    put32(p, static_cast<uint32_t>(x.hi));
+    put(frame(seq++, kConfigTravel, p));
+    tr[static_cast<size_t>(a)] = x;
+  };
+  for (int a = 0; a < kAxes; ++a) config(a);
+  for (size_t i = 0; i < lines; ++i) {
+    if (pick(g, 0, 15) == 0) config(static_cast<int>(pick(g, 0, kAxes - 1)));
+    const int k = static_cast<int>(pick(g, 0, kAxes));
+    std::vector<int32_t> st(static_cast<size_t>(k));
+    bool fits = true, inside = true;
+    for (size_t a = 0; a < st.size(); ++a) {
+      st[a] = static_cast<int32_t>(pick(g, 0, 0xFFFF'FFFFu)) >> pick(g, 14, 31);
+      fits = fits && st[a] >= -32768 && st[a] <= 32767;
+    }
+    for (size_t a = 0; a < kAxes; ++a) {
+      const int64_t end = int64_t{queued[a]} + (a < st.size() ? st[a] : 0);
+      if (tr[a].on && (end < tr[a].lo || end > tr[a].hi)) inside = false;
+    }
+    put(frame(seq, kLine,
+              line_payload(static_cast<uint8_t>(pick(g, 0, 3)), 0, pick(g, 0, 100'000), st,
+                           fits && pick(g, 0, 1))));
+    if (!inside) continue;  // NAK TRAVEL: next_seq stays
+    ++seq;
+    for (size_t a = 0; a < st.size(); ++a)
+      queued[a] =
+          static_cast<int32_t>(static_cast<uint32_t>(queued[a]) + static_cast<uint32_t>(st[a]));
   }
   return j;
 }
@@ -713,6 +785,13 @@ TwinRuns run_twins() {
         Case{fmt::format("uart_tx 3000000 seed {}", seed + s), {}, tx_job(g, 300), {}, {}, 1, {}});
     cases.push_back(
         Case{fmt::format("frame_decoder seed {}", seed + s), {}, {}, frame_job(g, 150), {}, 2, {}});
+    cases.push_back(Case{fmt::format("frame_decoder travel seed {}", seed + s),
+                         {},
+                         {},
+                         travel_job(g, 60),
+                         {},
+                         2,
+                         {}});
     cases.push_back(
         Case{fmt::format("segment_prep seed {}", seed + s), {}, {}, {}, prep_job(g, 150), 3, {}});
     Case e{fmt::format("response_encoder seed {}", seed + s), {}, {}, {}, {}, 4, {}};
@@ -884,7 +963,7 @@ void compare_kind(int kind) {
       ADD_FAILURE() << c.name << ": first difference: " << d;
     }
   }
-  EXPECT_EQ(jobs, (kind == kUartRx ? 2 : 1) * g_seeds) << "block jobs run";
+  EXPECT_EQ(jobs, (kind == kUartRx || kind == kFrameDecoder ? 2 : 1) * g_seeds) << "block jobs run";
   EXPECT_GT(events, 0u) << "events compared";
   fmt::print("cosim_blocks: {} block jobs, {} events", jobs, events);
   if (kind == kFrameDecoder) fmt::print(" ({} ARC FIFO writes)", runs.arc_fifo_writes);

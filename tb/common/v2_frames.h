@@ -23,6 +23,7 @@ enum Type : uint8_t {
   kStatusQuery = spec::kTypeStatusQuery,
   kFaultClear = spec::kTypeFaultClear,
   kConfigAxis = spec::kTypeConfigAxis,
+  kConfigTravel = spec::kTypeConfigTravel,
   kNumerators = spec::kTypeNumerators,
   kRelease = spec::kTypeRelease,
   kLine = spec::kTypeLine,
@@ -45,6 +46,7 @@ enum Reason : uint8_t {
   kOutOfOrder = spec::kNakOutOfOrder,
   kFifoFull = spec::kNakFifoFull,
   kBadField = spec::kNakBadField,
+  kTravel = spec::kNakTravel,
 };
 
 // CRC-16/CCITT-FALSE, bit by bit: poly 0x1021, init 0xFFFF, no reflection, no final XOR.
@@ -102,6 +104,14 @@ inline std::vector<uint8_t> config_axis(uint8_t seq, uint8_t axis, uint16_t high
   be16(p, setup);
   be16(p, hold);
   return frame(kConfigAxis, seq, p);
+}
+// CONFIG_TRAVEL: axis, flags (bit 0 enable), MIN, MAX (signed steps).
+inline std::vector<uint8_t> config_travel(uint8_t seq, uint8_t axis, bool enable, int32_t min,
+                                          int32_t max, uint8_t flags_extra = 0) {
+  std::vector<uint8_t> p{axis, static_cast<uint8_t>((enable ? 1 : 0) | flags_extra)};
+  be32(p, static_cast<uint32_t>(min));
+  be32(p, static_cast<uint32_t>(max));
+  return frame(kConfigTravel, seq, p);
 }
 inline std::vector<uint8_t> numerators(uint8_t seq, uint32_t nx, uint32_t ny) {
   std::vector<uint8_t> p;

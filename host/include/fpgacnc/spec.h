@@ -61,6 +61,9 @@ inline constexpr size_t kLenNumerators = 8;
 // RELEASE: gives the link back to auto mode (v1 or v2 by the next first byte)
 inline constexpr uint8_t kTypeRelease = 0x06;
 inline constexpr size_t kLenRelease = 0;
+// CONFIG_TRAVEL: axis u8, flags u8 (bit 0 enable), MIN int32, MAX int32: the axis's travel in steps (soft limits), see below
+inline constexpr uint8_t kTypeConfigTravel = 0x07;
+inline constexpr size_t kLenConfigTravel = 10;
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 inline constexpr uint8_t kTypeLine = 0x10;
 inline constexpr size_t kLenLineHeader = 6;
@@ -115,13 +118,14 @@ struct TypeInfo {
   bool sequenced;  // host frames: checked against next_seq
   bool fifo;       // host frames: written to the command FIFO
 };
-inline constexpr std::array<TypeInfo, 21> kTypes{{
+inline constexpr std::array<TypeInfo, 22> kTypes{{
     {0x01, "HELLO", true, false, false},
     {0x02, "STATUS_QUERY", true, false, false},
     {0x03, "FAULT_CLEAR", true, true, false},
     {0x04, "CONFIG_AXIS", true, true, false},
     {0x05, "NUMERATORS", true, true, true},
     {0x06, "RELEASE", true, true, false},
+    {0x07, "CONFIG_TRAVEL", true, true, false},
     {0x10, "LINE", true, true, true},
     {0x11, "DWELL", true, true, true},
     {0x12, "LINE_PROFILE", true, true, true},
@@ -154,11 +158,13 @@ inline constexpr uint8_t kNakOutOfOrder = 5;
 inline constexpr uint8_t kNakFifoFull = 6;
 // BAD_FIELD: reserved flag bits set, axis number >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field out of range, a heater field out of range (see "Heater frames")
 inline constexpr uint8_t kNakBadField = 7;
+// TRAVEL: a LINE, LINE_PROFILE or ARC whose end leaves the travel of an axis with soft limits on (CONFIG_TRAVEL); not queued
+inline constexpr uint8_t kNakTravel = 8;
 struct NakInfo {
   uint8_t value;
   std::string_view name;
 };
-inline constexpr std::array<NakInfo, 7> kNakReasons{{
+inline constexpr std::array<NakInfo, 8> kNakReasons{{
     {1, "BAD_CRC"},
     {2, "BAD_LENGTH"},
     {3, "UNKNOWN_TYPE"},
@@ -166,6 +172,7 @@ inline constexpr std::array<NakInfo, 7> kNakReasons{{
     {5, "OUT_OF_ORDER"},
     {6, "FIFO_FULL"},
     {7, "BAD_FIELD"},
+    {8, "TRAVEL"},
 }};
 
 // ---- STATUS
@@ -246,6 +253,8 @@ inline constexpr size_t kThermistorEntries = 65;
 inline constexpr size_t kThermistorChunk = 8;
 // HEATER_CONFIG modes 0 OFF, 1 MANUAL, 2 ON_OFF, 3 P, 4 PID
 inline constexpr size_t kHeaterModes = 5;
+// CONFIG_TRAVEL flags bit 0: soft limits on for the axis (bits 7:1 must be 0; on needs MIN <= MAX)
+inline constexpr size_t kTravelEnable = 1;
 // Q1.15 duty 100 % (largest duty_max and manual duty)
 inline constexpr uint16_t kDutyOne = 0x8000;
 // OUTPUT bit 0: coolant flood (M8 on, M9 off)

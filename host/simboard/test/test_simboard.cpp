@@ -16,10 +16,14 @@
 #include <fstream>
 #include <variant>
 
+#include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
+#include "fpgacnc/protocol/v2_job.h"
+#include "fpgacnc/simboard/cli_board.h"
 #include "fpgacnc/simboard/plot.h"
 #include "fpgacnc/simboard/runner.h"
 #include "fpgacnc/simboard/sim_board.h"
@@ -512,3 +516,33 @@ TEST(SimBoardPlot, WritesSvgWithLegend) {
 }
 
 }  // namespace
+
+// The device's own soft limits (docs/machine.md "Soft limits"): a job planned without a [travel]
+// but packed with X in [0, 5] mm (as a host whose planner does not check would send it) reaches
+// the Verilated core, which refuses the first LINE_PROFILE ending beyond 5 mm (line 3, X 8):
+// NAK TRAVEL, never retried: the stream stops at once naming that line, and the machine ends at
+// the last move inside (X 4 mm = 640 steps), the refused and later lines never run.
+TEST(SimBoardTravel, DeviceRefusesALineLeavingItsTravel) {
+  cfgns::MachineConfig cfg;
+  const auto p = plan::plan_program(
+      fpgacnc::gcode::parse_string("G1 X2 F3000\nG1 X4\nG1 X8\nG1 X3\n"), cfg, {});
+  cfgns::MachineConfig device = cfg;
+  device.travel[cfgns::kX] = {true, 0.0, 5.0};
+  const auto job =
+      fpgacnc::protocol::v2::pack_job(plan::plan_motion(p, cfg), device, {.heaters = false});
+  ASSERT_EQ(job.travel.size(), 1u);
+  auto link = sb::make_default_link(cfg, {});
+  try {
+    lk::stream_v2_job(*link, job, lk::stream_v2_options(cfg));
+    FAIL() << "the stream did not fail";
+  } catch (const lk::Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("(line 3)"), std::string::npos) << what;
+    EXPECT_NE(what.find("NAK TRAVEL"), std::string::npos) << what;
+  }
+  sb::Board* board = sb::any_board_of(*link);
+  ASSERT_NE(board, nullptr);
+  // The accepted moves run out on the board's clock (2 mm at 3000 mm/min: 40 ms each).
+  link->wait_until(link->now() + 500ms);
+  EXPECT_EQ(board->stats().position[0], 640);
+}

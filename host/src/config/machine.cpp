@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -61,6 +63,46 @@ class Reader {
       const double d = number(sub, full);
       if (!(d > 0.0)) fail(sub, full, "must be > 0");
       out[static_cast<size_t>(a)] = d;
+    }
+  }
+
+  // [travel]: x = { min = A, max = B } per axis (soft limits).
+  void travel(const toml::value& v, const std::string& key, std::array<Travel, kAxes>& out) {
+    if (!v.is_table()) fail(v, key, "expected a table with keys x, y, z, e (or a)");
+    bool fourth = false;
+    for (const auto& [k, sub] : v.as_table()) {
+      const std::string full = key + "." + k;
+      int a = -1;
+      if (k == "x") a = kX;
+      if (k == "y") a = kY;
+      if (k == "z") a = kZ;
+      if (k == "e" || k == "a") {
+        if (fourth) fail(sub, full, "e and a are the same (fourth) axis: give one of them");
+        fourth = true;
+        a = kE;
+      }
+      if (a < 0) fail(sub, full, "unknown key (expected x, y, z, e or a)");
+      if (!sub.is_table()) fail(sub, full, "expected { min = MM, max = MM }");
+      Travel t;
+      bool has_min = false, has_max = false;
+      for (const auto& [tk, tv] : sub.as_table()) {
+        const std::string tfull = full + "." + tk;
+        const double d = number(tv, tfull);
+        if (!std::isfinite(d) || std::fabs(d) > 1e6) fail(tv, tfull, "must be within +-1e6");
+        if (tk == "min") {
+          t.min_mm = d;
+          has_min = true;
+        } else if (tk == "max") {
+          t.max_mm = d;
+          has_max = true;
+        } else {
+          fail(tv, tfull, "unknown key (expected min and max)");
+        }
+      }
+      if (!has_min || !has_max) fail(sub, full, "give both min and max");
+      if (!(t.min_mm < t.max_mm)) fail(sub, full, "min must be below max");
+      t.enabled = true;
+      out[static_cast<size_t>(a)] = t;
     }
   }
 
@@ -135,6 +177,8 @@ class Reader {
           }
           if (clocks == 0) fail(tv, full, "must be >= 1 clock");
         }
+      } else if (k == "travel") {
+        travel(v, k, c.travel);
       } else if (k == "gcode") {
         if (!v.is_table()) fail(v, k, "expected a table");
         for (const auto& [gk, gv] : v.as_table()) {
@@ -241,6 +285,14 @@ void validate(const MachineConfig& c, const std::string& name) {
   if (c.lookahead_segments == 0) throw Error(name, 0, 0, "lookahead_segments must be >= 1");
   if (!valid_motion_name(c.motion)) {
     throw Error(name, 0, 0, "motion: expected \"profile\" or \"constant\"");
+  }
+  for (int a = 0; a < kAxes; ++a) {
+    const Travel& t = c.travel[static_cast<size_t>(a)];
+    if (t.enabled && !(t.min_mm < t.max_mm)) {
+      throw Error(name, 0, 0,
+                  fmt::format("travel.{}: min must be below max",
+                              static_cast<char>(std::tolower(kAxisNames[static_cast<size_t>(a)]))));
+    }
   }
 }
 

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "fpgacnc/gcode/reader.h"
 
 namespace fpgacnc::frontend {
@@ -14,6 +17,16 @@ void push_config_axes(link::V2Session& session, const v2::Ident& ident,
     session.push({v2::config_axis(
         0, a, static_cast<uint16_t>(t.step_high), static_cast<uint16_t>(t.step_low),
         static_cast<uint16_t>(t.dir_setup), static_cast<uint16_t>(t.dir_hold))});
+  }
+  // Soft limits (docs/machine.md): every axis, so that turning them off reaches the device too.
+  for (uint8_t a = 0; a < ident.n_axes && a < config::kAxes; ++a) {
+    const config::Travel& tr = cfg.travel[a];
+    const double spm = cfg.steps_per_mm[a];
+    const auto steps = [&](double mm) {
+      return static_cast<int32_t>(std::clamp(std::round(mm * spm), -2147483648.0, 2147483647.0));
+    };
+    session.push({v2::config_travel(0, a, tr.enabled, tr.enabled ? steps(tr.min_mm) : 0,
+                                    tr.enabled ? steps(tr.max_mm) : 0)});
   }
 }
 

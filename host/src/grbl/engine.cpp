@@ -263,7 +263,7 @@ bool Engine::line_ready() const {
 }
 
 bool Engine::can_take_line() const {
-  return !resetting_ && !held_ && !pause_pending_ && !limit_alarm_ &&
+  return !resetting_ && !critical_ && !held_ && !pause_pending_ && !limit_alarm_ &&
          session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
 }
 
@@ -332,6 +332,13 @@ void Engine::process_line(const std::string& raw) {
   } else {
     rc = gcode_line(raw, check_);
   }
+  if (rc == kSoftLimit) {  // grbl: alarm, then nothing until a reset (which sends the ok)
+    ++stats_.errors;
+    alarm_ = critical_ = true;
+    say("ALARM:2");
+    say("[MSG:Reset to continue]");
+    return;
+  }
   if (rc == 0) {
     ++stats_.oks;
     say("ok");
@@ -361,10 +368,19 @@ int Engine::gcode_line(const std::string& raw, bool check_only) {
   } catch (const gcode::Error& e) {
     return error_code(e.message());
   }
-  if (check_only) return 0;
+  if (check_only) {  // grbl checks soft limits in check mode too
+    for (const auto& c : cmds) {
+      const auto* m = std::get_if<gcode::Move>(&c);
+      if (m && plan::check_travel(*m, cfg_)) return kSoftLimit;
+    }
+    return 0;
+  }
   try {
     for (const auto& c : cmds) planner_->add(c);
     push_items(planner_->take_items());
+  } catch (const plan::TravelError&) {
+    planner_->take_items();  // the moves of this line before the offending one are not sent
+    return kSoftLimit;
   } catch (const std::invalid_argument&) {
     return 33;  // a target the planner cannot turn into frames
   }
@@ -693,14 +709,18 @@ int Engine::clear_limit_alarm() {
 
 void Engine::soft_reset() {
   ++stats_.resets;
+  if (critical_) {
+    say("ok");  // the line that raised ALARM:2 ends here, as in grbl
+    critical_ = false;
+  }
   rx_.clear();  // grbl empties its receive buffer
   const bool moving = motion_pending() && !check_;
   limit_alarm_ = false;  // a reset ends the critical alarm (the FAULT_CLEAR comes with it)
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   stats_.aborted += session_->abandon();
   if (moving) {
+    if (!alarm_) say("ALARM:3");  // not after ALARM:2: the alarm is already raised
     alarm_ = true;
-    say("ALARM:3");
     if (opt_.estop_press && opt_.estop_release) {
       opt_.estop_press();
       estop_pressed_ = true;

@@ -36,7 +36,12 @@ Settings settings_from_config(const config::MachineConfig& cfg) {
   v[11] = cfg.junction_deviation_mm;
   v[12] = cfg.arc_tolerance_mm;
   v[13] = 0;  // report in mm
-  for (int n : {20, 21, 22, 23}) v[n] = 0;
+  for (int n : {21, 22, 23}) v[n] = 0;
+  // Soft limits: on when the configuration gives a travel for X, Y or Z ([travel]).
+  v[20] = cfg.travel[config::kX].enabled || cfg.travel[config::kY].enabled ||
+                  cfg.travel[config::kZ].enabled
+              ? 1
+              : 0;
   v[24] = 25.0;
   v[25] = 500.0;
   v[26] = 250;
@@ -48,7 +53,8 @@ Settings settings_from_config(const config::MachineConfig& cfg) {
     v[100 + a] = cfg.steps_per_mm[static_cast<size_t>(a)];
     v[110 + a] = cfg.max_feed_mm_min[static_cast<size_t>(a)];
     v[120 + a] = cfg.max_accel_mm_s2[static_cast<size_t>(a)];
-    v[130 + a] = 200.0;
+    const config::Travel& t = cfg.travel[static_cast<size_t>(a)];
+    v[130 + a] = t.enabled ? t.max_mm - t.min_mm : 200.0;  // grbl's default 200 mm
   }
   return s;
 }
@@ -72,6 +78,20 @@ config::MachineConfig apply_settings(const config::MachineConfig& base, const Se
   }
   // G0 runs at each axis's maximum rate (grbl): the planner limits every axis to its own.
   cfg.rapid_feed_mm_min = rapid;
+  // $20 on: an axis the configuration gives a travel travels $130-$132 mm from its min; when
+  // the configuration gives none on X, Y, Z, each gets grbl's own [-$13x, 0]. Off: none on X, Y, Z.
+  const bool configured = base.travel[config::kX].enabled || base.travel[config::kY].enabled ||
+                          base.travel[config::kZ].enabled;
+  for (int a = 0; a < 3; ++a) {
+    config::Travel& t = cfg.travel[static_cast<size_t>(a)];
+    if (get(20) == 0) {
+      t.enabled = false;
+    } else if (t.enabled) {
+      t.max_mm = t.min_mm + get(130 + a);
+    } else if (!configured) {
+      t = {true, -get(130 + a), 0.0};
+    }
+  }
   return cfg;
 }
 
@@ -82,8 +102,8 @@ int set_value(Settings& s, int number, double value, bool hard_limits) {
   if (value < 0.0) return 4;
   if (kIntegers.count(number)) value = std::trunc(value);
   switch (number) {
-    case 20:  // soft limits need homing, which is off
-      if (value != 0.0) return 10;
+    case 20:  // a flag in grbl: any non-zero value is on
+      value = value != 0.0 ? 1.0 : 0.0;
       break;
     case 21:  // hard limits: only where the board has limit switches
       if (value != 0.0 && !hard_limits) return 3;

@@ -106,6 +106,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   V2Session session(link, opt, id, rep);
   session.start();
   for (size_t a = 0; a < job.config.size() && a < n_axes; ++a) session.push({job.config[a]});
+  for (const auto& f : job.travel)
+    if (f.payload[0] < n_axes) session.push({f});
   size_t ei = 0;
   auto events_before = [&](size_t frame) {
     for (; ei < job.events.size() && job.events[ei].before_frame <= frame; ++ei) {
@@ -175,7 +177,7 @@ std::string format_report(const StreamV2Report& r) {
       r.retransmissions, r.go_backs, r.timeouts, r.status_polls);
   s += "NAKs:";
   size_t total = 0;
-  for (uint8_t k = 1; k <= 7; ++k) {
+  for (uint8_t k = 1; k <= spec::kNakReasons.size(); ++k) {
     s += fmt::format(" {} {}", v2::nak_reason_name(k), r.naks[k]);
     total += r.naks[k];
   }

@@ -321,9 +321,10 @@ void V2Session::check_stuck(size_t acked, size_t same) const {
   if (same <= opt_.max_goback_same) return;
   throw Error(fmt::format(
       "{}: {} (seq {}) refused {} times without progress (NAKs: {} BAD_CRC, {} "
-      "BAD_LENGTH, {} UNKNOWN_TYPE, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL, {} BAD_FIELD)",
+      "BAD_LENGTH, {} UNKNOWN_TYPE, {} TIMEOUT, {} OUT_OF_ORDER, {} FIFO_FULL, {} BAD_FIELD, {} "
+      "TRAVEL)",
       name_, item_name(acked), win_.seq_of(acked), same, rep_.naks[1], rep_.naks[2], rep_.naks[3],
-      rep_.naks[4], rep_.naks[5], rep_.naks[6], rep_.naks[7]));
+      rep_.naks[4], rep_.naks[5], rep_.naks[6], rep_.naks[7], rep_.naks[8]));
 }
 
 void V2Session::check_faults(const v2::Status& stt) {
@@ -433,6 +434,15 @@ void V2Session::handle(const v2::Frame& f) {
         if (!update(k.next_seq, k.free, std::nullopt)) break;
         const size_t acked = win_.acked();
         const size_t n = items_.size();
+        // The device's soft limits (docs/machine.md "Soft limits"): the frame's end leaves the
+        // travel it was given; every copy would be refused the same way, so never retried.
+        if (k.reason == v2::NakReason::Travel && acked < n && k.seq == win_.seq_of(acked)) {
+          throw Error(fmt::format(
+              "{}: the device refused {} (seq {}): its end leaves the travel of an axis (NAK "
+              "TRAVEL: the device's soft limits, CONFIG_TRAVEL; the host's [travel] or its idea of "
+              "the machine position differs from the device's)",
+              name_, item_name(acked), k.seq));
+        }
         // A refusal of the frame's content (BAD_FIELD, UNKNOWN_TYPE) is the same for every
         // copy, including those sent before a go-back: three of them for the oldest unacked
         // frame end the job.

@@ -84,7 +84,102 @@ std::vector<gcode::Vec4> arc_chord_points(const gcode::Move& m, double tolerance
   return pts;
 }
 
-Planner::Planner(const config::MachineConfig& cfg, PlanOptions options) : cfg_(cfg), opt_(options) {
+namespace {
+
+// Soft-limit test of one axis value, in steps.
+std::optional<TravelViolation> outside(int axis, double mm, bool in_arc,
+                                       const config::MachineConfig& cfg) {
+  const auto a = static_cast<size_t>(axis);
+  const config::Travel& t = cfg.travel[a];
+  if (!t.enabled) return std::nullopt;
+  const double spm = cfg.steps_per_mm[a];
+  const long long v = std::llround(mm * spm);
+  if (v > std::llround(t.max_mm * spm)) return TravelViolation{axis, true, in_arc, mm, t.max_mm};
+  if (v < std::llround(t.min_mm * spm)) return TravelViolation{axis, false, in_arc, mm, t.min_mm};
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<TravelViolation> check_travel(const gcode::Move& m,
+                                            const config::MachineConfig& cfg) {
+  const bool arc = m.motion == gcode::Motion::kArcCw || m.motion == gcode::Motion::kArcCcw;
+  if (arc) {
+    const gcode::PlaneAxes pa = gcode::plane_axes(m.plane);
+    const auto u = static_cast<size_t>(pa.u), v = static_cast<size_t>(pa.v);
+    const config::Travel& tu = cfg.travel[u];
+    const config::Travel& tv = cfg.travel[v];
+    if (tu.enabled || tv.enabled) {
+      const double cx = m.center[0], cy = m.center[1];
+      const double r0 = std::hypot(m.start[u] - cx, m.start[v] - cy);
+      const double r1 = std::hypot(m.end[u] - cx, m.end[v] - cy);
+      const double a0 = std::atan2(m.start[v] - cy, m.start[u] - cx);
+      const double a1 = std::atan2(m.end[v] - cy, m.end[u] - cx);
+      const bool cw = m.motion == gcode::Motion::kArcCw;
+      constexpr double kTwoPi = 2.0 * std::numbers::pi;
+      constexpr double kQuarter = std::numbers::pi / 2.0;
+      double sweep;
+      if (m.full_circle) {
+        sweep = cw ? -kTwoPi : kTwoPi;
+      } else {
+        sweep = a1 - a0;
+        if (cw && sweep >= 0.0) sweep -= kTwoPi;
+        if (!cw && sweep <= 0.0) sweep += kTwoPi;
+      }
+      sweep += (cw ? -kTwoPi : kTwoPi) * m.extra_turns;
+      // Quarter-turn directions k * pi/2 strictly inside the sweep, in the order the arc meets
+      // them: the first and last four (the radius changes linearly along a spiral).
+      const double dir = cw ? -1.0 : 1.0;
+      const double s0 = dir * a0 / kQuarter, s1 = dir * (a0 + sweep) / kQuarter;
+      const long long k_first = static_cast<long long>(std::floor(s0)) + 1;
+      const long long k_last = static_cast<long long>(std::ceil(s1)) - 1;
+      for (long long k = k_first; k <= k_last; ++k) {
+        if (k - k_first >= 4 && k_last - k >= 4) {
+          k = k_last - 4;
+          continue;
+        }
+        const double ang = dir * static_cast<double>(k) * kQuarter;
+        const double f = (ang - a0) / sweep;
+        const double r = r0 + (r1 - r0) * f;
+        if (auto o = outside(pa.u, cx + r * std::cos(ang), true, cfg)) return o;
+        if (auto o = outside(pa.v, cy + r * std::sin(ang), true, cfg)) return o;
+      }
+    }
+  }
+  for (int a = 0; a < config::kAxes; ++a) {
+    if (auto o = outside(a, m.end[static_cast<size_t>(a)], false, cfg)) return o;
+  }
+  return std::nullopt;
+}
+
+std::optional<TravelViolation> check_travel_steps(const Steps4& position,
+                                                  const config::MachineConfig& cfg) {
+  for (size_t a = 0; a < 4; ++a) {
+    const config::Travel& t = cfg.travel[a];
+    if (!t.enabled) continue;
+    const double spm = cfg.steps_per_mm[a];
+    const double mm = static_cast<double>(position[a]) / spm;
+    const int axis = static_cast<int>(a);
+    if (position[a] > std::llround(t.max_mm * spm))
+      return TravelViolation{axis, true, false, mm, t.max_mm};
+    if (position[a] < std::llround(t.min_mm * spm))
+      return TravelViolation{axis, false, false, mm, t.min_mm};
+  }
+  return std::nullopt;
+}
+
+std::string describe(const TravelViolation& v, char fourth_axis) {
+  const char name =
+      v.axis == config::kE ? fourth_axis : config::kAxisNames[static_cast<size_t>(v.axis)];
+  const char* unit = name == 'A' ? "deg" : "mm";
+  return fmt::format("{} reaches {:.3f} {}{}, {:.3f} {} {} its {} {:.3f} {}", name, v.value_mm,
+                     unit, v.in_arc ? " inside the arc" : "", std::fabs(v.value_mm - v.limit_mm),
+                     unit, v.above_max ? "beyond" : "below", v.above_max ? "max" : "min",
+                     v.limit_mm, unit);
+}
+
+Planner::Planner(const config::MachineConfig& cfg, PlanOptions options, std::string source)
+    : cfg_(cfg), opt_(options), source_(std::move(source)) {
   plan_.numerator = {v1_numerator(cfg.clk_hz, cfg.steps_per_mm[0]),
                      v1_numerator(cfg.clk_hz, cfg.steps_per_mm[1])};
 }
@@ -133,6 +228,15 @@ void Planner::add_limits(const gcode::Limits& l) {
 }
 
 void Planner::add_move(const gcode::Move& m) {
+  if (const auto v = check_travel(m, cfg_)) {
+    throw TravelError(
+        source_, m.line, *v,
+        fmt::format("{} leaves the travel (soft limits, [travel]): {}",
+                    m.motion == gcode::Motion::kArcCw || m.motion == gcode::Motion::kArcCcw
+                        ? "arc"
+                        : "move",
+                    describe(*v, cfg_.fourth_axis)));
+  }
   move_ = &m;
   const bool cutting = is_cutting(m, cfg_);
   const uint8_t code = cutting ? static_cast<uint8_t>(m.motion) : 0;
@@ -276,7 +380,7 @@ gcode::Options gcode_options(const config::MachineConfig& cfg) {
 
 Plan plan_program(const gcode::Program& program, const config::MachineConfig& cfg,
                   PlanOptions options) {
-  Planner p(cfg, options);
+  Planner p(cfg, options, program.file_name);
   for (const auto& c : program.commands) p.add(c);
   Plan plan = p.finish();
   plan.source = program.file_name;
@@ -288,7 +392,7 @@ Plan plan_gcode_file(const std::string& path, const config::MachineConfig& cfg,
                      PlanOptions options) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw gcode::Error(path, 0, 0, "cannot open file");
-  Planner p(cfg, options);
+  Planner p(cfg, options, path);
   const gcode::Options go = gcode_options(cfg);
   const gcode::Stats in =
       gcode::parse_stream(f, path, go, [&](const gcode::Command& c) { p.add(c); });

@@ -104,6 +104,11 @@ Plan read_step_file(std::istream& in, const std::string& name, const config::Mac
     s.length_mm = std::hypot(dx, dy);
     for (size_t a = 0; a < 4; ++a) pos[a] += s.steps[a];
     s.target = pos;
+    if (const auto v = check_travel_steps(pos, cfg)) {
+      throw TravelError(name, n, *v,
+                        fmt::format("segment leaves the travel (soft limits, [travel]): {}",
+                                    describe(*v, cfg.fourth_axis)));
+    }
     ++plan.stats.segments;
     if (s.code == 0) {
       ++plan.stats.rapid_segments;

@@ -25,6 +25,18 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if (n != spec::kLenConfigAxis) return NakReason::BadLength;
       if (n_axes && f.payload[0] >= n_axes) return NakReason::BadField;
       return std::nullopt;
+    case Type::ConfigTravel: {
+      if (n != spec::kLenConfigTravel) return NakReason::BadLength;
+      if (n_axes && f.payload[0] >= n_axes) return NakReason::BadField;
+      if (f.payload[1] & ~spec::kTravelEnable) return NakReason::BadField;
+      const auto be = [&](size_t i) {
+        return static_cast<int32_t>(uint32_t{f.payload[i]} << 24 |
+                                    uint32_t{f.payload[i + 1]} << 16 |
+                                    uint32_t{f.payload[i + 2]} << 8 | f.payload[i + 3]);
+      };
+      if ((f.payload[1] & spec::kTravelEnable) && be(2) > be(6)) return NakReason::BadField;
+      return std::nullopt;
+    }
     case Type::Numerators:
       if (n != spec::kLenNumerators) return NakReason::BadLength;
       return std::nullopt;

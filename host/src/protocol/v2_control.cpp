@@ -55,7 +55,8 @@ Credit decode_credit(const Frame& f) {
 Nak decode_nak(const Frame& f) {
   expect(f, Type::Nak, spec::kLenNak);
   const uint8_t r = f.payload[1];
-  if (r < 1 || r > 7) throw ProtocolError(fmt::format("NAK: unknown reason {}", r));
+  if (r < 1 || r > spec::kNakReasons.size())
+    throw ProtocolError(fmt::format("NAK: unknown reason {}", r));
   return Nak{f.payload[0], static_cast<NakReason>(r), f.payload[2], get16(f.payload, 3)};
 }
 
@@ -184,6 +185,13 @@ Frame config_axis(uint8_t seq, uint8_t axis, uint16_t step_high, uint16_t step_l
   put16(p, dir_setup);
   put16(p, dir_hold);
   return make(seq, Type::ConfigAxis, std::move(p));
+}
+
+Frame config_travel(uint8_t seq, uint8_t axis, bool enable, int32_t min, int32_t max) {
+  std::vector<uint8_t> p{axis, static_cast<uint8_t>(enable ? spec::kTravelEnable : 0)};
+  put32(p, static_cast<uint32_t>(min));
+  put32(p, static_cast<uint32_t>(max));
+  return make(seq, Type::ConfigTravel, std::move(p));
 }
 
 ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {

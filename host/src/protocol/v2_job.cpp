@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -440,7 +441,21 @@ Job start_job(const plan::Plan& plan, const config::MachineConfig& cfg) {
   const uint16_t dh = u16_timing(st.dir_hold, "dir_hold");
   for (uint8_t a = 0; a < config::kAxes; ++a)
     job.config.push_back(config_axis(0, a, sh, sl, ds, dh));
+  for (uint8_t a = 0; a < config::kAxes; ++a) {
+    const config::Travel& t = cfg.travel[a];
+    if (!t.enabled) continue;
+    const auto steps = [&](double mm) {
+      const double s = std::round(mm * cfg.steps_per_mm[a]);
+      if (!(std::fabs(s) <= 2147483647.0))
+        throw std::invalid_argument(
+            fmt::format("[travel] {}: {} mm is {} steps, beyond a CONFIG_TRAVEL field (int32)",
+                        static_cast<char>(std::tolower(config::kAxisNames[a])), mm, s));
+      return static_cast<int32_t>(s);
+    };
+    job.travel.push_back(config_travel(0, a, true, steps(t.min_mm), steps(t.max_mm)));
+  }
   for (const auto& f : job.config) job.wire_bytes += kOverhead + f.payload.size();
+  for (const auto& f : job.travel) job.wire_bytes += kOverhead + f.payload.size();
   job.min_period = min_period(st);
   job.numerator = plan.numerator;
   job.clk_hz = cfg.clk_hz;

@@ -23,6 +23,15 @@ struct StepTiming {  // in clocks of clk_hz
   uint32_t dir_hold = 200;
 };
 
+// Soft limits of one axis: its travel in machine coordinates (mm; degrees for an A axis). A move
+// whose end (an arc: whose extent) leaves [min_mm, max_mm] is refused before anything is sent
+// (docs/machine.md "Soft limits"). Off (enabled = false) unless the configuration gives it.
+struct Travel {
+  bool enabled = false;
+  double min_mm = 0.0;
+  double max_mm = 0.0;
+};
+
 struct MachineConfig {
   std::array<double, kAxes> steps_per_mm{160.0, 160.0, 400.0, 100.0};
   std::array<double, kAxes> max_feed_mm_min{12000.0, 12000.0, 600.0, 3000.0};
@@ -55,6 +64,8 @@ struct MachineConfig {
   // The fourth step channel: "E" (an extruder, mm) or "A" (a rotary axis: steps_per_mm.a is
   // steps per degree, max_feed_mm_min.a degrees per minute, max_accel_mm_s2.a degrees/s^2).
   char fourth_axis = 'E';
+  // [travel]: soft limits per axis (x, y, z, e or a = { min = ..., max = ... }); absent: none.
+  std::array<Travel, kAxes> travel{};
   // [gcode]: how G-code files are read (docs/gcode.md).
   struct GCode {
     std::string dialect = "auto";   // "auto" (detected per file), grbl, linuxcnc, marlin, reprap
@@ -78,8 +89,8 @@ class Error : public SourceError {
 MachineConfig load_machine_config(const std::string& path);
 // Same from TOML text (name used in error messages).
 MachineConfig parse_machine_config(const std::string& text, const std::string& name);
-// Checks ranges (positive steps/mm, feeds, clk, baud, protocol name); throws Error naming `name`.
-// Protocol names: "auto", "v1", "v2".
+// Checks ranges (positive steps/mm, feeds, clk, baud, protocol name, travel min < max); throws
+// Error naming `name`. Protocol names: "auto", "v1", "v2".
 bool valid_protocol_name(const std::string& name);
 // Motion names: "profile", "constant".
 bool valid_motion_name(const std::string& name);

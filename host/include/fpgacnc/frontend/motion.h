@@ -18,7 +18,8 @@
 
 namespace fpgacnc::frontend {
 
-// CONFIG_AXIS (the configuration's step timing) for every axis the device has.
+// CONFIG_AXIS (the configuration's step timing) and CONFIG_TRAVEL (its [travel]: soft limits on
+// or off) for every axis the device has.
 void push_config_axes(link::V2Session& session, const protocol::v2::Ident& ident,
                       const config::MachineConfig& cfg);
 

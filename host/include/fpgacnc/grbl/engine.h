@@ -9,7 +9,8 @@
 // both work; each G-code line goes through the interpreter (grbl dialect) and the planner into
 // the look-ahead (plan::Lookahead, window W = lookahead_segments), whose finished profiles go to
 // the v2 session (link/v2_session.h) as LINE_PROFILE frames at once; `ok` when the line is
-// planned, `error:N` (grbl's codes) when refused.
+// planned, `error:N` (grbl's codes) when refused; a line whose motion leaves the travel with soft
+// limits on ($20=1) raises ALARM:2 (docs/grbl.md, "Soft limits").
 // Flush rule: the look-ahead is planned to a stop and sent when no complete line waits in the
 // receive buffer and the board has at most kLowWater FIFO frames left to run (the sender went
 // quiet or is slower than the machine), and always at G4, M0/M1/M6, M2/M30, coolant/fan outputs
@@ -119,7 +120,9 @@ class Engine {
   void take_line();
   void process_line(const std::string& raw);
   int system_command(const std::string& cmd);
+  // 0, grbl's error code, or kSoftLimit (a move leaves the travel: nothing of the line queued).
   int gcode_line(const std::string& raw, bool check_only);
+  static constexpr int kSoftLimit = -2;
   void push_items(std::vector<plan::PlanItem> items);
   void flush_lookahead();
   void emit_profiles();
@@ -158,6 +161,9 @@ class Engine {
   EngineStats stats_;
 
   bool alarm_ = false;
+  // Soft-limit alarm (ALARM:2): no line is taken until a soft reset, which answers the refused
+  // line's `ok` before the banner (grbl's critical event).
+  bool critical_ = false;
   bool limit_alarm_ =
       false;  // ALARM:1 given: lines wait until a soft reset (grbl's critical alarm)
   bool check_ = false;

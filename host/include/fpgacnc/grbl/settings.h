@@ -27,7 +27,7 @@ config::MachineConfig apply_settings(const config::MachineConfig& cfg, const Set
 // Checks `$N=value` against grbl's rules; returns 0 and stores it, or grbl's error code:
 // 3 unknown setting (also a feature this controller does not have: homing, and hard limits
 // `$21=1` unless `hard_limits`: the board has limit switches), 4 negative value, 6 step pulse
-// under 3 us, 10 soft limits without homing.
+// under 3 us. $20 is stored as 0 or 1.
 int set_value(Settings& s, int number, double value, bool hard_limits = false);
 
 // `$N=value` lines in number order, as `$$` prints them.

@@ -107,12 +107,12 @@ struct StreamV2Report {
   size_t profiles = 0;  // LINE_PROFILE frames
   size_t arcs = 0;      // ARC frames
   size_t dwells = 0;
-  size_t pauses = 0;             // pauses the job stopped at
-  size_t outputs = 0;            // OUTPUT frames (M7-M9, M62-M65, M106/M107)
-  size_t retransmissions = 0;    // sequenced frames written more than once (each resend)
-  size_t go_backs = 0;           // times the window went back (NAK or timeout)
-  size_t timeouts = 0;           // retransmission timeouts
-  std::array<size_t, 8> naks{};  // by reason code 1..7 (index 0: unused)
+  size_t pauses = 0;           // pauses the job stopped at
+  size_t outputs = 0;          // OUTPUT frames (M7-M9, M62-M65, M106/M107)
+  size_t retransmissions = 0;  // sequenced frames written more than once (each resend)
+  size_t go_backs = 0;         // times the window went back (NAK or timeout)
+  size_t timeouts = 0;         // retransmission timeouts
+  std::array<size_t, spec::kNakReasons.size() + 1> naks{};  // by reason code (index 0: unused)
   size_t naks_ignored = 0;       // NAKs about copies sent before a go-back (device still there)
   size_t duplicates = 0;         // device frames identical to the previous one (same SEQ)
   size_t stale_answers = 0;      // ACK/NAK/DONE whose next_seq is outside the window

@@ -10,7 +10,10 @@
 #include <variant>
 #include <vector>
 
+#include <optional>
+
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/error.h"
 #include "fpgacnc/gcode/interpreter.h"
 
 namespace fpgacnc::plan {
@@ -98,12 +101,45 @@ struct PlanOptions {
 // v1 init numerator for one axis: clk_hz * 60 / steps_per_mm (integer). Throws if it does not fit.
 uint32_t v1_numerator(uint64_t clk_hz, double steps_per_mm);
 
-// Point on an arc cut into chords: chord end points in mm (the last is exactly move.end).
+// Points on an arc cut into chords: chord end points in mm (the last is exactly move.end).
 std::vector<gcode::Vec4> arc_chord_points(const gcode::Move& move, double tolerance_mm);
+
+// Soft limits (config::Travel): where a move first leaves the travel. What is checked: a straight
+// move's end (the travel is a box, so a move that starts inside stays inside up to its end); an
+// arc's end and every point where it crosses one of its plane's four axis directions (its extent
+// in the plane: first and last crossing of each direction, so a spiral's largest radius is seen),
+// and its linear axes at their end. Positions compare in steps (llround(mm * steps_per_mm)), the
+// units the device's own check uses, so the host never sends what the device would refuse.
+struct TravelViolation {
+  int axis = 0;            // config::Axis
+  bool above_max = false;  // true: beyond max_mm; false: below min_mm
+  bool in_arc = false;     // the point is inside an arc, not its end
+  double value_mm = 0.0;   // where the move gets to on that axis
+  double limit_mm = 0.0;   // the limit it passes
+};
+std::optional<TravelViolation> check_travel(const gcode::Move& move,
+                                            const config::MachineConfig& cfg);
+// The same test for a position in steps (a step file's segment end).
+std::optional<TravelViolation> check_travel_steps(const Steps4& position,
+                                                  const config::MachineConfig& cfg);
+// "X reaches 312.500 mm, 12.500 mm beyond its max 300.000 mm" (the arc's extent said so).
+std::string describe(const TravelViolation& v, char fourth_axis = 'E');
+
+// A move that leaves the travel: what() reads "FILE:LINE: error: move leaves the travel: ...".
+class TravelError : public SourceError {
+ public:
+  TravelError(std::string file, int line, TravelViolation v, std::string message)
+      : SourceError(std::move(file), line, 0, std::move(message)), violation_(v) {}
+  const TravelViolation& violation() const { return violation_; }
+
+ private:
+  TravelViolation violation_;
+};
 
 class Planner {
  public:
-  Planner(const config::MachineConfig& cfg, PlanOptions options);
+  // `source` names the input in errors (TravelError: "source:line").
+  Planner(const config::MachineConfig& cfg, PlanOptions options, std::string source = {});
   void add(const gcode::Command& command);
   Plan finish();  // moves the plan out
   // The items added so far, moved out; the planner goes on from the same position (a line
@@ -118,6 +154,7 @@ class Planner {
   void add_limits(const gcode::Limits& l);
   config::MachineConfig cfg_;
   PlanOptions opt_;
+  std::string source_;
   // Job limits in force (0 = the machine's).
   std::array<double, 4> job_max_feed_{};
   std::array<double, 4> job_accel_{};

@@ -36,6 +36,7 @@ enum class Type : uint8_t {
   StatusQuery = spec::kTypeStatusQuery,
   FaultClear = spec::kTypeFaultClear,
   ConfigAxis = spec::kTypeConfigAxis,
+  ConfigTravel = spec::kTypeConfigTravel,  // soft limits of one axis
   Numerators = spec::kTypeNumerators,
   Release = spec::kTypeRelease,
   Line = spec::kTypeLine,
@@ -63,7 +64,8 @@ enum class NakReason : uint8_t {
   Timeout = spec::kNakTimeout,
   OutOfOrder = spec::kNakOutOfOrder,
   FifoFull = spec::kNakFifoFull,
-  BadField = spec::kNakBadField
+  BadField = spec::kNakBadField,
+  Travel = spec::kNakTravel  // the frame's end leaves the travel (CONFIG_TRAVEL): never retried
 };
 
 // "HELLO", "ACK", ..., or "0x12" for a value not in the table.
@@ -255,6 +257,8 @@ Frame fault_clear(uint8_t seq);
 Frame release(uint8_t seq);
 Frame config_axis(uint8_t seq, uint8_t axis, uint16_t step_high, uint16_t step_low,
                   uint16_t dir_setup, uint16_t dir_hold);
+// CONFIG_TRAVEL: axis `axis`'s travel [min, max] in signed steps, soft limits on (`enable`) or off.
+Frame config_travel(uint8_t seq, uint8_t axis, bool enable, int32_t min, int32_t max);
 Frame numerators(uint8_t seq, uint32_t numerator_x, uint32_t numerator_y);
 Frame line(uint8_t seq, uint8_t code, uint8_t power, uint32_t t, std::span<const int32_t> steps,
            bool short_if_fits = true);

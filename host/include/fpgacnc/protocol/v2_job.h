@@ -64,6 +64,9 @@ struct JobEvent {
 struct Job {
   // CONFIG_AXIS for axes 0..3 (the streamer sends those below the device's N_AXES).
   std::vector<Frame> config;
+  // CONFIG_TRAVEL for each axis with a [travel] (soft limits, in steps), sent after CONFIG_AXIS
+  // (those of axes below the device's N_AXES); empty when the configuration gives none.
+  std::vector<Frame> travel;
   // Frames in the order they are sent after CONFIG_AXIS: the heater setup frames (when heater
   // commands are packed), NUMERATORS, then LINE / LINE_PROFILE / ARC / DWELL / OUTPUT with
   // each HEATER_SETPOINT in its place.

@@ -22,6 +22,12 @@
 //   payload bytes) written to the FIFO,
 //   CONFIG_AXIS sent on `cfg`, FAULT_CLEAR acts; RELEASE, accepted or a duplicate, returns to
 //   auto mode.
+//   Soft limits (docs/protocol.md "CONFIG_TRAVEL"): CONFIG_TRAVEL sets an axis's travel (BAD_FIELD:
+//   axis >= N_AXES, flag bits 7:1, MIN > MAX while enabled); a new LINE / LINE_PROFILE / ARC whose
+//   end (the queued end plus its steps) leaves the travel of an enabled axis is NAK TRAVEL, after
+//   the SEQ rules and before FIFO_FULL. The queued end follows every motion entry written (v1
+//   included) and is 0 after reset; the twin board has no e-stop or limits, so nothing else
+//   flushes the queue.
 // Initiators: `fifo` (FIFO write; level read before a write), `resp` (requests to the response
 // encoder: a strobe after the delay's edge), `cfg` (CONFIG_AXIS writes). state_after(t): the
 // DecoderState after edge t (next_seq, mode, counters), from a history: asked in time order
@@ -94,6 +100,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     history_.clear();
     history_.emplace_back(-1'000'000'000, s_);
     packets = frames = fifo_writes = cfg_writes = 0;
+    travel_ = {};
+    queued_ = {};
     packet_done_cycles.clear();
     v1_packet_cycles.clear();
     naks.clear();
@@ -266,6 +274,54 @@ class FrameDecoderTwin : public sc_core::sc_module {
            ((m & 0x04) != 0 || d == 0);
   }
 
+  // Soft limits: an axis's travel in steps and the queued end position (docs/machine.md).
+  struct Travel {
+    bool on = false;
+    int32_t min = 0, max = 0;
+  };
+  std::array<Travel, kAxes> travel_{};
+  std::array<int32_t, kAxes> queued_{};
+
+  // The steps of the frame being checked, per axis (an ARC's DX, DY, DZ on its plane's axes).
+  std::array<int32_t, kAxes> frame_steps(int axes, int width) const {
+    std::array<int32_t, kAxes> d{};
+    if (type_ == v2::kArc) {
+      std::array<uint8_t, spec::kArcRawBytes> raw{};
+      std::copy(payload_.begin() + 2, payload_.begin() + 2 + spec::kArcRawBytes, raw.begin());
+      const models::arc::Frame f = v2::arc_frame_from_raw(raw, true);
+      const int32_t u = f.g.dx, v = f.g.dy, h = f.dz;
+      // (u, v, h) per plane: XY (X, Y, Z), ZX (Z, X, Y), YZ (Y, Z, X)
+      static constexpr int kU[3] = {0, 2, 1}, kV[3] = {1, 0, 2}, kH[3] = {2, 1, 0};
+      const int plane = payload_[0] >> 2 & 3;
+      auto put = [&](int axis, int32_t x) {
+        if (axis < kAxes) d[static_cast<size_t>(axis)] = x;
+      };
+      put(kU[plane], u);
+      put(kV[plane], v);
+      put(kH[plane], h);
+      return d;
+    }
+    const int base = type_ == v2::kLine ? 6 : 28;
+    for (int a = 0; a < axes; ++a) {
+      const uint8_t* p = &payload_[static_cast<size_t>(base + width * a)];
+      d[static_cast<size_t>(a)] =
+          width == 2 ? static_cast<int16_t>(be16(p)) : static_cast<int32_t>(be32(p));
+    }
+    return d;
+  }
+  bool travel_ok(const std::array<int32_t, kAxes>& d) const {
+    for (size_t a = 0; a < kAxes; ++a) {
+      const int64_t end = int64_t{queued_[a]} + d[a];
+      if (travel_[a].on && (end < travel_[a].min || end > travel_[a].max)) return false;
+    }
+    return true;
+  }
+  void follow(const std::array<int32_t, kAxes>& d) {
+    for (size_t a = 0; a < kAxes; ++a)
+      queued_[a] =
+          static_cast<int32_t>(static_cast<uint32_t>(queued_[a]) + static_cast<uint32_t>(d[a]));
+  }
+
   void v1_packet(Cycle take) {
     const bool init = kind_ == Kind::V1Init;
     count_ = 0;
@@ -283,6 +339,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
       commit_check(take);
       return;
     }
+    if (!init) follow({static_cast<int32_t>(e.steps[0]), static_cast<int32_t>(e.steps[1])});
     ++packets;
     packet_done_cycles.push_back(take + kDecoderResp);
     v1_packet_cycles.push_back(take + kDecoderResp);
@@ -342,6 +399,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return 0;
       case v2::kConfigAxis:
         return static_cast<int>(spec::kLenConfigAxis);
+      case v2::kConfigTravel:
+        return static_cast<int>(spec::kLenConfigTravel);
       case v2::kNumerators:
         return static_cast<int>(spec::kLenNumerators);
       case v2::kDwell:
@@ -424,6 +483,10 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
     if (((type_ == v2::kLine || type_ == v2::kLineProfile) && (payload_[0] & 0x7C) != 0) ||
         (type_ == v2::kConfigAxis && payload_[0] >= kAxes) ||
+        (type_ == v2::kConfigTravel &&
+         (payload_[0] >= kAxes || (payload_[1] & 0xFE) != 0 ||
+          ((payload_[1] & 1) != 0 &&
+           static_cast<int32_t>(be32(&payload_[2])) > static_cast<int32_t>(be32(&payload_[6]))))) ||
         (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) ||
         (type_ == v2::kArc && !arc_fields_ok()) || (type_ == v2::kOutput && !output_fields_ok()) ||
         !heater_fields_ok()) {
@@ -450,6 +513,14 @@ class FrameDecoderTwin : public sc_core::sc_module {
       if (type_ == v2::kRelease) s_.v2_mode = false;
       commit_check(take);
       request(r, RespReq{kReqAck});
+      return;
+    }
+    const bool moves = type_ == v2::kLine || type_ == v2::kLineProfile || type_ == v2::kArc;
+    const std::array<int32_t, kAxes> steps =
+        moves ? frame_steps(axes, width) : std::array<int32_t, kAxes>{};
+    if (moves && !travel_ok(steps)) {
+      commit_check(take);
+      request(r, RespReq{kReqNak, seq_, v2::kTravel});
       return;
     }
     if (type_ == v2::kLine || type_ == v2::kDwell || type_ == v2::kNumerators ||
@@ -505,6 +576,11 @@ class FrameDecoderTwin : public sc_core::sc_module {
         request(r, RespReq{kReqNak, seq_, v2::kFifoFull});
         return;
       }
+      if (moves) follow(steps);
+    } else if (type_ == v2::kConfigTravel) {
+      const auto a = static_cast<size_t>(payload_[0]);
+      travel_[a] = Travel{(payload_[1] & 1) != 0, static_cast<int32_t>(be32(&payload_[2])),
+                          static_cast<int32_t>(be32(&payload_[6]))};
     } else if (type_ == v2::kConfigAxis) {
       CfgAxis c{payload_[0], AxisTiming{be16(&payload_[1]), be16(&payload_[3]), be16(&payload_[5]),
                                         be16(&payload_[7])}};

@@ -169,6 +169,7 @@ inline constexpr uint32_t kBuildId = spec::kBuildId;
 // Host -> device types.
 inline constexpr uint8_t kHello = spec::kTypeHello, kStatusQuery = spec::kTypeStatusQuery,
                          kFaultClear = spec::kTypeFaultClear, kConfigAxis = spec::kTypeConfigAxis,
+                         kConfigTravel = spec::kTypeConfigTravel,
                          kNumerators = spec::kTypeNumerators, kRelease = spec::kTypeRelease,
                          kLine = spec::kTypeLine, kDwell = spec::kTypeDwell,
                          kLineProfile = spec::kTypeLineProfile, kArc = spec::kTypeArc,
@@ -185,7 +186,7 @@ inline constexpr uint8_t kAck = spec::kTypeAck, kNak = spec::kTypeNak, kDone = s
 inline constexpr uint8_t kBadCrc = spec::kNakBadCrc, kBadLength = spec::kNakBadLength,
                          kUnknownType = spec::kNakUnknownType, kTimeout = spec::kNakTimeout,
                          kOutOfOrder = spec::kNakOutOfOrder, kFifoFull = spec::kNakFifoFull,
-                         kBadField = spec::kNakBadField;
+                         kBadField = spec::kNakBadField, kTravel = spec::kNakTravel;
 // STATUS counters (payload order).
 enum Counter : int {
   kFramesOk = spec::kCounterFramesOk,
