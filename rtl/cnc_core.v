@@ -1,6 +1,8 @@
-// cnc_core: the board-independent controller, protocols v1 and v2: wiring of the blocks in
-// docs/architecture.md ("Code flow in the device"), the configuration registers, the fault latch,
-// the e-stop and the status counters.
+// cnc_core: the board-independent controller, protocols v1 and v2: the wiring of the blocks in
+// docs/architecture.md ("Code flow in the device"): uart_rx, the front end (front_v2: decoder and
+// command FIFO, or front_v1: the v1 decoder), step_config, segment_prep, segment_executor,
+// machine_outputs, estop_latch, the hard limits (input_filter, limit_guard), heater_block,
+// status_counters, answer_source, uart_tx.
 //
 // Contract
 //   rx / tx          the UART (BAUD, 8N1); the protocol is docs/protocol.md.
@@ -229,7 +231,7 @@ module cnc_core #(
       .overrun_error(rx_overrun)
   );
 
-  // ---------------------------------------------------------------- decoder, command FIFO
+  // ---------------------------------------------------------------- front end
   // Common to both protocol builds: the decoder's configuration, heater and fault-clear requests,
   // its status strobes, and the entry stream into segment_prep (cmd_*).
   wire dec_cfg_wr;
