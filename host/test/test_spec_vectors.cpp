@@ -446,6 +446,33 @@ TEST(SpecVectors, ReaderNamesTheBadLine) {
   } catch (const std::runtime_error& e) {
     EXPECT_EQ(std::string(e.what()), path + ":3:10: not a number: \"0G\"");
   }
+  // Sequences: a reply's TYPE that is not a number, a field before any reply.
+  const std::string seq_path = ::testing::TempDir() + "bad_sequences.txt";
+  const std::string good =
+      "vector x\nbytes A5 00 00 01 DC BD\nend\nsequence s\nsend x A5 00 00 01 DC BD\n";
+  for (const auto& [text, want] :
+       {std::pair<std::string, std::string>{good + "reply IDENT x A5\nend\n",
+                                            ":6:13: not a number: \"x\""},
+        std::pair<std::string, std::string>{good + "rfield next_seq 0\nend\n",
+                                            ":6:1: \"rfield\" before a \"reply\""}}) {
+    {
+      std::ofstream o(seq_path);
+      o << text;
+    }
+    try {
+      spec::load_sequences(seq_path);
+      ADD_FAILURE() << "no error for " << want;
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), seq_path + want);
+    }
+  }
+  std::ofstream(seq_path) << good << "reply IDENT 132 A5 00\nrfield next_seq 3\nend\n";
+  const auto seqs = spec::load_sequences(seq_path);
+  ASSERT_EQ(seqs.size(), 1u);
+  ASSERT_EQ(seqs[0].replies.size(), 1u);
+  EXPECT_EQ(seqs[0].sends.at(0).vector, "x");
+  EXPECT_EQ(seqs[0].replies[0].type, 132u);
+  EXPECT_EQ(seqs[0].replies[0].field("next_seq"), 3);
 }
 
 }  // namespace
