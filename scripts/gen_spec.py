@@ -615,6 +615,10 @@ def reply_fields(d, where, r):
         if k not in r:
             fail(where, f"reply {t['name']}: {k} missing")
     f = {k: r[k] for k in need[t["name"]]}
+    widths = {"seq": 8, "next_seq": 8, "free": 16, "done": 32}
+    for k, w in widths.items():
+        if k in f and not (isinstance(f[k], int) and 0 <= f[k] < 1 << w):
+            fail(where, f"reply {t['name']}: {k} must be an integer 0..{(1 << w) - 1}")
     if "reason" in f:
         if f["reason"] not in naks:
             fail(where, f"reply NAK: {f['reason']} is no NAK reason")
