@@ -99,7 +99,7 @@ inline SpecFile load_spec_file(const std::string& path) {
   std::vector<Vector>& out = file.vectors;
   Vector cur;
   Sequence seq;
-  enum class Block { kNone, kVector, kSequence } block = Block::kNone;
+  enum class Block { kVector, kSequence } block = Block::kVector;
   bool open = false;
   std::string line;
   int n = 0;
@@ -162,7 +162,7 @@ inline SpecFile load_spec_file(const std::string& path) {
       open = true;
       continue;
     }
-    if (!open) fail(0, "\"" + key + "\" outside a vector");
+    if (!open) fail(0, "\"" + key + "\" outside a vector or sequence");
     if (block == Block::kSequence) {
       // NAME then the rest of the line at its column.
       auto split = [&](std::string& name, std::string& tail, size_t& tail_col) {
