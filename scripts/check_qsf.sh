@@ -7,9 +7,9 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 t=$(mktemp)
 trap 'rm -f "$t"' EXIT
-if ! yosys -q -p "read_verilog -Irtl/include rtl/*.v; hierarchy -top de1soc_top; tee -q -o $t ls; \
+if ! yosys -q -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; hierarchy -top de1soc_top; tee -q -o $t ls; \
     tee -q -a $t select -list de1soc_top/i:* de1soc_top/o:*" >/dev/null 2>&1; then
-  echo "check_qsf: yosys could not elaborate de1soc_top from rtl/*.v"; exit 2
+  echo "check_qsf: yosys could not elaborate de1soc_top from rtl/*.v rtl/*/*.v"; exit 2
 fi
 fail=0
 # Module names: plain, $paramod\NAME\PARAMS or $paramod$HASH\NAME.
@@ -24,7 +24,7 @@ nports=0
 for p in $(sed -n 's#^de1soc_top/##p' "$t"); do
   nports=$((nports + 1))
   # Bus ports: every bit; scalar ports: the name itself. Width from the declaration in de1soc_top.v.
-  decl=$(grep -E "^\s*(input|output)\s+(wire|reg)?\s*(\[[0-9]+:0\])?\s*([A-Za-z0-9_]+\s*,\s*)*$p\b" rtl/de1soc_top.v | head -1)
+  decl=$(grep -E "^\s*(input|output)\s+(wire|reg)?\s*(\[[0-9]+:0\])?\s*([A-Za-z0-9_]+\s*,\s*)*$p\b" rtl/board/de1soc_top.v | head -1)
   msb=$(echo "$decl" | sed -n 's/.*\[\([0-9]*\):0\].*/\1/p')
   if [ -n "$msb" ]; then names=$(seq 0 "$msb" | sed "s/.*/$p[&]/"); else names=$p; fi
   for n in $names; do

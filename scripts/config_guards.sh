@@ -10,6 +10,8 @@
 # when any case does not behave (each is reported). CTest lint_config_guards (label lint).
 set -uo pipefail
 cd "$(dirname "$0")/.." || exit 2
+# shellcheck source=scripts/rtl_files.sh
+source scripts/rtl_files.sh
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 fail=0
@@ -21,16 +23,16 @@ elaborate() {
   case $tool in
     verilator)
       for pv in $params; do args+=("-G$pv"); done
-      verilator --lint-only -Wall -Irtl -Irtl/include --top-module cnc_core "${args[@]}" \
+      verilator --lint-only -Wall "${FPGACNC_RTL_VSEARCH[@]}" --top-module cnc_core "${args[@]}" \
         rtl/cnc_core.v >"$log" 2>&1 ;;
     iverilog)
       for pv in $params; do args+=("-Pcnc_core.$pv"); done
-      iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s cnc_core "${args[@]}" \
+      iverilog -g2005 -Wall -Wno-timescale "${FPGACNC_RTL_ISEARCH[@]}" -Y .v -s cnc_core "${args[@]}" \
         -o /dev/null rtl/cnc_core.v >"$log" 2>&1 ;;
     yosys)
       local chp=""
       for pv in $params; do chp="$chp -set ${pv%=*} ${pv#*=}"; done
-      yosys -q -p "read_verilog -Irtl/include rtl/*.v; ${chp:+chparam$chp cnc_core;} hierarchy -check -top cnc_core" \
+      yosys -q -p "read_verilog -Irtl/include ${FPGACNC_RTL_FILES[*]}; ${chp:+chparam$chp cnc_core;} hierarchy -check -top cnc_core" \
         >"$log" 2>&1 ;;
   esac
 }

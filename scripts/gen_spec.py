@@ -528,6 +528,15 @@ def gen_vectors(d):
          "#   answer ACK | NAK REASON VALUE | IDENT | STATUS (host frames: a v2-mode device whose",
          "#     next_seq is SEQ, FIFO not full, N_AXES 4)",
          "#   entry NAME VALUE... (the command-FIFO entry written; fields not named are 0)",
+         "# Worked sequences (after the vectors). Each: lines up to \"end\":",
+         "#   sequence NAME / doc TEXT",
+         "#   send VECTOR HEX... (one per host frame, in order: the frame of that vector, sent back",
+         "#     to back with the others at the device's baud, no idle time, from a device just out of",
+         "#     reset: auto mode, next_seq 0, FIFO empty, N_AXES 4, FIFO_DEPTH 64, 115 200 baud)",
+         "#   reply TYPE VALUE HEX... (one per device frame, in order: every frame the device sends,",
+         "#     its bytes; device SEQ 0, 1, ...)",
+         "#   rfield NAME VALUE (a field of the reply above: NAK seq as received, reason, next_seq,",
+         "#     free; IDENT next_seq; ACK / DONE next_seq, free, done)",
          ""]
     for v in d["vector"]:
         where = f"vector {v['name']}"
@@ -584,7 +593,94 @@ def gen_vectors(d):
                     L.append(f"entry {k} {val}")
         L.append("end")
         L.append("")
+    L += gen_sequences(d)
     return "\n".join(L)
+
+
+def reply_fields(d, where, r):
+    """(TYPE entry, payload bytes, [(field, value)]) of one stated device reply."""
+    types = {t["name"]: t for t in d["type"]}
+    naks = {x["name"]: x["value"] for x in d["nak"]}
+    t = types.get(r.get("type"))
+    if not t or t["dir"] != "device":
+        fail(where, f"reply type {r.get('type')}: not a device frame")
+    need = {"NAK": ("seq", "reason", "next_seq", "free"), "IDENT": ("next_seq",),
+            "ACK": ("next_seq", "free", "done"), "DONE": ("next_seq", "free", "done")}
+    if t["name"] not in need:
+        fail(where, f"reply type {t['name']}: only {', '.join(need)} are stated in sequences")
+    for k in r:
+        if k != "type" and k not in need[t["name"]]:
+            fail(where, f"reply {t['name']}: unknown field {k}")
+    for k in need[t["name"]]:
+        if k not in r:
+            fail(where, f"reply {t['name']}: {k} missing")
+    f = {k: r[k] for k in need[t["name"]]}
+    widths = {"seq": 8, "next_seq": 8, "free": 16, "done": 32}
+    for k, w in widths.items():
+        if k in f and not (isinstance(f[k], int) and 0 <= f[k] < 1 << w):
+            fail(where, f"reply {t['name']}: {k} must be an integer 0..{(1 << w) - 1}")
+    if "reason" in f:
+        if f["reason"] not in naks:
+            fail(where, f"reply NAK: {f['reason']} is no NAK reason")
+        f["reason"] = naks[f["reason"]]
+    D = d["defaults"]
+    if t["name"] == "NAK":
+        pl = [f["seq"], f["reason"], f["next_seq"], *f["free"].to_bytes(2, "big")]
+    elif t["name"] == "IDENT":
+        pl = [d["frame"]["version"]["value"], D["n_axes"]["value"],
+              *D["fifo_depth"]["value"].to_bytes(2, "big"), *D["clk_hz"]["value"].to_bytes(4, "big"),
+              *D["baud"]["value"].to_bytes(4, "big"), *d["build"]["build_id"]["value"].to_bytes(4, "big"),
+              f["next_seq"], d["frame"]["max_payload"]["value"]]
+    else:
+        pl = [f["next_seq"], *f["free"].to_bytes(2, "big"), *f["done"].to_bytes(4, "big")]
+    if len(pl) != t["len"]:
+        fail(where, f"reply {t['name']}: {len(pl)} payload bytes, LEN {t['len']}")
+    return t, pl, list(f.items())
+
+
+def sequence_frames(d, s):
+    """The host frames (name, bytes) and the device replies (TYPE, bytes, fields) of a sequence."""
+    where = f"sequence {s.get('name', '?')}"
+    vectors = {v["name"]: v for v in d["vector"]}
+    host = {t["value"] for t in d["type"] if t["dir"] == "host"}
+    for k in ("name", "doc", "send", "replies"):
+        if k not in s:
+            fail(where, f"{k} missing")
+    sends = []
+    for n in s["send"]:
+        v = vectors.get(n)
+        if v is None:
+            fail(where, f"send: {n} is no [[vector]]")
+        raw = bytes(int(x, 16) for x in v["bytes"].split())
+        if raw[3] not in host:
+            fail(where, f"send: {n} is not a host frame")
+        sends.append((n, raw))
+    replies = []
+    for i, r in enumerate(s["replies"]):
+        t, pl, fields = reply_fields(d, where, r)
+        body = bytes([len(pl), i & 0xFF, t["value"], *pl])
+        crc = crc16(body)
+        replies.append((t, bytes([d["frame"]["sync"]["value"]]) + body + bytes([crc >> 8, crc & 0xFF]), fields))
+        if t["name"] == "NAK" and r["seq"] not in {raw[2] for _, raw in sends}:
+            fail(where, f"reply {i}: NAK of seq {r['seq']}, a SEQ no frame sent has")
+    return sends, replies
+
+
+def gen_sequences(d):
+    L = []
+    for s in d.get("sequence", []):
+        sends, replies = sequence_frames(d, s)
+        L.append(f"sequence {s['name']}")
+        L.append(f"doc {s['doc']}")
+        for n, raw in sends:
+            L.append(f"send {n} " + " ".join(f"{x:02X}" for x in raw))
+        for t, raw, fields in replies:
+            L.append(f"reply {t['name']} {t['value']} " + " ".join(f"{x:02X}" for x in raw))
+            for k, v in fields:
+                L.append(f"rfield {k} {v}")
+        L.append("end")
+        L.append("")
+    return L
 
 
 # ---------------------------------------------------------------- docs tables
@@ -622,6 +718,24 @@ def tables(d):
         ans = v.get("answer", "(device frame)")
         rows.append(f"| {md_escape(v['doc'])} | `{v['bytes']}` | {ans} |")
     T["vectors"] = rows
+    naks = {x["value"]: x["name"] for x in d["nak"]}
+    rows = ["| sequence | host frames, back to back (host byte of each frame's last byte) | device frames, in order |",
+            "| --- | --- | --- |"]
+    for s in d.get("sequence", []):
+        sends, replies = sequence_frames(d, s)
+        at, sent = -1, []
+        for n, raw in sends:
+            at += len(raw)
+            sent.append(f"`{n}` ({at})")
+        got = []
+        for t, raw, fields in replies:
+            f = dict(fields)
+            if t["name"] == "NAK":
+                got.append(f"NAK of seq {f['seq']}, `{naks[f['reason']]}`: `{' '.join(f'{x:02X}' for x in raw)}`")
+            else:
+                got.append(f"{t['name']}")
+        rows.append(f"| `{s['name']}`: {md_escape(s['doc'])} | {', '.join(sent)} | {'; '.join(got)} |")
+    T["sequences"] = rows
     rows = ["| name | value | meaning |", "| --- | --- | --- |"]
     rows.append(f"| `build_id` | `0x{d['build']['build_id']['value']:08X}` | {d['build']['build_id']['doc']} |")
     for sect in ("v1", "frame", "fields", "defaults", "sim"):

@@ -99,14 +99,15 @@ endmodule
 VEOF
 
 # The cnc_core file set (CMakeLists.txt FPGACNC_CORE_RTL).
-core_rtl="rtl/uart_rx.v rtl/uart_tx.v rtl/crc16_ccitt.v rtl/frame_fields.v rtl/entry_pack.v rtl/travel_guard.v rtl/frame_decoder.v rtl/segment_fifo.v"
-core_rtl="$core_rtl rtl/front_v2.v rtl/response_encoder.v rtl/answer_source.v rtl/prep_profile.v rtl/prep_arc.v rtl/prep_dir_tracker.v"
-core_rtl="$core_rtl rtl/segment_prep.v rtl/dda_linear.v"
-core_rtl="$core_rtl rtl/profile_gen.v rtl/dda_profile.v rtl/arc_dda.v"
-core_rtl="$core_rtl rtl/step_pulse.v rtl/axis_channel.v rtl/dir_sequencer.v rtl/segment_executor.v rtl/input_filter.v rtl/limit_guard.v rtl/cnc_core.v"
-core_rtl="$core_rtl rtl/estop_latch.v rtl/step_config.v rtl/status_counters.v rtl/machine_outputs.v"
-core_rtl="$core_rtl rtl/pwm.v rtl/pid_incr.v rtl/ltc2308_spi.v rtl/temp_table.v rtl/heater_safety.v"
-core_rtl="$core_rtl rtl/heater_channel.v rtl/heater_block.v rtl/packet_decoder_v1.v rtl/front_v1.v"
+core_rtl="rtl/protocol/uart_rx.v rtl/protocol/uart_tx.v rtl/protocol/crc16_ccitt.v rtl/protocol/frame_fields.v rtl/protocol/entry_pack.v rtl/machine/travel_guard.v rtl/protocol/frame_decoder.v rtl/protocol/segment_fifo.v"
+core_rtl="$core_rtl rtl/protocol/front_v2.v rtl/protocol/response_encoder.v rtl/protocol/answer_source.v"
+core_rtl="$core_rtl rtl/protocol/status_counters.v rtl/motion/step_config.v rtl/machine/estop_latch.v rtl/machine/machine_outputs.v"
+core_rtl="$core_rtl rtl/motion/prep_profile.v rtl/motion/prep_arc.v rtl/motion/prep_dir_tracker.v"
+core_rtl="$core_rtl rtl/motion/segment_prep.v rtl/motion/dda_linear.v"
+core_rtl="$core_rtl rtl/motion/profile_gen.v rtl/motion/dda_profile.v rtl/motion/arc_dda.v"
+core_rtl="$core_rtl rtl/motion/step_pulse.v rtl/motion/axis_channel.v rtl/motion/dir_sequencer.v rtl/motion/segment_executor.v rtl/machine/input_filter.v rtl/machine/limit_guard.v rtl/cnc_core.v"
+core_rtl="$core_rtl rtl/machine/pwm.v rtl/heater/pid_incr.v rtl/heater/ltc2308_spi.v rtl/heater/temp_table.v rtl/heater/heater_safety.v"
+core_rtl="$core_rtl rtl/heater/heater_channel.v rtl/heater/heater_block.v rtl/protocol/packet_decoder_v1.v rtl/protocol/front_v1.v"
 
 status=0
 summary=()

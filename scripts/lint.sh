@@ -8,16 +8,18 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=scripts/configs.sh
 source scripts/configs.sh
+# shellcheck source=scripts/rtl_files.sh
+source scripts/rtl_files.sh
 fail=0
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
-files=(rtl/*.v)
+files=("${FPGACNC_RTL_FILES[@]}")
 for f in "${files[@]}"; do
   top=$(basename "$f" .v)
-  if ! verilator --lint-only -Wall -Irtl -Irtl/include --top-module "$top" "$f" >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! verilator --lint-only -Wall "${FPGACNC_RTL_VSEARCH[@]}" --top-module "$top" "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: $f"; cat "$log"; fail=1
   fi
-  if ! iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! iverilog -g2005 -Wall -Wno-timescale "${FPGACNC_RTL_ISEARCH[@]}" -Y .v -s "$top" -o /dev/null "$f" >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: $f"; cat "$log"; fail=1
   fi
 done
@@ -39,10 +41,10 @@ for name in "${configs[@]}"; do
   for pv in $params; do
     vg+=("-G$pv"); ig+=("-Pcnc_core.$pv"); yg="$yg -set ${pv%=*} ${pv#*=}"
   done
-  if ! verilator --lint-only -Wall -Irtl -Irtl/include --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! verilator --lint-only -Wall "${FPGACNC_RTL_VSEARCH[@]}" --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
-  if ! iverilog -g2005 -Wall -Wno-timescale -I rtl/include -y rtl -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
+  if ! iverilog -g2005 -Wall -Wno-timescale "${FPGACNC_RTL_ISEARCH[@]}" -Y .v -s cnc_core "${ig[@]}" -o /dev/null rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL iverilog: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
   ygs[$name]="$yg"

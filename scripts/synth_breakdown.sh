@@ -29,7 +29,7 @@ for b in segment_executor heater_block heater_channel $blocks; do
   attrs="$attrs setattr -set submod \"bd_$b\" a:src=*/$b.v:*;"
 done
 stat="$out/breakdown_stat.txt"
-yosys -q -l "$out/breakdown.log" -p "read_verilog -Irtl/include rtl/*.v; chparam $chp cnc_core;
+yosys -q -l "$out/breakdown.log" -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; chparam $chp cnc_core;
   hierarchy -top cnc_core; proc; flatten; opt -full; wreduce; opt_clean; $attrs submod;
   synth_intel_alm -family cyclonev -top cnc_core -noflatten; tee -q -o $stat stat" >/dev/null
 echo "cnc_core $cfg ($chp): per-block Yosys synth_intel_alm figures (cnc_core = its own logic)"

@@ -43,7 +43,7 @@ run() {
   local cfg=$1 top=$2 pre=$3
   local log="$out/report_$cfg.log" stat="$out/report_${cfg}_stat.txt" ltp="$out/report_${cfg}_ltp.txt"
   local t0=$SECONDS
-  if ! yosys -q -l "$log" -p "read_verilog -Irtl/include rtl/*.v; $pre synth_intel_alm -family cyclonev -top $top; \
+  if ! yosys -q -l "$log" -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; $pre synth_intel_alm -family cyclonev -top $top; \
       tee -q -o $stat stat; delete t:MISTRAL_FF t:MISTRAL_M10K t:MISTRAL_MLAB; tee -q -o $ltp ltp -noff" \
       >/dev/null; then
     echo "synth_report: Yosys failed for $cfg (see $log)"; exit 2

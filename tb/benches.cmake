@@ -31,3 +31,6 @@ if(FPGACNC_BUILD_HOST)
   target_include_directories(bench_protocol PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   target_link_libraries(bench_protocol PRIVATE vcore vcore_1m fpgacnc_host fpgacnc_models fmt::fmt)
 endif()
+# The worked sequences of spec/vectors.txt through cnc_core's pins (coalesced NAKs).
+fpgacnc_bench(test_spec_sequences LABEL system
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_spec_sequences.cpp LIBS vcore fmt::fmt)

@@ -1,31 +1,31 @@
 # Verilated models of the core blocks, shared by the benches, the simulated board and the
 # benchmarks.
 fpgacnc_verilated(vexec TOP segment_executor
-                  SOURCES ${FPGACNC_RTL_DIR}/segment_executor.v ${FPGACNC_RTL_DIR}/axis_channel.v
-                          ${FPGACNC_RTL_DIR}/dir_sequencer.v ${FPGACNC_RTL_DIR}/dda_linear.v
-                          ${FPGACNC_RTL_DIR}/profile_gen.v ${FPGACNC_RTL_DIR}/dda_profile.v
-                          ${FPGACNC_RTL_DIR}/arc_dda.v
-                          ${FPGACNC_RTL_DIR}/step_pulse.v)
+                  SOURCES ${FPGACNC_RTL_DIR}/motion/segment_executor.v ${FPGACNC_RTL_DIR}/motion/axis_channel.v
+                          ${FPGACNC_RTL_DIR}/motion/dir_sequencer.v ${FPGACNC_RTL_DIR}/motion/dda_linear.v
+                          ${FPGACNC_RTL_DIR}/motion/profile_gen.v ${FPGACNC_RTL_DIR}/motion/dda_profile.v
+                          ${FPGACNC_RTL_DIR}/motion/arc_dda.v
+                          ${FPGACNC_RTL_DIR}/motion/step_pulse.v)
 fpgacnc_verilated(vprep TOP segment_prep
-                  SOURCES ${FPGACNC_RTL_DIR}/segment_prep.v ${FPGACNC_RTL_DIR}/prep_profile.v
-                          ${FPGACNC_RTL_DIR}/prep_arc.v ${FPGACNC_RTL_DIR}/prep_dir_tracker.v)
+                  SOURCES ${FPGACNC_RTL_DIR}/motion/segment_prep.v ${FPGACNC_RTL_DIR}/motion/prep_profile.v
+                          ${FPGACNC_RTL_DIR}/motion/prep_arc.v ${FPGACNC_RTL_DIR}/motion/prep_dir_tracker.v)
 fpgacnc_verilated(vframe TOP frame_decoder
-                  SOURCES ${FPGACNC_RTL_DIR}/frame_decoder.v ${FPGACNC_RTL_DIR}/frame_fields.v
-                          ${FPGACNC_RTL_DIR}/entry_pack.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v
-                          ${FPGACNC_RTL_DIR}/travel_guard.v)
-fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/segment_fifo.v
+                  SOURCES ${FPGACNC_RTL_DIR}/protocol/frame_decoder.v ${FPGACNC_RTL_DIR}/protocol/frame_fields.v
+                          ${FPGACNC_RTL_DIR}/protocol/entry_pack.v ${FPGACNC_RTL_DIR}/protocol/crc16_ccitt.v
+                          ${FPGACNC_RTL_DIR}/machine/travel_guard.v)
+fpgacnc_verilated(vfifo TOP segment_fifo SOURCES ${FPGACNC_RTL_DIR}/protocol/segment_fifo.v
                   ARGS -GWIDTH=40 -GDEPTH=16)
-fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
+fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/protocol/crc16_ccitt.v)
 fpgacnc_verilated(vencoder TOP response_encoder
-                  SOURCES ${FPGACNC_RTL_DIR}/response_encoder.v ${FPGACNC_RTL_DIR}/crc16_ccitt.v)
+                  SOURCES ${FPGACNC_RTL_DIR}/protocol/response_encoder.v ${FPGACNC_RTL_DIR}/protocol/crc16_ccitt.v)
 fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis PGO SOURCES ${FPGACNC_CORE_RTL})
 # cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
 fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m CONFIG full-4axis
                   SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=3000000)
 # The DE1-SoC top: its cnc_core is the configuration full-2axis (spec/configs.toml).
 fpgacnc_verilated(vde1soc TOP de1soc_top
-                  SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/hex7seg.v
-                          ${FPGACNC_RTL_DIR}/de1soc_top.v
+                  SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/board/hex7seg.v
+                          ${FPGACNC_RTL_DIR}/board/de1soc_top.v
                   ARGS -GCLK_HZ=50000000)
 
 fpgacnc_bench(test_segment_executor LABEL rtl

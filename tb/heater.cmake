@@ -1,13 +1,9 @@
 # Heater benches (docs/heater.md): unit benches of pwm, pid_incr, ltc2308_spi, temp_table, and the
 # heater_block benches (safety faults, closed-loop bed and hot end against the plant models).
-fpgacnc_verilated(vpwm TOP pwm SOURCES ${FPGACNC_RTL_DIR}/pwm.v ARGS -GPWM_BITS=4 -GPWM_DIV=3)
-fpgacnc_verilated(vpid TOP pid_incr SOURCES ${FPGACNC_RTL_DIR}/pid_incr.v)
-fpgacnc_verilated(vadc TOP ltc2308_spi SOURCES ${FPGACNC_RTL_DIR}/ltc2308_spi.v)
-fpgacnc_verilated(vtable TOP temp_table SOURCES ${FPGACNC_RTL_DIR}/temp_table.v)
-set(FPGACNC_HEATER_RTL
-    ${FPGACNC_RTL_DIR}/heater_block.v ${FPGACNC_RTL_DIR}/heater_channel.v
-    ${FPGACNC_RTL_DIR}/heater_safety.v ${FPGACNC_RTL_DIR}/pid_incr.v ${FPGACNC_RTL_DIR}/pwm.v
-    ${FPGACNC_RTL_DIR}/ltc2308_spi.v ${FPGACNC_RTL_DIR}/temp_table.v)
+fpgacnc_verilated(vpwm TOP pwm SOURCES ${FPGACNC_RTL_DIR}/machine/pwm.v ARGS -GPWM_BITS=4 -GPWM_DIV=3)
+fpgacnc_verilated(vpid TOP pid_incr SOURCES ${FPGACNC_RTL_DIR}/heater/pid_incr.v)
+fpgacnc_verilated(vadc TOP ltc2308_spi SOURCES ${FPGACNC_RTL_DIR}/heater/ltc2308_spi.v)
+fpgacnc_verilated(vtable TOP temp_table SOURCES ${FPGACNC_RTL_DIR}/heater/temp_table.v)
 # Scaled time: one sample tick every 4096 clocks, PWM period 1024 clocks (4 per tick).
 fpgacnc_verilated(vheat TOP heater_block SOURCES ${FPGACNC_HEATER_RTL}
                   ARGS -GSAMPLE_CLKS=${FPGACNC_SPEC_BENCH_SAMPLE_CLKS} -GPWM_DIV=1)

@@ -10,7 +10,7 @@ add_test(NAME synth_report
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 # COST: the longest tests start first under `ctest -j` (a fresh clone has no timing history), so
 # they do not form the tail of the run.
-set_tests_properties(synth_report PROPERTIES LABELS synth TIMEOUT 600 COST 1000)
+set_tests_properties(synth_report PROPERTIES LABELS synth TIMEOUT 2400 COST 1000)
 
 # ice40_timing: Yosys synth_ice40 + nextpnr-ice40 (HX8K ct256) of the v1-board configuration at
 #   50 MHz, seed 1; fails below 50 MHz (docs/synthesis.md has every configuration's Fmax and

@@ -3,7 +3,7 @@
 // bench: worked examples, the 100 ms watchdog at its exact boundary, a million random bytes
 // against a reference framer, the overrun drop) and protocol v2 (docs/protocol.md: worked
 // examples, every NAK reason, duplicates, out-of-order, FIFO_FULL, modes, ten million random
-// bytes in v2 mode).
+// bytes in v2 mode, the worked frames and sequences of spec/vectors.txt).
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -836,4 +836,36 @@ TEST(FrameDecoderV2, SpecVectors) {
   }
   EXPECT_GE(checked, 15u);
   EXPECT_GE(entries, 7u);
+}
+
+// The worked sequences of spec/vectors.txt into a fresh decoder, back to back: one answer request
+// per frame (IDENT, ACK or NAK with the SEQ as received and the reason); the NAK frames the
+// sequence states are among the NAK requests, in order (a coalesced NAK is the last request of
+// its group: the response encoder's part, checked through cnc_core's pins by
+// test_spec_sequences), and the last request is always the last NAK sent.
+TEST(FrameDecoderV2, SpecSequencesRequests) {
+  namespace spec = fpgacnc::spec;
+  const auto seqs = spec::load_sequences();
+  ASSERT_GE(seqs.size(), 2u);
+  for (const auto& s : seqs) {
+    SCOPED_TRACE(s.name + ": " + s.doc);
+    DecoderBench b;
+    b.bytes(s.host_bytes(), 0, SIZE_MAX, 3);
+    b.idle(4);
+    EXPECT_EQ(b.hellos() + b.status_reqs() + b.acks().size() + b.naks().size(), s.sends.size())
+        << "one answer request per frame";
+    size_t k = 0, stated = 0;  // the stated NAKs, in order, among the requests
+    for (const auto& r : s.replies) {
+      if (r.type != v2::kNak) continue;
+      ++stated;
+      while (k < b.naks().size() &&
+             !(b.naks()[k].seq == r.field("seq") && b.naks()[k].reason == r.field("reason")))
+        ++k;
+      EXPECT_LT(k, b.naks().size()) << "NAK of seq " << r.field("seq") << " requested";
+      ++k;
+    }
+    if (stated > 0) {
+      EXPECT_EQ(k, b.naks().size()) << "the last request is the last NAK";
+    }
+  }
 }

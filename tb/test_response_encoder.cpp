@@ -1,7 +1,8 @@
 // Bench for response_encoder (N_AXES = 4, FIFO_DEPTH 64, 50 MHz, 115200 baud) with a model of
 // uart_tx's byte handshake, and for crc16_ccitt: the CRC check value, the docs' ACK and NAK
 // vectors byte exact, IDENT and STATUS fields, priority and merging of pending answers, the
-// snapshot rule, the device SEQ counter, and v1 0xAA bytes only between frames.
+// snapshot rule, the device SEQ counter, v1 0xAA bytes only between frames, and the clock that
+// decides which rejection a coalesced NAK describes.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -354,6 +355,65 @@ TEST(ResponseEncoder, V1AcksBetweenFrames) {
   EXPECT_GT(frames, 10u);
   EXPECT_LE(frames, frames_req);
   EXPECT_FALSE(b.mid_frame());
+}
+
+// The coalescing boundary of docs/protocol.md "Coalesced NAK": with a NAK pending behind an ACK
+// on the line, a second NAK request sampled on the edge that hands the ACK's last byte to the
+// UART still replaces it (one NAK, the second's SEQ and reason); one edge later the pending NAK
+// has been decided and the second gets a NAK of its own.
+TEST(ResponseEncoder, CoalescedNakBoundary) {
+  // Runs the case (second NAK request before tick `nak2_at`, -1: none); returns the tick whose
+  // edge took the ACK's last (13th) byte.
+  auto run = [](int nak2_at, std::vector<v2::DeviceMsg>& out) {
+    EncoderBench b;
+    set_live(b.dut(), 0, 64, 0);
+    b.dut().ack_req = 1;
+    int t = 0, last_take = -1;
+    for (; t < 100'000 && b.bytes().size() < 13; ++t) {
+      if (t == 20) {  // the first NAK, long before the ACK's end
+        b.dut().nak_req = 1;
+        b.dut().nak_seq = 2;
+        b.dut().nak_reason = v2::kBadField;
+      }
+      if (t == nak2_at) {
+        b.dut().nak_req = 1;
+        b.dut().nak_seq = 12;
+        b.dut().nak_reason = v2::kOutOfOrder;
+      }
+      b.tick();
+      if (b.bytes().size() == 13) last_take = t;
+    }
+    for (int k = 0; k < 4; ++k, ++t) {
+      if (t == nak2_at) {
+        b.dut().nak_req = 1;
+        b.dut().nak_seq = 12;
+        b.dut().nak_reason = v2::kOutOfOrder;
+      }
+      b.tick();
+    }
+    b.drain();
+    out = b.msgs();
+    return last_take;
+  };
+  std::vector<v2::DeviceMsg> ref;
+  const int take = run(-1, ref);  // the tick whose edge takes the ACK's last byte
+  ASSERT_GT(take, 100);
+  ASSERT_EQ(ref.size(), 2u);
+  EXPECT_EQ(ref[1].u8(0), 2u);
+  std::vector<v2::DeviceMsg> same, later;
+  EXPECT_EQ(run(take, same), take);
+  ASSERT_EQ(same.size(), 2u) << "a request on the last byte's edge joins the pending NAK";
+  EXPECT_EQ(same[0].type, v2::kAck);
+  EXPECT_EQ(same[1].type, v2::kNak);
+  EXPECT_EQ(same[1].u8(0), 12u) << "the NAK describes the last rejection, not the first";
+  EXPECT_EQ(same[1].u8(1), v2::kOutOfOrder);
+  EXPECT_EQ(run(take + 1, later), take);
+  ASSERT_EQ(later.size(), 3u) << "one edge later: a NAK of its own";
+  EXPECT_EQ(later[1].u8(0), 2u);
+  EXPECT_EQ(later[1].u8(1), v2::kBadField);
+  EXPECT_EQ(later[2].u8(0), 12u);
+  EXPECT_EQ(later[2].u8(1), v2::kOutOfOrder);
+  EXPECT_EQ(later[2].seq, 2u);
 }
 
 }  // namespace

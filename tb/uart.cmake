@@ -4,7 +4,7 @@ set(_uart_libs)
 foreach(_baud 115200 1000000 3000000)
   foreach(_mod uart_rx uart_tx)
     fpgacnc_verilated(${_mod}_${_baud} TOP ${_mod} PREFIX V${_mod}_${_baud}
-                      SOURCES ${FPGACNC_RTL_DIR}/${_mod}.v
+                      SOURCES ${FPGACNC_RTL_DIR}/protocol/${_mod}.v
                       ARGS -GCLK_HZ=50000000 -GBAUD=${_baud})
     list(APPEND _uart_libs ${_mod}_${_baud})
   endforeach()

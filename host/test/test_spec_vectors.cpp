@@ -4,8 +4,10 @@
 // check_host_frame gives the stated device answer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -248,6 +250,189 @@ TEST(SpecVectors, ArcFramesMatchTheReferenceWalk) {
   EXPECT_GE(ramps, 1u);
 }
 
+// ---- worked sequences -------------------------------------------------------------------------
+
+// The device frames a client expects for host frames sent back to back, by the byte-level rule
+// of docs/protocol.md ("Coalesced NAK"), written from the document alone: time counts host byte
+// times from the start of host byte 0, and the device frames go out at the same baud. A frame
+// whose last byte is host byte k is handled at time k + 1 (IDENT / STATUS / NAK / ACK pending;
+// a NAK replaces a pending NAK). With nothing on tx a frame is decided at once; while a frame is
+// on tx, the next is decided as the last byte of that frame starts, from what is pending then
+// (priority IDENT, STATUS, NAK, ACK) with the live next_seq. A frame handled at the very time a
+// decision falls is ambiguous (which side depends on the phase of the two clocks): `ambiguous`
+// counts them and a worked sequence must have none.
+struct Expected {
+  uint8_t type;
+  uint8_t dev_seq;
+  int seq = -1, reason = -1, next_seq = -1;  // NAK: seq as received, reason; NAK / IDENT / ACK
+};
+struct Prediction {
+  std::vector<Expected> replies;
+  int ambiguous = 0;           // frames handled on the very byte time a decision falls
+  size_t rejected = 0;         // frames answered NAK (coalesced or not)
+  bool fifo_accepted = false;  // a FIFO frame was accepted (then `free` is not predicted)
+};
+Prediction expected_replies(const std::vector<v2::Frame>& frames) {
+  Prediction pr;
+  struct Handled {
+    int time;
+    uint8_t kind;  // the answer's TYPE
+    uint8_t seq, reason;
+    int next_seq;  // next_seq after the frame
+  };
+  std::vector<Handled> handled;
+  int t = 0, next_seq = 0;
+  for (const auto& f : frames) {
+    t += static_cast<int>(v2::encode(f).size());
+    Handled h{t, 0, f.seq, 0, next_seq};
+    if (const auto r = v2::check_host_frame(f, 4)) {
+      h.kind = static_cast<uint8_t>(v2::Type::Nak);
+      h.reason = static_cast<uint8_t>(*r);
+    } else if (f.type == static_cast<uint8_t>(v2::Type::Hello)) {
+      h.kind = static_cast<uint8_t>(v2::Type::Ident);
+    } else if (f.type == static_cast<uint8_t>(v2::Type::StatusQuery)) {
+      h.kind = static_cast<uint8_t>(v2::Type::Status);
+    } else {
+      const uint8_t ahead = static_cast<uint8_t>(f.seq - next_seq);  // 0 new, 1..127 ahead
+      if (ahead >= 1 && ahead <= 127) {
+        h.kind = static_cast<uint8_t>(v2::Type::Nak);
+        h.reason = static_cast<uint8_t>(v2::NakReason::OutOfOrder);
+      } else {
+        h.kind = static_cast<uint8_t>(v2::Type::Ack);
+        if (ahead == 0) {
+          next_seq = (next_seq + 1) & 0xFF;
+          pr.fifo_accepted = pr.fifo_accepted || v2::is_fifo(f.type);
+        }
+        h.next_seq = next_seq;
+      }
+    }
+    pr.rejected += h.kind == static_cast<uint8_t>(v2::Type::Nak);
+    handled.push_back(h);
+  }
+  std::vector<Expected>& out = pr.replies;
+  bool ident = false, status = false, nak = false, ack = false;
+  Expected pending_nak{static_cast<uint8_t>(v2::Type::Nak), 0};
+  int live_next_seq = 0;
+  size_t i = 0;
+  auto handle = [&](const Handled& h) {
+    live_next_seq = h.next_seq;
+    if (h.kind == static_cast<uint8_t>(v2::Type::Ident)) ident = true;
+    if (h.kind == static_cast<uint8_t>(v2::Type::Status)) status = true;
+    if (h.kind == static_cast<uint8_t>(v2::Type::Ack)) ack = true;
+    if (h.kind == static_cast<uint8_t>(v2::Type::Nak)) {
+      nak = true;
+      pending_nak.seq = h.seq;
+      pending_nak.reason = h.reason;
+    }
+  };
+  int tx_end = std::numeric_limits<int>::min() / 2;  // the frame on tx ends (its last stop bit)
+  while (true) {
+    // The decision the frame on tx allows: as its last byte starts.
+    const int dp = tx_end - 1;
+    for (; i < handled.size() && handled[i].time < dp; ++i) handle(handled[i]);
+    if (i < handled.size() && handled[i].time == dp) ++pr.ambiguous;
+    int decide = dp;
+    if (!(ident || status || nak || ack)) {
+      if (i == handled.size()) break;
+      decide = handled[i].time;  // nothing pending then: decided as soon as it is
+      handle(handled[i++]);
+    }
+    Expected e{0, static_cast<uint8_t>(out.size())};
+    e.next_seq = live_next_seq;
+    int len = 0;
+    if (ident) {
+      ident = false;
+      e.type = static_cast<uint8_t>(v2::Type::Ident);
+      len = 18;
+    } else if (status) {
+      ADD_FAILURE() << "STATUS in a worked sequence: its length is not modelled here";
+      return pr;
+    } else if (nak) {
+      nak = false;
+      e.type = static_cast<uint8_t>(v2::Type::Nak);
+      e.seq = pending_nak.seq;
+      e.reason = pending_nak.reason;
+      len = 5;
+    } else {
+      ack = false;
+      e.type = static_cast<uint8_t>(v2::Type::Ack);
+      len = 7;
+    }
+    out.push_back(e);
+    tx_end = std::max(decide, tx_end) + 6 + len;  // its first byte follows the frame ahead
+  }
+  return pr;
+}
+
+// The worked sequences: the host parses the frames sent and the device frames given (device SEQ
+// 0, 1, ...; the stated fields), and the stated device frames are those the document's
+// byte-level rule gives (expected_replies): a NAK of a coalesced burst describes the last frame
+// rejected before it was decided, not the first.
+TEST(SpecVectors, SequencesHostCodec) {
+  const auto seqs = spec::load_sequences();
+  ASSERT_GE(seqs.size(), 2u);
+  size_t coalesced = 0;
+  for (const auto& s : seqs) {
+    SCOPED_TRACE(s.name + ": " + s.doc);
+    v2::FrameParser hp;
+    const auto sent = parse_all(s.host_bytes(), hp);
+    ASSERT_EQ(sent.size(), s.sends.size()) << "every frame sent parses";
+    v2::FrameParser dp;
+    const auto got = parse_all(s.device_bytes(), dp);
+    ASSERT_EQ(got.size(), s.replies.size()) << "every device frame parses";
+    EXPECT_EQ(dp.noise_bytes(), 0u);
+    for (size_t i = 0; i < got.size(); ++i) {
+      const auto& f = got[i];
+      const auto& r = s.replies[i];
+      SCOPED_TRACE("reply " + std::to_string(i) + " " + r.type_name);
+      EXPECT_EQ(f.type, r.type);
+      EXPECT_EQ(v2::type_name(f.type), r.type_name);
+      EXPECT_EQ(f.seq, i) << "device SEQ: 0 after reset, +1 per frame";
+      if (f.type == static_cast<uint8_t>(v2::Type::Nak)) {
+        const auto n = v2::decode_nak(f);
+        EXPECT_EQ(n.seq, r.field("seq"));
+        EXPECT_EQ(static_cast<int>(n.reason), r.field("reason"));
+        EXPECT_EQ(n.next_seq, r.field("next_seq"));
+        EXPECT_EQ(n.free, r.field("free"));
+      } else if (f.type == static_cast<uint8_t>(v2::Type::Ident)) {
+        const auto id = v2::decode_ident(f);
+        EXPECT_EQ(id.next_seq, r.field("next_seq"));
+        EXPECT_EQ(id.n_axes, fpgacnc::spec::kDefaultNAxes);
+        EXPECT_EQ(id.baud, fpgacnc::spec::kDefaultBaud);
+      } else {
+        const auto c = v2::decode_credit(f);
+        EXPECT_EQ(c.next_seq, r.field("next_seq"));
+        EXPECT_EQ(c.free, r.field("free"));
+        EXPECT_EQ(c.done, r.field("done"));
+      }
+    }
+    const Prediction p = expected_replies(sent);
+    const auto& want = p.replies;
+    EXPECT_EQ(p.ambiguous, 0) << "a frame handled on the very byte a device frame is decided";
+    ASSERT_EQ(want.size(), got.size()) << "device frames by the document's rule";
+    size_t naks = 0;
+    for (size_t i = 0; i < want.size(); ++i) {
+      SCOPED_TRACE("reply " + std::to_string(i));
+      EXPECT_EQ(got[i].type, want[i].type);
+      EXPECT_EQ(got[i].seq, want[i].dev_seq);
+      if (want[i].type == static_cast<uint8_t>(v2::Type::Nak)) {
+        const auto n = v2::decode_nak(got[i]);
+        EXPECT_EQ(n.seq, want[i].seq) << "the NAK describes the last frame rejected before it";
+        EXPECT_EQ(static_cast<int>(n.reason), want[i].reason);
+        EXPECT_EQ(n.next_seq, want[i].next_seq);
+        if (!p.fifo_accepted) {
+          EXPECT_EQ(n.free, fpgacnc::spec::kDefaultFifoDepth);
+        }
+        ++naks;
+      } else if (want[i].type == static_cast<uint8_t>(v2::Type::Ident)) {
+        EXPECT_EQ(v2::decode_ident(got[i]).next_seq, want[i].next_seq);
+      }
+    }
+    coalesced += naks < p.rejected;
+  }
+  EXPECT_GE(coalesced, 1u) << "a sequence where one NAK stands for several rejections";
+}
+
 // The reader names file:line:column for a bad vector file.
 TEST(SpecVectors, ReaderNamesTheBadLine) {
   const std::string path = ::testing::TempDir() + "bad_vectors.txt";
@@ -261,6 +446,33 @@ TEST(SpecVectors, ReaderNamesTheBadLine) {
   } catch (const std::runtime_error& e) {
     EXPECT_EQ(std::string(e.what()), path + ":3:10: not a number: \"0G\"");
   }
+  // Sequences: a reply's TYPE that is not a number, a field before any reply.
+  const std::string seq_path = ::testing::TempDir() + "bad_sequences.txt";
+  const std::string good =
+      "vector x\nbytes A5 00 00 01 DC BD\nend\nsequence s\nsend x A5 00 00 01 DC BD\n";
+  for (const auto& [text, want] :
+       {std::pair<std::string, std::string>{good + "reply IDENT x A5\nend\n",
+                                            ":6:13: not a number: \"x\""},
+        std::pair<std::string, std::string>{good + "rfield next_seq 0\nend\n",
+                                            ":6:1: \"rfield\" before a \"reply\""}}) {
+    {
+      std::ofstream o(seq_path);
+      o << text;
+    }
+    try {
+      spec::load_sequences(seq_path);
+      ADD_FAILURE() << "no error for " << want;
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), seq_path + want);
+    }
+  }
+  std::ofstream(seq_path) << good << "reply IDENT 132 A5 00\nrfield next_seq 3\nend\n";
+  const auto seqs = spec::load_sequences(seq_path);
+  ASSERT_EQ(seqs.size(), 1u);
+  ASSERT_EQ(seqs[0].replies.size(), 1u);
+  EXPECT_EQ(seqs[0].sends.at(0).vector, "x");
+  EXPECT_EQ(seqs[0].replies[0].type, 132u);
+  EXPECT_EQ(seqs[0].replies[0].field("next_seq"), 3);
 }
 
 }  // namespace

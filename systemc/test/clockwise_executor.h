@@ -153,7 +153,7 @@ class ClockwiseExecutorTwin : public sc_core::sc_module {
   }
 
   // Kind ARC from edge R (the walk's clock c is the clock after edge R + c): arc::Dda clock by
-  // clock (rtl/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
+  // clock (rtl/motion/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
   // request on edge R + c + 2. X / Y reverse inside the arc: from the walk's W1 clock on the
   // executor knows the next move's direction (Dda::next_x_pos / next_y_pos); when it differs from
   // the DIR target the write becomes pending and lands on the first edge after a clock in which

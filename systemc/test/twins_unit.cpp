@@ -897,6 +897,71 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
              static_cast<double>(1.0L - worst));
 }
 
+// The worked sequences of spec/vectors.txt (the host codec test and the Verilated cnc_core bench
+// read the same file) on a virtual board of their own (tx recorded): each job from reset, the
+// host frames back to back (one packet, no ACK awaited), the bytes decoded from the tx pin's
+// edges (8N1, sampled at the bit centres) are the stated device frames in order; where
+// rejections coalesce, the NAK describes the last frame rejected before it was decided.
+HostScript sequence_job(const fpgacnc::spec::Sequence& s) {
+  return HostScript{{HostPacket{s.host_bytes(), false, 1}}, {}};
+}
+Bytes tx_bytes(const std::vector<fpgacnc::models::Edge>& edges, const CoreParams& p) {
+  std::vector<std::pair<uint64_t, int>> tx;  // the level after each edge
+  for (const auto& e : edges)
+    if (e.signal == fpgacnc::models::kTx) tx.emplace_back(e.cycle, e.value);
+  const double cpb = static_cast<double>(p.clk_hz) / static_cast<double>(p.baud);
+  auto level_at = [&](uint64_t c) {
+    int lv = 1;
+    for (const auto& [cy, v] : tx) {
+      if (cy > c) break;
+      lv = v;
+    }
+    return lv;
+  };
+  Bytes out;
+  uint64_t idle_from = 0;  // no start bit before this (the last stop bit's centre)
+  for (const auto& [c, v] : tx) {
+    if (v != 0 || c < idle_from) continue;
+    uint8_t byte = 0;
+    for (int b = 1; b <= 8; ++b)
+      byte |= static_cast<uint8_t>(level_at(c + static_cast<uint64_t>((b + 0.5) * cpb)) << (b - 1));
+    check(level_at(c + static_cast<uint64_t>(9.5 * cpb)) == 1, "tx stop bit");
+    out.push_back(byte);
+    idle_from = c + static_cast<uint64_t>(9.5 * cpb);
+  }
+  return out;
+}
+void sequences(const std::vector<RunResult>& results, const CoreParams& p) {
+  const auto seqs = fpgacnc::spec::load_sequences();
+  check(seqs.size() >= 2 && results.size() == seqs.size(), "a job per worked sequence");
+  for (size_t k = 0; k < seqs.size() && k < results.size(); ++k) {
+    const auto& s = seqs[k];
+    const RunResult& r = results[k];
+    const std::string at = "sequence " + s.name;
+    check(r.error.empty(), at + ": host error " + r.error);
+    const Bytes got = tx_bytes(r.edges, p);
+    check_bytes(got, s.device_bytes(), at + ": device frames");
+    // Frame by frame: the NAKs' SEQ and reason.
+    fpgacnc::twins::v2::FrameParser fp;
+    std::vector<fpgacnc::twins::v2::DeviceFrame> frames;
+    for (uint8_t x : got)
+      if (auto f = fp.feed(x)) frames.push_back(*f);
+    check_eq(frames.size(), s.replies.size(), at + ": device frames");
+    for (size_t i = 0; i < frames.size() && i < s.replies.size(); ++i) {
+      const auto& r2 = s.replies[i];
+      check_eq(int{frames[i].type}, int{r2.type}, at + fmt::format(": reply {} type", i));
+      check_eq(int{frames[i].seq}, static_cast<int>(i),
+               at + fmt::format(": reply {} device SEQ", i));
+      if (r2.type == fpgacnc::twins::v2::kNak && frames[i].type == r2.type) {
+        check_eq(int64_t{frames[i].u8(0)}, r2.field("seq"),
+                 at + fmt::format(": NAK {} SEQ of the rejected frame", i));
+        check_eq(int64_t{frames[i].u8(1)}, r2.field("reason"),
+                 at + fmt::format(": NAK {} reason", i));
+      }
+    }
+  }
+}
+
 // Runs `body` with its checks kept in `r`.
 void in_block(Record& r, const std::function<void()>& body) {
   current = &r;
@@ -934,6 +999,11 @@ std::map<std::string, Record> run_simulation() {
   board.add_job(TwinJob{HostScript{{}, sp}, p.timing, keep});
   std::array<int64_t, 2> profile_pos{};
   board.add_job(TwinJob{HostScript{{}, profile_script(profile_pos)}, p.timing, keep});
+  VirtualBoard seq_board("virtual_board_tx", p, true);
+  std::vector<RunResult> seq_results;
+  for (const auto& s : fpgacnc::spec::load_sequences())
+    seq_board.add_job(TwinJob{sequence_job(s), p.timing,
+                              [&](RunResult&& r) { seq_results.push_back(std::move(r)); }});
   // The block benches run in a thread of their own (sockets need a running simulation).
   struct Blocks : sc_core::sc_module {
     SC_HAS_PROCESS(Blocks);
@@ -965,6 +1035,7 @@ std::map<std::string, Record> run_simulation() {
   } else {
     for (const char* j : jobs) in_block(rec[j], [&] { check(false, "all jobs ran"); });
   }
+  in_block(rec["board_spec_sequences"], [&] { sequences(seq_results, p); });
   return rec;
 }
 
@@ -1009,6 +1080,9 @@ TEST(TwinsUnit, BoardSpiral) {
 }
 TEST(TwinsUnit, BoardProfileJob) {
   expect_passed(simulated("board_profile_job"));
+}
+TEST(TwinsUnit, BoardSpecSequences) {
+  expect_passed(simulated("board_spec_sequences"));
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// arc_walk: the integer reference of the circular DDA (rtl/arc_dda.v, docs/motion.md "Arcs",
+// arc_walk: the integer reference of the circular DDA (rtl/motion/arc_dda.v, docs/motion.md "Arcs",
 // ARC frame in docs/protocol.md). Header-only, no SystemC: the host packer includes it to compute
 // N_RAMP and C_TOTAL, the tests and the twin include it to compute the exact edge list.
 //
@@ -28,7 +28,7 @@
 //   with floor(U(c) / 2^48) >= C_k (C_k = cost of moves 1..k). `late` when U(r_k - 1) already
 //   reached C_k (the move waited for the walk: tangential speed above the host rule).
 //   Z: z(c) = min(|DZ|, floor(U(c) |DZ| / (C_TOTAL 2^48))), one step on every clock where it grows.
-//   Output pins (rtl/arc_dda.v) show an event of clock c on clock c + 1.
+//   Output pins (rtl/motion/arc_dda.v) show an event of clock c on clock c + 1.
 #pragma once
 
 #include <array>
@@ -44,7 +44,7 @@ namespace fpgacnc::models::arc {
 using u128 = unsigned __int128;
 using i128 = __int128;
 
-inline constexpr int WALK_CLOCKS = 4;  // clocks between two moves at the fastest (rtl/arc_dda.v)
+inline constexpr int WALK_CLOCKS = 4;  // clocks between two moves at the fastest (rtl/motion/arc_dda.v)
 inline constexpr int FRAC = 48;        // fractional bits of U, V, A
 
 struct Geometry {
@@ -322,7 +322,7 @@ struct RunResult {
   bool late = false;            // some move waited for the walk
 };
 
-// The block (rtl/arc_dda.v's registers in exact integers): clock() runs one clock; skip_quiet()
+// The block (rtl/motion/arc_dda.v's registers in exact integers): clock() runs one clock; skip_quiet()
 // jumps over the clocks in which nothing happens, in closed form (the cost of a run grows with its
 // moves and Z steps, not with its clocks).
 class Dda {
@@ -347,7 +347,7 @@ class Dda {
   bool err() const { return err_; }
   bool late() const { return late_; }
   uint64_t next_clock() const { return c_; }
-  // rtl/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before clock()): the
+  // rtl/motion/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before clock()): the
   // walk has chosen the tangent signs of the next move from the second clock of its preparation
   // (W1) on: valid unless the clock is the move's first (W0, clock r_k - 3).
   bool dir_valid() const { return c_ + (WALK_CLOCKS - 1) != ready_; }

@@ -212,7 +212,7 @@ inline Table thermistor_table(const Thermistor& th = {}) {
   return t;
 }
 
-// The RTL's interpolation (rtl/temp_table.v), bit exact: i = code >> 6, f = code & 63,
+// The RTL's interpolation (rtl/heater/temp_table.v), bit exact: i = code >> 6, f = code & 63,
 // T = t[i] + floor((t[i+1] - t[i]) * f / 64) (arithmetic shift), in Q11.4.
 inline int table_lookup(const Table& t, int code) {
   const int i = code >> kTableShift;

@@ -1,4 +1,4 @@
-// Twin of rtl/dda_linear.v: the exact DDA of one axis (docs/timing.md "Steps").
+// Twin of rtl/motion/dda_linear.v: the exact DDA of one axis (docs/timing.md "Steps").
 //
 // Target `load`: a DdaLoad (n steps over T ticks), the delay naming the run-start edge R; tick
 // c of the segment is edge R + c. The k-th step (k = 1..n) falls on tick ceil(k * T / n) (128-bit

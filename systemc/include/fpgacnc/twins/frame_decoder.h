@@ -1,4 +1,4 @@
-// Twin of rtl/frame_decoder.v: v1 packets and v2 frames from one byte stream (docs/protocol.md
+// Twin of rtl/protocol/frame_decoder.v: v1 packets and v2 frames from one byte stream (docs/protocol.md
 // "Telling v1 from v2", "Frame", "Host to device", "Sequence numbers", "NAK reasons").
 //
 // Target `bytes`: RxByte valid from the delay's edge b; the decoder takes it on edge
@@ -428,7 +428,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
   }
 
-  // Heater frames' BAD_FIELD rules (rtl/frame_decoder.v): channel > 1; HEATER_CONFIG mode > 4,
+  // Heater frames' BAD_FIELD rules (rtl/protocol/frame_decoder.v): channel > 1; HEATER_CONFIG mode > 4,
   // duty_max or manual > 0x8000; THERMISTOR_TABLE first > 64 or first + n > 65; HEATER_SAFETY
   // Tmin >= Tmax. Other types: true.
   bool heater_fields_ok() const {

@@ -1,4 +1,4 @@
-// Twin of rtl/segment_fifo.v: the command FIFO between frame_decoder and segment_prep
+// Twin of rtl/protocol/segment_fifo.v: the command FIFO between frame_decoder and segment_prep
 // (docs/protocol.md "v2": FIFO_DEPTH entries in block RAM, registered read).
 //
 // Target `in`: write of a FifoEntry on the delay's edge W (the writer checks for room first with

@@ -1,4 +1,4 @@
-// Twin of rtl/segment_prep.v: the command FIFO entry becomes a prepared segment (docs/protocol.md
+// Twin of rtl/motion/segment_prep.v: the command FIFO entry becomes a prepared segment (docs/protocol.md
 // "Timing semantics" and "LINE", docs/timing.md "Segment length" and "Queued segments").
 //
 // Target `commands`: a FifoEntry valid from the delay's edge V. It is accepted (popped) on the

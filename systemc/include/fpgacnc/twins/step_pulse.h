@@ -1,4 +1,4 @@
-// Twin of rtl/step_pulse.v: STEP/DIR pin driver of one axis (docs/timing.md "Pulse shape").
+// Twin of rtl/motion/step_pulse.v: STEP/DIR pin driver of one axis (docs/timing.md "Pulse shape").
 //
 // Target `req` (from the axis's dda_linear) and target `ctl` (from segment_executor):
 //   write, address 0: a step request (DDA tick) on the delay's edge e. STEP rises on edge e,

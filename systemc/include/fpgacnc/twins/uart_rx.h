@@ -1,4 +1,4 @@
-// Twin of rtl/uart_rx.v: 8N1 receiver with a fractional bit timer (docs/protocol.md
+// Twin of rtl/protocol/uart_rx.v: 8N1 receiver with a fractional bit timer (docs/protocol.md
 // "Physical", docs/timing.md "Packet to motion").
 //
 // Target `pin`: one RxFrame per 8N1 frame the host puts on the rx pin, the delay naming the

@@ -10,7 +10,7 @@
 // position does not change.
 // step_pulse shapes STEP (high / low times) and owns the DIR pin: DIR takes dir_in on a clock with
 // dir_wr (the executor's DIR sequencer writes only when hold_ok, DIR hold elapsed since the last
-// STEP rise); idle, hold_ok and violation are step_pulse's (rtl/step_pulse.v).
+// STEP rise); idle, hold_ok and violation are step_pulse's (rtl/motion/step_pulse.v).
 // position: signed step count, +1 / -1 by the DIR pin on the edge STEP rises; 0 after reset.
 // moving: the segment at the executor's input moves this axis (|steps| != 0).
 // Build options (segment_executor passes them): PROFILES = 0 leaves dda_profile out (prof_* are not

@@ -4,8 +4,8 @@
 // "Profiled segments", "ARC segments"; docs/architecture.md "Code flow in the device").
 // This module sequences the segments (state IDLE / HOLD / SETUP / RUN / ZERO, the tick counter,
 // laser, seg_start / seg_done), routes an arc's steps by plane and applies OUTPUT entries; the DIR
-// targets, pending DIR writes and the DIR setup / post-abort waits are rtl/dir_sequencer.v, each
-// axis's DDAs, step_pulse and position rtl/axis_channel.v.
+// targets, pending DIR writes and the DIR setup / post-abort waits are rtl/motion/dir_sequencer.v, each
+// axis's DDAs, step_pulse and position rtl/motion/axis_channel.v.
 //
 // Segment kinds (s_axis_kind, held in kind_reg for the running segment; each kind has its
 // generator, its tick gate and its end condition in run_last):
@@ -37,7 +37,7 @@
 // clock; the next segment that needs the other direction takes the HOLD/SETUP path), and no
 // segment is accepted from IDLE until the largest DIR setup setting has passed since the last abort
 // clock (a DIR edge just before the abort still gets its setup time).
-// step_block (cnc_core's hard limits, rtl/limit_guard.v): an axis whose bit is high issues no step
+// step_block (cnc_core's hard limits, rtl/machine/limit_guard.v): an axis whose bit is high issues no step
 // request in that clock (its STEP does not rise on the next edge and its position does not
 // change); the segment runs on (cnc_core aborts it on the next clock). step_want is the request
 // before abort and step_block, for the limit check.
@@ -210,7 +210,7 @@ module segment_executor #(
   wire [N_AXES-1:0] f_setup_axes;  // the DIR sequencer's registers, for the invariants below
   wire [15:0] f_setup_cnt, f_settle, f_setup_max;
 `endif
-  // the DIR sequencer's outputs (rtl/dir_sequencer.v)
+  // the DIR sequencer's outputs (rtl/motion/dir_sequencer.v)
   wire [N_AXES-1:0] dir_tgt;  // DIR level written or pending per axis
   wire [N_AXES-1:0] rev;  // moving axes of the input segment that reverse
   wire [N_AXES-1:0] pend;  // DIR write pending
@@ -401,7 +401,7 @@ module segment_executor #(
 `endif
   );
 
-  // one channel per axis: its DDAs, STEP / DIR pins and position (rtl/axis_channel.v)
+  // one channel per axis: its DDAs, STEP / DIR pins and position (rtl/motion/axis_channel.v)
   genvar a;
   generate
     for (a = 0; a < N_AXES; a = a + 1) begin : g_axis

@@ -57,7 +57,7 @@ module dir_sequencer #(
     output wire              settled,      // no post-abort wait
     output wire              arc_dir_viol  // 1-clock strobe (see above)
 `ifdef FORMAL
-    ,  // the registers the executor's induction invariants name (rtl/segment_executor.v)
+    ,  // the registers the executor's induction invariants name (rtl/motion/segment_executor.v)
     output wire [N_AXES-1:0] f_setup_axes,
     output wire [      15:0] f_setup_cnt,
     output wire [      15:0] f_settle,

@@ -1,7 +1,7 @@
 // segment_prep: turns command-FIFO entries into segments the executor can run without arithmetic.
 // This module is the state machine that sequences the preparation, the entry decode and the LINE /
-// v1 arithmetic (divider, clamp, multiplier, T - n); the LINE_PROFILE products are rtl/prep_profile.v,
-// the ARC arithmetic rtl/prep_arc.v, the DIR tracking and dir_fast rtl/prep_dir_tracker.v.
+// v1 arithmetic (divider, clamp, multiplier, T - n); the LINE_PROFILE products are rtl/motion/prep_profile.v,
+// the ARC arithmetic rtl/motion/prep_arc.v, the DIR tracking and dir_fast rtl/motion/prep_dir_tracker.v.
 //
 // Input (s_axis_*): one FIFO entry, width ENTRY_W = `FPGACNC_ENTRY_W + 32*N_AXES (839 for 4 axes),
 //   { arc_raw[487:0], arc[0], D[31:0], V_exit[47:0], V_cruise[47:0], V_entry[47:0], prof[0],
@@ -189,7 +189,7 @@ module segment_prep #(
   wire [`FPGACNC_E_ARC_RAW_W-1:0] in_arc_raw =
       s_axis_tdata[SW+`FPGACNC_E_ARC_RAW+:`FPGACNC_E_ARC_RAW_W];
 
-  // ARC (rtl/prep_arc.v), PROFILE (rtl/prep_profile.v) and the DIR tracker (rtl/prep_dir_tracker.v):
+  // ARC (rtl/motion/prep_arc.v), PROFILE (rtl/motion/prep_profile.v) and the DIR tracker (rtl/motion/prep_dir_tracker.v):
   // the kind of the segment being prepared selects the path
   reg arc_reg;
   reg prof_reg;
