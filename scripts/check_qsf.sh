@@ -13,8 +13,10 @@ if ! yosys -q -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; hierarchy -top d
 fi
 fail=0
 # Module names: plain, $paramod\NAME\PARAMS or $paramod$HASH\NAME.
-used=$(awk '/modules:/{m=1; next} m && NF==1 && $1 !~ /\// {n=$1; if (n ~ /^\$paramod/) {sub(/^\$paramod(\$[0-9a-f]+)?\\/, "", n); sub(/\\.*/, "", n)}; print "rtl/" n ".v"}' "$t" | sort -u)
-listed=$(sed -n 's#^set_global_assignment -name VERILOG_FILE \.\./\(rtl/[A-Za-z0-9_]*\.v\).*#\1#p' \
+# Each module's file: rtl/NAME.v or rtl/<part>/NAME.v (one module per file).
+used=$(awk '/modules:/{m=1; next} m && NF==1 && $1 !~ /\// {n=$1; if (n ~ /^\$paramod/) {sub(/^\$paramod(\$[0-9a-f]+)?\\/, "", n); sub(/\\.*/, "", n)}; print n}' "$t" |
+  sort -u | while read -r n; do f=$(ls rtl/"$n".v rtl/*/"$n".v 2>/dev/null | head -1); echo "${f:-rtl/?/$n.v}"; done | sort -u)
+listed=$(sed -n 's#^set_global_assignment -name VERILOG_FILE \.\./\(rtl/[A-Za-z0-9_/]*\.v\).*#\1#p' \
   constraints/fpgacnc.qsf | sort -u)
 missing=$(comm -23 <(echo "$used") <(echo "$listed"))
 extra=$(comm -13 <(echo "$used") <(echo "$listed"))
