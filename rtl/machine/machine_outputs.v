@@ -11,8 +11,9 @@
 //   fan          (OUTPUTS = 1) pwm with 256 counts a period at about FAN_PWM_HZ (FAN_DIV = CLK_HZ /
 //                (256 * FAN_PWM_HZ), rounded; the frequency must come within 1 % of FAN_PWM_HZ). The
 //                PWM takes a duty only at a period boundary: after an abort the pin stays low until
-//                the clock after the first boundary (period_start), from which the duty the
-//                executor holds is the active one. OUTPUTS = 0: fan low, exec_fan_duty not read.
+//                the first boundary (pwm's period_start), from which the duty the executor holds
+//                (0 after the abort, or a later OUTPUT's) is the active one. OUTPUTS = 0: fan low,
+//                exec_fan_duty not read.
 // OUTPUTS 0 or 1; FAN_PWM_HZ at least 1, at most CLK_HZ / 256 and reachable within 1 %. An illegal
 // value instantiates a module named machine_outputs_illegal_<rule>, which does not exist.
 `default_nettype none
