@@ -5,18 +5,23 @@
 # exits non-zero otherwise. Run by CTest (check_qsf) and `make synth`.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/rtl_files.sh
+source scripts/rtl_files.sh
 t=$(mktemp)
 trap 'rm -f "$t"' EXIT
-if ! yosys -q -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; hierarchy -top de1soc_top; tee -q -o $t ls; \
+if ! yosys -q -p "read_verilog -Irtl/include ${FPGACNC_RTL_FILES[*]}; hierarchy -top de1soc_top; tee -q -o $t ls; \
     tee -q -a $t select -list de1soc_top/i:* de1soc_top/o:*" >/dev/null 2>&1; then
-  echo "check_qsf: yosys could not elaborate de1soc_top from rtl/*.v rtl/*/*.v"; exit 2
+  echo "check_qsf: yosys could not elaborate de1soc_top from ${FPGACNC_RTL_FILES[*]}"; exit 2
 fi
 fail=0
 # Module names: plain, $paramod\NAME\PARAMS or $paramod$HASH\NAME.
-# Each module's file: rtl/NAME.v or rtl/<part>/NAME.v (one module per file).
+# Each module's file: the one of FPGACNC_RTL_FILES named after it (one module per file).
 used=$(awk '/modules:/{m=1; next} m && NF==1 && $1 !~ /\// {n=$1; if (n ~ /^\$paramod/) {sub(/^\$paramod(\$[0-9a-f]+)?\\/, "", n); sub(/\\.*/, "", n)}; print n}' "$t" |
-  sort -u | while read -r n; do f=$(ls rtl/"$n".v rtl/*/"$n".v 2>/dev/null | head -1); echo "${f:-rtl/?/$n.v}"; done | sort -u)
-listed=$(sed -n 's#^set_global_assignment -name VERILOG_FILE \.\./\(rtl/[A-Za-z0-9_/]*\.v\).*#\1#p' \
+  sort -u | while read -r m; do
+    f=$(printf '%s\n' "${FPGACNC_RTL_FILES[@]}" | grep -E "(^|/)$m\.v$")
+    echo "${f:-rtl/.../$m.v (no file named after the module)}"
+  done | sort -u)
+listed=$(sed -n 's#^set_global_assignment -name VERILOG_FILE \.\./\(rtl/\([A-Za-z0-9_]*/\)\{0,1\}[A-Za-z0-9_]*\.v\).*#\1#p' \
   constraints/fpgacnc.qsf | sort -u)
 missing=$(comm -23 <(echo "$used") <(echo "$listed"))
 extra=$(comm -13 <(echo "$used") <(echo "$listed"))
