@@ -1,6 +1,8 @@
-// cnc_core: the board-independent controller, protocols v1 and v2: wiring of the blocks in
-// docs/architecture.md ("Code flow in the device"), the configuration registers, the fault latch,
-// the e-stop and the status counters.
+// cnc_core: the board-independent controller, protocols v1 and v2: the wiring of the blocks in
+// docs/architecture.md ("Code flow in the device"): uart_rx, the front end (front_v2: decoder and
+// command FIFO, or front_v1: the v1 decoder), step_config, segment_prep, segment_executor,
+// machine_outputs, estop_latch, the hard limits (input_filter, limit_guard), heater_block,
+// status_counters, answer_source, uart_tx.
 //
 // Contract
 //   rx / tx          the UART (BAUD, 8N1); the protocol is docs/protocol.md.
@@ -148,25 +150,10 @@ module cnc_core #(
   localparam integer ARC_EN = (V2_EN != 0 && ARCS != 0) ? 1 : 0;
   localparam integer HEAT_EN = (V2_EN != 0 && HEATERS != 0) ? 1 : 0;
   localparam integer OUT_EN = (V2_EN != 0 && OUTPUTS != 0) ? 1 : 0;
-  // fan PWM: 256 counts a period, PWM_DIV clocks a count (rounded): the frequency must come within
-  // 1 % of FAN_PWM_HZ (checked at elaboration below)
-  localparam integer FAN_HZ_I = (FAN_PWM_HZ < 1) ? 1 : FAN_PWM_HZ;
-  localparam integer FAN_DIV_R = (CLK_HZ + 128 * FAN_HZ_I) / (256 * FAN_HZ_I);
-  localparam integer FAN_DIV = (FAN_DIV_R < 1) ? 1 : FAN_DIV_R;
-  localparam integer FAN_PERIOD = 256 * FAN_DIV;
-  localparam integer FAN_ERR = (CLK_HZ > FAN_PERIOD * FAN_HZ_I) ? CLK_HZ - FAN_PERIOD * FAN_HZ_I
-                                                                : FAN_PERIOD * FAN_HZ_I - CLK_HZ;
-  localparam integer FAN_OK = (FAN_PWM_HZ >= 1 && FAN_DIV_R >= 1 &&
-                               FAN_ERR <= FAN_PERIOD * FAN_HZ_I / 100) ? 1 : 0;
   // v1-only datapath trims (segment_prep V1_ONLY, executor LEAN_DDA)
   localparam integer TRIM_EN = (V2_EN == 0 && LEAN_TRIM != 0) ? 1 : 0;
   // v1 build with the step timing fixed at STEP_HIGH / STEP_LOW / DIR_SETUP / DIR_HOLD
   localparam integer FIXED_EN = (V2_EN == 0 && STEP_CFG == 0) ? 1 : 0;
-  // the FIFO holds only the fields of the kinds built: header 45 + 32 * N_AXES, + 177 profile
-  // fields, + 489 ARC fields (segment_prep's entry layout; the bits above are 0)
-  localparam integer FIFO_W = (ARC_EN != 0)  ? ENTRY_W :
-                              (PROF_EN != 0) ? `FPGACNC_ENTRY_PROF_W + 32 * N_AXES
-                                             : `FPGACNC_ENTRY_BASE_W + 32 * N_AXES;
 
   // ---------------------------------------------------------------- build option guards
   // An illegal combination of the build options (header comment) instantiates a module that does
@@ -244,7 +231,7 @@ module cnc_core #(
       .overrun_error(rx_overrun)
   );
 
-  // ---------------------------------------------------------------- decoder, command FIFO
+  // ---------------------------------------------------------------- front end
   // Common to both protocol builds: the decoder's configuration, heater and fault-clear requests,
   // its status strobes, and the entry stream into segment_prep (cmd_*).
   wire dec_cfg_wr;
@@ -267,29 +254,27 @@ module cnc_core #(
 
   generate
     if (V2_EN != 0) begin : g_v2
-      wire [ENTRY_W-1:0] dec_tdata;
-      wire dec_tvalid, fifo_s_tready;
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire dec_release;  // not needed here
-      /* verilator lint_on UNUSEDSIGNAL */
-
-      frame_decoder #(
+      front_v2 #(
           .N_AXES       (N_AXES),
           .WATCHDOG_CLKS(WATCHDOG_CLKS),
-          .MAX_PAYLOAD  (64),
+          .FIFO_DEPTH   (FIFO_DEPTH),
           .PROFILES     (PROF_EN),
           .ARCS         (ARC_EN),
           .OUTPUTS      (OUT_EN),
           .HEATERS      (HEAT_EN)
-      ) u_dec (
+      ) u_front (
           .clk          (clk),
           .rst          (rst),
           .s_axis_tdata (rx_tdata),
           .s_axis_tvalid(rx_tvalid),
           .s_axis_tready(rx_tready),
-          .m_axis_tdata (dec_tdata),
-          .m_axis_tvalid(dec_tvalid),
-          .m_axis_tready(fifo_s_tready),
+          .m_axis_tdata (cmd_tdata),
+          .m_axis_tvalid(cmd_tvalid),
+          .m_axis_tready(cmd_tready),
+          .flush        (motion_abort),
+          .position     (position),
+          .level        (fifo_level_w),
+          .free         (fifo_free_w),
           .cfg_wr       (dec_cfg_wr),
           .cfg_axis     (dec_cfg_axis),
           .cfg_data     (dec_cfg_data),
@@ -298,15 +283,12 @@ module cnc_core #(
           .heat_len     (dec_heat_len),
           .heat_data    (dec_heat_data),
           .fault_clear  (dec_fault_clear),
-          .release_req  (dec_release),
           .hello        (dec_hello),
           .status_req   (dec_status),
           .ack_req      (dec_ack),
           .nak          (dec_nak),
           .nak_seq      (dec_nak_seq),
           .nak_reason   (dec_nak_reason),
-          .travel_resync(motion_abort),
-          .position     (position),
           .next_seq     (dec_next_seq),
           .v2_mode      (dec_v2_mode),
           .partial      (rx_partial),
@@ -319,65 +301,27 @@ module cnc_core #(
           .v1_packet    (dec_v1_packet),
           .v1_overrun   (dec_v1_overrun)
       );
-
-      // command FIFO: only the entry fields of the kinds built are stored
-      wire [FIFO_W-1:0] fifo_out;
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire [ENTRY_W-1:0] dec_tdata_nc = dec_tdata;  // bits above FIFO_W are 0 in a lean build
-      /* verilator lint_on UNUSEDSIGNAL */
-
-      segment_fifo #(
-          .WIDTH(FIFO_W),
-          .DEPTH(FIFO_DEPTH)
-      ) u_fifo (
-          .clk          (clk),
-          .rst          (rst),
-          .flush        (motion_abort),
-          .s_axis_tdata (dec_tdata[FIFO_W-1:0]),
-          .s_axis_tvalid(dec_tvalid),
-          .s_axis_tready(fifo_s_tready),
-          .m_axis_tdata (fifo_out),
-          .m_axis_tvalid(cmd_tvalid),
-          .m_axis_tready(cmd_tready),
-          .level        (fifo_level_w),
-          .free         (fifo_free_w)
-      );
-      if (FIFO_W < ENTRY_W) begin : g_pad
-        assign cmd_tdata = {{(ENTRY_W - FIFO_W) {1'b0}}, fifo_out};
-      end else begin : g_nopad
-        assign cmd_tdata = fifo_out;
-      end
     end else begin : g_v1
-      // protocol v1 only: the original's decoder, its output register is the only queue
-      wire [81:0] v1_tdata;
-      wire v1_init;
-      packet_decoder_v1 #(
+      front_v1 #(
+          .N_AXES       (N_AXES),
           .WATCHDOG_CLKS(WATCHDOG_CLKS)
-      ) u_dec (
+      ) u_front (
           .clk          (clk),
           .rst          (rst),
           .s_axis_tdata (rx_tdata),
           .s_axis_tvalid(rx_tvalid),
           .s_axis_tready(rx_tready),
-          .m_axis_tdata (v1_tdata),
-          .m_axis_tuser (v1_init),
+          .m_axis_tdata (cmd_tdata),
           .m_axis_tvalid(cmd_tvalid),
           .m_axis_tready(cmd_tready),
+          .level        (fifo_level_w),
+          .free         (fifo_free_w),
           .timeout      (dec_timeout),
           .overrun      (dec_v1_overrun),
           .packet_done  (dec_v1_packet),
           .partial      (rx_partial)
       );
-      // segment_prep's entry (as frame_decoder writes a v1 packet): motion {v2 0, kind 0, code,
-      // power 0xFF, t = feed, steps X, Y}; init {v2 0, kind 1, NUMERATOR_X, NUMERATOR_Y}
-      wire [32*N_AXES-1:0] v1_two = {{32 * (N_AXES - 2) {1'b0}}, v1_tdata[47:16], v1_tdata[79:48]};
-      assign cmd_tdata = {{(ENTRY_W - `FPGACNC_ENTRY_BASE_W - 32 * N_AXES) {1'b0}}, 1'b0,
-                          v1_init ? `FPGACNC_K_NUMERATORS : `FPGACNC_K_MOTION,
-                          v1_init ? 2'd0 : v1_tdata[81:80],
-                          v1_init ? 8'd0 : 8'hFF, v1_init ? 16'd0 : 16'd0,
-                          v1_init ? 16'd0 : v1_tdata[15:0], v1_two};
-      assign fifo_level_w     = {15'd0, cmd_tvalid};
-      assign fifo_free_w      = {15'd0, !cmd_tvalid};
+      // no v2 frames: no configuration, heater, fault-clear or answer requests, no v2 status
       assign dec_hello        = 1'b0;
       assign dec_status       = 1'b0;
       assign dec_ack          = 1'b0;
@@ -403,19 +347,16 @@ module cnc_core #(
   endgenerate
 
   // ---------------------------------------------------------------- e-stop
-  reg estop_s1_reg, estop_s2_reg, estop_latch_reg;
-  always @(posedge clk) begin
-    estop_s1_reg <= estop;
-    estop_s2_reg <= estop_s1_reg;
-    if (dec_fault_clear && !estop_s2_reg) estop_latch_reg <= 1'b0;
-    if (estop_s2_reg) estop_latch_reg <= 1'b1;
-    if (rst) begin
-      estop_s1_reg    <= 1'b0;
-      estop_s2_reg    <= 1'b0;
-      estop_latch_reg <= 1'b0;
-    end
-  end
-  assign estop_stop = estop_s2_reg || estop_latch_reg;  // motion, laser, heaters stopped
+  wire estop_active, estop_latched;
+  estop_latch u_estop (
+      .clk        (clk),
+      .rst        (rst),
+      .estop      (estop),
+      .fault_clear(dec_fault_clear),
+      .active     (estop_active),
+      .latched    (estop_latched),
+      .stop       (estop_stop)
+  );
 
   // ---------------------------------------------------------------- hard limits
   localparam [N_AXES-1:0] LIM_EN_MIN = LIMIT_ENABLE[N_AXES-1:0];
@@ -463,7 +404,7 @@ module cnc_core #(
   assign limit_state = {lim_max_w, lim_min_w};
   assign limit_trip  = limit_trip_w;
 
-  // ---------------------------------------------------------------- configuration
+  // ---------------------------------------------------------------- step timing
   // active step timing (all axes) and the minimum dominant period, as used by prep and executor
   wire [16*N_AXES-1:0] cfg_high, cfg_low, cfg_setup, cfg_hold;
   wire [31:0] min_period;
@@ -473,96 +414,29 @@ module cnc_core #(
   wire fifo_empty = (fifo_level_w == 16'd0);
   wire quiet = exec_idle && !prep_busy && fifo_empty;
 
-  // min_period = max over axes of (STEP high + STEP low), each at least 1, so at least 2: the fastest dominant period
-  // the pulse generators can follow. Computed by a scanner, one axis per clock (no comparator
-  // chain across axes): a change of the active settings reaches min_period_reg within
-  // 2 * N_AXES + 2 clocks, long before segment_prep uses it (34 clocks after it accepts a move,
-  // and settings change only while segment_prep is idle). Requires N_AXES <= 15.
-  localparam AXW = (N_AXES > 1) ? $clog2(N_AXES) : 1;
-  localparam integer AX_LAST_I = N_AXES - 1;
-  localparam [AXW-1:0] AX_LAST = AX_LAST_I[AXW-1:0];
-  localparam integer NAX_I = N_AXES;
-  localparam [7:0] NAX8 = NAX_I[7:0];
-  // fixed timing (STEP_CFG = 0, v1 build): a setting of 0 counts as 1 clock, as in step_pulse
-  localparam integer FIX_PERIOD_I = ((STEP_HIGH == 0) ? 1 : STEP_HIGH) + ((STEP_LOW == 0) ? 1 : STEP_LOW);
-  localparam [31:0] FIX_PERIOD = FIX_PERIOD_I;
-
-  generate
-  if (FIXED_EN == 0) begin : g_cfg
-  reg [16*N_AXES-1:0] shadow_high_reg, shadow_low_reg, shadow_setup_reg, shadow_hold_reg;
-  reg [16*N_AXES-1:0] cfg_high_reg, cfg_low_reg, cfg_setup_reg, cfg_hold_reg;
-  reg [31:0] min_period_reg;
-  reg [AXW-1:0] pm_idx_reg, pm_idx_d_reg;
-  reg [16:0] pm_sum_reg, pm_run_reg;
-  // step_pulse treats a setting of 0 as 1 clock: count it so here too.
-  wire [15:0] pm_high_raw = cfg_high_reg[16*pm_idx_reg+:16];
-  wire [15:0] pm_low_raw = cfg_low_reg[16*pm_idx_reg+:16];
-  wire [15:0] pm_high = (pm_high_raw == 16'd0) ? 16'd1 : pm_high_raw;
-  wire [15:0] pm_low = (pm_low_raw == 16'd0) ? 16'd1 : pm_low_raw;
-  wire [16:0] pm_cand = (pm_idx_d_reg == {AXW{1'b0}} || pm_sum_reg > pm_run_reg) ? pm_sum_reg
-                                                                                 : pm_run_reg;
-
-  wire [AXW-1:0] dec_ax = dec_cfg_axis[AXW-1:0];
-
-  always @(posedge clk) begin
-    if (dec_cfg_wr && dec_cfg_axis < NAX8) begin
-      shadow_high_reg[16*dec_ax+:16]  <= dec_cfg_data[63:48];
-      shadow_low_reg[16*dec_ax+:16]   <= dec_cfg_data[47:32];
-      shadow_setup_reg[16*dec_ax+:16] <= dec_cfg_data[31:16];
-      shadow_hold_reg[16*dec_ax+:16]  <= dec_cfg_data[15:0];
-    end
-    if (cfg_wr && {2'b00, cfg_addr[7:2]} < NAX8) begin
-      case (cfg_addr[1:0])
-        2'd0: shadow_high_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
-        2'd1: shadow_low_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
-        2'd2: shadow_setup_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
-        default: shadow_hold_reg[16*cfg_addr[7:2]+:16] <= cfg_wdata;
-      endcase
-    end
-    if (quiet) begin
-      cfg_high_reg  <= shadow_high_reg;
-      cfg_low_reg   <= shadow_low_reg;
-      cfg_setup_reg <= shadow_setup_reg;
-      cfg_hold_reg  <= shadow_hold_reg;
-    end
-    pm_idx_reg   <= (pm_idx_reg == AX_LAST) ? {AXW{1'b0}} : pm_idx_reg + 1'b1;
-    pm_idx_d_reg <= pm_idx_reg;
-    pm_sum_reg   <= {1'b0, pm_high} + {1'b0, pm_low};
-    pm_run_reg   <= pm_cand;
-    // STEP high and low are each at least one clock, so a period of at least 2.
-    if (pm_idx_d_reg == AX_LAST) min_period_reg <= (pm_cand < 17'd2) ? 32'd2 : {15'd0, pm_cand};
-    if (rst) begin
-      shadow_high_reg  <= {N_AXES{STEP_HIGH[15:0]}};
-      shadow_low_reg   <= {N_AXES{STEP_LOW[15:0]}};
-      shadow_setup_reg <= {N_AXES{DIR_SETUP[15:0]}};
-      shadow_hold_reg  <= {N_AXES{DIR_HOLD[15:0]}};
-      cfg_high_reg     <= {N_AXES{STEP_HIGH[15:0]}};
-      cfg_low_reg      <= {N_AXES{STEP_LOW[15:0]}};
-      cfg_setup_reg    <= {N_AXES{DIR_SETUP[15:0]}};
-      cfg_hold_reg     <= {N_AXES{DIR_HOLD[15:0]}};
-      min_period_reg   <= STEP_HIGH + STEP_LOW;
-      pm_idx_reg       <= {AXW{1'b0}};
-      pm_idx_d_reg     <= {AXW{1'b0}};
-      pm_sum_reg       <= 17'd0;
-      pm_run_reg       <= 17'd0;
-    end
-  end
-  assign cfg_high   = cfg_high_reg;
-  assign cfg_low    = cfg_low_reg;
-  assign cfg_setup  = cfg_setup_reg;
-  assign cfg_hold   = cfg_hold_reg;
-  assign min_period = min_period_reg;
-  end else begin : g_fixed
-    // the defaults, constant: no shadow or active set, no scanner; the cfg port is not read
-    assign cfg_high   = {N_AXES{STEP_HIGH[15:0]}};
-    assign cfg_low    = {N_AXES{STEP_LOW[15:0]}};
-    assign cfg_setup  = {N_AXES{DIR_SETUP[15:0]}};
-    assign cfg_hold   = {N_AXES{DIR_HOLD[15:0]}};
-    assign min_period = FIX_PERIOD;
-    wire unused_cfg = &{1'b0, cfg_wr, cfg_addr, cfg_wdata, dec_cfg_wr, dec_cfg_axis, dec_cfg_data,
-                        quiet};
-  end
-  endgenerate
+  step_config #(
+      .N_AXES   (N_AXES),
+      .STEP_HIGH(STEP_HIGH),
+      .STEP_LOW (STEP_LOW),
+      .DIR_SETUP(DIR_SETUP),
+      .DIR_HOLD (DIR_HOLD),
+      .FIXED    (FIXED_EN)
+  ) u_step_cfg (
+      .clk       (clk),
+      .rst       (rst),
+      .cfg_wr    (cfg_wr),
+      .cfg_addr  (cfg_addr),
+      .cfg_wdata (cfg_wdata),
+      .frame_wr  (dec_cfg_wr),
+      .frame_axis(dec_cfg_axis),
+      .frame_data(dec_cfg_data),
+      .quiet     (quiet),
+      .cfg_high  (cfg_high),
+      .cfg_low   (cfg_low),
+      .cfg_setup (cfg_setup),
+      .cfg_hold  (cfg_hold),
+      .min_period(min_period)
+  );
 
   // ---------------------------------------------------------------- preparation
   wire [1:0] seg_code;
@@ -658,7 +532,6 @@ module cnc_core #(
   wire [7:0] exec_fan_duty;
   wire out_done;
   wire [15:0] out_done_n;
-  assign laser = exec_laser && !motion_abort;  // also low at once (the executor's own is registered)
 
   segment_executor #(
       .N_AXES        (N_AXES),
@@ -727,113 +600,89 @@ module cnc_core #(
   );
 
   // ---------------------------------------------------------------- machine outputs
-  // low at once on e-stop or a limit alarm (the executor clears its levels from the next edge)
-  assign coolant_flood = exec_flood && !motion_abort;
-  assign coolant_mist  = exec_mist && !motion_abort;
-  assign dout          = exec_dout & {4{!motion_abort}};
-  generate
-    if (FAN_OK == 0) begin : g_fan_bad
-      // FAN_PWM_HZ must be at least 1, at most CLK_HZ / 256, and reachable within 1 %
-      FAN_PWM_HZ_out_of_range u_fan_pwm_hz_out_of_range ();
-    end
-    if (OUT_EN != 0) begin : g_fan
-      wire fan_pwm, fan_start;
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire [8:0] fan_active_nc;
-      /* verilator lint_on UNUSEDSIGNAL */
-      // The PWM takes a duty only at a period boundary: after an e-stop the pin stays low until
-      // the first boundary (fan_start: the clock after it), from which the duty the executor
-      // holds (0 after the e-stop, or a later OUTPUT's) is the active one.
-      reg fan_hold_reg;
-      always @(posedge clk) begin
-        if (fan_start) fan_hold_reg <= 1'b0;
-        if (motion_abort) fan_hold_reg <= 1'b1;
-        if (rst) fan_hold_reg <= 1'b0;
-      end
-      pwm #(
-          .PWM_BITS(8),
-          .PWM_DIV (FAN_DIV)
-      ) u_fan (
-          .clk         (clk),
-          .rst         (rst),
-          .duty        ((exec_fan_duty == 8'hFF) ? 9'd256 : {1'b0, exec_fan_duty}),
-          .force_off   (motion_abort),
-          .out         (fan_pwm),
-          .period_start(fan_start),
-          .active      (fan_active_nc)
-      );
-      assign fan = fan_pwm && !motion_abort && !(fan_hold_reg && !fan_start);
-    end else begin : g_nofan
-      assign fan = 1'b0;
-      wire unused_fan = &{1'b0, exec_fan_duty};
-    end
-  endgenerate
+  machine_outputs #(
+      .CLK_HZ    (CLK_HZ),
+      .FAN_PWM_HZ(FAN_PWM_HZ),
+      .OUTPUTS   (OUT_EN)
+  ) u_outputs (
+      .clk          (clk),
+      .rst          (rst),
+      .abort        (motion_abort),
+      .exec_laser   (exec_laser),
+      .exec_flood   (exec_flood),
+      .exec_mist    (exec_mist),
+      .exec_dout    (exec_dout),
+      .exec_fan_duty(exec_fan_duty),
+      .laser        (laser),
+      .coolant_flood(coolant_flood),
+      .coolant_mist (coolant_mist),
+      .dout         (dout),
+      .fan          (fan)
+  );
 
   // ---------------------------------------------------------------- status
-  reg [1:0] last_code_reg;
-  reg [15:0] last_feed_reg;
-  reg [31:0] last_period_reg;
-  reg [15:0] packet_count_reg, frame_errors_reg, timeouts_reg, overruns_reg, violations_reg;
-  reg [15:0] frames_ok_reg, crc_errors_reg, length_errors_reg, unknown_types_reg;
-  reg [15:0] noise_bytes_reg, clamped_reg, naks_reg;
-  reg [31:0] segments_done_reg;
-  reg fault_step_reg;
-  reg fault_arc_reg;  // an ARC ended inconsistently (faults bit 1)
-
   wire v2_seg_done = seg_done && seg_done_v2;
   wire v2_init_done = init_applied && init_v2;
   wire v1_move_done = seg_done && !seg_done_v2;
-
-  always @(posedge clk) begin
-    if (seg_tvalid && seg_tready) begin
-      last_code_reg   <= seg_code;
-      last_feed_reg   <= seg_feed;
-      last_period_reg <= seg_period;
-    end
-    if (dec_v1_packet || dec_frame_ok) packet_count_reg <= packet_count_reg + 16'd1;
-    if (rx_frame_error) frame_errors_reg <= frame_errors_reg + 16'd1;
-    if (dec_timeout) timeouts_reg <= timeouts_reg + 16'd1;
-    if (dec_v1_overrun || rx_overrun) overruns_reg <= overruns_reg + 16'd1;
-    if (exec_violation) violations_reg <= violations_reg + 16'd1;
-    if (dec_frame_ok) frames_ok_reg <= frames_ok_reg + 16'd1;
-    if (dec_crc_error) crc_errors_reg <= crc_errors_reg + 16'd1;
-    if (dec_length_error) length_errors_reg <= length_errors_reg + 16'd1;
-    if (dec_unknown_type) unknown_types_reg <= unknown_types_reg + 16'd1;
-    if (dec_noise) noise_bytes_reg <= noise_bytes_reg + 16'd1;
-    if (prep_clamped) clamped_reg <= clamped_reg + 16'd1;
-    if (dec_nak) naks_reg <= naks_reg + 16'd1;
-    segments_done_reg <= segments_done_reg + {31'd0, v2_seg_done} + {31'd0, v2_init_done} +
-                         (out_done ? {16'd0, out_done_n} : 32'd0);
-    if (dec_fault_clear) fault_step_reg <= 1'b0;
-    if (exec_violation) fault_step_reg <= 1'b1;
-    if (dec_fault_clear) fault_arc_reg <= 1'b0;
-    if (exec_arc_err) fault_arc_reg <= 1'b1;
-    if (rst) begin
-      last_code_reg     <= 2'd0;
-      last_feed_reg     <= 16'd0;
-      last_period_reg   <= 32'd0;
-      packet_count_reg  <= 16'd0;
-      frame_errors_reg  <= 16'd0;
-      timeouts_reg      <= 16'd0;
-      overruns_reg      <= 16'd0;
-      violations_reg    <= 16'd0;
-      frames_ok_reg     <= 16'd0;
-      crc_errors_reg    <= 16'd0;
-      length_errors_reg <= 16'd0;
-      unknown_types_reg <= 16'd0;
-      noise_bytes_reg   <= 16'd0;
-      clamped_reg       <= 16'd0;
-      naks_reg          <= 16'd0;
-      segments_done_reg <= 32'd0;
-      fault_step_reg    <= 1'b0;
-      fault_arc_reg     <= 1'b0;
-    end
-  end
-
-  // ---------------------------------------------------------------- heaters
+  wire [15:0] frames_ok_w, crc_errors_w, length_errors_w, unknown_types_w, timeouts_w;
+  wire [15:0] frame_errors_w, overruns_w, noise_bytes_w, clamped_w;
+  wire [31:0] segments_done_w;
+  wire [7:0] faults_w;
   wire [127:0] heat_status;
   wire [7:0] heat_faults0, heat_faults1;
   wire heat_wd_fault;
+
+  status_counters u_status (
+      .clk           (clk),
+      .rst           (rst),
+      .seg_accept    (seg_tvalid && seg_tready),
+      .seg_code      (seg_code),
+      .seg_feed      (seg_feed),
+      .seg_period    (seg_period),
+      .v1_packet     (dec_v1_packet),
+      .frame_ok      (dec_frame_ok),
+      .rx_frame_error(rx_frame_error),
+      .timeout       (dec_timeout),
+      .v1_overrun    (dec_v1_overrun),
+      .rx_overrun    (rx_overrun),
+      .violation     (exec_violation),
+      .crc_error     (dec_crc_error),
+      .length_error  (dec_length_error),
+      .unknown_type  (dec_unknown_type),
+      .noise         (dec_noise),
+      .prep_clamped  (prep_clamped),
+      .nak           (dec_nak),
+      .v2_seg_done   (v2_seg_done),
+      .v2_init_done  (v2_init_done),
+      .out_done      (out_done),
+      .out_done_n    (out_done_n),
+      .fault_clear   (dec_fault_clear),
+      .arc_err       (exec_arc_err),
+      .heat_faults0  (heat_faults0),
+      .heat_faults1  (heat_faults1),
+      .heat_wd_fault (heat_wd_fault),
+      .estop_latched (estop_latched),
+      .limit_trip    (limit_trip_w),
+      .last_code     (last_code),
+      .last_feed     (last_feed),
+      .last_period   (last_period),
+      .packet_count  (packet_count),
+      .frame_errors  (frame_errors_w),
+      .timeouts      (timeouts_w),
+      .overruns      (overruns_w),
+      .violations    (violations),
+      .frames_ok     (frames_ok_w),
+      .crc_errors    (crc_errors_w),
+      .length_errors (length_errors_w),
+      .unknown_types (unknown_types_w),
+      .noise_bytes   (noise_bytes_w),
+      .clamped       (clamped_w),
+      .naks          (naks),
+      .segments_done (segments_done_w),
+      .faults        (faults_w)
+  );
+
+  // ---------------------------------------------------------------- heaters
   generate
     if (HEAT_EN != 0) begin : g_heat
       /* verilator lint_off UNUSEDSIGNAL */
@@ -882,82 +731,46 @@ module cnc_core #(
   // ---------------------------------------------------------------- answers
   wire [7:0] enc_tdata;
   wire enc_tvalid, tx_tready;
-  wire [7:0] faults_w = {heat_faults1 != 8'd0, heat_faults0 != 8'd0, heat_wd_fault, estop_latch_reg,
-                         1'b0, limit_trip_w, fault_arc_reg, fault_step_reg};
 
-  generate
-    if (V2_EN != 0) begin : g_enc
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire enc_frame_start;  // not needed here
-      /* verilator lint_on UNUSEDSIGNAL */
-      wire [7:0] state_w = {3'd0, limit_untrusted, estop_s2_reg, faults_w != 8'd0, dec_v2_mode, busy};
-      // STATUS limit byte {0, 0, 0, max, axis} of the last trip, switch states u16 (bit a = min
-      // of axis a, bit 8 + a = max; axes 0..7)
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire [15:0] lim_min16 = {{(16 - N_AXES) {1'b0}}, lim_min_w};  // axes 8..14 not reported
-      wire [15:0] lim_max16 = {{(16 - N_AXES) {1'b0}}, lim_max_w};
-      /* verilator lint_on UNUSEDSIGNAL */
-      wire [23:0] limits_w = {3'd0, limit_trip_max, limit_trip_axis, lim_max16[7:0], lim_min16[7:0]};
-      wire [16*9-1:0] counters_w = {frames_ok_reg, crc_errors_reg, length_errors_reg,
-                                    unknown_types_reg, timeouts_reg, frame_errors_reg, overruns_reg,
-                                    noise_bytes_reg, clamped_reg};
-
-      response_encoder #(
-          .N_AXES     (N_AXES),
-          .FIFO_DEPTH (FIFO_DEPTH),
-          .CLK_HZ     (CLK_HZ),
-          .BAUD       (BAUD),
-          .BUILD_ID   (BUILD_ID),
-          .MAX_PAYLOAD(64),
-          .HEAT_BYTES (16)
-      ) u_enc (
-          .clk          (clk),
-          .rst          (rst),
-          .ident_req    (dec_hello),
-          .status_req   (dec_status),
-          .nak_req      (dec_nak),
-          .nak_seq      (dec_nak_seq),
-          .nak_reason   (dec_nak_reason),
-          .ack_req      (dec_ack),
-          .done_evt     (v2_seg_done || v2_init_done || out_done),
-          .v1_ack       (v1_move_done),
-          .next_seq     (dec_next_seq),
-          .fifo_free    (fifo_free_w),
-          .fifo_level   (fifo_level_w),
-          .segments_done(segments_done_reg),
-          .state        (state_w),
-          .faults       (faults_w),
-          .position     (position),
-          .counters     (counters_w),
-          .limits       (limits_w),
-          .heat_status  (heat_status),
-          .m_axis_tdata (enc_tdata),
-          .m_axis_tvalid(enc_tvalid),
-          .m_axis_tready(tx_tready),
-          .frame_start  (enc_frame_start)
-      );
-    end else begin : g_aa
-      // v1: one 0xAA per completed v1 move (a counter, as response_encoder keeps it)
-      reg [7:0] aa_cnt_reg;
-      wire aa_take = enc_tvalid && tx_tready;
-      always @(posedge clk) begin
-        case ({v1_move_done, aa_take})
-          2'b10:   aa_cnt_reg <= aa_cnt_reg + 8'd1;
-          2'b01:   aa_cnt_reg <= aa_cnt_reg - 8'd1;
-          default: aa_cnt_reg <= aa_cnt_reg;
-        endcase
-        if (rst) aa_cnt_reg <= 8'd0;
-      end
-      assign enc_tdata  = `FPGACNC_V1_ACK;
-      assign enc_tvalid = (aa_cnt_reg != 8'd0);
-      // v2-only status and requests, unused in a v1 build
-      wire unused_v2 = &{1'b0, dec_hello, dec_status, dec_ack, dec_nak, dec_nak_seq, dec_nak_reason,
-                         fifo_free_w, segments_done_reg, heat_status, v2_seg_done, v2_init_done,
-                         frames_ok_reg, crc_errors_reg, length_errors_reg, unknown_types_reg,
-                         noise_bytes_reg, clamped_reg, limit_untrusted, limit_trip_axis,
-                         limit_trip_max};
-    end
-  endgenerate
+  answer_source #(
+      .PROTO_V2  (V2_EN),
+      .N_AXES    (N_AXES),
+      .FIFO_DEPTH(FIFO_DEPTH),
+      .CLK_HZ    (CLK_HZ),
+      .BAUD      (BAUD),
+      .BUILD_ID  (BUILD_ID)
+  ) u_answer (
+      .clk            (clk),
+      .rst            (rst),
+      .ident_req      (dec_hello),
+      .status_req     (dec_status),
+      .nak_req        (dec_nak),
+      .nak_seq        (dec_nak_seq),
+      .nak_reason     (dec_nak_reason),
+      .ack_req        (dec_ack),
+      .done_evt       (v2_seg_done || v2_init_done || out_done),
+      .v1_ack         (v1_move_done),
+      .next_seq       (dec_next_seq),
+      .fifo_free      (fifo_free_w),
+      .fifo_level     (fifo_level_w),
+      .segments_done  (segments_done_w),
+      .busy           (busy),
+      .v2_mode        (dec_v2_mode),
+      .estop_active   (estop_active),
+      .limit_untrusted(limit_untrusted),
+      .faults         (faults_w),
+      .position       (position),
+      .counters       ({frames_ok_w, crc_errors_w, length_errors_w, unknown_types_w, timeouts_w,
+                        frame_errors_w, overruns_w, noise_bytes_w, clamped_w}),
+      .limit_trip_max (limit_trip_max),
+      .limit_trip_axis(limit_trip_axis),
+      .lim_min        (lim_min_w),
+      .lim_max        (lim_max_w),
+      .heat_status    (heat_status),
+      .m_axis_tdata   (enc_tdata),
+      .m_axis_tvalid  (enc_tvalid),
+      .m_axis_tready  (tx_tready)
+  );
 
   uart_tx #(
       .CLK_HZ(CLK_HZ),
@@ -972,27 +785,22 @@ module cnc_core #(
       .busy         (tx_busy)
   );
 
+  // ---------------------------------------------------------------- pins
   assign busy          = exec_busy || prep_busy || !fifo_empty;
-  assign last_code     = last_code_reg;
-  assign last_feed     = last_feed_reg;
-  assign last_period   = last_period_reg;
-  assign packet_count  = packet_count_reg;
-  assign frame_errors  = frame_errors_reg;
-  assign timeouts      = timeouts_reg;
-  assign overruns      = overruns_reg;
-  assign violations    = violations_reg;
+  assign frame_errors  = frame_errors_w;
+  assign timeouts      = timeouts_w;
+  assign overruns      = overruns_w;
   assign fifo_level    = fifo_level_w;
   assign next_seq      = dec_next_seq;
   assign v2_mode       = dec_v2_mode;
-  assign segments_done = segments_done_reg;
+  assign segments_done = segments_done_w;
   assign faults        = faults_w;
-  assign frames_ok     = frames_ok_reg;
-  assign crc_errors    = crc_errors_reg;
-  assign length_errors = length_errors_reg;
-  assign unknown_types = unknown_types_reg;
-  assign noise_bytes   = noise_bytes_reg;
-  assign clamped       = clamped_reg;
-  assign naks          = naks_reg;
+  assign frames_ok     = frames_ok_w;
+  assign crc_errors    = crc_errors_w;
+  assign length_errors = length_errors_w;
+  assign unknown_types = unknown_types_w;
+  assign noise_bytes   = noise_bytes_w;
+  assign clamped       = clamped_w;
 
 endmodule
 

@@ -2,8 +2,10 @@
 # cnc_core's elaboration guards (rtl/cnc_core.v "build option guards"): every illegal combination
 # of build options below must fail to elaborate in Verilator (--lint-only) and Icarus (-g2005),
 # naming the missing module cnc_core_illegal_<rule> that says what is wrong; one of them in Yosys
-# too. A few legal combinations (the defaults, PROTO_V2 = 0 alone, which relies on the options'
-# defaults following PROTO_V2, and ARCS without PROFILES) must elaborate without that error.
+# too. A parameter cnc_core passes on unchecked is guarded by the block that takes it
+# (<block>_illegal_<rule>): three of those too. A few legal combinations (the defaults,
+# PROTO_V2 = 0 alone, which relies on the options' defaults following PROTO_V2, and ARCS without
+# PROFILES) must elaborate without that error.
 # Every named configuration of spec/configs.toml is elaborated by scripts/lint.sh. Exits non-zero
 # when any case does not behave (each is reported). CTest lint_config_guards (label lint).
 set -uo pipefail
@@ -35,15 +37,16 @@ elaborate() {
   esac
 }
 
-# illegal TOOLS "P=V ..." RULE: every tool fails and names cnc_core_illegal_RULE
+# illegal TOOLS "P=V ..." RULE [BLOCK]: every tool fails and names BLOCK_illegal_RULE (BLOCK
+# cnc_core by default)
 illegal() {
-  local tool
+  local tool guard=${4:-cnc_core}_illegal_$3
   for tool in $1; do
     checked=$((checked + 1))
     if elaborate "$tool" "$2"; then
-      echo "FAIL $tool: cnc_core ($2) elaborated; expected cnc_core_illegal_$3"; fail=1
-    elif ! grep -q "cnc_core_illegal_$3\\b" "$log"; then
-      echo "FAIL $tool: cnc_core ($2) failed without naming cnc_core_illegal_$3:"; cat "$log"; fail=1
+      echo "FAIL $tool: cnc_core ($2) elaborated; expected $guard"; fail=1
+    elif ! grep -q "$guard\\b" "$log"; then
+      echo "FAIL $tool: cnc_core ($2) failed without naming $guard:"; cat "$log"; fail=1
     fi
   done
 }
@@ -76,14 +79,18 @@ illegal "$both" "PROTO_V2=0 OUTPUTS=1" OUTPUTS_needs_PROTO_V2_1
 illegal "$both" "LEAN_TRIM=1" LEAN_TRIM_needs_PROTO_V2_0
 illegal "$both" "N_AXES=2 STEP_CFG=0" STEP_CFG_0_needs_PROTO_V2_0
 illegal "$both" "LIMIT_FILTER_CLKS=16777216" LIMIT_FILTER_CLKS_not_0_to_2p24m1
+illegal "$both" "FIFO_DEPTH=48" FIFO_DEPTH_not_power_of_2_in_2_to_32768 front_v2
+illegal "$both" "STEP_HIGH=65536" timing_not_0_to_65535 step_config
+illegal "$both" "FAN_PWM_HZ=0" FAN_PWM_HZ_out_of_range machine_outputs
 
 legal "$both" ""
 legal "$both yosys" "PROTO_V2=0"
 legal "$both" "N_AXES=2 PROTO_V2=0 LEAN_TRIM=0 STEP_CFG=0"
 legal "$both" "N_AXES=3 PROFILES=0 ARCS=1 HEATERS=0 OUTPUTS=0"
 legal "$both" "N_AXES=3 LIMIT_FILTER_CLKS=0 LIMIT_ENABLE=458759 LIMIT_ACTIVE_LOW=65537"
+legal "$both" "FIFO_DEPTH=2 STEP_HIGH=65535"
 
 if [ $fail -eq 0 ]; then
-  echo "config_guards: $checked elaborations as expected (16 illegal combinations refused by name, 5 legal ones accepted)"
+  echo "config_guards: $checked elaborations as expected (19 illegal combinations refused by name, 6 legal ones accepted)"
 fi
 exit $fail

@@ -37,6 +37,14 @@ declare -A BLK=(
   [input_filter]="rtl/machine/input_filter.v|-set N 4 -set FILTER_CLKS 50000"
   [limit_guard]="rtl/machine/limit_guard.v|-set N_AXES 2"
   [travel_guard]="rtl/machine/travel_guard.v|-set N_AXES 2"
+  [step_config]="rtl/motion/step_config.v|-set N_AXES 2"
+  [status_counters]="rtl/protocol/status_counters.v|"
+  [estop_latch]="rtl/machine/estop_latch.v|"
+  [machine_outputs]="rtl/machine/machine_outputs.v rtl/machine/pwm.v|"
+  [answer_source]="rtl/protocol/answer_source.v rtl/protocol/response_encoder.v rtl/protocol/crc16_ccitt.v|-set N_AXES 2"
+  # the v1-only builds' front end (v1-board's parameters; those builds are timed whole by
+  # ice40_timing.sh): only on request
+  [front_v1]="rtl/protocol/front_v1.v rtl/protocol/packet_decoder_v1.v|-set N_AXES 2"
   [pwm]="rtl/machine/pwm.v|-set PWM_BITS 8 -set PWM_DIV 195"
   [ltc2308_spi]="rtl/heater/ltc2308_spi.v|"
   [heater_safety]="rtl/heater/heater_safety.v|"
@@ -48,7 +56,8 @@ declare -A BLK=(
 )
 # segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
 blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder
-  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard travel_guard"}
+  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard travel_guard
+  step_config status_counters estop_latch machine_outputs answer_source"}
 for tool in yosys nextpnr-ice40 python3; do
   command -v "$tool" >/dev/null || { echo "ice40_blocks: $tool not found"; exit 2; }
 done

@@ -19,7 +19,8 @@ fpgacnc_config_check "$cfg" synth_breakdown || exit 2
 chp=$(fpgacnc_config_chparam "$cfg")
 mkdir -p "$out"
 command -v yosys >/dev/null || { echo "synth_breakdown: yosys not found (Debian: yosys)"; exit 2; }
-blocks="segment_prep prep_profile prep_arc prep_dir_tracker segment_executor axis_channel dir_sequencer dda_linear step_pulse uart_rx uart_tx packet_decoder_v1
+blocks="front_v2 front_v1 answer_source machine_outputs estop_latch step_config status_counters
+        segment_prep prep_profile prep_arc prep_dir_tracker segment_executor axis_channel dir_sequencer dda_linear step_pulse uart_rx uart_tx packet_decoder_v1
         frame_decoder segment_fifo response_encoder profile_gen dda_profile arc_dda heater_block
         heater_channel pid_incr pwm heater_safety ltc2308_spi temp_table crc16_ccitt"
 attrs=""

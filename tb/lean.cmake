@@ -2,7 +2,8 @@
 # v1-board: 2 axes, protocol v1 only (no frame_decoder, FIFO, response_encoder, profiles, arcs or
 # heaters). A short v1 job through its pins (~1 s).
 fpgacnc_verilated(vcore_v1_board TOP cnc_core PREFIX Vcnc_core_v1_board CONFIG v1-board
-                  SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/protocol/packet_decoder_v1.v)
+                  SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/protocol/packet_decoder_v1.v
+                          ${FPGACNC_RTL_DIR}/protocol/front_v1.v)
 fpgacnc_bench(test_cnc_core_lean LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core_lean.cpp LIBS vcore_v1_board fmt::fmt)
 # lines-2axis: v2 without profiles, arcs and heaters; their frames are unknown types.
@@ -17,14 +18,17 @@ set(_fast_timing -GBAUD=2500000 -GWATCHDOG_CLKS=20000 -GFEED0_PERIOD=700 -GDEFAU
                  -GSTEP_HIGH=3 -GSTEP_LOW=2 -GDIR_SETUP=6 -GDIR_HOLD=4)
 fpgacnc_verilated(vcore_v1_board_fast TOP cnc_core PREFIX Vcnc_core_v1_board_fast CONFIG v1-board
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/protocol/packet_decoder_v1.v
+                          ${FPGACNC_RTL_DIR}/protocol/front_v1.v
                   ARGS ${_fast_timing})
 fpgacnc_verilated(vcore_v1_board_untrimmed_fast TOP cnc_core
                   PREFIX Vcnc_core_v1_board_untrimmed_fast CONFIG v1-board-untrimmed
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/protocol/packet_decoder_v1.v
+                          ${FPGACNC_RTL_DIR}/protocol/front_v1.v
                   ARGS ${_fast_timing})
 fpgacnc_verilated(vcore_v1_board_fixed_fast TOP cnc_core PREFIX Vcnc_core_v1_board_fixed_fast
                   CONFIG v1-board-fixed
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/protocol/packet_decoder_v1.v
+                          ${FPGACNC_RTL_DIR}/protocol/front_v1.v
                   ARGS ${_fast_timing})
 target_link_libraries(test_cnc_core_lean PRIVATE vcore_v1_board_fast vcore_v1_board_untrimmed_fast
                                                  vcore_v1_board_fixed_fast)
