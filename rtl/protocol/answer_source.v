@@ -4,7 +4,7 @@
 //
 // Contract
 //   m_axis_*     bytes for uart_tx, held until taken.
-//   PROTO_V2 = 1 response_encoder (rtl/response_encoder.v) with 64-byte payloads and the 16 heater
+//   PROTO_V2 = 1 response_encoder (rtl/protocol/response_encoder.v) with 64-byte payloads and the 16 heater
 //                bytes of STATUS: the request strobes (ident_req .. v1_ack) and the live state go to
 //                it; this module forms STATUS's state byte {0, 0, 0, limit_untrusted,
 //                estop_active, faults != 0, v2_mode, busy} and its limit bytes {0, 0, 0,

@@ -9,7 +9,7 @@
 //                motion {v2 0, kind MOTION, code, power 0xFF, T = feed, steps X, Y, other axes 0};
 //                init {v2 0, kind NUMERATORS, NUMERATOR_X, NUMERATOR_Y}; every other bit 0.
 //   level, free  the queue of one entry: level = m_axis_tvalid, free = !m_axis_tvalid.
-//   timeout, overrun, packet_done, partial   packet_decoder_v1's (rtl/packet_decoder_v1.v).
+//   timeout, overrun, packet_done, partial   packet_decoder_v1's (rtl/protocol/packet_decoder_v1.v).
 // N_AXES at least 2 (v1 packets carry X and Y); a smaller value instantiates a module named
 // front_v1_illegal_N_AXES_below_2, which does not exist.
 `default_nettype none

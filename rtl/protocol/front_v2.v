@@ -14,7 +14,7 @@
 //                high on e-stop and on the hard-limit alarm.
 //   level, free  entries in the FIFO and free slots (the ACK credit), registers.
 //   cfg_*, heat_*, fault_clear, hello, status_req, ack_req, nak*, next_seq, v2_mode, partial and
-//                the status strobes: frame_decoder's (rtl/frame_decoder.v); RELEASE is not used.
+//                the status strobes: frame_decoder's (rtl/protocol/frame_decoder.v); RELEASE is not used.
 // Build options (cnc_core passes its own): PROFILES, ARCS, OUTPUTS, HEATERS 0 or 1 (a frame of a
 // kind not built is answered NAK UNKNOWN_TYPE); FIFO_DEPTH a power of two, 2..32768. An illegal
 // value instantiates a module named front_v2_illegal_<rule>, which does not exist.
