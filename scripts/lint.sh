@@ -3,7 +3,8 @@
 #   verilator --lint-only -Wall, iverilog -g2005, and Yosys (read, hierarchy, proc, check)
 # with the file's own module as top, and cnc_core in every named configuration of
 # spec/configs.toml (scripts/configs.sh) elaborated the same three ways, so an illegal entry there
-# (rtl/cnc_core.v's elaboration guards) fails too. Exit non-zero on any warning or error.
+# (rtl/cnc_core.v's elaboration guards) fails too; and every rtl/... .v path named in the sources,
+# scripts and docs must exist. Exit non-zero on any warning or error.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=scripts/configs.sh
@@ -65,6 +66,11 @@ if ! yosys -q -l "$log" -p "$script" >/dev/null 2>&1 || grep -qi "warning" "$log
     fi
   done
 fi
+# Every RTL path the sources, scripts and docs name (rtl/<folder>/<module>.v) exists.
+while read -r p; do
+  [ -f "$p" ] || { echo "FAIL path: $p is named in $(grep -rlF "$p" rtl scripts docs tb systemc host models constraints spec CMakeLists.txt Makefile README.md | head -3 | tr '\n' ' ')but does not exist"; fail=1; }
+done < <(grep -rhoE "\brtl/[A-Za-z0-9_/]+\.v\b" rtl scripts docs tb systemc host models constraints spec \
+  CMakeLists.txt Makefile README.md | sort -u)
 if [ $fail -eq 0 ]; then
   echo "lint: ${#files[@]} files clean (verilator -Wall, iverilog -g2005, yosys check), and cnc_core in its ${#configs[@]} named configurations (spec/configs.toml)"
 fi
