@@ -5,7 +5,7 @@ numbers, written once) and spec/configs.toml (cnc_core's named build configurati
   rtl/include/fpgacnc_spec.vh      Verilog-2005 `define`s (include guard) for the RTL
   host/include/fpgacnc/spec.h      constexpr C++ (namespace fpgacnc::spec) for host, twins, benches
   spec/spec.cmake                  CMake variables (the benches' SAMPLE_CLKS)
-  spec/vectors.txt                 worked frames read by the host, RTL and twin codec tests
+  spec/vectors.txt                 worked frames and sequences read by the host, RTL and twin codec tests
   spec/configs.cmake               the configurations' Verilator -G arguments (tb/, systemc/)
   rtl/include/fpgacnc_configs.vh   the parameters of the configurations a board top instantiates
   scripts/configs.sh               the configurations for the lint, synthesis and timing scripts
