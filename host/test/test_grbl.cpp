@@ -218,6 +218,15 @@ void expect_at(const Report& r, const std::array<int64_t, 3>& steps, const Machi
   }
 }
 
+// A soft reset (0x18) out of an alarm that left a line waiting: that line's ok, the banner, and
+// the alarm's unlock message (grbl keeps the alarm over a reset).
+void expect_reset_out_of_alarm(Rig& rig) {
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ok");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+}
+
 struct StreamResult {
   size_t oks = 0, errors = 0;
   std::vector<std::string> error_lines;
@@ -565,10 +574,7 @@ TEST(Grbl, SoftLimitLineRaisesAlarm2AndMovesNothing) {
   // The next line waits unanswered (grbl blocks everything but reports and the reset).
   EXPECT_TRUE(rig.lines().empty());
   EXPECT_EQ(rig.engine().stats().frames, frames);
-  rig.send("\x18");
-  EXPECT_EQ(rig.next_line(), "ok");
-  EXPECT_EQ(rig.next_line(), grbl::kBanner);
-  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  expect_reset_out_of_alarm(rig);
   EXPECT_EQ(rig.command("G0 X-30")[0], "error:9");
   EXPECT_EQ(rig.command("$X")[0], "[MSG:Caution: Unlocked]");
   // The parser restarts at the machine's position: X-30 is 10 mm further, inside.
@@ -583,20 +589,14 @@ TEST(Grbl, SoftLimitLineRaisesAlarm2AndMovesNothing) {
   rig.send("G3 X-30 Y-70 I0 J-25\n");
   EXPECT_EQ(rig.next_line(), "ALARM:2");
   EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
-  rig.send("\x18");
-  EXPECT_EQ(rig.next_line(), "ok");
-  EXPECT_EQ(rig.next_line(), grbl::kBanner);
-  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  expect_reset_out_of_alarm(rig);
   EXPECT_EQ(rig.command("$X")[1], "ok");
   // Check mode checks soft limits too; $20=0 turns them off.
   EXPECT_EQ(rig.command("$C")[0], "[MSG:Enabled]");
   rig.send("G0 X5\n");
   EXPECT_EQ(rig.next_line(), "ALARM:2");
   EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
-  rig.send("\x18");
-  EXPECT_EQ(rig.next_line(), "ok");
-  EXPECT_EQ(rig.next_line(), grbl::kBanner);
-  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  expect_reset_out_of_alarm(rig);
   EXPECT_EQ(rig.command("$X")[1], "ok");
   EXPECT_EQ(rig.command("$20=0")[0], "ok");
   EXPECT_EQ(rig.command("G0 X5")[0], "ok");
