@@ -61,6 +61,10 @@
 `define FPGACNC_T_CONFIG_TRAVEL 8'h07
 `define FPGACNC_LEN_CONFIG_TRAVEL 8'd10
 `define FPGACNC_LENI_CONFIG_TRAVEL 10
+// MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
+`define FPGACNC_T_MOTION 8'h08
+`define FPGACNC_LEN_MOTION 8'd9
+`define FPGACNC_LENI_MOTION 9
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 `define FPGACNC_T_LINE 8'h10
 `define FPGACNC_LEN_LINE_HEADER 8'd6
@@ -157,6 +161,10 @@
 `define FPGACNC_STATE_ESTOP_BIT 3
 // positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR)
 `define FPGACNC_STATE_POS_UNTRUSTED_BIT 4
+// a feed hold is in effect (MOTION HOLD or the hold input; until MOTION RESUME or the cycle-start input)
+`define FPGACNC_STATE_HOLD_BIT 5
+// the motion rate is 0: motion is frozen (a hold is complete when HOLD is set too)
+`define FPGACNC_STATE_STOPPED_BIT 6
 // STEP timing violation (in an ARC also a step within DIR setup of a DIR change)
 `define FPGACNC_FAULT_STEP_TIMING_BIT 0
 // an ARC frame inconsistent with its walk
@@ -220,6 +228,14 @@
 `define FPGACNC_HEATER_MODES 5
 // CONFIG_TRAVEL flags bit 0: soft limits on for the axis (bits 7:1 must be 0; on needs MIN <= MAX)
 `define FPGACNC_TRAVEL_ENABLE 1
+// MOTION flags bit 0 HOLD: ramp the rate to 0 and keep it there
+`define FPGACNC_MOTION_HOLD 1
+// MOTION flags bit 1 RESUME: end a hold (HOLD and RESUME together: BAD_FIELD)
+`define FPGACNC_MOTION_RESUME 2
+// MOTION flags bits 7:2: must be 0
+`define FPGACNC_MOTION_RESERVED 252
+// MOTION feed and rapid rates: Q1.15, 0x8000 = 100 % (the planned speed); 1 .. 0x8000, else BAD_FIELD
+`define FPGACNC_RATE_ONE 32_768
 // Q1.15 duty 100 % (largest duty_max and manual duty)
 `define FPGACNC_DUTY_ONE 16'h8000
 // coolant flood (M8 on, M9 off)
@@ -309,6 +325,10 @@
 `define FPGACNC_DEF_DIR_SETUP 200
 // DIR_HOLD: clocks from a STEP to a DIR change
 `define FPGACNC_DEF_DIR_HOLD 200
+// RATE_PERIOD_LOG2: the motion rate moves toward its target once every 2^8 clocks (docs/timing.md "Feed hold and overrides")
+`define FPGACNC_DEF_RATE_PERIOD_LOG2 8
+// RATE_RAMP: the rate's largest change per period after rst, in 2^-32 (from 100 % to 0 in 19 531 periods, 0.1 s at 50 MHz)
+`define FPGACNC_DEF_RATE_RAMP 219_902
 // LIMIT_FILTER_CLKS: limit switch debounce, clocks a new level must be stable (1 ms at 50 MHz)
 `define FPGACNC_DEF_LIMIT_FILTER_CLKS 50_000
 // LIMIT_ENABLE: limit switches wired, bit a = min of axis a, bit 16 + a = max (0: none; a board enables those it has)

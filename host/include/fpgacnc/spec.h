@@ -64,6 +64,9 @@ inline constexpr size_t kLenRelease = 0;
 // CONFIG_TRAVEL: axis u8, flags u8 (bit 0 enable), MIN int32, MAX int32: the axis's travel in steps (soft limits), see below
 inline constexpr uint8_t kTypeConfigTravel = 0x07;
 inline constexpr size_t kLenConfigTravel = 10;
+// MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
+inline constexpr uint8_t kTypeMotion = 0x08;
+inline constexpr size_t kLenMotion = 9;
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 inline constexpr uint8_t kTypeLine = 0x10;
 inline constexpr size_t kLenLineHeader = 6;
@@ -118,7 +121,7 @@ struct TypeInfo {
   bool sequenced;  // host frames: checked against next_seq
   bool fifo;       // host frames: written to the command FIFO
 };
-inline constexpr std::array<TypeInfo, 22> kTypes{{
+inline constexpr std::array<TypeInfo, 23> kTypes{{
     {0x01, "HELLO", true, false, false},
     {0x02, "STATUS_QUERY", true, false, false},
     {0x03, "FAULT_CLEAR", true, true, false},
@@ -126,6 +129,7 @@ inline constexpr std::array<TypeInfo, 22> kTypes{{
     {0x05, "NUMERATORS", true, true, true},
     {0x06, "RELEASE", true, true, false},
     {0x07, "CONFIG_TRAVEL", true, true, false},
+    {0x08, "MOTION", true, false, false},
     {0x10, "LINE", true, true, true},
     {0x11, "DWELL", true, true, true},
     {0x12, "LINE_PROFILE", true, true, true},
@@ -190,6 +194,10 @@ inline constexpr uint8_t kStateFault = 0x04;
 inline constexpr uint8_t kStateEstop = 0x08;
 // bit 4: positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR)
 inline constexpr uint8_t kStatePosUntrusted = 0x10;
+// bit 5: a feed hold is in effect (MOTION HOLD or the hold input; until MOTION RESUME or the cycle-start input)
+inline constexpr uint8_t kStateHold = 0x20;
+// bit 6: the motion rate is 0: motion is frozen (a hold is complete when HOLD is set too)
+inline constexpr uint8_t kStateStopped = 0x40;
 // bit 0: STEP timing violation (in an ARC also a step within DIR setup of a DIR change)
 inline constexpr uint8_t kFaultStepTiming = 0x01;
 // bit 1: an ARC frame inconsistent with its walk
@@ -255,6 +263,14 @@ inline constexpr size_t kThermistorChunk = 8;
 inline constexpr size_t kHeaterModes = 5;
 // CONFIG_TRAVEL flags bit 0: soft limits on for the axis (bits 7:1 must be 0; on needs MIN <= MAX)
 inline constexpr size_t kTravelEnable = 1;
+// MOTION flags bit 0 HOLD: ramp the rate to 0 and keep it there
+inline constexpr size_t kMotionHold = 1;
+// MOTION flags bit 1 RESUME: end a hold (HOLD and RESUME together: BAD_FIELD)
+inline constexpr size_t kMotionResume = 2;
+// MOTION flags bits 7:2: must be 0
+inline constexpr size_t kMotionReserved = 252;
+// MOTION feed and rapid rates: Q1.15, 0x8000 = 100 % (the planned speed); 1 .. 0x8000, else BAD_FIELD
+inline constexpr size_t kRateOne = 32768;
 // Q1.15 duty 100 % (largest duty_max and manual duty)
 inline constexpr uint16_t kDutyOne = 0x8000;
 // OUTPUT bit 0: coolant flood (M8 on, M9 off)
@@ -340,6 +356,10 @@ inline constexpr uint32_t kDefaultStepLow = 100;
 inline constexpr uint32_t kDefaultDirSetup = 200;
 // DIR_HOLD: clocks from a STEP to a DIR change
 inline constexpr uint32_t kDefaultDirHold = 200;
+// RATE_PERIOD_LOG2: the motion rate moves toward its target once every 2^8 clocks (docs/timing.md "Feed hold and overrides")
+inline constexpr uint32_t kDefaultRatePeriodLog2 = 8;
+// RATE_RAMP: the rate's largest change per period after rst, in 2^-32 (from 100 % to 0 in 19 531 periods, 0.1 s at 50 MHz)
+inline constexpr uint32_t kDefaultRateRamp = 0x3'5AFE;
 // LIMIT_FILTER_CLKS: limit switch debounce, clocks a new level must be stable (1 ms at 50 MHz)
 inline constexpr uint32_t kDefaultLimitFilterClks = 50000;
 // LIMIT_ENABLE: limit switches wired, bit a = min of axis a, bit 16 + a = max (0: none; a board enables those it has)
