@@ -286,6 +286,9 @@ void TwinBoard::session(VirtualBoard& vb) {
   const uint64_t per = vb.clk_.period_ps();
   const uint64_t now_ps = sc_core::sc_time_stamp().value();
   vb.clk_.set_base(sc_core::sc_time::from_value((now_ps + per - 1) / per * per));
+  // live: each MOTION request goes to the motion rate when its frame is accepted
+  vb.known_motion_.clear();
+  vb.live_motion_ = true;
   vb.reset(axis_timing(opt_));
   vb.pins_.record_tx = true;
   vb.host_ = nullptr;

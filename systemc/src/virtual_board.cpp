@@ -24,6 +24,7 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
       fifo_("segment_fifo", clk_, v2::kFifoDepth),
       prep_("segment_prep", clk_, p_),
       exec_("segment_executor", clk_, p_, pins_),
+      rate_(p.rate_phase),
       enc_("response_encoder", clk_,
            EncoderParams{v2::kFifoDepth, p.clk_hz, p.baud, v2::kBuildId, true}),
       tx_("uart_tx", clk_, p_, pins_),
@@ -47,6 +48,11 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   prep_.entry_ends = &entry_ends_;
   prep_.on_output = [this](Cycle h, const OutputCmd& o) { exec_.output(h, o); };
   exec_.entry_ends = &entry_ends_;
+  exec_.rate = &rate_;
+  dec_.on_motion = [this](const MotionReq& m) {
+    observed_motion_.push_back(m);
+    if (live_motion_) rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
+  };
   make_axis_twins(exec_, clk_, p_, pins_, dda_, pulse_);
   for (auto& pulse : pulse_) pulse->keep_history = true;
   exec_.done.bind(enc_.done);
@@ -71,6 +77,10 @@ void VirtualBoard::reset(const std::array<AxisTiming, kAxes>& timing) {
   fifo_.reset();
   prep_.reset();
   exec_.reset();
+  rate_.reset();
+  observed_motion_.clear();
+  for (const MotionReq& m : known_motion_)
+    rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
   for (auto& p : pulse_) p->reset();
   enc_.reset();
   tx_.reset();
@@ -130,6 +140,8 @@ void VirtualBoard::on_state(tlm::tlm_generic_payload& gp, sc_core::sc_time& dela
   for (Cycle v : exec_.arc_err_cycles)
     if (v <= t && v > enc_.fault_clear_at) s.faults |= 2;
   s.frame_errors = static_cast<uint16_t>(rx_.frame_errors);
+  s.hold = rate_.hold(t);
+  s.stopped = rate_.rate(t) == 0;
   const auto& cl = prep_.clamp_cycles;
   s.clamped = static_cast<uint16_t>(std::upper_bound(cl.begin(), cl.end(), t) - cl.begin());
   payload<StatusSnapshot>(gp) = s;
@@ -149,6 +161,28 @@ size_t VirtualBoard::deliver(Cycle before, bool one) {
 }
 
 RunResult VirtualBoard::run_job(const TwinJob& job) {
+  // Runs until the MOTION requests known up front are the ones the run accepts (see the header):
+  // each run keeps the requests that matched and the first that did not.
+  known_motion_.clear();
+  live_motion_ = false;
+  for (runs_ = 1;; ++runs_) {
+    RunResult r = run_once(job);
+    if (observed_motion_ == known_motion_) return r;
+    size_t same = 0;
+    while (same < known_motion_.size() && same < observed_motion_.size() &&
+           known_motion_[same] == observed_motion_[same])
+      ++same;
+    if (runs_ > static_cast<int>(observed_motion_.size() + known_motion_.size()) + 2) {
+      r.error = "the motion rate's requests do not settle (" + std::to_string(runs_) + " runs)";
+      return r;
+    }
+    known_motion_.assign(observed_motion_.begin(),
+                         observed_motion_.begin() +
+                             static_cast<std::ptrdiff_t>(std::min(same + 1, observed_motion_.size())));
+  }
+}
+
+RunResult VirtualBoard::run_once(const TwinJob& job) {
   const auto t0 = std::chrono::steady_clock::now();
   tlm_utils::tlm_quantumkeeper qk;
   qk.set_global_quantum(quantum_);

@@ -1,7 +1,8 @@
 // Twin of rtl/motion/dda_linear.v: the exact DDA of one axis (docs/timing.md "Steps").
 //
 // Target `load`: a DdaLoad (n steps over T ticks), the delay naming the run-start edge R; tick
-// c of the segment is edge R + c. The k-th step (k = 1..n) falls on tick ceil(k * T / n) (128-bit
+// c of the segment is edge R + c, or with DdaLoad::rate the edge after the c-th clock with the
+// motion rate's `adv` high from the clock after R (feed_rate.h). The k-th step (k = 1..n) falls on tick ceil(k * T / n) (128-bit
 // product): the twin computes each step time instead of ticking, and sends one step request
 // per step on initiator `step` (to the axis's step_pulse), delay = R + tick. DdaLoad::cut (an
 // abort edge, from the executor): requests on that edge or later are not sent.
@@ -9,6 +10,7 @@
 
 #include <limits>
 
+#include "fpgacnc/twins/feed_rate.h"
 #include "fpgacnc/twins/tlm_common.h"
 
 namespace fpgacnc::twins {
@@ -17,6 +19,7 @@ struct DdaLoad {
   uint32_t steps;
   uint64_t total;
   Cycle cut = std::numeric_limits<Cycle>::max();  // abort: no step request on this edge or later
+  FeedRate* rate = nullptr;                        // ticks through the motion rate (null: every clock)
 };
 
 class DdaLinearTwin : public sc_core::sc_module {
@@ -37,7 +40,8 @@ class DdaLinearTwin : public sc_core::sc_module {
     PulseCmd none{false};
     DdaTicks ticks(l.steps, l.total);
     for (uint64_t k = 1; k <= l.steps; ++k) {
-      const Cycle e = r + static_cast<Cycle>(ticks.next());
+      const uint64_t j = ticks.next();
+      const Cycle e = l.rate ? l.rate->tick_edge(r, j) : r + static_cast<Cycle>(j);
       if (e >= l.cut) break;  // the executor gates step_req from the abort edge on
       transport(step, gp_, clk_, none, e);
     }

@@ -52,7 +52,7 @@ class FeedRate {
     pieces_.clear();
     Regs r;
     r.ramp = ramp0_;
-    pieces_.push_back(Piece{0, kOne, 0, 1, 0, r, -1});
+    pieces_.push_back(Piece{0, kOne, 0, 1, 0, r, -1, Regs{}, kNoScan});
     queried_ = -1;
     late_ = 0;
   }
@@ -175,7 +175,12 @@ class FeedRate {
     size_t ev;     // events with clock <= start - 1 (applied to regs)
     Regs regs;     // registers in clock start - 1
     Cycle end;     // u of the next piece's first clock; -1 unknown yet; kNever: for good
+    // A steady last piece: the registers after every event so far (their count in scan_ev;
+    // kNoScan: none), so that a request appended later continues the scan from there.
+    Regs scan{};
+    size_t scan_ev = kNoScan;
   };
+  static constexpr size_t kNoScan = std::numeric_limits<size_t>::max();
 
   void add(const Event& e) {
     if (e.clock < 0) throw std::invalid_argument("feed_rate twin: a request before the reset");
@@ -184,10 +189,18 @@ class FeedRate {
     if (queried_ > reach) ++late_;
     auto it = std::upper_bound(events_.begin(), events_.end(), e.clock,
                                [](Cycle c, const Event& x) { return c < x.clock; });
+    const bool appended = it == events_.end();
     events_.insert(it, e);
-    // Pieces starting after the request are computed again; the one holding it gets a new end.
-    while (pieces_.size() > 1 && pieces_.back().start > e.clock) pieces_.pop_back();
-    pieces_.back().end = -1;
+    // Pieces starting after the request are computed again; the one holding it gets a new end
+    // (a steady one continues its scan when the request comes after every other).
+    bool popped = false;
+    while (pieces_.size() > 1 && pieces_.back().start > e.clock) {
+      pieces_.pop_back();
+      popped = true;
+    }
+    Piece& last = pieces_.back();
+    if (!appended || popped) last.scan_ev = kNoScan;
+    last.end = -1;
   }
   static void apply_group(Regs& r, const std::vector<Event>& ev, size_t& i, Cycle upto) {
     while (i < ev.size() && ev[i].clock <= upto) {
@@ -214,11 +227,22 @@ class FeedRate {
     Regs r = p.regs;
     size_t ev = p.ev;
     Cycle b = (p.start / k_ + 1) * k_;  // the first boundary after its first clock
+    bool resume = false;
+    if (p.scan_ev != kNoScan) {  // steady through every event before scan_ev
+      r = p.scan;
+      ev = p.scan_ev;
+      resume = true;
+    }
     for (;;) {
-      apply_group(r, events_, ev, b - 1);
-      if (r.target() != p.rho) break;
+      if (!resume) {
+        apply_group(r, events_, ev, b - 1);
+        if (r.target() != p.rho) break;
+      }
+      resume = false;
       if (ev == events_.size()) {
         b = kNever;
+        p.scan = r;
+        p.scan_ev = ev;
         break;
       }
       b = (events_[ev].clock / k_ + 1) * k_;
@@ -244,7 +268,7 @@ class FeedRate {
     const unsigned __int128 sum =
         static_cast<unsigned __int128>(p.acc) + static_cast<unsigned __int128>(e - p.start) * p.rho;
     pieces_.push_back(Piece{e, rho, static_cast<uint32_t>(sum & 0xffffffffu),
-                            p.cnt + static_cast<uint64_t>(sum >> 32), ev, r, -1});
+                            p.cnt + static_cast<uint64_t>(sum >> 32), ev, r, -1, Regs{}, kNoScan});
   }
   // The index of the piece holding clock u (u >= 0), computing pieces up to it.
   size_t index_at(Cycle u) {

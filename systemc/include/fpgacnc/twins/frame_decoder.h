@@ -15,6 +15,9 @@
 //   flag bits, an axis >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field rule broken, a heater field
 //   out of range: NAK BAD_FIELD;
 //   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
+//   MOTION (not sequenced; BAD_FIELD: flag bits 7:2, HOLD and RESUME together, a feed or rapid
+//   rate outside 1..0x8000, ramp 0): STATUS request, and on_motion(L, the request) (the motion
+//   rate takes it on L + 2, feed_rate.h);
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
 //   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS / LINE_PROFILE / ARC
@@ -62,6 +65,14 @@ struct CfgAxis {  // CONFIG_AXIS accepted: the axis's step timing
   uint8_t axis;
   AxisTiming timing;
 };
+struct MotionReq {  // an accepted MOTION frame: the first clock of its values (L + 2), its fields
+  Cycle from;
+  bool hold, resume;
+  uint16_t feed, rapid;
+  uint32_t ramp;
+  bool operator==(const MotionReq&) const = default;
+};
+inline constexpr Cycle kMotionTakes = 2;  // L -> the rate's registers hold the frame's values
 struct DecoderState {
   uint8_t next_seq = 0;
   bool v2_mode = false;
@@ -130,6 +141,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
   std::vector<std::pair<Cycle, RespReq>> naks;                 // every NAK request
   std::vector<std::pair<Cycle, DecoderState>>* log = nullptr;  // every state change, when set
   std::function<void(Cycle)> before_write;  // called with the edge of each FIFO write
+  std::function<void(const MotionReq&)> on_motion;  // each accepted MOTION frame
 
  private:
   enum class Kind { None, V1Init, V1Motion, V2 };
@@ -264,6 +276,18 @@ class FrameDecoderTwin : public sc_core::sc_module {
            f.c_total < (uint64_t{1} << spec::kArcCTotalBits) && f.v_cruise < (uint64_t{1} << 63) &&
            f.v_entry <= f.v_cruise && f.v_exit <= f.v_cruise && f.v_exit != 0 &&
            (f.a != 0 || f.v_entry != 0);
+  }
+
+  // MOTION field rules (docs/protocol.md "MOTION"): flags bits 7:2 zero, not HOLD and RESUME
+  // together, feed and rapid 1..0x8000, ramp >= 1.
+  bool motion_fields_ok() const {
+    const uint8_t f = payload_[0];
+    const uint16_t feed = be16(&payload_[1]), rapid = be16(&payload_[3]);
+    return (f & spec::kMotionReserved) == 0 &&
+           (f & (spec::kMotionHold | spec::kMotionResume)) !=
+               (spec::kMotionHold | spec::kMotionResume) &&
+           feed >= 1 && feed <= spec::kRateOne && rapid >= 1 && rapid <= spec::kRateOne &&
+           be32(&payload_[5]) != 0;
   }
 
   // OUTPUT field rules (docs/protocol.md "OUTPUT"): mask != 0, mask bit 7, value bits 2 and 7
@@ -413,6 +437,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
         return static_cast<int>(spec::kLenArc);
       case v2::kOutput:
         return static_cast<int>(spec::kLenOutput);
+      case spec::kTypeMotion:
+        return static_cast<int>(spec::kLenMotion);
       case v2::kHeaterConfig:  // heater frames (docs/protocol.md "Heater frames")
         return static_cast<int>(spec::kLenHeaterConfig);
       case v2::kHeaterSetpoint:
@@ -489,15 +515,22 @@ class FrameDecoderTwin : public sc_core::sc_module {
            static_cast<int32_t>(be32(&payload_[2])) > static_cast<int32_t>(be32(&payload_[6]))))) ||
         (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) ||
         (type_ == v2::kArc && !arc_fields_ok()) || (type_ == v2::kOutput && !output_fields_ok()) ||
+        (type_ == spec::kTypeMotion && !motion_fields_ok()) ||
         !heater_fields_ok()) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;
     }
-    if (type_ == v2::kHello || type_ == v2::kStatusQuery) {
+    if (type_ == v2::kHello || type_ == v2::kStatusQuery || type_ == spec::kTypeMotion) {
       ++s_.frames_ok;
       packet_done_cycles.push_back(r);
       commit_check(take);
+      if (type_ == spec::kTypeMotion && on_motion) {
+        const uint8_t f = payload_[0];
+        on_motion(MotionReq{take + kMotionTakes, (f & spec::kMotionHold) != 0,
+                            (f & spec::kMotionResume) != 0, be16(&payload_[1]), be16(&payload_[3]),
+                            be32(&payload_[5])});
+      }
       request(r, RespReq{type_ == v2::kHello ? kReqIdent : kReqStatus});
       return;
     }

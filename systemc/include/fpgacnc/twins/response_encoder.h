@@ -40,6 +40,8 @@ struct StatusSnapshot {  // the live state a frame is filled in from (cnc_core s
   uint8_t faults = 0;  // other latched fault bits (bit 1: arc error); OR-ed with `fault`
   std::array<int32_t, kAxes> position{};
   uint16_t frame_errors = 0, clamped = 0;
+  bool hold = false;     // the motion rate's hold register (state bit 5 HOLD)
+  bool stopped = false;  // the motion rate is 0 (state bit 6 STOPPED)
 };
 
 struct EncoderParams {
@@ -241,8 +243,10 @@ class ResponseEncoderTwin : public sc_core::sc_module {
         pend_.status = false;
         type = v2::kStatus;
         const uint8_t faults = static_cast<uint8_t>(s.faults | (s.fault ? 1 : 0));
-        pl.push_back(static_cast<uint8_t>((s.busy ? 1 : 0) | (s.dec.v2_mode ? 2 : 0) |
-                                          (faults != 0 ? 4 : 0)));
+        pl.push_back(static_cast<uint8_t>(
+            (s.busy ? spec::kStateBusy : 0) | (s.dec.v2_mode ? spec::kStateV2 : 0) |
+            (faults != 0 ? spec::kStateFault : 0) | (s.hold ? spec::kStateHold : 0) |
+            (s.stopped ? spec::kStateStopped : 0)));
         pl.push_back(faults);
         put16(pl, s.fifo_level);
         pl.push_back(s.dec.next_seq);

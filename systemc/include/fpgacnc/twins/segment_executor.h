@@ -31,6 +31,15 @@
 //   arc error); the segment lasts c_last + 2 ticks (c_last: the clock of the last move), so the
 //   last move's step request lands on the segment's last edge as for every other kind. dir_fast
 //   is 0; otherwise as a segment of that T.
+// The motion rate (member `rate`, feed_rate.h; null: every clock is a tick): "tick j" of a run
+//   started on edge R is the j-th clock with `adv` high from the clock after R, "edge R + j" the
+//   edge after it (FeedRate::tick_edge), for the LINE DDAs, the PROFILE ticks and the end edge
+//   R + T; the arc's walk clock c is its (c + 1)-th tick, its step request lands two edges after
+//   that clock (in the clock after the walk's tick whether or not that clock is a tick) and its
+//   last tick is the first tick after the walk's ending tick. DIR hold / setup and the HOLD /
+//   SETUP waits count real clocks. The laser is low in every clock with r = 0. Every accepted
+//   segment sends its code to the rate on its accept edge (the target: rapid for code 0, else
+//   feed). A segment whose ticks never come (a hold never resumed) ends at kHeldForever.
 // Target `abort` (write, AbortSpan): the e-stop input high on edges first..last (rtl `abort`),
 //   sent before any segment that can reach it. With X = the first abort edge after a segment's
 //   accept edge A: no step request on an edge >= X (DDA, profile and arc requests are cut there;
@@ -63,12 +72,16 @@
 #include <memory>
 
 #include "fpgacnc/twins/dda_linear.h"
+#include "fpgacnc/twins/feed_rate.h"
 #include "fpgacnc/twins/segment_prep.h"
 #include "fpgacnc/twins/step_pulse.h"
 
 namespace fpgacnc::twins {
 
 inline constexpr Cycle kFastDirDelay = 1;  // earliest DIR change after a zero-gap accept edge
+// The end edge of a segment whose ticks never come (the rate held at 0 for good): far beyond any
+// job (6 hours at 50 MHz), so that nothing after it is scheduled.
+inline constexpr Cycle kHeldForever = Cycle{1} << 40;
 
 class SegmentExecutorTwin : public sc_core::sc_module {
  public:
@@ -156,8 +169,18 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   // When set: the edge after which each segment stops keeping the executor busy (R + T; its
   // accept edge for T = 0, + 1 when taken on a last tick), in order (cnc_core busy).
   std::vector<Cycle>* entry_ends = nullptr;
+  // The motion rate (ticks and the laser's r = 0 gate); null: every clock is a tick.
+  FeedRate* rate = nullptr;
 
  private:
+  // The edge of tick j of a run started on edge r (j = 0: r).
+  Cycle tick_edge(Cycle r, uint64_t j) {
+    if (rate == nullptr) return r + static_cast<Cycle>(j);
+    const Cycle e = rate->tick_edge(r, j);
+    return e == FeedRate::kNever ? kHeldForever : std::min(e, kHeldForever);
+  }
+  // The clock of walk clock c of an arc run from edge r (its (c + 1)-th tick).
+  Cycle walk_clock(Cycle r, Cycle c) { return tick_edge(r, static_cast<uint64_t>(c) + 1) - 1; }
   PulseState pulse_state(int a, Cycle now) {
     PulseState s{};
     transport(*pulse[a], gp_, clk_, s, now, tlm::TLM_READ_COMMAND);
@@ -258,18 +281,20 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     last_wr_[static_cast<size_t>(a)] = e;
   }
 
-  // Kind ARC from edge R (the walk's clock c is the clock after edge R + c): arc::Dda from event to
-  // event (rtl/motion/arc_dda.v's walk and pacing in exact integers); an event of clock c is a step
-  // request on edge R + c + 2. X / Y reverse inside the arc: from the walk's W1 clock on the
-  // executor knows the next move's direction (Dda::next_x_pos / next_y_pos); when it differs from
-  // the DIR target the write becomes pending and lands on the first edge after a clock in which
-  // the axis's DIR hold since its last STEP rise has elapsed and no arc step request of that axis
-  // is high. An X / Y step whose direction is not on the pin yet, or that comes less than DIR
-  // setup after the last DIR write of its axis, strobes `violation` (not delayed). Returns the
-  // number of ticks (last move's clock + 2): the segment's last edge is R + ticks, the edge of the
-  // last move's step request.
-  // Abort: nothing lands on an edge >= cut (the walk stops; returns -1 when the arc's end edge
-  // R + ticks is >= cut: the segment is dropped).
+  // Kind ARC from edge R: arc::Dda from event to event (rtl/motion/arc_dda.v's walk and pacing in
+  // exact integers). Walk clock c runs in the clock of the run's (c + 1)-th tick, tau(c) (R + c
+  // at full rate); its event is a step request on edge tau(c) + 2. The walk's outputs of clock c
+  // (its registers after its previous clock) are seen from clock tau(c - 1) + 1 (R for c = 0) on.
+  // X / Y reverse inside the arc: from the walk's W1 clock on the executor knows the next move's
+  // direction (Dda::next_x_pos / next_y_pos); when it differs from the DIR target the write
+  // becomes pending and lands on the first edge after a clock in which the axis's DIR hold since
+  // its last STEP rise has elapsed and no arc step request of that axis is high (real clocks). An
+  // X / Y step whose direction is not on the pin yet, or that comes less than DIR setup after the
+  // last DIR write of its axis, strobes `violation` (not delayed). Returns the number of ticks
+  // (last move's clock + 2): the segment's last tick is the first tick after the walk's ending
+  // tick, whose edge is the last move's step request at full rate.
+  // Abort: nothing lands on an edge >= cut (the walk stops; returns -1 when a walk clock's
+  // tau + 1 is >= cut: the segment is dropped).
   Cycle run_arc(const Segment& s, Cycle r, Cycle cut) {
     models::arc::Dda dda(s.arc_frame);
     // the physical axes of the walk's u, v and the helix (the plane)
@@ -278,6 +303,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
     std::array<bool, 2> tgt{s.dir[axis[0]], s.dir[axis[1]]}, pend{};
     std::array<bool, 2> pin{};
     std::array<Cycle, 2> last_rise{};
+    std::array<Cycle, 2> from{};  // a pending write: the first clock it may land from
     std::array<Cycle, 3> req{kLongAgo, kLongAgo, kLongAgo};
     std::array<std::deque<Cycle>, 2> rises;  // rise edges not yet reached
     for (size_t k = 0; k < 2; ++k) {
@@ -316,35 +342,48 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         }
       }
     };
-    Cycle last = 0;
+    // Lands the pending writes whose clock is <= upto (and whose edge is before the abort's).
+    auto flush = [&](Cycle upto) {
+      for (size_t k = 0; k < 2; ++k) {
+        if (!pend[k]) continue;
+        const Cycle w = first_write(k, from[k]);
+        if (w <= upto && w + 1 < cut) write_if_ok(k, w);
+      }
+    };
+    // the walk clocks c with tau(c) + 1 < cut
+    const Cycle stop = cut == kNever      ? kNever
+                       : rate == nullptr  ? cut - 1 - r
+                       : cut - 2 < r      ? 0
+                                          : static_cast<Cycle>(rate->ticks_in(r, cut - 2));
+    Cycle last = 0, last_tau = r;
+    Cycle prev_c = -1, prev_tau = r - 1;  // the last walk clock run and its clock
     while (!dda.done()) {
-      // Clocks in which neither the walk nor a pending DIR write does anything are skipped: the
-      // next clock run is the walk's next event, a pending write's landing clock or the abort's.
+      // Quiet walk clocks (no event, the same DIR outputs) are skipped up to the next event or
+      // the abort's.
       {
         const auto c0 = static_cast<Cycle>(dda.next_clock());
-        Cycle stop = cut - 1 - r;  // clock c with r + c + 1 >= cut
-        for (size_t k = 0; k < 2; ++k)
-          if (pend[k]) stop = std::min(stop, first_write(k, r + c0) - r);
         if (stop > c0) dda.skip_quiet(static_cast<uint64_t>(stop - c0));
       }
       const auto c = static_cast<Cycle>(dda.next_clock());
-      const Cycle t = r + c;
-      if (t + 1 >= cut) {  // aborted: nothing of this clock or later lands
-        ++arcs;
-        return -1;
-      }
-      for (size_t k = 0; k < 2; ++k)
-        if (pend[k]) write_if_ok(k, t);
+      const Cycle tau = walk_clock(r, c);
+      const Cycle vis = c == 0 ? r : (c - 1 == prev_c ? prev_tau : walk_clock(r, c - 1)) + 1;
+      flush(vis);
       if (dda.dir_valid()) {
         const std::array<bool, 2> nd{dda.next_x_pos(), dda.next_y_pos()};
         for (size_t k = 0; k < 2; ++k)
           if (nd[k] != tgt[k]) {
             tgt[k] = nd[k];
             pend[k] = true;
+            from[k] = vis + 1;
           }
       }
+      flush(tau);
+      if (tau + 1 >= cut) {  // aborted: nothing of this walk clock or later lands
+        ++arcs;
+        return -1;
+      }
       const models::arc::Event ev = dda.clock();
-      const Cycle e = t + 2;
+      const Cycle e = tau + 2;
       bool viol = false;
       const std::array<int, 3> d{ev.dx, ev.dy, ev.dz};
       for (size_t k = 0; k < 3; ++k) {
@@ -364,20 +403,24 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
       if (viol) arc_violation_cycles.push_back(e);
       last = c;
+      last_tau = tau;
+      prev_c = c;
+      prev_tau = tau;
     }
     const Cycle ticks = last + 2;
     // A write still pending at the end (only when the arc outran its DIR timing) lands from the
     // segment's last tick on (not with the last step request of its axis), as in IDLE or in the
     // next segment's run.
+    const Cycle last_tick = tick_edge(r, static_cast<uint64_t>(ticks)) - 1;
     for (size_t k = 0; k < 2; ++k) {
       if (!pend[k]) continue;
-      const Cycle t = first_write(k, r + last + 1);
+      const Cycle t = first_write(k, std::max(from[k], last_tick));
       if (t + 1 < cut) write_if_ok(k, t);
     }
     ++arcs;
     if (dda.err()) {
       ++arc_errors;
-      arc_err_cycles.push_back(r + last + 2);
+      arc_err_cycles.push_back(last_tau + 2);
     }
     return ticks;
   }
@@ -451,6 +494,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
     }
     delay = clk_.delay_to(accept);
+    if (rate) rate->segment_code(accept, s.code);  // the rate's target from the accept edge on
     // T = 0 completes at once; accepted on a last tick it passes one clock in ZERO.
     Cycle end = on_last_tick ? accept + 1 : accept;
     const char kind =
@@ -461,29 +505,46 @@ class SegmentExecutorTwin : public sc_core::sc_module {
                                                                                          : 'L';
     running_ = s.total != 0;
     bool dropped = s.total != 0 ? run >= cut : end >= cut;  // HOLD / SETUP, or in ZERO
+    Cycle arc_end = -1;       // an arc stopped by the abort (or a hold for good) ends there
     if (s.arc && !dropped) {  // an arc the abort stops runs until edge `cut` (dropped there)
-      const Cycle ticks = run_arc(s, run, cut);
-      s.total = static_cast<uint64_t>(ticks < 0 ? cut - run : ticks);
+      const Cycle arc_cut = rate ? std::min(cut, kHeldForever) : cut;
+      const Cycle ticks = run_arc(s, run, arc_cut);
+      if (ticks < 0) arc_end = arc_cut;
+      s.total = static_cast<uint64_t>(ticks < 0 ? arc_cut - run : ticks);
     }
     if (s.total != 0 && !dropped) {
       seg_start_cycles.push_back(run);
-      end = run + static_cast<Cycle>(s.total);
+      end = arc_end >= 0 ? arc_end : tick_edge(run, s.total);
       dropped = end >= cut;
       if (s.code != 0 && s.power != 0) {  // laser low from the abort edge (combinational gate)
-        pins_.add(run, models::kLaser, 1);
-        pins_.add(std::min(end, cut), models::kLaser, 0);
+        // and in every clock with r = 0
+        Cycle on = run;
+        const Cycle off = std::min(end, cut);
+        if (rate)
+          for (const auto& [a, b] : rate->stopped(run, off)) {
+            if (a > on) {
+              pins_.add(on, models::kLaser, 1);
+              pins_.add(a, models::kLaser, 0);
+            }
+            on = b;
+          }
+        if (on < off) {
+          pins_.add(on, models::kLaser, 1);
+          pins_.add(off, models::kLaser, 0);
+        }
       }
       for (int a = 0; a < kAxes && !s.arc; ++a) {
         if (s.steps[a] == 0) continue;
         if (s.prof) {  // a step in tick j: step request on edge R + j (STEP rises there)
           PulseCmd none{false};
           for (uint64_t j : prof.ticks[a]) {
-            if (run + static_cast<Cycle>(j) >= cut) break;
-            transport(*pulse[a], gp_, clk_, none, run + static_cast<Cycle>(j));
+            const Cycle e = tick_edge(run, j);
+            if (e >= cut || e >= kHeldForever) break;
+            transport(*pulse[a], gp_, clk_, none, e);
           }
           continue;
         }
-        DdaLoad l{s.steps[a], s.total, cut};
+        DdaLoad l{s.steps[a], s.total, cut, rate};
         transport(*dda[a], gp_, clk_, l, run);
       }
       run_end_ = end;

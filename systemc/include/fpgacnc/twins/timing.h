@@ -48,6 +48,9 @@ struct CoreParams {
   // settle edges).
   uint32_t fan_pwm_hz = 1000;
   int64_t fan_phase = 21;
+  // The motion rate (rtl/motion/feed_rate.v, feed_rate.h) starts its period counter p and its
+  // phase accumulator at the reset release, rate_phase clocks before cycle 0 (as the fan's PWM).
+  int64_t rate_phase = 21;
   uint32_t fan_div() const {
     return static_cast<uint32_t>((clk_hz + 128 * fan_pwm_hz) / (256 * fan_pwm_hz));
   }

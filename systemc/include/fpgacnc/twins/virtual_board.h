@@ -10,7 +10,17 @@
 //                                                     DdaLinearTwin -> StepPulseTwin (x4)
 //
 // Jobs run in order in the host's thread (one SystemC elaboration can run many); each job
-// starts at cycle 0 from the reset state with its own step timing. The host sends each packet
+// starts at cycle 0 from the reset state with its own step timing.
+//
+// The motion rate (feed_rate.h) changes the clocks of the ticks of segments the executor twin
+// has already computed (it computes each segment whole when it accepts it). So a job whose host
+// sends MOTION frames runs again until it is consistent: a run with the requests of the MOTION
+// frames known up front (their clocks and fields, from the previous run), whose MOTION frames
+// are accepted exactly there, is the job's run (the effect of a request starts two edges after
+// its frame ends, so the first request that differs is at its right clock in the next run: a job
+// with n MOTION frames runs at most n + 1 times). A live session (TwinBoard) cannot run again:
+// it hands each request to the rate when its frame is accepted, so segments computed earlier
+// keep their clocks (FeedRate::late() counts those requests). The host sends each packet
 // with its delay; the response encoder computes the answers lazily, in time order, up to the
 // edge before which every input is known (docs/systemc.md "Time").
 #pragma once
@@ -59,6 +69,8 @@ class VirtualBoard : public sc_core::sc_module {
   // Machine outputs (OUTPUT frames) as pin edges: coolant, fan PWM, digital outputs (off: the
   // edge list has STEP/DIR/LASER/TX only, as the Verilated board records it).
   void record_outputs(bool on) { exec_.record_outputs = on; }
+  // Runs of the last job (1 without MOTION frames; see above).
+  int runs() const { return runs_; }
   // Called in the host thread after the jobs: a TwinBoard's pty sessions (twin_board.h).
   std::function<void(VirtualBoard&)> live;
 
@@ -70,6 +82,7 @@ class VirtualBoard : public sc_core::sc_module {
   void on_state(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);
   void reset(const std::array<AxisTiming, kAxes>& timing);
   RunResult run_job(const TwinJob& job);
+  RunResult run_once(const TwinJob& job);
   // Gives the host the tx bytes whose stop-bit centre is before edge `before` (all when
   // `one` is false; only the next one otherwise). Returns the number given.
   size_t deliver(Cycle before, bool one);
@@ -82,6 +95,11 @@ class VirtualBoard : public sc_core::sc_module {
   SegmentFifoTwin fifo_;
   SegmentPrepTwin prep_;
   SegmentExecutorTwin exec_;
+  FeedRate rate_;
+  std::vector<MotionReq> known_motion_;     // requests known up front (a job's later runs)
+  std::vector<MotionReq> observed_motion_;  // MOTION frames accepted in this run
+  bool live_motion_ = false;                // a live session: requests go to the rate at once
+  int runs_ = 0;
   std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda_;
   std::array<std::unique_ptr<StepPulseTwin>, kAxes> pulse_;
   ResponseEncoderTwin enc_;
