@@ -37,6 +37,7 @@
 #include "fpgacnc/twins/virtual_board.h"
 
 using namespace fpgacnc::twins;
+namespace spec = fpgacnc::spec;
 namespace arc = fpgacnc::models::arc;
 
 namespace {
@@ -290,6 +291,59 @@ uint64_t g_v2_output_frames = 0;
 bool g_v2_arc_planes = true;
 std::array<uint64_t, 3> g_v2_plane_arcs{};
 
+// MOTION frames (feed hold, resume, feed and rapid rates) in the random v2 sessions, drawn from a
+// generator of their own (the other frames of a session are the same without them): before about
+// one frame in eight, as side frames (no credit needed, host_schedule.h), after 1..20 000 clocks
+// one of: a HOLD and, 1..2 000 clocks (often still ramping down) or 2 000..60 000 clocks later,
+// its RESUME; new feed / rapid rates (1 % .. 100 %; below 20 % back to at least 20 % within
+// 20 000 clocks, to bound the RTL time); rarely a MOTION that breaks a field rule (NAK BAD_FIELD).
+// Rates are Q1.15, a third at 100 %; ramps 2^20 .. 2^32 - 1 per 256 clocks. A session that got
+// any ends with a MOTION back to 100 %.
+bool g_v2_holds = true;
+uint64_t g_v2_motion_frames = 0, g_v2_holds_sent = 0, g_v2_bad_motions = 0;
+uint16_t g_v2_min_rate = 0x8000;
+
+void add_motions(std::mt19937_64& g, V2Item& it) {
+  using namespace fpgacnc::twins::v2;
+  auto rate = [&]() -> uint16_t {
+    const auto r = static_cast<uint16_t>(pick(g, 0, 2) == 0 ? 0x8000 : pick(g, 328, 0x8000));
+    g_v2_min_rate = std::min(g_v2_min_rate, r);
+    return r;
+  };
+  auto ramp = [&]() -> uint32_t {
+    if (pick(g, 0, 9) == 0) return 0xFFFF'FFFFu;
+    const uint32_t e = pick(g, 20, 31);
+    return pick(g, 1u << e, e == 31 ? 0xFFFF'FFFEu : (2u << e) - 1);
+  };
+  auto side = [&](uint8_t flags, uint16_t feed, uint16_t rapid, uint32_t rp, int64_t gap) {
+    it.side.push_back(V2Side{spec::kTypeMotion, motion_payload(flags, feed, rapid, rp), gap});
+    ++g_v2_motion_frames;
+  };
+  const auto hold = static_cast<uint8_t>(spec::kMotionHold);
+  const auto resume = static_cast<uint8_t>(spec::kMotionResume);
+  const int64_t gap = pick(g, 1, 20'000);
+  const uint32_t what = pick(g, 0, 19);
+  if (what < 10) {  // a hold and its resume
+    side(hold, rate(), rate(), ramp(), gap);
+    const int64_t held = pick(g, 0, 1) ? pick(g, 1, 2'000) : pick(g, 2'000, 60'000);
+    side(resume, rate(), rate(), ramp(), held);
+    ++g_v2_holds_sent;
+  } else if (what < 19) {  // new rates
+    const uint16_t f = rate(), r = rate();
+    side(0, f, r, ramp(), gap);
+    if (std::min(f, r) < 0x8000 / 5)
+      side(0, static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)),
+           static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)), ramp(), pick(g, 1, 20'000));
+  } else {  // a field rule broken: reserved flag bits, HOLD with RESUME, a rate or the ramp 0
+    const uint32_t k = pick(g, 0, 3);
+    side(k == 0 ? 0x04 : k == 1 ? 3 : 0, k == 2 ? uint16_t{0} : uint16_t{0x8001}, 0x8000,
+         k == 3 ? 0u : ramp(), gap);
+    if (k < 2) it.side.back().payload[1] = 0x40;  // a good feed rate: only the flags are wrong
+    it.side.back().status = false;
+    ++g_v2_bad_motions;
+  }
+}
+
 // An ARC frame within the host's rules (arc_stimulus.h, defaults: R = 2..30 steps, cruise at
 // 1 201..2 400 clocks per step, one in ten with C_TOTAL + 1), in `plane`.
 std::vector<uint8_t> random_arc_payload(std::mt19937_64& g, uint8_t power, uint8_t plane) {
@@ -305,6 +359,8 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
   using namespace fpgacnc::twins::v2;
   std::mt19937_64 g(seed * 0x9E37'79B9'7F4A'7C15ull + 2);
   std::mt19937_64 go(seed * 0x9E37'79B9'7F4A'7C15ull + 3);  // OUTPUT frames
+  std::mt19937_64 gm(seed * 0x9E37'79B9'7F4A'7C15ull + 4);  // MOTION frames
+  bool motions = false;
   Job j;
   j.segments = segments;
   if (pick(g, 0, 4) != 0)
@@ -408,6 +464,10 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
       it.pre.resize(pick(g, 1, 6));
       it.pre_gap = static_cast<int64_t>(watchdog) + pick(g, 1, 500);
     }
+    if (g_v2_holds && pick(gm, 0, 7) == 0) {
+      add_motions(gm, it);
+      motions = true;
+    }
     sc.items.push_back(std::move(it));
     if (g_v2_outputs && pick(go, 0, 4) == 0) {
       auto mask = static_cast<uint8_t>(pick(go, 1, 0x7F));
@@ -427,6 +487,11 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
   if (g_v2_outputs) {
     sc.items.push_back(V2Item{kOutput, {0x7F, 0, 0}});
     ++g_v2_output_frames;
+  }
+  if (motions) {  // back to 100 % before the last frame
+    sc.items.back().side.push_back(V2Side{spec::kTypeMotion,
+                                          motion_payload(0, 0x8000, 0x8000, 0xFFFF'FFFFu), 1});
+    ++g_v2_motion_frames;
   }
   j.script.v2 = std::move(sc);
   return j;
@@ -462,6 +527,7 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--v2-arcs", &g_v2_arcs);
   opts.flag("--v2-outputs", &g_v2_outputs);
   opts.flag("--v2-arc-planes", &g_v2_arc_planes);
+  opts.flag("--v2-holds", &g_v2_holds);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
 
@@ -529,6 +595,19 @@ int sc_main(int argc, char* argv[]) {
       "OUTPUT frames in the random v2 sessions\n",
       g_v2_profile_frames, g_v2_arc_frames, g_v2_bad_arcs, g_v2_plane_arcs[0], g_v2_plane_arcs[1],
       g_v2_plane_arcs[2], g_v2_output_frames);
+  uint64_t runs = 0, motions = 0;
+  std::array<uint64_t, 4> motion_in{};
+  for (const RunResult& r : twin_results) {
+    runs += static_cast<uint64_t>(r.runs);
+    motions += r.motions;
+    for (size_t k = 0; k < 4; ++k) motion_in[k] += r.motion_in[k];
+  }
+  fmt::print(
+      "cosim: {} MOTION frames ({} holds with their resumes, {} breaking a rule, lowest rate "
+      "{:.1f} %); {} accepted, taking effect in a LINE {}, PROFILE {}, ARC {}, no segment {}; "
+      "twin runs {} for {} jobs\n",
+      g_v2_motion_frames, g_v2_holds_sent, g_v2_bad_motions, 100.0 * g_v2_min_rate / 0x8000,
+      motions, motion_in[0], motion_in[1], motion_in[2], motion_in[3], runs, twin_results.size());
   fmt::print(
       "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "
       "clocks/s), twins {:.3f} s; wall {:.2f} s; {}\n",

@@ -167,6 +167,7 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   live_motion_ = false;
   for (runs_ = 1;; ++runs_) {
     RunResult r = run_once(job);
+    r.runs = runs_;
     if (observed_motion_ == known_motion_) return r;
     size_t same = 0;
     while (same < known_motion_.size() && same < observed_motion_.size() &&
@@ -264,6 +265,14 @@ RunResult VirtualBoard::run_once(const TwinJob& job) {
   r.frames_ok = d.frames_ok;
   r.clamped = prep_.clamped;
   r.zero_gap = exec_.zero_gap;
+  r.motions = observed_motion_.size();
+  for (const MotionReq& m : observed_motion_) {
+    size_t k = 3;
+    for (const auto& t : exec_.trace)
+      if (t.run <= m.from && m.from < t.end && t.cut < 0 && t.kind != 'Z')
+        k = t.kind == 'P' ? 1 : t.kind == 'A' ? 2 : 0;
+    ++r.motion_in[k];
+  }
   if (auto* h = dynamic_cast<V2StreamHost*>(host.get())) {
     r.device_frames = h->acks.size();
     r.naks = h->naks;

@@ -126,9 +126,18 @@ inline std::vector<HostPacket> job_packets(const protocol::v1::Job& job, uint64_
 //   when every frame is acknowledged and `segments done` counts every FIFO frame:
 //   STATUS_QUERY (wait for STATUS), then RELEASE (wait for its ACK).
 // A frame with `corrupt` is sent once with a wrong CRC (the device NAKs BAD_CRC); `pre` bytes go
-// out once before it.
+// out once before it. `side` frames (unsequenced, e.g. MOTION: SEQ 0, no credit needed) go out
+// once before it, each `gap` clocks after the host is ready, without waiting for their answers
+// (a STATUS is kept in `statuses`), before its `pre` bytes: a feed hold and its resume sent one
+// after the other never wait for credit that the hold keeps from coming.
 // Waiting for answers, the host acts on each complete device frame: it is ready again at the
 // end of that frame's last byte on tx. No retransmission timer: the models never lose bytes.
+struct V2Side {
+  uint8_t type;
+  std::vector<uint8_t> payload;
+  int64_t gap = 1;
+  bool status = true;  // answered by a STATUS (false: by a NAK, a frame that breaks a rule)
+};
 struct V2Item {
   uint8_t type;
   std::vector<uint8_t> payload;
@@ -138,6 +147,7 @@ struct V2Item {
   // noise, a frame cut short), and the gap from their end to the frame.
   std::vector<uint8_t> pre{};
   int64_t pre_gap = 1;
+  std::vector<V2Side> side{};
   bool fifo() const {
     return type == v2::kLine || type == v2::kLineProfile || type == v2::kArc ||
            type == v2::kDwell || type == v2::kNumerators || type == v2::kOutput;
@@ -159,6 +169,7 @@ class V2StreamHost : public Host {
     for (const V2Item& i : s_.items) fifo_total_ += i.fifo() ? 1 : 0;
     corrupted_.assign(s_.items.size(), false);
     pre_done_.assign(s_.items.size(), false);
+    side_done_.assign(s_.items.size(), 0);
   }
 
   bool done() const override { return phase_ == Phase::Done; }
@@ -173,6 +184,11 @@ class V2StreamHost : public Host {
         phase_ = Phase::Hello;
         return send(v2::frame(0, v2::kHello), s_.hello_gap, true);
       case Phase::Stream:
+        if (next_ < s_.items.size() && side_done_[next_] < s_.items[next_].side.size()) {
+          const V2Side& f = s_.items[next_].side[side_done_[next_]++];
+          if (f.status) ++side_answers_;
+          return send(v2::frame(0, f.type, f.payload), f.gap, false);
+        }
         if (can_send()) return send_item();
         if (acked_ + 1 == s_.items.size() && done_ == fifo_total_) {
           if (s_.status_at_end) {
@@ -283,9 +299,12 @@ class V2StreamHost : public Host {
       ++naks;
       credit(f.u8(2), f.u16(3));
       next_ = acked_;
-    } else if (f.type == v2::kStatus && phase_ == Phase::Status) {
+    } else if (f.type == v2::kStatus && phase_ == Phase::Status && side_answers_ == 0) {
       statuses.push_back(f);
       phase_ = Phase::Release;
+    } else if (f.type == v2::kStatus && side_answers_ > 0) {  // a side frame's answer
+      --side_answers_;
+      statuses.push_back(f);
     } else {
       ++unexpected;
     }
@@ -302,6 +321,8 @@ class V2StreamHost : public Host {
   size_t next_ = 0, acked_ = 0, sent_hi_ = 0;
   uint32_t free_ = 0, done_ = 0, fifo_total_ = 0;
   std::vector<bool> corrupted_, pre_done_;
+  std::vector<size_t> side_done_;  // side frames sent per item
+  size_t side_answers_ = 0;        // STATUS answers of side frames still to come
   bool after_pre_ = false;
   v2::FrameParser parser_;
   uint64_t bad_seen_ = 0;

@@ -138,6 +138,15 @@ inline std::vector<uint8_t> dwell_payload(uint32_t t) {
   put32(p, t);
   return p;
 }
+// MOTION: flags (bit 0 HOLD, bit 1 RESUME), feed and rapid rates (Q1.15), ramp.
+inline std::vector<uint8_t> motion_payload(uint8_t flags, uint16_t feed, uint16_t rapid,
+                                           uint32_t ramp) {
+  std::vector<uint8_t> p{flags};
+  put16(p, feed);
+  put16(p, rapid);
+  put32(p, ramp);
+  return p;
+}
 
 struct DeviceFrame {
   uint8_t seq, type;
