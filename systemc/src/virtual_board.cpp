@@ -50,8 +50,12 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   exec_.entry_ends = &entry_ends_;
   exec_.rate = &rate_;
   dec_.on_motion = [this](const MotionReq& m) {
+    const size_t i = observed_motion_.size();
     observed_motion_.push_back(m);
-    if (live_motion_) rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
+    if (live_motion_)
+      rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
+    else if (i >= known_motion_.size() || !(known_motion_[i] == m))
+      motion_mismatch_ = true;
   };
   make_axis_twins(exec_, clk_, p_, pins_, dda_, pulse_);
   for (auto& pulse : pulse_) pulse->keep_history = true;
@@ -79,6 +83,7 @@ void VirtualBoard::reset(const std::array<AxisTiming, kAxes>& timing) {
   exec_.reset();
   rate_.reset();
   observed_motion_.clear();
+  motion_mismatch_ = false;
   for (const MotionReq& m : known_motion_)
     rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
   for (auto& p : pulse_) p->reset();
@@ -161,29 +166,23 @@ size_t VirtualBoard::deliver(Cycle before, bool one) {
 }
 
 RunResult VirtualBoard::run_job(const TwinJob& job) {
-  // Runs until the MOTION requests known up front are the ones the run accepts (see the header):
-  // each run keeps the requests that matched and the first that did not.
+  // Runs until the MOTION requests known up front are the ones the run accepts (see the header).
+  // A run stops at the first MOTION frame accepted that it did not know (or knew otherwise):
+  // everything before it was exact, so the next run knows that request too.
   known_motion_.clear();
   live_motion_ = false;
   for (runs_ = 1;; ++runs_) {
-    RunResult r = run_once(job);
+    // (a run again takes no SystemC time: the job's time passed in its first run)
+    RunResult r = run_once(job, runs_ == 1);
     r.runs = runs_;
-    if (observed_motion_ == known_motion_) return r;
-    size_t same = 0;
-    while (same < known_motion_.size() && same < observed_motion_.size() &&
-           known_motion_[same] == observed_motion_[same])
-      ++same;
-    if (runs_ > static_cast<int>(observed_motion_.size() + known_motion_.size()) + 2) {
-      r.error = "the motion rate's requests do not settle (" + std::to_string(runs_) + " runs)";
-      return r;
-    }
-    known_motion_.assign(observed_motion_.begin(),
-                         observed_motion_.begin() +
-                             static_cast<std::ptrdiff_t>(std::min(same + 1, observed_motion_.size())));
+    if (!motion_mismatch_) return r;
+    if (observed_motion_.size() <= known_motion_.size())
+      throw std::logic_error("virtual board: a MOTION request known up front came otherwise");
+    known_motion_ = observed_motion_;
   }
 }
 
-RunResult VirtualBoard::run_once(const TwinJob& job) {
+RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   const auto t0 = std::chrono::steady_clock::now();
   tlm_utils::tlm_quantumkeeper qk;
   qk.set_global_quantum(quantum_);
@@ -219,12 +218,16 @@ RunResult VirtualBoard::run_once(const TwinJob& job) {
       deliver(ready, false);
       // Every event computed from now on is later than `ready`: time may advance to it.
       qk.set(clk_.delay_to(ready));
-      if (qk.need_sync()) qk.sync();
+      if (sync && qk.need_sync()) qk.sync();
     }
     woke = false;
     for (const HostFrame& f : host->next_packet()) {
       RxFrame frame{f.byte};
       transport(host_pin_, gp_, clk_, frame, f.start);
+    }
+    if (motion_mismatch_) {  // a request not known up front: this run is over (run_job)
+      host_ = nullptr;
+      return r;
     }
   }
   // Answers after the last decision (DONE frames, the last ACK's tail). A packet cut short at
@@ -232,7 +235,7 @@ RunResult VirtualBoard::run_once(const TwinJob& job) {
   while (enc_.step(kNever)) {
   }
   deliver(kNever, false);
-  qk.sync();
+  if (sync) qk.sync();
   host_ = nullptr;
   exec_.flush_outputs(host->ready());
   r.edges = pins_.take_sorted();

@@ -16,9 +16,10 @@
 // has already computed (it computes each segment whole when it accepts it). So a job whose host
 // sends MOTION frames runs again until it is consistent: a run with the requests of the MOTION
 // frames known up front (their clocks and fields, from the previous run), whose MOTION frames
-// are accepted exactly there, is the job's run (the effect of a request starts two edges after
-// its frame ends, so the first request that differs is at its right clock in the next run: a job
-// with n MOTION frames runs at most n + 1 times). A live session (TwinBoard) cannot run again:
+// are accepted exactly there, is the job's run. A run stops at the first MOTION frame it did not
+// know: the effect of a request starts two edges after its frame ends, so everything before was
+// exact and the next run knows that request too (a job with n MOTION frames runs n + 1 times,
+// all but the last cut short at a MOTION frame). A live session (TwinBoard) cannot run again:
 // it hands each request to the rate when its frame is accepted, so segments computed earlier
 // keep their clocks (FeedRate::late() counts those requests). The host sends each packet
 // with its delay; the response encoder computes the answers lazily, in time order, up to the
@@ -82,7 +83,7 @@ class VirtualBoard : public sc_core::sc_module {
   void on_state(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay);
   void reset(const std::array<AxisTiming, kAxes>& timing);
   RunResult run_job(const TwinJob& job);
-  RunResult run_once(const TwinJob& job);
+  RunResult run_once(const TwinJob& job, bool sync);  // sync: let SystemC time pass
   // Gives the host the tx bytes whose stop-bit centre is before edge `before` (all when
   // `one` is false; only the next one otherwise). Returns the number given.
   size_t deliver(Cycle before, bool one);
@@ -99,6 +100,7 @@ class VirtualBoard : public sc_core::sc_module {
   std::vector<MotionReq> known_motion_;     // requests known up front (a job's later runs)
   std::vector<MotionReq> observed_motion_;  // MOTION frames accepted in this run
   bool live_motion_ = false;                // a live session: requests go to the rate at once
+  bool motion_mismatch_ = false;            // a MOTION frame accepted that was not known
   int runs_ = 0;
   std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda_;
   std::array<std::unique_ptr<StepPulseTwin>, kAxes> pulse_;
