@@ -336,10 +336,11 @@ void add_motions(std::mt19937_64& g, V2Item& it) {
            static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)), ramp(), pick(g, 1, 20'000));
   } else {  // a field rule broken: reserved flag bits, HOLD with RESUME, a rate or the ramp 0
     const uint32_t k = pick(g, 0, 3);
-    side(k == 0 ? 0x04 : k == 1 ? 3 : 0, k == 2 ? uint16_t{0} : uint16_t{0x8001}, 0x8000,
-         k == 3 ? 0u : ramp(), gap);
+    side(k == 0   ? 0x04
+         : k == 1 ? 3
+                  : 0,
+         k == 2 ? uint16_t{0} : uint16_t{0x8001}, 0x8000, k == 3 ? 0u : ramp(), gap);
     if (k < 2) it.side.back().payload[1] = 0x40;  // a good feed rate: only the flags are wrong
-    it.side.back().status = false;
     ++g_v2_bad_motions;
   }
 }
@@ -489,8 +490,8 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
     ++g_v2_output_frames;
   }
   if (motions) {  // back to 100 % before the last frame
-    sc.items.back().side.push_back(V2Side{spec::kTypeMotion,
-                                          motion_payload(0, 0x8000, 0x8000, 0xFFFF'FFFFu), 1});
+    sc.items.back().side.push_back(
+        V2Side{spec::kTypeMotion, motion_payload(0, 0x8000, 0x8000, 0xFFFF'FFFFu), 1});
     ++g_v2_motion_frames;
   }
   j.script.v2 = std::move(sc);
@@ -599,7 +600,7 @@ int sc_main(int argc, char* argv[]) {
   std::array<uint64_t, 4> motion_in{};
   for (const RunResult& r : twin_results) {
     runs += static_cast<uint64_t>(r.runs);
-    motions += r.motions;
+    motions += r.motion_from.size();
     for (size_t k = 0; k < 4; ++k) motion_in[k] += r.motion_in[k];
   }
   fmt::print(

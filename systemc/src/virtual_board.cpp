@@ -268,8 +268,8 @@ RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   r.frames_ok = d.frames_ok;
   r.clamped = prep_.clamped;
   r.zero_gap = exec_.zero_gap;
-  r.motions = observed_motion_.size();
   for (const MotionReq& m : observed_motion_) {
+    r.motion_from.push_back(m.from);
     size_t k = 3;
     for (const auto& t : exec_.trace)
       if (t.run <= m.from && m.from < t.end && t.cut < 0 && t.kind != 'Z')

@@ -6,67 +6,15 @@
 
 #include <random>
 
+#include "feed_rate_ref.h"
 #include "fpgacnc/twins/feed_rate.h"
 
 namespace {
 
 using fpgacnc::twins::Cycle;
 using fpgacnc::twins::FeedRate;
-
-// One request: the first clock (cycles) with its new value.
-struct Req {
-  Cycle t;
-  int kind;  // 0 MOTION frame, 1 hold input, 2 start input, 3 segment code
-  bool hold = false, resume = false;
-  uint16_t feed = 0x8000, rapid = 0x8000;
-  uint32_t ramp = 1;
-  uint8_t code = 0;
-};
-
-// The registers clock by clock, as the table defines them: values in clock u (counted from the
-// reset release), requests taking effect in the clock they name.
-struct Reference {
-  std::vector<uint8_t> adv;
-  std::vector<uint64_t> r;
-  std::vector<uint8_t> hold;
-  Reference(const std::vector<Req>& reqs, Cycle phase, uint32_t log2k, uint32_t ramp0, Cycle n) {
-    const Cycle k = Cycle{1} << log2k;
-    uint64_t rate = uint64_t{1} << 32, acc = 0;
-    bool h = false, code0 = true, a = true;
-    uint16_t feed = 0x8000, rapid = 0x8000;
-    uint32_t ramp = ramp0;
-    for (Cycle u = 0; u < n + phase; ++u) {
-      bool set = false, clr = false;
-      for (const Req& q : reqs) {
-        if (q.t + phase != u) continue;
-        if (q.kind == 0) {
-          feed = q.feed;
-          rapid = q.rapid;
-          ramp = q.ramp;
-        }
-        if (q.kind == 3) code0 = q.code == 0;
-        set = set || (q.kind == 0 && q.hold) || q.kind == 1;
-        clr = clr || (q.kind == 0 && q.resume) || q.kind == 2;
-      }
-      h = set || (h && !clr);
-      if (u >= phase) {
-        adv.push_back(a);
-        r.push_back(rate);
-        hold.push_back(h);
-      }
-      const uint64_t sum = acc + rate;
-      a = sum >= (uint64_t{1} << 32);
-      acc = sum & 0xffffffffu;
-      if (u % k == k - 1) {
-        const uint64_t tgt = h ? 0 : uint64_t{code0 ? rapid : feed} << 17;
-        if (tgt > rate)
-          rate = tgt - rate <= ramp ? tgt : rate + ramp;
-        else
-          rate = rate - tgt <= ramp ? tgt : rate - ramp;
-      }
-    }
-  }
-};
+using fpgacnc::twins::test::Reference;
+using fpgacnc::twins::test::Req;
 
 struct Case {
   std::vector<Req> reqs;

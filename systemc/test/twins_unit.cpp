@@ -14,6 +14,7 @@
 #include <map>
 #include <systemc>
 
+#include "feed_rate_ref.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/spec_vectors.h"
 #include "fpgacnc/twins/v2_frames.h"
@@ -897,6 +898,139 @@ void profile_job(const RunResult& r, const std::array<int64_t, 2>& pos) {
              static_cast<double>(1.0L - worst));
 }
 
+// A feed hold, its resume and a feed override on the board (v2): LINE X -50 in 10^6 ticks (code
+// 1, laser power 200), a DWELL of 1 tick, LINE X -40 in 4 * 10^5 ticks (code 1), LINE X -30 in
+// 3 * 10^5 ticks (code 0, rapid). Before the DWELL frame: MOTION HOLD (ramp 2^20: 4 096 periods,
+// about 10^6 clocks, from 100 % to 0), a STATUS_QUERY at once (answered after the HOLD's STATUS
+// has gone out at 115 200 baud: HOLD, not STOPPED yet), one 1.5 * 10^6 clocks later (HOLD and
+// STOPPED), MOTION RESUME; before the second LINE: MOTION feed 25 %, rapid 100 %. No axis
+// reverses (DIR stays low from reset), so each segment is accepted on its run edge (seg_start).
+// The step rises, the segment ends and the laser are checked against the clock-by-clock
+// reference of the rate (feed_rate_ref.h) with its requests at the accepted MOTION frames' clocks
+// and the segments' codes at their run edges: the k-th step of n over T ticks in tick
+// ceil(k * T / n) (docs/timing.md "Steps"), tick j the j-th clock with adv high from R.
+struct HoldLine {
+  int32_t x;
+  uint32_t t;
+  uint8_t code;
+};
+constexpr HoldLine kHoldLines[] = {
+    {-50, 1'000'000, 1}, {0, 1, 0}, {-40, 400'000, 1}, {-30, 300'000, 0}};
+V2Script hold_script() {
+  using namespace fpgacnc::twins::v2;
+  namespace spec = fpgacnc::spec;
+  V2Script s;
+  for (const HoldLine& l : kHoldLines) {
+    if (l.x == 0) {
+      s.items.push_back(V2Item{kDwell, dwell_payload(l.t)});
+      continue;
+    }
+    const int32_t st[1] = {l.x};
+    s.items.push_back(V2Item{kLine, line_payload(l.code, 200, l.t, st, true)});
+  }
+  const auto hold = static_cast<uint8_t>(spec::kMotionHold);
+  const auto resume = static_cast<uint8_t>(spec::kMotionResume);
+  auto& dwell = s.items[1].side;
+  dwell.push_back(V2Side{spec::kTypeMotion, motion_payload(hold, 0x8000, 0x8000, 1u << 20), 5000});
+  dwell.push_back(V2Side{kStatusQuery, {}, 1});
+  dwell.push_back(V2Side{kStatusQuery, {}, 1'500'000});
+  dwell.push_back(V2Side{spec::kTypeMotion, motion_payload(resume, 0x8000, 0x8000, 1u << 28), 1});
+  s.items[2].side.push_back(
+      V2Side{spec::kTypeMotion, motion_payload(0, 0x2000, 0x8000, 1u << 30), 1});
+  return s;
+}
+void hold_job(const RunResult& r, const CoreParams& p) {
+  namespace spec = fpgacnc::spec;
+  check(r.error.empty(), "host error: " + r.error);
+  check_eq(r.motion_from.size(), size_t{3}, "three MOTION frames accepted");
+  check_eq(r.seg_start.size(), std::size(kHoldLines), "a seg_start per segment");
+  check_eq(r.runs, 4, "the board ran the job once more per MOTION frame");
+  if (r.motion_from.size() != 3 || r.seg_start.size() != std::size(kHoldLines)) return;
+  std::vector<test::Req> reqs;
+  test::Req h{r.motion_from[0], 0, true, false, 0x8000, 0x8000, 1u << 20};
+  test::Req u{r.motion_from[1], 0, false, true, 0x8000, 0x8000, 1u << 28};
+  test::Req f{r.motion_from[2], 0, false, false, 0x2000, 0x8000, 1u << 30};
+  reqs = {h, u, f};
+  for (size_t i = 0; i < std::size(kHoldLines); ++i) {
+    test::Req c{r.seg_start[i], 3};
+    c.code = kHoldLines[i].code;
+    reqs.push_back(c);
+  }
+  const Cycle n = r.end_cycle + 10;
+  const test::Reference ref(reqs, p.rate_phase, spec::kDefaultRatePeriodLog2,
+                            spec::kDefaultRateRamp, n);
+  // the edge of tick j from R (the j-th clock >= R with adv high, + 1)
+  auto tick_edge = [&](Cycle run, uint64_t j) -> Cycle {
+    for (Cycle t = run; t < n; ++t)
+      if (ref.adv[static_cast<size_t>(t)] && --j == 0) return t + 1;
+    return -1;
+  };
+  std::vector<Cycle> rises, laser;
+  for (const auto& e : r.edges) {
+    if (e.signal == fpgacnc::models::step_signal(0) && e.value == 1)
+      rises.push_back(static_cast<Cycle>(e.cycle));
+    if (e.signal == fpgacnc::models::kLaser) laser.push_back(static_cast<Cycle>(e.cycle));
+  }
+  std::vector<Cycle> want_rises, want_laser;
+  for (size_t i = 0; i < std::size(kHoldLines); ++i) {
+    const HoldLine& l = kHoldLines[i];
+    const Cycle run = r.seg_start[i];
+    const auto steps = static_cast<uint64_t>(l.x < 0 ? -l.x : l.x);
+    for (uint64_t k = 1; k <= steps; ++k)
+      want_rises.push_back(tick_edge(run, (k * l.t + steps - 1) / steps));
+    const Cycle end = tick_edge(run, l.t);
+    check_eq(r.seg_done.size() > i ? r.seg_done[i] : -1, end,
+             fmt::format("segment {} ends on the edge of its last tick", i));
+    if (l.x == 0 || l.code == 0) continue;  // (the laser is off in dwells and rapids)
+    // laser high in the segment's clocks with r > 0 (pin edges where the level changes)
+    bool on = false;
+    for (Cycle t = run; t < end; ++t) {
+      const bool want = ref.r[static_cast<size_t>(t)] != 0;
+      if (want != on) want_laser.push_back(t);
+      on = want;
+    }
+    if (on) want_laser.push_back(end);
+  }
+  // back-to-back cutting segments keep the laser high: the recorder drops a fall and a rise on
+  // one edge
+  for (size_t i = 1; i < want_laser.size();)
+    if (want_laser[i] == want_laser[i - 1]) {
+      want_laser.erase(want_laser.begin() + static_cast<std::ptrdiff_t>(i) - 1,
+                       want_laser.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+    } else {
+      ++i;
+    }
+  check(rises == want_rises, fmt::format("STEP X rises at the reference's ticks ({} of {})",
+                                         rises.size(), want_rises.size()));
+  for (size_t k = 0; k < rises.size() && k < want_rises.size(); ++k)
+    if (rises[k] != want_rises[k]) {
+      check(false, fmt::format("step {}: board {}, reference {}", k + 1, rises[k], want_rises[k]));
+      break;
+    }
+  check(laser == want_laser, fmt::format("laser edges {} as the reference's r = 0 gate: {}",
+                                         fmt::join(laser, " "), fmt::join(want_laser, " ")));
+  // the hold stretches the first LINE: it ends later than 10^6 ticks after its run edge
+  check(r.seg_done.size() == std::size(kHoldLines) &&
+            r.seg_done[0] - r.seg_start[0] > Cycle{2'000'000},
+        "the hold stretches the first LINE by more than 10^6 clocks");
+  // STATUS: the HOLD answer, STATUS_QUERY during the ramp, while stopped, one for the RESUME and
+  // the feed rate (the second request came while the first's STATUS was still going out: one
+  // answer), the final STATUS_QUERY
+  std::string st;
+  for (const auto& x : r.statuses) st += fmt::format(" {:02X}", x[0]);
+  check_eq(r.statuses.size(), size_t{5}, "STATUS answers (state bytes" + st + ")");
+  if (r.statuses.size() == 5) {
+    auto state = [&](size_t i) {
+      return r.statuses[i][0] & (spec::kStateHold | spec::kStateStopped);
+    };
+    check_eq(state(0), int{spec::kStateHold}, "MOTION HOLD's STATUS: HOLD");
+    check_eq(state(1), int{spec::kStateHold}, "STATUS during the ramp: HOLD, not STOPPED");
+    check_eq(state(2), int{spec::kStateHold | spec::kStateStopped}, "STATUS held: HOLD, STOPPED");
+    check_eq(state(3), 0, "MOTION RESUME's STATUS: neither");
+    check_eq(state(4), 0, "the last STATUS: neither");
+  }
+}
+
 // The worked sequences of spec/vectors.txt (the host codec test and the Verilated cnc_core bench
 // read the same file) on a virtual board of their own (tx recorded): each job from reset, the
 // host frames back to back (one packet, no ACK awaited), the bytes decoded from the tx pin's
@@ -999,6 +1133,7 @@ std::map<std::string, Record> run_simulation() {
   board.add_job(TwinJob{HostScript{{}, sp}, p.timing, keep});
   std::array<int64_t, 2> profile_pos{};
   board.add_job(TwinJob{HostScript{{}, profile_script(profile_pos)}, p.timing, keep});
+  board.add_job(TwinJob{HostScript{{}, hold_script()}, p.timing, keep});
   VirtualBoard seq_board("virtual_board_tx", p, true);
   std::vector<RunResult> seq_results;
   for (const auto& s : fpgacnc::spec::load_sequences())
@@ -1026,12 +1161,13 @@ std::map<std::string, Record> run_simulation() {
   } blocks("blocks", dec_bench, enc_bench, exec_bench, rec);
   sc_core::sc_start();
   const char* jobs[] = {"board_worked_example", "board_zero_move_and_watchdog", "board_spiral",
-                        "board_profile_job"};
-  if (results.size() == 4) {
+                        "board_profile_job", "board_hold"};
+  if (results.size() == 5) {
     in_block(rec[jobs[0]], [&] { worked_example(results[0]); });
     in_block(rec[jobs[1]], [&] { zero_move_and_watchdog(results[1]); });
     in_block(rec[jobs[2]], [&] { spiral(results[2], spiral_t, spiral_pos, results[2].statuses); });
     in_block(rec[jobs[3]], [&] { profile_job(results[3], profile_pos); });
+    in_block(rec[jobs[4]], [&] { hold_job(results[4], p); });
   } else {
     for (const char* j : jobs) in_block(rec[j], [&] { check(false, "all jobs ran"); });
   }
@@ -1080,6 +1216,9 @@ TEST(TwinsUnit, BoardSpiral) {
 }
 TEST(TwinsUnit, BoardProfileJob) {
   expect_passed(simulated("board_profile_job"));
+}
+TEST(TwinsUnit, BoardHold) {
+  expect_passed(simulated("board_hold"));
 }
 TEST(TwinsUnit, BoardSpecSequences) {
   expect_passed(simulated("board_spec_sequences"));

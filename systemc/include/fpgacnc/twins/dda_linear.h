@@ -2,10 +2,10 @@
 //
 // Target `load`: a DdaLoad (n steps over T ticks), the delay naming the run-start edge R; tick
 // c of the segment is edge R + c, or with DdaLoad::rate the edge after the c-th clock with the
-// motion rate's `adv` high from the clock after R (feed_rate.h). The k-th step (k = 1..n) falls on tick ceil(k * T / n) (128-bit
-// product): the twin computes each step time instead of ticking, and sends one step request
-// per step on initiator `step` (to the axis's step_pulse), delay = R + tick. DdaLoad::cut (an
-// abort edge, from the executor): requests on that edge or later are not sent.
+// motion rate's `adv` high from the clock after R (feed_rate.h). The k-th step (k = 1..n) falls on
+// tick ceil(k * T / n) (128-bit product): the twin computes each step time instead of ticking, and
+// sends one step request per step on initiator `step` (to the axis's step_pulse), delay = R + tick.
+// DdaLoad::cut (an abort edge, from the executor): requests on that edge or later are not sent.
 #pragma once
 
 #include <limits>
@@ -19,7 +19,7 @@ struct DdaLoad {
   uint32_t steps;
   uint64_t total;
   Cycle cut = std::numeric_limits<Cycle>::max();  // abort: no step request on this edge or later
-  FeedRate* rate = nullptr;                        // ticks through the motion rate (null: every clock)
+  FeedRate* rate = nullptr;  // ticks through the motion rate (null: every clock)
 };
 
 class DdaLinearTwin : public sc_core::sc_module {

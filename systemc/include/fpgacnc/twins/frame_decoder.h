@@ -1,5 +1,6 @@
-// Twin of rtl/protocol/frame_decoder.v: v1 packets and v2 frames from one byte stream (docs/protocol.md
-// "Telling v1 from v2", "Frame", "Host to device", "Sequence numbers", "NAK reasons").
+// Twin of rtl/protocol/frame_decoder.v: v1 packets and v2 frames from one byte stream
+// (docs/protocol.md "Telling v1 from v2", "Frame", "Host to device", "Sequence numbers", "NAK
+// reasons").
 //
 // Target `bytes`: RxByte valid from the delay's edge b; the decoder takes it on edge
 // t = b + kDecoderTake. Between packets (auto mode) 0xFF starts a v1 init, 0x00..0x03 a v1
@@ -140,7 +141,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
   std::vector<Cycle> v1_packet_cycles;                         // v1 packets only
   std::vector<std::pair<Cycle, RespReq>> naks;                 // every NAK request
   std::vector<std::pair<Cycle, DecoderState>>* log = nullptr;  // every state change, when set
-  std::function<void(Cycle)> before_write;  // called with the edge of each FIFO write
+  std::function<void(Cycle)> before_write;          // called with the edge of each FIFO write
   std::function<void(const MotionReq&)> on_motion;  // each accepted MOTION frame
 
  private:
@@ -454,8 +455,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
     }
   }
 
-  // Heater frames' BAD_FIELD rules (rtl/protocol/frame_decoder.v): channel > 1; HEATER_CONFIG mode > 4,
-  // duty_max or manual > 0x8000; THERMISTOR_TABLE first > 64 or first + n > 65; HEATER_SAFETY
+  // Heater frames' BAD_FIELD rules (rtl/protocol/frame_decoder.v): channel > 1; HEATER_CONFIG mode
+  // > 4, duty_max or manual > 0x8000; THERMISTOR_TABLE first > 64 or first + n > 65; HEATER_SAFETY
   // Tmin >= Tmax. Other types: true.
   bool heater_fields_ok() const {
     if (type_ < v2::kHeaterConfig || type_ > v2::kHeaterWatchdog) return true;
@@ -515,8 +516,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
            static_cast<int32_t>(be32(&payload_[2])) > static_cast<int32_t>(be32(&payload_[6]))))) ||
         (type_ == v2::kLineProfile && !profile_fields_ok(axes, width)) ||
         (type_ == v2::kArc && !arc_fields_ok()) || (type_ == v2::kOutput && !output_fields_ok()) ||
-        (type_ == spec::kTypeMotion && !motion_fields_ok()) ||
-        !heater_fields_ok()) {
+        (type_ == spec::kTypeMotion && !motion_fields_ok()) || !heater_fields_ok()) {
       commit_check(take);
       request(r, RespReq{kReqNak, seq_, v2::kBadField});
       return;

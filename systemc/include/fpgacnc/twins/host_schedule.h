@@ -128,15 +128,15 @@ inline std::vector<HostPacket> job_packets(const protocol::v1::Job& job, uint64_
 // A frame with `corrupt` is sent once with a wrong CRC (the device NAKs BAD_CRC); `pre` bytes go
 // out once before it. `side` frames (unsequenced, e.g. MOTION: SEQ 0, no credit needed) go out
 // once before it, each `gap` clocks after the host is ready, without waiting for their answers
-// (a STATUS is kept in `statuses`), before its `pre` bytes: a feed hold and its resume sent one
-// after the other never wait for credit that the hold keeps from coming.
+// (a STATUS is kept in `statuses`; the device answers requests pending together with one STATUS),
+// before its `pre` bytes: a feed hold and its resume sent one after the other never wait for
+// credit that the hold keeps from coming.
 // Waiting for answers, the host acts on each complete device frame: it is ready again at the
 // end of that frame's last byte on tx. No retransmission timer: the models never lose bytes.
 struct V2Side {
   uint8_t type;
   std::vector<uint8_t> payload;
   int64_t gap = 1;
-  bool status = true;  // answered by a STATUS (false: by a NAK, a frame that breaks a rule)
 };
 struct V2Item {
   uint8_t type;
@@ -170,6 +170,7 @@ class V2StreamHost : public Host {
     corrupted_.assign(s_.items.size(), false);
     pre_done_.assign(s_.items.size(), false);
     side_done_.assign(s_.items.size(), 0);
+    for (const V2Item& i : s_.items) has_side_ = has_side_ || !i.side.empty();
   }
 
   bool done() const override { return phase_ == Phase::Done; }
@@ -186,14 +187,15 @@ class V2StreamHost : public Host {
       case Phase::Stream:
         if (next_ < s_.items.size() && side_done_[next_] < s_.items[next_].side.size()) {
           const V2Side& f = s_.items[next_].side[side_done_[next_]++];
-          if (f.status) ++side_answers_;
           return send(v2::frame(0, f.type, f.payload), f.gap, false);
         }
         if (can_send()) return send_item();
         if (acked_ + 1 == s_.items.size() && done_ == fifo_total_) {
           if (s_.status_at_end) {
             phase_ = Phase::Status;
-            return send(v2::frame(0, v2::kStatusQuery), 1, true);
+            auto q = send(v2::frame(0, v2::kStatusQuery), 1, true);
+            query_last_ = ready_ - sender_.frame();
+            return q;
           }
           phase_ = Phase::Release;
           return send_item();
@@ -218,9 +220,10 @@ class V2StreamHost : public Host {
       frame_start_.reset();
     }
     if (!f) return;
-    acks.push_back(*frame_start_);
+    const Cycle first = *frame_start_;
+    acks.push_back(first);
     frame_start_.reset();
-    handle(*f);
+    handle(*f, first);
     if (waiting_) {
       waiting_ = false;
       ready_ = start + byte_frame_;
@@ -284,7 +287,8 @@ class V2StreamHost : public Host {
     free_ = free;
     if (next_ < acked_) next_ = acked_;
   }
-  void handle(const v2::DeviceFrame& f) {
+  // f: a device frame whose first byte started on edge `start`.
+  void handle(const v2::DeviceFrame& f, Cycle start) {
     if (f.type == v2::kIdent && phase_ == Phase::Hello && f.payload.size() == 18) {
       base_seq_ = f.u8(16);
       free_ = f.u16(2);
@@ -299,11 +303,10 @@ class V2StreamHost : public Host {
       ++naks;
       credit(f.u8(2), f.u16(3));
       next_ = acked_;
-    } else if (f.type == v2::kStatus && phase_ == Phase::Status && side_answers_ == 0) {
+    } else if (f.type == v2::kStatus && phase_ == Phase::Status && start > query_last_) {
       statuses.push_back(f);
       phase_ = Phase::Release;
-    } else if (f.type == v2::kStatus && side_answers_ > 0) {  // a side frame's answer
-      --side_answers_;
+    } else if (f.type == v2::kStatus && has_side_) {  // a side frame's answer (or several's)
       statuses.push_back(f);
     } else {
       ++unexpected;
@@ -322,7 +325,10 @@ class V2StreamHost : public Host {
   uint32_t free_ = 0, done_ = 0, fifo_total_ = 0;
   std::vector<bool> corrupted_, pre_done_;
   std::vector<size_t> side_done_;  // side frames sent per item
-  size_t side_answers_ = 0;        // STATUS answers of side frames still to come
+  bool has_side_ = false;          // the script has side frames
+  // The start edge of the final STATUS_QUERY's last byte: a STATUS starting by then answers side
+  // frames (one decided later answers every request pending then, the query's too).
+  Cycle query_last_ = 0;
   bool after_pre_ = false;
   v2::FrameParser parser_;
   uint64_t bad_seen_ = 0;

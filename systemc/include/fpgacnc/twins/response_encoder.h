@@ -1,4 +1,5 @@
-// Twin of rtl/protocol/response_encoder.v: the device's answers on tx (docs/protocol.md "Device to host").
+// Twin of rtl/protocol/response_encoder.v: the device's answers on tx (docs/protocol.md "Device to
+// host").
 //
 // Inputs are strobes after an edge e; each is sampled on edge e + 1 (a pending flag or a counter),
 // so a frame can be decided (its fields snapshotted) on edge e + kRespStart = e + 2 at the
@@ -48,8 +49,8 @@ struct EncoderParams {
   uint32_t fifo_depth = v2::kFifoDepth;
   uint64_t clk_hz = 50'000'000, baud = 115'200;
   uint32_t build_id = v2::kBuildId;
-  // cnc_core appends its 16-byte heater block to STATUS (rtl/protocol/response_encoder.v HEAT_BYTES 16;
-  // the block-level encoder bench uses 0). The twins model idle heaters (no frames, ADC at 0):
+  // cnc_core appends its 16-byte heater block to STATUS (rtl/protocol/response_encoder.v HEAT_BYTES
+  // 16; the block-level encoder bench uses 0). The twins model idle heaters (no frames, ADC at 0):
   // per channel temperature 0 until the first sample's eval, then -2048 degC (0x8000, no table),
   // setpoint, duty, mode and faults 0. The first eval is on edge SAMPLE_CLKS (= clk_hz) + 635
   // after reset release (docs/heater.md), i.e. cycle clk_hz + 635 + kResetHoldRef here.

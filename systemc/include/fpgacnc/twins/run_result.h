@@ -31,11 +31,11 @@ struct RunResult {
   uint64_t device_frames = 0, naks = 0, retransmitted = 0, segments_done = 0;
   uint64_t frames_ok = 0, clamped = 0, zero_gap = 0;
   std::vector<std::vector<uint8_t>> statuses;  // payloads of the STATUS frames the host got
-  // Twins: runs of the job (more than 1 with MOTION frames, virtual_board.h); accepted MOTION
-  // frames; the segments their requests took effect in, by the executor's kind: LINE (and
-  // dwell), PROFILE, ARC, none (idle, or between segments).
+  // Twins: runs of the job (more than 1 with MOTION frames, virtual_board.h); the first clock of
+  // the values of each accepted MOTION frame (L + 2); the segments their requests took effect
+  // in, by the executor's kind: LINE (and dwell), PROFILE, ARC, none (idle, between segments).
   int runs = 1;
-  uint64_t motions = 0;
+  std::vector<Cycle> motion_from;
   std::array<uint64_t, 4> motion_in{};
   double wall_s = 0.0;
   std::string error;  // "" = the host got every ACK it waited for

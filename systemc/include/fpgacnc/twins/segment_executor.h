@@ -351,10 +351,10 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
     };
     // the walk clocks c with tau(c) + 1 < cut
-    const Cycle stop = cut == kNever      ? kNever
-                       : rate == nullptr  ? cut - 1 - r
-                       : cut - 2 < r      ? 0
-                                          : static_cast<Cycle>(rate->ticks_in(r, cut - 2));
+    const Cycle stop = cut == kNever     ? kNever
+                       : rate == nullptr ? cut - 1 - r
+                       : cut - 2 < r     ? 0
+                                         : static_cast<Cycle>(rate->ticks_in(r, cut - 2));
     Cycle last = 0, last_tau = r;
     Cycle prev_c = -1, prev_tau = r - 1;  // the last walk clock run and its clock
     while (!dda.done()) {
