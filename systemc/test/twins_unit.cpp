@@ -347,6 +347,45 @@ void decoder_tests(DecoderBench& b) {
   check(is_nak(r, 2, kBadField) && w == 0, "reserved flag bit: NAK BAD_FIELD");
   std::tie(r, w) = b.run(frame(2, kConfigAxis, config_axis_payload(4, AxisTiming{})));
   check(is_nak(r, 2, kBadField), "axis 4: NAK BAD_FIELD");
+  // MOTION (docs/protocol.md): unsequenced, answered by STATUS, the request to the motion rate on
+  // L + 2 (L the take edge of the last byte); BAD_FIELD: flag bits 7:2, HOLD with RESUME, a rate
+  // outside 1..0x8000, ramp 0; LEN other than 9: BAD_LENGTH. Nothing goes to the FIFO and
+  // next_seq stays.
+  {
+    namespace spec = fpgacnc::spec;
+    std::vector<MotionReq> got;
+    b.dec.on_motion = [&](const MotionReq& m) { got.push_back(m); };
+    std::tie(r, w) = b.run(frame(200, spec::kTypeMotion, motion_payload(1, 0x4000, 0x8000, 77)));
+    check(r.size() == 1 && r[0].kind == kReqStatus && w == 0, "MOTION HOLD -> STATUS");
+    check(got.size() == 1 && got[0].hold && !got[0].resume && got[0].feed == 0x4000 &&
+              got[0].rapid == 0x8000 && got[0].ramp == 77,
+          "MOTION HOLD: the request's fields");
+    if (got.size() == 1)
+      check_eq(got[0].from, b.t - 10 + kDecoderTake + kMotionTakes,
+               "MOTION: the rate's clock L + 2");
+    check_eq(b.dec.current().next_seq, 2, "MOTION: next_seq unchanged");
+    std::tie(r, w) = b.run(frame(9, spec::kTypeMotion, motion_payload(2, 1, 1, 1)));
+    check(r.size() == 1 && r[0].kind == kReqStatus && got.size() == 2 && got[1].resume &&
+              !got[1].hold && got[1].feed == 1 && got[1].rapid == 1,
+          "MOTION RESUME at the lowest rates -> STATUS");
+    const std::array<std::pair<Bytes, const char*>, 7> bad_motion{{
+        {motion_payload(3, 0x8000, 0x8000, 1), "HOLD with RESUME"},
+        {motion_payload(4, 0x8000, 0x8000, 1), "flag bit 2"},
+        {motion_payload(0x80, 0x8000, 0x8000, 1), "flag bit 7"},
+        {motion_payload(0, 0, 0x8000, 1), "feed 0"},
+        {motion_payload(0, 0x8001, 0x8000, 1), "feed 0x8001"},
+        {motion_payload(0, 0x8000, 0, 1), "rapid 0"},
+        {motion_payload(0, 0x8000, 0x8000, 0), "ramp 0"},
+    }};
+    for (const auto& [pl, what] : bad_motion) {
+      std::tie(r, w) = b.run(frame(5, spec::kTypeMotion, pl));
+      check(is_nak(r, 5, kBadField) && got.size() == 2,
+            fmt::format("MOTION with {}: NAK BAD_FIELD, no request", what));
+    }
+    std::tie(r, w) = b.run(frame(5, spec::kTypeMotion, {0, 0x80, 0, 0x80, 0, 0, 0, 0}));
+    check(is_nak(r, 5, kBadLength) && got.size() == 2, "MOTION of 8 bytes: NAK BAD_LENGTH");
+    b.dec.on_motion = nullptr;
+  }
   std::tie(r, w) = b.run(frame(2, kConfigAxis, config_axis_payload(3, AxisTiming{5, 6, 7, 8})));
   check(is_ack(r) && b.cfgs.size() == 1 && b.cfgs[0].axis == 3 && b.cfgs[0].timing.low == 6 &&
             b.cfgs[0].timing.hold == 8,
