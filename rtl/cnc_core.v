@@ -79,7 +79,12 @@ module cnc_core #(
     // hard limits (docs/machine.md): bit a = min switch of axis a, bit 16 + a = max switch
     parameter LIMIT_FILTER_CLKS = `FPGACNC_DEF_LIMIT_FILTER_CLKS,  // debounce, clocks
     parameter [31:0] LIMIT_ENABLE     = `FPGACNC_DEF_LIMIT_ENABLE,      // switches wired
-    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW   // asserted at a low pin
+    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW,  // asserted at a low pin
+    // feed hold and cycle-start buttons (docs/machine.md): bit 0 hold, bit 1 cycle start
+    parameter [1:0] BUTTON_ENABLE     = 2'b11,  // buttons wired (a button not wired reads released)
+    parameter [1:0] BUTTON_ACTIVE_LOW = 2'b00,  // asserted at a low pin
+    parameter RATE_PERIOD_LOG2        = `FPGACNC_DEF_RATE_PERIOD_LOG2,  // motion rate period
+    parameter [31:0] RATE_RAMP        = `FPGACNC_DEF_RATE_RAMP  // motion rate ramp after rst
 ) (
     input wire clk,
     input wire rst,
@@ -99,6 +104,8 @@ module cnc_core #(
     input  wire       estop,       // e-stop, active high, asynchronous
     input  wire [N_AXES-1:0] limit_min,  // limit switches, asynchronous (LIMIT_* parameters)
     input  wire [N_AXES-1:0] limit_max,
+    input  wire       hold_in,     // feed hold button, asynchronous (BUTTON_* parameters)
+    input  wire       start_in,    // cycle start (resume) button, asynchronous
     output wire [1:0] heater,      // 0 hot end, 1 bed
     output wire       adc_convst,  // LTC2308
     output wire       adc_sck,
@@ -248,6 +255,8 @@ module cnc_core #(
   wire cmd_tvalid, cmd_tready;
   wire [15:0] fifo_level_w, fifo_free_w;
   wire dec_hello, dec_status, dec_ack;  // requests to response_encoder (v2 only)
+  wire dec_motion_set;  // an accepted MOTION frame (v2 only), its payload in dec_motion_data
+  wire [71:0] dec_motion_data;
   wire [7:0] dec_nak_seq, dec_nak_reason;
   wire estop_stop;  // e-stop active or latched (below)
   wire motion_abort;  // e-stop or hard-limit alarm: FIFO flushed, prep and executor aborted
@@ -285,6 +294,8 @@ module cnc_core #(
           .fault_clear  (dec_fault_clear),
           .hello        (dec_hello),
           .status_req   (dec_status),
+          .motion_set   (dec_motion_set),
+          .motion_data  (dec_motion_data),
           .ack_req      (dec_ack),
           .nak          (dec_nak),
           .nak_seq      (dec_nak_seq),
@@ -324,6 +335,8 @@ module cnc_core #(
       // no v2 frames: no configuration, heater, fault-clear or answer requests, no v2 status
       assign dec_hello        = 1'b0;
       assign dec_status       = 1'b0;
+      assign dec_motion_set   = 1'b0;
+      assign dec_motion_data  = 72'd0;
       assign dec_ack          = 1'b0;
       assign dec_nak_seq      = 8'd0;
       assign dec_nak_reason   = 8'd0;
@@ -403,6 +416,65 @@ module cnc_core #(
   );
   assign limit_state = {lim_max_w, lim_min_w};
   assign limit_trip  = limit_trip_w;
+
+  // ---------------------------------------------------------------- motion rate
+  // feed hold, resume and the feed / rapid rates (docs/timing.md "Feed hold and overrides"):
+  // the hold and cycle-start buttons through their filter, MOTION frames, feed_rate's enable of
+  // every motion generator. The v1 build has neither: its motion advances in every clock.
+  wire [1:0] btn_q, btn_strobe;
+  wire [1:0] btn_rise = btn_strobe & btn_q & BUTTON_ENABLE;
+  wire rate_adv, rate_hold, rate_stopped, exec_rapid;
+
+  input_filter #(
+      .N          (2),
+      .FILTER_CLKS(LIMIT_FILTER_CLKS),
+      .ACTIVE_LOW (BUTTON_ACTIVE_LOW)
+  ) u_button_filter (
+      .clk   (clk),
+      .rst   (rst),
+      .din   ({start_in, hold_in}),
+      .q     (btn_q),
+      .strobe(btn_strobe)
+  );
+
+  generate
+    if (V2_EN != 0) begin : g_rate
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire [32:0] rate_nc;  // the rate itself: for benches and waveforms
+      /* verilator lint_on UNUSEDSIGNAL */
+      feed_rate #(
+          .PERIOD_LOG2(RATE_PERIOD_LOG2),
+          .RAMP0      (RATE_RAMP)
+      ) u_rate (
+          .clk       (clk),
+          .rst       (rst),
+          .load      (dec_motion_set),
+          .set_hold  (dec_motion_data[0]),
+          .set_resume(dec_motion_data[1]),
+          .set_feed  ({dec_motion_data[15:8], dec_motion_data[23:16]}),
+          .set_rapid ({dec_motion_data[31:24], dec_motion_data[39:32]}),
+          .set_ramp  ({dec_motion_data[47:40], dec_motion_data[55:48], dec_motion_data[63:56],
+                       dec_motion_data[71:64]}),
+          .hold_req  (btn_rise[0]),
+          .resume_req(btn_rise[1]),
+          .rapid_seg (exec_rapid),
+          .adv       (rate_adv),
+          .hold      (rate_hold),
+          .stopped   (rate_stopped),
+          .rate      (rate_nc)
+      );
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_motion = &{1'b0, dec_motion_data[7:2]};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end else begin : g_norate
+      assign rate_adv     = 1'b1;
+      assign rate_hold    = 1'b0;
+      assign rate_stopped = 1'b0;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_rate = &{1'b0, btn_rise, exec_rapid, dec_motion_set, dec_motion_data};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end
+  endgenerate
 
   // ---------------------------------------------------------------- step timing
   // active step timing (all axes) and the minimum dominant period, as used by prep and executor
@@ -577,6 +649,8 @@ module cnc_core #(
       .cfg_dir_setup  (cfg_setup),
       .cfg_dir_hold   (cfg_hold),
       .abort          (motion_abort),
+      .adv            (rate_adv),
+      .rapid_seg      (exec_rapid),
       .step_block     (exec_step_block),
       .step_want      (exec_step_want),
       .step           (step),
@@ -608,7 +682,7 @@ module cnc_core #(
       .clk          (clk),
       .rst          (rst),
       .abort        (motion_abort),
-      .exec_laser   (exec_laser),
+      .exec_laser   (exec_laser && !rate_stopped),
       .exec_flood   (exec_flood),
       .exec_mist    (exec_mist),
       .exec_dout    (exec_dout),
@@ -758,6 +832,8 @@ module cnc_core #(
       .v2_mode        (dec_v2_mode),
       .estop_active   (estop_active),
       .limit_untrusted(limit_untrusted),
+      .hold           (rate_hold),
+      .stopped        (rate_stopped),
       .faults         (faults_w),
       .position       (position),
       .counters       ({frames_ok_w, crc_errors_w, length_errors_w, unknown_types_w, timeouts_w,
