@@ -80,6 +80,8 @@ SC_MODULE(RtlHarness) {
   // Limit switches: none (the twins have none; cnc_core's default LIMIT_ENABLE is 0 anyway).
   sc_core::sc_signal<uint32_t> limit_min, limit_max, limit_state;
   sc_core::sc_signal<bool> limit_trip;
+  // Feed hold and cycle-start buttons: released (the holds come as MOTION frames).
+  sc_core::sc_signal<bool> hold_in, start_in;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -128,6 +130,8 @@ SC_MODULE(RtlHarness) {
     dut.estop(estop);
     dut.limit_min(limit_min);
     dut.limit_max(limit_max);
+    dut.hold_in(hold_in);
+    dut.start_in(start_in);
     dut.limit_state(limit_state);
     dut.limit_trip(limit_trip);
     dut.heater(heater);

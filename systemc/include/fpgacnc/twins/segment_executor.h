@@ -283,9 +283,10 @@ class SegmentExecutorTwin : public sc_core::sc_module {
 
   // Kind ARC from edge R: arc::Dda from event to event (rtl/motion/arc_dda.v's walk and pacing in
   // exact integers). Walk clock c runs in the clock of the run's (c + 1)-th tick, tau(c) (R + c
-  // at full rate); its event is a step request on edge tau(c) + 2. The walk's outputs of clock c
-  // (its registers after its previous clock) are seen from clock tau(c - 1) + 1 (R for c = 0) on.
-  // X / Y reverse inside the arc: from the walk's W1 clock on the executor knows the next move's
+  // at full rate); its event is a step request on edge tau(c) + 2 (arc_dda's output register,
+  // high in the clock after the tick whether or not that one is a tick). The executor reads the
+  // walk's DIR outputs in its ticks (arc_ann). X / Y reverse inside the arc: from the walk's W1
+  // clock on the executor knows the next move's
   // direction (Dda::next_x_pos / next_y_pos); when it differs from the DIR target the write
   // becomes pending and lands on the first edge after a clock in which the axis's DIR hold since
   // its last STEP rise has elapsed and no arc step request of that axis is high (real clocks). An
@@ -356,7 +357,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
                        : cut - 2 < r     ? 0
                                          : static_cast<Cycle>(rate->ticks_in(r, cut - 2));
     Cycle last = 0, last_tau = r;
-    Cycle prev_c = -1, prev_tau = r - 1;  // the last walk clock run and its clock
     while (!dda.done()) {
       // Quiet walk clocks (no event, the same DIR outputs) are skipped up to the next event or
       // the abort's.
@@ -366,18 +366,16 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       }
       const auto c = static_cast<Cycle>(dda.next_clock());
       const Cycle tau = walk_clock(r, c);
-      const Cycle vis = c == 0 ? r : (c - 1 == prev_c ? prev_tau : walk_clock(r, c - 1)) + 1;
-      flush(vis);
-      if (dda.dir_valid()) {
+      flush(tau);
+      if (dda.dir_valid()) {  // the executor takes the walk's DIR outputs on its ticks
         const std::array<bool, 2> nd{dda.next_x_pos(), dda.next_y_pos()};
         for (size_t k = 0; k < 2; ++k)
           if (nd[k] != tgt[k]) {
             tgt[k] = nd[k];
             pend[k] = true;
-            from[k] = vis + 1;
+            from[k] = tau + 1;
           }
       }
-      flush(tau);
       if (tau + 1 >= cut) {  // aborted: nothing of this walk clock or later lands
         ++arcs;
         return -1;
@@ -404,8 +402,6 @@ class SegmentExecutorTwin : public sc_core::sc_module {
       if (viol) arc_violation_cycles.push_back(e);
       last = c;
       last_tau = tau;
-      prev_c = c;
-      prev_tau = tau;
     }
     const Cycle ticks = last + 2;
     // A write still pending at the end (only when the arc outran its DIR timing) lands from the
