@@ -12,6 +12,11 @@
 // (with the earlier aborts) show: the run of a LINE, a LINE_PROFILE, a dwell, the HOLD and SETUP
 // waits before a run, a zero-length entry in ZERO, or anywhere; 1..N clocks long (N random per
 // abort: 1, 8 or 300), the offer waiting during it held. Later segments run after it.
+// The motion rate (`--rate-pct` of the jobs): the block's `adv` input comes from a clock-by-clock
+// model of feed_rate (cosim_executor_rtl.cpp) fed with the block's rapid_seg, the twins use
+// FeedRate; before the aborts are aimed, 1..4 events at random clocks of the job's run at full
+// rate: a HOLD and its RESUME 1..3 000 or 3 000..40 000 clocks later, or new feed / rapid rates
+// (1 % .. 100 %; below 20 % back to at least 20 % within 20 000 clocks); ramps 2^20 .. 2^32 - 1.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -52,6 +57,7 @@ bool g_arc_dwell = false;       // a dwell of 1..8 ticks after each arc (see ran
 uint64_t g_arc_pct = 5;         // share of the moving segments that are ARCs, percent
 uint64_t g_abort_pct = 50;      // share of the jobs with aborts, percent
 uint64_t g_aborts = 4;          // aborts per such job
+uint64_t g_rate_pct = 50;       // share of the jobs with motion-rate requests, percent
 
 // What an abort hit (the twin's trace of the final run), for the summary.
 enum AbortHit {
@@ -318,6 +324,11 @@ SC_MODULE(ExecBench) {
   uint64_t aborts = 0, dropped = 0, abort_jobs = 0, arc_errs = 0;
   uint64_t fire_aborts = 0;  // aimed at the clock in which an arc move fires
   std::vector<RunResult> results;
+  FeedRate rate{kExecRatePhase};
+  // motion-rate requests, holds among them, and where they took effect: LINE, PROFILE, ARC,
+  // dwell, other (HOLD / SETUP, idle)
+  uint64_t rate_reqs = 0, rate_holds = 0, rate_jobs = 0;
+  std::array<uint64_t, 5> rate_in{};
   std::vector<Cycle> seg_done, seg_done_v2;
   std::array<uint64_t, 4> stats{};   // zero gap, fast reversals, zero-length / HOLD on a last tick
   std::array<uint64_t, 3> pstats{};  // profiled: zero gap, reversing, never at cruise
@@ -335,6 +346,8 @@ SC_MODULE(ExecBench) {
     exec.done.bind(done);
     done.register_b_transport(this, &ExecBench::on_done);
     make_axis_twins(exec, clk, p, pins, dda, pulse);
+    exec.rate = &rate;
+    exec.laser_rate_gate = false;  // (cnc_core's gate, not the block's)
     SC_THREAD(run);
   }
   void on_done(tlm::tlm_generic_payload & g, sc_core::sc_time & d) {
@@ -350,6 +363,8 @@ SC_MODULE(ExecBench) {
     for (auto& x : pulse) x->reset();
     seg_done.clear();
     seg_done_v2.clear();
+    rate.reset();
+    for (const ExecRate& q : j.rate) rate.motion(q.from, q.hold, q.resume, q.feed, q.rapid, q.ramp);
     for (const ExecAbort& a : j.aborts) {
       AbortSpan s{a.first, a.last};
       transport(abort, gp, clk, s, a.first);
@@ -364,6 +379,47 @@ SC_MODULE(ExecBench) {
       s.arc_frame = e.arc_frame;
       accept = transport(seg, gp, clk, s, accept + j.offers[i].gap);
     }
+  }
+  // Motion-rate requests at random clocks of the job's run at full rate (see the header).
+  void add_rate(Job & j, uint64_t seed) {
+    std::mt19937_64 g(seed * 0x9E3779B97F4A7C15ull + 0x4A7E);
+    if (pick(g, 0, 99) >= g_rate_pct) return;
+    run_twins(j);
+    Cycle end = 1;
+    for (const auto& t : exec.trace) end = std::max(end, t.end);
+    auto rate_q15 = [&]() -> uint16_t {
+      return static_cast<uint16_t>(pick(g, 0, 2) == 0 ? 0x8000 : pick(g, 328, 0x8000));
+    };
+    auto ramp = [&]() -> uint32_t {
+      if (pick(g, 0, 9) == 0) return 0xFFFF'FFFFu;
+      const uint32_t e = pick(g, 20, 31);
+      return pick(g, 1u << e, e == 31 ? 0xFFFF'FFFEu : (2u << e) - 1);
+    };
+    ++rate_jobs;
+    for (uint32_t n = pick(g, 1, 4); n > 0; --n) {
+      const Cycle t = 1 + static_cast<Cycle>(std::uniform_int_distribution<uint64_t>(
+                              0, static_cast<uint64_t>(end))(g));
+      if (pick(g, 0, 1) == 0) {  // a hold and its resume
+        const Cycle held = pick(g, 0, 1) ? pick(g, 1, 3'000) : pick(g, 3'000, 40'000);
+        j.rate.push_back(ExecRate{t, true, false, rate_q15(), rate_q15(), ramp()});
+        j.rate.push_back(ExecRate{t + held, false, true, rate_q15(), rate_q15(), ramp()});
+        ++rate_holds;
+      } else {
+        const uint16_t f = rate_q15(), r = rate_q15();
+        j.rate.push_back(ExecRate{t, false, false, f, r, ramp()});
+        if (std::min(f, r) < 0x8000 / 5)
+          j.rate.push_back(ExecRate{t + pick(g, 1, 20'000), false, false,
+                                    static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)),
+                                    static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)), ramp()});
+      }
+    }
+    // in time order; two on one clock: the later one drawn wins its fields, a HOLD its flag
+    std::stable_sort(j.rate.begin(), j.rate.end(),
+                     [](const ExecRate& a, const ExecRate& b) { return a.from < b.from; });
+    // the job ends at full rate: nothing held, a last request back to 100 %
+    const bool held =
+        std::any_of(j.rate.begin(), j.rate.end(), [](const ExecRate& q) { return q.hold; });
+    j.rate.push_back(ExecRate{j.rate.back().from + 1, false, held, 0x8000, 0x8000, 0xFFFF'FFFFu});
   }
   // Aims the job's aborts one by one (each after the previous one's settle time) with the twins'
   // trace of the run with the aborts so far.
@@ -419,8 +475,17 @@ SC_MODULE(ExecBench) {
       wait(sc_core::sc_time(1, sc_core::SC_US));
       const uint64_t per = clk.period_ps(), now = sc_core::sc_time_stamp().value();
       clk.set_base(sc_core::sc_time::from_value((now + per - 1) / per * per));
+      if (g_rate_pct != 0) add_rate(j, seeds[ji]);
       if (g_aborts != 0 && g_abort_pct != 0) aim_aborts(j, seeds[ji]);
       run_twins(j);
+      for (const ExecRate& q : j.rate) {
+        ++rate_reqs;
+        size_t k = 4;
+        for (const auto& t : exec.trace)
+          if (t.run <= q.from && q.from < t.end && t.cut < 0)
+            k = t.kind == 'L' ? 0 : t.kind == 'P' ? 1 : t.kind == 'A' ? 2 : t.kind == 'D' ? 3 : 4;
+        ++rate_in[k];
+      }
       for (const ExecAbort& a : j.aborts) {
         ++aborts;
         ++hits[classify(exec.trace, a.first)];
@@ -508,6 +573,7 @@ int sc_main(int argc, char* argv[]) {
   opts.u64("--profile-pct", &g_profile_pct).u64("--max-ticks", &g_max_ticks);
   opts.flag("--arc-dwell", &g_arc_dwell);
   opts.u64("--abort-pct", &g_abort_pct).u64("--aborts", &g_aborts).u64("--arc-pct", &g_arc_pct);
+  opts.u64("--rate-pct", &g_rate_pct);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
   std::vector<Job> jobs;
@@ -626,6 +692,11 @@ int sc_main(int argc, char* argv[]) {
       "cosim_executor: {} ARC segments ({} arc errors); {} aborts in {} jobs (hit: {}; {} on the "
       "clock an arc move fires in); {} segments dropped by them (no seg_done)\n",
       arcs, bench.arc_errs, bench.aborts, bench.abort_jobs, hit, bench.fire_aborts, bench.dropped);
+  fmt::print(
+      "cosim_executor: motion rate in {} jobs: {} requests ({} holds with their resumes), taking "
+      "effect in a LINE {}, PROFILE {}, ARC {}, dwell {}, elsewhere {}\n",
+      bench.rate_jobs, bench.rate_reqs, bench.rate_holds, bench.rate_in[0], bench.rate_in[1],
+      bench.rate_in[2], bench.rate_in[3], bench.rate_in[4]);
   fmt::print("cosim_executor: twins {:.3f} s, RTL (Verilated) {:.3f} s: twins {:.1f}x faster\n",
              twin_s, rtl_s, twin_s > 0 ? rtl_s / twin_s : 0.0);
   return bad ? 1 : 0;

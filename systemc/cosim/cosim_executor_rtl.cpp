@@ -65,6 +65,40 @@ void put_profile(Vsegment_executor& m, const ExecSegment& s) {
   }
 }
 
+// The motion rate clock by clock, as docs/timing.md's register table reads (the block's `adv`
+// input; the executor's rapid_seg output chooses the target): values in clock u from the reset
+// release, step() to the next clock.
+struct RateByClock {
+  uint64_t r = uint64_t{1} << 32, acc = 0;
+  bool adv = true, hold = false;
+  uint16_t feed = 0x8000, rapid = 0x8000;
+  uint32_t ramp = fpgacnc::spec::kDefaultRateRamp;
+  Cycle u = 0;
+  // From clock u to u + 1 (cycle c + 1 = u + 1 - phase); `rapid_seg` in clock u; the requests of
+  // clock u + 1 applied (a HOLD wins over a RESUME).
+  void step(bool rapid_seg, const std::vector<ExecRate>& reqs, size_t& next) {
+    const uint64_t sum = acc + r;
+    constexpr Cycle k = Cycle{1} << fpgacnc::spec::kDefaultRatePeriodLog2;
+    if (u % k == k - 1) {
+      const uint64_t tgt = hold ? 0 : uint64_t{rapid_seg ? rapid : feed} << 17;
+      r = tgt > r ? (tgt - r <= ramp ? tgt : r + ramp) : (r - tgt <= ramp ? tgt : r - ramp);
+    }
+    adv = sum >= (uint64_t{1} << 32);
+    acc = sum & 0xffffffffu;
+    ++u;
+    bool set = false, clr = false;
+    for (; next < reqs.size() && reqs[next].from + kExecRatePhase <= u; ++next) {
+      const ExecRate& q = reqs[next];
+      feed = q.feed;
+      rapid = q.rapid;
+      ramp = q.ramp;
+      set = set || q.hold;
+      clr = clr || q.resume;
+    }
+    hold = set || (hold && !clr);
+  }
+};
+
 }  // namespace
 
 RunResult run_executor_rtl(const ExecJob& j) {
@@ -76,13 +110,21 @@ RunResult run_executor_rtl(const ExecJob& j) {
   m->cfg_dir_hold = pack16(j.timing, &AxisTiming::hold);
   m->s_axis_tvalid = 0;
   m->__SYM__abort = 0;
-  m->adv = 1;  // the motion rate at 100 %
+  m->adv = 1;  // the motion rate at 100 % after rst
   m->rst = 1;
   m->clk = 0;
   m->eval();
   for (int i = 0; i < 8; ++i) clock_once(*m);
   m->rst = 0;
-  for (int i = 0; i < 21; ++i) clock_once(*m);  // cycles -20..0, as in the system harness
+  RateByClock rate;  // clock -21 (the clock after the last reset edge) is u = 0
+  size_t next_rate = 0;
+  for (int i = 0; i < 21; ++i) {  // cycles -20..0, as in the system harness
+    m->adv = rate.adv ? 1 : 0;
+    m->eval();
+    const bool rapid = m->rapid_seg != 0;
+    clock_once(*m);
+    rate.step(rapid, j.rate, next_rate);
+  }
   RunResult r;
   uint32_t prev = 0;
   Cycle c = 0, valid_from = j.offers.empty() ? -1 : j.offers[0].gap;
@@ -119,9 +161,13 @@ RunResult run_executor_rtl(const ExecJob& j) {
       m->__SYM__abort = abort ? 1 : 0;
       m->eval();  // s_axis_tready and laser depend on it combinationally
     }
+    m->adv = rate.adv ? 1 : 0;  // adv in clock c
+    m->eval();
     const bool accepted = offering && m->s_axis_tready;
+    const bool rapid = m->rapid_seg != 0;
     ++c;
     clock_once(*m);
+    rate.step(rapid, j.rate, next_rate);
     if (accepted) {
       ++next;
       if (next < j.offers.size()) valid_from = c + j.offers[next].gap;
@@ -139,7 +185,8 @@ RunResult run_executor_rtl(const ExecJob& j) {
     if (m->seg_done && m->seg_done_v2) r.seg_done_v2.push_back(c);
     if (m->arc_err) r.arc_err.push_back(c + 1);  // (strobe after edge c, latched on c + 1)
     if (m->violation) ++r.violations;            // STEP timing (or arc DIR setup) violation strobes
-    if (next >= j.offers.size() && next_abort >= j.aborts.size() && m->idle && !m->step) {
+    if (next >= j.offers.size() && next_abort >= j.aborts.size() && next_rate >= j.rate.size() &&
+        m->idle && !m->step) {
       if (++quiet > 2) break;
     } else {
       quiet = 0;

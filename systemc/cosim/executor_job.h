@@ -37,10 +37,22 @@ struct ExecAbort {
   Cycle first, last;
 };
 
+// A request to the motion rate (feed_rate.v: an accepted MOTION frame's values, from clock
+// `from` on), in time order. The rate's period counter and accumulator start at the reset
+// release, kExecRatePhase clocks before cycle 0 (as in cnc_core's harness).
+struct ExecRate {
+  Cycle from;
+  bool hold = false, resume = false;
+  uint16_t feed = 0x8000, rapid = 0x8000;
+  uint32_t ramp = 1;
+};
+inline constexpr Cycle kExecRatePhase = 21;
+
 struct ExecJob {
   std::array<AxisTiming, kAxes> timing;
   std::vector<ExecOffer> offers;
   std::vector<ExecAbort> aborts;
+  std::vector<ExecRate> rate;
 };
 
 RunResult run_executor_rtl(const ExecJob& j);

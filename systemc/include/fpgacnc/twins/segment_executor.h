@@ -37,7 +37,8 @@
 //   R + T; the arc's walk clock c is its (c + 1)-th tick, its step request lands two edges after
 //   that clock (in the clock after the walk's tick whether or not that clock is a tick) and its
 //   last tick is the first tick after the walk's ending tick. DIR hold / setup and the HOLD /
-//   SETUP waits count real clocks. The laser is low in every clock with r = 0. Every accepted
+//   SETUP waits count real clocks. The laser is low in every clock with r = 0 (cnc_core's gate:
+//   laser_rate_gate, off for the block alone). Every accepted
 //   segment sends its code to the rate on its accept edge (the target: rapid for code 0, else
 //   feed). A segment whose ticks never come (a hold never resumed) ends at kHeldForever.
 // Target `abort` (write, AbortSpan): the e-stop input high on edges first..last (rtl `abort`),
@@ -171,6 +172,9 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   std::vector<Cycle>* entry_ends = nullptr;
   // The motion rate (ticks and the laser's r = 0 gate); null: every clock is a tick.
   FeedRate* rate = nullptr;
+  // The laser low while r = 0 (cnc_core gates the executor's laser with feed_rate's `stopped`;
+  // off for the block alone).
+  bool laser_rate_gate = true;
 
  private:
   // The edge of tick j of a run started on edge r (j = 0: r).
@@ -516,7 +520,7 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         // and in every clock with r = 0
         Cycle on = run;
         const Cycle off = std::min(end, cut);
-        if (rate)
+        if (rate && laser_rate_gate)
           for (const auto& [a, b] : rate->stopped(run, off)) {
             if (a > on) {
               pins_.add(on, models::kLaser, 1);
