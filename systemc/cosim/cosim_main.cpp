@@ -80,7 +80,7 @@ SC_MODULE(RtlHarness) {
   // Limit switches: none (the twins have none; cnc_core's default LIMIT_ENABLE is 0 anyway).
   sc_core::sc_signal<uint32_t> limit_min, limit_max, limit_state;
   sc_core::sc_signal<bool> limit_trip;
-  // Feed hold and cycle-start buttons: released (the holds come as MOTION frames).
+  // Feed hold and cycle-start buttons (Job::script.buttons).
   sc_core::sc_signal<bool> hold_in, start_in;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
@@ -169,11 +169,23 @@ SC_MODULE(RtlHarness) {
         edge();
       }
       cfg_wr.write(false);
+      hold_in.write(false);
+      start_in.write(false);
       for (int i = 0; i < kSettleEdges; ++i) edge();
       Cycle c = 0;
+      size_t press = 0;  // the first button press not over
       while (!drv.finished()) {
         ++c;
         rx.write(drv.rx_for(c) != 0);
+        {  // the buttons' levels for edge c
+          const auto& bp = job.script.buttons;
+          while (press < bp.size() && bp[press].from + bp[press].clocks <= c) ++press;
+          bool level[2] = {false, false};
+          for (size_t k = press; k < bp.size() && bp[k].from <= c; ++k)
+            if (c < bp[k].from + bp[k].clocks) level[bp[k].button & 1] = true;
+          if (hold_in.read() != level[0]) hold_in.write(level[0]);
+          if (start_in.read() != level[1]) start_in.write(level[1]);
+        }
         edge();
         drv.after_edge(c, RtlDriver::Outputs{step.read(), dir.read(), laser.read(), tx.read(),
                                              busy.read(), seg_start.read(), seg_done.read(),
@@ -305,6 +317,12 @@ std::array<uint64_t, 3> g_v2_plane_arcs{};
 // any ends with a MOTION back to 100 %.
 bool g_v2_holds = true;
 uint64_t g_v2_motion_frames = 0, g_v2_holds_sent = 0, g_v2_bad_motions = 0;
+// The feed hold and cycle-start buttons in the random v2 sessions (`--v2-buttons`; a generator of
+// their own): in about half of them a hold press 20 000..1 000 000 clocks in and a cycle-start
+// press 1..400 000 clocks after it, each held for the filter's 50 000 clocks (cnc_core's
+// LIMIT_FILTER_CLKS) plus 0..20 000; in a quarter of those a press too short for the filter too.
+bool g_v2_buttons = true;
+uint64_t g_v2_presses = 0, g_v2_short_presses = 0;
 uint16_t g_v2_min_rate = 0x8000;
 
 void add_motions(std::mt19937_64& g, V2Item& it) {
@@ -365,11 +383,27 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
   std::mt19937_64 g(seed * 0x9E37'79B9'7F4A'7C15ull + 2);
   std::mt19937_64 go(seed * 0x9E37'79B9'7F4A'7C15ull + 3);  // OUTPUT frames
   std::mt19937_64 gm(seed * 0x9E37'79B9'7F4A'7C15ull + 4);  // MOTION frames
+  std::mt19937_64 gb(seed * 0x9E37'79B9'7F4A'7C15ull + 5);  // buttons
   bool motions = false;
   Job j;
   j.segments = segments;
   if (pick(g, 0, 4) != 0)
     for (auto& t : j.timing) t = random_timing(g);
+  if (g_v2_buttons && pick(gb, 0, 1) == 0) {
+    const Cycle f = spec::kDefaultLimitFilterClks;
+    const Cycle hold_at = pick(gb, 20'000, 1'000'000);
+    auto& bp = j.script.buttons;
+    bp.push_back(ButtonPress{0, hold_at, f + pick(gb, 0, 20'000)});
+    bp.push_back(ButtonPress{1, hold_at + pick(gb, 1, 400'000), f + pick(gb, 0, 20'000)});
+    g_v2_presses += 2;
+    if (pick(gb, 0, 3) == 0) {
+      bp.push_back(ButtonPress{static_cast<int>(pick(gb, 0, 1)), pick(gb, 20'000, 1'500'000),
+                               pick(gb, 1, static_cast<uint32_t>(f - 1))});
+      ++g_v2_short_presses;
+    }
+    std::stable_sort(bp.begin(), bp.end(),
+                     [](const ButtonPress& a, const ButtonPress& b) { return a.from < b.from; });
+  }
   V2Script sc;
   sc.ignore_credit = pick(g, 0, 3) == 0;
   j.name = fmt::format("v2 random seed {}{}", seed, sc.ignore_credit ? " (ignoring credit)" : "");
@@ -533,6 +567,7 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--v2-outputs", &g_v2_outputs);
   opts.flag("--v2-arc-planes", &g_v2_arc_planes);
   opts.flag("--v2-holds", &g_v2_holds);
+  opts.flag("--v2-buttons", &g_v2_buttons);
   if (!opts.parse(argc, argv)) return 2;
   seed = opts.seed(seed, seeds);
 
@@ -613,6 +648,8 @@ int sc_main(int argc, char* argv[]) {
       "twin runs {} for {} jobs\n",
       g_v2_motion_frames, g_v2_holds_sent, g_v2_bad_motions, 100.0 * g_v2_min_rate / 0x8000,
       motions, motion_in[0], motion_in[1], motion_in[2], motion_in[3], runs, twin_results.size());
+  fmt::print("cosim: {} button presses (hold and cycle start), {} of them too short to pass\n",
+             g_v2_presses + g_v2_short_presses, g_v2_short_presses);
   fmt::print(
       "cosim: {} jobs, {} segments, {} edges, {} clocks compared; rtl {:.2f} s ({:.2f} M "
       "clocks/s), twins {:.3f} s; wall {:.2f} s; {}\n",

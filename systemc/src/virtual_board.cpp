@@ -192,6 +192,10 @@ RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   const uint64_t now = sc_core::sc_time_stamp().value();
   clk_.set_base(sc_core::sc_time::from_value((now + per - 1) / per * per));
   reset(job.timing);
+  // the feed hold and cycle-start buttons, known up front
+  for (Cycle t : button_requests(job.script.buttons, 0, p_.button_filter_clks)) rate_.hold_input(t);
+  for (Cycle t : button_requests(job.script.buttons, 1, p_.button_filter_clks))
+    rate_.start_input(t);
   auto host = make_host(job.script, SenderTiming{p_.clk_hz, p_.baud}, tx_.frame_clocks());
   host_ = host.get();
   constexpr Cycle kNever = std::numeric_limits<Cycle>::max();

@@ -350,9 +350,18 @@ inline V2Script job_script(const protocol::v2::Job& job, size_t max_frames = SIZ
 }
 
 // How a job is driven: v1 stop-and-wait packets or a v2 session.
+// A press of the feed hold (button 0) or cycle-start (button 1) input of cnc_core: asserted on
+// the edges from..from + clocks - 1 (the harness's input for those edges), released after it. The
+// input filter passes it when it lasts longer than its filter length.
+struct ButtonPress {
+  int button;
+  Cycle from;
+  Cycle clocks;
+};
 struct HostScript {
   std::vector<HostPacket> v1;
   std::optional<V2Script> v2;
+  std::vector<ButtonPress> buttons;  // in time order, per button not overlapping
 };
 inline std::unique_ptr<Host> make_host(const HostScript& s, const SenderTiming& sender,
                                        int64_t byte_frame) {

@@ -51,6 +51,8 @@ struct CoreParams {
   // The motion rate (rtl/motion/feed_rate.v, feed_rate.h) starts its period counter p and its
   // phase accumulator at the reset release, rate_phase clocks before cycle 0 (as the fan's PWM).
   int64_t rate_phase = 21;
+  // The hold and cycle-start inputs' filter (cnc_core LIMIT_FILTER_CLKS, input_filter.v).
+  uint32_t button_filter_clks = spec::kDefaultLimitFilterClks;
   uint32_t fan_div() const {
     return static_cast<uint32_t>((clk_hz + 128 * fan_pwm_hz) / (256 * fan_pwm_hz));
   }

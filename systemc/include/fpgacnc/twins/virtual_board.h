@@ -33,6 +33,7 @@
 
 #include "fpgacnc/twins/frame_decoder.h"
 #include "fpgacnc/twins/host_schedule.h"
+#include "fpgacnc/twins/input_filter.h"
 #include "fpgacnc/twins/response_encoder.h"
 #include "fpgacnc/twins/run_result.h"
 #include "fpgacnc/twins/segment_executor.h"
