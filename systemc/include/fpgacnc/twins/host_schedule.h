@@ -361,7 +361,7 @@ struct ButtonPress {
 struct HostScript {
   std::vector<HostPacket> v1;
   std::optional<V2Script> v2;
-  std::vector<ButtonPress> buttons;  // in time order, per button not overlapping
+  std::vector<ButtonPress> buttons{};  // in time order, per button not overlapping
 };
 inline std::unique_ptr<Host> make_host(const HostScript& s, const SenderTiming& sender,
                                        int64_t byte_frame) {
