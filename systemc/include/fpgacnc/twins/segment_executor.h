@@ -347,12 +347,17 @@ class SegmentExecutorTwin : public sc_core::sc_module {
         }
       }
     };
-    // Lands the pending writes whose clock is <= upto (and whose edge is before the abort's).
+    // Lands the pending writes whose clock is <= upto (and whose edge is before the abort's); a
+    // write still pending looks no earlier than upto + 1 from then on (the clocks up to upto had
+    // the step requests known now).
     auto flush = [&](Cycle upto) {
       for (size_t k = 0; k < 2; ++k) {
         if (!pend[k]) continue;
         const Cycle w = first_write(k, from[k]);
-        if (w <= upto && w + 1 < cut) write_if_ok(k, w);
+        if (w <= upto && w + 1 < cut)
+          write_if_ok(k, w);
+        else
+          from[k] = std::max(from[k], upto + 1);
       }
     };
     // the walk clocks c with tau(c) + 1 < cut
