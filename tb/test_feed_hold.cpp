@@ -84,7 +84,8 @@ std::vector<uint8_t> motion(uint8_t flags, uint16_t feed, uint16_t rapid, uint32
   p.resize(p.size() - cut);
   return v2::frame(spec::kTypeMotion, 0, p);
 }
-constexpr uint8_t kHold = spec::kMotionHold, kResume = spec::kMotionResume;
+constexpr uint8_t kHold = spec::kMotionHold, kResume = spec::kMotionResume,
+                  kCancel = spec::kMotionCancel;
 constexpr uint16_t kFull = spec::kRateOne;
 
 // Every STEP rise of axes 0 and 1 in time order: (clock, axis bits rising in that clock).
@@ -234,6 +235,41 @@ TEST(FeedHold, FeedAndRapidRatesStretchTheJobExactly) {
     EXPECT_EQ(slow.dut().position[a], plain.dut().position[a]) << "axis " << a;
 }
 
+TEST(FeedHold, CancelStopsOnThePathThenDropsTheQueueKeepingThePosition) {
+  const Job job;
+  Core c;
+  c.ask(v2::hello());
+  c.send(job.frame(0, 200));
+  c.send(job.frame(1, 200));
+  c.send(v2::line(2, 1, 0, 10'000, {-20, 0, 0, 0}, true));
+  for (int i = 0; i < 100'000 && !c.dut().running; ++i) c.tick();
+  c.idle(200'000);  // cruising in the first move, the other two queued
+  const uint32_t ramp = static_cast<uint32_t>((uint64_t{1} << 32) / 200);
+  const v2::DeviceMsg ans = c.ask(motion(kCancel, kFull, kFull, ramp));
+  ASSERT_EQ(ans.type, v2::kStatus);
+  EXPECT_TRUE(ans.u8(0) & spec::kStateHold) << "a cancel holds first";
+  c.idle(210 * kPeriod + 1000);
+  const uint8_t st = c.state();
+  EXPECT_EQ(st & (spec::kStateBusy | spec::kStateHold | spec::kStateFault), 0)
+      << "after a cancel: idle, no hold, no fault (state " << int(st) << ")";
+  EXPECT_EQ(st & spec::kStatePosUntrusted, 0) << "a cancel keeps the positions trusted";
+  EXPECT_EQ(c.dut().segments_done, 0u) << "the dropped segments are not done";
+  EXPECT_EQ(c.dut().fifo_level, 0u);
+  EXPECT_EQ(c.dut().faults, 0u);
+  // the position counters are the steps the pins made, and the motion stopped short of the end
+  for (int a = 0; a < 2; ++a)
+    EXPECT_EQ(int32_t(c.dut().position[a]), -int32_t(c.mon().axis(a).rises.size())) << "axis " << a;
+  const int32_t x = int32_t(c.dut().position[0]);
+  EXPECT_GT(x, job.nx);
+  EXPECT_LT(x, 0);
+  // a new move runs from there (the rate comes back from 0 with the ramp)
+  c.send(v2::line(3, 1, 0, 10'000, {-20, 0, 0, 0}, true));
+  run_until_done(c, 1, 1'000'000);
+  EXPECT_EQ(int32_t(c.dut().position[0]), x - 20);
+  for (int a = 0; a < kAxes; ++a)
+    for (auto& v : c.mon().check_pulses(a, fpgacnc::tb::AxisTiming{})) ADD_FAILURE() << v;
+}
+
 TEST(FeedHold, BadMotionFramesAreRefusedAndChangeNothing) {
   Core c;
   c.ask(v2::hello());
@@ -244,7 +280,8 @@ TEST(FeedHold, BadMotionFramesAreRefusedAndChangeNothing) {
   };
   const std::vector<Bad> bad = {
       {"HOLD and RESUME", motion(kHold | kResume, kFull, kFull, 1000), spec::kNakBadField},
-      {"reserved flag bit 2", motion(0x04, kFull, kFull, 1000), spec::kNakBadField},
+      {"CANCEL and RESUME", motion(kCancel | kResume, kFull, kFull, 1000), spec::kNakBadField},
+      {"reserved flag bit 3", motion(0x08, kFull, kFull, 1000), spec::kNakBadField},
       {"feed 0", motion(kHold, 0, kFull, 1000), spec::kNakBadField},
       {"feed above 100 %", motion(kHold, kFull + 1, kFull, 1000), spec::kNakBadField},
       {"rapid 0", motion(kHold, kFull, 0, 1000), spec::kNakBadField},

@@ -14,6 +14,11 @@
 //             set_rapid, set_ramp on the edge after it; set_hold / set_resume are its flags.
 //   hold_req, resume_req   1-clock strobes (the hold and cycle-start inputs); a hold request (frame
 //             or input) wins over a resume in the same clock.
+//   set_cancel   with load (MOTION CANCEL): a hold that ends in a flush: `cancel` is set with the
+//             hold; in the first clock with cancel and r = 0, `flush` is high (cnc_core drops the
+//             running segment and the queue as on an e-stop, positions kept) and on its edge cancel
+//             and hold clear (a hold request in that clock keeps the hold). A resume does not end
+//             the hold of a cancel in progress.
 //   hold      the hold latch; stopped = (r == 0), a register.
 // After rst: r = 2^32, acc = 0, adv = 1, p = 0, hold = 0, feed = rapid = 0x8000, ramp = RAMP0: adv
 // is high in every clock until a MOTION frame or a hold request changes the target.
@@ -36,6 +41,7 @@ module feed_rate #(
     input wire [31:0] set_ramp,
     input wire        set_hold,
     input wire        set_resume,
+    input wire        set_cancel,
     input wire        hold_req,
     input wire        resume_req,
     input wire        rapid_seg,
@@ -43,6 +49,7 @@ module feed_rate #(
     output wire        adv,
     output wire        hold,
     output wire        stopped,
+    output wire        flush,
     output wire [32:0] rate
 );
 
@@ -66,6 +73,8 @@ module feed_rate #(
   reg [           15:0] rapid_reg;
   reg [           31:0] ramp_reg;
   reg                   stopped_reg;
+  reg                   cancel_reg;
+  wire                  flush_w = cancel_reg && stopped_reg;
 
   wire [32:0] target = hold_reg ? 33'd0 : {rapid_seg ? rapid_reg : feed_reg, 17'd0};
   // target - r as a 34-bit two's complement number; its magnitude against the ramp
@@ -90,8 +99,10 @@ module feed_rate #(
       rapid_reg <= set_rapid;
       ramp_reg  <= set_ramp;
     end
-    if ((load && set_hold) || hold_req) hold_reg <= 1'b1;
-    else if ((load && set_resume) || resume_req) hold_reg <= 1'b0;
+    if ((load && (set_hold || set_cancel)) || hold_req) hold_reg <= 1'b1;
+    else if (flush_w || (((load && set_resume) || resume_req) && !cancel_reg)) hold_reg <= 1'b0;
+    if (load && set_cancel) cancel_reg <= 1'b1;
+    else if (flush_w) cancel_reg <= 1'b0;
     if (rst) begin
       r_reg       <= ONE;
       acc_reg     <= 32'd0;
@@ -102,12 +113,14 @@ module feed_rate #(
       rapid_reg   <= 16'h8000;
       ramp_reg    <= RAMP0;
       stopped_reg <= 1'b0;
+      cancel_reg  <= 1'b0;
     end
   end
 
   assign adv     = adv_reg;
   assign hold    = hold_reg;
   assign stopped = stopped_reg;
+  assign flush   = flush_w;
   assign rate    = r_reg;
 
 `ifdef FORMAL
@@ -143,6 +156,9 @@ module feed_rate #(
       assert (rapid_reg != 16'd0 && rapid_reg <= 16'h8000);
       assert (ramp_reg != 32'd0);
       assert (stopped_reg == (r_reg == 33'd0));
+      // a cancel is always a hold, and flushes only with the motion at rest
+      if (cancel_reg) assert (hold_reg);
+      if (flush) assert (r_reg == 33'd0);
       // a hold never exceeds the configured deceleration: r changes only at a period end, and
       // then by at most the ramp in force
       if (!f_period_q) assert (r_reg == f_r_q);
