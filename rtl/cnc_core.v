@@ -29,6 +29,14 @@
 //                    LINE_PROFILE or ARC whose end leaves it is answered NAK TRAVEL and not queued
 //                    (frame_decoder's travel_guard); its queued end position resyncs to the
 //                    position counters while the FIFO is held flushed (e-stop, hard limit).
+//   feed hold        (v2) rtl/motion/feed_rate.v (docs/timing.md "Feed hold and overrides"): a
+//                    MOTION frame sets the feed and rapid rates (<= 100 %) and the ramp, and holds,
+//                    resumes or cancels; hold_in / start_in (BUTTON_* parameters, filtered like the
+//                    limit switches) request a hold / a resume on the filtered level's rise. Every
+//                    motion generator advances only in the clocks feed_rate enables, so the path
+//                    is the planned one at any rate; the laser is low while the rate is 0. A
+//                    CANCEL holds and, at rest, flushes as the e-stop does (positions kept, no
+//                    fault). STATUS state bits 5 HOLD and 6 STOPPED.
 //   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
 //                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
 //                    writes a shadow set that becomes active only while the FIFO is empty and
@@ -259,7 +267,8 @@ module cnc_core #(
   wire [71:0] dec_motion_data;
   wire [7:0] dec_nak_seq, dec_nak_reason;
   wire estop_stop;  // e-stop active or latched (below)
-  wire motion_abort;  // e-stop or hard-limit alarm: FIFO flushed, prep and executor aborted
+  // e-stop, hard-limit alarm or a MOTION CANCEL at rest: FIFO flushed, prep and executor aborted
+  wire motion_abort;
 
   generate
     if (V2_EN != 0) begin : g_v2
@@ -423,7 +432,7 @@ module cnc_core #(
   // every motion generator. The v1 build has neither: its motion advances in every clock.
   wire [1:0] btn_q, btn_strobe;
   wire [1:0] btn_rise = btn_strobe & btn_q & BUTTON_ENABLE;
-  wire rate_adv, rate_hold, rate_stopped, exec_rapid;
+  wire rate_adv, rate_hold, rate_stopped, rate_flush, exec_rapid;
 
   input_filter #(
       .N          (2),
@@ -451,6 +460,7 @@ module cnc_core #(
           .load      (dec_motion_set),
           .set_hold  (dec_motion_data[0]),
           .set_resume(dec_motion_data[1]),
+          .set_cancel(dec_motion_data[2]),
           .set_feed  ({dec_motion_data[15:8], dec_motion_data[23:16]}),
           .set_rapid ({dec_motion_data[31:24], dec_motion_data[39:32]}),
           .set_ramp  ({dec_motion_data[47:40], dec_motion_data[55:48], dec_motion_data[63:56],
@@ -461,15 +471,17 @@ module cnc_core #(
           .adv       (rate_adv),
           .hold      (rate_hold),
           .stopped   (rate_stopped),
+          .flush     (rate_flush),
           .rate      (rate_nc)
       );
       /* verilator lint_off UNUSEDSIGNAL */
-      wire unused_motion = &{1'b0, dec_motion_data[7:2]};
+      wire unused_motion = &{1'b0, dec_motion_data[7:3]};
       /* verilator lint_on UNUSEDSIGNAL */
     end else begin : g_norate
       assign rate_adv     = 1'b1;
       assign rate_hold    = 1'b0;
       assign rate_stopped = 1'b0;
+      assign rate_flush   = 1'b0;
       /* verilator lint_off UNUSEDSIGNAL */
       wire unused_rate = &{1'b0, btn_rise, exec_rapid, dec_motion_set, dec_motion_data};
       /* verilator lint_on UNUSEDSIGNAL */
@@ -533,7 +545,7 @@ module cnc_core #(
   wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
   wire [1:0] seg_arc_plane;  // and their plane (0 XY, 1 ZX, 2 YZ)
   // e-stop or limit alarm: prep and executor drop what they hold, stay idle
-  assign motion_abort = estop_stop || limit_trip_w;
+  assign motion_abort = estop_stop || limit_trip_w || rate_flush;
   wire out_tvalid, out_tready;  // OUTPUT entries: segment_prep -> segment_executor
   wire [23:0] out_tdata;
 

@@ -26,8 +26,8 @@
 //   hello, status_req, ack_req, nak (+ nak_seq as received, nak_reason)   answer requests.
 //   motion_set  an accepted MOTION frame (unsequenced, answered by STATUS: status_req strobes
 //               with it), with motion_data {flags, feed, rapid, ramp} (payload bytes 0..8; valid
-//               with the strobe). Field rules: flags bits 7:2 0 and not HOLD and RESUME
-//               together, feed and rapid 1 .. 0x8000, ramp >= 1 (else NAK BAD_FIELD).
+//               with the strobe). Field rules: flags bits 7:3 0 and RESUME not with HOLD or
+//               CANCEL, feed and rapid 1 .. 0x8000, ramp >= 1 (else NAK BAD_FIELD).
 //   frame_ok    a v2 frame that passed every check (HELLO, STATUS_QUERY, accepted, duplicate).
 //   crc_error, length_error, unknown_type   a v2 frame rejected for that reason (length_error
 //               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER, FIFO_FULL or TRAVEL.
@@ -226,6 +226,7 @@ module frame_decoder #(
       // MOTION: flags bits 7:2 0, not HOLD and RESUME together; feed and rapid 1 .. 0x8000;
       // ramp >= 1
       motion_ok_reg <= (pay_reg[7:0] & MOT_RSV) == 8'd0 && pay_reg[1:0] != 2'b11 &&
+                       pay_reg[2:1] != 2'b11 &&
                        {pb(1), pb(2)} != 16'd0 && {pb(1), pb(2)} <= RATE_ONE &&
                        {pb(3), pb(4)} != 16'd0 && {pb(3), pb(4)} <= RATE_ONE &&
                        be32p(5) != 32'd0;
