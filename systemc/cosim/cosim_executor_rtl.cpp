@@ -69,7 +69,7 @@ void put_profile(Vsegment_executor& m, const ExecSegment& s) {
 // input; the executor's rapid_seg output chooses the target): values in clock u from the reset
 // release, step() to the next clock.
 struct RateByClock {
-  uint64_t r = uint64_t{1} << 32, acc = 0;
+  uint64_t r = uint64_t{1} << 32, acc = 0, cand = uint64_t{1} << 32;
   bool adv = true, hold = false;
   uint16_t feed = 0x8000, rapid = 0x8000;
   uint32_t ramp = fpgacnc::spec::kDefaultRateRamp;
@@ -79,10 +79,11 @@ struct RateByClock {
   void step(bool rapid_seg, const std::vector<ExecRate>& reqs, size_t& next) {
     const uint64_t sum = acc + r;
     constexpr Cycle k = Cycle{1} << fpgacnc::spec::kDefaultRatePeriodLog2;
-    if (u % k == k - 1) {
-      const uint64_t tgt = hold ? 0 : uint64_t{rapid_seg ? rapid : feed} << 17;
-      r = tgt > r ? (tgt - r <= ramp ? tgt : r + ramp) : (r - tgt <= ramp ? tgt : r - ramp);
-    }
+    const uint64_t tgt = hold ? 0 : uint64_t{rapid_seg ? rapid : feed} << 17;
+    const uint64_t next_cand =
+        tgt > r ? (tgt - r <= ramp ? tgt : r + ramp) : (r - tgt <= ramp ? tgt : r - ramp);
+    if (u % k == k - 1) r = cand;  // r takes the step formed a clock ahead
+    cand = next_cand;
     adv = sum >= (uint64_t{1} << 32);
     acc = sum & 0xffffffffu;
     ++u;

@@ -313,6 +313,7 @@ std::array<uint64_t, 3> g_v2_plane_arcs{};
 // one of: a HOLD and, 1..2 000 clocks (often still ramping down) or 2 000..60 000 clocks later,
 // its RESUME; new feed / rapid rates (1 % .. 100 %; below 20 % back to at least 20 % within
 // 20 000 clocks, to bound the RTL time); rarely a MOTION that breaks a field rule (NAK BAD_FIELD).
+// No CANCEL: the twins do not model its drop of the running segment and the queue.
 // Rates are Q1.15, a third at 100 %; ramps 2^20 .. 2^32 - 1 per 256 clocks. A session that got
 // any ends with a MOTION back to 100 %.
 bool g_v2_holds = true;
@@ -356,9 +357,9 @@ void add_motions(std::mt19937_64& g, V2Item& it) {
     if (std::min(f, r) < 0x8000 / 5)
       side(0, static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)),
            static_cast<uint16_t>(pick(g, 0x8000 / 5, 0x8000)), ramp(), pick(g, 1, 20'000));
-  } else {  // a field rule broken: reserved flag bits, HOLD with RESUME, a rate or the ramp 0
+  } else {  // a field rule broken: reserved flag bit 3, HOLD with RESUME, a rate or the ramp 0
     const uint32_t k = pick(g, 0, 3);
-    side(k == 0   ? 0x04
+    side(k == 0   ? 0x08
          : k == 1 ? 3
                   : 0,
          k == 2 ? uint16_t{0} : uint16_t{0x8001}, 0x8000, k == 3 ? 0u : ramp(), gap);

@@ -53,7 +53,7 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
     const size_t i = observed_motion_.size();
     observed_motion_.push_back(m);
     if (live_motion_)
-      rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
+      rate_.motion(m.from, m.hold || m.cancel, m.resume, m.feed, m.rapid, m.ramp);
     else if (i >= known_motion_.size() || !(known_motion_[i] == m))
       motion_mismatch_ = true;
   };
@@ -85,7 +85,7 @@ void VirtualBoard::reset(const std::array<AxisTiming, kAxes>& timing) {
   observed_motion_.clear();
   motion_mismatch_ = false;
   for (const MotionReq& m : known_motion_)
-    rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp);
+    rate_.motion(m.from, m.hold || m.cancel, m.resume, m.feed, m.rapid, m.ramp);
   for (auto& p : pulse_) p->reset();
   enc_.reset();
   tx_.reset();

@@ -28,7 +28,7 @@ struct Reference {
   std::vector<uint8_t> hold;
   Reference(const std::vector<Req>& reqs, Cycle phase, uint32_t log2k, uint32_t ramp0, Cycle n) {
     const Cycle k = Cycle{1} << log2k;
-    uint64_t rate = uint64_t{1} << 32, acc = 0;
+    uint64_t rate = uint64_t{1} << 32, acc = 0, cand = uint64_t{1} << 32;
     bool h = false, code0 = true, a = true;
     uint16_t feed = 0x8000, rapid = 0x8000;
     uint32_t ramp = ramp0;
@@ -54,13 +54,11 @@ struct Reference {
       const uint64_t sum = acc + rate;
       a = sum >= (uint64_t{1} << 32);
       acc = sum & 0xffffffffu;
-      if (u % k == k - 1) {
-        const uint64_t tgt = h ? 0 : uint64_t{code0 ? rapid : feed} << 17;
-        if (tgt > rate)
-          rate = tgt - rate <= ramp ? tgt : rate + ramp;
-        else
-          rate = rate - tgt <= ramp ? tgt : rate - ramp;
-      }
+      const uint64_t tgt = h ? 0 : uint64_t{code0 ? rapid : feed} << 17;
+      const uint64_t next_cand = tgt > rate ? (tgt - rate <= ramp ? tgt : rate + ramp)
+                                            : (rate - tgt <= ramp ? tgt : rate - ramp);
+      if (u % k == k - 1) rate = cand;
+      cand = next_cand;
     }
   }
 };

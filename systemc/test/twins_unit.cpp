@@ -348,8 +348,8 @@ void decoder_tests(DecoderBench& b) {
   std::tie(r, w) = b.run(frame(2, kConfigAxis, config_axis_payload(4, AxisTiming{})));
   check(is_nak(r, 2, kBadField), "axis 4: NAK BAD_FIELD");
   // MOTION (docs/protocol.md): unsequenced, answered by STATUS, the request to the motion rate on
-  // L + 2 (L the take edge of the last byte); BAD_FIELD: flag bits 7:2, HOLD with RESUME, a rate
-  // outside 1..0x8000, ramp 0; LEN other than 9: BAD_LENGTH. Nothing goes to the FIFO and
+  // L + 2 (L the take edge of the last byte); BAD_FIELD: flag bits 7:3, RESUME with HOLD or CANCEL,
+  // a rate outside 1..0x8000, ramp 0; LEN other than 9: BAD_LENGTH. Nothing goes to the FIFO and
   // next_seq stays.
   {
     namespace spec = fpgacnc::spec;
@@ -368,9 +368,10 @@ void decoder_tests(DecoderBench& b) {
     check(r.size() == 1 && r[0].kind == kReqStatus && got.size() == 2 && got[1].resume &&
               !got[1].hold && got[1].feed == 1 && got[1].rapid == 1,
           "MOTION RESUME at the lowest rates -> STATUS");
-    const std::array<std::pair<Bytes, const char*>, 7> bad_motion{{
+    const std::array<std::pair<Bytes, const char*>, 8> bad_motion{{
         {motion_payload(3, 0x8000, 0x8000, 1), "HOLD with RESUME"},
-        {motion_payload(4, 0x8000, 0x8000, 1), "flag bit 2"},
+        {motion_payload(6, 0x8000, 0x8000, 1), "CANCEL with RESUME"},
+        {motion_payload(8, 0x8000, 0x8000, 1), "flag bit 3"},
         {motion_payload(0x80, 0x8000, 0x8000, 1), "flag bit 7"},
         {motion_payload(0, 0, 0x8000, 1), "feed 0"},
         {motion_payload(0, 0x8001, 0x8000, 1), "feed 0x8001"},

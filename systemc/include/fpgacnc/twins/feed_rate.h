@@ -3,9 +3,11 @@
 //
 // Registers, with u = t + phase the clock counted from the reset release (p(u) = u mod K,
 // K = 2^period_log2): after rst r = 2^32, acc = 0, adv = 1; acc(u+1) = (acc(u) + r(u)) mod
-// 2^32; adv(u+1) = carry of acc(u) + r(u); at the edge ending a period (p(u) = K - 1) r moves
-// toward target(u) by at most ramp(u). target = 0 while hold, else rapid * 2^17 when the segment
-// last accepted by the executor has code 0, else feed * 2^17.
+// 2^32; adv(u+1) = carry of acc(u) + r(u); cand(u+1) = r(u) moved toward target(u) by at most
+// ramp(u); at the edge ending a period (p(u) = K - 1) r takes cand(u): the step formed from the
+// target and ramp of the clock before the period's last one (a change in the last clock counts
+// from the next period). target = 0 while hold, else rapid * 2^17 when the segment last accepted
+// by the executor has code 0, else feed * 2^17.
 //
 // Requests (each names the first clock with its new value): motion() (an accepted MOTION frame,
 // on edge L + 2 of its last byte), hold_input() / start_input() (the filtered inputs' rising
@@ -16,7 +18,7 @@
 // stretch (until the next request that changes the target), so its cost grows with the ramp
 // periods and the requests, never with the clocks. Piece i (clocks s .. e - 1, rate rho, acc(s) =
 // a) owns the adv of clocks s + 1 .. e: clocks s + 1 .. s + n hold floor((a + n * rho) / 2^32)
-// of them. A request at clock c changes r from the first period boundary after c on: pieces
+// of them. A request at clock c changes r from the first period boundary b >= c + 2 on: pieces
 // computed past it are dropped and computed again when asked for. Asking about a clock later
 // than the earliest clock a later request can change makes that answer provisional: the twin
 // counts requests that arrive after such an answer (late()); exact users send every request
@@ -172,8 +174,8 @@ class FeedRate {
     uint64_t rho;  // r in its clocks
     uint32_t acc;  // acc in its first clock
     uint64_t cnt;  // clocks with adv high in u = 0 .. start
-    size_t ev;     // events with clock <= start - 1 (applied to regs)
-    Regs regs;     // registers in clock start - 1
+    size_t ev;     // events with clock <= start - 2 (applied to regs)
+    Regs regs;     // registers in clock start - 2 (those its r was formed from)
     Cycle end;     // u of the next piece's first clock; -1 unknown yet; kNever: for good
     // A steady last piece: the registers after every event so far (their count in scan_ev;
     // kNoScan: none), so that a request appended later continues the scan from there.
@@ -184,8 +186,8 @@ class FeedRate {
 
   void add(const Event& e) {
     if (e.clock < 0) throw std::invalid_argument("feed_rate twin: a request before the reset");
-    // A request at u changes r from the first boundary after u, adv from the clock after it.
-    const Cycle reach = (e.clock / k_ + 1) * k_ + 1;
+    // A request at u changes r from boundary(u), adv from the clock after it.
+    const Cycle reach = boundary(e.clock) + 1;
     if (queried_ > reach) ++late_;
     auto it = std::upper_bound(events_.begin(), events_.end(), e.clock,
                                [](Cycle c, const Event& x) { return c < x.clock; });
@@ -220,6 +222,9 @@ class FeedRate {
       r.hold = set || (r.hold && !clr);
     }
   }
+  // The first period boundary b (r's first clock of a period) whose r a change of the target or
+  // ramp in clock u reaches: cand(b - 1) is formed in clock b - 2, so b >= u + 2.
+  Cycle boundary(Cycle u) const { return ((u + 1) / k_ + 1) * k_; }
   // The end of piece i (computed when unknown).
   Cycle end_of(size_t i) {
     Piece& p = pieces_[i];
@@ -235,7 +240,7 @@ class FeedRate {
     }
     for (;;) {
       if (!resume) {
-        apply_group(r, events_, ev, b - 1);
+        apply_group(r, events_, ev, b - 2);
         if (r.target() != p.rho) break;
       }
       resume = false;
@@ -245,7 +250,7 @@ class FeedRate {
         p.scan_ev = ev;
         break;
       }
-      b = (events_[ev].clock / k_ + 1) * k_;
+      b = boundary(events_[ev].clock);
     }
     p.end = b;
     return b;
@@ -258,7 +263,7 @@ class FeedRate {
     const Piece& p = pieces_[i];
     Regs r = p.regs;
     size_t ev = p.ev;
-    apply_group(r, events_, ev, e - 1);
+    apply_group(r, events_, ev, e - 2);
     const uint64_t tgt = r.target();
     uint64_t rho = p.rho;
     if (tgt > rho)

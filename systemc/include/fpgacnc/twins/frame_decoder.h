@@ -16,9 +16,10 @@
 //   flag bits, an axis >= N_AXES, a LINE_PROFILE, ARC or OUTPUT field rule broken, a heater field
 //   out of range: NAK BAD_FIELD;
 //   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
-//   MOTION (not sequenced; BAD_FIELD: flag bits 7:2, HOLD and RESUME together, a feed or rapid
+//   MOTION (not sequenced; BAD_FIELD: flag bits 7:3, RESUME with HOLD or CANCEL, a feed or rapid
 //   rate outside 1..0x8000, ramp 0): STATUS request, and on_motion(L, the request) (the motion
-//   rate takes it on L + 2, feed_rate.h);
+//   rate takes it on L + 2, feed_rate.h; CANCEL holds there, its drop of the running segment and
+//   the queue is not modelled);
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
 //   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS / LINE_PROFILE / ARC
@@ -68,7 +69,7 @@ struct CfgAxis {  // CONFIG_AXIS accepted: the axis's step timing
 };
 struct MotionReq {  // an accepted MOTION frame: the first clock of its values (L + 2), its fields
   Cycle from;
-  bool hold, resume;
+  bool hold, resume, cancel;
   uint16_t feed, rapid;
   uint32_t ramp;
   bool operator==(const MotionReq&) const = default;
@@ -279,14 +280,14 @@ class FrameDecoderTwin : public sc_core::sc_module {
            (f.a != 0 || f.v_entry != 0);
   }
 
-  // MOTION field rules (docs/protocol.md "MOTION"): flags bits 7:2 zero, not HOLD and RESUME
-  // together, feed and rapid 1..0x8000, ramp >= 1.
+  // MOTION field rules (docs/protocol.md "MOTION"): flags bits 7:3 zero, RESUME not with HOLD or
+  // CANCEL, feed and rapid 1..0x8000, ramp >= 1.
   bool motion_fields_ok() const {
     const uint8_t f = payload_[0];
     const uint16_t feed = be16(&payload_[1]), rapid = be16(&payload_[3]);
     return (f & spec::kMotionReserved) == 0 &&
-           (f & (spec::kMotionHold | spec::kMotionResume)) !=
-               (spec::kMotionHold | spec::kMotionResume) &&
+           ((f & spec::kMotionResume) == 0 ||
+            (f & (spec::kMotionHold | spec::kMotionCancel)) == 0) &&
            feed >= 1 && feed <= spec::kRateOne && rapid >= 1 && rapid <= spec::kRateOne &&
            be32(&payload_[5]) != 0;
   }
@@ -528,8 +529,8 @@ class FrameDecoderTwin : public sc_core::sc_module {
       if (type_ == spec::kTypeMotion && on_motion) {
         const uint8_t f = payload_[0];
         on_motion(MotionReq{take + kMotionTakes, (f & spec::kMotionHold) != 0,
-                            (f & spec::kMotionResume) != 0, be16(&payload_[1]), be16(&payload_[3]),
-                            be32(&payload_[5])});
+                            (f & spec::kMotionResume) != 0, (f & spec::kMotionCancel) != 0,
+                            be16(&payload_[1]), be16(&payload_[3]), be32(&payload_[5])});
       }
       request(r, RespReq{type_ == v2::kHello ? kReqIdent : kReqStatus});
       return;
