@@ -102,6 +102,18 @@ class V2Session {
   void drain();
   // A STATUS_QUERY now (unless one is outstanding); the answer goes to last_status().
   void request_status();
+  // MOTION (docs/protocol.md "MOTION": feed hold, resume, feed / rapid rates and the hold ramp;
+  // unsequenced, answered with STATUS). configure_motion: right after start(), before anything
+  // else is sent: sends `m` and waits for its answer (resent on a lost answer); true when the
+  // device took it, false when it answers NAK UNKNOWN_TYPE (a device without the motion rate:
+  // no feed hold or overrides there); Error when it refuses the fields or never answers.
+  bool configure_motion(const protocol::v2::Motion& m);
+  // Sends `m` now (a device that took configure_motion); resent every retransmission timeout
+  // until a STATUS shows it: with HOLD the HOLD bit set, with RESUME clear, else any STATUS.
+  void send_motion(const protocol::v2::Motion& m);
+  bool motion_pending() const { return motion_pending_; }
+  // The last MOTION sent (the rates in effect on the device).
+  const protocol::v2::Motion& motion() const { return motion_; }
   // Gives up every pushed frame not yet sent (frames on the line stay in the window until
   // acknowledged); returns how many were dropped. From then on latched faults are not errors
   // (the caller may press the e-stop to drop the board's queue): the session is only left.
@@ -163,6 +175,9 @@ class V2Session {
   Link::Time last_poll_{};
   Link::Time last_heater_poll_{};
   Link::Time link_t0_{};
+  protocol::v2::Motion motion_;
+  bool motion_pending_ = false;
+  Link::Time motion_sent_{};
   bool status_outstanding_ = false;
   Link::Time status_sent_{};
   size_t status_answers_ = 0;
