@@ -13,6 +13,7 @@
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/link/v2_session.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -461,4 +462,128 @@ TEST(SelectProtocol, ExplicitV2OnAV1DeviceIsAnError) {
         << e.what();
   }
   EXPECT_THROW(lk::select_protocol(dev, "v3", so), lk::Error);
+}
+
+// MOTION at the start (StreamV2Options::motion, docs/protocol.md "MOTION"): a device that takes
+// it gets the machine's ramp once; a device without it (NAK UNKNOWN_TYPE) runs the job anyway.
+TEST(StreamV2, MotionAtTheStartAndADeviceWithoutIt) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(40, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  for (const bool known : {true, false}) {
+    SCOPED_TRACE(known ? "device with MOTION" : "device without MOTION");
+    FakeV2Device::Options o;
+    if (!known) o.unknown_types = {0x08};
+    FakeV2Device dev(o);
+    auto so = clean_options();
+    so.motion = lk::machine_motion(cfg);
+    const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+    EXPECT_EQ(r.motion, known ? 1 : 0);
+    if (known) {
+      ASSERT_EQ(dev.motions().size(), 1u);
+      EXPECT_EQ(dev.motions()[0], lk::machine_motion(cfg));
+      EXPECT_EQ(dev.motions()[0].ramp, lk::machine_hold_ramp(cfg));
+    } else {
+      EXPECT_EQ(r.naks[static_cast<size_t>(v2::NakReason::UnknownType)], 1u);
+    }
+    expect_executed_in_order(dev, job);
+    EXPECT_TRUE(r.position_ok);
+  }
+}
+
+// A hold from on_poll (as `fpgacnc stream` sends it on a key or SIGINT): once STATUS shows the
+// hold, nothing more completes however long it lasts (counted in STATUS answers, not time); a
+// resume runs the rest of the job in order to the plan's end.
+TEST(StreamV2, HoldFromOnPollFreezesTheJobAndResumeFinishesIt) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(120, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  FakeV2Device dev(o);
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  enum { kRun, kHolding, kHeld, kResumed } phase = kRun;
+  size_t done_at_hold = 0, held_answers = 0, answers0 = 0;
+  so.on_poll = [&](lk::V2Session& s) {
+    switch (phase) {
+      case kRun:
+        if (s.fifo_done() >= 10) {
+          v2::Motion m = s.motion();
+          m.hold = true;
+          s.send_motion(m);
+          phase = kHolding;
+        }
+        break;
+      case kHolding:
+        if (!s.motion_pending() && (s.last_status().state & v2::kStateStopped)) {
+          done_at_hold = s.fifo_done();
+          answers0 = s.status_answers();
+          phase = kHeld;
+        }
+        break;
+      case kHeld:
+        EXPECT_EQ(s.fifo_done(), done_at_hold) << "a segment completed during the hold";
+        s.request_status();
+        if (s.status_answers() >= answers0 + 20) {
+          held_answers = s.status_answers() - answers0;
+          EXPECT_TRUE(dev.held());
+          v2::Motion m = s.motion();
+          m.hold = false;
+          m.resume = true;
+          s.send_motion(m);
+          phase = kResumed;
+        }
+        break;
+      case kResumed:
+        break;
+    }
+    return true;
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_EQ(phase, kResumed);
+  EXPECT_GE(held_answers, 20u);
+  EXPECT_LT(done_at_hold, job.frames.size());
+  ASSERT_EQ(dev.motions().size(), 3u);  // the start's, HOLD, RESUME
+  EXPECT_TRUE(dev.motions()[1].hold);
+  EXPECT_TRUE(dev.motions()[2].resume);
+  EXPECT_FALSE(dev.held());
+  expect_executed_in_order(dev, job);
+  EXPECT_TRUE(r.position_ok);
+  EXPECT_FALSE(r.stopped);
+}
+
+// on_poll returning false during a hold stops the job: the frames not yet sent are dropped, the
+// device keeps its queue (held), and the report gives both counts and the device position.
+TEST(StreamV2, StopDuringAHoldKeepsTheDeviceQueueAndReports) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  FakeV2Device dev(o);
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  bool sent = false;
+  so.on_poll = [&](lk::V2Session& s) {
+    if (!sent && s.fifo_done() >= 5) {
+      v2::Motion m = s.motion();
+      m.hold = true;
+      s.send_motion(m);
+      sent = true;
+    }
+    return !(sent && !s.motion_pending() && (s.last_status().state & v2::kStateStopped));
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_FALSE(r.position_ok);
+  EXPECT_FALSE(r.released);
+  EXPECT_TRUE(dev.held());
+  EXPECT_GT(r.unsent, 0u);
+  EXPECT_EQ(r.queued, dev.fifo_level());
+  EXPECT_GT(r.queued, 0u);
+  // Every frame is either done, queued on the device or dropped (none lost or doubled).
+  EXPECT_EQ(dev.executed().size() + dev.fifo_level() + r.unsent, job.frames.size());
+  EXPECT_EQ(r.status_end.position, dev.position());
+  EXPECT_EQ(r.status_end.done - r.status_start.done, dev.executed().size());
 }

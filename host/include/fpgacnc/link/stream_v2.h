@@ -49,6 +49,8 @@
 
 namespace fpgacnc::link {
 
+class V2Session;  // link/v2_session.h
+
 struct StreamV2Options {
   // Link time (see the file comment).
   std::chrono::milliseconds hello_timeout{300};       // IDENT after HELLO
@@ -90,7 +92,7 @@ struct StreamV2Options {
   // through the session). False stops the job there: frames not yet sent are dropped
   // (V2Session::abandon), what the device has stays queued (held when a hold is in effect), the
   // final STATUS is read and stream_v2_job returns with StreamV2Report::stopped set.
-  std::function<bool(class V2Session&)> on_poll;
+  std::function<bool(V2Session&)> on_poll;
 };
 
 // One M109/M190 wait as it happened.
