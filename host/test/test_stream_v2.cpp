@@ -11,6 +11,7 @@
 
 #include "fake_v2_device.h"
 #include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/link/hold_control.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/link/v2_session.h"
@@ -500,6 +501,7 @@ TEST(StreamV2, HoldFromOnPollFreezesTheJobAndResumeFinishesIt) {
   const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(10000);  // the job outlasts the polls by far
   FakeV2Device dev(o);
   auto so = clean_options();
   so.motion = lk::machine_motion(cfg);
@@ -561,6 +563,7 @@ TEST(StreamV2, StopDuringAHoldKeepsTheDeviceQueueAndReports) {
   const auto job = fpgacnc::test::pack_motion(plan, cfg);
   FakeV2Device::Options o;
   o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(10000);  // the job outlasts the polls by far
   FakeV2Device dev(o);
   auto so = clean_options();
   so.motion = lk::machine_motion(cfg);
@@ -586,4 +589,102 @@ TEST(StreamV2, StopDuringAHoldKeepsTheDeviceQueueAndReports) {
   EXPECT_EQ(dev.executed().size() + dev.fifo_level() + r.unsent, job.frames.size());
   EXPECT_EQ(r.status_end.position, dev.position());
   EXPECT_EQ(r.status_end.done - r.status_start.done, dev.executed().size());
+}
+
+// `fpgacnc stream`'s keys and interrupt (link/hold_control.h) on the fake device: f f f sets
+// the feed rate to 70 % (Q1.15 22 938), r r the rapid rate to 25 %, '!' holds, '~' resumes;
+// an interrupt holds and asks once the hold is complete; "stop" ends the job there with the
+// device's queue kept.
+TEST(StreamV2, HoldControlKeysAndInterrupt) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(20000);  // the job outlasts the polls by far
+  FakeV2Device dev(o);
+  std::vector<std::string> said;
+  std::vector<std::string> asked;
+  lk::HoldControl::Io io;
+  io.say = [&](const std::string& l) { said.push_back(l); };
+  io.ask = [&](const std::string& where) {
+    asked.push_back(where);
+    EXPECT_TRUE(dev.held()) << "asked before the device holds";
+    return false;  // stop
+  };
+  lk::HoldControl hc(cfg, io);
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  int step = 0;
+  size_t done_held = 0;
+  so.on_poll = [&](lk::V2Session& s) {
+    if (step == 0 && s.fifo_done() >= 3) {
+      for (char c : std::string("fffrr!")) hc.key(c);
+      step = 1;
+    } else if (step == 1 && (s.last_status().state & v2::kStateStopped)) {
+      done_held = s.fifo_done();
+      hc.key('~');
+      step = 2;
+    } else if (step == 2 && s.fifo_done() >= done_held + 3) {
+      hc.interrupt();
+      step = 3;
+    }
+    if (step == 1) s.request_status();
+    return hc.poll(s);
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_EQ(step, 3);
+  EXPECT_TRUE(r.stopped);
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0], hc.where(r.status_end));
+  // MOTION frames: the start's; f, f, f, r, r (rates only); '!'; '~'; the interrupt's hold.
+  const auto& m = dev.motions();
+  ASSERT_EQ(m.size(), 9u);
+  EXPECT_EQ(m[3].feed, 22'938);  // 70 % of 0x8000, rounded
+  EXPECT_EQ(m[3].rapid, 0x8000);
+  EXPECT_EQ(m[5].rapid, 0x2000);  // 25 %
+  EXPECT_TRUE(m[6].hold);
+  EXPECT_TRUE(m[7].resume);
+  EXPECT_TRUE(m[8].hold);
+  for (size_t i = 1; i < 6; ++i) EXPECT_FALSE(m[i].hold || m[i].resume) << i;
+  for (const auto& x : m) EXPECT_EQ(x.ramp, lk::machine_hold_ramp(cfg));
+  EXPECT_EQ(hc.feed_pct(), 70);
+  EXPECT_EQ(hc.rapid_pct(), 25);
+  EXPECT_TRUE(dev.held());
+  EXPECT_EQ(dev.executed().size() + dev.fifo_level() + r.unsent, job.frames.size());
+  EXPECT_FALSE(said.empty());
+}
+
+// A device without MOTION: keys are refused once with a message, the first interrupt goes on,
+// the second stops sending.
+TEST(StreamV2, HoldControlOnADeviceWithoutMotion) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(1000000);  // the job outlasts the polls by far
+  o.unknown_types = {0x08};
+  FakeV2Device dev(o);
+  std::vector<std::string> said;
+  lk::HoldControl hc(cfg, {[&](const std::string& l) { said.push_back(l); }, nullptr});
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  int polls = 0;
+  so.on_poll = [&](lk::V2Session& s) {
+    ++polls;
+    if (polls == 2) {
+      hc.key('!');
+      hc.interrupt();
+    }
+    if (polls == 5) hc.interrupt();
+    return hc.poll(s);
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_EQ(r.motion, 0);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_EQ(polls, 5);
+  EXPECT_TRUE(dev.motions().empty());
+  ASSERT_EQ(said.size(), 2u);
+  EXPECT_NE(said[0].find("no feed hold"), std::string::npos) << said[0];
+  EXPECT_NE(said[1].find("cannot hold"), std::string::npos) << said[1];
 }

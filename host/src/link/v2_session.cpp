@@ -227,6 +227,7 @@ bool V2Session::configure_motion(const v2::Motion& m) {
         if (f->type == static_cast<uint8_t>(v2::Type::Status)) {
           motion_ = m;
           on_status(v2::decode_status(*f, ident_.n_axes));
+          motion_available_ = true;
           return true;
         }
         if (f->type != static_cast<uint8_t>(v2::Type::Nak)) continue;

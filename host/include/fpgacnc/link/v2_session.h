@@ -112,6 +112,8 @@ class V2Session {
   // until a STATUS shows it: with HOLD the HOLD bit set, with RESUME clear, else any STATUS.
   void send_motion(const protocol::v2::Motion& m);
   bool motion_pending() const { return motion_pending_; }
+  // configure_motion() was answered with STATUS: the device has the motion rate.
+  bool motion_available() const { return motion_available_; }
   // The last MOTION sent (the rates in effect on the device).
   const protocol::v2::Motion& motion() const { return motion_; }
   // Gives up every pushed frame not yet sent (frames on the line stay in the window until
@@ -177,6 +179,7 @@ class V2Session {
   Link::Time link_t0_{};
   protocol::v2::Motion motion_;
   bool motion_pending_ = false;
+  bool motion_available_ = false;
   Link::Time motion_sent_{};
   bool status_outstanding_ = false;
   Link::Time status_sent_{};
