@@ -241,7 +241,7 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
 
   if (choice.protocol == "v2") {
     ProgressBar bar("frames");
-    // Feed hold and overrides (docs/streaming.md "Feed hold and overrides"): keys on a
+    // Feed hold and overrides (README.md "Feed hold and overrides while streaming"): keys on a
     // terminal, SIGINT always.
     o2.motion = link::machine_motion(cfg);
     InterruptGuard interrupts;

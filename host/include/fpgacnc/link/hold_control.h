@@ -1,4 +1,4 @@
-// Feed hold, resume and overrides of a streamed job (`fpgacnc stream`, docs/streaming.md "Feed
+// Feed hold, resume and overrides of a streamed job (`fpgacnc stream`, README.md "Feed
 // hold and overrides"): the operator's keys and the interrupt (SIGINT) turned into MOTION frames
 // (docs/protocol.md "MOTION") through a running V2Session. No terminal I/O here: the command reads
 // the keys and the signal and answers the question through HoldControl::Io.
