@@ -6,6 +6,10 @@ set_location_assignment PIN_AF14 -to clk
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to clk
 set_location_assignment PIN_AA14 -to rst_n
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to rst_n
+set_location_assignment PIN_AA15 -to hold_n
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to hold_n
+set_location_assignment PIN_W15 -to start_n
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to start_n
 set_location_assignment PIN_AC18 -to rx
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to rx
 set_location_assignment PIN_Y17 -to tx

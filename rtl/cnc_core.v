@@ -29,6 +29,14 @@
 //                    LINE_PROFILE or ARC whose end leaves it is answered NAK TRAVEL and not queued
 //                    (frame_decoder's travel_guard); its queued end position resyncs to the
 //                    position counters while the FIFO is held flushed (e-stop, hard limit).
+//   feed hold        (v2) rtl/motion/feed_rate.v (docs/timing.md "Feed hold and overrides"): a
+//                    MOTION frame sets the feed and rapid rates (<= 100 %) and the ramp, and holds,
+//                    resumes or cancels; hold_in / start_in (BUTTON_* parameters, filtered like the
+//                    limit switches) request a hold / a resume on the filtered level's rise. Every
+//                    motion generator advances only in the clocks feed_rate enables, so the path
+//                    is the planned one at any rate; the laser is low while the rate is 0. A
+//                    CANCEL holds and, at rest, flushes as the e-stop does (positions kept, no
+//                    fault). STATUS state bits 5 HOLD and 6 STOPPED.
 //   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
 //                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
 //                    writes a shadow set that becomes active only while the FIFO is empty and
@@ -79,7 +87,12 @@ module cnc_core #(
     // hard limits (docs/machine.md): bit a = min switch of axis a, bit 16 + a = max switch
     parameter LIMIT_FILTER_CLKS = `FPGACNC_DEF_LIMIT_FILTER_CLKS,  // debounce, clocks
     parameter [31:0] LIMIT_ENABLE     = `FPGACNC_DEF_LIMIT_ENABLE,      // switches wired
-    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW   // asserted at a low pin
+    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW,  // asserted at a low pin
+    // feed hold and cycle-start buttons (docs/machine.md): bit 0 hold, bit 1 cycle start
+    parameter [1:0] BUTTON_ENABLE     = 2'b11,  // buttons wired (a button not wired reads released)
+    parameter [1:0] BUTTON_ACTIVE_LOW = 2'b00,  // asserted at a low pin
+    parameter RATE_PERIOD_LOG2        = `FPGACNC_DEF_RATE_PERIOD_LOG2,  // motion rate period
+    parameter [31:0] RATE_RAMP        = `FPGACNC_DEF_RATE_RAMP  // motion rate ramp after rst
 ) (
     input wire clk,
     input wire rst,
@@ -99,6 +112,8 @@ module cnc_core #(
     input  wire       estop,       // e-stop, active high, asynchronous
     input  wire [N_AXES-1:0] limit_min,  // limit switches, asynchronous (LIMIT_* parameters)
     input  wire [N_AXES-1:0] limit_max,
+    input  wire       hold_in,     // feed hold button, asynchronous (BUTTON_* parameters)
+    input  wire       start_in,    // cycle start (resume) button, asynchronous
     output wire [1:0] heater,      // 0 hot end, 1 bed
     output wire       adc_convst,  // LTC2308
     output wire       adc_sck,
@@ -248,9 +263,12 @@ module cnc_core #(
   wire cmd_tvalid, cmd_tready;
   wire [15:0] fifo_level_w, fifo_free_w;
   wire dec_hello, dec_status, dec_ack;  // requests to response_encoder (v2 only)
+  wire dec_motion_set;  // an accepted MOTION frame (v2 only), its payload in dec_motion_data
+  wire [71:0] dec_motion_data;
   wire [7:0] dec_nak_seq, dec_nak_reason;
   wire estop_stop;  // e-stop active or latched (below)
-  wire motion_abort;  // e-stop or hard-limit alarm: FIFO flushed, prep and executor aborted
+  // e-stop, hard-limit alarm or a MOTION CANCEL at rest: FIFO flushed, prep and executor aborted
+  wire motion_abort;
 
   generate
     if (V2_EN != 0) begin : g_v2
@@ -285,6 +303,8 @@ module cnc_core #(
           .fault_clear  (dec_fault_clear),
           .hello        (dec_hello),
           .status_req   (dec_status),
+          .motion_set   (dec_motion_set),
+          .motion_data  (dec_motion_data),
           .ack_req      (dec_ack),
           .nak          (dec_nak),
           .nak_seq      (dec_nak_seq),
@@ -324,6 +344,8 @@ module cnc_core #(
       // no v2 frames: no configuration, heater, fault-clear or answer requests, no v2 status
       assign dec_hello        = 1'b0;
       assign dec_status       = 1'b0;
+      assign dec_motion_set   = 1'b0;
+      assign dec_motion_data  = 72'd0;
       assign dec_ack          = 1'b0;
       assign dec_nak_seq      = 8'd0;
       assign dec_nak_reason   = 8'd0;
@@ -404,6 +426,68 @@ module cnc_core #(
   assign limit_state = {lim_max_w, lim_min_w};
   assign limit_trip  = limit_trip_w;
 
+  // ---------------------------------------------------------------- motion rate
+  // feed hold, resume and the feed / rapid rates (docs/timing.md "Feed hold and overrides"):
+  // the hold and cycle-start buttons through their filter, MOTION frames, feed_rate's enable of
+  // every motion generator. The v1 build has neither: its motion advances in every clock.
+  wire [1:0] btn_q, btn_strobe;
+  wire [1:0] btn_rise = btn_strobe & btn_q & BUTTON_ENABLE;
+  wire rate_adv, rate_hold, rate_stopped, rate_flush, exec_rapid;
+
+  input_filter #(
+      .N          (2),
+      .FILTER_CLKS(LIMIT_FILTER_CLKS),
+      .ACTIVE_LOW (BUTTON_ACTIVE_LOW)
+  ) u_button_filter (
+      .clk   (clk),
+      .rst   (rst),
+      .din   ({start_in, hold_in}),
+      .q     (btn_q),
+      .strobe(btn_strobe)
+  );
+
+  generate
+    if (V2_EN != 0) begin : g_rate
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire [32:0] rate_nc;  // the rate itself: for benches and waveforms
+      /* verilator lint_on UNUSEDSIGNAL */
+      feed_rate #(
+          .PERIOD_LOG2(RATE_PERIOD_LOG2),
+          .RAMP0      (RATE_RAMP)
+      ) u_rate (
+          .clk       (clk),
+          .rst       (rst),
+          .load      (dec_motion_set),
+          .set_hold  (dec_motion_data[0]),
+          .set_resume(dec_motion_data[1]),
+          .set_cancel(dec_motion_data[2]),
+          .set_feed  ({dec_motion_data[15:8], dec_motion_data[23:16]}),
+          .set_rapid ({dec_motion_data[31:24], dec_motion_data[39:32]}),
+          .set_ramp  ({dec_motion_data[47:40], dec_motion_data[55:48], dec_motion_data[63:56],
+                       dec_motion_data[71:64]}),
+          .hold_req  (btn_rise[0]),
+          .resume_req(btn_rise[1]),
+          .rapid_seg (exec_rapid),
+          .adv       (rate_adv),
+          .hold      (rate_hold),
+          .stopped   (rate_stopped),
+          .flush     (rate_flush),
+          .rate      (rate_nc)
+      );
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_motion = &{1'b0, dec_motion_data[7:3]};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end else begin : g_norate
+      assign rate_adv     = 1'b1;
+      assign rate_hold    = 1'b0;
+      assign rate_stopped = 1'b0;
+      assign rate_flush   = 1'b0;
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_rate = &{1'b0, btn_rise, exec_rapid, dec_motion_set, dec_motion_data};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end
+  endgenerate
+
   // ---------------------------------------------------------------- step timing
   // active step timing (all axes) and the minimum dominant period, as used by prep and executor
   wire [16*N_AXES-1:0] cfg_high, cfg_low, cfg_setup, cfg_hold;
@@ -461,7 +545,7 @@ module cnc_core #(
   wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
   wire [1:0] seg_arc_plane;  // and their plane (0 XY, 1 ZX, 2 YZ)
   // e-stop or limit alarm: prep and executor drop what they hold, stay idle
-  assign motion_abort = estop_stop || limit_trip_w;
+  assign motion_abort = estop_stop || limit_trip_w || rate_flush;
   wire out_tvalid, out_tready;  // OUTPUT entries: segment_prep -> segment_executor
   wire [23:0] out_tdata;
 
@@ -577,6 +661,8 @@ module cnc_core #(
       .cfg_dir_setup  (cfg_setup),
       .cfg_dir_hold   (cfg_hold),
       .abort          (motion_abort),
+      .adv            (rate_adv),
+      .rapid_seg      (exec_rapid),
       .step_block     (exec_step_block),
       .step_want      (exec_step_want),
       .step           (step),
@@ -608,7 +694,7 @@ module cnc_core #(
       .clk          (clk),
       .rst          (rst),
       .abort        (motion_abort),
-      .exec_laser   (exec_laser),
+      .exec_laser   (exec_laser && !rate_stopped),
       .exec_flood   (exec_flood),
       .exec_mist    (exec_mist),
       .exec_dout    (exec_dout),
@@ -758,6 +844,8 @@ module cnc_core #(
       .v2_mode        (dec_v2_mode),
       .estop_active   (estop_active),
       .limit_untrusted(limit_untrusted),
+      .hold           (rate_hold),
+      .stopped        (rate_stopped),
       .faults         (faults_w),
       .position       (position),
       .counters       ({frames_ok_w, crc_errors_w, length_errors_w, unknown_types_w, timeouts_w,

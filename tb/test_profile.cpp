@@ -183,6 +183,7 @@ class ProfBench {
     }
     prep_->cfg_dir_setup = ex_->cfg_dir_setup;
     prep_->cfg_dir_hold = ex_->cfg_dir_hold;
+    ex_->adv = 1;  // the motion rate at 100 %
     prep_->rst = ex_->rst = 1;
     clock();
     clock();

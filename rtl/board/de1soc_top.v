@@ -20,6 +20,9 @@
 // high when pressed or when its wire breaks (LIMIT_ACTIVE_LOW 0). LIMIT_ENABLE (bit 0 x min, 1 y
 // min, 16 x max, 17 y max) says which are wired; the default (spec/protocol.toml) is none, so a
 // board without switches (whose pulled-up pins read "pressed") still moves.
+// Feed hold and cycle start (docs/machine.md): the push buttons KEY[1] (hold_n) and KEY[2]
+// (start_n), active low (the board's buttons read low while pressed and are debounced on the
+// board; the core filters them again).
 // The reset button is synchronized (two flops) and released synchronously.
 // Its cnc_core is the configuration full-2axis of spec/configs.toml (fpgacnc_configs.vh).
 `default_nettype none
@@ -59,6 +62,8 @@ module de1soc_top #(
     input  wire       lim_x_max,
     input  wire       lim_y_min,
     input  wire       lim_y_max,
+    input  wire       hold_n,
+    input  wire       start_n,
     output wire       heater_hotend,
     output wire       heater_bed,
     output wire       ADC_CONVST,
@@ -106,7 +111,8 @@ module de1soc_top #(
       .FAN_PWM_HZ(FAN_PWM_HZ),
       .LIMIT_FILTER_CLKS(LIMIT_FILTER_CLKS),
       .LIMIT_ENABLE     (LIMIT_ENABLE),
-      .LIMIT_ACTIVE_LOW (LIMIT_ACTIVE_LOW)
+      .LIMIT_ACTIVE_LOW (LIMIT_ACTIVE_LOW),
+      .BUTTON_ACTIVE_LOW(2'b11)
   ) u_core (
       .clk         (clk),
       .rst         (rst),
@@ -122,6 +128,8 @@ module de1soc_top #(
       .estop       (!estop_n),
       .limit_min   ({lim_y_min, lim_x_min}),
       .limit_max   ({lim_y_max, lim_x_max}),
+      .hold_in     (hold_n),
+      .start_in    (start_n),
       .heater      (heater_w),
       .adc_convst  (ADC_CONVST),
       .adc_sck     (ADC_SCK),

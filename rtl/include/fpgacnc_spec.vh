@@ -61,7 +61,7 @@
 `define FPGACNC_T_CONFIG_TRAVEL 8'h07
 `define FPGACNC_LEN_CONFIG_TRAVEL 8'd10
 `define FPGACNC_LENI_CONFIG_TRAVEL 10
-// MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
+// MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME, bit 2 CANCEL), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
 `define FPGACNC_T_MOTION 8'h08
 `define FPGACNC_LEN_MOTION 8'd9
 `define FPGACNC_LENI_MOTION 9
@@ -232,8 +232,10 @@
 `define FPGACNC_MOTION_HOLD 1
 // MOTION flags bit 1 RESUME: end a hold (HOLD and RESUME together: BAD_FIELD)
 `define FPGACNC_MOTION_RESUME 2
-// MOTION flags bits 7:2: must be 0
-`define FPGACNC_MOTION_RESERVED 252
+// MOTION flags bit 2 CANCEL: hold, and once the rate is 0 drop the running segment and the queue (positions kept), then end the hold (with RESUME: BAD_FIELD)
+`define FPGACNC_MOTION_CANCEL 4
+// MOTION flags bits 7:3: must be 0
+`define FPGACNC_MOTION_RESERVED 248
 // MOTION feed and rapid rates: Q1.15, 0x8000 = 100 % (the planned speed); 1 .. 0x8000, else BAD_FIELD
 `define FPGACNC_RATE_ONE 32_768
 // Q1.15 duty 100 % (largest duty_max and manual duty)

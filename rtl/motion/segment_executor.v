@@ -145,6 +145,8 @@ module segment_executor #(
     /* verilator lint_off SYMRSVDWORD */
     input wire abort,  // e-stop: drop everything (see above)
     /* verilator lint_on SYMRSVDWORD */
+    input wire adv,  // the motion rate's enable (rtl/motion/feed_rate.v): a RUN clock is a tick
+    output wire rapid_seg,  // the segment last accepted has code 0 (feed_rate's target)
     input wire [N_AXES-1:0] step_block,  // 1: no step request of that axis in this clock (limits)
     output wire [N_AXES-1:0] step_want,  // each axis's step request before abort and step_block
 
@@ -217,7 +219,7 @@ module segment_executor #(
   wire [N_AXES-1:0] dir_wr;
   wire hold_clear, setup_ok, settled, arc_dir_viol;
 
-  wire tick = (state_reg == S_RUN);
+  wire tick = (state_reg == S_RUN) && adv;
   wire line_tick = tick && (kind_reg == K_LINE);
   wire prof_tick = tick && (kind_reg == K_PROFILE);
   wire arc_tick = tick && (kind_reg == K_ARC);
@@ -448,7 +450,8 @@ module segment_executor #(
     seg_start_reg <= 1'b0;
     seg_done_reg  <= 1'b0;
     arc_err_reg   <= arc_tick && arc_ending && arc_end_err && !abort;
-    arc_end_reg   <= arc_tick && arc_ending && !abort;
+    // held until the tick that ends the arc (the first tick after the ending one)
+    arc_end_reg   <= (arc_tick && arc_ending && !abort) || (arc_end_reg && !tick && !abort);
 
     // tick counter: loaded on accept, counts down during RUN
     if (accept) begin
@@ -630,6 +633,7 @@ module segment_executor #(
   assign busy          = (state_reg != S_IDLE);
   assign idle          = (state_reg == S_IDLE) && (&pulse_idle);
   assign running       = (state_reg == S_RUN);
+  assign rapid_seg     = (code_reg == 2'd0);
   assign seg_start     = seg_start_reg;
   assign seg_done      = seg_done_reg;
   assign seg_done_v2   = seg_done_v2_reg;

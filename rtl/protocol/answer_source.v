@@ -6,7 +6,7 @@
 //   m_axis_*     bytes for uart_tx, held until taken.
 //   PROTO_V2 = 1 response_encoder (rtl/protocol/response_encoder.v) with 64-byte payloads and the 16 heater
 //                bytes of STATUS: the request strobes (ident_req .. v1_ack) and the live state go to
-//                it; this module forms STATUS's state byte {0, 0, 0, limit_untrusted,
+//                it; this module forms STATUS's state byte {0, stopped, hold, limit_untrusted,
 //                estop_active, faults != 0, v2_mode, busy} and its limit bytes {0, 0, 0,
 //                limit_trip_max, limit_trip_axis} and the switch states u16 (bit a = lim_min of axis
 //                a, bit 8 + a = lim_max; axes 0..7 only); counters are STATUS's nine u16 in order
@@ -49,6 +49,8 @@ module answer_source #(
     input wire                 v2_mode,
     input wire                 estop_active,
     input wire                 limit_untrusted,
+    input wire                 hold,            // feed hold in effect (feed_rate)
+    input wire                 stopped,         // motion rate 0 (feed_rate)
     input wire [          7:0] faults,
     input wire [32*N_AXES-1:0] position,
     input wire [     16*9-1:0] counters,
@@ -77,7 +79,8 @@ module answer_source #(
       /* verilator lint_off UNUSEDSIGNAL */
       wire enc_frame_start;  // not needed here
       /* verilator lint_on UNUSEDSIGNAL */
-      wire [7:0] state_w = {3'd0, limit_untrusted, estop_active, faults != 8'd0, v2_mode, busy};
+      wire [7:0] state_w = {1'b0, stopped, hold, limit_untrusted, estop_active, faults != 8'd0,
+                            v2_mode, busy};
       /* verilator lint_off UNUSEDSIGNAL */
       wire [15:0] lim_min16 = {{(16 - N_AXES) {1'b0}}, lim_min};  // axes 8..14 not reported
       wire [15:0] lim_max16 = {{(16 - N_AXES) {1'b0}}, lim_max};
@@ -133,7 +136,7 @@ module answer_source #(
       assign m_axis_tvalid = (aa_cnt_reg != 8'd0);
       wire unused_v2 = &{1'b0, ident_req, status_req, nak_req, nak_seq, nak_reason, ack_req,
                          done_evt, next_seq, fifo_free, fifo_level, segments_done, busy, v2_mode,
-                         estop_active, limit_untrusted, faults, position, counters,
+                         estop_active, limit_untrusted, hold, stopped, faults, position, counters,
                          limit_trip_max, limit_trip_axis, lim_min, lim_max, heat_status};
     end
   endgenerate

@@ -24,6 +24,10 @@
 //               are never refused, v1 has no NAK) and is set to `position` on every clock of
 //               `travel_resync` (the queue is flushed) and at rst.
 //   hello, status_req, ack_req, nak (+ nak_seq as received, nak_reason)   answer requests.
+//   motion_set  an accepted MOTION frame (unsequenced, answered by STATUS: status_req strobes
+//               with it), with motion_data {flags, feed, rapid, ramp} (payload bytes 0..8; valid
+//               with the strobe). Field rules: flags bits 7:3 0 and RESUME not with HOLD or
+//               CANCEL, feed and rapid 1 .. 0x8000, ramp >= 1 (else NAK BAD_FIELD).
 //   frame_ok    a v2 frame that passed every check (HELLO, STATUS_QUERY, accepted, duplicate).
 //   crc_error, length_error, unknown_type   a v2 frame rejected for that reason (length_error
 //               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER, FIFO_FULL or TRAVEL.
@@ -75,6 +79,8 @@ module frame_decoder #(
     output wire       release_req,
     output wire       hello,
     output wire       status_req,
+    output wire        motion_set,
+    output wire [71:0] motion_data,
     output wire       ack_req,
     output wire       nak,
     output wire [7:0] nak_seq,
@@ -112,7 +118,8 @@ module frame_decoder #(
                    T_NUM = `FPGACNC_T_NUMERATORS, T_REL = `FPGACNC_T_RELEASE,
                    T_LINE = `FPGACNC_T_LINE, T_DWELL = `FPGACNC_T_DWELL,
                    T_LPROF = `FPGACNC_T_LINE_PROFILE, T_ARC = `FPGACNC_T_ARC,
-                   T_OUT = `FPGACNC_T_OUTPUT, T_CTRAV = `FPGACNC_T_CONFIG_TRAVEL;
+                   T_OUT = `FPGACNC_T_OUTPUT, T_CTRAV = `FPGACNC_T_CONFIG_TRAVEL,
+                   T_MOTION = `FPGACNC_T_MOTION;
   localparam [7:0] T_HCFG = `FPGACNC_T_HEATER_CONFIG, T_HSET = `FPGACNC_T_HEATER_SETPOINT,
                    T_HTAB = `FPGACNC_T_THERMISTOR_TABLE, T_HSAF = `FPGACNC_T_HEATER_SAFETY,
                    T_HWD = `FPGACNC_T_HEATER_WATCHDOG;
@@ -122,6 +129,10 @@ module frame_decoder #(
                    R_OUT_OF_ORDER = `FPGACNC_NAK_OUT_OF_ORDER, R_FIFO_FULL = `FPGACNC_NAK_FIFO_FULL,
                    R_BAD_FIELD = `FPGACNC_NAK_BAD_FIELD, R_TRAVEL = `FPGACNC_NAK_TRAVEL;
 
+  localparam integer MOT_RSV_I = `FPGACNC_MOTION_RESERVED;
+  localparam [7:0] MOT_RSV = MOT_RSV_I[7:0];
+  localparam integer RATE_ONE_I = `FPGACNC_RATE_ONE;
+  localparam [15:0] RATE_ONE = RATE_ONE_I[15:0];
   localparam integer MAXP_I = MAX_PAYLOAD;
   localparam [7:0] MAXP = MAXP_I[7:0];
   localparam integer NAX_I = N_AXES;
@@ -146,6 +157,7 @@ module frame_decoder #(
   reg  [       7:0] next_seq_reg;
 
   reg cfg_wr_reg, heat_wr_reg, fault_clear_reg, release_reg, hello_reg, status_reg, ack_reg, nak_reg;
+  reg motion_reg;
   reg [7:0] nak_seq_reg, nak_reason_reg;
   reg frame_ok_reg, crc_error_reg, length_error_reg, unknown_type_reg, timeout_reg, noise_reg;
   reg v1_packet_reg, v1_overrun_reg;
@@ -184,6 +196,7 @@ module frame_decoder #(
   wire t_line = (type_reg == T_LINE);
   wire t_dwell = (type_reg == T_DWELL);
   wire t_ctrav = (type_reg == T_CTRAV);
+  wire t_motion = (type_reg == T_MOTION);
   // ---- heater frames
   wire t_hcfg = (type_reg == T_HCFG);
   wire t_hset = (type_reg == T_HSET);
@@ -197,7 +210,7 @@ module frame_decoder #(
   // TYPE and LEN rules, formed (block-local regs) and registered on the edge that takes the
   // frame's last byte, as the field rules are: LEN, TYPE and the flag byte are complete then and
   // stay until the CHECK clock, the only clock that reads them.
-  reg known_reg, len_ok_reg, ctrav_ok_reg;
+  reg known_reg, len_ok_reg, ctrav_ok_reg, motion_ok_reg;
   always @(posedge clk) begin : len_rules
     reg short_steps, line_len_ok, prof_len_ok, heat_len_ok;
     reg [7:0] len_m6, len_m28;
@@ -205,10 +218,18 @@ module frame_decoder #(
       known_reg    <= 1'b0;
       len_ok_reg   <= 1'b0;
       ctrav_ok_reg <= 1'b0;
+      motion_ok_reg <= 1'b0;
     end else if (take && st_reg == ST_CRC2) begin
       // CONFIG_TRAVEL: axis < N_AXES, flag bits 7:1 0, and MIN <= MAX when enabled
       ctrav_ok_reg <= pb(0) < NAX8 && pay_reg[15:9] == 7'd0 &&
                       (!pay_reg[8] || $signed(be32p(2)) <= $signed(be32p(6)));
+      // MOTION: flags bits 7:2 0, not HOLD and RESUME together; feed and rapid 1 .. 0x8000;
+      // ramp >= 1
+      motion_ok_reg <= (pay_reg[7:0] & MOT_RSV) == 8'd0 && pay_reg[1:0] != 2'b11 &&
+                       pay_reg[2:1] != 2'b11 &&
+                       {pb(1), pb(2)} != 16'd0 && {pb(1), pb(2)} <= RATE_ONE &&
+                       {pb(3), pb(4)} != 16'd0 && {pb(3), pb(4)} <= RATE_ONE &&
+                       be32p(5) != 32'd0;
       short_steps = pay_reg[7];  // flag bit 7: int16 step fields
       len_m6 = len_reg - 8'd6;
       line_len_ok = (len_reg >= `FPGACNC_LEN_LINE_HEADER) &&
@@ -226,10 +247,11 @@ module frame_decoder #(
                     (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
                     (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
       known_reg <= t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
-               t_lprof || t_arc || t_out || t_heat || t_ctrav;
+               t_lprof || t_arc || t_out || t_heat || t_ctrav || t_motion;
       len_ok_reg <= ((t_hello || t_status || t_fclr || t_rel) && len_reg == 8'd0) ||
                 (t_cfg && len_reg == `FPGACNC_LEN_CONFIG_AXIS) ||
                 (t_ctrav && len_reg == `FPGACNC_LEN_CONFIG_TRAVEL) ||
+                (t_motion && len_reg == `FPGACNC_LEN_MOTION) ||
                 (t_num && len_reg == `FPGACNC_LEN_NUMERATORS) ||
                 (t_dwell && len_reg == `FPGACNC_LEN_DWELL) || (t_line && line_len_ok) ||
                 (t_lprof && prof_len_ok) || (t_arc && len_reg == `FPGACNC_LEN_ARC) ||
@@ -240,7 +262,7 @@ module frame_decoder #(
   // payload, LEN and TYPE are complete then and stay until the CHECK clock, so field_ok holds the
   // rules of the frame being checked.
   wire field_ok_f;
-  wire field_ok = field_ok_f && (!t_ctrav || ctrav_ok_reg);
+  wire field_ok = field_ok_f && (!t_ctrav || ctrav_ok_reg) && (!t_motion || motion_ok_reg);
   frame_fields #(
       .N_AXES(N_AXES),
       .PB    (PB)
@@ -322,6 +344,7 @@ module frame_decoder #(
     release_reg      <= 1'b0;
     hello_reg        <= 1'b0;
     status_reg       <= 1'b0;
+    motion_reg       <= 1'b0;
     ack_reg          <= 1'b0;
     nak_reg          <= 1'b0;
     frame_ok_reg     <= 1'b0;
@@ -355,7 +378,8 @@ module frame_decoder #(
         end else if (!sequenced) begin
           frame_ok_reg <= 1'b1;
           hello_reg    <= t_hello;
-          status_reg   <= t_status;
+          status_reg   <= t_status || t_motion;
+          motion_reg   <= t_motion;
         end else if (!seq_new && !seq_dup) begin
           nak_reg        <= 1'b1;
           nak_seq_reg    <= seq_reg;
@@ -470,6 +494,7 @@ module frame_decoder #(
       release_reg      <= 1'b0;
       hello_reg        <= 1'b0;
       status_reg       <= 1'b0;
+      motion_reg       <= 1'b0;
       ack_reg          <= 1'b0;
       nak_reg          <= 1'b0;
       nak_seq_reg      <= 8'd0;
@@ -594,6 +619,8 @@ module frame_decoder #(
   assign release_req   = release_reg;
   assign hello         = hello_reg;
   assign status_req    = status_reg;
+  assign motion_set    = motion_reg;
+  assign motion_data   = pay_reg[71:0];
   assign ack_req       = ack_reg;
   assign nak           = nak_reg;
   assign nak_seq       = nak_seq_reg;

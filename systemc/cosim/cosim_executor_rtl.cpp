@@ -76,6 +76,7 @@ RunResult run_executor_rtl(const ExecJob& j) {
   m->cfg_dir_hold = pack16(j.timing, &AxisTiming::hold);
   m->s_axis_tvalid = 0;
   m->__SYM__abort = 0;
+  m->adv = 1;  // the motion rate at 100 %
   m->rst = 1;
   m->clk = 0;
   m->eval();

@@ -66,6 +66,7 @@ int run(bool with_abort) {
     e->eval();
     ++cyc;
   };
+  e->adv = 1;  // the motion rate at 100 %
   p->rst = e->rst = 1;
   clock();
   clock();

@@ -91,6 +91,7 @@ class ExecHarness {
       : ctx_(std::make_unique<VerilatedContext>()), mon_(kExecAxes) {
     m_ = std::make_unique<Vsegment_executor>(ctx_.get());
     set_timing(timing);
+    m_->adv = 1;  // the motion rate at 100 %: every RUN clock is a tick
     m_->rst = 1;
     tick();
     tick();

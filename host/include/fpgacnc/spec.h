@@ -64,7 +64,7 @@ inline constexpr size_t kLenRelease = 0;
 // CONFIG_TRAVEL: axis u8, flags u8 (bit 0 enable), MIN int32, MAX int32: the axis's travel in steps (soft limits), see below
 inline constexpr uint8_t kTypeConfigTravel = 0x07;
 inline constexpr size_t kLenConfigTravel = 10;
-// MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
+// MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME, bit 2 CANCEL), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
 inline constexpr uint8_t kTypeMotion = 0x08;
 inline constexpr size_t kLenMotion = 9;
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
@@ -267,8 +267,10 @@ inline constexpr size_t kTravelEnable = 1;
 inline constexpr size_t kMotionHold = 1;
 // MOTION flags bit 1 RESUME: end a hold (HOLD and RESUME together: BAD_FIELD)
 inline constexpr size_t kMotionResume = 2;
-// MOTION flags bits 7:2: must be 0
-inline constexpr size_t kMotionReserved = 252;
+// MOTION flags bit 2 CANCEL: hold, and once the rate is 0 drop the running segment and the queue (positions kept), then end the hold (with RESUME: BAD_FIELD)
+inline constexpr size_t kMotionCancel = 4;
+// MOTION flags bits 7:3: must be 0
+inline constexpr size_t kMotionReserved = 248;
 // MOTION feed and rapid rates: Q1.15, 0x8000 = 100 % (the planned speed); 1 .. 0x8000, else BAD_FIELD
 inline constexpr size_t kRateOne = 32768;
 // Q1.15 duty 100 % (largest duty_max and manual duty)
