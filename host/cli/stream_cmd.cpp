@@ -253,23 +253,26 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       std::fflush(stdout);
     };
     if (keys.on()) {
+      using Answer = link::HoldControl::Io::Answer;
       hio.ask = [&bar, &keys](const std::string& where) {
         bar.finish_line();
         fmt::print(
             "held at {}, at rest on the path. Enter or r Enter: resume; s Enter: stop the job "
-            "here (the frames not yet sent are dropped; the board keeps what it has queued, "
-            "held, and its position)\n",
+            "here (the board drops what it has queued, its position kept; the frames not yet "
+            "sent are dropped); k Enter: stop sending, the board keeps its queue, held\n",
             where);
         std::fflush(stdout);
         keys.cooked();
         std::string answer;
         const bool got = static_cast<bool>(std::getline(std::cin, answer));
         keys.raw();
-        if (!got) {
+        if (!got) {  // end of input or a second Ctrl-C: stop
           std::cin.clear();
-          return false;
+          return Answer::kStop;
         }
-        return answer.empty() || (answer[0] != 's' && answer[0] != 'S' && answer[0] != 'q');
+        if (answer.empty() || answer[0] == 'r' || answer[0] == 'R') return Answer::kResume;
+        if (answer[0] == 'k' || answer[0] == 'K') return Answer::kKeep;
+        return Answer::kStop;
       };
     }
     link::HoldControl hold(cfg, hio);
@@ -365,6 +368,12 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       bar.finish_line();
       const std::string at = hold.where(r.status_end);
       fmt::print("{}", link::format_report(r));
+      if (hold.cancelled()) {
+        throw link::Error(fmt::format(
+            "{}: job stopped by the operator; the device is at {}, at rest ({} frames not sent, "
+            "{} dropped by the device: MOTION CANCEL)",
+            lk->name(), at, r.unsent, r.queued));
+      }
       throw link::Error(fmt::format(
           "{}: job stopped by the operator; the device is at {} ({} frames not sent, {} left "
           "queued on the device{})",

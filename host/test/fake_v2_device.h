@@ -160,6 +160,7 @@ class FakeV2Device : public link::Link {
   const std::vector<v2::ConfigAxis>& configs() const { return configs_; }
   const std::vector<v2::Motion>& motions() const { return motions_; }  // MOTION frames taken
   bool held() const { return hold_; }
+  size_t cancelled() const { return cancelled_; }
   size_t fifo_level() const { return fifo_.size(); }
   const std::vector<uint8_t>& written() const { return written_; }
   const FakeStats& stats() const { return st_; }
@@ -332,6 +333,12 @@ class FakeV2Device : public link::Link {
       motions_.push_back(m);
       if (m.hold) hold_ = true;
       if (m.resume) hold_ = false;
+      if (m.cancel) {  // a hold (at rest at once here), the queue dropped without DONE, hold ends
+        cancelled_ += fifo_.size();
+        fifo_.clear();
+        running_ = false;
+        hold_ = false;
+      }
       pend_status_ = true;
       return;
     }
@@ -456,7 +463,8 @@ class FakeV2Device : public link::Link {
   std::vector<uint8_t> hdr_;  // LEN SEQ TYPE payload CRC
   uint8_t frame_seq_ = 0;
   bool v2_mode_ = false;
-  bool hold_ = false;  // MOTION HOLD until MOTION RESUME
+  bool hold_ = false;     // MOTION HOLD until MOTION RESUME
+  size_t cancelled_ = 0;  // FIFO frames dropped by MOTION CANCEL
   std::vector<v2::Motion> motions_;
   clock::time_point last_advance_ = clock::now();
   uint8_t next_seq_ = 0;

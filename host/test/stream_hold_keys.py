@@ -6,8 +6,9 @@ Usage: stream_hold_keys.py FPGACNC WORKDIR
 1. On a terminal (a pty as stdin and stdout): once the keys line is printed, '!' holds the job,
    'c' resumes it, Ctrl-C (SIGINT) holds again and asks; Enter resumes; the job must end with the
    device position equal to the plan ("device moved: ... matches the plan") and exit 0.
-2. Without a terminal (stdin a pipe): SIGINT holds, then reports where the board is and stops:
-   exit status 1 with "job stopped by the operator" and the position.
+2. Without a terminal (stdin a pipe): SIGINT holds, then reports where the board is and stops
+   with MOTION CANCEL (the board drops its queue at rest): exit status 1 with "job stopped by the
+   operator", the position and the frames dropped.
 Every step waits for the command's own line before the next key; timeouts only catch a hang (the
 job is long in board time, so each key arrives while it runs however fast the machine is).
 """
@@ -87,7 +88,8 @@ out += rest
 if p.returncode != 1:
     fail(f"exit status {p.returncode} for a stopped job", out)
 m = re.search(rb"job stopped by the operator; the device is at (X [-\d.]+ Y [-\d.]+ Z [-\d.]+ mm)"
-              rb" \((\d+) frames not sent, (\d+) left queued on the device, held\)", out)
+              rb", at rest \((\d+) frames not sent, (\d+) dropped by the device: MOTION CANCEL\)",
+              out)
 if not m:
     fail("no stop report", out)
 print(f"no terminal: SIGINT held at {m.group(1).decode()} and stopped")

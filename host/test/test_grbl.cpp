@@ -846,9 +846,9 @@ TEST(Grbl, RapidOverrideScalesRapidsOnly) {
   EXPECT_NEAR(g1_25 / g1_100, 1.0, 0.02) << g1_25 << " vs " << g1_100 << " clocks";
 }
 
-// 0x18 during a hold (grbl: ALARM:3, the queue dropped): the e-stop of the Verilated board drops
-// its queue while it is at rest, so the position is the held one exactly; after $X the
-// parser starts there and a new move ends on the plan.
+// 0x18 during a hold (grbl: ALARM:3, the queue dropped): MOTION CANCEL makes the Verilated board
+// drop its queue while it is at rest, so the position is the held one exactly and no fault
+// latches; after $X the parser starts there and a new move ends on the plan.
 TEST(Grbl, SoftResetDuringAHoldAlarmsAndKeepsThePosition) {
   const MachineConfig cfg;
   Rig rig("", cfg, true);

@@ -147,20 +147,28 @@ TEST(GrblMotion, FeedOverrideAbove100PlansTheNextLinesFaster) {
   EXPECT_NEAR(v_mm_min, 900.0, 1.0);
 }
 
-// 0x18 during a hold: ALARM:3 (grbl); without an e-stop the board is resumed and runs out what it
-// has queued, then the banner; the overrides are back at 100 %.
-TEST(GrblMotion, ResetDuringAHoldAlarmsAndRunsOutTheQueue) {
+// 0x18 during a hold: ALARM:3 (grbl); MOTION CANCEL drops the board's queue at rest (nothing more
+// runs, the position kept), then the banner; the overrides are back at 100 %.
+TEST(GrblMotion, ResetDuringAHoldAlarmsAndCancelsTheQueue) {
   FakeRig rig;
   EXPECT_EQ(rig.command("G21 G90 F1200"), "ok");
   for (int i = 1; i <= 12; ++i) EXPECT_EQ(rig.command(fmt::format("G1 X{}", i)), "ok");
   ASSERT_TRUE(rig.pump_until([&] { return rig.dev_.executed().size() >= 1; }));
   rig.engine_->receive("\x92!");
   ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Hold:0"; }, 200));
+  const size_t done = rig.dev_.executed().size();
+  const auto at = rig.dev_.position();
   rig.engine_->receive("\x18");
   EXPECT_EQ(rig.next_line(), "ALARM:3");
   EXPECT_EQ(rig.next_line(), grbl::kBanner);
   EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
   EXPECT_FALSE(rig.dev_.held());
+  EXPECT_GT(rig.dev_.cancelled(), 0u);
+  EXPECT_EQ(rig.dev_.executed().size(), done) << "a frame ran after the reset";
+  EXPECT_EQ(rig.dev_.position(), at);
+  bool cancel = false;
+  for (const auto& m : rig.dev_.motions()) cancel |= m.cancel;
+  EXPECT_TRUE(cancel);
   EXPECT_EQ(rig.engine_->overrides(), grbl::Overrides{});
   // The new session's MOTION: 100 %.
   EXPECT_EQ(rig.dev_.motions().back().feed, 0x8000);

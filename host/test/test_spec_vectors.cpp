@@ -113,7 +113,7 @@ void check_fields(const spec::Vector& v, const v2::Frame& f) {
     }
     case v2::Type::Motion: {
       const auto m = v2::decode_motion(f);
-      EXPECT_EQ((m.hold ? 1 : 0) | (m.resume ? 2 : 0), v.field("flags")) << at;
+      EXPECT_EQ((m.hold ? 1 : 0) | (m.resume ? 2 : 0) | (m.cancel ? 4 : 0), v.field("flags")) << at;
       EXPECT_EQ(m.feed, v.field("feed")) << at;
       EXPECT_EQ(m.rapid, v.field("rapid")) << at;
       EXPECT_EQ(m.ramp, v.field("ramp")) << at;

@@ -610,7 +610,7 @@ TEST(StreamV2, HoldControlKeysAndInterrupt) {
   io.ask = [&](const std::string& where) {
     asked.push_back(where);
     EXPECT_TRUE(dev.held()) << "asked before the device holds";
-    return false;  // stop
+    return lk::HoldControl::Io::Answer::kKeep;  // stop, the device keeps its queue
   };
   lk::HoldControl hc(cfg, io);
   auto so = clean_options();
@@ -687,4 +687,44 @@ TEST(StreamV2, HoldControlOnADeviceWithoutMotion) {
   ASSERT_EQ(said.size(), 2u);
   EXPECT_NE(said[0].find("no feed hold"), std::string::npos) << said[0];
   EXPECT_NE(said[1].find("cannot hold"), std::string::npos) << said[1];
+}
+
+// "stop" at the question (and no terminal to ask): MOTION CANCEL, the device drops its queue at
+// rest, and the job ends once STATUS shows it empty and the hold over; every frame is done,
+// dropped by the device or not sent.
+TEST(StreamV2, HoldControlStopCancelsTheDeviceQueue) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  for (const bool terminal : {true, false}) {
+    SCOPED_TRACE(terminal ? "asked" : "no terminal");
+    FakeV2Device::Options o;
+    o.fifo_depth = 16;
+    o.exec_period = std::chrono::microseconds(20'000);  // the job outlasts the polls by far
+    FakeV2Device dev(o);
+    lk::HoldControl::Io io;
+    if (terminal) io.ask = [](const std::string&) { return lk::HoldControl::Io::Answer::kStop; };
+    lk::HoldControl hc(cfg, io);
+    auto so = clean_options();
+    so.motion = lk::machine_motion(cfg);
+    bool sent = false;
+    so.on_poll = [&](lk::V2Session& s) {
+      if (!sent && s.fifo_done() >= 3) {
+        hc.interrupt();
+        sent = true;
+      }
+      return hc.poll(s);
+    };
+    const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+    EXPECT_TRUE(r.stopped);
+    EXPECT_TRUE(hc.cancelled());
+    ASSERT_EQ(dev.motions().size(), 3u);  // the start's, the hold, the cancel
+    EXPECT_TRUE(dev.motions()[2].cancel);
+    EXPECT_FALSE(dev.held());
+    EXPECT_EQ(dev.fifo_level(), 0u);
+    EXPECT_GT(dev.cancelled(), 0u);
+    EXPECT_EQ(r.queued, dev.cancelled());
+    EXPECT_EQ(dev.executed().size() + dev.cancelled() + r.unsent, job.frames.size());
+    EXPECT_EQ(r.status_end.position, dev.position());
+  }
 }

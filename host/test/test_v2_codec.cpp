@@ -196,7 +196,10 @@ TEST(V2Codec, MotionFrameLayoutAndRules) {
     return v2::check_host_frame(with(p), 4);
   };
   EXPECT_EQ(bad(0, 0x03), v2::NakReason::BadField);  // HOLD and RESUME
-  EXPECT_EQ(bad(0, 0x04), v2::NakReason::BadField);  // reserved bit 2
+  EXPECT_EQ(bad(0, 0x06), v2::NakReason::BadField);  // CANCEL and RESUME
+  EXPECT_EQ(bad(0, 0x04), std::nullopt);             // CANCEL
+  EXPECT_EQ(bad(0, 0x05), std::nullopt);             // HOLD and CANCEL
+  EXPECT_EQ(bad(0, 0x08), v2::NakReason::BadField);  // reserved bit 3
   EXPECT_EQ(bad(0, 0x80), v2::NakReason::BadField);  // reserved bit 7
   {
     auto p = good;
@@ -220,6 +223,13 @@ TEST(V2Codec, MotionFrameLayoutAndRules) {
   v2::Motion both;
   both.hold = both.resume = true;
   EXPECT_THROW(v2::motion(both), std::invalid_argument);
+  v2::Motion cancel;
+  cancel.cancel = true;
+  const auto cb = v2::encode(v2::motion(cancel));
+  EXPECT_EQ(cb[4], 0x04u);
+  EXPECT_EQ(v2::decode_motion(parse_one(cb)), cancel);
+  cancel.resume = true;
+  EXPECT_THROW(v2::motion(cancel), std::invalid_argument);
   v2::Motion zero;
   zero.feed = 0;
   EXPECT_THROW(v2::motion(zero), std::invalid_argument);

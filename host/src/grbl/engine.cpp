@@ -241,17 +241,18 @@ void Engine::receive(std::string_view bytes) {
   }
 }
 
-v2::Motion Engine::motion_frame(bool hold, bool resume) const {
+v2::Motion Engine::motion_frame(bool hold, bool resume, bool cancel) const {
   v2::Motion m = link::machine_motion(cfg_, ident_.n_axes);
   m.hold = hold;
   m.resume = resume;
+  m.cancel = cancel;
   m.feed = v2::rate_from_percent(std::min(ov_.feed, 100));
   m.rapid = v2::rate_from_percent(ov_.rapid);
   return m;
 }
 
-void Engine::send_motion(bool hold, bool resume) {
-  session_->send_motion(motion_frame(hold, resume));
+void Engine::send_motion(bool hold, bool resume, bool cancel) {
+  session_->send_motion(motion_frame(hold, resume, cancel));
   ++stats_.motions;
 }
 
@@ -851,14 +852,13 @@ void Engine::soft_reset() {
   if (moving) {
     if (!alarm_) say("ALARM:3");  // not after ALARM:2: the alarm is already raised
     alarm_ = true;
-    if (opt_.estop_press && opt_.estop_release) {
-      // The board drops its queue (held or running); a held board is at rest: no step lost.
-      opt_.estop_press();
+    if (motion_ok_ && board_held()) {
+      // A hold in effect: MOTION CANCEL drops the board's queue once it is at rest, positions
+      // kept, no fault (docs/machine.md "Cancel").
+      send_motion(false, false, true);
+    } else if (opt_.estop_press && opt_.estop_release) {
+      opt_.estop_press();  // running: the board drops its queue at once
       estop_pressed_ = true;
-    } else if (motion_ok_ && board_held()) {
-      // No e-stop to drop the queue: the frames already on the board run out, as for a reset
-      // while running (at most its FIFO depth).
-      send_motion(false, true);
     }
   }
   hold_ = false;

@@ -30,10 +30,11 @@ std::string HoldControl::where(const v2::Status& st) const {
   return s + " mm";
 }
 
-void HoldControl::send(V2Session& s, bool hold, bool resume) {
+void HoldControl::send(V2Session& s, bool hold, bool resume, bool cancel) {
   v2::Motion m = s.motion();
   m.hold = hold;
   m.resume = resume;
+  m.cancel = cancel;
   m.feed = v2::rate_from_percent(std::min(feed_, 100));
   m.rapid = v2::rate_from_percent(rapid_);
   s.send_motion(m);
@@ -53,6 +54,19 @@ bool HoldControl::poll(V2Session& s) {
     }
     interrupts_ = 0;
     return interrupts_nohold_ < 2;
+  }
+  if (cancelling_) {
+    // Stopped once the board has dropped its queue: at rest, nothing queued, the hold over.
+    keys_.clear();
+    interrupts_ = 0;
+    const auto& st = s.last_status();
+    if (!s.motion_pending() && !(st.state & (v2::kStateHold | v2::kStateBusy)) &&
+        st.fifo_level == 0) {
+      cancelled_ = true;
+      return false;
+    }
+    s.request_status();
+    return true;
   }
   const bool board_hold = (s.last_status().state & v2::kStateHold) != 0;
   for (const char c : keys_) {
@@ -110,11 +124,19 @@ bool HoldControl::poll(V2Session& s) {
     }
     asking_ = false;
     const std::string at = where(s.last_status());
-    if (!io_.ask) {
+    Io::Answer a = Io::Answer::kStop;
+    if (io_.ask) {
+      a = io_.ask(at);
+    } else {
       say(fmt::format("held at {}; no terminal to ask: stopping here", at));
-      return false;
     }
-    if (!io_.ask(at)) return false;
+    if (a == Io::Answer::kKeep) return false;
+    if (a == Io::Answer::kStop) {
+      cancelling_ = true;
+      send(s, false, false, true);
+      say("stop: MOTION CANCEL, the board drops its queue at rest, positions kept");
+      return true;
+    }
     held_ = false;
     send(s, false, true);
     say("resume");

@@ -43,8 +43,7 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       const uint16_t feed = get16(f.payload, 1), rapid = get16(f.payload, 3);
       const uint32_t ramp = detail::get32(f.payload, 5);
       if ((flags & spec::kMotionReserved) ||
-          (flags & (spec::kMotionHold | spec::kMotionResume)) ==
-              (spec::kMotionHold | spec::kMotionResume) ||
+          ((flags & spec::kMotionResume) && (flags & (spec::kMotionHold | spec::kMotionCancel))) ||
           feed < 1 || feed > spec::kRateOne || rapid < 1 || rapid > spec::kRateOne || ramp < 1)
         return NakReason::BadField;
       return std::nullopt;

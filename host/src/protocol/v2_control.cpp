@@ -199,6 +199,7 @@ Frame config_travel(uint8_t seq, uint8_t axis, bool enable, int32_t min, int32_t
 
 std::string motion_field_error(const Motion& m) {
   if (m.hold && m.resume) return "HOLD and RESUME in one frame";
+  if (m.cancel && m.resume) return "CANCEL and RESUME in one frame";
   if (m.feed < 1 || m.feed > kRateOne)
     return fmt::format("feed rate 0x{:04X} outside 1..0x8000", m.feed);
   if (m.rapid < 1 || m.rapid > kRateOne)
@@ -210,8 +211,9 @@ std::string motion_field_error(const Motion& m) {
 Frame motion(const Motion& m, uint8_t seq) {
   if (const std::string e = motion_field_error(m); !e.empty())
     throw std::invalid_argument("MOTION frame: " + e);
-  std::vector<uint8_t> p{
-      static_cast<uint8_t>((m.hold ? kMotionHold : 0) | (m.resume ? kMotionResume : 0))};
+  std::vector<uint8_t> p{static_cast<uint8_t>((m.hold ? kMotionHold : 0) |
+                                              (m.resume ? kMotionResume : 0) |
+                                              (m.cancel ? kMotionCancel : 0))};
   put16(p, m.feed);
   put16(p, m.rapid);
   put32(p, m.ramp);
@@ -224,6 +226,7 @@ Motion decode_motion(const Frame& f) {
   Motion m;
   m.hold = (p[0] & kMotionHold) != 0;
   m.resume = (p[0] & kMotionResume) != 0;
+  m.cancel = (p[0] & kMotionCancel) != 0;
   m.feed = get16(p, 1);
   m.rapid = get16(p, 3);
   m.ramp = get32(p, 5);

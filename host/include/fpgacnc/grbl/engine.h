@@ -25,7 +25,8 @@
 // are planned faster, capped by the max rates), 0x95-0x97 rapid override 100 / 50 / 25 % (the
 // board's rapid rate), 0x99-0x9D spindle override (kept and reported, no hardware). On a board
 // without MOTION (NAK UNKNOWN_TYPE) `!` and the feed / rapid overrides are ignored as by a grbl
-// built without them.
+// built without them. A soft reset during a hold sends MOTION CANCEL: the board drops its queue
+// at rest, positions kept.
 #pragma once
 
 #include <array>
@@ -153,9 +154,9 @@ class Engine {
   void push_fifo(const protocol::v2::Frame& f, int line, double feed, double s);
   // Real-time commands other than '?' and 0x18 (acted on in step(), in their order).
   void realtime(unsigned char c);
-  // MOTION with the override rates and the machine's ramp (and HOLD / RESUME).
-  protocol::v2::Motion motion_frame(bool hold, bool resume) const;
-  void send_motion(bool hold, bool resume);
+  // MOTION with the override rates and the machine's ramp (and HOLD / RESUME / CANCEL).
+  protocol::v2::Motion motion_frame(bool hold, bool resume, bool cancel = false) const;
+  void send_motion(bool hold, bool resume, bool cancel = false);
   bool board_held() const;  // a hold in effect: ours ('!') or the board's (its hold pin)
   void soft_reset();
   void continue_reset();

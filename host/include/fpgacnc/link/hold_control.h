@@ -8,10 +8,11 @@
 // never runs faster than planned): a feed override above 100 % is kept and shown, but a job
 // packed before it started runs at its planned speed (--feed-override plans it faster).
 // Interrupt: a hold (unless one is in effect), then, once the board reports it complete (HOLD
-// and STOPPED), the question: resume, or stop the job there (frames not yet sent are dropped,
-// the board keeps its queue, held, and its position). A device without MOTION cannot hold: the
-// first interrupt says so and the job goes on, the second stops sending (the board runs out
-// what it has queued).
+// and STOPPED), the question: resume; stop (MOTION CANCEL: the board drops its queue at rest,
+// positions kept, and the frames not yet sent are dropped); or keep (the frames not yet sent are
+// dropped, the board keeps its queue, held). Without a terminal to ask: stop. A device without
+// MOTION cannot hold: the first interrupt says so and the job goes on, the second stops sending
+// (the board runs out what it has queued).
 #pragma once
 
 #include <functional>
@@ -26,9 +27,10 @@ class HoldControl {
  public:
   struct Io {
     std::function<void(const std::string&)> say;  // one line for the operator
-    // After an interrupt's hold is complete, `where` the machine is held: true resumes, false
-    // stops the job. Unset (no terminal): the job stops there.
-    std::function<bool(const std::string& where)> ask;
+    // After an interrupt's hold is complete, `where` the machine is held: the operator's choice.
+    // Unset (no terminal): kStop.
+    enum class Answer { kResume, kStop, kKeep };
+    std::function<Answer(const std::string& where)> ask;
   };
   HoldControl(const config::MachineConfig& cfg, Io io);
 
@@ -41,11 +43,13 @@ class HoldControl {
   int feed_pct() const { return feed_; }
   int rapid_pct() const { return rapid_; }
   bool holding() const { return held_; }
+  // The job was stopped with MOTION CANCEL (the board dropped its queue) rather than kept.
+  bool cancelled() const { return cancelled_; }
   // "X 1.000 Y 2.000 Z 0.000 mm" from a STATUS.
   std::string where(const protocol::v2::Status& st) const;
 
  private:
-  void send(V2Session& s, bool hold, bool resume);
+  void send(V2Session& s, bool hold, bool resume, bool cancel = false);
   void say(const std::string& l) const;
 
   config::MachineConfig cfg_;
@@ -56,6 +60,8 @@ class HoldControl {
   bool held_ = false;    // a hold of ours is in effect
   bool asking_ = false;  // an interrupt's hold: ask once it is complete
   bool told_no_motion_ = false;
+  bool cancelling_ = false;  // MOTION CANCEL sent: the job stops once the board is at rest, empty
+  bool cancelled_ = false;
   int feed_ = 100, rapid_ = 100;
 };
 

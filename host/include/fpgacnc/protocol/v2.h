@@ -423,7 +423,9 @@ OutputSet decode_output(const Frame& f);
 
 // MOTION (TYPE 0x08, 9-byte payload; docs/protocol.md "MOTION", docs/timing.md "Feed hold and
 // overrides"): unsequenced like STATUS_QUERY, answered with STATUS. Flags bit 0 HOLD (ramp the
-// motion rate to 0 and keep it there), bit 1 RESUME (end the hold), not both; the feed rate
+// motion rate to 0 and keep it there), bit 1 RESUME (end the hold), not both; bit 2 CANCEL (a
+// hold that, at rate 0, drops the running segment and the queue, positions kept, no fault, then
+// ends the hold; the dropped frames send no DONE), not with RESUME; the feed rate
 // (segments with a code other than 0) and the rapid rate (code 0) in Q1.15, 0x8000 = 100 % =
 // the planned speed, 1 .. 0x8000; the ramp: the rate's largest change per 256-clock period in
 // 2^-32 (>= 1). Every MOTION sets all three rates; a frame with neither flag changes only them.
@@ -433,9 +435,11 @@ constexpr size_t kMotionPayload = spec::kLenMotion;
 constexpr uint16_t kRateOne = static_cast<uint16_t>(spec::kRateOne);  // 100 %
 constexpr uint8_t kMotionHold = static_cast<uint8_t>(spec::kMotionHold);
 constexpr uint8_t kMotionResume = static_cast<uint8_t>(spec::kMotionResume);
+constexpr uint8_t kMotionCancel = static_cast<uint8_t>(spec::kMotionCancel);
 struct Motion {
   bool hold = false;
   bool resume = false;
+  bool cancel = false;
   uint16_t feed = kRateOne;   // Q1.15
   uint16_t rapid = kRateOne;  // Q1.15
   uint32_t ramp = spec::kDefaultRateRamp;
@@ -446,7 +450,8 @@ std::string motion_field_error(const Motion& m);
 // Builder (SEQ is not checked by the device; 0 as for STATUS_QUERY). Throws std::invalid_argument
 // for fields the device would refuse (motion_field_error).
 Frame motion(const Motion& m, uint8_t seq = 0);
-// Decoder (LEN 9, reserved flag bits 0, not HOLD and RESUME, rates 1..0x8000, ramp >= 1;
+// Decoder (LEN 9, reserved flag bits 0, RESUME with neither HOLD nor CANCEL, rates 1..0x8000,
+// ramp >= 1;
 // ProtocolError naming the rule otherwise).
 Motion decode_motion(const Frame& f);
 // A percentage (0 < pct <= 100) as a Q1.15 rate, rounded to nearest, at least 1.
