@@ -285,7 +285,10 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       fmt::print(
           "keys: ! or space feed hold, ~ or c resume, f / F feed -10 / +10 %, r rapid 100 / 50 / "
           "25 %; Ctrl-C holds and asks\n");
+    } else {
+      fmt::print("SIGINT: feed hold, then the job stops at rest (no terminal to ask)\n");
     }
+    std::fflush(stdout);
     o2.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
     if (port.empty() && hooks.configure_v2) hooks.configure_v2(*lk, o2);
     // Pauses (M0/M1, M6, M600): at rest, ask the operator (a terminal), go on (a simulated

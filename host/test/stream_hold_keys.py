@@ -80,7 +80,7 @@ print("terminal: hold, resume, SIGINT hold and question, resume: the job ends on
 # 2. No terminal.
 p = subprocess.Popen([FPGACNC, "stream", JOB, "--model", "rtl"], stdin=subprocess.PIPE,
                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-out = read_until(p.stdout.fileno(), b"", r"protocol: v2")
+out = read_until(p.stdout.fileno(), b"", r"SIGINT: feed hold, then the job stops at rest")
 p.send_signal(signal.SIGINT)
 out = read_until(p.stdout.fileno(), out, r"no terminal to ask: stopping here")
 rest, _ = p.communicate(timeout=HANG)
