@@ -393,10 +393,14 @@ void Engine::step(milliseconds wait) {
   }
   if (report_pending_) {
     if (!report_asked_) {
-      report_answers_ = session_->status_answers();
+      // A STATUS asked for now: the answers to what is still in flight (a MOTION's, an idle
+      // poll's) show the board before the '?' and come first.
+      session_->request_status(true);
+      report_answers_ = session_->status_answers() + session_->status_unanswered();
       report_asked_ = true;
+    } else {
+      session_->request_status();
     }
-    session_->request_status();
   }
   const bool waiting = motion_pending() || report_asked_ || resetting_;
   try {
@@ -404,7 +408,7 @@ void Engine::step(milliseconds wait) {
   } catch (const link::Error&) {
     on_session_error();
   }
-  if (report_asked_ && session_->status_answers() > report_answers_) {
+  if (report_asked_ && session_->status_answers() >= report_answers_) {
     write_report();
     report_pending_ = report_asked_ = false;
   }

@@ -254,6 +254,7 @@ void V2Session::send_motion(const v2::Motion& m) {
   motion_pending_ = true;
   motion_sent_ = link_.now();
   io_.send(v2::motion(m));
+  asked_status();
   // Its answer is a STATUS: no STATUS_QUERY of ours is needed meanwhile.
   status_outstanding_ = true;
   status_sent_ = motion_sent_;
@@ -454,6 +455,7 @@ void V2Session::on_status(const v2::Status& stt) {
   const uint16_t fr = static_cast<uint16_t>(stt.fifo_level >= depth ? 0 : depth - stt.fifo_level);
   update(stt.next_seq, fr, stt.done);
   status_outstanding_ = false;
+  if (status_unanswered_) --status_unanswered_;
   if (motion_pending_) {
     // HOLD / RESUME are seen in the HOLD bit; rates alone in any STATUS after them.
     const bool held = (stt.state & v2::kStateHold) != 0;
@@ -537,12 +539,21 @@ void V2Session::handle(const v2::Frame& f) {
   }
 }
 
-void V2Session::request_status() {
+void V2Session::asked_status() {
   const Time now = link_.now();
-  if (status_outstanding_ && now - status_sent_ <= opt_.retransmit_timeout) return;
+  // Answers not seen for a retransmission timeout are lost: no longer waited for.
+  if (now - last_status_ask_ > opt_.retransmit_timeout) status_unanswered_ = 0;
+  ++status_unanswered_;
+  last_status_ask_ = now;
+}
+
+void V2Session::request_status(bool fresh) {
+  const Time now = link_.now();
+  if (!fresh && status_outstanding_ && now - status_sent_ <= opt_.retransmit_timeout) return;
   status_outstanding_ = true;
   status_sent_ = now;
   io_.send(v2::status_query());
+  asked_status();
   ++rep_.status_polls;
   last_poll_ = now;
 }
@@ -581,6 +592,7 @@ void V2Session::poll_once(milliseconds wait) {
   if (motion_pending_ && link_.now() - motion_sent_ > opt_.retransmit_timeout) {
     motion_sent_ = link_.now();
     io_.send(v2::motion(motion_));
+    asked_status();
     status_outstanding_ = true;
     status_sent_ = motion_sent_;
   }
@@ -643,12 +655,14 @@ void V2Session::poll_once(milliseconds wait) {
     status_outstanding_ = true;
     status_sent_ = now;
     io_.send(v2::status_query());
+    asked_status();
     ++rep_.status_polls;
     last_heater_poll_ = now;
     last_poll_ = now;
   } else if (win_.sent() == win_.acked() && now - io_.last_rx() > opt_.idle_poll &&
              now - last_poll_ > opt_.idle_poll) {
     io_.send(v2::status_query());
+    asked_status();
     ++rep_.status_polls;
     last_poll_ = now;
   }

@@ -209,7 +209,7 @@ class Engine {
   bool ov_report_ = false;  // Ov in the next report (an override changed)
   std::string realtime_;    // real-time commands received, acted on in step()
   bool report_pending_ = false;
-  size_t report_answers_ = 0;  // session status answers when the report was asked for
+  size_t report_answers_ = 0;  // the session status answer count the report waits for
   bool report_asked_ = false;
   bool reset_asked_ = false;
   size_t reset_answers_ = 0;
