@@ -38,6 +38,7 @@ declare -A BLK=(
   [limit_guard]="rtl/machine/limit_guard.v|-set N_AXES 2"
   [travel_guard]="rtl/machine/travel_guard.v|-set N_AXES 2"
   [step_config]="rtl/motion/step_config.v|-set N_AXES 2"
+  [feed_rate]="rtl/motion/feed_rate.v|"
   [status_counters]="rtl/protocol/status_counters.v|"
   [estop_latch]="rtl/machine/estop_latch.v|"
   [machine_outputs]="rtl/machine/machine_outputs.v rtl/machine/pwm.v|"
@@ -57,7 +58,7 @@ declare -A BLK=(
 # segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
 blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder
   segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard travel_guard
-  step_config status_counters estop_latch machine_outputs answer_source"}
+  step_config feed_rate status_counters estop_latch machine_outputs answer_source"}
 for tool in yosys nextpnr-ice40 python3; do
   command -v "$tool" >/dev/null || { echo "ice40_blocks: $tool not found"; exit 2; }
 done

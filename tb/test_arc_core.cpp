@@ -365,6 +365,127 @@ TEST(ArcCore, ArcFramesThroughThePins) {
       static_cast<unsigned long long>(b.cycle()));
 }
 
+// Feed hold and rates inside arcs (docs/timing.md "Feed hold and overrides"): a chain of quarter
+// arcs (X or Y reverses inside each one) and a full helical turn, run plainly and then with a feed
+// rate of 37 %, a hold that comes to rest inside an arc, a resume and 100 % again, each at a
+// seeded clock. The held run shows the same STEP events (axes, DIR at the rise) in the same order
+// with the same coincidences, never two closer together than in the plain run, no STEP/DIR
+// timing violation (the in-arc DIR changes only get more room), no STEP while at rest, and the
+// same end positions.
+struct ArcEvent {
+  uint64_t clock;
+  unsigned axes, dirs;
+};
+std::vector<ArcEvent> arc_events(CoreBench& b) {
+  std::vector<ArcEvent> ev;
+  for (int a = 0; a < 3; ++a) {
+    const auto& tr = b.mon().axis(a);
+    for (size_t k = 0; k < tr.rises.size(); ++k)
+      ev.push_back({tr.rises[k], 1u << a, tr.rise_dir[k] ? 1u << a : 0u});
+  }
+  std::sort(ev.begin(), ev.end(),
+            [](const ArcEvent& x, const ArcEvent& y) { return x.clock < y.clock; });
+  std::vector<ArcEvent> merged;
+  for (const ArcEvent& e : ev) {
+    if (!merged.empty() && merged.back().clock == e.clock) {
+      merged.back().axes |= e.axes;
+      merged.back().dirs |= e.dirs;
+    } else {
+      merged.push_back(e);
+    }
+  }
+  return merged;
+}
+
+std::vector<uint8_t> motion_frame(uint8_t flags, uint16_t feed, uint32_t ramp) {
+  std::vector<uint8_t> p{flags};
+  v2::be16(p, feed);
+  v2::be16(p, 0x8000);
+  v2::be32(p, ramp);
+  return v2::frame(0x08, 0, p);
+}
+
+TEST(ArcCore, HoldAndRatesInsideArcsKeepThePath) {
+  const uint64_t seed = fpgacnc::tb::test_seed(20261127, "ArcCoreHold");
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<uint8_t>> frames;
+  uint8_t seq = 4;  // after the four CONFIG_AXIS frames and the dwell
+  for (auto& s : chain(90, true))
+    frames.push_back(v2::frame(0x13, ++seq, arc_payload(s.f, 255, 0)));
+  uint64_t bytes = 0;
+  for (const auto& f : frames) bytes += f.size();
+  const uint32_t dwell = static_cast<uint32_t>(bytes * 10 * 17 + 20'000);
+
+  auto start = [&](CoreBench& b) {
+    b.exchange(v2::hello());
+    for (uint8_t ax = 0; ax < kAxes; ++ax)
+      ASSERT_EQ(b.exchange(v2::config_axis(ax, ax, static_cast<uint16_t>(kTiming.high),
+                                           static_cast<uint16_t>(kTiming.low),
+                                           static_cast<uint16_t>(kTiming.setup),
+                                           static_cast<uint16_t>(kTiming.hold)))
+                    .type,
+                v2::kAck);
+    ASSERT_EQ(b.exchange(v2::dwell(4, dwell)).type, v2::kAck);
+    for (const auto& f : frames) b.queue(f);
+    while (!b.rx_idle()) b.tick();
+  };
+  auto finish = [&](CoreBench& b) {
+    const uint32_t n = static_cast<uint32_t>(frames.size()) + 1;
+    for (uint64_t g = 0; g < 50'000'000 && b.dut().segments_done < n; ++g) b.tick();
+    ASSERT_EQ(b.dut().segments_done, n) << "by cycle " << b.cycle() << ", seed " << seed;
+    b.idle(200);
+  };
+  CoreBench plain;
+  start(plain);
+  finish(plain);
+
+  CoreBench held;
+  start(held);
+  while (held.starts.size() < 2) held.tick();  // the dwell is over: the first arc runs
+  auto wait = [&](uint64_t lo, uint64_t hi) {
+    held.idle(std::uniform_int_distribution<uint64_t>(lo, hi)(rng));
+  };
+  wait(100, 3'000);
+  EXPECT_EQ(held.exchange(motion_frame(0, 0x8000 * 37 / 100, 1u << 28)).type, v2::kStatus);
+  wait(1'000, 20'000);
+  const uint32_t ramp = (1u << 31) / 40;  // 37 % to 0 in about 30 periods
+  EXPECT_EQ(held.exchange(motion_frame(1, 0x8000 * 37 / 100, ramp)).type, v2::kStatus);
+  held.idle(60 * 256);
+  size_t at_rest = 0;
+  for (int a = 0; a < 3; ++a) at_rest += held.mon().axis(a).rises.size();
+  const uint32_t done_at_rest = held.dut().segments_done;
+  held.idle(50'000);
+  size_t later = 0;
+  for (int a = 0; a < 3; ++a) later += held.mon().axis(a).rises.size();
+  EXPECT_EQ(later, at_rest) << "a STEP while at rest";
+  EXPECT_LT(done_at_rest, frames.size() + 1) << "the hold came after the last arc, seed " << seed;
+  EXPECT_EQ(held.exchange(motion_frame(2, 0x8000 * 37 / 100, ramp)).type, v2::kStatus);
+  wait(1'000, 30'000);
+  EXPECT_EQ(held.exchange(motion_frame(0, 0x8000, 1u << 26)).type, v2::kStatus);
+  finish(held);
+
+  EXPECT_EQ(held.dut().violations, 0) << "STEP/DIR timing violations, seed " << seed;
+  EXPECT_EQ(held.dut().faults, 0) << "faults, seed " << seed;
+  for (int a = 0; a < 3; ++a)
+    for (auto& v : held.mon().check_pulses(a, kTiming)) ADD_FAILURE() << v;
+  const auto p = arc_events(plain), h = arc_events(held);
+  ASSERT_EQ(p.size(), h.size()) << "step events, seed " << seed;
+  for (size_t k = 0; k < p.size(); ++k) {
+    ASSERT_EQ(p[k].axes, h[k].axes) << "event " << k << ", seed " << seed;
+    ASSERT_EQ(p[k].dirs, h[k].dirs) << "event " << k << " DIR, seed " << seed;
+    if (k > 0) {
+      ASSERT_GE(h[k].clock - h[k - 1].clock, p[k].clock - p[k - 1].clock)
+          << "event " << k << " faster than planned, seed " << seed;
+    }
+  }
+  for (int a = 0; a < kAxes; ++a)
+    EXPECT_EQ(held.dut().position[a], plain.dut().position[a]) << "axis " << a;
+  std::printf("ArcCoreHold: seed %llu, %zu step events; plain run %llu cycles, held %llu\n",
+              static_cast<unsigned long long>(seed), p.size(),
+              static_cast<unsigned long long>(plain.cycle()),
+              static_cast<unsigned long long>(held.cycle()));
+}
+
 // Rule breakers are NAKed (BAD_FIELD 7, BAD_LENGTH 2) with nothing queued; the first good frame
 // after them takes the same seq. An arc whose C_TOTAL is one more than its walk's ends at its end
 // point and latches `arc error` (faults bit 1) until FAULT_CLEAR.

@@ -7,7 +7,10 @@
 //   adv(t+1)  = 1 when acc(t) + r(t) >= 2^32; acc(t+1) = (acc(t) + r(t)) mod 2^32. A register:
 //               the executor's tick gate starts at a flip-flop.
 //   r         moves only at the edge that ends a period (p(t) = 2^PERIOD_LOG2 - 1; p counts from
-//             rst): toward target(t) by at most ramp(t), equal to target(t) when within ramp(t).
+//             rst): to cand(t), a register: cand(t) = r(t-1) moved toward target(t-1) by at most
+//             ramp(t-1), equal to target(t-1) when within ramp(t-1) (r(t-1) = r(t) then: r
+//             changed last a whole period before). The step is formed a clock ahead so that its
+//             compares and the zero test of `stopped` are not one path.
 //   target    0 while hold; rapid * 2^17 while `rapid_seg` (the executor's segment has code 0);
 //             else feed * 2^17.
 //   load       1-clock strobe (an accepted MOTION frame): feed, rapid, ramp take set_feed,
@@ -24,8 +27,9 @@
 // is high in every clock until a MOTION frame or a hold request changes the target.
 // The range checks (feed, rapid 1 .. 0x8000, ramp >= 1, not HOLD and RESUME together) are the
 // frame decoder's; this block takes what it is given.
-// Resources: 33-bit r, 32-bit acc, 32-bit ramp, 2 x 16-bit rates, PERIOD_LOG2-bit counter; one
-// 33-bit add (phase), a 34-bit subtract and a 34-bit compare with the ramp (at period ends).
+// Resources: 33-bit r and cand, 32-bit acc, 32-bit ramp, 2 x 16-bit rates, PERIOD_LOG2-bit
+// counter; a 33-bit add (phase); r + ramp and r - ramp, each then compared with the target, in
+// parallel with the compare of the target and r.
 `default_nettype none
 
 module feed_rate #(
@@ -76,23 +80,26 @@ module feed_rate #(
   reg                   cancel_reg;
   wire                  flush_w = cancel_reg && stopped_reg;
 
+  reg  [           32:0] cand_reg;
   wire [32:0] target = hold_reg ? 33'd0 : {rapid_seg ? rapid_reg : feed_reg, 17'd0};
-  // target - r as a 34-bit two's complement number; its magnitude against the ramp
-  wire [33:0] diff = {1'b0, target} - {1'b0, r_reg};
-  wire        down = diff[33];
-  wire [33:0] mag = down ? (~diff + 34'd1) : diff;
-  wire        near = (mag <= {2'd0, ramp_reg});
-  wire [32:0] r_step = down ? (r_reg - {1'b0, ramp_reg}) : (r_reg + {1'b0, ramp_reg});
-  wire [32:0] r_next = near ? target : r_step;
+  // r moved toward the target by at most the ramp: r + ramp and r - ramp (34 bits, the latter
+  // negative when the ramp is larger than r), each compared with the target, and which applies
+  wire        up = (target > r_reg);
+  wire [33:0] r_up = {1'b0, r_reg} + {2'd0, ramp_reg};
+  wire [33:0] r_dn = {1'b0, r_reg} - {2'd0, ramp_reg};
+  wire        past_up = (r_up >= {1'b0, target});
+  wire        past_dn = r_dn[33] || (r_dn <= {1'b0, target});
+  wire [32:0] r_next = up ? (past_up ? target : r_up[32:0]) : (past_dn ? target : r_dn[32:0]);
   wire        period_end = (p_reg == {PERIOD_LOG2{1'b1}});
   wire [32:0] phase = {1'b0, acc_reg} + r_reg;
 
   always @(posedge clk) begin
     {adv_reg, acc_reg} <= phase;
     p_reg <= p_reg + {{(PERIOD_LOG2 - 1) {1'b0}}, 1'b1};
+    cand_reg <= r_next;
     if (period_end) begin
-      r_reg       <= r_next;
-      stopped_reg <= (r_next == 33'd0);
+      r_reg       <= cand_reg;
+      stopped_reg <= (cand_reg == 33'd0);
     end
     if (load) begin
       feed_reg  <= set_feed;
@@ -105,6 +112,7 @@ module feed_rate #(
     else if (flush_w) cancel_reg <= 1'b0;
     if (rst) begin
       r_reg       <= ONE;
+      cand_reg    <= ONE;
       acc_reg     <= 32'd0;
       adv_reg     <= 1'b1;
       p_reg       <= {PERIOD_LOG2{1'b0}};
@@ -137,21 +145,27 @@ module feed_rate #(
       assume (set_ramp != 32'd0);
     end
   reg [32:0] f_r_q;
-  reg [31:0] f_ramp_q;
-  reg f_hold_q, f_rst_q, f_period_q;
+  reg [31:0] f_ramp_q, f_ramp_qq;
+  reg f_hold_q, f_hold_qq, f_rst_q, f_rst_qq, f_period_q;
   always @(posedge clk) begin
     f_r_q      <= r_reg;
     f_ramp_q   <= ramp_reg;
+    f_ramp_qq  <= f_ramp_q;
     f_hold_q   <= hold_reg;
+    f_hold_qq  <= f_hold_q;
     f_rst_q    <= rst;
+    f_rst_qq   <= f_rst_q;
     f_period_q <= period_end;
   end
-  wire [33:0] f_dr = (r_reg >= f_r_q) ? ({1'b0, r_reg} - {1'b0, f_r_q}) :
-                                         ({1'b0, f_r_q} - {1'b0, r_reg});
+  function [33:0] f_absdiff;
+    input [32:0] x, y;
+    f_absdiff = (x >= y) ? ({1'b0, x} - {1'b0, y}) : ({1'b0, y} - {1'b0, x});
+  endfunction
   always @(*)
     if (f_past_valid && !f_rst_q) begin
       // the rate stays within 0 .. 100 %; the registers stay in range
       assert (r_reg <= ONE);
+      assert (cand_reg <= ONE);
       assert (feed_reg != 16'd0 && feed_reg <= 16'h8000);
       assert (rapid_reg != 16'd0 && rapid_reg <= 16'h8000);
       assert (ramp_reg != 32'd0);
@@ -159,12 +173,17 @@ module feed_rate #(
       // a cancel is always a hold, and flushes only with the motion at rest
       if (cancel_reg) assert (hold_reg);
       if (flush) assert (r_reg == 33'd0);
+      // the next step is at most the ramp away from the rate it was formed from, and never up
+      // from a clock in hold
+      assert (f_absdiff(cand_reg, f_r_q) <= {2'd0, f_ramp_q});
+      if (f_hold_q) assert (cand_reg <= f_r_q);
       // a hold never exceeds the configured deceleration: r changes only at a period end, and
-      // then by at most the ramp in force
+      // then by at most the ramp in force when the step was formed; in a hold it never rises
       if (!f_period_q) assert (r_reg == f_r_q);
-      else assert (f_dr <= {2'd0, f_ramp_q});
-      // in a hold the rate never rises
-      if (f_hold_q) assert (r_reg <= f_r_q);
+      else if (!f_rst_qq) begin
+        assert (f_absdiff(r_reg, f_r_q) <= {2'd0, f_ramp_qq});
+        if (f_hold_qq) assert (r_reg <= f_r_q);
+      end
       // no tick while the rate is 0 for a whole clock
       if (f_r_q == 33'd0) assert (!adv_reg);
       // at 100 % every clock is a tick
