@@ -219,30 +219,45 @@ const v2::Status& V2Session::start() {
 bool V2Session::configure_motion(const v2::Motion& m) {
   const v2::Frame fr = v2::motion(m);
   constexpr int kAttempts = 5;
+  // A STATUS may answer an earlier STATUS_QUERY (one resent at the start): a device that refuses
+  // MOTION sends its NAK right behind any pending STATUS (NAK ranks below STATUS), so after a
+  // STATUS the line is watched a little longer for that NAK.
+  const auto settle = std::max(milliseconds(20), opt_.retransmit_timeout / 4);
   for (int attempt = 0; attempt < kAttempts; ++attempt) {
     io_.send(fr);
-    const Time deadline = link_.now() + opt_.retransmit_timeout;
+    Time deadline = link_.now() + opt_.retransmit_timeout;
+    std::optional<v2::Status> answer;
+    bool resend = false;
     while (const auto f = io_.receive_until(deadline)) {
       try {
         if (f->type == static_cast<uint8_t>(v2::Type::Status)) {
-          motion_ = m;
-          on_status(v2::decode_status(*f, ident_.n_axes));
-          motion_available_ = true;
-          return true;
+          answer = v2::decode_status(*f, ident_.n_axes);
+          deadline = std::min(deadline, link_.now() + settle);
+          continue;
         }
         if (f->type != static_cast<uint8_t>(v2::Type::Nak)) continue;
         const v2::Nak k = v2::decode_nak(*f);
         ++rep_.naks[static_cast<size_t>(k.reason)];
-        if (k.reason == v2::NakReason::UnknownType) return false;
+        if (k.reason == v2::NakReason::UnknownType) {
+          if (answer) on_status(*answer);
+          return false;
+        }
         if (k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::BadLength) {
           throw Error(fmt::format("{}: device refuses MOTION (NAK {}): {}", name_,
                                   v2::nak_reason_name(static_cast<uint8_t>(k.reason)),
                                   v2::hex(v2::encode(fr))));
         }
-        break;  // corrupted on the way (BAD_CRC, TIMEOUT): send it again
+        resend = true;  // corrupted on the way (BAD_CRC, TIMEOUT): send it again
+        break;
       } catch (const v2::ProtocolError&) {
         ++rep_.bad_device_frames;
       }
+    }
+    if (answer && !resend) {
+      motion_ = m;
+      on_status(*answer);
+      motion_available_ = true;
+      return true;
     }
   }
   throw Error(fmt::format("{}: no answer to MOTION after {} attempts ({} ms each)", name_,
