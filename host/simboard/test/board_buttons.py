@@ -133,15 +133,23 @@ def main():
             c.send(frame(0, STATUS_QUERY))
             return Status(c.await_type(STATUS), n_axes)
 
+        def status_until(cond, what):
+            """STATUS answers until cond(status) holds; a wall limit only ends a hung board."""
+            deadline = time.monotonic() + WAIT_S
+            s = status()
+            while not cond(s):
+                if time.monotonic() > deadline:
+                    raise Failed(f"never: {what} (state 0x{s.state:02x}, X {s.pos[0]})")
+                s = status()
+            return s
+
         s0 = status()
         x0, seq = s0.pos[0], s0.next_seq
         # 2 000 steps over 0.3 s of board time; a hold stops within 0.1 s (the reset ramp).
         steps, t_clocks = 2000, 3 * clk_hz // 10
         c.send(line(seq, t_clocks, steps))
         c.await_type(ACK)
-        running = status()
-        while running.pos[0] == x0:  # until the move has made a step (board clocks)
-            running = status()
+        running = status_until(lambda s: s.pos[0] != x0, "the move's first step")
         check(running.state & BUSY_BIT and not running.state & HOLD_BIT,
               f"the move runs ({running.pos[0] - x0} of {steps} steps), no hold")
 
@@ -151,19 +159,17 @@ def main():
         check(m is not None and int(m.group(3)) == int(m.group(1)) + int(m.group(2)),
               "hold: ok, the press's edges and length in board clocks")
         released_at = int(m.group(3))
-        s = status()
-        while not s.state & HOLD_BIT:
-            s = status()
-        check(True, "STATUS shows HOLD (state bit 5)")
-        while not s.state & STOPPED_BIT:
-            s = status()
+        status_until(lambda s: s.state & HOLD_BIT, "STATUS HOLD after the hold button")
+        print("ok: STATUS shows HOLD (state bit 5)")
+        s = status_until(lambda s: s.state & STOPPED_BIT, "STATUS STOPPED after the hold")
         held = s.pos[0]
         check(s.state & HOLD_BIT and 0 < held - x0 < steps,
               f"STATUS shows STOPPED (state bit 6) with X short of the end ({held - x0} of "
               f"{steps} steps)")
         c0 = int(ctl.state()["cycle"])
         polls = 0
-        while True:
+        deadline = time.monotonic() + WAIT_S
+        while time.monotonic() < deadline:
             s = status()
             polls += 1
             if s.pos[0] != held or not s.state & STOPPED_BIT:
@@ -172,7 +178,9 @@ def main():
             st = ctl.state()
             if int(st["cycle"]) >= max(c0 + 5_000_000, released_at):
                 break
-        check(True, f"X stays at {held - x0} steps over {int(st['cycle']) - c0} board clocks "
+        else:
+            raise Failed(f"the board's clock did not run while held (cycle {st['cycle']})")
+        print(f"ok: X stays at {held - x0} steps over {int(st['cycle']) - c0} board clocks "
               f"({polls} STATUS answers)")
         check(st["hold"] == "off", "the hold button's pin is released after its press")
 
@@ -180,9 +188,7 @@ def main():
         a = ctl.ask("start")
         check(a.startswith("ok start pressed from clock edge "), "start: ok")
         c.await_type(DONE)
-        s = status()
-        while s.state & BUSY_BIT:
-            s = status()
+        s = status_until(lambda s: not s.state & BUSY_BIT, "idle after the DONE")
         check(s.pos[0] == x0 + steps and s.done == (s0.done + 1) & 0xFFFFFFFF,
               f"after cycle start the move ends at its planned position (X +{steps}, one segment "
               f"done)")
