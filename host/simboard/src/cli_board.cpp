@@ -405,8 +405,12 @@ class ControlSocket {
         } else {
           answer = board_control_command(board, c.buf);
         }
-        fmt::print("control socket: {} -> {}\n", c.overlong ? "(long line)" : c.buf, answer);
-        std::fflush(stdout);
+        // Actions and errors are logged; the answers to queries (state, help) only go back.
+        const auto w = split_words(c.buf);
+        if (c.overlong || !answer.starts_with("ok ") || (w[0] != "state" && w[0] != "help")) {
+          fmt::print("control socket: {} -> {}\n", c.overlong ? "(long line)" : c.buf, answer);
+          std::fflush(stdout);
+        }
         c.buf.clear();
         c.overlong = false;
         answer += '\n';

@@ -17,18 +17,21 @@ Checks:
      released again by then.
   3. `start` presses cycle start: the move completes (DONE) at its planned position with HOLD and
      STOPPED clear.
-  4. SIGTERM stops the board with status 0 and the socket file is gone.
+  4. `estop on` / `estop off` show in STATUS (state bit 3); `limit x max on` shows in `state`,
+     first at the pin and then, after the filter, in the core's filtered level.
+  5. SIGTERM stops the board with status 0 and the socket file is gone.
 Every wait is for an answer, a printed line or the board's clock; the wall-clock limits only end
 a hung run.
 """
 import os
+import queue
 import re
-import select
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -79,26 +82,31 @@ def main():
     board = subprocess.Popen([sys.argv[1], "board", "--model", "rtl", "--control", sock_path],
                              stdout=subprocess.PIPE)
     out = []
-    pending = bytearray()
+    lines = queue.Queue()
+
+    def drain():
+        """Reads the board's stdout all the time, so that its printing never blocks it."""
+        for raw in board.stdout:
+            s = raw.decode()
+            out.append(s)
+            lines.put(s.rstrip("\n"))
+        lines.put(None)
+
+    threading.Thread(target=drain, daemon=True).start()
 
     def read_line(pattern):
         """The next printed line matching pattern (the lines before it are skipped)."""
         deadline = time.monotonic() + WAIT_S
         while True:
-            while b"\n" in pending:
-                k = pending.index(b"\n")
-                s = pending[:k].decode()
-                del pending[:k + 1]
-                out.append(s + "\n")
-                m = re.search(pattern, s)
-                if m:
-                    return m
-            left = deadline - time.monotonic()
-            r = select.select([board.stdout], [], [], left)[0] if left > 0 else []
-            chunk = os.read(board.stdout.fileno(), 4096) if r else b""
-            if not chunk:
+            try:
+                s = lines.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                s = None
+            if s is None:
                 raise Failed(f"the board never printed /{pattern}/")
-            pending.extend(chunk)
+            m = re.search(pattern, s)
+            if m:
+                return m
 
     try:
         m = read_line(r"^simulated board \(rtl\) on (/dev/pts/\d+) \((\d+) baud\)$")
@@ -193,9 +201,28 @@ def main():
               f"after cycle start the move ends at its planned position (X +{steps}, one segment "
               f"done)")
         check(not s.state & (HOLD_BIT | STOPPED_BIT), "HOLD and STOPPED clear after the resume")
+
+        # 4. The e-stop and a limit switch through the socket.
+        check(ctl.ask("estop on").startswith("ok e-stop pressed at board cycle "), "estop on: ok")
+        s = status()
+        check(s.state & 0x08 and s.faults & 0x10 and ctl.state()["estop"] == "on",
+              "estop on: STATUS state bit 3 and faults bit 4; state estop=on")
+        check(ctl.ask("estop off").startswith("ok e-stop released"), "estop off: ok")
+        s = status()
+        check(not s.state & 0x08 and ctl.state()["estop"] == "off",
+              "estop off: state bit 3 clear; state estop=off")
+        check(ctl.ask("limit x max on").startswith("ok X max pressed from clock edge "),
+              "limit x max on: ok")
+        st = ctl.state()
+        check(st["limit_pins"] == "x-max", "state: the X max pin is pressed")
+        deadline = time.monotonic() + WAIT_S
+        while st["limit_filtered"] != "x-max" and time.monotonic() < deadline:
+            st = ctl.state()  # the board's clock runs through the filter without host traffic
+        check(st["limit_filtered"] == "x-max", "state: the core's filtered X max level follows")
+        check(ctl.ask("limit x max off").startswith("ok X max released"), "limit x max off: ok")
         ctl.close()
 
-        # 4. Stop.
+        # 5. Stop.
         board.send_signal(signal.SIGTERM)
         read_line(r"^stopped by SIGTERM$")
         board.wait(timeout=WAIT_S)
