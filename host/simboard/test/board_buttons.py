@@ -20,6 +20,7 @@ Checks:
   4. `estop on` / `estop off` show in STATUS (state bit 3); `limit x max on` shows in `state`,
      first at the pin and then, after the filter, in the core's filtered level.
   5. SIGTERM stops the board with status 0 and the socket file is gone.
+  6. On the twin board (--model tlm) `hold` is an error naming it and --model rtl.
 Every wait is for an answer, a printed line or the board's clock; the wall-clock limits only end
 a hung run.
 """
@@ -228,6 +229,26 @@ def main():
         board.wait(timeout=WAIT_S)
         check(board.returncode == 0, "the board exits with status 0 on SIGTERM")
         check(not os.path.exists(sock_path), "the control socket is removed at exit")
+
+        # 6. The twin board has no buttons: a clear error, nothing pressed.
+        tb = subprocess.Popen([sys.argv[1], "board", "--model", "tlm", "--control", sock_path],
+                              stdin=subprocess.DEVNULL, stdout=subprocess.PIPE)
+        try:
+            # The socket exists before the board prints its lines; the second one is enough.
+            for _ in range(2):
+                if not tb.stdout.readline():
+                    raise Failed("the twin board exited before printing its control socket")
+            ctl = Control(sock_path)
+            a = ctl.ask("hold")
+            check(a.startswith("error: hold: ") and "twin board" in a and "--model rtl" in a,
+                  "tlm: hold is answered by an error naming the twin board and --model rtl")
+            check(ctl.state().get("model") == "tlm", "tlm: state answers")
+            ctl.close()
+        finally:
+            tb.send_signal(signal.SIGTERM)
+            tb.wait(timeout=WAIT_S)
+        check(tb.returncode == 0 and not os.path.exists(sock_path),
+              "tlm: exits with status 0 on SIGTERM and removes its socket")
         return 0
     except (Failed, OSError) as e:
         print(f"FAILED: {e}", file=sys.stderr)
