@@ -187,7 +187,7 @@ void register_board(CLI::App& app) {
                   "tlm: the SystemC twins of cnc_core (default; fast, event-driven, edge-for-edge "
                   "equal to the RTL; no heaters, no line faults, no e-stop); rtl: the Verilated "
                   "cnc_core (about 1.6 M clocks/s; heaters, --line-*, --fst, e-stop by SIGUSR1 / "
-                  "SIGUSR2)")
+                  "SIGUSR2, limit switches, feed hold and cycle start buttons by --control)")
       ->check(CLI::IsMember({"tlm", "rtl"}));
   sub->add_flag("--realtime", args->realtime,
                 "tlm: simulated time follows the wall clock while the board is busy (a 5-minute "
