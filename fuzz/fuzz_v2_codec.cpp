@@ -10,7 +10,7 @@
 //         from the data decode back to the same fields.
 // For every frame a parser yields: payload <= 64 bytes; every decoder (device answers:
 // decode_credit, _nak, _ident, _status for 1..4 axes; host frames: decode_line, _dwell,
-// _config_axis, _numerators) returns or throws ProtocolError (anything else escapes and is
+// _config_axis, _numerators, _motion) returns or throws ProtocolError (anything else escapes and is
 // reported as a crash); check_host_frame agrees with the host decoders (no NAK reason exactly
 // when the decoder accepts); encode(frame) is 6 + LEN bytes with SYNC, LEN and the CRC-16 of
 // bytes 1..3+N, and parsed back gives exactly that frame, with no error counted.
@@ -99,6 +99,13 @@ void run_decoders(const v2::Frame& f) {
         case v2::Type::Numerators:
           (void)v2::decode_numerators(f);
           break;
+        case v2::Type::Motion: {
+          const auto m = v2::decode_motion(f);
+          if (!v2::motion_field_error(m).empty()) fail("decode_motion: bad field accepted");
+          // every payload bit is a field: the builder gives the same bytes back
+          if (v2::motion(m, f.seq).payload != f.payload) fail("decode_motion: rebuilt differs");
+          break;
+        }
         default:
           host_type = false;
       }

@@ -609,7 +609,7 @@ TEST(FrameDecoderV2, NakReasons) {
              "LINE int32, 5 axes");
   expect_nak(v2::frame(v2::kLine, 1, {0x01, 1, 0, 0, 0}), 1, v2::kBadLength, "LINE of 5 bytes");
   // UNKNOWN_TYPE (reserved and undefined types), checked before the length.
-  for (uint8_t t : {0x00, 0x08, 0x14, 0x25, 0x2F, 0x80, 0x84, 0xFF}) {
+  for (uint8_t t : {0x00, 0x09, 0x14, 0x25, 0x2F, 0x80, 0x84, 0xFF}) {
     expect_nak(v2::frame(t, 1, {1, 2, 3}), 1, v2::kUnknownType, "unknown type");
   }
   // BAD_FIELD.

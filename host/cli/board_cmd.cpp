@@ -1,7 +1,9 @@
 // fpgacnc board [--model tlm|rtl] [--realtime] [--config F] [--fst F] [--edges F.csv]
 //               [--line-* ...]: a simulated board alone on a pseudo-terminal; prints its
 // /dev/pts/N path and serves any serial client until Ctrl-C / SIGTERM; SIGUSR1 / SIGUSR2 press /
-// release the e-stop (--model rtl), --endstop places simulated endstops (rtl). `tlm` (default): the
+// release the e-stop (--model rtl), --endstop places simulated endstops (rtl), --control PATH
+// listens on a control socket (hold / start buttons, e-stop, limit switches, state; keys h, s, e
+// on a terminal). `tlm` (default): the
 // SystemC twins of cnc_core (twins::TwinBoard, event-driven, proven edge-for-edge equal to the
 // RTL); `rtl`: the Verilated cnc_core (SimBoard: heaters, line faults, FST waveforms). Also the
 // hooks that put a board behind `stream` without --port, and `stream --model both`.
@@ -185,7 +187,7 @@ void register_board(CLI::App& app) {
                   "tlm: the SystemC twins of cnc_core (default; fast, event-driven, edge-for-edge "
                   "equal to the RTL; no heaters, no line faults, no e-stop); rtl: the Verilated "
                   "cnc_core (about 1.6 M clocks/s; heaters, --line-*, --fst, e-stop by SIGUSR1 / "
-                  "SIGUSR2)")
+                  "SIGUSR2, limit switches, feed hold and cycle start buttons by --control)")
       ->check(CLI::IsMember({"tlm", "rtl"}));
   sub->add_flag("--realtime", args->realtime,
                 "tlm: simulated time follows the wall clock while the board is busy (a 5-minute "
@@ -199,6 +201,12 @@ void register_board(CLI::App& app) {
                   "pressed while the axis is at or beyond MM (machine position from reset); "
                   "SIGHUP pulls the carriages off their endstops by hand (repeatable)")
       ->type_name("AXIS-SIDE=MM");
+  sub->add_option("--control", args->board.control_path,
+                  "listen on a Unix-domain control socket at PATH (removed at exit): one command "
+                  "a line, answered 'ok ...' or 'error: ...': hold, start (rtl: the feed hold "
+                  "and cycle start buttons), estop on|off, limit AXIS min|max on|off (rtl), "
+                  "state, help (docs/protocol.md \"The simulated board\")")
+      ->type_name("PATH");
   add_line_fault_options(*sub, [args](const std::string& name, const std::string& v) {
     apply_line_fault(args->board.line_faults, name, v);
   });

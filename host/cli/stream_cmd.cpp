@@ -15,12 +15,12 @@
 // simulated board, see board_cmd.cpp); the plain default throws. --plot/--fst/--edges and the
 // line fault options need the simulated board.
 #include <fmt/format.h>
-#include <unistd.h>
-
+#include <termios.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -29,6 +29,7 @@
 #include "commands.h"
 #include "fpgacnc/heat/heater_job.h"
 #include "fpgacnc/heat/heater_plot.h"
+#include "fpgacnc/link/hold_control.h"
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
@@ -92,6 +93,77 @@ class ProgressBar {
   std::string unit_;
   std::string extra_;
   size_t done_ = 0, total_ = 1;
+};
+
+// SIGINT during a v2 job: a controlled feed hold (link/hold_control.h), never an abrupt stop.
+volatile std::sig_atomic_t g_stream_interrupts = 0;
+void on_stream_interrupt(int) {
+  g_stream_interrupts = g_stream_interrupts + 1;
+}
+
+// SIGINT handled by the stream while it lives; the previous handler back after.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    struct sigaction sa {};
+    sa.sa_handler = on_stream_interrupt;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = 0;  // no SA_RESTART: a question's read ends on a second interrupt
+    ::sigaction(SIGINT, &sa, &old_);
+    g_stream_interrupts = 0;
+  }
+  ~InterruptGuard() { ::sigaction(SIGINT, &old_, nullptr); }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+  // Interrupts since the last call.
+  int take() {
+    const int n = g_stream_interrupts;
+    g_stream_interrupts = g_stream_interrupts - n;
+    return n;
+  }
+
+ private:
+  struct sigaction old_ {};
+};
+
+// Keys on a terminal: stdin in non-canonical mode without echo (signals still on: Ctrl-C is
+// SIGINT), read without waiting; the terminal's mode back on destruction and around questions.
+class TerminalKeys {
+ public:
+  TerminalKeys() : on_(::isatty(STDIN_FILENO) == 1) {
+    if (on_ && ::tcgetattr(STDIN_FILENO, &saved_) != 0) on_ = false;
+    if (on_) raw();
+  }
+  ~TerminalKeys() { cooked(); }
+  TerminalKeys(const TerminalKeys&) = delete;
+  TerminalKeys& operator=(const TerminalKeys&) = delete;
+  bool on() const { return on_; }
+  std::string read_keys() {
+    std::string out;
+    if (!on_) return out;
+    char buf[16];
+    for (;;) {
+      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+      if (n <= 0) break;
+      out.append(buf, static_cast<size_t>(n));
+    }
+    return out;
+  }
+  void raw() {
+    if (!on_) return;
+    termios t = saved_;
+    t.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));
+    t.c_cc[VMIN] = 0;
+    t.c_cc[VTIME] = 0;
+    ::tcsetattr(STDIN_FILENO, TCSANOW, &t);
+  }
+  void cooked() {
+    if (on_) ::tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
+  }
+
+ private:
+  bool on_;
+  termios saved_{};
 };
 
 void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
@@ -169,13 +241,61 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
 
   if (choice.protocol == "v2") {
     ProgressBar bar("frames");
+    // Feed hold and overrides (README.md "Feed hold and overrides while streaming"): keys on a
+    // terminal, SIGINT always.
+    o2.motion = link::machine_motion(cfg);
+    InterruptGuard interrupts;
+    TerminalKeys keys;
+    link::HoldControl::Io hio;
+    hio.say = [&bar](const std::string& l) {
+      bar.finish_line();
+      fmt::print("{}\n", l);
+      std::fflush(stdout);
+    };
+    if (keys.on()) {
+      using Answer = link::HoldControl::Io::Answer;
+      hio.ask = [&bar, &keys](const std::string& where) {
+        bar.finish_line();
+        fmt::print(
+            "held at {}, at rest on the path. Enter or r Enter: resume; s Enter: stop the job "
+            "here (the board drops what it has queued, its position kept; the frames not yet "
+            "sent are dropped); k Enter: stop sending, the board keeps its queue, held\n",
+            where);
+        std::fflush(stdout);
+        keys.cooked();
+        std::string answer;
+        const bool got = static_cast<bool>(std::getline(std::cin, answer));
+        keys.raw();
+        if (!got) {  // end of input or a second Ctrl-C: stop
+          std::cin.clear();
+          return Answer::kStop;
+        }
+        if (answer.empty() || answer[0] == 'r' || answer[0] == 'R') return Answer::kResume;
+        if (answer[0] == 'k' || answer[0] == 'K') return Answer::kKeep;
+        return Answer::kStop;
+      };
+    }
+    link::HoldControl hold(cfg, hio);
+    o2.on_poll = [&](link::V2Session& s) {
+      for (const char c : keys.read_keys()) hold.key(c);
+      for (int n = interrupts.take(); n > 0; --n) hold.interrupt();
+      return hold.poll(s);
+    };
+    if (keys.on()) {
+      fmt::print(
+          "keys: ! or space feed hold, ~ or c resume, f / F feed -10 / +10 %, r rapid 100 / 50 / "
+          "25 %; Ctrl-C holds and asks\n");
+    } else {
+      fmt::print("SIGINT: feed hold, then the job stops at rest (no terminal to ask)\n");
+    }
+    std::fflush(stdout);
     o2.progress = [&bar](size_t d, size_t t) { bar.update(d, t); };
     if (port.empty() && hooks.configure_v2) hooks.configure_v2(*lk, o2);
     // Pauses (M0/M1, M6, M600): at rest, ask the operator (a terminal), go on (a simulated
     // board without a terminal) or stop (a real machine without a terminal).
     std::string mode = a.pause_mode;
     if (mode == "auto") mode = isatty(STDIN_FILENO) ? "prompt" : port.empty() ? "continue" : "stop";
-    o2.on_pause = [&bar, mode](const gcode::Pause& pz) {
+    o2.on_pause = [&bar, &keys, mode](const gcode::Pause& pz) {
       bar.finish_line();
       if (mode == "continue") {
         fmt::print("pause at line {}: {} (--pause continue: going on)\n", pz.line, pz.prompt);
@@ -186,8 +306,11 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
           "pause at line {}: {}. The machine is at rest. Enter: go on, q Enter: stop the job\n",
           pz.line, pz.prompt);
       std::fflush(stdout);
+      keys.cooked();
       std::string answer;
-      if (!std::getline(std::cin, answer)) return false;
+      const bool got = static_cast<bool>(std::getline(std::cin, answer));
+      keys.raw();
+      if (!got) return false;
       return answer.empty() || (answer[0] != 'q' && answer[0] != 'Q');
     };
     o2.on_message = [&bar](const gcode::Message& m) {
@@ -244,6 +367,25 @@ void run_stream(const StreamArgs& a, const StreamHooks& hooks) {
       throw;
     }
     write_heater_plot();
+    if (r.stopped) {
+      bar.finish_line();
+      const std::string at = hold.where(r.status_end);
+      fmt::print("{}", link::format_report(r));
+      if (hold.cancelled()) {
+        throw link::Error(fmt::format(
+            "{}: job stopped by the operator; the device is at {}, at rest ({} frames not sent, "
+            "{} dropped by the device: MOTION CANCEL)",
+            lk->name(), at, r.unsent, r.queued));
+      }
+      throw link::Error(fmt::format(
+          "{}: job stopped by the operator; the device is at {} ({} frames not sent, {} left "
+          "queued on the device{})",
+          lk->name(), at, r.unsent, r.queued,
+          (r.status_end.state & protocol::v2::kStateHold) ? ", held" : ""));
+    }
+    if (r.motion == 0) {
+      fmt::print("feed hold and overrides: not available (the device refused MOTION)\n");
+    }
     fmt::print(
         "streamed {} over {} with protocol v2: {} segments as {} LINE, {} LINE_PROFILE, {} ARC "
         "and {} DWELL frames, {} bytes in {:.2f} s\n",

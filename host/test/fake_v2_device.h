@@ -158,6 +158,10 @@ class FakeV2Device : public link::Link {
   // ---- inspection ----
   const std::vector<v2::Frame>& executed() const { return executed_; }
   const std::vector<v2::ConfigAxis>& configs() const { return configs_; }
+  const std::vector<v2::Motion>& motions() const { return motions_; }  // MOTION frames taken
+  bool held() const { return hold_; }
+  size_t cancelled() const { return cancelled_; }
+  size_t fifo_level() const { return fifo_.size(); }
   const std::vector<uint8_t>& written() const { return written_; }
   const FakeStats& stats() const { return st_; }
   bool v2_mode() const { return v2_mode_; }
@@ -206,8 +210,12 @@ class FakeV2Device : public link::Link {
   void advance() {
     const auto now = clock::now();
     advance_heaters(now);
+    // Feed hold (MOTION HOLD): the running entry is frozen (its end moves with the time held),
+    // nothing starts until MOTION RESUME.
+    if (hold_ && running_) run_end_ += now - last_advance_;
+    last_advance_ = now;
     // Execution.
-    while (!fifo_.empty()) {
+    while (!hold_ && !fifo_.empty()) {
       if (!running_) {
         running_ = true;
         run_end_ = now + (fifo_.front().type == static_cast<uint8_t>(v2::Type::Numerators)
@@ -320,6 +328,20 @@ class FakeV2Device : public link::Link {
       pend_status_ = true;
       return;
     }
+    if (type == v2::Type::Motion) {  // unsequenced, answered with STATUS
+      const v2::Motion m = v2::decode_motion(f);
+      motions_.push_back(m);
+      if (m.hold) hold_ = true;
+      if (m.resume) hold_ = false;
+      if (m.cancel) {  // a hold (at rest at once here), the queue dropped without DONE, hold ends
+        cancelled_ += fifo_.size();
+        fifo_.clear();
+        running_ = false;
+        hold_ = false;
+      }
+      pend_status_ = true;
+      return;
+    }
     const uint8_t behind = static_cast<uint8_t>(next_seq_ - f.seq);
     if (f.seq != next_seq_) {
       if (behind >= 1 && behind <= 128) {
@@ -371,8 +393,10 @@ class FakeV2Device : public link::Link {
     } else if (pend_status_) {
       pend_status_ = false;
       v2::Status s;
+      // A hold stops at once here: HOLD and STOPPED together.
       s.state = static_cast<uint8_t>((fifo_.empty() ? 0 : v2::kStateBusy) |
-                                     (v2_mode_ ? v2::kStateV2 : 0));
+                                     (v2_mode_ ? v2::kStateV2 : 0) |
+                                     (hold_ ? v2::kStateHold | v2::kStateStopped : 0));
       s.fifo_level = static_cast<uint16_t>(fifo_.size());
       s.next_seq = next_seq_;
       s.done = done_;
@@ -439,6 +463,10 @@ class FakeV2Device : public link::Link {
   std::vector<uint8_t> hdr_;  // LEN SEQ TYPE payload CRC
   uint8_t frame_seq_ = 0;
   bool v2_mode_ = false;
+  bool hold_ = false;     // MOTION HOLD until MOTION RESUME
+  size_t cancelled_ = 0;  // FIFO frames dropped by MOTION CANCEL
+  std::vector<v2::Motion> motions_;
+  clock::time_point last_advance_ = clock::now();
   uint8_t next_seq_ = 0;
   // answers
   bool pend_ident_ = false, pend_status_ = false, pend_nak_ = false, pend_ack_ = false,

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/link/stream_v2.h"
 
 using fpgacnc::config::MachineConfig;
 
@@ -121,4 +122,35 @@ TEST(Config, WrongTypeNamesKey) {
   EXPECT_THROW(fpgacnc::config::parse_machine_config("baud = \n", "m.toml"),
                fpgacnc::config::Error);
   EXPECT_THROW(fpgacnc::config::load_machine_config("/nonexistent/m.toml"), fpgacnc::config::Error);
+}
+
+// hold_decel_mm_s2 (docs/timing.md "Feed hold and overrides"): the MOTION ramp is
+// 2^32 * 256 * a / (v_max * CLK_HZ) per axis (units cancel: a / v in 1/s), the smallest over the
+// axes. Defaults: X and Y 1000 mm/s^2 at 200 mm/s (5 /s), Z 100 at 10 (10 /s), E 1000 at 50
+// (20 /s): X decides, 2^32 * 256 * 5 / 5e7 = 109 951.16.
+TEST(Config, HoldDecelSetsTheMotionRamp) {
+  const MachineConfig d;
+  EXPECT_EQ(d.hold_decel_mm_s2, 0.0);
+  EXPECT_EQ(fpgacnc::link::machine_hold_ramp(d), 109'951u);
+  EXPECT_EQ(fpgacnc::link::machine_motion(d).ramp, 109'951u);
+  EXPECT_EQ(fpgacnc::link::machine_motion(d).feed, 0x8000);
+  EXPECT_FALSE(fpgacnc::link::machine_motion(d).hold);
+  // 500 mm/s^2 on every axis: X at 200 mm/s gives 2.5 /s: 54 975.58.
+  const auto c = fpgacnc::config::parse_machine_config("hold_decel_mm_s2 = 500\n", "m.toml");
+  EXPECT_EQ(c.hold_decel_mm_s2, 500.0);
+  EXPECT_EQ(fpgacnc::link::machine_hold_ramp(c), 54'975u);
+  // Only the device's axes: with Z alone slower (a 3-axis device), still X; a machine whose X
+  // is slow to stop but has 1 axis only is decided by X alone.
+  MachineConfig z = d;
+  z.max_accel_mm_s2[2] = 10.0;  // Z: 10 / 10 = 1 /s: 21 990.23
+  EXPECT_EQ(fpgacnc::link::machine_hold_ramp(z, 3), 21'990u);
+  EXPECT_EQ(fpgacnc::link::machine_hold_ramp(z, 2), 109'951u);
+  try {
+    fpgacnc::config::parse_machine_config("\nhold_decel_mm_s2 = 0\n", "m.toml");
+    ADD_FAILURE() << "hold_decel_mm_s2 = 0 accepted";
+  } catch (const std::exception& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("m.toml:2"), std::string::npos) << w;
+    EXPECT_NE(w.find("hold_decel_mm_s2"), std::string::npos) << w;
+  }
 }

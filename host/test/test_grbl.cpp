@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -604,21 +605,24 @@ TEST(Grbl, SoftLimitLineRaisesAlarm2AndMovesNothing) {
 }
 
 // Features that need hardware not built yet answer as grbl does without them (docs/grbl.md):
-// $H error:5, $J= error:3, feed hold and overrides ignored (the job runs to its end at 100 %),
-// M0 holds at rest until '~'.
+// $H error:5, $J= error:3, jog cancel ignored; the spindle override is kept and reported (Ov)
+// with nothing to drive; M0 holds at rest until '~'.
 TEST(Grbl, FeaturesNotAvailableAndProgramPause) {
   Rig rig;
   EXPECT_EQ(rig.command("$H")[0], "error:5");
   EXPECT_EQ(rig.command("$J=G91 X10 F500")[0], "error:3");
   EXPECT_EQ(rig.command("G0 X5")[0], "ok");
-  rig.send("!\x91\x9A\x85");  // hold, feed +10 %, rapid 25 %, jog cancel: not available
+  rig.send("\x9A\x85");  // spindle override +10 %, jog cancel (not available)
   const Report r = rig.wait_idle();
   expect_at(r, {800, 0, 0}, MachineConfig{});
+  size_t ov = 0;
   for (const auto& rep : rig.reports()) {
     if (rep.find("|Ov:") != std::string::npos) {
-      EXPECT_NE(rep.find("|Ov:100,100,100"), std::string::npos) << rep;
+      EXPECT_NE(rep.find("|Ov:100,100,110"), std::string::npos) << rep;
+      ++ov;
     }
   }
+  EXPECT_GE(ov, 1u) << "the report after an override change carries Ov";
   // M0: Hold:0 once at rest, then '~' runs the rest.
   EXPECT_EQ(rig.command("G0 X6")[0], "ok");
   EXPECT_EQ(rig.command("M0")[0], "ok");
@@ -715,4 +719,184 @@ TEST(Grbl, HardLimitOnTheVerilatedBoard) {
   EXPECT_EQ(rig.command("G1 X1").back(), "ok");
   const Report end = rig.wait_idle();
   EXPECT_NEAR(end.mpos[0], 1.0, 0.0005);
+}
+
+// ---- Feed hold and overrides on the Verilated board (docs/grbl.md "Feed hold and overrides").
+// Every duration is counted in board clocks (SimBoard::cycle, move_done_cycles), never wall time.
+
+std::array<int64_t, 3> board_xyz(Rig& rig) {
+  const auto n = rig.board().net_steps();
+  return {n[0], n[1], n[2]};
+}
+
+// Reports until `pred` holds for one of them (asked back to back: a few ms of board time each),
+// every state seen kept in `states`; false after `limit` of board time.
+template <typename P>
+bool poll_reports(Rig& rig, std::vector<std::string>& states, P pred,
+                  milliseconds limit = milliseconds(3000)) {
+  const auto end = rig.link().now() + limit;
+  while (rig.link().now() < end) {
+    const Report r = rig.status();
+    states.push_back(r.state);
+    if (pred(r)) return true;
+  }
+  return false;
+}
+
+// '!' mid-job: Hold:1 while the board decelerates, then Hold:0 with the machine at rest (no STEP
+// edge for a while of polling); '~' runs the rest and the job ends where the plan ends, on
+// the board's own step counters.
+TEST(Grbl, FeedHoldMidJobThenResumeEndsOnThePlan) {
+  const MachineConfig cfg;
+  Rig rig("", cfg, true);
+  ASSERT_TRUE(rig.engine().motion_available()) << "the Verilated board refuses MOTION";
+  for (const char* l : {"G21 G90 F1200", "G1 X3 Y1", "G1 X6 Y0", "G1 X8 Y2"})
+    EXPECT_EQ(rig.command(l).back(), "ok") << l;
+  std::vector<std::string> states;
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 1.0; }));
+  EXPECT_EQ(states.back(), "Run");
+  rig.send("!");
+  states.clear();
+  Report held;
+  ASSERT_TRUE(poll_reports(rig, states, [&](const Report& r) {
+    held = r;
+    return r.state == "Hold:0";
+  })) << "no Hold:0";
+  EXPECT_NE(std::find(states.begin(), states.end(), "Hold:1"), states.end())
+      << "no Hold:1 while decelerating (states polled: " << states.size() << ")";
+  EXPECT_LT(held.mpos[0], 8.0) << "the hold came after the end of the job";
+  // At rest: the board's step counters stay put while held, and the report says so.
+  const auto at_rest = board_xyz(rig);
+  std::vector<std::string> still;
+  EXPECT_FALSE(poll_reports(
+      rig, still, [](const Report& r) { return r.state != "Hold:0"; }, milliseconds(50)));
+  EXPECT_EQ(board_xyz(rig), at_rest) << "STEP edges during Hold:0";
+  for (size_t a = 0; a < 3; ++a) {
+    EXPECT_NEAR(held.mpos[a], static_cast<double>(at_rest[a]) / cfg.steps_per_mm[a], 0.0005);
+  }
+  EXPECT_EQ(rig.engine().stats().holds, 1u);
+  rig.send("~");
+  const Report end = rig.wait_idle();
+  const std::array<int64_t, 3> plan{8 * 160, 2 * 160, 0};
+  expect_at(end, plan, cfg);
+  EXPECT_EQ(board_xyz(rig), plan);
+  EXPECT_EQ(rig.engine().stats().resumes, 1u);
+}
+
+// The rate settles at once in the override tests: a hold deceleration of 1e6 mm/s^2 makes the
+// ramp 2^32 * 256 * 5000 / 5e7 per period, 100 % to 25 % in 30 periods (7 680 clocks), so the
+// clocks measured are the rates', not the ramp's. The G1 moves run with M3 (laser on: code 1,
+// the feed rate); G0 and moves with the laser off are code 0, the rapid rate (docs/timing.md).
+MachineConfig override_cfg() {
+  MachineConfig c;
+  c.hold_decel_mm_s2 = 1e6;
+  return c;
+}
+
+// Clocks from the board's first edge (DIR, STEP or laser of the job's first segment) to the
+// completion of move `last` (index into move_done_cycles, from the end: 0 = the last).
+double clocks_of_job(Rig& rig) {
+  const auto done = rig.board().move_done_cycles();
+  const auto edges = rig.board().edges();
+  EXPECT_FALSE(done.empty());
+  EXPECT_FALSE(edges.empty());
+  if (done.empty() || edges.empty()) return 0.0;
+  return static_cast<double>(done.back() - edges.front().cycle);
+}
+
+// Feed override: the same G1 takes twice the board clocks at 50 % (the board's motion rate
+// stretches the time base of the running segment, docs/timing.md) and fewer at 150 % (the host
+// plans it faster: 4 mm at 30 mm/s instead of 20 mm/s, with the same 1000 mm/s^2 ramps:
+// (0.1333 + 0.03) / (0.2 + 0.02) = 0.742); every run ends where the plan ends. Ov reports the
+// override.
+TEST(Grbl, FeedOverrideScalesTheJobInBoardClocks) {
+  const MachineConfig cfg = override_cfg();
+  auto run = [&](const std::string& ov, const std::string& want_ov) -> double {
+    Rig rig("", cfg, true);
+    EXPECT_TRUE(rig.engine().motion_available());
+    if (!ov.empty()) {
+      rig.send(ov);
+      rig.status();
+      EXPECT_NE(rig.reports().back().find("|Ov:" + want_ov), std::string::npos)
+          << rig.reports().back();
+    }
+    EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
+    EXPECT_EQ(rig.command("G1 X4 F1200").back(), "ok");
+    expect_at(rig.wait_idle(), {640, 0, 0}, cfg);
+    EXPECT_EQ(board_xyz(rig), (std::array<int64_t, 3>{640, 0, 0}));
+    return clocks_of_job(rig);
+  };
+  const double t100 = run("", "");
+  const double t50 = run("\x92\x92\x92\x92\x92", "50,100,100");
+  const double t150 = run("\x91\x91\x91\x91\x91", "150,100,100");
+  ASSERT_GT(t100, 0.0);
+  fmt::print(
+      "G1 X4 F1200: {:.0f} clocks at 100 %, {:.0f} at 50 % ({:.4f}x), {:.0f} at 150 % "
+      "({:.4f}x)\n",
+      t100, t50, t50 / t100, t150, t150 / t100);
+  EXPECT_NEAR(t50 / t100, 2.0, 0.02) << t50 << " vs " << t100 << " clocks";
+  EXPECT_NEAR(t150 / t100, 0.742, 0.02) << t150 << " vs " << t100 << " clocks";
+}
+
+// Rapid override 25 %: a G0 takes four times the board clocks (the board's rapid rate); a G1
+// (laser on) after it runs at 100 % (the feed rate is separate). Ov shows 100,25,100.
+TEST(Grbl, RapidOverrideScalesRapidsOnly) {
+  const MachineConfig cfg = override_cfg();
+  auto run = [&](bool slow) -> std::pair<double, double> {
+    Rig rig("", cfg, true);
+    EXPECT_TRUE(rig.engine().motion_available());
+    if (slow) {
+      rig.send("\x97");
+      rig.status();
+      EXPECT_NE(rig.reports().back().find("|Ov:100,25,100"), std::string::npos)
+          << rig.reports().back();
+    }
+    EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
+    EXPECT_EQ(rig.command("G0 X3").back(), "ok");
+    EXPECT_EQ(rig.command("G4 P0.01").back(), "ok");  // the G0 ends at rest
+    EXPECT_EQ(rig.command("G1 X6 F1200").back(), "ok");
+    expect_at(rig.wait_idle(), {960, 0, 0}, cfg);
+    const auto done = rig.board().move_done_cycles();
+    const auto edges = rig.board().edges();
+    EXPECT_GE(done.size(), 3u);
+    if (done.size() < 3 || edges.empty()) return {0.0, 0.0};
+    return {static_cast<double>(done[0] - edges.front().cycle),
+            static_cast<double>(done.back() - done[done.size() - 2])};
+  };
+  const auto [g0_100, g1_100] = run(false);
+  const auto [g0_25, g1_25] = run(true);
+  ASSERT_GT(g0_100, 0.0);
+  fmt::print(
+      "G0 X3: {:.0f} clocks at 100 %, {:.0f} at 25 % ({:.4f}x); the G1 after it {:.0f} and "
+      "{:.0f} ({:.4f}x)\n",
+      g0_100, g0_25, g0_25 / g0_100, g1_100, g1_25, g1_25 / g1_100);
+  EXPECT_NEAR(g0_25 / g0_100, 4.0, 0.05) << g0_25 << " vs " << g0_100 << " clocks";
+  EXPECT_NEAR(g1_25 / g1_100, 1.0, 0.01) << g1_25 << " vs " << g1_100 << " clocks";
+}
+
+// 0x18 during a hold (grbl: ALARM:3, the queue dropped): MOTION CANCEL makes the Verilated board
+// drop its queue while it is at rest, so the position is the held one exactly and no fault
+// latches; after $X the parser starts there and a new move ends on the plan.
+TEST(Grbl, SoftResetDuringAHoldAlarmsAndKeepsThePosition) {
+  const MachineConfig cfg;
+  Rig rig("", cfg, true);
+  ASSERT_TRUE(rig.engine().motion_available());
+  EXPECT_EQ(rig.command("G21 G90 G1 X6 F1200").back(), "ok");
+  std::vector<std::string> states;
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 1.0; }));
+  rig.send("!");
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.state == "Hold:0"; }));
+  const auto held = board_xyz(rig);
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const Report a = rig.status();
+  EXPECT_EQ(a.state, "Alarm");
+  EXPECT_EQ(board_xyz(rig), held) << "the board moved after the reset";
+  EXPECT_NEAR(a.mpos[0], static_cast<double>(held[0]) / cfg.steps_per_mm[0], 0.0005);
+  EXPECT_LT(a.mpos[0], 6.0);
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G0 X1").back(), "ok");
+  expect_at(rig.wait_idle(), {160, 0, 0}, cfg);
 }

@@ -111,6 +111,15 @@ void check_fields(const spec::Vector& v, const v2::Frame& f) {
       rebuilt = v2::encode(v2::arc(v.seq, a));
       break;
     }
+    case v2::Type::Motion: {
+      const auto m = v2::decode_motion(f);
+      EXPECT_EQ((m.hold ? 1 : 0) | (m.resume ? 2 : 0) | (m.cancel ? 4 : 0), v.field("flags")) << at;
+      EXPECT_EQ(m.feed, v.field("feed")) << at;
+      EXPECT_EQ(m.rapid, v.field("rapid")) << at;
+      EXPECT_EQ(m.ramp, v.field("ramp")) << at;
+      rebuilt = v2::encode(v2::motion(m, v.seq));
+      break;
+    }
     case v2::Type::Output: {
       const auto o = v2::decode_output(f);
       // The stated mask / value / duty, rebuilt from the decoded set.
@@ -193,7 +202,11 @@ TEST(SpecVectors, HostCodec) {
         if (v.answer == "IDENT") {
           EXPECT_EQ(f.type, static_cast<uint8_t>(v2::Type::Hello));
         } else if (v.answer == "STATUS") {
-          EXPECT_EQ(f.type, static_cast<uint8_t>(v2::Type::StatusQuery));
+          // STATUS_QUERY, or MOTION (unsequenced, answered with STATUS).
+          EXPECT_TRUE(f.type == static_cast<uint8_t>(v2::Type::StatusQuery) ||
+                      f.type == static_cast<uint8_t>(v2::Type::Motion))
+              << v2::type_name(f.type);
+          EXPECT_FALSE(v2::is_sequenced(f.type));
         } else {
           EXPECT_EQ(v.answer, "ACK");
           EXPECT_TRUE(v2::is_sequenced(f.type));

@@ -11,8 +11,10 @@
 
 #include "fake_v2_device.h"
 #include "fpgacnc/gcode/interpreter.h"
+#include "fpgacnc/link/hold_control.h"
 #include "fpgacnc/link/stream_v1.h"
 #include "fpgacnc/link/stream_v2.h"
+#include "fpgacnc/link/v2_session.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
@@ -461,4 +463,268 @@ TEST(SelectProtocol, ExplicitV2OnAV1DeviceIsAnError) {
         << e.what();
   }
   EXPECT_THROW(lk::select_protocol(dev, "v3", so), lk::Error);
+}
+
+// MOTION at the start (StreamV2Options::motion, docs/protocol.md "MOTION"): a device that takes
+// it gets the machine's ramp once; a device without it (NAK UNKNOWN_TYPE) runs the job anyway.
+TEST(StreamV2, MotionAtTheStartAndADeviceWithoutIt) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(40, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  for (const bool known : {true, false}) {
+    SCOPED_TRACE(known ? "device with MOTION" : "device without MOTION");
+    FakeV2Device::Options o;
+    if (!known) o.unknown_types = {0x08};
+    FakeV2Device dev(o);
+    auto so = clean_options();
+    so.motion = lk::machine_motion(cfg);
+    const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+    EXPECT_EQ(r.motion, known ? 1 : 0);
+    if (known) {
+      ASSERT_EQ(dev.motions().size(), 1u);
+      EXPECT_EQ(dev.motions()[0], lk::machine_motion(cfg));
+      EXPECT_EQ(dev.motions()[0].ramp, lk::machine_hold_ramp(cfg));
+    } else {
+      EXPECT_EQ(r.naks[static_cast<size_t>(v2::NakReason::UnknownType)], 1u);
+    }
+    expect_executed_in_order(dev, job);
+    EXPECT_TRUE(r.position_ok);
+  }
+}
+
+// A hold from on_poll (as `fpgacnc stream` sends it on a key or SIGINT): once STATUS shows the
+// hold, nothing more completes however long it lasts (counted in STATUS answers, not time); a
+// resume runs the rest of the job in order to the plan's end.
+TEST(StreamV2, HoldFromOnPollFreezesTheJobAndResumeFinishesIt) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(120, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(10000);  // the job outlasts the polls by far
+  FakeV2Device dev(o);
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  enum { kRun, kHolding, kHeld, kResumed } phase = kRun;
+  size_t done_at_hold = 0, held_answers = 0, answers0 = 0;
+  so.on_poll = [&](lk::V2Session& s) {
+    switch (phase) {
+      case kRun:
+        if (s.fifo_done() >= 10) {
+          v2::Motion m = s.motion();
+          m.hold = true;
+          s.send_motion(m);
+          phase = kHolding;
+        }
+        break;
+      case kHolding:
+        if (!s.motion_pending() && (s.last_status().state & v2::kStateStopped)) {
+          done_at_hold = s.fifo_done();
+          answers0 = s.status_answers();
+          phase = kHeld;
+        }
+        break;
+      case kHeld:
+        EXPECT_EQ(s.fifo_done(), done_at_hold) << "a segment completed during the hold";
+        s.request_status();
+        if (s.status_answers() >= answers0 + 20) {
+          held_answers = s.status_answers() - answers0;
+          EXPECT_TRUE(dev.held());
+          v2::Motion m = s.motion();
+          m.hold = false;
+          m.resume = true;
+          s.send_motion(m);
+          phase = kResumed;
+        }
+        break;
+      case kResumed:
+        break;
+    }
+    return true;
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_EQ(phase, kResumed);
+  EXPECT_GE(held_answers, 20u);
+  EXPECT_LT(done_at_hold, job.frames.size());
+  ASSERT_EQ(dev.motions().size(), 3u);  // the start's, HOLD, RESUME
+  EXPECT_TRUE(dev.motions()[1].hold);
+  EXPECT_TRUE(dev.motions()[2].resume);
+  EXPECT_FALSE(dev.held());
+  expect_executed_in_order(dev, job);
+  EXPECT_TRUE(r.position_ok);
+  EXPECT_FALSE(r.stopped);
+}
+
+// on_poll returning false during a hold stops the job: the frames not yet sent are dropped, the
+// device keeps its queue (held), and the report gives both counts and the device position.
+TEST(StreamV2, StopDuringAHoldKeepsTheDeviceQueueAndReports) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(10000);  // the job outlasts the polls by far
+  FakeV2Device dev(o);
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  bool sent = false;
+  so.on_poll = [&](lk::V2Session& s) {
+    if (!sent && s.fifo_done() >= 5) {
+      v2::Motion m = s.motion();
+      m.hold = true;
+      s.send_motion(m);
+      sent = true;
+    }
+    return !(sent && !s.motion_pending() && (s.last_status().state & v2::kStateStopped));
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_FALSE(r.position_ok);
+  EXPECT_FALSE(r.released);
+  EXPECT_TRUE(dev.held());
+  EXPECT_GT(r.unsent, 0u);
+  EXPECT_EQ(r.queued, dev.fifo_level());
+  EXPECT_GT(r.queued, 0u);
+  // Every frame is either done, queued on the device or dropped (none lost or doubled).
+  EXPECT_EQ(dev.executed().size() + dev.fifo_level() + r.unsent, job.frames.size());
+  EXPECT_EQ(r.status_end.position, dev.position());
+  EXPECT_EQ(r.status_end.done - r.status_start.done, dev.executed().size());
+}
+
+// `fpgacnc stream`'s keys and interrupt (link/hold_control.h) on the fake device: f f f sets
+// the feed rate to 70 % (Q1.15 22 938), r r the rapid rate to 25 %, '!' holds, '~' resumes;
+// an interrupt holds and asks once the hold is complete; "stop" ends the job there with the
+// device's queue kept.
+TEST(StreamV2, HoldControlKeysAndInterrupt) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(20000);  // the job outlasts the polls by far
+  FakeV2Device dev(o);
+  std::vector<std::string> said;
+  std::vector<std::string> asked;
+  lk::HoldControl::Io io;
+  io.say = [&](const std::string& l) { said.push_back(l); };
+  io.ask = [&](const std::string& where) {
+    asked.push_back(where);
+    EXPECT_TRUE(dev.held()) << "asked before the device holds";
+    return lk::HoldControl::Io::Answer::kKeep;  // stop, the device keeps its queue
+  };
+  lk::HoldControl hc(cfg, io);
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  int step = 0;
+  size_t done_held = 0;
+  so.on_poll = [&](lk::V2Session& s) {
+    if (step == 0 && s.fifo_done() >= 3) {
+      for (char c : std::string("fffrr!")) hc.key(c);
+      step = 1;
+    } else if (step == 1 && (s.last_status().state & v2::kStateStopped)) {
+      done_held = s.fifo_done();
+      hc.key('~');
+      step = 2;
+    } else if (step == 2 && s.fifo_done() >= done_held + 3) {
+      hc.interrupt();
+      step = 3;
+    }
+    if (step == 1) s.request_status();
+    return hc.poll(s);
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_EQ(step, 3);
+  EXPECT_TRUE(r.stopped);
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0], hc.where(r.status_end));
+  // MOTION frames: the start's; f, f, f, r, r (rates only); '!'; '~'; the interrupt's hold.
+  const auto& m = dev.motions();
+  ASSERT_EQ(m.size(), 9u);
+  EXPECT_EQ(m[3].feed, 22'938);  // 70 % of 0x8000, rounded
+  EXPECT_EQ(m[3].rapid, 0x8000);
+  EXPECT_EQ(m[5].rapid, 0x2000);  // 25 %
+  EXPECT_TRUE(m[6].hold);
+  EXPECT_TRUE(m[7].resume);
+  EXPECT_TRUE(m[8].hold);
+  for (size_t i = 1; i < 6; ++i) EXPECT_FALSE(m[i].hold || m[i].resume) << i;
+  for (const auto& x : m) EXPECT_EQ(x.ramp, lk::machine_hold_ramp(cfg));
+  EXPECT_EQ(hc.feed_pct(), 70);
+  EXPECT_EQ(hc.rapid_pct(), 25);
+  EXPECT_TRUE(dev.held());
+  EXPECT_EQ(dev.executed().size() + dev.fifo_level() + r.unsent, job.frames.size());
+  EXPECT_FALSE(said.empty());
+}
+
+// A device without MOTION: keys are refused once with a message, the first interrupt goes on,
+// the second stops sending.
+TEST(StreamV2, HoldControlOnADeviceWithoutMotion) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(1000000);  // the job outlasts the polls by far
+  o.unknown_types = {0x08};
+  FakeV2Device dev(o);
+  std::vector<std::string> said;
+  lk::HoldControl hc(cfg, {[&](const std::string& l) { said.push_back(l); }, nullptr});
+  auto so = clean_options();
+  so.motion = lk::machine_motion(cfg);
+  int polls = 0;
+  so.on_poll = [&](lk::V2Session& s) {
+    ++polls;
+    if (polls == 2) {
+      hc.key('!');
+      hc.interrupt();
+    }
+    if (polls == 5) hc.interrupt();
+    return hc.poll(s);
+  };
+  const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+  EXPECT_EQ(r.motion, 0);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_EQ(polls, 5);
+  EXPECT_TRUE(dev.motions().empty());
+  ASSERT_EQ(said.size(), 2u);
+  EXPECT_NE(said[0].find("no feed hold"), std::string::npos) << said[0];
+  EXPECT_NE(said[1].find("cannot hold"), std::string::npos) << said[1];
+}
+
+// "stop" at the question (and no terminal to ask): MOTION CANCEL, the device drops its queue at
+// rest, and the job ends once STATUS shows it empty and the hold over; every frame is done,
+// dropped by the device or not sent.
+TEST(StreamV2, HoldControlStopCancelsTheDeviceQueue) {
+  const auto cfg = test_cfg();
+  const auto plan = plan_of(spiral_gcode(200, false), cfg);
+  const auto job = fpgacnc::test::pack_motion(plan, cfg);
+  for (const bool terminal : {true, false}) {
+    SCOPED_TRACE(terminal ? "asked" : "no terminal");
+    FakeV2Device::Options o;
+    o.fifo_depth = 16;
+    o.exec_period = std::chrono::microseconds(20'000);  // the job outlasts the polls by far
+    FakeV2Device dev(o);
+    lk::HoldControl::Io io;
+    if (terminal) io.ask = [](const std::string&) { return lk::HoldControl::Io::Answer::kStop; };
+    lk::HoldControl hc(cfg, io);
+    auto so = clean_options();
+    so.motion = lk::machine_motion(cfg);
+    bool sent = false;
+    so.on_poll = [&](lk::V2Session& s) {
+      if (!sent && s.fifo_done() >= 3) {
+        hc.interrupt();
+        sent = true;
+      }
+      return hc.poll(s);
+    };
+    const auto r = fpgacnc::test::stream_plan(dev, plan, cfg, so);
+    EXPECT_TRUE(r.stopped);
+    EXPECT_TRUE(hc.cancelled());
+    ASSERT_EQ(dev.motions().size(), 3u);  // the start's, the hold, the cancel
+    EXPECT_TRUE(dev.motions()[2].cancel);
+    EXPECT_FALSE(dev.held());
+    EXPECT_EQ(dev.fifo_level(), 0u);
+    EXPECT_GT(dev.cancelled(), 0u);
+    EXPECT_EQ(r.queued, dev.cancelled());
+    EXPECT_EQ(dev.executed().size() + dev.cancelled() + r.unsent, job.frames.size());
+    EXPECT_EQ(r.status_end.position, dev.position());
+  }
 }

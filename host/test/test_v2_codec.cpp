@@ -164,6 +164,115 @@ TEST(V2Codec, DeviceFramesRoundTrip) {
             (std::array<uint32_t, 2>{18'750'000, 7'500'000}));
 }
 
+// MOTION (docs/protocol.md "MOTION"): big-endian flags, feed, rapid, ramp; unsequenced, the
+// device's field rules; STATUS bits 5 HOLD and 6 STOPPED.
+TEST(V2Codec, MotionFrameLayoutAndRules) {
+  v2::Motion m;
+  m.resume = true;
+  m.feed = 0x1234;
+  m.rapid = 0x8000;
+  m.ramp = 0x01020304;
+  const auto b = v2::encode(v2::motion(m));
+  ASSERT_EQ(b.size(), 6u + 9u);
+  EXPECT_EQ(b[1], 9u);     // LEN
+  EXPECT_EQ(b[2], 0u);     // SEQ
+  EXPECT_EQ(b[3], 0x08u);  // TYPE MOTION
+  const std::vector<uint8_t> payload(b.begin() + 4, b.end() - 2);
+  EXPECT_EQ(payload, (std::vector<uint8_t>{0x02, 0x12, 0x34, 0x80, 0x00, 0x01, 0x02, 0x03, 0x04}));
+  EXPECT_EQ(v2::decode_motion(parse_one(b)), m);
+  EXPECT_FALSE(v2::is_sequenced(0x08));
+  EXPECT_FALSE(v2::is_fifo(0x08));
+  EXPECT_EQ(v2::type_name(0x08), "MOTION");
+
+  // The device's rules: both flags, a reserved flag, a rate of 0 or above 0x8000, ramp 0.
+  auto with = [](std::vector<uint8_t> p) {
+    return v2::Frame{0, static_cast<uint8_t>(v2::Type::Motion), std::move(p)};
+  };
+  const std::vector<uint8_t> good{0x01, 0x80, 0x00, 0x40, 0x00, 0x00, 0x00, 0x00, 0x01};
+  EXPECT_FALSE(v2::check_host_frame(with(good), 4).has_value());
+  auto bad = [&](size_t i, uint8_t v) {
+    auto p = good;
+    p[i] = v;
+    return v2::check_host_frame(with(p), 4);
+  };
+  EXPECT_EQ(bad(0, 0x03), v2::NakReason::BadField);  // HOLD and RESUME
+  EXPECT_EQ(bad(0, 0x06), v2::NakReason::BadField);  // CANCEL and RESUME
+  EXPECT_EQ(bad(0, 0x04), std::nullopt);             // CANCEL
+  EXPECT_EQ(bad(0, 0x05), std::nullopt);             // HOLD and CANCEL
+  EXPECT_EQ(bad(0, 0x08), v2::NakReason::BadField);  // reserved bit 3
+  EXPECT_EQ(bad(0, 0x80), v2::NakReason::BadField);  // reserved bit 7
+  {
+    auto p = good;
+    p[1] = 0x00;
+    p[2] = 0x00;  // feed 0
+    EXPECT_EQ(v2::check_host_frame(with(p), 4), v2::NakReason::BadField);
+    p[1] = 0x80;
+    p[2] = 0x01;  // feed 0x8001
+    EXPECT_EQ(v2::check_host_frame(with(p), 4), v2::NakReason::BadField);
+    p = good;
+    p[3] = 0x80;
+    p[4] = 0x01;  // rapid 0x8001
+    EXPECT_EQ(v2::check_host_frame(with(p), 4), v2::NakReason::BadField);
+    p = good;
+    p[8] = 0x00;  // ramp 0
+    EXPECT_EQ(v2::check_host_frame(with(p), 4), v2::NakReason::BadField);
+  }
+  EXPECT_EQ(v2::check_host_frame(with({0x01}), 4), v2::NakReason::BadLength);
+  EXPECT_THROW(v2::decode_motion(with({0x03, 0x80, 0x00, 0x80, 0x00, 0, 0, 0, 1})),
+               v2::ProtocolError);
+  v2::Motion both;
+  both.hold = both.resume = true;
+  EXPECT_THROW(v2::motion(both), std::invalid_argument);
+  v2::Motion cancel;
+  cancel.cancel = true;
+  const auto cb = v2::encode(v2::motion(cancel));
+  EXPECT_EQ(cb[4], 0x04u);
+  EXPECT_EQ(v2::decode_motion(parse_one(cb)), cancel);
+  cancel.resume = true;
+  EXPECT_THROW(v2::motion(cancel), std::invalid_argument);
+  v2::Motion zero;
+  zero.feed = 0;
+  EXPECT_THROW(v2::motion(zero), std::invalid_argument);
+  zero.feed = 1;
+  zero.ramp = 0;
+  EXPECT_THROW(v2::motion(zero), std::invalid_argument);
+}
+
+TEST(V2Codec, MotionRatesAndHoldRamp) {
+  EXPECT_EQ(v2::rate_from_percent(100.0), 0x8000);
+  EXPECT_EQ(v2::rate_from_percent(50.0), 0x4000);
+  EXPECT_EQ(v2::rate_from_percent(25.0), 0x2000);
+  EXPECT_EQ(v2::rate_from_percent(10.0), 3277);  // 3276.8 rounded
+  EXPECT_EQ(v2::rate_from_percent(1e-9), 1);     // never 0 (the device refuses it)
+  EXPECT_THROW(v2::rate_from_percent(0.0), std::invalid_argument);
+  EXPECT_THROW(v2::rate_from_percent(150.0), std::invalid_argument);
+  // RATE_RAMP is "100 % to 0 in 0.1 s at 50 MHz": a machine whose fastest axis stops from its
+  // top speed in 0.1 s (v / a = 0.1 s) gets the same ramp: 2^32 * 256 / 5e6 = 219 902.3.
+  EXPECT_EQ(v2::hold_ramp(10'000.0, 1'000.0, 50e6), 219'902u);
+  EXPECT_EQ(v2::hold_ramp(10'000.0, 1'000.0, 50e6), fpgacnc::spec::kDefaultRateRamp);
+  // Twice the deceleration: half the time, twice the ramp (rounded down).
+  EXPECT_EQ(v2::hold_ramp(20'000.0, 1'000.0, 50e6), 439'804u);
+  EXPECT_EQ(v2::hold_ramp(1e30, 1.0, 1.0), 0xFFFF'FFFFu);  // clamped
+  EXPECT_EQ(v2::hold_ramp(1e-30, 1e9, 50e6), 1u);          // never 0
+  EXPECT_THROW(v2::hold_ramp(0.0, 1.0, 50e6), std::invalid_argument);
+  EXPECT_THROW(v2::hold_ramp(1.0, -1.0, 50e6), std::invalid_argument);
+}
+
+TEST(V2Codec, StatusHoldAndStoppedBits) {
+  // docs/protocol.md STATUS byte 0: bit 5 HOLD, bit 6 STOPPED.
+  EXPECT_EQ(v2::kStateHold, 1u << 5);
+  EXPECT_EQ(v2::kStateStopped, 1u << 6);
+  v2::Status st;
+  st.state = 0x60 | v2::kStateV2;
+  st.position = {1, 2, 3, 4};
+  const auto b = v2::encode(v2::status(0, st));
+  EXPECT_EQ(b[4], 0x62u);
+  const auto d = v2::decode_status(parse_one(b), 4);
+  EXPECT_TRUE(d.state & v2::kStateHold);
+  EXPECT_TRUE(d.state & v2::kStateStopped);
+  EXPECT_FALSE(d.state & v2::kStateBusy);
+}
+
 TEST(V2Codec, LineChoosesShortOnlyWhenEveryCountFits) {
   const std::array<int32_t, 2> fits{32767, -32768};
   auto f = v2::line(0, 2, 10, 1000, fits);

@@ -1,15 +1,26 @@
 #include "fpgacnc/simboard/cli_board.h"
 
 #include <fmt/format.h>
+#include <poll.h>
 #include <pthread.h>
 #include <signal.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <termios.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <optional>
 #include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include "fpgacnc/simboard/plot.h"
 #include "fpgacnc/simboard/runner.h"
@@ -170,9 +181,329 @@ uint16_t parse_limit_switches_option(std::string_view value) {
   return bits;
 }
 
+namespace {
+
+// "x-min,z-max" for switch bits as STATUS numbers them; "none" for 0.
+std::string switch_list(uint16_t bits) {
+  std::string out;
+  for (int side = 0; side < 2; ++side) {
+    for (int a = 0; a < models::kBoardAxes; ++a) {
+      if (!((bits >> (a + 8 * side)) & 1u)) continue;
+      if (!out.empty()) out += ',';
+      out += fmt::format("{}-{}", "xyza"[a], side ? "max" : "min");
+    }
+  }
+  return out.empty() ? "none" : out;
+}
+
+std::vector<std::string_view> split_words(std::string_view line) {
+  std::vector<std::string_view> w;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    const size_t b = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+    if (i > b) w.push_back(line.substr(b, i - b));
+  }
+  return w;
+}
+
+constexpr const char* kCommands =
+    "hold, start, estop on|off, limit AXIS min|max on|off, state, help";
+
+std::string press(Board& board, Button b) {
+  const uint64_t edge = board.press_button(b);
+  const auto* sb = dynamic_cast<const SimBoard*>(&board);
+  const uint64_t len = sb ? SimBoard::kButtonPressClks : 0;
+  return fmt::format("ok {} pressed from clock edge {} for {} clocks (released at edge {})",
+                     button_name(b), edge, len, edge + len);
+}
+
+std::string board_state(const Board& board) {
+  const auto* sb = dynamic_cast<const SimBoard*>(&board);
+  if (!sb) {
+    return fmt::format("ok model={} cycle={} (no e-stop, buttons or limit switches are modelled)",
+                       board.model(), board.cycle());
+  }
+  const BoardPins p = sb->pins();
+  return fmt::format(
+      "ok model={} cycle={} estop={} hold={} start={} limit_pins={} limit_filtered={} "
+      "limit_wired={} faults=0x{:02x}",
+      board.model(), p.cycle, p.estop ? "on" : "off", (p.buttons & 1u) ? "on" : "off",
+      (p.buttons & 2u) ? "on" : "off", switch_list(p.limit_pins), switch_list(p.limit_filtered),
+      switch_list(p.limit_wired), p.faults);
+}
+
+// on / off as a bool; nullopt for anything else.
+std::optional<bool> on_off(std::string_view w) {
+  if (w == "on") return true;
+  if (w == "off") return false;
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::string board_control_command(Board& board, std::string_view line) {
+  const auto w = split_words(line);
+  if (w.empty()) return "error: empty command (commands: " + std::string(kCommands) + ")";
+  const std::string_view cmd = w[0];
+  const auto extra = [&](size_t n) -> std::string {
+    return w.size() > n ? fmt::format("error: {}: unexpected '{}'", cmd, w[n]) : std::string();
+  };
+  try {
+    if (cmd == "hold" || cmd == "start" || cmd == "state" || cmd == "help") {
+      if (auto e = extra(1); !e.empty()) return e;
+      if (cmd == "hold") return press(board, Button::kHold);
+      if (cmd == "start") return press(board, Button::kStart);
+      if (cmd == "state") return board_state(board);
+      return "ok commands: " + std::string(kCommands);
+    }
+    if (cmd == "estop") {
+      if (w.size() < 2) return "error: estop: expected on or off";
+      const auto on = on_off(w[1]);
+      if (!on) return fmt::format("error: estop: '{}' is not on or off", w[1]);
+      if (auto e = extra(2); !e.empty()) return e;
+      board.set_estop(*on);
+      return fmt::format("ok e-stop {} at board cycle {}", *on ? "pressed" : "released",
+                         board.cycle());
+    }
+    if (cmd == "limit") {
+      if (w.size() < 4) return "error: limit: expected limit AXIS min|max on|off";
+      const std::string_view axes = "xyza";
+      const size_t axis = w[1].size() == 1 ? axes.find(w[1][0]) : std::string_view::npos;
+      if (axis == std::string_view::npos)
+        return fmt::format("error: limit: '{}' is not an axis (x, y, z, a)", w[1]);
+      if (w[2] != "min" && w[2] != "max")
+        return fmt::format("error: limit: '{}' is not min or max", w[2]);
+      const auto on = on_off(w[3]);
+      if (!on) return fmt::format("error: limit: '{}' is not on or off", w[3]);
+      if (auto e = extra(4); !e.empty()) return e;
+      const bool max_side = w[2] == "max";
+      const uint64_t edge = board.set_limit(static_cast<int>(axis), max_side, *on);
+      return fmt::format("ok {} {} from clock edge {}",
+                         limit_switch_name(static_cast<int>(axis), max_side),
+                         *on ? "pressed" : "released", edge);
+    }
+  } catch (const BoardError& e) {
+    return fmt::format("error: {}: {}", cmd, e.what());
+  }
+  return fmt::format("error: unknown command '{}' (commands: {})", cmd, kCommands);
+}
+
+namespace {
+
+// The control socket: a listening Unix-domain stream socket and its clients, each with the part
+// of a line it has sent so far. Removes the socket file when destroyed.
+class ControlSocket {
+ public:
+  static constexpr size_t kMaxLine = 256;
+
+  explicit ControlSocket(const std::string& path) : path_(path) {
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    if (path.empty() || path.size() >= sizeof addr.sun_path) {
+      throw std::invalid_argument(fmt::format("--control {}: a socket path must have 1 to {} bytes",
+                                              path, sizeof addr.sun_path - 1));
+    }
+    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) == 0) {
+      // A socket left behind by a board that did not exit cleanly is replaced; anything else,
+      // or a socket some process still answers on, is not touched.
+      if (!S_ISSOCK(st.st_mode)) {
+        throw std::invalid_argument(
+            fmt::format("--control {}: the path exists and is not a socket", path));
+      }
+      const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+      const bool live =
+          probe >= 0 && ::connect(probe, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+      if (probe >= 0) ::close(probe);
+      if (live) {
+        throw std::invalid_argument(
+            fmt::format("--control {}: another process is listening on that socket", path));
+      }
+      ::unlink(path.c_str());
+    }
+    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    if (fd_ < 0) fail("socket");
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) fail("bind");
+    bound_ = true;
+    if (::listen(fd_, 8) != 0) fail("listen");
+  }
+  ~ControlSocket() {
+    for (auto& c : clients_) ::close(c.fd);
+    if (fd_ >= 0) ::close(fd_);
+    if (bound_) ::unlink(path_.c_str());
+  }
+  ControlSocket(const ControlSocket&) = delete;
+  ControlSocket& operator=(const ControlSocket&) = delete;
+
+  const std::string& path() const { return path_; }
+  // The descriptors to poll: the listening socket first, then the clients.
+  void add_fds(std::vector<pollfd>& p) const {
+    p.push_back({fd_, POLLIN, 0});
+    for (const auto& c : clients_) p.push_back({c.fd, POLLIN, 0});
+  }
+  // Serves what poll() reported for the descriptors add_fds() gave from `first` on.
+  void serve(const std::vector<pollfd>& p, size_t first, Board& board) {
+    std::vector<int> gone;
+    for (size_t i = first + 1; i < p.size() && i - first - 1 < clients_.size(); ++i) {
+      if (p[i].revents && !read_client(clients_[i - first - 1], board)) gone.push_back(p[i].fd);
+    }
+    for (int fd : gone) {
+      ::close(fd);
+      std::erase_if(clients_, [fd](const Client& c) { return c.fd == fd; });
+    }
+    if (p[first].revents & POLLIN) {
+      for (;;) {
+        const int c = ::accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+        if (c < 0) break;
+        clients_.push_back({c, {}, false});
+      }
+    }
+  }
+
+ private:
+  struct Client {
+    int fd;
+    std::string buf;
+    bool overlong;  // the current line passed kMaxLine: dropped up to its newline
+  };
+
+  [[noreturn]] void fail(const char* call) {
+    const std::string why = std::strerror(errno);
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    if (bound_) ::unlink(path_.c_str());
+    bound_ = false;
+    throw std::runtime_error(fmt::format("--control {}: {}: {}", path_, call, why));
+  }
+
+  // Reads what a client sent and answers each complete line; false when it is gone.
+  bool read_client(Client& c, Board& board) {
+    char buf[512];
+    for (;;) {
+      const ssize_t n = ::recv(c.fd, buf, sizeof buf, 0);
+      if (n == 0) return false;
+      if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      for (ssize_t k = 0; k < n; ++k) {
+        const char ch = buf[k];
+        if (ch != '\n') {
+          if (c.buf.size() < kMaxLine)
+            c.buf += ch;
+          else
+            c.overlong = true;
+          continue;
+        }
+        if (!c.buf.empty() && c.buf.back() == '\r') c.buf.pop_back();
+        std::string answer;
+        if (c.overlong) {
+          answer = fmt::format("error: line longer than {} bytes", kMaxLine);
+        } else if (split_words(c.buf).empty()) {
+          c.buf.clear();
+          continue;  // a blank line is no command
+        } else {
+          answer = board_control_command(board, c.buf);
+        }
+        // Actions and errors are logged; the answers to queries (state, help) only go back.
+        const auto w = split_words(c.buf);
+        if (c.overlong || !answer.starts_with("ok ") || (w[0] != "state" && w[0] != "help")) {
+          fmt::print("control socket: {} -> {}\n", c.overlong ? "(long line)" : c.buf, answer);
+          std::fflush(stdout);
+        }
+        c.buf.clear();
+        c.overlong = false;
+        answer += '\n';
+        // The answer is short and the client reads it before its next command; one that does
+        // not read is dropped rather than blocking the board's command loop.
+        if (::send(c.fd, answer.data(), answer.size(), MSG_NOSIGNAL | MSG_DONTWAIT) !=
+            static_cast<ssize_t>(answer.size()))
+          return false;
+      }
+    }
+  }
+
+  std::string path_;
+  int fd_ = -1;
+  bool bound_ = false;
+  std::vector<Client> clients_;
+};
+
+// Keys on the board's terminal: stdin in non-canonical mode without echo (Ctrl-C still sends
+// SIGINT); restored when destroyed. Inactive when stdin is not a terminal.
+class TerminalKeys {
+ public:
+  TerminalKeys() {
+    if (!::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &saved_) != 0) return;
+    termios t = saved_;
+    t.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));
+    t.c_cc[VMIN] = 1;
+    t.c_cc[VTIME] = 0;
+    active_ = ::tcsetattr(STDIN_FILENO, TCSANOW, &t) == 0;
+  }
+  ~TerminalKeys() {
+    if (active_) ::tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
+  }
+  TerminalKeys(const TerminalKeys&) = delete;
+  TerminalKeys& operator=(const TerminalKeys&) = delete;
+  bool active() const { return active_; }
+
+ private:
+  termios saved_{};
+  bool active_ = false;
+};
+
+void key_command(Board& board, char key) {
+  std::string answer;
+  if (key == 'h') {
+    answer = board_control_command(board, "hold");
+  } else if (key == 's') {
+    answer = board_control_command(board, "start");
+  } else if (key == 'e') {
+    const auto* sb = dynamic_cast<const SimBoard*>(&board);
+    const bool pressed = sb && sb->pins().estop;
+    answer = board_control_command(board, pressed ? "estop off" : "estop on");
+  } else {
+    return;
+  }
+  fmt::print("key {}: {}\n", key, answer);
+  std::fflush(stdout);
+}
+
+// The control socket and the keys, served in their own thread until `stop_fd` (an eventfd) is
+// signalled. Signals stay with the caller's sigwait(): a process-directed signal goes to the
+// main thread only while it waits in sigwait (a thread that blocks it in poll() is passed over,
+// and a library thread with nothing blocked would take it with its default action).
+void serve_control(Board& board, ControlSocket* control, bool keys, int stop_fd) {
+  try {
+    for (;;) {
+      std::vector<pollfd> p{{stop_fd, POLLIN, 0}};
+      if (keys) p.push_back({STDIN_FILENO, POLLIN, 0});
+      const size_t ctl_first = p.size();
+      if (control) control->add_fds(p);
+      if (::poll(p.data(), p.size(), -1) < 0) {
+        if (errno == EINTR) continue;
+        throw std::runtime_error(fmt::format("poll: {}", std::strerror(errno)));
+      }
+      if (p[0].revents) return;
+      if (keys && p[1].revents) {
+        char k = 0;
+        if (::read(STDIN_FILENO, &k, 1) == 1) key_command(board, k);
+      }
+      if (control) control->serve(p, ctl_first, board);
+    }
+  } catch (const std::exception& e) {
+    fmt::print("control socket and keys stopped: {}\n", e.what());
+    std::fflush(stdout);
+  }
+}
+
+}  // namespace
+
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud) {
-  // SIGINT/SIGTERM (stop) and SIGUSR1/SIGUSR2 (e-stop) are taken with sigwait() here; block them
-  // before the board thread starts so that it inherits the mask and they always reach this thread.
+  // SIGINT/SIGTERM (stop), SIGUSR1/SIGUSR2 (e-stop) and SIGHUP are taken with sigwait() here;
+  // block them before the board thread and the control thread start so that they inherit the
+  // mask and the signals always reach this thread.
   sigset_t set;
   sigemptyset(&set);
   sigaddset(&set, SIGINT);
@@ -181,15 +512,34 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
   sigaddset(&set, SIGUSR2);
   sigaddset(&set, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  struct Unblock {
+    sigset_t* s;
+    ~Unblock() { pthread_sigmask(SIG_UNBLOCK, s, nullptr); }
+  } unblock{&set};
+  // The socket exists before the board starts: a bad path stops here with nothing running.
+  std::unique_ptr<ControlSocket> control;
+  if (!args.control_path.empty()) control = std::make_unique<ControlSocket>(args.control_path);
+  const int stop_fd = ::eventfd(0, EFD_CLOEXEC);
+  if (stop_fd < 0) throw std::runtime_error(fmt::format("eventfd: {}", std::strerror(errno)));
+  struct CloseFd {
+    int fd;
+    ~CloseFd() { ::close(fd); }
+  } close_stop{stop_fd};
   board.start();
   fmt::print("simulated board ({}) on {} ({} baud)\n", board.model(), board.path(), baud);
+  if (control) fmt::print("control socket: {}\n", control->path());
   if (!args.fst_path.empty()) fmt::print("FST waveform: {}\n", args.fst_path);
   if (args.line_faults.any()) fmt::print("line faults: {}\n", args.line_faults.describe());
   fmt::print(
       "Ctrl-C (SIGINT) or SIGTERM stops it; SIGUSR1 presses the e-stop, SIGUSR2 releases it "
       "(kill -USR1 {}); SIGHUP pulls the carriages off their endstops\n",
       static_cast<long>(getpid()));
+  TerminalKeys keys;
+  if (keys.active()) fmt::print("keys: h feed hold, s cycle start, e e-stop on/off\n");
   std::fflush(stdout);
+  std::thread served;
+  if (control || keys.active())
+    served = std::thread(serve_control, std::ref(board), control.get(), keys.active(), stop_fd);
   int sig = 0;
   for (;;) {
     sigwait(&set, &sig);
@@ -214,7 +564,13 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
     }
     std::fflush(stdout);
   }
+  if (served.joinable()) {
+    const uint64_t one = 1;
+    [[maybe_unused]] ssize_t n = ::write(stop_fd, &one, sizeof one);
+    served.join();
+  }
   board.stop();
+  control.reset();  // the socket file goes before the figures are printed
   fmt::print("\nstopped by {}\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
   print_board_figures(board);
   const auto edges = board.edges();
@@ -224,7 +580,6 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
     models::write_edges_csv(args.edges_csv, edges, board.clk_hz());
     fmt::print("edges written to {}\n", args.edges_csv);
   }
-  pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
   return 0;
 }
 

@@ -12,6 +12,7 @@
 #include <verilated.h>
 #include <verilated_fst_c.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -125,6 +126,11 @@ struct SimBoard::Model {
   std::vector<Endstop> endstops;
   std::array<int64_t, models::kBoardAxes> steps{};  // STEP rising edges counted (endstops)
   std::vector<LimitEvent> lim_events;
+  // Machine buttons: pins held (bit 0 hold, bit 1 cycle start), the edge each is released on,
+  // and the clock until which the board runs for them (the filter sees the release).
+  uint8_t btn_pins = 0;
+  std::array<uint64_t, 2> btn_release{};
+  uint64_t btn_settle = 0;
 
   Model(double clk_hz, double baud, size_t reserve, const LineFaults& faults,
         const std::array<double, 2>& initial_c)
@@ -156,6 +162,23 @@ void drive_limits(M& m, SimBoard::Model& s, uint64_t edge, bool by_endstop) {
   s.lim_pins = pins;
   m.limit_min = static_cast<uint8_t>(pins & 0xfu);
   m.limit_max = static_cast<uint8_t>(pins >> 4);
+}
+
+// Drives the button pins with s.btn_pins.
+template <class M>
+void drive_buttons(M& m, const SimBoard::Model& s) {
+  m.hold_in = static_cast<uint8_t>(s.btn_pins & 1u);
+  m.start_in = static_cast<uint8_t>((s.btn_pins >> 1) & 1u);
+}
+
+// Releases the buttons whose press ends at clock edge `edge` (the next one).
+template <class M>
+void release_buttons(M& m, SimBoard::Model& s, uint64_t edge) {
+  for (size_t b = 0; b < 2; ++b) {
+    if (((s.btn_pins >> b) & 1u) && s.btn_release[b] == edge)
+      s.btn_pins = static_cast<uint8_t>(s.btn_pins & ~(1u << b));
+  }
+  drive_buttons(m, s);
 }
 
 // After STEP edges: the step counts and the endstops they press or release.
@@ -210,6 +233,8 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
   const uint64_t end = cyc + max_cycles;
   bool got_byte = false;
   while (cyc < end) {
+    if (s.btn_pins) [[unlikely]]
+      release_buttons(m, s, cyc + 1);
     if (!drv_idle) {
       m.rx = static_cast<uint8_t>(drv.tick(cyc + 1));
       drv_idle = drv.idle();
@@ -251,7 +276,8 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
     // rx_partial: a packet or frame was cut short; the clock runs on so that the decoder's 100 ms
     // watchdog drops it (and NAKs a v2 frame with TIMEOUT) as on the real board.
     if (m.busy || m.step || m.rx_partial || !drv_idle || tx == 0 || mon.busy() ||
-        cyc < s.tx_stop_end || h.active || ((s.lim_pins ^ m.limit_state) & s.lim_wired)) {
+        cyc < s.tx_stop_end || h.active || ((s.lim_pins ^ m.limit_state) & s.lim_wired) ||
+        cyc < s.btn_settle) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;
@@ -272,6 +298,8 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
   m.estop = 0;
   m.limit_min = 0;
   m.limit_max = 0;
+  m.hold_in = 0;
+  m.start_in = 0;
   m.adc_sdo = 0;
   m.clk = 0;
   m.eval();
@@ -424,6 +452,12 @@ Board::Board() : progress_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
 
 Board::~Board() {
   ::close(progress_);
+}
+
+uint64_t Board::press_button(Button b) {
+  throw BoardError(fmt::format("the {} board has no {} button; use --model rtl",
+                               model() == "tlm" ? "twin" : model(),
+                               b == Button::kHold ? "feed hold" : "cycle start"));
 }
 
 void Board::notify_progress() const {
@@ -878,6 +912,61 @@ uint16_t SimBoard::limit_state() const {
   OtherThreadLock l(*this);
   const uint8_t v = model_->core ? model_->core->limit_state : model_->core_trace->limit_state;
   return static_cast<uint16_t>((v & 0xfu) | ((v >> 4) << 8));
+}
+
+}  // namespace fpgacnc::simboard
+
+namespace fpgacnc::simboard {
+
+// ---- Machine buttons ----
+
+const char* button_name(Button b) {
+  return b == Button::kHold ? "hold" : "start";
+}
+
+uint64_t SimBoard::press_button(Button b) {
+  uint64_t edge;
+  {
+    OtherThreadLock l(*this);
+    Model& s = *model_;
+    const size_t i = static_cast<size_t>(b);
+    edge = s.cycle + 1;
+    s.btn_pins = static_cast<uint8_t>(s.btn_pins | (1u << i));
+    s.btn_release[i] = edge + kButtonPressClks;
+    // The pin low reaches the synchronizer on the release edge; the filtered level falls
+    // kFilterClks + 1 edges later (input_filter); a few clocks more for margin.
+    s.btn_settle = std::max(s.btn_settle, s.btn_release[i] + kFilterClks + 8);
+    if (s.core)
+      drive_buttons(*s.core, s);
+    else
+      drive_buttons(*s.core_trace, s);
+    s.never_active = false;
+    s.last_active = s.cycle;
+  }
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  return edge;
+}
+
+BoardPins SimBoard::pins() const {
+  OtherThreadLock l(*this);
+  const Model& s = *model_;
+  BoardPins p;
+  p.cycle = s.cycle;
+  p.buttons = s.btn_pins;
+  p.release_edge = s.btn_release;
+  p.limit_pins = static_cast<uint16_t>((s.lim_pins & 0xfu) | ((s.lim_pins >> 4) << 8));
+  p.limit_wired = kLimitSwitches;
+  const auto fill = [&p](const auto& m) {
+    p.estop = m.estop != 0;
+    p.limit_filtered = static_cast<uint16_t>((m.limit_state & 0xfu) | ((m.limit_state >> 4) << 8));
+    p.faults = m.faults;
+  };
+  if (s.core)
+    fill(*s.core);
+  else
+    fill(*s.core_trace);
+  return p;
 }
 
 }  // namespace fpgacnc::simboard

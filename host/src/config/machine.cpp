@@ -138,6 +138,8 @@ class Reader {
         c.laser_s_max = positive(v, k);
       } else if (k == "feed_override") {
         c.feed_override_pct = positive(v, k);
+      } else if (k == "hold_decel_mm_s2") {
+        c.hold_decel_mm_s2 = positive(v, k);
       } else if (k == "max_accel_mm_s2") {
         axes(v, k, c.max_accel_mm_s2);
       } else if (k == "junction_deviation_mm") {
@@ -279,6 +281,7 @@ void validate(const MachineConfig& c, const std::string& name) {
           fmt::format("max_accel_mm_s2.{} must be > 0", kAxisNames[static_cast<size_t>(a)]));
     }
   }
+  if (!(c.hold_decel_mm_s2 >= 0.0)) throw Error(name, 0, 0, "hold_decel_mm_s2 must be > 0");
   if (!(c.junction_deviation_mm >= 0.0)) {
     throw Error(name, 0, 0, "junction_deviation_mm must be >= 0");
   }

@@ -9,6 +9,7 @@
 
 #include "fpgacnc/frontend/motion.h"
 #include "fpgacnc/gcode/dialect.h"
+#include "fpgacnc/link/stream_v2.h"
 
 namespace fpgacnc::grbl {
 namespace v2 = protocol::v2;
@@ -94,6 +95,8 @@ const char* state_name(State s) {
       return "Run";
     case State::kHold:
       return "Hold:0";
+    case State::kHolding:
+      return "Hold:1";
     case State::kJog:
       return "Jog";
     case State::kAlarm:
@@ -130,7 +133,11 @@ void Engine::opened() {
 
 void Engine::new_session() {
   session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
-  session_->start();
+  const auto& st = session_->start();
+  // The machine's hold ramp and the rates in effect; a hold left on the board ends here (the
+  // queue behind it was dropped or has run out).
+  motion_ok_ = session_->configure_motion(motion_frame(false, (st.state & v2::kStateHold) != 0));
+  if (motion_ok_) ++stats_.motions;
   frontend::push_config_axes(*session_, ident_, cfg_);
   fifo_info_.clear();
   fifo_base_ = 0;
@@ -168,6 +175,8 @@ void Engine::rebuild_pipeline(const plan::Steps4& steps) {
   dc.reason = "fpgacnc grbl";
   interp_ = std::make_unique<gcode::Interpreter>("grbl", go, dc, *params_);
   planner_ = std::make_unique<plan::Planner>(cfg_, plan::PlanOptions{});
+  // A feed override above 100 % is the host's: the lines planned from now on (docs/grbl.md).
+  if (motion_ok_ && ov_.feed > 100) planner_->set_feed_override(ov_.feed);
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   seg_index_ = 0;
   modal_ = Modal{};
@@ -217,17 +226,114 @@ void Engine::receive(std::string_view bytes) {
       case 0x18:
         soft_reset();
         break;
-      case '~':  // cycle start: resumes after M0
-        held_ = false;
-        break;
-      case '!':  // feed hold: needs the machine-control hardware (docs/grbl.md), ignored
+      case '~':  // cycle start: ends a feed hold, resumes after M0
+      case '!':  // feed hold
+        realtime_.push_back(ch);
         break;
       default:
-        // 0x80..0xFF: safety door, jog cancel, overrides (not available, ignored).
-        if (c >= 0x80) break;
+        // 0x80..0xFF: overrides (0x90..0x9D); safety door, jog cancel, coolant toggles ignored.
+        if (c >= 0x80) {
+          if (c >= 0x90 && c <= 0x9D) realtime_.push_back(ch);
+          break;
+        }
         rx_.push_back(ch);
     }
   }
+}
+
+v2::Motion Engine::motion_frame(bool hold, bool resume, bool cancel) const {
+  v2::Motion m = link::machine_motion(cfg_, ident_.n_axes);
+  m.hold = hold;
+  m.resume = resume;
+  m.cancel = cancel;
+  m.feed = v2::rate_from_percent(std::min(ov_.feed, 100));
+  m.rapid = v2::rate_from_percent(ov_.rapid);
+  return m;
+}
+
+void Engine::send_motion(bool hold, bool resume, bool cancel) {
+  session_->send_motion(motion_frame(hold, resume, cancel));
+  ++stats_.motions;
+}
+
+bool Engine::board_held() const {
+  return hold_ || (session_ && (session_->last_status().state & v2::kStateHold) != 0);
+}
+
+void Engine::realtime(unsigned char c) {
+  if (c == '~') {
+    held_ = false;  // after M0
+    if (motion_ok_ && board_held()) {
+      hold_ = false;
+      send_motion(false, true);
+      ++stats_.resumes;
+    }
+    return;
+  }
+  if (c == '!') {
+    // grbl holds a cycle in progress (Run); Idle, Alarm, Check: nothing to hold.
+    if (!motion_ok_ || hold_ || alarm_ || check_ || sleep_ || !motion_pending()) return;
+    hold_ = true;
+    send_motion(true, false);
+    ++stats_.holds;
+    return;
+  }
+  const Overrides before = ov_;
+  switch (c) {
+    case 0x90:
+      ov_.feed = 100;
+      break;
+    case 0x91:
+      ov_.feed += 10;
+      break;
+    case 0x92:
+      ov_.feed -= 10;
+      break;
+    case 0x93:
+      ov_.feed += 1;
+      break;
+    case 0x94:
+      ov_.feed -= 1;
+      break;
+    case 0x95:
+      ov_.rapid = 100;
+      break;
+    case 0x96:
+      ov_.rapid = 50;
+      break;
+    case 0x97:
+      ov_.rapid = 25;
+      break;
+    case 0x99:
+      ov_.spindle = 100;
+      break;
+    case 0x9A:
+      ov_.spindle += 10;
+      break;
+    case 0x9B:
+      ov_.spindle -= 10;
+      break;
+    case 0x9C:
+      ov_.spindle += 1;
+      break;
+    case 0x9D:
+      ov_.spindle -= 1;
+      break;
+    default:
+      return;
+  }
+  ov_.feed = std::clamp(ov_.feed, 10, 200);
+  ov_.spindle = std::clamp(ov_.spindle, 10, 200);
+  if (!motion_ok_) {  // no motion rate on this board: feed and rapid stay 100 %
+    ov_.feed = before.feed;
+    ov_.rapid = before.rapid;
+  }
+  if (ov_ == before) return;
+  ov_report_ = true;
+  if (ov_.feed != before.feed) planner_->set_feed_override(std::max(ov_.feed, 100));
+  const bool board_rates =
+      std::min(ov_.feed, 100) != std::min(before.feed, 100) || ov_.rapid != before.rapid;
+  if (board_rates && !resetting_) send_motion(false, false);
 }
 
 bool Engine::motion_pending() const {
@@ -240,6 +346,11 @@ State Engine::state() const {
   if (sleep_) return State::kSleep;
   if (alarm_) return State::kAlarm;
   if (check_) return State::kCheck;
+  if (board_held()) {
+    // Hold:0 once the board reports the hold complete (HOLD and STOPPED), Hold:1 before.
+    const uint8_t b = session_->last_status().state;
+    return (b & v2::kStateHold) && (b & v2::kStateStopped) ? State::kHold : State::kHolding;
+  }
   if (held_) return State::kHold;
   if (motion_pending() || pause_pending_) return State::kRun;
   return State::kIdle;
@@ -268,6 +379,10 @@ bool Engine::can_take_line() const {
 }
 
 void Engine::step(milliseconds wait) {
+  if (!resetting_) {
+    for (const char c : realtime_) realtime(static_cast<unsigned char>(c));
+  }
+  realtime_.clear();
   if (resetting_) continue_reset();
   if (!resetting_) {
     while (line_ready() && can_take_line()) take_line();
@@ -278,10 +393,14 @@ void Engine::step(milliseconds wait) {
   }
   if (report_pending_) {
     if (!report_asked_) {
-      report_answers_ = session_->status_answers();
+      // A STATUS asked for now: the answers to what is still in flight (a MOTION's, an idle
+      // poll's) show the board before the '?' and come first.
+      session_->request_status(true);
+      report_answers_ = session_->status_answers() + session_->status_unanswered();
       report_asked_ = true;
+    } else {
+      session_->request_status();
     }
-    session_->request_status();
   }
   const bool waiting = motion_pending() || report_asked_ || resetting_;
   try {
@@ -289,7 +408,7 @@ void Engine::step(milliseconds wait) {
   } catch (const link::Error&) {
     on_session_error();
   }
-  if (report_asked_ && session_->status_answers() > report_answers_) {
+  if (report_asked_ && session_->status_answers() >= report_answers_) {
     write_report();
     report_pending_ = report_asked_ = false;
   }
@@ -387,6 +506,13 @@ int Engine::gcode_line(const std::string& raw, bool check_only) {
   if (ended) {
     flush_lookahead();
     say("[MSG:Pgm End]");
+    // grbl restores the overrides at M2 / M30 (RESTORE_OVERRIDES_AFTER_PROGRAM_END).
+    if (ov_ != Overrides{}) {
+      const bool board_rates = ov_.feed < 100 || ov_.rapid != 100;
+      ov_ = Overrides{};
+      ov_report_ = true;
+      if (board_rates && motion_ok_) send_motion(false, false);
+    }
     rebuild_pipeline(planner_->position());
   }
   return 0;
@@ -516,13 +642,19 @@ void Engine::write_report() {
     for (int a = 0; a < 3; ++a)
       if ((sw >> a) & 0x101u) r += "XYZ"[a];
   }
-  // WCO when it changed and every 10th report; Ov on the report after (grbl's refresh rule).
+  // WCO when it changed and every 10th report; Ov on the report after, and on the next report
+  // after an override changed (grbl's refresh rule).
   const uint64_t n = report_count_++;
+  bool ov = ov_report_;
   if (wco_changed_ || n % 10 == 0) {
     r += "|WCO:" + vec(off);
     wco_changed_ = false;
   } else if (n % 10 == 1) {
-    r += "|Ov:100,100,100";
+    ov = true;
+  }
+  if (ov) {
+    r += fmt::format("|Ov:{},{},{}", ov_.feed, ov_.rapid, ov_.spindle);
+    ov_report_ = false;
   }
   r += ">";
   say(r);
@@ -657,8 +789,9 @@ int Engine::system_command(const std::string& cmd) {
     settings_ = std::move(next);
     const plan::Steps4 pos = planner_->position();
     cfg_ = apply_settings(base_, settings_);
-    // New step timing to the board, the planner at the same step position.
+    // New step timing and hold ramp to the board, the planner at the same step position.
     frontend::push_config_axes(*session_, ident_, cfg_);
+    if (motion_ok_) send_motion(false, false);
     rebuild_pipeline(pos);
     save();
     return 0;
@@ -678,7 +811,7 @@ void Engine::on_session_error() {
   // grbl's hard-limit alarm: a critical alarm; lines wait until a soft reset.
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   alarm_ = limit_alarm_ = true;
-  held_ = pause_pending_ = false;
+  held_ = pause_pending_ = hold_ = false;
   say("ALARM:1");
   say("[MSG:Reset to continue]");
 }
@@ -714,18 +847,28 @@ void Engine::soft_reset() {
     critical_ = false;
   }
   rx_.clear();  // grbl empties its receive buffer
-  const bool moving = motion_pending() && !check_;
+  realtime_.clear();
+  // A hold counts as motion (grbl: a reset during a feed hold is ALARM:3 too).
+  const bool moving = (motion_pending() || (motion_ok_ && board_held())) && !check_;
   limit_alarm_ = false;  // a reset ends the critical alarm (the FAULT_CLEAR comes with it)
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   stats_.aborted += session_->abandon();
   if (moving) {
     if (!alarm_) say("ALARM:3");  // not after ALARM:2: the alarm is already raised
     alarm_ = true;
-    if (opt_.estop_press && opt_.estop_release) {
-      opt_.estop_press();
+    if (motion_ok_ && board_held()) {
+      // A hold in effect: MOTION CANCEL drops the board's queue once it is at rest, positions
+      // kept, no fault (docs/machine.md "Cancel").
+      send_motion(false, false, true);
+    } else if (opt_.estop_press && opt_.estop_release) {
+      opt_.estop_press();  // running: the board drops its queue at once
       estop_pressed_ = true;
     }
   }
+  hold_ = false;
+  // grbl restores the overrides at a reset (the next session's MOTION carries them).
+  if (ov_ != Overrides{}) ov_report_ = true;
+  ov_ = Overrides{};
   if (sleep_) {
     sleep_ = false;
     alarm_ = true;

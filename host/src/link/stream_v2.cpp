@@ -79,6 +79,23 @@ StreamV2Options stream_v2_options(const config::MachineConfig& cfg) {
   return o;
 }
 
+uint32_t machine_hold_ramp(const config::MachineConfig& cfg, size_t n_axes) {
+  uint32_t ramp = 0xFFFF'FFFFu;
+  for (size_t a = 0; a < n_axes && a < config::kAxes; ++a) {
+    const double spm = cfg.steps_per_mm[a];
+    const double decel = cfg.hold_decel_mm_s2 > 0.0 ? cfg.hold_decel_mm_s2 : cfg.max_accel_mm_s2[a];
+    ramp = std::min(ramp, v2::hold_ramp(decel * spm, cfg.max_feed_mm_min[a] / 60.0 * spm,
+                                        static_cast<double>(cfg.clk_hz)));
+  }
+  return ramp;
+}
+
+v2::Motion machine_motion(const config::MachineConfig& cfg, size_t n_axes) {
+  v2::Motion m;
+  m.ramp = machine_hold_ramp(cfg, n_axes);
+  return m;
+}
+
 StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Options& options,
                              std::optional<v2::Ident> ident) {
   StreamV2Report rep;
@@ -105,6 +122,7 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   // pause and message before the frame it precedes in the program.
   V2Session session(link, opt, id, rep);
   session.start();
+  if (opt.motion) rep.motion = session.configure_motion(*opt.motion) ? 1 : 0;
   for (size_t a = 0; a < job.config.size() && a < n_axes; ++a) session.push({job.config[a]});
   for (const auto& f : job.travel)
     if (f.payload[0] < n_axes) session.push({f});
@@ -124,8 +142,18 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
   }
   events_before(SIZE_MAX);
 
-  // 3. Until every frame is done.
-  session.drain();
+  // 3. Until every frame is done (or the caller stops the job).
+  while (!session.complete()) {
+    session.poll();
+    if (opt.on_poll && !opt.on_poll(session)) {
+      rep.stopped = true;
+      rep.unsent = session.abandon();
+      const Time give_up = link.now() + opt.answer_timeout;
+      while (!session.settled() && link.now() < give_up) session.poll();
+      rep.queued = session.fifo_pushed() - session.fifo_done();
+      break;
+    }
+  }
 
   // 4. Final status and release.
   FrameIo& io = session.io();
@@ -139,7 +167,8 @@ StreamV2Report stream_v2_job(Link& link, const v2::Job& job, const StreamV2Optio
     const int64_t want = a < 4 ? job.target[a] : 0;
     if (static_cast<int32_t>(static_cast<uint32_t>(want)) != d) rep.position_ok = false;
   }
-  if (opt.release) {
+  if (rep.stopped) rep.position_ok = false;
+  if (opt.release && !rep.stopped) {
     const uint8_t rseq = static_cast<uint8_t>(rep.status_start.next_seq + session.pushed());
     const Time give_up = link.now() + opt.answer_timeout;
     while (!rep.released && link.now() < give_up) {

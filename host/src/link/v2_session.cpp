@@ -216,6 +216,65 @@ const v2::Status& V2Session::start() {
   return rep_.status_start;
 }
 
+bool V2Session::configure_motion(const v2::Motion& m) {
+  const v2::Frame fr = v2::motion(m);
+  constexpr int kAttempts = 5;
+  // A STATUS may answer an earlier STATUS_QUERY (one resent at the start): a device that refuses
+  // MOTION sends its NAK right behind any pending STATUS (NAK ranks below STATUS), so after a
+  // STATUS the line is watched a little longer for that NAK.
+  const auto settle = std::max(milliseconds(20), opt_.retransmit_timeout / 4);
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    io_.send(fr);
+    Time deadline = link_.now() + opt_.retransmit_timeout;
+    std::optional<v2::Status> answer;
+    bool resend = false;
+    while (const auto f = io_.receive_until(deadline)) {
+      try {
+        if (f->type == static_cast<uint8_t>(v2::Type::Status)) {
+          answer = v2::decode_status(*f, ident_.n_axes);
+          deadline = std::min(deadline, link_.now() + settle);
+          continue;
+        }
+        if (f->type != static_cast<uint8_t>(v2::Type::Nak)) continue;
+        const v2::Nak k = v2::decode_nak(*f);
+        ++rep_.naks[static_cast<size_t>(k.reason)];
+        if (k.reason == v2::NakReason::UnknownType) {
+          if (answer) on_status(*answer);
+          return false;
+        }
+        if (k.reason == v2::NakReason::BadField || k.reason == v2::NakReason::BadLength) {
+          throw Error(fmt::format("{}: device refuses MOTION (NAK {}): {}", name_,
+                                  v2::nak_reason_name(static_cast<uint8_t>(k.reason)),
+                                  v2::hex(v2::encode(fr))));
+        }
+        resend = true;  // corrupted on the way (BAD_CRC, TIMEOUT): send it again
+        break;
+      } catch (const v2::ProtocolError&) {
+        ++rep_.bad_device_frames;
+      }
+    }
+    if (answer && !resend) {
+      motion_ = m;
+      on_status(*answer);
+      motion_available_ = true;
+      return true;
+    }
+  }
+  throw Error(fmt::format("{}: no answer to MOTION after {} attempts ({} ms each)", name_,
+                          kAttempts, opt_.retransmit_timeout.count()));
+}
+
+void V2Session::send_motion(const v2::Motion& m) {
+  motion_ = m;
+  motion_pending_ = true;
+  motion_sent_ = link_.now();
+  io_.send(v2::motion(m));
+  asked_status();
+  // Its answer is a STATUS: no STATUS_QUERY of ours is needed meanwhile.
+  status_outstanding_ = true;
+  status_sent_ = motion_sent_;
+}
+
 void V2Session::push(SessionItem item) {
   if (was_complete_ && complete()) {
     // Resuming after a quiet spell of our own (the caller had nothing to send).
@@ -411,6 +470,13 @@ void V2Session::on_status(const v2::Status& stt) {
   const uint16_t fr = static_cast<uint16_t>(stt.fifo_level >= depth ? 0 : depth - stt.fifo_level);
   update(stt.next_seq, fr, stt.done);
   status_outstanding_ = false;
+  if (status_unanswered_) --status_unanswered_;
+  if (motion_pending_) {
+    // HOLD / RESUME are seen in the HOLD bit; rates alone in any STATUS after them.
+    const bool held = (stt.state & v2::kStateHold) != 0;
+    if ((!motion_.hold && !motion_.resume) || (motion_.hold && held) || (motion_.resume && !held))
+      motion_pending_ = false;
+  }
   ++status_answers_;
   last_status_ = stt;
   rep_.status_end = stt;
@@ -488,12 +554,21 @@ void V2Session::handle(const v2::Frame& f) {
   }
 }
 
-void V2Session::request_status() {
+void V2Session::asked_status() {
   const Time now = link_.now();
-  if (status_outstanding_ && now - status_sent_ <= opt_.retransmit_timeout) return;
+  // Answers not seen for a retransmission timeout are lost: no longer waited for.
+  if (now - last_status_ask_ > opt_.retransmit_timeout) status_unanswered_ = 0;
+  ++status_unanswered_;
+  last_status_ask_ = now;
+}
+
+void V2Session::request_status(bool fresh) {
+  const Time now = link_.now();
+  if (!fresh && status_outstanding_ && now - status_sent_ <= opt_.retransmit_timeout) return;
   status_outstanding_ = true;
   status_sent_ = now;
   io_.send(v2::status_query());
+  asked_status();
   ++rep_.status_polls;
   last_poll_ = now;
 }
@@ -528,6 +603,14 @@ void V2Session::poll_once(milliseconds wait) {
   // Answers already there (read before any timer: a host that was not scheduled for a while
   // must not take answers waiting in its input for a silence).
   while (const auto f = io_.receive(milliseconds(0))) handle(*f);
+  // A MOTION whose effect no STATUS has shown yet (lost on the way, or its answer lost).
+  if (motion_pending_ && link_.now() - motion_sent_ > opt_.retransmit_timeout) {
+    motion_sent_ = link_.now();
+    io_.send(v2::motion(motion_));
+    asked_status();
+    status_outstanding_ = true;
+    status_sent_ = motion_sent_;
+  }
   // Messages whose frames before are done; a pause once the machine is at rest before it.
   while (next_message_ < messages_.size() && win_.acked() >= messages_[next_message_].first &&
          done_count_ >= fifo_before_[messages_[next_message_].first]) {
@@ -549,7 +632,7 @@ void V2Session::poll_once(milliseconds wait) {
     return;
   }
   if (complete()) {
-    // Nothing in flight but a STATUS_QUERY of the caller's: wait for its answer.
+    // Nothing in flight but a STATUS_QUERY or MOTION of the caller's: wait for its answer.
     if (status_outstanding_) {
       if (const auto f = io_.receive(wait)) handle(*f);
     }
@@ -587,12 +670,14 @@ void V2Session::poll_once(milliseconds wait) {
     status_outstanding_ = true;
     status_sent_ = now;
     io_.send(v2::status_query());
+    asked_status();
     ++rep_.status_polls;
     last_heater_poll_ = now;
     last_poll_ = now;
   } else if (win_.sent() == win_.acked() && now - io_.last_rx() > opt_.idle_poll &&
              now - last_poll_ > opt_.idle_poll) {
     io_.send(v2::status_query());
+    asked_status();
     ++rep_.status_polls;
     last_poll_ = now;
   }

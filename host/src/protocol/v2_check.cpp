@@ -37,6 +37,17 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
       if ((f.payload[1] & spec::kTravelEnable) && be(2) > be(6)) return NakReason::BadField;
       return std::nullopt;
     }
+    case Type::Motion: {
+      if (n != spec::kLenMotion) return NakReason::BadLength;
+      const uint8_t flags = f.payload[0];
+      const uint16_t feed = get16(f.payload, 1), rapid = get16(f.payload, 3);
+      const uint32_t ramp = detail::get32(f.payload, 5);
+      if ((flags & spec::kMotionReserved) ||
+          ((flags & spec::kMotionResume) && (flags & (spec::kMotionHold | spec::kMotionCancel))) ||
+          feed < 1 || feed > spec::kRateOne || rapid < 1 || rapid > spec::kRateOne || ramp < 1)
+        return NakReason::BadField;
+      return std::nullopt;
+    }
     case Type::Numerators:
       if (n != spec::kLenNumerators) return NakReason::BadLength;
       return std::nullopt;

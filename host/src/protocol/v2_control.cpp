@@ -3,6 +3,9 @@
 // STATUS from the device (decoders for the host, builders for fake devices and tests).
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
@@ -192,6 +195,62 @@ Frame config_travel(uint8_t seq, uint8_t axis, bool enable, int32_t min, int32_t
   put32(p, static_cast<uint32_t>(min));
   put32(p, static_cast<uint32_t>(max));
   return make(seq, Type::ConfigTravel, std::move(p));
+}
+
+std::string motion_field_error(const Motion& m) {
+  if (m.hold && m.resume) return "HOLD and RESUME in one frame";
+  if (m.cancel && m.resume) return "CANCEL and RESUME in one frame";
+  if (m.feed < 1 || m.feed > kRateOne)
+    return fmt::format("feed rate 0x{:04X} outside 1..0x8000", m.feed);
+  if (m.rapid < 1 || m.rapid > kRateOne)
+    return fmt::format("rapid rate 0x{:04X} outside 1..0x8000", m.rapid);
+  if (m.ramp < 1) return "ramp 0 (the rate would never move)";
+  return {};
+}
+
+Frame motion(const Motion& m, uint8_t seq) {
+  if (const std::string e = motion_field_error(m); !e.empty())
+    throw std::invalid_argument("MOTION frame: " + e);
+  std::vector<uint8_t> p{static_cast<uint8_t>((m.hold ? kMotionHold : 0) |
+                                              (m.resume ? kMotionResume : 0) |
+                                              (m.cancel ? kMotionCancel : 0))};
+  put16(p, m.feed);
+  put16(p, m.rapid);
+  put32(p, m.ramp);
+  return make(seq, Type::Motion, std::move(p));
+}
+
+Motion decode_motion(const Frame& f) {
+  check_or_throw(f, Type::Motion, 0);
+  const auto& p = f.payload;
+  Motion m;
+  m.hold = (p[0] & kMotionHold) != 0;
+  m.resume = (p[0] & kMotionResume) != 0;
+  m.cancel = (p[0] & kMotionCancel) != 0;
+  m.feed = get16(p, 1);
+  m.rapid = get16(p, 3);
+  m.ramp = get32(p, 5);
+  return m;
+}
+
+uint16_t rate_from_percent(double pct) {
+  if (!(pct > 0.0) || pct > 100.0)
+    throw std::invalid_argument(fmt::format("motion rate {} % outside (0, 100]", pct));
+  const double q = std::round(pct / 100.0 * kRateOne);
+  return static_cast<uint16_t>(std::clamp(q, 1.0, static_cast<double>(kRateOne)));
+}
+
+uint32_t hold_ramp(double a_hold_steps_s2, double v_max_steps_s, double clk_hz) {
+  for (const double x : {a_hold_steps_s2, v_max_steps_s, clk_hz}) {
+    if (!std::isfinite(x) || x <= 0.0)
+      throw std::invalid_argument(
+          fmt::format("hold ramp: deceleration, top speed and clock must be positive ({}, {}, {})",
+                      a_hold_steps_s2, v_max_steps_s, clk_hz));
+  }
+  const double period = std::ldexp(1.0, static_cast<int>(spec::kDefaultRatePeriodLog2));
+  const double r =
+      std::floor(std::ldexp(1.0, 32) * period * a_hold_steps_s2 / (v_max_steps_s * clk_hz));
+  return static_cast<uint32_t>(std::clamp(r, 1.0, std::ldexp(1.0, 32) - 1.0));
 }
 
 ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {

@@ -187,8 +187,8 @@ void pack_profiles(const plan::ProfilePlan& pp, const config::MachineConfig& cfg
       s.spindle_s = p->spindle_s;
       if (p->arc) {
         // The ARC segment lasts c_last + 2 clocks (p->clocks is c_last, the clock of the walk's
-        // last move: rtl/motion/segment_executor.v issues its step request one clock after it, on the
-        // segment's last tick, and the last STEP rises on the segment's last edge).
+        // last move: rtl/motion/segment_executor.v issues its step request one clock after it, on
+        // the segment's last tick, and the last STEP rises on the segment's last edge).
         const uint64_t arc_ticks = p->clocks + kArcExtraTicks;
         JobFrame jf;
         jf.frame = arc_frame(0, laser_power(s, cfg), p->arc_fields, p->rec);

@@ -284,9 +284,11 @@ async function main() {
     if (seen.sender.sent >= total) {
       fail(`every line was sent before the pause at line ${at}: the job is too short for --pause`);
     }
-    // The lines in flight are answered; then nothing more is sent and the machine comes to rest.
+    // The lines in flight are answered; then nothing more is sent and the machine comes to rest:
+    // Idle (a board without feed hold: the queue ran out) or Hold:0 (the '!' held it mid-job).
     await until('the machine at rest with every line sent answered', () =>
-      seen.sender.received === seen.sender.sent && activeState() === 'Idle');
+      seen.sender.received === seen.sender.sent && (activeState() === 'Idle' ||
+        (activeState() === 'Hold' && seen.status.subState === 0)));
     // At rest with lines left: a sender that was not held would have sent them (the front end
     // takes lines whenever its look-ahead has room, and it is empty now).
     const held = { ...senderCounts() };

@@ -54,7 +54,10 @@ struct MachineConfig {
   // Motion planning (protocol v2; docs/motion.md). Per-axis acceleration limit, mm/s^2.
   std::array<double, kAxes> max_accel_mm_s2{1000.0, 1000.0, 100.0, 1000.0};
   double junction_deviation_mm = 0.01;  // grbl's $11
-  uint32_t lookahead_segments = 64;     // planner window W (>= 1); 64 = device FIFO depth
+  // Feed hold: the deceleration to rest (mm/s^2, every axis); 0 = each axis's max_accel_mm_s2.
+  // Sets the MOTION ramp (link::machine_hold_ramp, docs/timing.md "Feed hold and overrides").
+  double hold_decel_mm_s2 = 0.0;
+  uint32_t lookahead_segments = 64;  // planner window W (>= 1); 64 = device FIFO depth
   // v2 motion: "profile" (LINE_PROFILE frames, look-ahead planned trapezoids) or "constant"
   // (LINE frames, constant feed per segment, no acceleration). v1 always moves at constant feed.
   std::string motion = "profile";

@@ -17,6 +17,16 @@
 // and before a '$' command.
 // Status reports (`?`): a STATUS_QUERY to the board; the report is written when its answer
 // arrives: MPos (or WPos per $10) from the FPGA's step counters, Bf, FS, Ov and WCO.
+// Feed hold and overrides (docs/grbl.md "Feed hold and overrides"), on a board that takes the
+// MOTION frame (sent with the machine's hold ramp at every session start): `!` while running ->
+// MOTION HOLD (Hold:1 until STATUS says STOPPED, then Hold:0; the hold pin gives the same states),
+// `~` -> MOTION RESUME; 0x90-0x94 feed override 10..200 % (up to 100 % the board's feed rate at
+// once on the running job; above, the board stays at 100 % and the lines planned from then on
+// are planned faster, capped by the max rates), 0x95-0x97 rapid override 100 / 50 / 25 % (the
+// board's rapid rate), 0x99-0x9D spindle override (kept and reported, no hardware). On a board
+// without MOTION (NAK UNKNOWN_TYPE) `!` and the feed / rapid overrides are ignored as by a grbl
+// built without them. A soft reset during a hold sends MOTION CANCEL: the board drops its queue
+// at rest, positions kept.
 #pragma once
 
 #include <array>
@@ -48,7 +58,8 @@ inline constexpr size_t kLowWater = 2;    // board FIFO frames left that trigger
 inline constexpr const char* kBanner = "Grbl 1.1h ['$' for help]";
 inline constexpr const char* kVersion = "1.1h.20190825";
 
-enum class State { kIdle, kRun, kHold, kJog, kAlarm, kCheck, kHome, kSleep };
+// kHold: Hold:0 (at rest), kHolding: Hold:1 (decelerating).
+enum class State { kIdle, kRun, kHold, kHolding, kJog, kAlarm, kCheck, kHome, kSleep };
 const char* state_name(State s);
 
 struct EngineOptions {
@@ -75,6 +86,17 @@ struct EngineStats {
   uint64_t frames = 0;   // FIFO frames pushed to the session
   uint64_t resets = 0;   // soft resets
   uint64_t aborted = 0;  // frames given up by a soft reset (never sent)
+  uint64_t holds = 0;    // MOTION HOLD sent ('!')
+  uint64_t resumes = 0;  // MOTION RESUME sent ('~')
+  uint64_t motions = 0;  // MOTION frames sent in all (holds, resumes, overrides)
+};
+
+// grbl's override values, percent.
+struct Overrides {
+  int feed = 100;     // 10..200
+  int rapid = 100;    // 100, 50, 25
+  int spindle = 100;  // 10..200
+  bool operator==(const Overrides&) const = default;
 };
 
 class Engine {
@@ -108,6 +130,9 @@ class Engine {
   std::array<double, 4> mpos() const;
   const plan::Steps4& planned_steps() const { return planner_->position(); }
   size_t rx_pending() const { return rx_.size(); }
+  const Overrides& overrides() const { return ov_; }
+  // The board took MOTION at the session start: feed hold and overrides work.
+  bool motion_available() const { return motion_ok_; }
 
  private:
   void new_session();
@@ -127,6 +152,12 @@ class Engine {
   void flush_lookahead();
   void emit_profiles();
   void push_fifo(const protocol::v2::Frame& f, int line, double feed, double s);
+  // Real-time commands other than '?' and 0x18 (acted on in step(), in their order).
+  void realtime(unsigned char c);
+  // MOTION with the override rates and the machine's ramp (and HOLD / RESUME / CANCEL).
+  protocol::v2::Motion motion_frame(bool hold, bool resume, bool cancel = false) const;
+  void send_motion(bool hold, bool resume, bool cancel = false);
+  bool board_held() const;  // a hold in effect: ours ('!') or the board's (its hold pin)
   void soft_reset();
   void continue_reset();
   // The session threw: a hard-limit alarm on the board (ALARM:1 while running; quietly while
@@ -172,8 +203,13 @@ class Engine {
   bool held_ = false;           // at rest after M0 until '~'
   bool resetting_ = false;
   bool estop_pressed_ = false;
+  bool motion_ok_ = false;  // the board took MOTION (session start)
+  bool hold_ = false;       // '!' sent MOTION HOLD; '~' ends it
+  Overrides ov_;
+  bool ov_report_ = false;  // Ov in the next report (an override changed)
+  std::string realtime_;    // real-time commands received, acted on in step()
   bool report_pending_ = false;
-  size_t report_answers_ = 0;  // session status answers when the report was asked for
+  size_t report_answers_ = 0;  // the session status answer count the report waits for
   bool report_asked_ = false;
   bool reset_asked_ = false;
   size_t reset_answers_ = 0;

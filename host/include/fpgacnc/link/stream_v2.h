@@ -49,6 +49,8 @@
 
 namespace fpgacnc::link {
 
+class V2Session;  // link/v2_session.h
+
 struct StreamV2Options {
   // Link time (see the file comment).
   std::chrono::milliseconds hello_timeout{300};       // IDENT after HELLO
@@ -81,6 +83,16 @@ struct StreamV2Options {
   std::function<bool(const gcode::Pause&)> on_pause;
   // Each message (M117, M118, M73, (MSG,...)) once the frames before it are done.
   std::function<void(const gcode::Message&)> on_message;
+  // ---- Feed hold and overrides (docs/protocol.md "MOTION") ----
+  // Sent once the session has started (V2Session::configure_motion): the machine's hold ramp,
+  // rates 100 %. A device that answers NAK UNKNOWN_TYPE has no motion rate: the job runs without
+  // (StreamV2Report::motion says so). Unset: no MOTION.
+  std::optional<protocol::v2::Motion> motion;
+  // Called after every poll round while the job runs (keys, signals: it may send MOTION frames
+  // through the session). False stops the job there: frames not yet sent are dropped
+  // (V2Session::abandon), what the device has stays queued (held when a hold is in effect), the
+  // final STATUS is read and stream_v2_job returns with StreamV2Report::stopped set.
+  std::function<bool(V2Session&)> on_poll;
 };
 
 // One M109/M190 wait as it happened.
@@ -132,6 +144,14 @@ struct StreamV2Report {
   size_t skipped_heater = 0;   // heater commands not sent (not packed: PackOptions::heaters)
   size_t heater_frames = 0;    // heater setup + setpoint frames of the session
   std::vector<HeaterWaitReport> heater_waits;
+  // MOTION at the start (StreamV2Options::motion): 1 taken, 0 refused (NAK UNKNOWN_TYPE: a
+  // device without feed hold), -1 not sent.
+  int motion = -1;
+  // StreamV2Options::on_poll stopped the job: `unsent` frames were dropped, `queued` FIFO frames
+  // (sent, not done) were left on the device.
+  bool stopped = false;
+  size_t unsent = 0;
+  size_t queued = 0;
   size_t t_raised = 0;
   uint64_t total_t = 0;  // sum of T of the job's frames (clocks)
   std::chrono::duration<double> elapsed{0};
@@ -172,6 +192,16 @@ ProtocolChoice select_protocol(
 
 // Options from a machine configuration (retransmit and answer timeouts).
 StreamV2Options stream_v2_options(const config::MachineConfig& cfg);
+
+// The MOTION ramp of the machine (docs/timing.md "Feed hold and overrides"): per axis a of the
+// first n_axes, ramp_a = 2^32 * 256 * a_hold / (v_max * CLK_HZ) with a_hold its hold
+// deceleration (hold_decel_mm_s2, else its max_accel_mm_s2) and v_max its max rate
+// (max_feed_mm_min / 60), both in steps (protocol::v2::hold_ramp); the smallest of them, so
+// that no axis decelerates harder than its a_hold from any speed up to its max rate.
+uint32_t machine_hold_ramp(const config::MachineConfig& cfg, size_t n_axes = config::kAxes);
+// MOTION with the machine's ramp and rates 100 %, neither HOLD nor RESUME.
+protocol::v2::Motion machine_motion(const config::MachineConfig& cfg,
+                                    size_t n_axes = config::kAxes);
 
 // Multi-line human summary of a report (frames, resends, NAKs by reason, device counters).
 std::string format_report(const StreamV2Report& r);

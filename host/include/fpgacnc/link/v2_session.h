@@ -100,8 +100,28 @@ class V2Session {
   bool complete() const;
   // poll() until complete().
   void drain();
-  // A STATUS_QUERY now (unless one is outstanding); the answer goes to last_status().
-  void request_status();
+  // A STATUS_QUERY now (unless one is outstanding and `fresh` is false); the answer goes to
+  // last_status().
+  void request_status(bool fresh = false);
+  // Frames sent that the device answers with STATUS (STATUS_QUERY, MOTION) whose answers have not
+  // come yet (those older than a retransmission timeout count as lost). The answers come in
+  // order: a STATUS that reflects the device after a given moment is the one numbered
+  // status_answers() + status_unanswered() right after a fresh request_status() then.
+  size_t status_unanswered() const { return status_unanswered_; }
+  // MOTION (docs/protocol.md "MOTION": feed hold, resume, feed / rapid rates and the hold ramp;
+  // unsequenced, answered with STATUS). configure_motion: right after start(), before anything
+  // else is sent: sends `m` and waits for its answer (resent on a lost answer); true when the
+  // device took it, false when it answers NAK UNKNOWN_TYPE (a device without the motion rate:
+  // no feed hold or overrides there); Error when it refuses the fields or never answers.
+  bool configure_motion(const protocol::v2::Motion& m);
+  // Sends `m` now (a device that took configure_motion); resent every retransmission timeout
+  // until a STATUS shows it: with HOLD the HOLD bit set, with RESUME clear, else any STATUS.
+  void send_motion(const protocol::v2::Motion& m);
+  bool motion_pending() const { return motion_pending_; }
+  // configure_motion() was answered with STATUS: the device has the motion rate.
+  bool motion_available() const { return motion_available_; }
+  // The last MOTION sent (the rates in effect on the device).
+  const protocol::v2::Motion& motion() const { return motion_; }
   // Gives up every pushed frame not yet sent (frames on the line stay in the window until
   // acknowledged); returns how many were dropped. From then on latched faults are not errors
   // (the caller may press the e-stop to drop the board's queue): the session is only left.
@@ -128,6 +148,7 @@ class V2Session {
   void go_back();
   void check_stuck(size_t acked, size_t same) const;  // Error after too many go-backs
   void on_status(const protocol::v2::Status& s);
+  void asked_status();  // a frame the device answers with STATUS was sent
   void check_faults(const protocol::v2::Status& s);
   void wait_status(const protocol::v2::Status& s);
   size_t gate() const;
@@ -163,6 +184,12 @@ class V2Session {
   Link::Time last_poll_{};
   Link::Time last_heater_poll_{};
   Link::Time link_t0_{};
+  protocol::v2::Motion motion_;
+  bool motion_pending_ = false;
+  bool motion_available_ = false;
+  Link::Time motion_sent_{};
+  size_t status_unanswered_ = 0;
+  Link::Time last_status_ask_{};
   bool status_outstanding_ = false;
   Link::Time status_sent_{};
   size_t status_answers_ = 0;

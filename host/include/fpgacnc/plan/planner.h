@@ -146,6 +146,9 @@ class Planner {
   // front end such as `fpgacnc grbl` plans as lines arrive).
   std::vector<PlanItem> take_items();
   const Steps4& position() const { return pos_; }  // absolute steps after the last item
+  // The feed override for the moves added from now on (PlanOptions::feed_override_pct; a front
+  // end's real-time override above 100 %, fpgacnc grbl).
+  void set_feed_override(double pct) { opt_.feed_override_pct = pct; }
 
  private:
   void add_move(const gcode::Move& m);

@@ -37,6 +37,7 @@ enum class Type : uint8_t {
   FaultClear = spec::kTypeFaultClear,
   ConfigAxis = spec::kTypeConfigAxis,
   ConfigTravel = spec::kTypeConfigTravel,  // soft limits of one axis
+  Motion = spec::kTypeMotion,              // feed hold, resume, rates (unsequenced)
   Numerators = spec::kTypeNumerators,
   Release = spec::kTypeRelease,
   Line = spec::kTypeLine,
@@ -165,6 +166,9 @@ constexpr uint8_t kStateFault = spec::kStateFault;
 constexpr uint8_t kStateEstop = spec::kStateEstop;  // the e-stop input is active now
 constexpr uint8_t kStatePosUntrusted =
     spec::kStatePosUntrusted;  // a hard limit tripped since reset
+constexpr uint8_t kStateHold =
+    spec::kStateHold;  // a feed hold is in effect (MOTION HOLD, hold pin)
+constexpr uint8_t kStateStopped = spec::kStateStopped;  // the motion rate is 0: motion frozen
 // STATUS fault bits.
 constexpr uint8_t kFaultStepTiming = spec::kFaultStepTiming;
 constexpr uint8_t kFaultLimit = spec::kFaultLimit;  // hard limit (Status::limit names the switch)
@@ -416,6 +420,48 @@ Frame output_frame(uint8_t seq, const OutputSet& o);
 // Decoder (LEN 3, mask != 0, reserved bits 0, value bits only where the mask is set, duty 0
 // without the fan bit; ProtocolError naming the rule otherwise).
 OutputSet decode_output(const Frame& f);
+
+// MOTION (TYPE 0x08, 9-byte payload; docs/protocol.md "MOTION", docs/timing.md "Feed hold and
+// overrides"): unsequenced like STATUS_QUERY, answered with STATUS. Flags bit 0 HOLD (ramp the
+// motion rate to 0 and keep it there), bit 1 RESUME (end the hold), not both; bit 2 CANCEL (a
+// hold that, at rate 0, drops the running segment and the queue, positions kept, no fault, then
+// ends the hold; the dropped frames send no DONE), not with RESUME; the feed rate
+// (segments with a code other than 0) and the rapid rate (code 0) in Q1.15, 0x8000 = 100 % =
+// the planned speed, 1 .. 0x8000; the ramp: the rate's largest change per 256-clock period in
+// 2^-32 (>= 1). Every MOTION sets all three rates; a frame with neither flag changes only them.
+// STATUS: kStateHold while the hold is in effect, kStateStopped while the rate is 0 (grbl's
+// Hold:1 = HOLD without STOPPED, Hold:0 = both).
+constexpr size_t kMotionPayload = spec::kLenMotion;
+constexpr uint16_t kRateOne = static_cast<uint16_t>(spec::kRateOne);  // 100 %
+constexpr uint8_t kMotionHold = static_cast<uint8_t>(spec::kMotionHold);
+constexpr uint8_t kMotionResume = static_cast<uint8_t>(spec::kMotionResume);
+constexpr uint8_t kMotionCancel = static_cast<uint8_t>(spec::kMotionCancel);
+struct Motion {
+  bool hold = false;
+  bool resume = false;
+  bool cancel = false;
+  uint16_t feed = kRateOne;   // Q1.15
+  uint16_t rapid = kRateOne;  // Q1.15
+  uint32_t ramp = spec::kDefaultRateRamp;
+  bool operator==(const Motion&) const = default;
+};
+// Empty when the device accepts the fields, else the rule broken (for messages).
+std::string motion_field_error(const Motion& m);
+// Builder (SEQ is not checked by the device; 0 as for STATUS_QUERY). Throws std::invalid_argument
+// for fields the device would refuse (motion_field_error).
+Frame motion(const Motion& m, uint8_t seq = 0);
+// Decoder (LEN 9, reserved flag bits 0, RESUME with neither HOLD nor CANCEL, rates 1..0x8000,
+// ramp >= 1;
+// ProtocolError naming the rule otherwise).
+Motion decode_motion(const Frame& f);
+// A percentage (0 < pct <= 100) as a Q1.15 rate, rounded to nearest, at least 1.
+uint16_t rate_from_percent(double pct);
+// The ramp for a hold deceleration (docs/timing.md "Feed hold and overrides"):
+// ramp = 2^32 * 2^RATE_PERIOD_LOG2 * a_hold / (v_max * clk_hz), a_hold and v_max in steps/s^2
+// and steps/s of the fastest axis (v_max: the largest max rate in steps/s); rounded down (the
+// hold never decelerates harder than a_hold), clamped to 1 .. 2^32 - 1. Throws
+// std::invalid_argument for a non-positive or non-finite argument.
+uint32_t hold_ramp(double a_hold_steps_s2, double v_max_steps_s, double clk_hz);
 
 // Hex dump "A5 0A 07 10 ..." (upper case, space separated).
 std::string hex(std::span<const uint8_t> bytes);

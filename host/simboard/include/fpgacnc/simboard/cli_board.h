@@ -21,11 +21,17 @@
 namespace fpgacnc::simboard {
 
 struct BoardCommandArgs {
-  std::string config_path;  // machine configuration (clock, baud, step timing)
-  std::string fst_path;     // FST waveform ("" = none)
-  std::string edges_csv;    // edge list written at the end ("" = none)
-  LineFaults line_faults;   // serial line fault injection (default none)
+  std::string config_path;   // machine configuration (clock, baud, step timing)
+  std::string fst_path;      // FST waveform ("" = none)
+  std::string edges_csv;     // edge list written at the end ("" = none)
+  LineFaults line_faults;    // serial line fault injection (default none)
+  std::string control_path;  // control socket (Unix-domain stream socket; "" = none)
 };
+
+// One line of the board's control protocol (docs/protocol.md "The simulated board": hold,
+// start, estop on|off, limit AXIS min|max on|off, state, help) applied to `board`; returns the
+// answer without its newline: "ok ..." or "error: <why>" naming the word it could not take.
+std::string board_control_command(Board& board, std::string_view line);
 
 // Line fault options shared by `fpgacnc board` and `fpgacnc stream` (simulated board):
 //   --line-ber P[,Q]        bit error rate, P host->board (per UART bit) and Q board->host (per
@@ -61,7 +67,11 @@ uint16_t parse_limit_switches_option(std::string_view value);
 // or SIGTERM, then prints its figures (and writes the edge list). SIGUSR1 presses the board's
 // e-stop input, SIGUSR2 releases it (Board::set_estop; a board without one prints why and goes
 // on); SIGHUP pulls the carriages off their simulated endstops (SimBoard::pull_off_endstops).
-// Returns the exit status.
+// With args.control_path it listens on a Unix-domain stream socket there (printed after the pty
+// line, removed at exit; a path that exists and is not a stale socket is an error before the
+// board starts) and answers board_control_command() for each line of each client. When stdin is
+// a terminal, keys press the buttons: h feed hold, s cycle start, e e-stop toggle. Returns the
+// exit status.
 int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud);
 // The figures of a board (cycles, machine time, clocks/s, bytes, edges, moves; line faults and
 // heaters for the Verilated board).

@@ -67,6 +67,11 @@
 // (limit_events() records that edge, "p" in docs/machine.md "Timing"). While a wired switch's pin
 // differs from the core's filtered level the board counts as active (its clock runs through the
 // debounce filter without host traffic).
+//
+// Machine buttons (docs/machine.md "Simulated board"). press_button() drives cnc_core's hold_in or
+// start_in high for kButtonPressClks board clocks and then low again; the release happens inside
+// the clock loop on its exact edge, and the board's clock runs through the press and the filter's
+// release so that the next press is seen as a new rise.
 #pragma once
 
 #include <array>
@@ -114,6 +119,22 @@ struct LimitEvent {
 
 // "X min", "Z max": a switch's name as STATUS messages and the CLI write it.
 std::string limit_switch_name(int axis, bool max_side);
+
+// The machine buttons of cnc_core (hold_in, start_in): feed hold and cycle start (resume).
+enum class Button { kHold = 0, kStart = 1 };
+const char* button_name(Button b);  // "hold", "start"
+
+// What the Verilated board's input pins carry now (SimBoard::pins()).
+struct BoardPins {
+  uint64_t cycle = 0;                      // clocks since reset release
+  bool estop = false;                      // the e-stop pin (high = pressed)
+  uint8_t buttons = 0;                     // buttons held now: bit 0 hold, bit 1 cycle start
+  std::array<uint64_t, 2> release_edge{};  // a held button: the first edge sampling it released
+  uint16_t limit_pins = 0;      // switch pins pressed (set_limit or an endstop), bits as STATUS
+  uint16_t limit_filtered = 0;  // the core's filtered switch levels, same bits
+  uint16_t limit_wired = 0;     // the switches wired (limit_switches())
+  uint8_t faults = 0;           // the core's latched faults (STATUS byte 1)
+};
 
 struct BoardOptions {
   // The Verilated model is built for 50 MHz and 115200 baud (cnc_core parameters): any other
@@ -199,6 +220,12 @@ class Board {
   // The switches wired, bits as STATUS's switch u16: bit a the min switch of axis a, bit 8 + a
   // its max switch (0: none).
   virtual uint16_t limit_switches() const = 0;
+  // Presses a machine button: its pin is asserted for a fixed number of board clocks (SimBoard:
+  // kButtonPressClks, well above the input filter) and then released, both timed in board
+  // clocks, so the core sees one press whatever the host's speed. Returns the first clock edge
+  // that samples the pin pressed. The default (a model without the buttons, the twin board)
+  // throws BoardError.
+  virtual uint64_t press_button(Button b);
   // Nothing in flight and every answer byte already written to the pty: nothing more comes
   // until the host writes (bytes the host wrote that the board has not read yet count as
   // written only once stats().bytes_in counts them).
@@ -329,6 +356,18 @@ class SimBoard : public Board {
   int pull_off_endstops();
   // The core's filtered switch levels now (bits as limit_switches()).
   uint16_t limit_state() const;
+
+  // ---- Machine buttons ----
+  // The core's input filter (cnc_core LIMIT_FILTER_CLKS, the board's default: buttons and switches
+  // alike) and the length of a press: four filter lengths (4 ms of board time), so the filtered
+  // level rises about 1 ms after the press starts and falls about 1 ms after its release.
+  static constexpr uint64_t kFilterClks = spec::kDefaultLimitFilterClks;
+  static constexpr uint64_t kButtonPressClks = 4 * kFilterClks;
+  // Asserts the button's pin from the next clock edge for kButtonPressClks edges; the board's
+  // clock runs (without host traffic) until the filter has seen the release. A press while the
+  // same button is held lengthens the press (no second rise).
+  uint64_t press_button(Button b) override;
+  BoardPins pins() const;
 
   // Implementation detail (model, UART driver/monitor, recorder), defined in sim_board.cpp.
   struct Model;

@@ -1,0 +1,176 @@
+// The grbl front end's feed hold and overrides (docs/grbl.md "Feed hold and overrides") against
+// the in-process fake device (fake_v2_device.h), which takes MOTION and freezes its queue at once
+// on a hold (STATUS HOLD and STOPPED together): the MOTION frames the engine sends for '!', '~'
+// and 0x90-0x9D, the states and Ov it reports, a feed override above 100 % planned by the host,
+// and a reset during a hold. The Verilated board's own tests are in test_grbl.cpp.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "fake_v2_device.h"
+#include "fpgacnc/grbl/engine.h"
+#include "fpgacnc/link/stream_v2.h"
+
+namespace {
+
+namespace grbl = fpgacnc::grbl;
+namespace v2 = fpgacnc::protocol::v2;
+using fpgacnc::config::MachineConfig;
+using fpgacnc::test::FakeV2Device;
+using std::chrono::milliseconds;
+
+class FakeRig {
+ public:
+  explicit FakeRig(FakeV2Device::Options o = options()) : dev_(o) {
+    grbl::EngineOptions eo;
+    eo.v2 = fpgacnc::link::stream_v2_options(cfg_);
+    engine_ = std::make_unique<grbl::Engine>(dev_, cfg_, grbl::settings_from_config(cfg_), eo);
+    engine_->connect();
+    engine_->take_output();
+  }
+  static FakeV2Device::Options options() {
+    FakeV2Device::Options o;
+    o.fifo_depth = 16;
+    o.exec_period = std::chrono::microseconds(50'000);  // 50 ms a frame: the job outlasts the keys
+    return o;
+  }
+  void pump() {
+    engine_->step(milliseconds(5));
+    partial_ += engine_->take_output();
+    for (size_t nl; (nl = partial_.find('\n')) != std::string::npos;) {
+      std::string l = partial_.substr(0, nl);
+      partial_.erase(0, nl + 1);
+      if (!l.empty() && l.back() == '\r') l.pop_back();
+      if (l.empty()) continue;
+      (l[0] == '<' ? reports_ : lines_).push_back(l);
+    }
+  }
+  template <typename P>
+  bool pump_until(P pred, int rounds = 20'000) {
+    for (int i = 0; i < rounds; ++i) {
+      if (pred()) return true;
+      pump();
+    }
+    return pred();
+  }
+  std::string next_line() {
+    EXPECT_TRUE(pump_until([&] { return !lines_.empty(); })) << "no answer";
+    if (lines_.empty()) return "";
+    std::string l = lines_.front();
+    lines_.erase(lines_.begin());
+    return l;
+  }
+  std::string command(const std::string& line) {
+    engine_->receive(line + "\n");
+    std::string l;
+    do {
+      l = next_line();
+    } while (!l.empty() && l != "ok" && l.rfind("error:", 0) != 0);
+    return l;
+  }
+  std::string report() {
+    const size_t n = reports_.size();
+    engine_->receive("?");
+    EXPECT_TRUE(pump_until([&] { return reports_.size() > n; })) << "no report";
+    return reports_.empty() ? "" : reports_.back();
+  }
+  static std::string state(const std::string& r) { return r.substr(1, r.find('|') - 1); }
+
+  MachineConfig cfg_;
+  FakeV2Device dev_;
+  std::unique_ptr<grbl::Engine> engine_;
+  std::string partial_;
+  std::vector<std::string> lines_, reports_;
+};
+
+}  // namespace
+
+TEST(GrblMotion, HoldResumeAndOverridesAsMotionFrames) {
+  FakeRig rig;
+  ASSERT_TRUE(rig.engine_->motion_available());
+  ASSERT_EQ(rig.dev_.motions().size(), 1u);  // the session's start: the machine's ramp, 100 %
+  EXPECT_EQ(rig.dev_.motions()[0], fpgacnc::link::machine_motion(rig.cfg_));
+  EXPECT_EQ(rig.command("G21 G90 F1200"), "ok");
+  for (int i = 1; i <= 12; ++i) EXPECT_EQ(rig.command(fmt::format("G1 X{}", i)), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.dev_.executed().size() >= 2; }));
+  rig.engine_->receive("!");
+  std::string r;
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(r = rig.report()) == "Hold:0"; }, 200))
+      << r;
+  ASSERT_EQ(rig.dev_.motions().size(), 2u);
+  EXPECT_TRUE(rig.dev_.motions()[1].hold);
+  // Held: nothing completes while the reports come.
+  const size_t done = rig.dev_.executed().size();
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(FakeRig::state(rig.report()), "Hold:0");
+  EXPECT_EQ(rig.dev_.executed().size(), done);
+  // Feed 50 % (five -10 %), rapid 25 %, spindle +10 %: the board's rates, Ov in the next report.
+  rig.engine_->receive("\x92\x92\x92\x92\x92\x97\x9A");
+  r = rig.report();
+  EXPECT_NE(r.find("|Ov:50,25,110"), std::string::npos) << r;
+  const auto& m = rig.dev_.motions().back();
+  EXPECT_EQ(m.feed, 0x4000);
+  EXPECT_EQ(m.rapid, 0x2000);
+  EXPECT_FALSE(m.hold || m.resume);
+  // Above 100 %: the board stays at 100 %.
+  rig.engine_->receive(std::string(10, '\x91'));
+  r = rig.report();
+  EXPECT_NE(r.find("|Ov:150,25,110"), std::string::npos) << r;
+  EXPECT_EQ(rig.dev_.motions().back().feed, 0x8000);
+  EXPECT_EQ(rig.engine_->overrides().feed, 150);
+  rig.engine_->receive("~");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  EXPECT_TRUE(rig.dev_.motions().back().resume);
+  EXPECT_FALSE(rig.dev_.held());
+  EXPECT_EQ(rig.dev_.position()[0], 12 * 160);
+  EXPECT_EQ(rig.engine_->stats().holds, 1u);
+  EXPECT_EQ(rig.engine_->stats().resumes, 1u);
+  // '!' at rest does nothing (grbl holds a cycle in progress only).
+  const size_t motions = rig.dev_.motions().size();
+  rig.engine_->receive("!");
+  EXPECT_EQ(FakeRig::state(rig.report()), "Idle");
+  EXPECT_EQ(rig.dev_.motions().size(), motions);
+}
+
+// Above 100 % the host plans faster: a G1 F600 after 150 % cruises at 900 mm/min (15 mm/s:
+// V_cruise in dominant-axis steps per clock, 2^48 scale: 15 * 160 / 5e7 * 2^48).
+TEST(GrblMotion, FeedOverrideAbove100PlansTheNextLinesFaster) {
+  FakeRig rig;
+  rig.engine_->receive(std::string(5, '\x91'));
+  rig.report();
+  EXPECT_EQ(rig.command("G21 G90 G1 X20 F600"), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  ASSERT_EQ(rig.dev_.executed().size(), 1u);
+  const auto p = v2::decode_line_profile(rig.dev_.executed()[0], 4);
+  const double v_mm_min = static_cast<double>(p.v_cruise) / std::ldexp(1.0, 48) * 5e7 / 160.0 * 60;
+  EXPECT_NEAR(v_mm_min, 900.0, 1.0);
+}
+
+// 0x18 during a hold: ALARM:3 (grbl); MOTION CANCEL drops the board's queue at rest (nothing more
+// runs, the position kept), then the banner; the overrides are back at 100 %.
+TEST(GrblMotion, ResetDuringAHoldAlarmsAndCancelsTheQueue) {
+  FakeRig rig;
+  EXPECT_EQ(rig.command("G21 G90 F1200"), "ok");
+  for (int i = 1; i <= 12; ++i) EXPECT_EQ(rig.command(fmt::format("G1 X{}", i)), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.dev_.executed().size() >= 1; }));
+  rig.engine_->receive("\x92!");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Hold:0"; }, 200));
+  const size_t done = rig.dev_.executed().size();
+  const auto at = rig.dev_.position();
+  rig.engine_->receive("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_FALSE(rig.dev_.held());
+  EXPECT_GT(rig.dev_.cancelled(), 0u);
+  EXPECT_EQ(rig.dev_.executed().size(), done) << "a frame ran after the reset";
+  EXPECT_EQ(rig.dev_.position(), at);
+  bool cancel = false;
+  for (const auto& m : rig.dev_.motions()) cancel |= m.cancel;
+  EXPECT_TRUE(cancel);
+  EXPECT_EQ(rig.engine_->overrides(), grbl::Overrides{});
+  // The new session's MOTION: 100 %.
+  EXPECT_EQ(rig.dev_.motions().back().feed, 0x8000);
+  EXPECT_EQ(FakeRig::state(rig.report()), "Alarm");
+}
