@@ -286,9 +286,11 @@ void TwinBoard::session(VirtualBoard& vb) {
   const uint64_t per = vb.clk_.period_ps();
   const uint64_t now_ps = sc_core::sc_time_stamp().value();
   vb.clk_.set_base(sc_core::sc_time::from_value((now_ps + per - 1) / per * per));
-  // live: each MOTION request goes to the motion rate when its frame is accepted
+  // live: the twins cannot run a session again, so they refuse MOTION (NAK UNKNOWN_TYPE) as a
+  // core without the motion rate does; hosts then keep their holds to themselves
   vb.known_motion_.clear();
   vb.live_motion_ = true;
+  vb.dec_.accept_motion = false;
   vb.reset(axis_timing(opt_));
   vb.pins_.record_tx = true;
   vb.host_ = nullptr;

@@ -171,6 +171,7 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   // everything before it was exact, so the next run knows that request too.
   known_motion_.clear();
   live_motion_ = false;
+  dec_.accept_motion = true;
   for (runs_ = 1;; ++runs_) {
     // (a run again takes no SystemC time: the job's time passed in its first run)
     RunResult r = run_once(job, runs_ == 1);

@@ -144,6 +144,9 @@ class FrameDecoderTwin : public sc_core::sc_module {
   std::vector<std::pair<Cycle, DecoderState>>* log = nullptr;  // every state change, when set
   std::function<void(Cycle)> before_write;          // called with the edge of each FIFO write
   std::function<void(const MotionReq&)> on_motion;  // each accepted MOTION frame
+  // false: MOTION is an unknown type (NAK UNKNOWN_TYPE), as on a core without the motion rate
+  // (the live twin board, virtual_board.h)
+  bool accept_motion = true;
 
  private:
   enum class Kind { None, V1Init, V1Motion, V2 };
@@ -476,7 +479,7 @@ class FrameDecoderTwin : public sc_core::sc_module {
     count_ = 0;
     kind_ = Kind::None;
     const Cycle r = take + kDecoderResp;
-    const int want = expected_len(type_);
+    const int want = type_ == spec::kTypeMotion && !accept_motion ? -1 : expected_len(type_);
     if (want == -1) {
       ++s_.unknown_types;
       commit_check(take);

@@ -20,10 +20,12 @@
 // know: the effect of a request starts two edges after its frame ends, so everything before was
 // exact and the next run knows that request too (a job with n MOTION frames runs n + 1 times,
 // all but the last cut short at a MOTION frame). A live session (TwinBoard) cannot run again:
-// it hands each request to the rate when its frame is accepted, so segments computed earlier
-// keep their clocks (FeedRate::late() counts those requests). The host sends each packet
-// with its delay; the response encoder computes the answers lazily, in time order, up to the
-// edge before which every input is known (docs/systemc.md "Time").
+// its decoder refuses MOTION (NAK UNKNOWN_TYPE, as a core without the motion rate), so a host
+// keeps its holds to itself (live_motion_ would hand each request to the rate when its frame is
+// accepted, with the segments computed before keeping their clocks: FeedRate::late()).
+//
+// The host sends each packet with its delay; the response encoder computes the answers lazily,
+// in time order, up to the edge before which every input is known (docs/systemc.md "Time").
 #pragma once
 
 #include <functional>
