@@ -98,16 +98,10 @@ module ice40_cnc_top #(
 endmodule
 VEOF
 
-# The cnc_core file set (CMakeLists.txt FPGACNC_CORE_RTL).
-core_rtl="rtl/protocol/uart_rx.v rtl/protocol/uart_tx.v rtl/protocol/crc16_ccitt.v rtl/protocol/frame_fields.v rtl/protocol/entry_pack.v rtl/machine/travel_guard.v rtl/protocol/frame_decoder.v rtl/protocol/segment_fifo.v"
-core_rtl="$core_rtl rtl/protocol/front_v2.v rtl/protocol/response_encoder.v rtl/protocol/answer_source.v"
-core_rtl="$core_rtl rtl/protocol/status_counters.v rtl/motion/step_config.v rtl/machine/estop_latch.v rtl/machine/machine_outputs.v"
-core_rtl="$core_rtl rtl/motion/prep_profile.v rtl/motion/prep_arc.v rtl/motion/prep_dir_tracker.v"
-core_rtl="$core_rtl rtl/motion/segment_prep.v rtl/motion/dda_linear.v"
-core_rtl="$core_rtl rtl/motion/profile_gen.v rtl/motion/dda_profile.v rtl/motion/arc_dda.v"
-core_rtl="$core_rtl rtl/motion/step_pulse.v rtl/motion/axis_channel.v rtl/motion/dir_sequencer.v rtl/motion/segment_executor.v rtl/machine/input_filter.v rtl/machine/limit_guard.v rtl/cnc_core.v"
-core_rtl="$core_rtl rtl/machine/pwm.v rtl/heater/pid_incr.v rtl/heater/ltc2308_spi.v rtl/heater/temp_table.v rtl/heater/heater_safety.v"
-core_rtl="$core_rtl rtl/heater/heater_channel.v rtl/heater/heater_block.v rtl/protocol/packet_decoder_v1.v rtl/protocol/front_v1.v"
+# Every RTL file (scripts/rtl_files.sh); the top's hierarchy keeps what cnc_core uses.
+# shellcheck source=scripts/rtl_files.sh
+source scripts/rtl_files.sh
+core_rtl="${FPGACNC_RTL_FILES[*]}"
 
 status=0
 summary=()

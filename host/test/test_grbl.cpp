@@ -750,7 +750,7 @@ TEST(Grbl, FeedHoldMidJobThenResumeEndsOnThePlan) {
   const MachineConfig cfg;
   Rig rig("", cfg, true);
   ASSERT_TRUE(rig.engine().motion_available()) << "the Verilated board refuses MOTION";
-  for (const char* l : {"G21 G90 F1200", "G1 X3 Y1", "G1 X6 Y0", "G1 X8 Y2"})
+  for (const char* l : {"G21 G90 F2400", "G1 X3 Y1", "G1 X6 Y0", "G1 X8 Y2"})
     EXPECT_EQ(rig.command(l).back(), "ok") << l;
   std::vector<std::string> states;
   ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 1.0; }));
@@ -806,8 +806,8 @@ double clocks_of_job(Rig& rig) {
 
 // Feed override: the same G1 takes twice the board clocks at 50 % (the board's motion rate
 // stretches the time base of the running segment, docs/timing.md) and fewer at 150 % (the host
-// plans it faster: 4 mm at 30 mm/s instead of 20 mm/s, with the same 1000 mm/s^2 ramps:
-// (0.1333 + 0.03) / (0.2 + 0.02) = 0.742); every run ends where the plan ends. Ov reports the
+// plans it faster: 2 mm at 30 mm/s instead of 20 mm/s, with the same 1000 mm/s^2 ramps:
+// (0.0667 + 0.03) / (0.1 + 0.02) = 0.806); every run ends where the plan ends. Ov reports the
 // override.
 TEST(Grbl, FeedOverrideScalesTheJobInBoardClocks) {
   const MachineConfig cfg = override_cfg();
@@ -821,9 +821,9 @@ TEST(Grbl, FeedOverrideScalesTheJobInBoardClocks) {
           << rig.reports().back();
     }
     EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
-    EXPECT_EQ(rig.command("G1 X4 F1200").back(), "ok");
-    expect_at(rig.wait_idle(), {640, 0, 0}, cfg);
-    EXPECT_EQ(board_xyz(rig), (std::array<int64_t, 3>{640, 0, 0}));
+    EXPECT_EQ(rig.command("G1 X2 F1200").back(), "ok");
+    expect_at(rig.wait_idle(), {320, 0, 0}, cfg);
+    EXPECT_EQ(board_xyz(rig), (std::array<int64_t, 3>{320, 0, 0}));
     return clocks_of_job(rig);
   };
   const double t100 = run("", "");
@@ -831,11 +831,11 @@ TEST(Grbl, FeedOverrideScalesTheJobInBoardClocks) {
   const double t150 = run("\x91\x91\x91\x91\x91", "150,100,100");
   ASSERT_GT(t100, 0.0);
   fmt::print(
-      "G1 X4 F1200: {:.0f} clocks at 100 %, {:.0f} at 50 % ({:.4f}x), {:.0f} at 150 % "
+      "G1 X2 F1200: {:.0f} clocks at 100 %, {:.0f} at 50 % ({:.4f}x), {:.0f} at 150 % "
       "({:.4f}x)\n",
       t100, t50, t50 / t100, t150, t150 / t100);
   EXPECT_NEAR(t50 / t100, 2.0, 0.02) << t50 << " vs " << t100 << " clocks";
-  EXPECT_NEAR(t150 / t100, 0.742, 0.02) << t150 << " vs " << t100 << " clocks";
+  EXPECT_NEAR(t150 / t100, 0.806, 0.02) << t150 << " vs " << t100 << " clocks";
 }
 
 // Rapid override 25 %: a G0 takes four times the board clocks (the board's rapid rate); a G1
@@ -852,10 +852,10 @@ TEST(Grbl, RapidOverrideScalesRapidsOnly) {
           << rig.reports().back();
     }
     EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
-    EXPECT_EQ(rig.command("G0 X3").back(), "ok");
+    EXPECT_EQ(rig.command("G0 X1.5").back(), "ok");
     EXPECT_EQ(rig.command("G4 P0.01").back(), "ok");  // the G0 ends at rest
-    EXPECT_EQ(rig.command("G1 X6 F1200").back(), "ok");
-    expect_at(rig.wait_idle(), {960, 0, 0}, cfg);
+    EXPECT_EQ(rig.command("G1 X3 F1200").back(), "ok");
+    expect_at(rig.wait_idle(), {480, 0, 0}, cfg);
     const auto done = rig.board().move_done_cycles();
     const auto edges = rig.board().edges();
     EXPECT_GE(done.size(), 3u);
@@ -867,7 +867,7 @@ TEST(Grbl, RapidOverrideScalesRapidsOnly) {
   const auto [g0_25, g1_25] = run(true);
   ASSERT_GT(g0_100, 0.0);
   fmt::print(
-      "G0 X3: {:.0f} clocks at 100 %, {:.0f} at 25 % ({:.4f}x); the G1 after it {:.0f} and "
+      "G0 X1.5: {:.0f} clocks at 100 %, {:.0f} at 25 % ({:.4f}x); the G1 after it {:.0f} and "
       "{:.0f} ({:.4f}x)\n",
       g0_100, g0_25, g0_25 / g0_100, g1_100, g1_25, g1_25 / g1_100);
   EXPECT_NEAR(g0_25 / g0_100, 4.0, 0.05) << g0_25 << " vs " << g0_100 << " clocks";
@@ -881,7 +881,7 @@ TEST(Grbl, SoftResetDuringAHoldAlarmsAndKeepsThePosition) {
   const MachineConfig cfg;
   Rig rig("", cfg, true);
   ASSERT_TRUE(rig.engine().motion_available());
-  EXPECT_EQ(rig.command("G21 G90 G1 X6 F1200").back(), "ok");
+  EXPECT_EQ(rig.command("G21 G90 G1 X6 F2400").back(), "ok");
   std::vector<std::string> states;
   ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 1.0; }));
   rig.send("!");
