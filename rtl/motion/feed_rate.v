@@ -9,7 +9,8 @@
 //   r         moves only at the edge that ends a period (p(t) = 2^PERIOD_LOG2 - 1; p counts from
 //             rst): to cand(t), a register: cand(t) = r(t-1) moved toward target(t-1) by at most
 //             ramp(t-1), equal to target(t-1) when within ramp(t-1) (r(t-1) = r(t) then: r
-//             changed last a whole period before). The step is formed a clock ahead so that its
+//             changed last a whole period before). cand is written only in the clock before the
+//             period's last one (p = 2^PERIOD_LOG2 - 2), the only value r reads. The step is formed a clock ahead so that its
 //             compares and the zero test of `stopped` are not one path.
 //   target    0 while hold; rapid * 2^17 while `rapid_seg` (the executor's segment has code 0);
 //             else feed * 2^17.
@@ -58,8 +59,8 @@ module feed_rate #(
 );
 
   generate
-    if (PERIOD_LOG2 < 1 || PERIOD_LOG2 > 16) begin : g_bad_period
-      feed_rate_illegal_PERIOD_LOG2_not_1_to_16 u_err ();
+    if (PERIOD_LOG2 < 2 || PERIOD_LOG2 > 16) begin : g_bad_period
+      feed_rate_illegal_PERIOD_LOG2_not_2_to_16 u_err ();
     end
     if (RAMP0 == 32'd0) begin : g_bad_ramp
       feed_rate_illegal_RAMP0_zero u_err ();
@@ -91,12 +92,14 @@ module feed_rate #(
   wire        past_dn = r_dn[33] || (r_dn <= {1'b0, target});
   wire [32:0] r_next = up ? (past_up ? target : r_up[32:0]) : (past_dn ? target : r_dn[32:0]);
   wire        period_end = (p_reg == {PERIOD_LOG2{1'b1}});
+  // the clock before a period's last clock: the step that r takes at the period end is formed
+  wire        period_last = (p_reg == {{(PERIOD_LOG2 - 1) {1'b1}}, 1'b0});
   wire [32:0] phase = {1'b0, acc_reg} + r_reg;
 
   always @(posedge clk) begin
     {adv_reg, acc_reg} <= phase;
     p_reg <= p_reg + {{(PERIOD_LOG2 - 1) {1'b0}}, 1'b1};
-    cand_reg <= r_next;
+    if (period_last) cand_reg <= r_next;  // read only at the period's end
     if (period_end) begin
       r_reg       <= cand_reg;
       stopped_reg <= (cand_reg == 33'd0);
@@ -175,8 +178,10 @@ module feed_rate #(
       if (flush) assert (r_reg == 33'd0);
       // the next step is at most the ramp away from the rate it was formed from, and never up
       // from a clock in hold
-      assert (f_absdiff(cand_reg, f_r_q) <= {2'd0, f_ramp_q});
-      if (f_hold_q) assert (cand_reg <= f_r_q);
+      if (period_end) begin
+        assert (f_absdiff(cand_reg, f_r_q) <= {2'd0, f_ramp_q});
+        if (f_hold_q) assert (cand_reg <= f_r_q);
+      end
       // a hold never exceeds the configured deceleration: r changes only at a period end, and
       // then by at most the ramp in force when the step was formed; in a hold it never rises
       if (!f_period_q) assert (r_reg == f_r_q);
