@@ -492,6 +492,14 @@ TEST(StreamV2, MotionAtTheStartAndADeviceWithoutIt) {
   }
 }
 
+// A device slow enough that a job outlasts the polls by far (the hold tests act between polls).
+FakeV2Device::Options slow_device() {
+  FakeV2Device::Options o;
+  o.fifo_depth = 16;
+  o.exec_period = std::chrono::microseconds(10000);
+  return o;
+}
+
 // A hold from on_poll (as `fpgacnc stream` sends it on a key or SIGINT): once STATUS shows the
 // hold, nothing more completes however long it lasts (counted in STATUS answers, not time); a
 // resume runs the rest of the job in order to the plan's end.
@@ -499,10 +507,7 @@ TEST(StreamV2, HoldFromOnPollFreezesTheJobAndResumeFinishesIt) {
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(120, false), cfg);
   const auto job = fpgacnc::test::pack_motion(plan, cfg);
-  FakeV2Device::Options o;
-  o.fifo_depth = 16;
-  o.exec_period = std::chrono::microseconds(10000);  // the job outlasts the polls by far
-  FakeV2Device dev(o);
+  FakeV2Device dev(slow_device());
   auto so = clean_options();
   so.motion = lk::machine_motion(cfg);
   enum { kRun, kHolding, kHeld, kResumed } phase = kRun;
@@ -561,10 +566,7 @@ TEST(StreamV2, StopDuringAHoldKeepsTheDeviceQueueAndReports) {
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(200, false), cfg);
   const auto job = fpgacnc::test::pack_motion(plan, cfg);
-  FakeV2Device::Options o;
-  o.fifo_depth = 16;
-  o.exec_period = std::chrono::microseconds(10000);  // the job outlasts the polls by far
-  FakeV2Device dev(o);
+  FakeV2Device dev(slow_device());
   auto so = clean_options();
   so.motion = lk::machine_motion(cfg);
   bool sent = false;
