@@ -900,3 +900,33 @@ TEST(Grbl, SoftResetDuringAHoldAlarmsAndKeepsThePosition) {
   EXPECT_EQ(rig.command("G0 X1").back(), "ok");
   expect_at(rig.wait_idle(), {160, 0, 0}, cfg);
 }
+
+// $J= and the jog cancel on the Verilated board: Jog while it runs; 0x85 mid-jog decelerates it
+// with the board's hold ramp (MOTION CANCEL) and drops the queued jogs; Idle at rest with the
+// report at the board's own step counters, short of the jogs' end; the next jog starts there
+// and ends exactly one jog length on.
+TEST(Grbl, JogAndJogCancelOnTheVerilatedBoard) {
+  const MachineConfig cfg;
+  Rig rig("", cfg, true);
+  ASSERT_TRUE(rig.engine().motion_available());
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(rig.command("$J=G91 X1 F1200").back(), "ok");
+  std::vector<std::string> states;
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 0.2; }));
+  EXPECT_EQ(states.back(), "Jog");
+  rig.send("\x85");
+  states.clear();
+  Report idle;
+  ASSERT_TRUE(poll_reports(rig, states, [&](const Report& r) {
+    idle = r;
+    return r.state == "Idle";
+  })) << "no Idle after the jog cancel";
+  const auto at = board_xyz(rig);
+  EXPECT_GT(at[0], 32);
+  EXPECT_LT(at[0], 4 * 160) << "the jog cancel did not stop the jogs";
+  EXPECT_NEAR(idle.mpos[0], static_cast<double>(at[0]) / cfg.steps_per_mm[0], 0.0005);
+  EXPECT_EQ(rig.command("$J=G91 X-0.1 F600").back(), "ok");
+  expect_at(rig.wait_idle(), {at[0] - 16, 0, 0}, cfg);
+  EXPECT_EQ(board_xyz(rig), (std::array<int64_t, 3>{at[0] - 16, 0, 0}));
+  EXPECT_EQ(rig.command("G91 G1 Y0.1 F1200").back(), "ok") << "G-code after the jogs";
+  expect_at(rig.wait_idle(), {at[0] - 16, 16, 0}, cfg);
+}
