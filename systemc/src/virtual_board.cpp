@@ -52,10 +52,7 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   dec_.on_motion = [this](const MotionReq& m) {
     const size_t i = observed_motion_.size();
     observed_motion_.push_back(m);
-    if (live_motion_)
-      rate_.motion(m.from, m.hold || m.cancel, m.resume, m.feed, m.rapid, m.ramp);
-    else if (i >= known_motion_.size() || !(known_motion_[i] == m))
-      motion_mismatch_ = true;
+    if (i >= known_motion_.size() || !(known_motion_[i] == m)) motion_mismatch_ = true;
   };
   make_axis_twins(exec_, clk_, p_, pins_, dda_, pulse_);
   for (auto& pulse : pulse_) pulse->keep_history = true;
@@ -170,7 +167,6 @@ RunResult VirtualBoard::run_job(const TwinJob& job) {
   // A run stops at the first MOTION frame accepted that it did not know (or knew otherwise):
   // everything before it was exact, so the next run knows that request too.
   known_motion_.clear();
-  live_motion_ = false;
   dec_.accept_motion = true;
   for (runs_ = 1;; ++runs_) {
     // (a run again takes no SystemC time: the job's time passed in its first run)

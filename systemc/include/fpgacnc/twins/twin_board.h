@@ -29,6 +29,19 @@
 // time follows the wall clock (50 M clocks per second at 50 MHz, times realtime_speed) while the
 // board is busy; no holds.
 //
+// MOTION (feed hold, resume, feed and rapid rates): the twins compute a segment's edges and its
+// end when the executor accepts it, ahead of the board's time, so a MOTION frame changes edges
+// already computed. The board keeps a log of every host byte with its start clock; at a MOTION
+// frame the twins did not know up front, it runs the session again from the reset up to `now`
+// with the requests of every MOTION frame so far known up front (VirtualBoard::run_job's way),
+// in the same thread, without waiting: the answers already decided and the edges already
+// released (up to the published cycle) come out the same (checked: a difference ends the
+// session with error()), the edges after them are replaced. A replay costs the host bytes and
+// the edges of the session so far, never its clocks (replays()). A board held for good (rate 0,
+// nothing to end it) does not run its clock on its own: it moves on to the host's deadlines
+// (set_host_deadline) or its next bytes. The host's timer stops the board at that clock also
+// when an event falls on it (bytes written then start on the next clock, as with SimBoard).
+//
 // No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
 // e-stop input (set_estop throws BoardError), no limit switches (set_limit throws BoardError). The
 // SystemC kernel runs in a thread of its own, one per process, elaborated by the first TwinBoard;
@@ -101,6 +114,8 @@ class TwinBoard : public simboard::Board {
   void set_host_deadline(int64_t cycle) override;
   // An error that ended the session (a twin's logic error), "" when none.
   std::string error() const;
+  // Replays of this session so far (one per MOTION frame the twins did not know; see above).
+  uint64_t replays() const { return replays_.load(); }
 
  private:
   void session(VirtualBoard& vb);
@@ -120,6 +135,7 @@ class TwinBoard : public simboard::Board {
   bool running_ = false;
   std::atomic<bool> stop_{false};
   std::atomic<bool> quiet_{true};
+  std::atomic<uint64_t> replays_{0};
   std::atomic<int64_t> host_deadline_{-1};
   std::atomic<bool> session_done_{true};
   std::chrono::steady_clock::time_point t_start_{};

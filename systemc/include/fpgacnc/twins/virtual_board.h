@@ -19,10 +19,9 @@
 // are accepted exactly there, is the job's run. A run stops at the first MOTION frame it did not
 // know: the effect of a request starts two edges after its frame ends, so everything before was
 // exact and the next run knows that request too (a job with n MOTION frames runs n + 1 times,
-// all but the last cut short at a MOTION frame). A live session (TwinBoard) cannot run again:
-// its decoder refuses MOTION (NAK UNKNOWN_TYPE, as a core without the motion rate), so a host
-// keeps its holds to itself (live_motion_ would hand each request to the rate when its frame is
-// accepted, with the segments computed before keeping their clocks: FeedRate::late()).
+// all but the last cut short at a MOTION frame). A live session (TwinBoard) does the same from
+// its own log: at a MOTION frame it did not know it runs again from the reset with every host
+// byte so far at its clock and the requests known up front (twin_board.h).
 //
 // The host sends each packet with its delay; the response encoder computes the answers lazily,
 // in time order, up to the edge before which every input is known (docs/systemc.md "Time").
@@ -102,7 +101,6 @@ class VirtualBoard : public sc_core::sc_module {
   FeedRate rate_;
   std::vector<MotionReq> known_motion_;     // requests known up front (a job's later runs)
   std::vector<MotionReq> observed_motion_;  // MOTION frames accepted in this run
-  bool live_motion_ = false;                // a live session: requests go to the rate at once
   bool motion_mismatch_ = false;            // a MOTION frame accepted that was not known
   int runs_ = 0;
   std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda_;
