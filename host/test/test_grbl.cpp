@@ -900,3 +900,96 @@ TEST(Grbl, SoftResetDuringAHoldAlarmsAndKeepsThePosition) {
   EXPECT_EQ(rig.command("G0 X1").back(), "ok");
   expect_at(rig.wait_idle(), {160, 0, 0}, cfg);
 }
+
+std::array<int64_t, 3> board_xyz_of(Rig& rig) {
+  const auto n = fpgacnc::simboard::any_board_of(rig.link())->net_steps();
+  return {n[0], n[1], n[2]};
+}
+
+// ---- Feed hold and feed override on the twin board (the default model of `fpgacnc grbl`).
+// Board clocks from the board's first edge to its last (Board::edges; the twin board releases
+// edges up to its clock).
+double twin_clocks_of_job(Rig& rig) {
+  const auto e = fpgacnc::simboard::any_board_of(rig.link())->edges();
+  EXPECT_FALSE(e.empty());
+  return e.empty() ? 0.0 : static_cast<double>(e.back().cycle - e.front().cycle);
+}
+
+// '!' while the G1 runs, Hold:0, '~' some board time later: the move ends where the plan ends and
+// took longer than without the hold by at least the board clocks it was seen at rest and at most
+// those from '!' to '~' and the RESUME's way (the ramps of this machine are short: under 1 % of
+// the move); at a 50 % feed override the move takes twice the clocks.
+TEST(Grbl, TwinBoardFeedHoldResumeAndOverride) {
+  const MachineConfig cfg = override_cfg();
+  const std::array<int64_t, 3> plan{320, 0, 0};
+  auto cycle = [](Rig& rig) {
+    return static_cast<double>(fpgacnc::simboard::any_board_of(rig.link())->cycle());
+  };
+  auto start = [&](Rig& rig, const std::string& ov) {
+    EXPECT_TRUE(rig.engine().motion_available()) << "the twin board refuses MOTION";
+    if (!ov.empty()) {
+      rig.send(ov);
+      rig.status();
+    }
+    EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
+    EXPECT_EQ(rig.command("G1 X2 F1200").back(), "ok");
+  };
+  // held: clocks from the first Hold:0 report to '~'; between: from '!' to '~'
+  double plain = 0.0, half = 0.0, held_job = 0.0, held = 0.0, between = 0.0;
+  {
+    Rig rig("", cfg);
+    start(rig, "");
+    expect_at(rig.wait_idle(), plan, cfg);
+    EXPECT_EQ(board_xyz_of(rig), plan);
+    plain = twin_clocks_of_job(rig);
+  }
+  {
+    Rig rig("", cfg);
+    start(rig, "\x92\x92\x92\x92\x92");
+    EXPECT_NE(rig.reports().back().find("|Ov:50,100,100"), std::string::npos)
+        << rig.reports().back();
+    expect_at(rig.wait_idle(), plan, cfg);
+    EXPECT_EQ(board_xyz_of(rig), plan);
+    half = twin_clocks_of_job(rig);
+  }
+  {
+    Rig rig("", cfg);
+    start(rig, "");
+    std::vector<std::string> states;
+    ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 0.5; }));
+    const double h_send = cycle(rig);
+    rig.send("!");
+    Report at_rest;
+    ASSERT_TRUE(poll_reports(rig, states, [&](const Report& r) {
+      at_rest = r;
+      return r.state == "Hold:0";
+    })) << "no Hold:0";
+    EXPECT_LT(at_rest.mpos[0], 2.0) << "the hold came after the end of the move";
+    const double h0 = cycle(rig);
+    const auto still = board_xyz_of(rig);
+    rig.link().wait_until(rig.link().now() + milliseconds(200));  // held for 200 ms
+    std::vector<std::string> more;
+    EXPECT_FALSE(poll_reports(
+        rig, more, [](const Report& r) { return r.state != "Hold:0"; }, milliseconds(20)));
+    EXPECT_EQ(board_xyz_of(rig), still) << "STEP edges during Hold:0";
+    held = cycle(rig) - h0;
+    between = cycle(rig) - h_send;
+    rig.send("~");
+    expect_at(rig.wait_idle(), plan, cfg);
+    EXPECT_EQ(board_xyz_of(rig), plan);
+    held_job = twin_clocks_of_job(rig);
+    EXPECT_EQ(rig.engine().stats().holds, 1u);
+    EXPECT_EQ(rig.engine().stats().resumes, 1u);
+  }
+  ASSERT_GT(plain, 0.0);
+  fmt::print(
+      "twin board, G1 X2 F1200: {:.0f} clocks at 100 %, {:.0f} at 50 % ({:.4f}x); with a hold "
+      "of {:.0f} clocks at rest ({:.0f} from '!' to '~') {:.0f} ({:.0f} more)\n",
+      plain, half, half / plain, held, between, held_job, held_job - plain);
+  EXPECT_NEAR(half / plain, 2.0, 0.02) << half << " vs " << plain << " clocks";
+  EXPECT_GT(held, 0.2 * cfg.clk_hz);
+  EXPECT_GE(held_job - plain, held);
+  // at most the clocks from '!' to '~' and the RESUME frame's 15 bytes on the line (65 100
+  // clocks) and its ramp
+  EXPECT_LE(held_job - plain, between + 0.02 * plain);
+}
