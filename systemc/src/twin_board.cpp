@@ -290,6 +290,7 @@ void TwinBoard::session(VirtualBoard& vb) {
   // MOTION frames: a frame not known up front makes the session run again from its reset with
   // the requests known (replay below, docs/systemc.md "The twin board")
   vb.known_motion_.clear();
+  vb.known_flush_.clear();
   vb.dec_.accept_motion = true;
   vb.reset(axis_timing(opt_));
   vb.pins_.record_tx = true;
@@ -455,10 +456,8 @@ void TwinBoard::session(VirtualBoard& vb) {
   // front, up to `now`. What was released is the same again (checked): the answers decided (tx
   // bytes taken) and the edges up to the published cycle; the edges after it are replaced.
   auto replay = [&] {
-    while (vb.motion_mismatch_) {
-      if (vb.observed_motion_.size() <= vb.known_motion_.size())
-        throw std::logic_error("twin board: a MOTION request known up front came otherwise");
-      vb.known_motion_ = vb.observed_motion_;
+    for (int runs = 0; !vb.settle_motion(); ++runs) {
+      if (runs > 64) throw std::logic_error("twin board: the MOTION requests do not settle");
       vb.reset(axis_timing(opt_));
       vb.pins_.record_tx = true;
       for (const auto& [c, b] : rx_log) {

@@ -306,8 +306,9 @@ class RtlHost : public ClockedHost {
 // The session (both boards): HELLO; three LINE frames (X 2000 steps in 1 M clocks, X back 1500
 // in 600 k, Y 800 in 400 k; code 1 without power: the feed rate), then at fixed clocks after
 // they were written: a HOLD (ramp 1/40 of 100 % per 256 clocks) during the first, a STATUS_QUERY
-// while held, a RESUME, a 50 % feed rate, a STATUS_QUERY; at the end a STATUS_QUERY. Returns the
-// clock the LINE frames were written at (0 on a failure).
+// while held, a RESUME, a 50 % feed rate, a STATUS_QUERY, a CANCEL (back to 100 %) with the
+// first LINE still running and the others queued; when idle a new LINE (X -300, Y -200), then a
+// STATUS_QUERY. Returns the clock the first LINE frames were written at (0 on a failure).
 uint64_t motion_session(ClockedHost& h) {
   namespace v2 = tw::v2;
   h.write(v2::frame(0, v2::kHello));
@@ -341,6 +342,7 @@ uint64_t motion_session(ClockedHost& h) {
       {900'000, motion(static_cast<uint8_t>(fpgacnc::spec::kMotionResume), 0x8000)},
       {1'100'000, motion(0, 0x4000)},
       {1'300'000, v2::frame(0, v2::kStatusQuery)},
+      {1'500'000, motion(static_cast<uint8_t>(fpgacnc::spec::kMotionCancel), 0x8000)},
   };
   for (const auto& [dt, bytes] : timed) {
     const uint64_t at = c0 + dt;
@@ -349,6 +351,10 @@ uint64_t motion_session(ClockedHost& h) {
     if (got != at) return 0;
     h.write(bytes);
   }
+  h.run_idle();
+  // after the CANCEL: a new move from where the machine stopped
+  const std::array<int32_t, 4> back{-300, -200, 0, 0};
+  h.write(v2::frame(seq++, v2::kLine, v2::line_payload(1, 0, 150'000, back, false)));
   h.run_idle();
   h.write(v2::frame(0, v2::kStatusQuery));
   h.run_idle();
@@ -423,27 +429,36 @@ TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
     EXPECT_EQ(fa[k].first, fb[k].first) << "device frame #" << k;
     EXPECT_EQ(fa[k].second, fb[k].second) << "device frame #" << k;
   }
-  // Not vacuous: the moves ran whole (2000 - 1500 steps X, 1100 Y), the hold stopped the board
-  // (a STATUS with HOLD and STOPPED), the 50 % rate took effect (the board time is longer than
-  // the 2 M clocks of the moves plus the time held), and the twin board replayed its session
-  // once per MOTION frame.
+  // Not vacuous: the hold stopped the board (a STATUS with HOLD and STOPPED); the CANCEL came
+  // with the first LINE still running (held, then at 50 %) and dropped it and the two queued:
+  // X short of the first's 2000 steps, no Y but the new move's; no fault, the hold over, not
+  // busy (the last STATUS); one move done (the one after the CANCEL); the twin board replayed
+  // its session at each MOTION frame.
   const auto n = models::net_steps(a.edges);
-  EXPECT_EQ(n[0], 500);
-  EXPECT_EQ(n[1], 1100);
+  EXPECT_GT(n[0], 0);
+  EXPECT_LT(n[0], 2000 - 300);
+  EXPECT_EQ(n[1], -200) << "the third LINE (Y 800) was dropped";
   tw::v2::FrameParser parser;
   int held = 0, statuses = 0;
+  std::vector<uint8_t> last;
   for (uint8_t x : a.received)
     if (const auto f = parser.feed(x); f && f->type == tw::v2::kStatus) {
       ++statuses;
       const uint8_t want = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
       if ((f->u8(0) & want) == want) ++held;
+      last = f->payload;
     }
-  EXPECT_GE(statuses, 4);
+  EXPECT_GE(statuses, 5);
   EXPECT_GE(held, 1) << "no STATUS with HOLD and STOPPED";
-  EXPECT_EQ(tlm.replays(), 3u);
+  ASSERT_GE(last.size(), 30u);
+  EXPECT_EQ(last[0] & (fpgacnc::spec::kStateBusy | fpgacnc::spec::kStateHold |
+                       fpgacnc::spec::kStateFault),
+            0)
+      << "busy, held or a fault after the CANCEL and the new move";
+  EXPECT_EQ(tlm.replays(), 4u);
   EXPECT_EQ(a.stats.cycles, b.stats.cycles);
-  EXPECT_EQ(a.stats.moves_done, 3u);
-  EXPECT_EQ(b.stats.moves_done, 3u);
+  EXPECT_EQ(a.stats.moves_done, 1u);
+  EXPECT_EQ(b.stats.moves_done, 1u);
   std::printf("%zu answer bytes, %zu edges, %llu cycles; %llu replays\n", a.received.size(),
               a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
               static_cast<unsigned long long>(tlm.replays()));

@@ -99,7 +99,20 @@ class VirtualBoard : public sc_core::sc_module {
   SegmentPrepTwin prep_;
   SegmentExecutorTwin exec_;
   FeedRate rate_;
-  std::vector<MotionReq> known_motion_;     // requests known up front (a job's later runs)
+  std::vector<MotionReq> known_motion_;  // requests known up front (a job's later runs)
+  // Per known request: the flush clock of a CANCEL (the first clock with cancel and r = 0),
+  // kFlushNone (not a CANCEL, or one within a cancel in progress), kFlushUnknown.
+  static constexpr Cycle kFlushNone = -1, kFlushUnknown = -2;
+  std::vector<Cycle> known_flush_;
+  std::vector<Cycle> flush_edges_;  // their abort edges (flush clock + 1), in order
+  // The flushes as this run's rate has them (for the requests known up front).
+  std::vector<Cycle> observe_flushes();
+  // After a run (or a replay): true when the requests and flushes known up front are this run's;
+  // otherwise they are updated for the next run.
+  bool settle_motion();
+  // A CANCEL with its flush unknown whose effect has begun by clock t: everything that can come
+  // before its flush is known, so the run stops and the next one knows it.
+  bool flush_unknown_before(Cycle t) const;
   std::vector<MotionReq> observed_motion_;  // MOTION frames accepted in this run
   bool motion_mismatch_ = false;            // a MOTION frame accepted that was not known
   int runs_ = 0;
