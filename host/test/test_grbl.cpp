@@ -993,3 +993,30 @@ TEST(Grbl, TwinBoardFeedHoldResumeAndOverride) {
   // clocks) and its ramp
   EXPECT_LE(held_job - plain, between + 0.02 * plain);
 }
+
+// 0x18 during a hold on the twin board: MOTION CANCEL drops the queue at rest (the twins model
+// the flush), so the alarm comes with the held position, and a new move ends on the plan.
+TEST(Grbl, TwinBoardSoftResetDuringAHoldKeepsThePosition) {
+  const MachineConfig cfg;
+  Rig rig("", cfg);
+  ASSERT_TRUE(rig.engine().motion_available()) << "the twin board refuses MOTION";
+  EXPECT_EQ(rig.command("G21 G90 G1 X6 F2400").back(), "ok");
+  std::vector<std::string> states;
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 1.0; }));
+  rig.send("!");
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.state == "Hold:0"; }));
+  const auto held = board_xyz_of(rig);
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const Report a = rig.status();
+  EXPECT_EQ(a.state, "Alarm");
+  EXPECT_EQ(board_xyz_of(rig), held) << "the board moved after the reset";
+  EXPECT_NEAR(a.mpos[0], static_cast<double>(held[0]) / cfg.steps_per_mm[0], 0.0005);
+  EXPECT_LT(a.mpos[0], 6.0);
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G0 X1").back(), "ok");
+  expect_at(rig.wait_idle(), {160, 0, 0}, cfg);
+  EXPECT_EQ(board_xyz_of(rig), (std::array<int64_t, 3>{160, 0, 0}));
+}

@@ -202,7 +202,7 @@ bool VirtualBoard::settle_motion() {
     const size_t i = observed_motion_.size() - 1;
     known_motion_ = observed_motion_;
     known_flush_.resize(i);
-    known_flush_.push_back(kFlushUnknown);
+    known_flush_.push_back(known_motion_[i].cancel ? kFlushUnknown : kFlushNone);
     return false;
   }
   std::vector<Cycle> f = observe_flushes();

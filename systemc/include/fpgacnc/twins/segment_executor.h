@@ -52,7 +52,7 @@
 //   from edge X, the executor idle after X. No segment is accepted on an abort edge, and from IDLE
 //   only from edge last + max(largest DIR setup, 1) + 1 (settle_reg). An offer held through the
 //   abort is accepted then (the block bench); in cnc_core segment_prep drops it (the prep twin
-//   and the virtual board do not model the abort yet).
+//   models that for CANCEL's flush: accept_edge).
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 // output(H, cmd): an OUTPUT entry handed over on edge H (segment_prep's on_output). It takes effect
 //   on edge max(H, end edge of the last segment accepted), the edge that ends the segment in

@@ -18,10 +18,15 @@
 // frames known up front (their clocks and fields, from the previous run), whose MOTION frames
 // are accepted exactly there, is the job's run. A run stops at the first MOTION frame it did not
 // know: the effect of a request starts two edges after its frame ends, so everything before was
-// exact and the next run knows that request too (a job with n MOTION frames runs n + 1 times,
-// all but the last cut short at a MOTION frame). A live session (TwinBoard) does the same from
-// its own log: at a MOTION frame it did not know it runs again from the reset with every host
-// byte so far at its clock and the requests known up front (twin_board.h).
+// exact and the next run knows that request too (a job with n MOTION frames without CANCEL runs
+// n + 1 times, all but the last cut short at a MOTION frame). A CANCEL's flush (the first clock
+// with cancel and r = 0: the rate's hold and cancel clear, the FIFO, the prep and the executor
+// drop what they hold on the next edge) is settled the same way: a run knows the flush clocks
+// the run before found (known_flush_), stops once its host's time passes a CANCEL whose flush it
+// does not know, and the job runs again until the flushes it knows are the ones it finds
+// (settle_motion). A live session (TwinBoard) does the same from its own log: at a MOTION frame
+// it did not know it runs again from the reset with every host byte so far at its clock and the
+// requests known up front (twin_board.h).
 //
 // The host sends each packet with its delay; the response encoder computes the answers lazily,
 // in time order, up to the edge before which every input is known (docs/systemc.md "Time").
