@@ -15,6 +15,7 @@
 #include <limits>
 #include <thread>
 
+#include "fpgacnc/twins/input_filter.h"
 #include "fpgacnc/twins/virtual_board.h"
 
 namespace fpgacnc::twins {
@@ -166,6 +167,8 @@ void TwinBoard::start() {
   quiet_ = false;
   st_ = simboard::BoardStats{};
   replays_ = 0;
+  press_req_.clear();
+  press_asked_ = press_taken_ = 0;
   edges_.clear();
   error_.clear();
   t_start_ = wall_clock::now();
@@ -177,7 +180,11 @@ void TwinBoard::start() {
       error_ = fmt::format("twin board: session ended by an error: {}", e.what());
     }
     quiet_ = true;
-    session_done_ = true;
+    {
+      std::lock_guard<std::mutex> g(mu_);
+      session_done_ = true;
+    }
+    press_cv_.notify_all();
   });
 }
 
@@ -224,6 +231,20 @@ std::vector<models::Edge> TwinBoard::edges() const {
 
 std::array<int64_t, models::kBoardAxes> TwinBoard::net_steps() const {
   return models::net_steps(edges());
+}
+
+uint64_t TwinBoard::press_button(simboard::Button b) {
+  std::unique_lock<std::mutex> l(mu_);
+  if (!running_ || session_done_.load())
+    throw BoardError("twin board: press_button while no session runs");
+  press_req_.push_back(static_cast<int>(b));
+  const uint64_t mine = ++press_asked_;
+  l.unlock();
+  wake();
+  l.lock();
+  press_cv_.wait(l, [&] { return press_taken_ >= mine || session_done_.load(); });
+  if (press_taken_ < mine) throw BoardError("twin board: the session ended before the press");
+  return press_edge_;
 }
 
 void TwinBoard::set_estop(bool) {
@@ -325,7 +346,15 @@ void TwinBoard::session(VirtualBoard& vb) {
   // For a replay: every host byte given to the twins (start edge, byte), every tx byte taken
   // from them, and the activity of each.
   std::vector<std::pair<Cycle, uint8_t>> rx_log, tx_log;
-  Cycle act_host = 0, act_tx = 0;
+  Cycle act_host = 0, act_tx = 0, act_buttons = 0;
+  std::vector<ButtonPress> presses;  // the buttons pressed so far
+  constexpr Cycle kPress = static_cast<Cycle>(simboard::SimBoard::kButtonPressClks);
+  constexpr Cycle kFilter = static_cast<Cycle>(simboard::SimBoard::kFilterClks);
+  // The presses' requests to the rate (after a reset: the twins know them up front).
+  auto press_requests = [&] {
+    for (Cycle t : button_requests(presses, 0, vb.p_.button_filter_clks)) vb.rate_.hold_input(t);
+    for (Cycle t : button_requests(presses, 1, vb.p_.button_filter_clks)) vb.rate_.start_input(t);
+  };
 
   auto read_input = [&] {
     uint8_t buf[4096];
@@ -455,10 +484,14 @@ void TwinBoard::session(VirtualBoard& vb) {
   // with every host byte at its clock and the requests of every MOTION frame so far known up
   // front, up to `now`. What was released is the same again (checked): the answers decided (tx
   // bytes taken) and the edges up to the published cycle; the edges after it are replaced.
-  auto replay = [&] {
-    for (int runs = 0; !vb.settle_motion(); ++runs) {
+  auto replay = [&](bool force) {
+    for (int runs = 0;; ++runs) {
+      if (!vb.settle_motion()) force = true;
+      if (!force) break;
+      force = false;
       if (runs > 64) throw std::logic_error("twin board: the MOTION requests do not settle");
       vb.reset(axis_timing(opt_));
+      press_requests();
       vb.pins_.record_tx = true;
       for (const auto& [c, b] : rx_log) {
         RxFrame f{b};
@@ -501,19 +534,42 @@ void TwinBoard::session(VirtualBoard& vb) {
     }
     // The activity again: the host's bytes and the answers as before, the pins and the entries
     // as they are now (a hold delays them, a resume brings them forward).
-    act = std::max(act_host, act_tx);
+    act = std::max({act_host, act_tx, act_buttons});
     for (const models::Edge& e : all) pin_act(e);
     if (!vb.entry_ends_.empty()) act = std::max(act, vb.entry_ends_.back() - 1);
   };
 
+  // Buttons pressed by the host: pressed from the next edge (SimBoard::press_button).
+  auto take_presses = [&] {
+    std::vector<int> req;
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      req.swap(press_req_);
+      if (!req.empty()) {
+        press_taken_ += req.size();
+        press_edge_ = static_cast<uint64_t>(now + 1);
+      }
+    }
+    if (req.empty()) return false;
+    press_cv_.notify_all();
+    for (int b : req) {
+      presses.push_back(ButtonPress{b, now + 1, kPress});
+      act_buttons = std::max(act_buttons, now + 1 + kPress + kFilter + 8 - 1);
+    }
+    act = std::max(act, act_buttons);
+    never_active = false;
+    return true;
+  };
+
   while (!stop_.load(std::memory_order_relaxed)) {
     read_input();
+    const bool pressed = take_presses();
     admit();
     // Answers that start by `now` are final: no host byte can start before now + 1.
     vb.dec_.advance(now + 1);
     while (vb.enc_.step(now + 1)) {
     }
-    if (vb.motion_mismatch_) replay();
+    if (vb.motion_mismatch_ || pressed) replay(pressed);
     for (const auto& b : vb.tx_bytes_) {
       pending.push_back(b);
       tx_log.push_back(b);
@@ -618,8 +674,12 @@ void TwinBoard::session(VirtualBoard& vb) {
       publish(false);
       const auto give_up = wall_clock::now() + std::chrono::seconds(5);
       bool input = false;
+      auto press_pending = [&] {
+        std::lock_guard<std::mutex> l(mu_);
+        return !press_req_.empty();
+      };
       while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
-             !stop_.load())
+             !stop_.load() && !press_pending())
         input = wait_input(std::min(give_up, wall_clock::now() + std::chrono::milliseconds(10)));
       if (host_deadline_.load() == host_at) host_deadline_.store(-1);
     }

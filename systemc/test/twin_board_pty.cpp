@@ -27,6 +27,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -226,6 +227,7 @@ class ClockedHost {
   // Runs the board until it is idle for the host (every answer read).
   virtual void run_idle() = 0;
   virtual uint64_t cycle() const = 0;
+  virtual uint64_t press(sb::Button b) = 0;
   std::vector<uint8_t> received;
 };
 
@@ -263,6 +265,7 @@ class TwinHost : public ClockedHost {
     ADD_FAILURE() << "twin board not idle after 60 s";
   }
   uint64_t cycle() const override { return b_.cycle(); }
+  uint64_t press(sb::Button b) override { return b_.press_button(b); }
 
  private:
   void read() {
@@ -289,6 +292,7 @@ class RtlHost : public ClockedHost {
     read(true);
   }
   uint64_t cycle() const override { return b_.cycle(); }
+  uint64_t press(sb::Button b) override { return b_.press_button(b); }
 
  private:
   void read(bool all) {
@@ -361,40 +365,44 @@ uint64_t motion_session(ClockedHost& h) {
   return c0;
 }
 
-// The session above on the twin board and on the Verilated board: identical STEP/DIR edges,
-// identical answers at identical clocks (the STATUS frames with their hold and stopped bits,
-// positions and counters; not the heater block, see below).
-TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
+// Runs `session` on the twin board and on the Verilated board and compares them: the STEP/DIR
+// edges identical; every answer byte starting on the same clock; the device frames identical but
+// for the heater block of STATUS (the Verilated core samples its heaters every
+// kSimboardSampleClks, the twins model cnc_core's SAMPLE_CLKS of one second: their first sample
+// comes later).
+struct BothRuns {
+  tw::LockstepRun rtl, tlm;
+  uint64_t replays = 0;
+};
+BothRuns run_both(const std::function<uint64_t(ClockedHost&)>& session) {
   const cfgns::MachineConfig cfg;
+  BothRuns r;
+  tw::LockstepRun &a = r.rtl, &b = r.tlm;
   sb::BoardOptions ro = sb::SimBoard::options_from_config(cfg);
   ro.record_tx = true;
   sb::SimBoard rtl(ro);
   tw::TwinBoardOptions to = tw::TwinBoard::options_from_config(cfg);
   to.record_tx = true;
   tw::TwinBoard tlm(to);
-  tw::LockstepRun a, b;
   {
     TwinHost h(tlm);
     b.model = "tlm";
-    ASSERT_NE(motion_session(h), 0u);
+    EXPECT_NE(session(h), 0u);
     b.received = h.received;
   }
   tlm.stop();
-  ASSERT_EQ(tlm.error(), "");
+  EXPECT_EQ(tlm.error(), "");
   b.edges = tlm.edges();
   b.stats = tlm.stats();
+  r.replays = tlm.replays();
   {
     RtlHost h(rtl);
     a.model = "rtl";
-    ASSERT_NE(motion_session(h), 0u);
+    EXPECT_NE(session(h), 0u);
     a.received = h.received;
   }
   a.edges = rtl.edges();
   a.stats = rtl.stats();
-  // The STEP/DIR edges identical; every answer byte starting on the same clock; the device
-  // frames identical but for the heater block of STATUS (the Verilated core samples its heaters
-  // every kSimboardSampleClks, the twins model cnc_core's SAMPLE_CLKS of one second: their first
-  // sample comes later).
   auto pins = [](const std::vector<models::Edge>& e) {
     std::vector<std::tuple<uint64_t, int, int>> v;
     for (const auto& x : e)
@@ -429,6 +437,23 @@ TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
     EXPECT_EQ(fa[k].first, fb[k].first) << "device frame #" << k;
     EXPECT_EQ(fa[k].second, fb[k].second) << "device frame #" << k;
   }
+  EXPECT_EQ(a.stats.cycles, b.stats.cycles);
+  return r;
+}
+
+// The STATUS frames the host received, in order.
+std::vector<std::vector<uint8_t>> statuses(const std::vector<uint8_t>& rx) {
+  std::vector<std::vector<uint8_t>> v;
+  tw::v2::FrameParser parser;
+  for (uint8_t x : rx)
+    if (const auto f = parser.feed(x); f && f->type == tw::v2::kStatus) v.push_back(f->payload);
+  return v;
+}
+
+// The session above on the twin board and on the Verilated board (run_both).
+TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
+  const auto r = run_both(motion_session);
+  const tw::LockstepRun &a = r.rtl, &b = r.tlm;
   // Not vacuous: the hold stopped the board (a STATUS with HOLD and STOPPED); the CANCEL came
   // with the first LINE still running (held, then at 50 %) and dropped it and the two queued:
   // X short of the first's 2000 steps, no Y but the new move's; no fault, the hold over, not
@@ -438,30 +463,81 @@ TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
   EXPECT_GT(n[0], 0);
   EXPECT_LT(n[0], 2000 - 300);
   EXPECT_EQ(n[1], -200) << "the third LINE (Y 800) was dropped";
-  tw::v2::FrameParser parser;
-  int held = 0, statuses = 0;
-  std::vector<uint8_t> last;
-  for (uint8_t x : a.received)
-    if (const auto f = parser.feed(x); f && f->type == tw::v2::kStatus) {
-      ++statuses;
-      const uint8_t want = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
-      if ((f->u8(0) & want) == want) ++held;
-      last = f->payload;
-    }
-  EXPECT_GE(statuses, 5);
+  const auto st = statuses(a.received);
+  int held = 0;
+  for (const auto& f : st) {
+    const uint8_t want = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
+    if ((f.at(0) & want) == want) ++held;
+  }
+  EXPECT_GE(st.size(), 5u);
   EXPECT_GE(held, 1) << "no STATUS with HOLD and STOPPED";
+  ASSERT_FALSE(st.empty());
+  const std::vector<uint8_t>& last = st.back();
   ASSERT_GE(last.size(), 30u);
   EXPECT_EQ(last[0] & (fpgacnc::spec::kStateBusy | fpgacnc::spec::kStateHold |
                        fpgacnc::spec::kStateFault),
             0)
       << "busy, held or a fault after the CANCEL and the new move";
-  EXPECT_EQ(tlm.replays(), 4u);
-  EXPECT_EQ(a.stats.cycles, b.stats.cycles);
+  EXPECT_EQ(r.replays, 4u);
   EXPECT_EQ(a.stats.moves_done, 1u);
   EXPECT_EQ(b.stats.moves_done, 1u);
   std::printf("%zu answer bytes, %zu edges, %llu cycles; %llu replays\n", a.received.size(),
               a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
-              static_cast<unsigned long long>(tlm.replays()));
+              static_cast<unsigned long long>(r.replays));
+}
+
+// The buttons at board clocks: HELLO, a LINE (X 3000 steps in 1.5 M clocks); the feed hold button
+// pressed 300 000 clocks after it was written, a STATUS_QUERY 800 000 clocks after it, the
+// cycle-start button at 1 000 000; when idle a STATUS_QUERY. Both boards press for
+// SimBoard::kButtonPressClks from the next edge.
+uint64_t button_session(ClockedHost& h) {
+  namespace v2 = tw::v2;
+  h.write(v2::frame(0, v2::kHello));
+  h.run_idle();
+  v2::FrameParser parser;
+  uint8_t seq = 0;
+  for (uint8_t b : h.received)
+    if (const auto f = parser.feed(b); f && f->type == v2::kIdent) seq = f->u8(16);
+  const uint64_t c0 = h.cycle();
+  const std::array<int32_t, 4> steps{3000, 0, 0, 0};
+  h.write(v2::frame(seq, v2::kLine, v2::line_payload(1, 0, 1'500'000, steps, false)));
+  for (const auto& [dt, what] :
+       {std::pair<uint64_t, int>{300'000, 0}, {800'000, 2}, {1'000'000, 1}}) {
+    const uint64_t at = c0 + dt;
+    const uint64_t got = h.run_to(at);
+    EXPECT_EQ(got, at) << "the board was not busy at clock " << at;
+    if (got != at) return 0;
+    if (what == 2) {
+      h.write(v2::frame(0, v2::kStatusQuery));
+    } else {
+      EXPECT_EQ(h.press(what == 0 ? sb::Button::kHold : sb::Button::kStart), at + 1);
+    }
+  }
+  h.run_idle();
+  h.write(v2::frame(0, v2::kStatusQuery));
+  h.run_idle();
+  return c0;
+}
+
+// The feed hold and cycle-start buttons of the twin board against the Verilated board's: identical
+// edges and answers (run_both); the hold stopped the move (a STATUS with HOLD and STOPPED), the
+// cycle start resumed it (the move done, X at 3000, HOLD clear at the end), and the board took
+// longer than the move's 1.5 M clocks.
+TEST(TwinBoardPty, ButtonsAtBoardClocksSameAsVerilatedBoard) {
+  const auto r = run_both(button_session);
+  const tw::LockstepRun& a = r.rtl;
+  EXPECT_EQ(models::net_steps(a.edges)[0], 3000);
+  EXPECT_EQ(a.stats.moves_done, 1u);
+  EXPECT_EQ(r.tlm.stats.moves_done, 1u);
+  const auto st = statuses(a.received);
+  ASSERT_EQ(st.size(), 2u);
+  const uint8_t both = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
+  EXPECT_EQ(st[0].at(0) & both, both) << "not held at rest 500 000 clocks after the press";
+  EXPECT_EQ(st[1].at(0) & (both | fpgacnc::spec::kStateBusy), 0);
+  EXPECT_EQ(r.replays, 2u);
+  std::printf("%zu answer bytes, %zu edges, %llu cycles; %llu replays\n", a.received.size(),
+              a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
+              static_cast<unsigned long long>(r.replays));
 }
 
 }  // namespace
