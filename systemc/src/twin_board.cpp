@@ -561,6 +561,23 @@ void TwinBoard::session(VirtualBoard& vb) {
     return true;
   };
 
+  // Held at the host's timer until the host writes, presses a button or waits for a later clock
+  // (at most 5 s of wall time: a host that went away does not stop the board). A press keeps the
+  // timer (the board takes it at this clock and holds here again).
+  auto hold_at_timer = [&](Cycle host_at) {
+    publish(false);
+    const auto give_up = wall_clock::now() + std::chrono::seconds(5);
+    bool input = false, press = false;
+    auto press_pending = [&] {
+      std::lock_guard<std::mutex> l(mu_);
+      return !press_req_.empty();
+    };
+    while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
+           !stop_.load() && !(press = press_pending()))
+      input = wait_input(std::min(give_up, wall_clock::now() + std::chrono::milliseconds(10)));
+    if (host_deadline_.load() == host_at && !press) host_deadline_.store(-1);
+  };
+
   while (!stop_.load(std::memory_order_relaxed)) {
     read_input();
     const bool pressed = take_presses();
@@ -570,6 +587,10 @@ void TwinBoard::session(VirtualBoard& vb) {
     while (vb.enc_.step(now + 1)) {
     }
     if (vb.motion_mismatch_ || pressed) replay(pressed);
+    if (pressed && !opt_.realtime && host_deadline_.load() == now) {
+      hold_at_timer(now);  // pressed at the host's timer: held there again
+      continue;
+    }
     for (const auto& b : vb.tx_bytes_) {
       pending.push_back(b);
       tx_log.push_back(b);
@@ -668,21 +689,7 @@ void TwinBoard::session(VirtualBoard& vb) {
       if (wait_input(last_write + grace)) continue;
     }
     now = e;
-    if (to_host) {
-      // Held at the host's timer until the host writes or waits for a later one (at most 5 s
-      // of wall time: a host that went away does not stop the board).
-      publish(false);
-      const auto give_up = wall_clock::now() + std::chrono::seconds(5);
-      bool input = false;
-      auto press_pending = [&] {
-        std::lock_guard<std::mutex> l(mu_);
-        return !press_req_.empty();
-      };
-      while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
-             !stop_.load() && !press_pending())
-        input = wait_input(std::min(give_up, wall_clock::now() + std::chrono::milliseconds(10)));
-      if (host_deadline_.load() == host_at) host_deadline_.store(-1);
-    }
+    if (to_host) hold_at_timer(host_at);
   }
   // Final figures: violations as cnc_core counts them (clocks with a `violation` strobe).
   std::vector<Cycle> strobes = vb.exec_.arc_violation_cycles;

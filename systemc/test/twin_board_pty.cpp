@@ -254,6 +254,7 @@ class TwinHost : public ClockedHost {
     return b_.cycle();
   }
   void run_idle() override {
+    b_.set_host_deadline(-1);  // no timer: a board held at one goes on
     const auto give_up = std::chrono::steady_clock::now() + 60s;
     while (std::chrono::steady_clock::now() < give_up) {
       read();
@@ -486,7 +487,8 @@ TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
               static_cast<unsigned long long>(r.replays));
 }
 
-// The buttons at board clocks: HELLO, a LINE (X 3000 steps in 1.5 M clocks); the feed hold button
+// The buttons at board clocks: HELLO, a MOTION setting a short hold ramp, a LINE (X 3000 steps
+// in 1.5 M clocks); the feed hold button
 // pressed 300 000 clocks after it was written, a STATUS_QUERY 800 000 clocks after it, the
 // cycle-start button at 1 000 000; when idle a STATUS_QUERY. Both boards press for
 // SimBoard::kButtonPressClks from the next edge.
@@ -498,6 +500,11 @@ uint64_t button_session(ClockedHost& h) {
   uint8_t seq = 0;
   for (uint8_t b : h.received)
     if (const auto f = parser.feed(b); f && f->type == v2::kIdent) seq = f->u8(16);
+  // the ramp of a hold: 1/40 of 100 % per 256 clocks (the default takes 0.1 s)
+  h.write(v2::frame(
+      0, fpgacnc::spec::kTypeMotion,
+      v2::motion_payload(0, 0x8000, 0x8000, static_cast<uint32_t>((uint64_t{1} << 32) / 40))));
+  h.run_idle();
   const uint64_t c0 = h.cycle();
   const std::array<int32_t, 4> steps{3000, 0, 0, 0};
   h.write(v2::frame(seq, v2::kLine, v2::line_payload(1, 0, 1'500'000, steps, false)));
@@ -530,11 +537,12 @@ TEST(TwinBoardPty, ButtonsAtBoardClocksSameAsVerilatedBoard) {
   EXPECT_EQ(a.stats.moves_done, 1u);
   EXPECT_EQ(r.tlm.stats.moves_done, 1u);
   const auto st = statuses(a.received);
-  ASSERT_EQ(st.size(), 2u);
+  ASSERT_EQ(st.size(), 3u);  // the MOTION's, the two STATUS_QUERYs'
   const uint8_t both = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
-  EXPECT_EQ(st[0].at(0) & both, both) << "not held at rest 500 000 clocks after the press";
-  EXPECT_EQ(st[1].at(0) & (both | fpgacnc::spec::kStateBusy), 0);
-  EXPECT_EQ(r.replays, 2u);
+  EXPECT_EQ(st[1].at(0) & both, both) << "not held at rest 500 000 clocks after the press";
+  EXPECT_EQ(st[2].at(0) & (both | fpgacnc::spec::kStateBusy), 0);
+  EXPECT_GT(a.stats.cycles, 1'500'000u + 500'000u) << "held for about 600 000 clocks";
+  EXPECT_EQ(r.replays, 3u);  // the MOTION, the two presses
   std::printf("%zu answer bytes, %zu edges, %llu cycles; %llu replays\n", a.received.size(),
               a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
               static_cast<unsigned long long>(r.replays));
