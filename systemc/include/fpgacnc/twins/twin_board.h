@@ -46,7 +46,9 @@
 // clock for SimBoard::kButtonPressClks edges (a press while the same button is held lengthens
 // it) and the board counts as active until kFilterClks + 8 clocks after the release; the filtered
 // rise requests a hold or a resume (input_filter.h). A press is a request the twins did not know
-// up front: the board replays its session with it, as for a MOTION frame.
+// up front: the board replays its session with it, as for a MOTION frame. A press while the
+// board stands at the host's deadline keeps it there until the host writes or names another
+// deadline, so that the press lands on the same edge as on SimBoard.
 //
 // No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
 // e-stop input (set_estop throws BoardError), no limit switches (set_limit throws BoardError). The
