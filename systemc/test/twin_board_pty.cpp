@@ -384,6 +384,9 @@ BothRuns run_both(const std::function<uint64_t(ClockedHost&)>& session) {
   sb::SimBoard rtl(ro);
   tw::TwinBoardOptions to = tw::TwinBoard::options_from_config(cfg);
   to.record_tx = true;
+  // The board does not pass the end of the bytes written at a timer until 50 ms after the write:
+  // time for this thread to name its next timer first, also on a loaded machine.
+  to.host_grace = std::chrono::milliseconds(50);
   tw::TwinBoard tlm(to);
   {
     TwinHost h(tlm);
