@@ -126,10 +126,10 @@ class FeedRate {
     apply_group(r, events_, i, t + phase_);
     return r.hold;
   }
-  // The first clock >= t with r = 0 (kNever: none before kHorizon clocks).
-  Cycle first_stop(Cycle t) {
-    static constexpr Cycle kHorizon = Cycle{1} << 40;
-    const auto s = stopped(t, t + kHorizon);
+  // The first clock in t .. t + horizon - 1 with r = 0 (kNever: none). Its cost is that of the
+  // pieces up to it: one per ramp period.
+  Cycle first_stop(Cycle t, Cycle horizon = Cycle{1} << 40) {
+    const auto s = stopped(t, t + horizon);
     return s.empty() ? kNever : std::max(s.front().first, t);
   }
   // The spans [a, b) of clocks with r = 0 that overlap clocks from .. to - 1 (b = kNever: for
