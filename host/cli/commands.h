@@ -89,6 +89,10 @@ void register_board(CLI::App& app);
 // 1.1's protocol on a pty and TCP with the FPGA behind it (host/cli/grbl_cmd.cpp).
 void register_grbl(CLI::App& app);
 
+// fpgacnc jog [--port DEV | --model tlm|rtl] --feed F [--to] [--inch] X10 Y-2: one jog through
+// the grbl front end's $J=, Ctrl-C the jog cancel (host/cli/jog_cmd.cpp).
+void register_jog(CLI::App& app);
+
 // fpgacnc grbl-bench [--moves N] [--feed F] [--baud B]: sender-side throughput of `fpgacnc grbl`
 // on the simulated board (host/cli/grbl_bench_cmd.cpp).
 void register_grbl_bench(CLI::App& app);

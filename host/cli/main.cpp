@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   fpgacnc::cli::register_stream(app, fpgacnc::cli::simboard_stream_hooks());
   fpgacnc::cli::register_board(app);
   fpgacnc::cli::register_grbl(app);
+  fpgacnc::cli::register_jog(app);
   fpgacnc::cli::register_grbl_bench(app);
   fpgacnc::cli::register_marlin(app);
   fpgacnc::cli::register_sim(app);

@@ -37,6 +37,7 @@
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
+#include "interrupt_guard.h"
 
 namespace fpgacnc::cli {
 namespace {
@@ -93,37 +94,6 @@ class ProgressBar {
   std::string unit_;
   std::string extra_;
   size_t done_ = 0, total_ = 1;
-};
-
-// SIGINT during a v2 job: a controlled feed hold (link/hold_control.h), never an abrupt stop.
-volatile std::sig_atomic_t g_stream_interrupts = 0;
-void on_stream_interrupt(int) {
-  g_stream_interrupts = g_stream_interrupts + 1;
-}
-
-// SIGINT handled by the stream while it lives; the previous handler back after.
-class InterruptGuard {
- public:
-  InterruptGuard() {
-    struct sigaction sa {};
-    sa.sa_handler = on_stream_interrupt;
-    sigemptyset(&sa.sa_mask);
-    sa.sa_flags = 0;  // no SA_RESTART: a question's read ends on a second interrupt
-    ::sigaction(SIGINT, &sa, &old_);
-    g_stream_interrupts = 0;
-  }
-  ~InterruptGuard() { ::sigaction(SIGINT, &old_, nullptr); }
-  InterruptGuard(const InterruptGuard&) = delete;
-  InterruptGuard& operator=(const InterruptGuard&) = delete;
-  // Interrupts since the last call.
-  int take() {
-    const int n = g_stream_interrupts;
-    g_stream_interrupts = g_stream_interrupts - n;
-    return n;
-  }
-
- private:
-  struct sigaction old_ {};
 };
 
 // Keys on a terminal: stdin in non-canonical mode without echo (signals still on: Ctrl-C is
