@@ -45,6 +45,8 @@ JOBS=(
   "limit_guard         cover   8"
   "travel_guard        prove   4"
   "travel_guard        cover   8"
+  "trigger_latch       sat     6"
+  "trigger_latch       satcover 12"
   "feed_rate           sat     6"
   "feed_rate           satcover 16"
 )
