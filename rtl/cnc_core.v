@@ -105,7 +105,7 @@ module cnc_core #(
     parameter RATE_PERIOD_LOG2        = `FPGACNC_DEF_RATE_PERIOD_LOG2,  // motion rate period
     parameter [31:0] RATE_RAMP        = `FPGACNC_DEF_RATE_RAMP,  // motion rate ramp after rst
     // homing and probing trigger (docs/machine.md "Homing and probing (hardware)"), v2 only
-    parameter TRIGGER                 = PROTO_V2,
+    parameter TRIGGER                 = PROTO_V2,  // 1: PROTO_V2 = 1 only
     parameter PROBE_FILTER_CLKS       = `FPGACNC_DEF_PROBE_FILTER_CLKS,  // probe debounce, clocks
     parameter PROBE_ENABLE            = `FPGACNC_DEF_PROBE_ENABLE,  // probe wired (else released)
     parameter PROBE_ACTIVE_LOW        = `FPGACNC_DEF_PROBE_ACTIVE_LOW  // asserted at a low pin
