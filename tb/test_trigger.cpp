@@ -100,6 +100,7 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
   // The machine: max endstop of each axis (pressed at or beyond), the probe rule.
   int64_t endstop_max[kAxes] = {kNone, kNone};
   std::function<bool(const int64_t*)> probe_rule;
+  bool model_switches = true;  // false: the test drives limit_max itself
   // Edge that first samples each change of a switch or probe pin: {edge, what (0..3 switch, 4
   // probe), level}.
   struct PinChange {
@@ -187,7 +188,7 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
     uint32_t maxes = 0;
     for (int a = 0; a < kAxes; ++a)
       if (endstop_max[a] != kNone && pins_pos[a] >= endstop_max[a]) maxes |= 1u << a;
-    if (maxes != m.limit_max) {
+    if (model_switches && maxes != m.limit_max) {
       for (int a = 0; a < kAxes; ++a)
         if (((maxes ^ m.limit_max) >> a) & 1u)
           pin_changes.push_back({cycle() + 1, 2 + a, static_cast<bool>((maxes >> a) & 1u)});
@@ -352,6 +353,59 @@ TEST(Trigger, ProbeContactStopsAlongTheRamp) {
       static_cast<unsigned long long>(kProbeFilter), r.pos[0], r.pos[1],
       static_cast<unsigned long long>(f), static_cast<long long>(stop_x), expect,
       expect + 0.02 * 258, static_cast<unsigned long long>(stop_clocks));
+}
+
+// The latch clock, exactly: the probe pin rises at every phase of the X step period (50 clocks);
+// in every run the latched X equals the STEP rises up to and including the filtered edge's clock f
+// (a STEP rising on edge f counts, one rising on f + 1 does not), and the phases include runs with
+// a STEP rising on f and runs with one rising on f + 1, so a latch one clock early or late fails.
+TEST(Trigger, ProbeLatchClockAtEveryPhase) {
+  int on_edge = 0, after_edge = 0;
+  for (uint64_t phase = 0; phase < 50; ++phase) {
+    TriggerBench b;
+    ASSERT_EQ(b.exchange(motion(0, 0x8000, 0x8000, kRamp)).type, v2::kStatus);
+    ASSERT_EQ(b.exchange(trigger(b.seq++, kProbe, 0)).type, v2::kAck);
+    ASSERT_EQ(b.exchange(v2::line(b.seq++, 1, 0, 100000, {2000, 0}, true)).type, v2::kAck);
+    b.idle(10000 + phase);
+    const uint64_t p = b.cycle() + 1;
+    b.dut().probe_in = 1;
+    b.run_until_idle(200000);
+    const uint64_t f = p + 1 + kProbeFilter;
+    const auto r = b.report();
+    ASSERT_EQ(r.flags, kDone) << "phase " << phase;
+    EXPECT_EQ(r.pos[0], b.pos_at(0, f)) << "phase " << phase;
+    if (b.pos_at(0, f) != b.pos_at(0, f - 1)) ++on_edge;
+    if (b.pos_at(0, f + 1) != b.pos_at(0, f)) ++after_edge;
+  }
+  EXPECT_GT(on_edge, 0) << "no run with a STEP rising on the latch clock's edge";
+  EXPECT_GT(after_edge, 0) << "no run with a STEP rising on the edge after it";
+  std::printf("probe latch over 50 phases: %d runs with a STEP on edge f, %d on edge f + 1\n",
+              on_edge, after_edge);
+}
+
+// The same for HOME: X max pressed at every phase of the X step period (40 clocks) while X moves
+// toward it: latched X = the STEP rises up to edge f, and X stays there (its step in clock f is
+// blocked); runs with a STEP rising on edge f are among them.
+TEST(Trigger, HomeLatchClockAtEveryPhase) {
+  int on_edge = 0;
+  for (uint64_t phase = 0; phase < 40; ++phase) {
+    TriggerBench b;
+    b.model_switches = false;
+    ASSERT_EQ(b.exchange(trigger(b.seq++, kHome, 0x0100)).type, v2::kAck);
+    ASSERT_EQ(b.exchange(v2::line(b.seq++, 0, 0, 40000, {1000, 300}, true)).type, v2::kAck);
+    b.idle(8000 + phase);
+    const uint64_t p = b.cycle() + 1;
+    b.dut().limit_max = 1;
+    b.run_until_idle(100000);
+    const uint64_t f = p + 1 + kFilter;
+    const auto r = b.report();
+    ASSERT_EQ(r.flags, kDone) << "phase " << phase;
+    EXPECT_EQ(r.pos[0], b.pos_at(0, f)) << "phase " << phase;
+    EXPECT_EQ(b.pins_pos[0], r.pos[0]) << "phase " << phase;
+    EXPECT_TRUE(b.trip_cycles.empty());
+    if (b.pos_at(0, f) != b.pos_at(0, f - 1)) ++on_edge;
+  }
+  EXPECT_GT(on_edge, 0) << "no run with a STEP rising on the latch clock's edge";
 }
 
 // PROBE to release (G38.4-like): the probe touches at rest; arming mode 3 and moving off the
