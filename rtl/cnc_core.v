@@ -46,8 +46,10 @@
 //                    and executor dropped, no fault, positions kept) or PROBE (the filtered probe's
 //                    edge to the level latches every position and starts feed_rate's CANCEL).
 //                    TRIGGER_QUERY is answered by TRIGGER_REPORT. SET_POSITION (only while quiet,
-//                    else NAK BUSY) writes the chosen position counters, resyncs travel_guard's
-//                    queued end on the next clock and clears state bit 4 (positions not trusted).
+//                    else NAK BUSY) sets the chosen axes' positions (rtl/machine/position_offset.v:
+//                    `position` = the executor's STEP counters + an offset per axis, from the
+//                    next clock), resyncs travel_guard's queued end on the clock after and clears
+//                    state bit 4 (positions not trusted).
 //   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
 //                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
 //                    writes a shadow set that becomes active only while the FIFO is empty and
@@ -309,6 +311,7 @@ module cnc_core #(
   wire quiet;  // FIFO empty, nothing prepared or running
   wire [2*N_AXES-1:0] trig_suppress;  // trigger_latch: switches whose trips are suppressed
   wire trig_flush, trig_cancel, probe_lvl;
+  wire [32*N_AXES-1:0] exec_position;  // the executor's STEP counters (position: + SET_POSITION's offset)
   reg setpos_q_reg;  // a SET_POSITION wrote the position counters on the last edge
 
   generate
@@ -565,6 +568,18 @@ module cnc_core #(
           .latched     (trig_pos)
       );
       assign trig_state = {6'd0, trig_mode, 6'd0, trig_done, trig_armed, fired16};
+
+      // SET_POSITION: the position is the executor's counter plus an offset per axis
+      position_offset #(
+          .N_AXES(N_AXES)
+      ) u_pos_offset (
+          .clk     (clk),
+          .rst     (rst),
+          .raw     (exec_position),
+          .wr      (setpos_wr),
+          .wdata   (setpos_data),
+          .position(position)
+      );
       /* verilator lint_off UNUSEDSIGNAL */
       wire unused_ctl = &{1'b0, dec_ctl_data[7:2]};
       /* verilator lint_on UNUSEDSIGNAL */
@@ -576,7 +591,8 @@ module cnc_core #(
       assign trig_state    = 32'd0;
       assign trig_pos      = {32 * N_AXES{1'b0}};
       /* verilator lint_off UNUSEDSIGNAL */
-      wire unused_trig = &{1'b0, probe_in, dec_trig_wr};
+      wire unused_trig = &{1'b0, probe_in, dec_trig_wr, setpos_wr, setpos_data};
+      assign position = exec_position;
       /* verilator lint_on UNUSEDSIGNAL */
     end
   endgenerate
@@ -824,8 +840,6 @@ module cnc_core #(
       .rapid_seg      (exec_rapid),
       .step_block     (exec_step_block),
       .step_want      (exec_step_want),
-      .pos_wr         (setpos_wr),
-      .pos_wdata      (setpos_data),
       .step           (step),
       .dir            (dir),
       .laser          (exec_laser),
@@ -835,7 +849,7 @@ module cnc_core #(
       .seg_start      (seg_start),
       .seg_done       (seg_done),
       .seg_done_v2    (seg_done_v2),
-      .position       (position),
+      .position       (exec_position),
       .violation      (exec_violation),
       .arc_err        (exec_arc_err),
       .coolant_flood  (exec_flood),

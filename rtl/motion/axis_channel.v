@@ -11,8 +11,7 @@
 // step_pulse shapes STEP (high / low times) and owns the DIR pin: DIR takes dir_in on a clock with
 // dir_wr (the executor's DIR sequencer writes only when hold_ok, DIR hold elapsed since the last
 // STEP rise); idle, hold_ok and violation are step_pulse's (rtl/motion/step_pulse.v).
-// position: signed step count, +1 / -1 by the DIR pin on the edge STEP rises; 0 after reset;
-// pos_wdata on an edge with pos_wr (SET_POSITION, written only while the axis is idle).
+// position: signed step count, +1 / -1 by the DIR pin on the edge STEP rises; 0 after reset.
 // moving: the segment at the executor's input moves this axis (|steps| != 0).
 // Build options (segment_executor passes them): PROFILES = 0 leaves dda_profile out (prof_* are not
 // used); LEAN_DDA = 1 builds dda_linear computing T - n from total (tmn not used) with no
@@ -62,8 +61,6 @@ module axis_channel #(
     output wire        idle,       // step_pulse: STEP low and low time elapsed, nothing pending
     output wire        hold_ok,    // step_pulse: DIR hold elapsed since the last STEP rise
     output wire        violation,  // step_pulse: 1-clock strobe, a step before STEP low time
-    input  wire        pos_wr,     // set the position to pos_wdata
-    input  wire [31:0] pos_wdata,
     output wire [31:0] position
 );
 
@@ -137,8 +134,7 @@ module axis_channel #(
   );
 
   always @(posedge clk) begin
-    if (pos_wr) pos_reg <= pos_wdata;
-    else if (step_req) pos_reg <= dir ? pos_reg + 32'd1 : pos_reg - 32'd1;
+    if (step_req) pos_reg <= dir ? pos_reg + 32'd1 : pos_reg - 32'd1;
     if (rst) pos_reg <= 32'd0;
   end
   assign position = pos_reg;

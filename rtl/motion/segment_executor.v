@@ -75,8 +75,7 @@
 // new one's seg_start are high in the same clock.
 // Laser: high after edge R until edge R + T for a segment with code != 0 and power != 0; between
 // two such segments run back to back it stays high; low in HOLD, SETUP, ZERO and idle.
-// position: signed step count per axis, updated on the edge STEP rises; pos_wr[a] (SET_POSITION,
-// only while idle: the decoder checks) sets axis a's count to pos_wdata[32*a+:32] on its edge.
+// position: signed step count per axis, updated on the edge STEP rises.
 // Machine outputs (OUTPUT entries, docs/protocol.md "OUTPUT"): s_out_* from segment_prep, handed
 // over on an edge H (s_out_tvalid && s_out_tready). Every segment accepted before H precedes the
 // OUTPUT in the FIFO, every segment accepted after it follows it. The entry is applied on the
@@ -150,8 +149,6 @@ module segment_executor #(
     output wire rapid_seg,  // the segment last accepted has code 0 (feed_rate's target)
     input wire [N_AXES-1:0] step_block,  // 1: no step request of that axis in this clock (limits)
     output wire [N_AXES-1:0] step_want,  // each axis's step request before abort and step_block
-    input wire [N_AXES-1:0] pos_wr,  // set the position counters (SET_POSITION)
-    input wire [32*N_AXES-1:0] pos_wdata,
 
     output wire [N_AXES-1:0] step,
     output wire [N_AXES-1:0] dir,
@@ -444,8 +441,6 @@ module segment_executor #(
           .idle         (pulse_idle[a]),
           .hold_ok      (pulse_hold_ok[a]),
           .violation    (pulse_violation[a]),
-          .pos_wr       (pos_wr[a]),
-          .pos_wdata    (pos_wdata[32*a+:32]),
           .position     (position[32*a+:32])
       );
     end
