@@ -47,6 +47,28 @@ module position_offset #(
     end
   endgenerate
 
+`ifdef FORMAL
+  // Formal properties (scripts/formal.sh set position_offset: induction, Yosys SAT). Reset in the
+  // first clock; every input free.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+  integer k;
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst) && !rst)
+      for (k = 0; k < N_AXES; k = k + 1) begin
+        // After a write the position is the value written, as long as the counter has not moved.
+        if ($past(wr[k]) && raw[32*k+:32] == $past(raw[32*k+:32]))
+          assert (position[32*k+:32] == $past(wdata[32*k+:32]));
+        // Without a write the position follows the counter exactly (the offset stays).
+        if (!$past(wr[k]))
+          assert (position[32*k+:32] - raw[32*k+:32] ==
+                  $past(position[32*k+:32]) - $past(raw[32*k+:32]));
+      end
+  always @(posedge clk)
+    if (f_past_valid && $past(rst)) assert (position == raw);
+`endif
+
 endmodule
 
 `default_nettype wire
