@@ -793,51 +793,6 @@ MachineConfig override_cfg() {
   return c;
 }
 
-// Clocks from the board's first edge (DIR, STEP or laser of the job's first segment) to the
-// completion of move `last` (index into move_done_cycles, from the end: 0 = the last).
-double clocks_of_job(Rig& rig) {
-  const auto done = rig.board().move_done_cycles();
-  const auto edges = rig.board().edges();
-  EXPECT_FALSE(done.empty());
-  EXPECT_FALSE(edges.empty());
-  if (done.empty() || edges.empty()) return 0.0;
-  return static_cast<double>(done.back() - edges.front().cycle);
-}
-
-// Feed override: the same G1 takes twice the board clocks at 50 % (the board's motion rate
-// stretches the time base of the running segment, docs/timing.md) and fewer at 150 % (the host
-// plans it faster: 2 mm at 30 mm/s instead of 20 mm/s, with the same 1000 mm/s^2 ramps:
-// (0.0667 + 0.03) / (0.1 + 0.02) = 0.806); every run ends where the plan ends. Ov reports the
-// override.
-TEST(Grbl, FeedOverrideScalesTheJobInBoardClocks) {
-  const MachineConfig cfg = override_cfg();
-  auto run = [&](const std::string& ov, const std::string& want_ov) -> double {
-    Rig rig("", cfg, true);
-    EXPECT_TRUE(rig.engine().motion_available());
-    if (!ov.empty()) {
-      rig.send(ov);
-      rig.status();
-      EXPECT_NE(rig.reports().back().find("|Ov:" + want_ov), std::string::npos)
-          << rig.reports().back();
-    }
-    EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
-    EXPECT_EQ(rig.command("G1 X2 F1200").back(), "ok");
-    expect_at(rig.wait_idle(), {320, 0, 0}, cfg);
-    EXPECT_EQ(board_xyz(rig), (std::array<int64_t, 3>{320, 0, 0}));
-    return clocks_of_job(rig);
-  };
-  const double t100 = run("", "");
-  const double t50 = run("\x92\x92\x92\x92\x92", "50,100,100");
-  const double t150 = run("\x91\x91\x91\x91\x91", "150,100,100");
-  ASSERT_GT(t100, 0.0);
-  fmt::print(
-      "G1 X2 F1200: {:.0f} clocks at 100 %, {:.0f} at 50 % ({:.4f}x), {:.0f} at 150 % "
-      "({:.4f}x)\n",
-      t100, t50, t50 / t100, t150, t150 / t100);
-  EXPECT_NEAR(t50 / t100, 2.0, 0.02) << t50 << " vs " << t100 << " clocks";
-  EXPECT_NEAR(t150 / t100, 0.806, 0.02) << t150 << " vs " << t100 << " clocks";
-}
-
 // Rapid override 25 %: a G0 takes four times the board clocks (the board's rapid rate); a G1
 // (laser on) after it runs at 100 % (the feed rate is separate). Ov shows 100,25,100.
 TEST(Grbl, RapidOverrideScalesRapidsOnly) {
@@ -874,29 +829,153 @@ TEST(Grbl, RapidOverrideScalesRapidsOnly) {
   EXPECT_NEAR(g1_25 / g1_100, 1.0, 0.01) << g1_25 << " vs " << g1_100 << " clocks";
 }
 
-// 0x18 during a hold (grbl: ALARM:3, the queue dropped): MOTION CANCEL makes the Verilated board
-// drop its queue while it is at rest, so the position is the held one exactly and no fault
-// latches; after $X the parser starts there and a new move ends on the plan.
-TEST(Grbl, SoftResetDuringAHoldAlarmsAndKeepsThePosition) {
+std::array<int64_t, 3> board_xyz_of(Rig& rig) {
+  const auto n = fpgacnc::simboard::any_board_of(rig.link())->net_steps();
+  return {n[0], n[1], n[2]};
+}
+
+// ---- Feed hold and feed override on the twin board (the default model of `fpgacnc grbl`).
+// Board clocks from the board's first edge to its last (Board::edges; the twin board releases
+// edges up to its clock).
+double twin_clocks_of_job(Rig& rig) {
+  const auto e = fpgacnc::simboard::any_board_of(rig.link())->edges();
+  EXPECT_FALSE(e.empty());
+  return e.empty() ? 0.0 : static_cast<double>(e.back().cycle - e.front().cycle);
+}
+
+// '!' while the G1 runs, Hold:0, '~' some board time later: the move ends where the plan ends and
+// took longer than without the hold by at least the board clocks it was seen at rest and at most
+// those from '!' to '~' and the RESUME's way (the ramps of this machine are short: under 1 % of
+// the move); at a 50 % feed override the move takes twice the clocks.
+TEST(Grbl, TwinBoardFeedHoldResumeAndOverride) {
+  const MachineConfig cfg = override_cfg();
+  const std::array<int64_t, 3> plan{320, 0, 0};
+  auto cycle = [](Rig& rig) {
+    return static_cast<double>(fpgacnc::simboard::any_board_of(rig.link())->cycle());
+  };
+  auto start = [&](Rig& rig, const std::string& ov) {
+    EXPECT_TRUE(rig.engine().motion_available()) << "the twin board refuses MOTION";
+    if (!ov.empty()) {
+      rig.send(ov);
+      rig.status();
+    }
+    EXPECT_EQ(rig.command("G21 G90 M3 S1000").back(), "ok");
+    EXPECT_EQ(rig.command("G1 X2 F1200").back(), "ok");
+  };
+  // held: clocks from the first Hold:0 report to '~'; between: from '!' to '~'
+  double plain = 0.0, half = 0.0, held_job = 0.0, held = 0.0, between = 0.0;
+  {
+    Rig rig("", cfg);
+    start(rig, "");
+    expect_at(rig.wait_idle(), plan, cfg);
+    EXPECT_EQ(board_xyz_of(rig), plan);
+    plain = twin_clocks_of_job(rig);
+  }
+  {
+    Rig rig("", cfg);
+    start(rig, "\x92\x92\x92\x92\x92");
+    EXPECT_NE(rig.reports().back().find("|Ov:50,100,100"), std::string::npos)
+        << rig.reports().back();
+    expect_at(rig.wait_idle(), plan, cfg);
+    EXPECT_EQ(board_xyz_of(rig), plan);
+    half = twin_clocks_of_job(rig);
+  }
+  {
+    Rig rig("", cfg);
+    start(rig, "");
+    std::vector<std::string> states;
+    ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 0.5; }));
+    const double h_send = cycle(rig);
+    rig.send("!");
+    Report at_rest;
+    ASSERT_TRUE(poll_reports(rig, states, [&](const Report& r) {
+      at_rest = r;
+      return r.state == "Hold:0";
+    })) << "no Hold:0";
+    EXPECT_LT(at_rest.mpos[0], 2.0) << "the hold came after the end of the move";
+    const double h0 = cycle(rig);
+    const auto still = board_xyz_of(rig);
+    rig.link().wait_until(rig.link().now() + milliseconds(200));  // held for 200 ms
+    std::vector<std::string> more;
+    EXPECT_FALSE(poll_reports(
+        rig, more, [](const Report& r) { return r.state != "Hold:0"; }, milliseconds(20)));
+    EXPECT_EQ(board_xyz_of(rig), still) << "STEP edges during Hold:0";
+    held = cycle(rig) - h0;
+    between = cycle(rig) - h_send;
+    rig.send("~");
+    expect_at(rig.wait_idle(), plan, cfg);
+    EXPECT_EQ(board_xyz_of(rig), plan);
+    held_job = twin_clocks_of_job(rig);
+    EXPECT_EQ(rig.engine().stats().holds, 1u);
+    EXPECT_EQ(rig.engine().stats().resumes, 1u);
+  }
+  ASSERT_GT(plain, 0.0);
+  fmt::print(
+      "twin board, G1 X2 F1200: {:.0f} clocks at 100 %, {:.0f} at 50 % ({:.4f}x); with a hold "
+      "of {:.0f} clocks at rest ({:.0f} from '!' to '~') {:.0f} ({:.0f} more)\n",
+      plain, half, half / plain, held, between, held_job, held_job - plain);
+  EXPECT_NEAR(half / plain, 2.0, 0.02) << half << " vs " << plain << " clocks";
+  EXPECT_GT(held, 0.2 * cfg.clk_hz);
+  EXPECT_GE(held_job - plain, held);
+  // at most the clocks from '!' to '~' and the RESUME frame's 15 bytes on the line (65 100
+  // clocks) and its ramp
+  EXPECT_LE(held_job - plain, between + 0.02 * plain);
+}
+
+// 0x18 during a hold on the twin board: MOTION CANCEL drops the queue at rest (the twins model
+// the flush), so the alarm comes with the held position, and a new move ends on the plan.
+TEST(Grbl, TwinBoardSoftResetDuringAHoldKeepsThePosition) {
   const MachineConfig cfg;
-  Rig rig("", cfg, true);
-  ASSERT_TRUE(rig.engine().motion_available());
+  Rig rig("", cfg);
+  ASSERT_TRUE(rig.engine().motion_available()) << "the twin board refuses MOTION";
   EXPECT_EQ(rig.command("G21 G90 G1 X6 F2400").back(), "ok");
   std::vector<std::string> states;
   ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 1.0; }));
   rig.send("!");
   ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.state == "Hold:0"; }));
-  const auto held = board_xyz(rig);
+  const auto held = board_xyz_of(rig);
   rig.send("\x18");
   EXPECT_EQ(rig.next_line(), "ALARM:3");
   EXPECT_EQ(rig.next_line(), grbl::kBanner);
   EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
   const Report a = rig.status();
   EXPECT_EQ(a.state, "Alarm");
-  EXPECT_EQ(board_xyz(rig), held) << "the board moved after the reset";
+  EXPECT_EQ(board_xyz_of(rig), held) << "the board moved after the reset";
   EXPECT_NEAR(a.mpos[0], static_cast<double>(held[0]) / cfg.steps_per_mm[0], 0.0005);
   EXPECT_LT(a.mpos[0], 6.0);
   EXPECT_EQ(rig.command("$X").back(), "ok");
   EXPECT_EQ(rig.command("G0 X1").back(), "ok");
   expect_at(rig.wait_idle(), {160, 0, 0}, cfg);
+  EXPECT_EQ(board_xyz_of(rig), (std::array<int64_t, 3>{160, 0, 0}));
+}
+
+// $J= and the jog cancel on the twin board (the default model; cosim checks its MOTION CANCEL
+// against the RTL's): Jog while it runs; 0x85 mid-jog decelerates it with the board's hold ramp
+// and drops the queued jogs; Idle at rest with the
+// report at the board's own step counters, short of the jogs' end; the next jog starts there
+// and ends exactly one jog length on.
+TEST(Grbl, JogAndJogCancelOnTheTwinBoard) {
+  const MachineConfig cfg;
+  Rig rig("", cfg);
+  ASSERT_TRUE(rig.engine().motion_available());
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(rig.command("$J=G91 X1 F1200").back(), "ok");
+  std::vector<std::string> states;
+  ASSERT_TRUE(poll_reports(rig, states, [](const Report& r) { return r.mpos[0] > 0.2; }));
+  EXPECT_EQ(states.back(), "Jog");
+  rig.send("\x85");
+  states.clear();
+  Report idle;
+  ASSERT_TRUE(poll_reports(rig, states, [&](const Report& r) {
+    idle = r;
+    return r.state == "Idle";
+  })) << "no Idle after the jog cancel";
+  const auto at = board_xyz_of(rig);
+  EXPECT_GT(at[0], 32);
+  EXPECT_LT(at[0], 4 * 160) << "the jog cancel did not stop the jogs";
+  EXPECT_NEAR(idle.mpos[0], static_cast<double>(at[0]) / cfg.steps_per_mm[0], 0.0005);
+  EXPECT_EQ(rig.command("$J=G91 X-0.1 F600").back(), "ok");
+  expect_at(rig.wait_idle(), {at[0] - 16, 0, 0}, cfg);
+  EXPECT_EQ(board_xyz_of(rig), (std::array<int64_t, 3>{at[0] - 16, 0, 0}));
+  EXPECT_EQ(rig.command("G91 G1 Y0.1 F1200").back(), "ok") << "G-code after the jogs";
+  expect_at(rig.wait_idle(), {at[0] - 16, 16, 0}, cfg);
 }

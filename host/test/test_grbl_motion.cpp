@@ -174,3 +174,93 @@ TEST(GrblMotion, ResetDuringAHoldAlarmsAndCancelsTheQueue) {
   EXPECT_EQ(rig.dev_.motions().back().feed, 0x8000);
   EXPECT_EQ(FakeRig::state(rig.report()), "Alarm");
 }
+
+// $J= (docs/grbl.md "Jogging"): one straight move, laser off, state Jog while it runs; the
+// parser's modes are not changed by it and follow the machine to the jog's end.
+TEST(GrblMotion, JogMovesWithoutChangingTheParserState) {
+  FakeRig rig;
+  EXPECT_EQ(rig.command("G21 G90 G1 F300"), "ok");
+  EXPECT_EQ(rig.command("G10 L20 P1 X5"), "ok");  // work X = machine X - (-5): WCO X -5
+  EXPECT_EQ(rig.command("$J=G91 X2 F600"), "ok");
+  EXPECT_EQ(FakeRig::state(rig.report()), "Jog");
+  EXPECT_EQ(rig.command("$J=G91 Y-1 F600"), "ok") << "a jog is taken while jogging";
+  EXPECT_EQ(rig.command("G1 X1"), "error:9") << "G-code is locked out while jogging";
+  EXPECT_EQ(rig.command("$$"), "error:8");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  ASSERT_EQ(rig.dev_.executed().size(), 2u);
+  for (const auto& f : rig.dev_.executed()) {
+    const auto p = v2::decode_line_profile(f, 4);
+    EXPECT_EQ(p.power, 0) << "a jog fires the laser";
+  }
+  EXPECT_EQ(rig.dev_.position()[0], 2 * 160);
+  EXPECT_EQ(rig.dev_.position()[1], -160);
+  // Work coordinates (G90, no G53): X3 work = X-2 machine; inches: Y0.1 in = 2.54 mm machine
+  // (work Y offset 0).
+  EXPECT_EQ(rig.command("$J=X3 F600"), "ok");
+  EXPECT_EQ(rig.command("$J=G20 G53 Y0.1 F20"), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  EXPECT_EQ(rig.dev_.position()[0], -2 * 160);
+  EXPECT_EQ(rig.dev_.position()[1], static_cast<int32_t>(std::lround(2.54 * 160)));
+  // The parser kept G1, G90, G21 and F300 and starts from the jog's end: G91 X1 from -2.
+  rig.engine_->receive("$G\n");
+  std::string gc;
+  while ((gc = rig.next_line()).rfind("[GC:", 0) != 0 && !gc.empty()) {
+  }
+  EXPECT_NE(gc.find("G1 G54 G17 G21 G90"), std::string::npos) << gc;
+  EXPECT_NE(gc.find("F300"), std::string::npos) << gc;
+  EXPECT_EQ(rig.next_line(), "ok");
+  EXPECT_EQ(rig.command("G91 X1"), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  EXPECT_EQ(rig.dev_.position()[0], -1 * 160);
+}
+
+TEST(GrblMotion, JogErrorsAsGrbl) {
+  FakeRig rig;
+  EXPECT_EQ(rig.command("$J=G91 X1"), "error:22");  // no feed
+  EXPECT_EQ(rig.command("$J=G91 X1 F0"), "error:22");
+  EXPECT_EQ(rig.command("$J=G1 X1 F100"), "error:16");      // a motion mode
+  EXPECT_EQ(rig.command("$J=G91 X1 M3 F100"), "error:16");  // an M word
+  EXPECT_EQ(rig.command("$J=G91 F100"), "error:16");        // no axis
+  EXPECT_EQ(rig.command("$J G91 X1 F100"), "error:3");
+  EXPECT_EQ(rig.command("$J=G91 X1 F100 X2"), "error:25");  // a repeated word
+  EXPECT_TRUE(rig.dev_.executed().empty());
+  // Soft limits on: a target beyond the travel is error:15 and nothing moves (no alarm).
+  EXPECT_EQ(rig.command("$20=1"), "ok");
+  EXPECT_EQ(rig.command("$J=G53 X1 F600"), "error:15");  // grbl's travel is [-$130, 0]
+  EXPECT_EQ(FakeRig::state(rig.report()), "Idle");
+  EXPECT_TRUE(rig.dev_.executed().empty());
+  // A reset while jogging is ALARM:3; $J is refused in Alarm until $X.
+  EXPECT_EQ(rig.command("$J=G91 X-5 F600"), "ok");
+  rig.engine_->receive("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.command("$J=G91 X-1 F600"), "error:8");
+  EXPECT_EQ(rig.command("$X"), "ok");
+  EXPECT_EQ(rig.command("$J=G91 X-1 F600"), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+}
+
+// 0x85 while jogging: MOTION CANCEL, the board's queue dropped at rest, Idle at the machine's
+// position, and the next jog starts there; 0x85 when not jogging does nothing.
+TEST(GrblMotion, JogCancelStopsAndFlushes) {
+  FakeRig rig;
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(rig.command("$J=G91 X1 F600"), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.dev_.executed().size() >= 1; }));
+  rig.engine_->receive("\x85");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  EXPECT_FALSE(rig.dev_.held());
+  bool cancel = false;
+  for (const auto& m : rig.dev_.motions()) cancel |= m.cancel;
+  EXPECT_TRUE(cancel);
+  const size_t done = rig.dev_.executed().size();
+  EXPECT_LT(done, 6u) << "the jog was not cancelled";
+  const int32_t at = rig.dev_.position()[0];
+  EXPECT_EQ(at, static_cast<int32_t>(done) * 160);
+  EXPECT_EQ(rig.command("$J=G91 X0.5 F600"), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
+  EXPECT_EQ(rig.dev_.position()[0], at + 80);
+  const size_t motions = rig.dev_.motions().size();
+  rig.engine_->receive("\x85");
+  EXPECT_EQ(FakeRig::state(rig.report()), "Idle");
+  EXPECT_EQ(rig.dev_.motions().size(), motions);
+  EXPECT_EQ(rig.command("G0 X0"), "ok");
+}

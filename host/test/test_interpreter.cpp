@@ -19,7 +19,7 @@ gc::Move last_move(std::string_view text) {
   return m.back();
 }
 
-void expect_error(std::string_view text, int line, int col, std::string_view msg) {
+void expect_refused(std::string_view text, int line, int col, std::string_view msg) {
   gc::test::expect_error(text, line, col, msg, {}, "t.gcode");
 }
 
@@ -195,36 +195,36 @@ TEST(Interpreter, Checksums) {
   EXPECT_DOUBLE_EQ(last_move(good).end[0], 1.0);
   std::string bad = good;
   bad.back() = bad.back() == '0' ? '1' : '0';
-  expect_error("G0 X0\n" + bad, 2, 14, "checksum mismatch");
-  expect_error("G0 X0 *", 1, 7, "malformed checksum");
+  expect_refused("G0 X0\n" + bad, 2, 14, "checksum mismatch");
+  expect_refused("G0 X0 *", 1, 7, "malformed checksum");
 }
 
 TEST(Interpreter, ErrorsHaveLineAndColumn) {
-  expect_error("G1 X1 F100\nG42 D3", 2, 5, "G42: no tool table to read the diameter of tool 3");
-  expect_error("G1 X1 F100\n  M7000", 2, 3, "M7000: not supported in the grbl dialect");
-  expect_error("G0 X0\nG2 X1 Y1 F100", 2, 1, "arc without centre");
-  expect_error("G0 X0 Y0\nG2 X10 Y0 R4 F100", 2, 11, "impossible arc");
-  expect_error("G1 Xnan F1", 1, 4, "expected a number");
-  expect_error("G1 X1 Yinf F1", 1, 7, "expected a number");
-  expect_error("G1 X1.2.3 F1", 1, 8, "garbage in the number of 'X'");
-  expect_error("G1 X1 Y-- F1", 1, 7, "expected a number");
-  expect_error("G1 X2000000 F1", 1, 4, "out of range");
-  expect_error("G20 G1 X50000 F1", 1, 8, "out of range");
-  expect_error("G1 X1 F-5", 1, 7, "negative feed");
-  expect_error("G1 X1 F0", 1, 7, "feed is 0");
-  expect_error("G1 F0\nG1 X1", 2, 1, "feed is 0");
-  expect_error("G1 X1 F100\nG1 X2\x01", 2, 6, "non-printable byte 0x01");
-  expect_error("G1 X1 F100\nG1 X2 \xff\xfe", 2, 7, "non-ASCII");
-  expect_error("G1 X1 X2 F100", 1, 7, "two 'X' words");
-  expect_error("G1 G0 X1", 1, 4, "G1 and G0 on one line are in the same modal group");
-  expect_error("G1.5 X1 F100", 1, 1, "G1.5: not supported");
-  expect_error("G1 X1 F100 D3", 1, 12, "'D' word with nothing on the line that uses it");
-  expect_error("G1 X1 F100 (unclosed", 1, 12, "unterminated comment");
-  expect_error("X1", 1, 1, "no motion mode");
-  expect_error("G4", 1, 1, "G4 needs a P word");
-  expect_error("", 1, 1, "empty job");
-  expect_error("; nothing\n(nothing)\n\n", 3, 1, "empty job");
-  expect_error("G21 G90\n", 1, 1, "empty job");
+  expect_refused("G1 X1 F100\nG42 D3", 2, 5, "G42: no tool table to read the diameter of tool 3");
+  expect_refused("G1 X1 F100\n  M7000", 2, 3, "M7000: not supported in the grbl dialect");
+  expect_refused("G0 X0\nG2 X1 Y1 F100", 2, 1, "arc without centre");
+  expect_refused("G0 X0 Y0\nG2 X10 Y0 R4 F100", 2, 11, "impossible arc");
+  expect_refused("G1 Xnan F1", 1, 4, "expected a number");
+  expect_refused("G1 X1 Yinf F1", 1, 7, "expected a number");
+  expect_refused("G1 X1.2.3 F1", 1, 8, "garbage in the number of 'X'");
+  expect_refused("G1 X1 Y-- F1", 1, 7, "expected a number");
+  expect_refused("G1 X2000000 F1", 1, 4, "out of range");
+  expect_refused("G20 G1 X50000 F1", 1, 8, "out of range");
+  expect_refused("G1 X1 F-5", 1, 7, "negative feed");
+  expect_refused("G1 X1 F0", 1, 7, "feed is 0");
+  expect_refused("G1 F0\nG1 X1", 2, 1, "feed is 0");
+  expect_refused("G1 X1 F100\nG1 X2\x01", 2, 6, "non-printable byte 0x01");
+  expect_refused("G1 X1 F100\nG1 X2 \xff\xfe", 2, 7, "non-ASCII");
+  expect_refused("G1 X1 X2 F100", 1, 7, "two 'X' words");
+  expect_refused("G1 G0 X1", 1, 4, "G1 and G0 on one line are in the same modal group");
+  expect_refused("G1.5 X1 F100", 1, 1, "G1.5: not supported");
+  expect_refused("G1 X1 F100 D3", 1, 12, "'D' word with nothing on the line that uses it");
+  expect_refused("G1 X1 F100 (unclosed", 1, 12, "unterminated comment");
+  expect_refused("X1", 1, 1, "no motion mode");
+  expect_refused("G4", 1, 1, "G4 needs a P word");
+  expect_refused("", 1, 1, "empty job");
+  expect_refused("; nothing\n(nothing)\n\n", 3, 1, "empty job");
+  expect_refused("G21 G90\n", 1, 1, "empty job");
 }
 
 TEST(Interpreter, ModalArcWithoutCentreRunsAsLine) {

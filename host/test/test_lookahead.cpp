@@ -22,7 +22,7 @@ using fpgacnc::config::MachineConfig;
 
 namespace {
 
-uint64_t seed_from_env(uint64_t def) {
+uint64_t lookahead_seed(uint64_t def) {
   const char* s = std::getenv("FPGACNC_SEED");
   const uint64_t seed = s ? std::strtoull(s, nullptr, 0) : def;
   std::printf("seed %llu (set FPGACNC_SEED to change)\n", static_cast<unsigned long long>(seed));
@@ -227,7 +227,7 @@ struct Checker {
 }  // namespace
 
 TEST(ProfileSim, ClosedFormEqualsClockByClock) {
-  std::mt19937_64 rng(seed_from_env(6001));
+  std::mt19937_64 rng(lookahead_seed(6001));
   std::uniform_int_distribution<uint64_t> any;
   int cases = 0;
   for (int i = 0; i < 3000; ++i) {
@@ -286,7 +286,7 @@ TEST(Junction, DeviationFormula) {
 }
 
 TEST(Lookahead, RandomMovesRespectLimitsAndJunctions) {
-  std::mt19937_64 rng(seed_from_env(6002));
+  std::mt19937_64 rng(lookahead_seed(6002));
   size_t total = 0;
   double worst = 0, jump_up = 0, jump_down = 0, tail = 0;
   for (int job = 0; job < 12; ++job) {
@@ -316,7 +316,7 @@ TEST(Lookahead, RandomMovesRespectLimitsAndJunctions) {
 }
 
 TEST(Lookahead, EveryPrefixCanStopAndEmittedProfilesAreFinal) {
-  std::mt19937_64 rng(seed_from_env(6003));
+  std::mt19937_64 rng(lookahead_seed(6003));
   for (int job = 0; job < 3; ++job) {
     MachineConfig c = random_machine(rng);
     c.lookahead_segments = 1 + static_cast<uint32_t>(rng() % 12);

@@ -62,8 +62,8 @@ std::vector<Block> read_all(const std::string& text, const Syntax& syntax = ngc(
   return read_all(text, syntax, p);
 }
 
-std::string error_of(const std::string& text, const Syntax& syntax = ngc(),
-                     uint64_t loop_limit = 0) {
+std::string read_error_of(const std::string& text, const Syntax& syntax = ngc(),
+                          uint64_t loop_limit = 0) {
   Params p;
   try {
     read_all(text, syntax, p, false, loop_limit);
@@ -154,38 +154,39 @@ TEST(ReaderLex, EveryLineIsABlockBlankAndCommentLinesHaveNoWords) {
 TEST(ReaderLex, BlanksInsideNumbersOnlyInRs274ngc) {
   // LinuxCNC's overview: "G0X +0. 12 34Y 7" is equivalent to "G0 x+0.1234 Y7".
   EXPECT_EQ(trace("G0X +0. 12 34Y 7"), (V{"G0 X0.1234 Y7"}));
-  EXPECT_EQ(error_of("G0 X1 2", plain()), "t.ngc:1:7: error: unexpected character '2'");
+  EXPECT_EQ(read_error_of("G0 X1 2", plain()), "t.ngc:1:7: error: unexpected character '2'");
 }
 
 TEST(ReaderLex, Comments) {
   // A '(' inside a comment nests; unbalanced, the comment ends at the line's last ')'.
   EXPECT_EQ(trace("G0 (rapid (to) start) X1 ; end (x", plain()), (V{"G0 X1"}));
   EXPECT_EQ(trace("G0 (a ( b) X1", plain()), (V{"G0 X1"}));
-  EXPECT_EQ(error_of("G0 (rapid (to) start) X1"), "t.ngc:1:11: error: '(' inside a comment");
-  EXPECT_EQ(error_of("G0 X1 (open", plain()), "t.ngc:1:7: error: unterminated comment '('");
+  EXPECT_EQ(read_error_of("G0 (rapid (to) start) X1"), "t.ngc:1:11: error: '(' inside a comment");
+  EXPECT_EQ(read_error_of("G0 X1 (open", plain()), "t.ngc:1:7: error: unterminated comment '('");
   Syntax s = plain();
   s.semicolon_comments = false;
-  EXPECT_EQ(error_of("G0 X1 ; no", s),
+  EXPECT_EQ(read_error_of("G0 X1 ; no", s),
             "t.ngc:1:7: error: unexpected character ';' (';' comments are not enabled for this "
             "file)");
   // Non-ASCII text is fine inside comments, not outside.
   EXPECT_EQ(trace("G0 X1 (Fr\xc3\xa4se)", plain()), (V{"G0 X1"}));
   EXPECT_EQ(trace("G0 X1 ; Fr\xc3\xa4se", ngc()), (V{"G0 X1"}));
-  EXPECT_EQ(error_of("G0 X1 \xc3\xa4", plain()), "t.ngc:1:7: error: non-ASCII byte 0xC3");
-  EXPECT_EQ(error_of("G0 X1\nG0 X\x01", plain()), "t.ngc:2:5: error: non-printable byte 0x01");
-  EXPECT_EQ(error_of("G0 X1 (a\x02)", ngc()), "t.ngc:1:9: error: non-printable byte 0x02");
-  EXPECT_EQ(error_of("G0 X1 ; a\x7f", plain()), "t.ngc:1:10: error: non-printable byte 0x7F");
+  EXPECT_EQ(read_error_of("G0 X1 \xc3\xa4", plain()), "t.ngc:1:7: error: non-ASCII byte 0xC3");
+  EXPECT_EQ(read_error_of("G0 X1\nG0 X\x01", plain()), "t.ngc:2:5: error: non-printable byte 0x01");
+  EXPECT_EQ(read_error_of("G0 X1 (a\x02)", ngc()), "t.ngc:1:9: error: non-printable byte 0x02");
+  EXPECT_EQ(read_error_of("G0 X1 ; a\x7f", plain()), "t.ngc:1:10: error: non-printable byte 0x7F");
 }
 
 TEST(ReaderLex, NumberErrors) {
-  EXPECT_EQ(error_of("G1 X1.2.3", plain()), "t.ngc:1:8: error: garbage in the number of 'X'");
-  EXPECT_EQ(error_of("G1 Xnan", plain()), "t.ngc:1:4: error: expected a number after 'X'");
-  EXPECT_EQ(error_of("G1 X1 Y-- F1", plain()), "t.ngc:1:7: error: expected a number after 'Y'");
-  EXPECT_EQ(error_of("G1 X1 R", plain()), "t.ngc:1:7: error: expected a number after 'R'");
-  EXPECT_EQ(error_of("G1 X1 & Y2", plain()), "t.ngc:1:7: error: unexpected character '&'");
+  EXPECT_EQ(read_error_of("G1 X1.2.3", plain()), "t.ngc:1:8: error: garbage in the number of 'X'");
+  EXPECT_EQ(read_error_of("G1 Xnan", plain()), "t.ngc:1:4: error: expected a number after 'X'");
+  EXPECT_EQ(read_error_of("G1 X1 Y-- F1", plain()),
+            "t.ngc:1:7: error: expected a number after 'Y'");
+  EXPECT_EQ(read_error_of("G1 X1 R", plain()), "t.ngc:1:7: error: expected a number after 'R'");
+  EXPECT_EQ(read_error_of("G1 X1 & Y2", plain()), "t.ngc:1:7: error: unexpected character '&'");
   std::string many;
   for (int i = 0; i < 65; ++i) many += "X1 ";
-  EXPECT_EQ(error_of(many, plain()), "t.ngc:1:193: error: too many words on one line");
+  EXPECT_EQ(read_error_of(many, plain()), "t.ngc:1:193: error: too many words on one line");
 }
 
 TEST(ReaderLex, BareLetters) {
@@ -204,7 +205,7 @@ TEST(ReaderLex, BareLetters) {
 TEST(ReaderLex, BareLettersSignWithoutDigitsIsStillAnError) {
   Syntax s = plain();
   s.bare_letters = true;
-  EXPECT_EQ(error_of("G1 X-", s), "t.ngc:1:4: error: expected a number after 'X'");
+  EXPECT_EQ(read_error_of("G1 X-", s), "t.ngc:1:4: error: expected a number after 'X'");
 }
 
 TEST(ReaderLex, Checksums) {
@@ -218,17 +219,17 @@ TEST(ReaderLex, Checksums) {
   EXPECT_EQ(trace(good + " ; comment", plain()), (V{"N12 G1 X1 F100"}));
   std::string bad = good;
   bad.back() = bad.back() == '0' ? '1' : '0';
-  EXPECT_EQ(error_of("G0 X0\n" + bad, plain()).substr(0, 37),
+  EXPECT_EQ(read_error_of("G0 X0\n" + bad, plain()).substr(0, 37),
             "t.ngc:2:15: error: checksum mismatch:");
-  EXPECT_EQ(error_of("G0 X0 *", plain()),
+  EXPECT_EQ(read_error_of("G0 X0 *", plain()),
             "t.ngc:1:7: error: malformed checksum (expected *0..255 at the end of the line)");
-  EXPECT_EQ(error_of("G0 X0 *12 G1", plain()),
+  EXPECT_EQ(read_error_of("G0 X0 *12 G1", plain()),
             "t.ngc:1:7: error: malformed checksum (expected *0..255 at the end of the line)");
-  EXPECT_EQ(error_of("G0 X0 *256", plain()),
+  EXPECT_EQ(read_error_of("G0 X0 *256", plain()),
             "t.ngc:1:7: error: malformed checksum (expected *0..255 at the end of the line)");
   Syntax s = plain();
   s.checksums = false;
-  EXPECT_EQ(error_of(good, s),
+  EXPECT_EQ(read_error_of(good, s),
             "t.ngc:1:15: error: unexpected character '*' (checksums are not enabled for this "
             "file)");
   // In an rs274ngc expression '*' multiplies (the message was "malformed checksum").
@@ -247,7 +248,7 @@ TEST(ReaderLex, PercentLines) {
   EXPECT_EQ(bs[2].count, 0);
   // rs274ngc too: '%' lines are not O-words or words.
   EXPECT_EQ(read_all("% hello #1\n")[0].kind, BlockKind::kPercent);
-  EXPECT_EQ(error_of("G0 X1 %", plain()), "t.ngc:1:7: error: unexpected character '%'");
+  EXPECT_EQ(read_error_of("G0 X1 %", plain()), "t.ngc:1:7: error: unexpected character '%'");
 }
 
 TEST(ReaderLex, DollarAndQuestionLines) {
@@ -264,9 +265,9 @@ TEST(ReaderLex, DollarAndQuestionLines) {
   EXPECT_EQ(bs[2].count, 0);
   Syntax m;
   m.dialect_name = "marlin";
-  EXPECT_EQ(error_of("G0 X1\n$H", m),
+  EXPECT_EQ(read_error_of("G0 X1\n$H", m),
             "t.ngc:2:1: error: '$' lines are grbl system commands; this file's dialect is marlin");
-  EXPECT_EQ(error_of("?", m),
+  EXPECT_EQ(read_error_of("?", m),
             "t.ngc:1:1: error: '?' lines are grbl status queries; this file's dialect is marlin");
 }
 
@@ -296,10 +297,10 @@ TEST(ReaderLex, TextMCodes) {
   bs = read_all(line + "*" + std::to_string(x), s);
   EXPECT_EQ(words(bs[0]), "N7 M117");
   EXPECT_EQ(bs[0].text, "Layer 2");
-  EXPECT_EQ(error_of(line + "*" + std::to_string(x ^ 1), s).substr(0, 36),
+  EXPECT_EQ(read_error_of(line + "*" + std::to_string(x ^ 1), s).substr(0, 36),
             "t.ngc:1:16: error: checksum mismatch");
   // Without text_mcodes the text is words (and 'H' 'e'... are refused by the interpreter).
-  EXPECT_EQ(error_of("M117 Hello", plain()), "t.ngc:1:6: error: expected a number after 'H'");
+  EXPECT_EQ(read_error_of("M117 Hello", plain()), "t.ngc:1:6: error: expected a number after 'H'");
 }
 
 TEST(ReaderLex, BlockDelete) {
@@ -320,22 +321,22 @@ TEST(ReaderLex, BlockDelete) {
 }
 
 TEST(ReaderLex, Rs274ngcSyntaxRefusedInOtherDialects) {
-  EXPECT_EQ(error_of("G0 X#1", plain()),
+  EXPECT_EQ(read_error_of("G0 X#1", plain()),
             "t.ngc:1:5: error: '#' parameters are rs274ngc (LinuxCNC) syntax; this file's dialect "
             "is grbl");
-  EXPECT_EQ(error_of("G0 X[1]", plain()),
+  EXPECT_EQ(read_error_of("G0 X[1]", plain()),
             "t.ngc:1:5: error: '[' expressions are rs274ngc (LinuxCNC) syntax; this file's "
             "dialect is grbl");
-  EXPECT_EQ(error_of("#1=2", plain()),
+  EXPECT_EQ(read_error_of("#1=2", plain()),
             "t.ngc:1:1: error: '#' parameters are rs274ngc (LinuxCNC) syntax; this file's dialect "
             "is grbl");
-  EXPECT_EQ(error_of("G0 [1]", plain()),
+  EXPECT_EQ(read_error_of("G0 [1]", plain()),
             "t.ngc:1:4: error: '[' expressions are rs274ngc (LinuxCNC) syntax; this file's "
             "dialect is grbl");
-  EXPECT_EQ(error_of("o100 sub", plain()),
+  EXPECT_EQ(read_error_of("o100 sub", plain()),
             "t.ngc:1:1: error: O-words are rs274ngc (LinuxCNC) syntax; this file's dialect is "
             "grbl");
-  EXPECT_EQ(error_of("#1=2", Syntax{}),
+  EXPECT_EQ(read_error_of("#1=2", Syntax{}),
             "t.ngc:1:1: error: '#' parameters are rs274ngc (LinuxCNC) syntax, not enabled for "
             "this file's dialect");
 }
@@ -469,38 +470,40 @@ TEST(ReaderExpr, WordValuesFromExpressions) {
 }
 
 TEST(ReaderExpr, Errors) {
-  EXPECT_EQ(error_of("G0 X[1 + FOO[2]]"), "t.ngc:1:10: error: unknown function 'FOO'");
-  EXPECT_EQ(error_of("G0 X FOO[2]"), "t.ngc:1:6: error: unknown function 'FOO'");
-  EXPECT_EQ(error_of("G0 X[1 + 2"), "t.ngc:1:5: error: unclosed '[' (no matching ']')");
-  EXPECT_EQ(error_of("G0 X[1 + 2]]"), "t.ngc:1:12: error: unbalanced ']'");
-  EXPECT_EQ(error_of("G0 X[1 + ]"), "t.ngc:1:10: error: expected a value before ']'");
-  EXPECT_EQ(error_of("G0 X[1 2 3 #1]"),
+  EXPECT_EQ(read_error_of("G0 X[1 + FOO[2]]"), "t.ngc:1:10: error: unknown function 'FOO'");
+  EXPECT_EQ(read_error_of("G0 X FOO[2]"), "t.ngc:1:6: error: unknown function 'FOO'");
+  EXPECT_EQ(read_error_of("G0 X[1 + 2"), "t.ngc:1:5: error: unclosed '[' (no matching ']')");
+  EXPECT_EQ(read_error_of("G0 X[1 + 2]]"), "t.ngc:1:12: error: unbalanced ']'");
+  EXPECT_EQ(read_error_of("G0 X[1 + ]"), "t.ngc:1:10: error: expected a value before ']'");
+  EXPECT_EQ(read_error_of("G0 X[1 2 3 #1]"),
             "t.ngc:1:12: error: expected an operator or ']', found '#'");
-  EXPECT_EQ(error_of("G0 X[1 FOO 2]"), "t.ngc:1:8: error: unknown operator 'FOO'");
-  EXPECT_EQ(error_of("G0 X[4 / [2 - 2]]"), "t.ngc:1:8: error: division by zero");
-  EXPECT_EQ(error_of("G0 X[4 MOD 0]"), "t.ngc:1:8: error: MOD by zero");
-  EXPECT_EQ(error_of("G0 X[SQRT[-4]]"), "t.ngc:1:6: error: SQRT of a negative number (-4)");
-  EXPECT_EQ(error_of("G0 X[LN[0]]"), "t.ngc:1:6: error: LN of 0 (needs a positive number)");
-  EXPECT_EQ(error_of("G0 X[ACOS[2]]"), "t.ngc:1:6: error: ACOS argument 2 is outside [-1, 1]");
-  EXPECT_EQ(error_of("G0 X[ASIN[-1.5]]"),
+  EXPECT_EQ(read_error_of("G0 X[1 FOO 2]"), "t.ngc:1:8: error: unknown operator 'FOO'");
+  EXPECT_EQ(read_error_of("G0 X[4 / [2 - 2]]"), "t.ngc:1:8: error: division by zero");
+  EXPECT_EQ(read_error_of("G0 X[4 MOD 0]"), "t.ngc:1:8: error: MOD by zero");
+  EXPECT_EQ(read_error_of("G0 X[SQRT[-4]]"), "t.ngc:1:6: error: SQRT of a negative number (-4)");
+  EXPECT_EQ(read_error_of("G0 X[LN[0]]"), "t.ngc:1:6: error: LN of 0 (needs a positive number)");
+  EXPECT_EQ(read_error_of("G0 X[ACOS[2]]"), "t.ngc:1:6: error: ACOS argument 2 is outside [-1, 1]");
+  EXPECT_EQ(read_error_of("G0 X[ASIN[-1.5]]"),
             "t.ngc:1:6: error: ASIN argument -1.5 is outside [-1, 1]");
-  EXPECT_EQ(error_of("G0 X[-8 ** 0.5]"),
+  EXPECT_EQ(read_error_of("G0 X[-8 ** 0.5]"),
             "t.ngc:1:9: error: negative number raised to a non-integer power");
-  EXPECT_EQ(error_of("G0 X[0 ** -1]"), "t.ngc:1:8: error: the result is not a finite number");
-  EXPECT_EQ(error_of("G0 X[EXP[1000]]"), "t.ngc:1:6: error: EXP result is not a finite number");
-  EXPECT_EQ(error_of("G0 X[ATAN[1]]"), "t.ngc:1:6: error: ATAN needs two arguments: ATAN[y]/[x]");
-  EXPECT_EQ(error_of("G0 X[EXISTS[#1]]"),
+  EXPECT_EQ(read_error_of("G0 X[0 ** -1]"), "t.ngc:1:8: error: the result is not a finite number");
+  EXPECT_EQ(read_error_of("G0 X[EXP[1000]]"),
+            "t.ngc:1:6: error: EXP result is not a finite number");
+  EXPECT_EQ(read_error_of("G0 X[ATAN[1]]"),
+            "t.ngc:1:6: error: ATAN needs two arguments: ATAN[y]/[x]");
+  EXPECT_EQ(read_error_of("G0 X[EXISTS[#1]]"),
             "t.ngc:1:6: error: EXISTS takes one named parameter: EXISTS[#<name>]");
-  EXPECT_EQ(error_of("G0 X[SIN 30]"),
+  EXPECT_EQ(read_error_of("G0 X[SIN 30]"),
             "t.ngc:1:6: error: unexpected 'SIN' in an expression (a function needs its argument "
             "in brackets, e.g. SIN[30])");
-  EXPECT_EQ(error_of("G0 [1]"),
+  EXPECT_EQ(read_error_of("G0 [1]"),
             "t.ngc:1:4: error: an expression '[...]' needs a word letter before it");
-  EXPECT_EQ(error_of("G0 X[1] + 2"), "t.ngc:1:9: error: unexpected character '+'");
-  EXPECT_EQ(error_of("G0 X[1 (c) + 2]"),
+  EXPECT_EQ(read_error_of("G0 X[1] + 2"), "t.ngc:1:9: error: unexpected character '+'");
+  EXPECT_EQ(read_error_of("G0 X[1 (c) + 2]"),
             "t.ngc:1:8: error: expected an operator or ']', found '('");
   // Columns are those of the source line, blanks included.
-  EXPECT_EQ(error_of("G0   X [ 4 /   0 ]"), "t.ngc:1:12: error: division by zero");
+  EXPECT_EQ(read_error_of("G0   X [ 4 /   0 ]"), "t.ngc:1:12: error: division by zero");
 }
 
 // ---- parameters ----------------------------------------------------------------------------
@@ -525,7 +528,7 @@ TEST(ReaderParams, HashBindsTighterThanPlus) {
   Params p;
   read_all("#1=10\n#3=100\n#4=[#1+2]\n", ngc(), p);
   EXPECT_DOUBLE_EQ(p.get(4), 12.0);
-  EXPECT_EQ(error_of("#1=5\n#6=#1+2\n"), "t.ngc:2:6: error: unexpected character '+'");
+  EXPECT_EQ(read_error_of("#1=5\n#6=#1+2\n"), "t.ngc:2:6: error: unexpected character '+'");
 }
 
 TEST(ReaderParams, AssignmentsTakeEffectAfterTheWholeLineIsRead) {
@@ -543,20 +546,21 @@ TEST(ReaderParams, AssignmentsTakeEffectAfterTheWholeLineIsRead) {
   read_all("#3=6 #3=15\n", ngc(), r);
   EXPECT_DOUBLE_EQ(r.get(3), 15.0);
   // A named parameter read on the line of its first assignment is not set yet.
-  EXPECT_EQ(error_of("#<a>=1 #<b>=#<a>"), "t.ngc:1:13: error: parameter #<a> is not set");
+  EXPECT_EQ(read_error_of("#<a>=1 #<b>=#<a>"), "t.ngc:1:13: error: parameter #<a> is not set");
 }
 
 TEST(ReaderParams, Errors) {
-  EXPECT_EQ(error_of("G0 X#<depth>"), "t.ngc:1:5: error: parameter #<depth> is not set");
-  EXPECT_EQ(error_of("G0 X#0"), "t.ngc:1:5: error: parameter number 0 is out of range (1..5602)");
-  EXPECT_EQ(error_of("#5603=1"),
+  EXPECT_EQ(read_error_of("G0 X#<depth>"), "t.ngc:1:5: error: parameter #<depth> is not set");
+  EXPECT_EQ(read_error_of("G0 X#0"),
+            "t.ngc:1:5: error: parameter number 0 is out of range (1..5602)");
+  EXPECT_EQ(read_error_of("#5603=1"),
             "t.ngc:1:1: error: parameter number 5603 is out of range (1..5602)");
-  EXPECT_EQ(error_of("G0 X#1.5"), "t.ngc:1:5: error: parameter number 1.5 is not an integer");
-  EXPECT_EQ(error_of("#1"),
+  EXPECT_EQ(read_error_of("G0 X#1.5"), "t.ngc:1:5: error: parameter number 1.5 is not an integer");
+  EXPECT_EQ(read_error_of("#1"),
             "t.ngc:1:1: error: a parameter outside an expression must be assigned ('#1 = "
             "value')");
-  EXPECT_EQ(error_of("#<a"), "t.ngc:1:2: error: unterminated parameter name '<' (no '>')");
-  EXPECT_EQ(error_of("#1="), "t.ngc:1:4: error: expected a value at the end of the line");
+  EXPECT_EQ(read_error_of("#<a"), "t.ngc:1:2: error: unterminated parameter name '<' (no '>')");
+  EXPECT_EQ(read_error_of("#1="), "t.ngc:1:4: error: expected a value at the end of the line");
   // Unset numbered parameters read as 0.
   EXPECT_EQ(trace("G0 X#4000"), (V{"G0 X0"}));
   EXPECT_DOUBLE_EQ(eval("#5602"), 0.0);
@@ -795,77 +799,81 @@ TEST(ReaderO, ProgramNumberCommentsAndLineNumbers) {
 }
 
 TEST(ReaderO, LoopGuardIsAnErrorNamingTheLoop) {
-  EXPECT_EQ(error_of("G0 X1\no7 while [1]\no7 endwhile\n", ngc(), 1000),
+  EXPECT_EQ(read_error_of("G0 X1\no7 while [1]\no7 endwhile\n", ngc(), 1000),
             "t.ngc:2:1: error: o7 while: more than 1000 iterations (an endless loop?)");
-  EXPECT_EQ(error_of("o8 do\no8 while [1]\n", ngc(), 50),
+  EXPECT_EQ(read_error_of("o8 do\no8 while [1]\n", ngc(), 50),
             "t.ngc:1:1: error: o8 do: more than 50 iterations (an endless loop?)");
   // A loop entered again starts counting again: 3 x 40 iterations under a limit of 50.
-  EXPECT_EQ(error_of("#1=0\no1 while [#1 LT 3]\n#1=[#1+1]\n#2=0\no2 while [#2 LT 40]\n"
-                     "#2=[#2+1]\no2 endwhile\no1 endwhile\n",
-                     ngc(), 50),
+  EXPECT_EQ(read_error_of("#1=0\no1 while [#1 LT 3]\n#1=[#1+1]\n#2=0\no2 while [#2 LT 40]\n"
+                          "#2=[#2+1]\no2 endwhile\no1 endwhile\n",
+                          ngc(), 50),
             "no error");
 }
 
 TEST(ReaderO, StructureErrors) {
-  EXPECT_EQ(error_of("#1=0\no101 endwhile\n"), "t.ngc:2:1: error: o101 endwhile without while");
-  EXPECT_EQ(error_of("G0 X1\no100 sub\nG0 X2\n"), "t.ngc:2:1: error: o100 sub without endsub");
-  EXPECT_EQ(error_of("o100 call\no100 sub\nG0 X2\n"), "t.ngc:2:1: error: o100 sub without endsub");
-  EXPECT_EQ(error_of("o1 if [0]\nG0 X1\n"), "t.ngc:1:1: error: o1 if without endif");
-  EXPECT_EQ(error_of("o1 if [1]\nG0 X1\n"), "t.ngc:1:1: error: o1 if without endif");
-  EXPECT_EQ(error_of("o1 else\n"), "t.ngc:1:1: error: o1 else without if");
-  EXPECT_EQ(error_of("o1 elseif [1]\n"), "t.ngc:1:1: error: o1 elseif without if");
-  EXPECT_EQ(error_of("o1 endif\n"), "t.ngc:1:1: error: o1 endif without if");
-  EXPECT_EQ(error_of("o1 while [1]\n"), "t.ngc:1:1: error: o1 while without endwhile");
-  EXPECT_EQ(error_of("o1 do\n"), "t.ngc:1:1: error: o1 do without a closing while");
-  EXPECT_EQ(error_of("o1 repeat [2]\n"), "t.ngc:1:1: error: o1 repeat without endrepeat");
-  EXPECT_EQ(error_of("o1 endrepeat\n"), "t.ngc:1:1: error: o1 endrepeat without repeat");
-  EXPECT_EQ(error_of("o1 break\n"),
+  EXPECT_EQ(read_error_of("#1=0\no101 endwhile\n"),
+            "t.ngc:2:1: error: o101 endwhile without while");
+  EXPECT_EQ(read_error_of("G0 X1\no100 sub\nG0 X2\n"), "t.ngc:2:1: error: o100 sub without endsub");
+  EXPECT_EQ(read_error_of("o100 call\no100 sub\nG0 X2\n"),
+            "t.ngc:2:1: error: o100 sub without endsub");
+  EXPECT_EQ(read_error_of("o1 if [0]\nG0 X1\n"), "t.ngc:1:1: error: o1 if without endif");
+  EXPECT_EQ(read_error_of("o1 if [1]\nG0 X1\n"), "t.ngc:1:1: error: o1 if without endif");
+  EXPECT_EQ(read_error_of("o1 else\n"), "t.ngc:1:1: error: o1 else without if");
+  EXPECT_EQ(read_error_of("o1 elseif [1]\n"), "t.ngc:1:1: error: o1 elseif without if");
+  EXPECT_EQ(read_error_of("o1 endif\n"), "t.ngc:1:1: error: o1 endif without if");
+  EXPECT_EQ(read_error_of("o1 while [1]\n"), "t.ngc:1:1: error: o1 while without endwhile");
+  EXPECT_EQ(read_error_of("o1 do\n"), "t.ngc:1:1: error: o1 do without a closing while");
+  EXPECT_EQ(read_error_of("o1 repeat [2]\n"), "t.ngc:1:1: error: o1 repeat without endrepeat");
+  EXPECT_EQ(read_error_of("o1 endrepeat\n"), "t.ngc:1:1: error: o1 endrepeat without repeat");
+  EXPECT_EQ(read_error_of("o1 break\n"),
             "t.ngc:1:1: error: o1 break outside a while or do loop of that number");
-  EXPECT_EQ(error_of("o1 repeat [2]\no1 break\no1 endrepeat\n"),
+  EXPECT_EQ(read_error_of("o1 repeat [2]\no1 break\no1 endrepeat\n"),
             "t.ngc:2:1: error: o1 break outside a while or do loop of that number");
-  EXPECT_EQ(error_of("o100 return\n"), "t.ngc:1:1: error: o100 return outside a subroutine call");
+  EXPECT_EQ(read_error_of("o100 return\n"),
+            "t.ngc:1:1: error: o100 return outside a subroutine call");
   // A return may carry another label (rs274 returns from o1 here too); endsub may not.
   EXPECT_EQ(trace("o1 sub\nG0 X1\no2 return\nG0 X5\no1 endsub\no1 call\nG0 Y2\n"),
             (V{"G0 X1", "G0 Y2"}));
-  EXPECT_EQ(error_of("o1 sub\no2 endsub\no1 call\n"), "t.ngc:1:1: error: o1 sub without endsub");
-  EXPECT_EQ(error_of("o1 sub\no1 endsub\no1 sub\no1 endsub\n"),
+  EXPECT_EQ(read_error_of("o1 sub\no2 endsub\no1 call\n"),
+            "t.ngc:1:1: error: o1 sub without endsub");
+  EXPECT_EQ(read_error_of("o1 sub\no1 endsub\no1 sub\no1 endsub\n"),
             "t.ngc:3:1: error: o1 sub is defined twice (first at line 1)");
-  EXPECT_EQ(error_of("o<lib> call [1]\n"),
+  EXPECT_EQ(read_error_of("o<lib> call [1]\n"),
             "t.ngc:1:1: error: subroutine o<lib> is not defined in this file (subroutines in "
             "other files are not supported)");
 }
 
 TEST(ReaderO, LineErrors) {
-  EXPECT_EQ(error_of("o100 sub G0\n"),
+  EXPECT_EQ(read_error_of("o100 sub G0\n"),
             "t.ngc:1:10: error: unexpected 'G' after o100 sub: an O-word line has no other words");
-  EXPECT_EQ(error_of("G0 o100 sub\n"),
+  EXPECT_EQ(read_error_of("G0 o100 sub\n"),
             "t.ngc:1:4: error: an O-word must be the first word on its line (only N may come "
             "before it)");
-  EXPECT_EQ(error_of("#1=1 o100 sub\n"),
+  EXPECT_EQ(read_error_of("#1=1 o100 sub\n"),
             "t.ngc:1:6: error: an O-word line cannot have parameter assignments");
-  EXPECT_EQ(error_of("o100 foo\n"),
+  EXPECT_EQ(read_error_of("o100 foo\n"),
             "t.ngc:1:6: error: unknown O-word keyword 'FOO' (sub, endsub, return, call, do, "
             "while, endwhile, if, elseif, else, endif, break, continue, repeat, endrepeat)");
-  EXPECT_EQ(error_of("o1 sub\no1 endsub\no1 call 5\n"),
+  EXPECT_EQ(read_error_of("o1 sub\no1 endsub\no1 call 5\n"),
             "t.ngc:3:9: error: o1 call: arguments must be in brackets, e.g. [1.5]");
-  EXPECT_EQ(error_of("o1 if\no1 endif\n"),
+  EXPECT_EQ(read_error_of("o1 if\no1 endif\n"),
             "t.ngc:1:4: error: o1 if needs one condition in brackets, e.g. [#1 LT 10]");
-  EXPECT_EQ(error_of("o1 if [1\n"), "t.ngc:1:7: error: unclosed '['");
-  EXPECT_EQ(error_of("o1.5 sub\n"), "t.ngc:1:3: error: an O-word number must be an integer");
-  EXPECT_EQ(error_of("o sub\n"),
+  EXPECT_EQ(read_error_of("o1 if [1\n"), "t.ngc:1:7: error: unclosed '['");
+  EXPECT_EQ(read_error_of("o1.5 sub\n"), "t.ngc:1:3: error: an O-word number must be an integer");
+  EXPECT_EQ(read_error_of("o sub\n"),
             "t.ngc:1:1: error: expected a number, <name> or [expression] after 'O'");
-  EXPECT_EQ(error_of("o1 repeat [1e20]\no1 endrepeat\n"),
+  EXPECT_EQ(read_error_of("o1 repeat [1e20]\no1 endrepeat\n"),
             "t.ngc:1:13: error: unknown operator 'E'");
-  EXPECT_EQ(error_of("o1 repeat [10 ** 20]\no1 endrepeat\n"),
+  EXPECT_EQ(read_error_of("o1 repeat [10 ** 20]\no1 endrepeat\n"),
             "t.ngc:1:4: error: o1 repeat: count 1e+20 out of range");
-  EXPECT_EQ(error_of("o[-1] call\n"),
+  EXPECT_EQ(read_error_of("o[-1] call\n"),
             "t.ngc:1:1: error: computed O-word number -1 is not a non-negative integer");
-  EXPECT_EQ(error_of("o[1] if [1]\n"),
+  EXPECT_EQ(read_error_of("o[1] if [1]\n"),
             "t.ngc:1:1: error: a computed O-word number ('o[...]') is only supported with call");
   // The condition's own errors name its column.
-  EXPECT_EQ(error_of("o1 if [#<x> GT 1]\no1 endif\n"),
+  EXPECT_EQ(read_error_of("o1 if [#<x> GT 1]\no1 endif\n"),
             "t.ngc:1:8: error: parameter #<x> is not set");
-  EXPECT_EQ(error_of("o1 if [0]\no1 elseif [1/0]\no1 endif\n"),
+  EXPECT_EQ(read_error_of("o1 if [0]\no1 elseif [1/0]\no1 endif\n"),
             "t.ngc:2:13: error: division by zero");
 }
 

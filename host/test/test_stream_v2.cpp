@@ -27,7 +27,7 @@ using std::chrono::milliseconds;
 
 namespace {
 
-uint64_t seed_from_env(uint64_t dflt) {
+uint64_t stream_seed(uint64_t dflt) {
   const char* e = std::getenv("FPGACNC_SEED");
   return e ? std::strtoull(e, nullptr, 10) : dflt;
 }
@@ -196,7 +196,7 @@ TEST(StreamV2, SequenceAndDoneCountersWrapAround) {
 class StreamV2Faults : public ::testing::TestWithParam<uint64_t> {};
 
 TEST_P(StreamV2Faults, JobCompletesEverySegmentExactlyOnce) {
-  const uint64_t seed = seed_from_env(GetParam());
+  const uint64_t seed = stream_seed(GetParam());
   std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
   const auto cfg = test_cfg();
   const auto plan = plan_of(spiral_gcode(600), cfg);

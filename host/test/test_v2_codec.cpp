@@ -41,7 +41,7 @@ v2::Frame parse_one(const Bytes& b) {
   return f.value_or(v2::Frame{});
 }
 
-uint32_t seed_from_env() {
+uint32_t codec_seed() {
   const char* e = std::getenv("FPGACNC_SEED");
   return e ? static_cast<uint32_t>(std::strtoul(e, nullptr, 10)) : 20260005u;
 }
@@ -56,7 +56,7 @@ TEST(V2Codec, CrcCheckValue) {
 }
 
 TEST(V2Codec, CrcMatchesBitwiseReference) {
-  const uint32_t seed = seed_from_env();
+  const uint32_t seed = codec_seed();
   std::printf("seed %u (FPGACNC_SEED)\n", seed);
   std::mt19937 rng(seed);
   for (int n = 0; n < 200; ++n) {
@@ -375,7 +375,7 @@ TEST(V2Codec, ParserCountsBadLengthAndAbandonsPartial) {
 }
 
 TEST(V2Codec, ParserRandomStreamRecoversEveryUntouchedFrame) {
-  const uint32_t seed = seed_from_env();
+  const uint32_t seed = codec_seed();
   std::printf("seed %u (FPGACNC_SEED)\n", seed);
   std::mt19937 rng(seed);
   // Frames separated by random noise without 0xA5 (so no false sync): all found, in order.
@@ -583,7 +583,7 @@ TEST(V2Codec, OutputWorkedExamples) {
 TEST(V2Codec, OutputRoundTripAndFieldRules) {
   using R = v2::NakReason;
   // Every combination of set / not set / level for the 6 on-off outputs, and a fan duty.
-  std::mt19937 rng(seed_from_env());
+  std::mt19937 rng(codec_seed());
   for (int i = 0; i < 2000; ++i) {
     v2::OutputSet o;
     auto pick = [&]() -> std::optional<bool> {

@@ -312,12 +312,14 @@ std::array<uint64_t, 3> g_v2_plane_arcs{};
 // one frame in eight, as side frames (no credit needed, host_schedule.h), after 1..20 000 clocks
 // one of: a HOLD and, 1..2 000 clocks (often still ramping down) or 2 000..60 000 clocks later,
 // its RESUME; new feed / rapid rates (1 % .. 100 %; below 20 % back to at least 20 % within
-// 20 000 clocks, to bound the RTL time); rarely a MOTION that breaks a field rule (NAK BAD_FIELD).
-// No CANCEL: the twins do not model its drop of the running segment and the queue.
+// 20 000 clocks, to bound the RTL time); rarely a MOTION that breaks a field rule (NAK BAD_FIELD);
+// in half of the sessions (`--v2-cancels`) one in six of them a CANCEL (the session goes on with
+// the frames after it; those sessions have no OUTPUT frames: the twins do not model the abort
+// clearing the outputs).
 // Rates are Q1.15, a third at 100 %; ramps 2^20 .. 2^32 - 1 per 256 clocks. A session that got
 // any ends with a MOTION back to 100 %.
-bool g_v2_holds = true;
-uint64_t g_v2_motion_frames = 0, g_v2_holds_sent = 0, g_v2_bad_motions = 0;
+bool g_v2_holds = true, g_v2_cancels = true;
+uint64_t g_v2_motion_frames = 0, g_v2_holds_sent = 0, g_v2_bad_motions = 0, g_v2_cancels_sent = 0;
 // The feed hold and cycle-start buttons in the random v2 sessions (`--v2-buttons`; a generator of
 // their own): in about half of them a hold press 20 000..1 000 000 clocks in and a cycle-start
 // press 1..400 000 clocks after it, each held for the filter's 50 000 clocks (cnc_core's
@@ -326,7 +328,7 @@ bool g_v2_buttons = true;
 uint64_t g_v2_presses = 0, g_v2_short_presses = 0;
 uint16_t g_v2_min_rate = 0x8000;
 
-void add_motions(std::mt19937_64& g, V2Item& it) {
+void add_motions(std::mt19937_64& g, V2Item& it, bool cancels) {
   using namespace fpgacnc::twins::v2;
   auto rate = [&]() -> uint16_t {
     const auto r = static_cast<uint16_t>(pick(g, 0, 2) == 0 ? 0x8000 : pick(g, 328, 0x8000));
@@ -345,6 +347,11 @@ void add_motions(std::mt19937_64& g, V2Item& it) {
   const auto hold = static_cast<uint8_t>(spec::kMotionHold);
   const auto resume = static_cast<uint8_t>(spec::kMotionResume);
   const int64_t gap = pick(g, 1, 20'000);
+  if (cancels && pick(g, 0, 5) == 0) {  // a CANCEL: hold, then the queue dropped at rest
+    side(static_cast<uint8_t>(spec::kMotionCancel), rate(), rate(), ramp(), gap);
+    ++g_v2_cancels_sent;
+    return;
+  }
   const uint32_t what = pick(g, 0, 19);
   if (what < 10) {  // a hold and its resume
     side(hold, rate(), rate(), ramp(), gap);
@@ -385,6 +392,8 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
   std::mt19937_64 go(seed * 0x9E37'79B9'7F4A'7C15ull + 3);  // OUTPUT frames
   std::mt19937_64 gm(seed * 0x9E37'79B9'7F4A'7C15ull + 4);  // MOTION frames
   std::mt19937_64 gb(seed * 0x9E37'79B9'7F4A'7C15ull + 5);  // buttons
+  std::mt19937_64 gc(seed * 0x9E37'79B9'7F4A'7C15ull + 6);  // sessions with CANCEL
+  const bool cancels = g_v2_holds && g_v2_cancels && pick(gc, 0, 1) == 0;
   bool motions = false;
   Job j;
   j.segments = segments;
@@ -505,11 +514,11 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
       it.pre_gap = static_cast<int64_t>(watchdog) + pick(g, 1, 500);
     }
     if (g_v2_holds && pick(gm, 0, 7) == 0) {
-      add_motions(gm, it);
+      add_motions(gm, it, cancels);
       motions = true;
     }
     sc.items.push_back(std::move(it));
-    if (g_v2_outputs && pick(go, 0, 4) == 0) {
+    if (g_v2_outputs && !cancels && pick(go, 0, 4) == 0) {
       auto mask = static_cast<uint8_t>(pick(go, 1, 0x7F));
       const auto value = static_cast<uint8_t>(pick(go, 0, 0x7F) & mask & ~0x04u);
       const uint32_t dk = pick(go, 0, 3);
@@ -524,7 +533,7 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
       ++g_v2_output_frames;
     }
   }
-  if (g_v2_outputs) {
+  if (g_v2_outputs && !cancels) {
     sc.items.push_back(V2Item{kOutput, {0x7F, 0, 0}});
     ++g_v2_output_frames;
   }
@@ -566,6 +575,7 @@ int sc_main(int argc, char* argv[]) {
   opts.flag("--v2-profiles", &g_v2_profiles);
   opts.flag("--v2-arcs", &g_v2_arcs);
   opts.flag("--v2-outputs", &g_v2_outputs);
+  opts.flag("--v2-cancels", &g_v2_cancels);
   opts.flag("--v2-arc-planes", &g_v2_arc_planes);
   opts.flag("--v2-holds", &g_v2_holds);
   opts.flag("--v2-buttons", &g_v2_buttons);
@@ -636,19 +646,21 @@ int sc_main(int argc, char* argv[]) {
       "OUTPUT frames in the random v2 sessions\n",
       g_v2_profile_frames, g_v2_arc_frames, g_v2_bad_arcs, g_v2_plane_arcs[0], g_v2_plane_arcs[1],
       g_v2_plane_arcs[2], g_v2_output_frames);
-  uint64_t runs = 0, motions = 0;
+  uint64_t runs = 0, motions = 0, flushed = 0;
   std::array<uint64_t, 4> motion_in{};
   for (const RunResult& r : twin_results) {
     runs += static_cast<uint64_t>(r.runs);
+    flushed += r.flushed;
     motions += r.motion_from.size();
     for (size_t k = 0; k < 4; ++k) motion_in[k] += r.motion_in[k];
   }
   fmt::print(
-      "cosim: {} MOTION frames ({} holds with their resumes, {} breaking a rule, lowest rate "
-      "{:.1f} %); {} accepted, taking effect in a LINE {}, PROFILE {}, ARC {}, no segment {}; "
-      "twin runs {} for {} jobs\n",
-      g_v2_motion_frames, g_v2_holds_sent, g_v2_bad_motions, 100.0 * g_v2_min_rate / 0x8000,
-      motions, motion_in[0], motion_in[1], motion_in[2], motion_in[3], runs, twin_results.size());
+      "cosim: {} MOTION frames ({} holds with their resumes, {} CANCELs, {} breaking a rule, "
+      "lowest rate {:.1f} %); {} accepted, taking effect in a LINE {}, PROFILE {}, ARC {}, no "
+      "segment {}; {} entries dropped by a CANCEL's flush; twin runs {} for {} jobs\n",
+      g_v2_motion_frames, g_v2_holds_sent, g_v2_cancels_sent, g_v2_bad_motions,
+      100.0 * g_v2_min_rate / 0x8000, motions, motion_in[0], motion_in[1], motion_in[2],
+      motion_in[3], flushed, runs, twin_results.size());
   fmt::print("cosim: {} button presses (hold and cycle start), {} of them too short to pass\n",
              g_v2_presses + g_v2_short_presses, g_v2_short_presses);
   fmt::print(

@@ -15,6 +15,7 @@
 #include <limits>
 #include <thread>
 
+#include "fpgacnc/twins/input_filter.h"
 #include "fpgacnc/twins/virtual_board.h"
 
 namespace fpgacnc::twins {
@@ -165,6 +166,9 @@ void TwinBoard::start() {
   session_done_ = false;
   quiet_ = false;
   st_ = simboard::BoardStats{};
+  replays_ = 0;
+  press_req_.clear();
+  press_asked_ = press_taken_ = 0;
   edges_.clear();
   error_.clear();
   t_start_ = wall_clock::now();
@@ -176,7 +180,11 @@ void TwinBoard::start() {
       error_ = fmt::format("twin board: session ended by an error: {}", e.what());
     }
     quiet_ = true;
-    session_done_ = true;
+    {
+      std::lock_guard<std::mutex> g(mu_);
+      session_done_ = true;
+    }
+    press_cv_.notify_all();
   });
 }
 
@@ -223,6 +231,20 @@ std::vector<models::Edge> TwinBoard::edges() const {
 
 std::array<int64_t, models::kBoardAxes> TwinBoard::net_steps() const {
   return models::net_steps(edges());
+}
+
+uint64_t TwinBoard::press_button(simboard::Button b) {
+  std::unique_lock<std::mutex> l(mu_);
+  if (!running_ || session_done_.load())
+    throw BoardError("twin board: press_button while no session runs");
+  press_req_.push_back(static_cast<int>(b));
+  const uint64_t mine = ++press_asked_;
+  l.unlock();
+  wake();
+  l.lock();
+  press_cv_.wait(l, [&] { return press_taken_ >= mine || session_done_.load(); });
+  if (press_taken_ < mine) throw BoardError("twin board: the session ended before the press");
+  return press_edge_;
 }
 
 void TwinBoard::set_estop(bool) {
@@ -286,11 +308,11 @@ void TwinBoard::session(VirtualBoard& vb) {
   const uint64_t per = vb.clk_.period_ps();
   const uint64_t now_ps = sc_core::sc_time_stamp().value();
   vb.clk_.set_base(sc_core::sc_time::from_value((now_ps + per - 1) / per * per));
-  // live: the twins cannot run a session again, so they refuse MOTION (NAK UNKNOWN_TYPE) as a
-  // core without the motion rate does; hosts then keep their holds to themselves
+  // MOTION frames: a frame not known up front makes the session run again from its reset with
+  // the requests known (replay below, docs/systemc.md "The twin board")
   vb.known_motion_.clear();
-  vb.live_motion_ = true;
-  vb.dec_.accept_motion = false;
+  vb.known_flush_.clear();
+  vb.dec_.accept_motion = true;
   vb.reset(axis_timing(opt_));
   vb.pins_.record_tx = true;
   vb.host_ = nullptr;
@@ -321,6 +343,18 @@ void TwinBoard::session(VirtualBoard& vb) {
   double waited_s = 0.0;
   std::vector<uint8_t> in;
   std::vector<models::Edge> batch_out;
+  // For a replay: every host byte given to the twins (start edge, byte), every tx byte taken
+  // from them, and the activity of each.
+  std::vector<std::pair<Cycle, uint8_t>> rx_log, tx_log;
+  Cycle act_host = 0, act_tx = 0, act_buttons = 0;
+  std::vector<ButtonPress> presses;  // the buttons pressed so far
+  constexpr Cycle kPress = static_cast<Cycle>(simboard::SimBoard::kButtonPressClks);
+  constexpr Cycle kFilter = static_cast<Cycle>(simboard::SimBoard::kFilterClks);
+  // The presses' requests to the rate (after a reset: the twins know them up front).
+  auto press_requests = [&] {
+    for (Cycle t : button_requests(presses, 0, vb.p_.button_filter_clks)) vb.rate_.hold_input(t);
+    for (Cycle t : button_requests(presses, 1, vb.p_.button_filter_clks)) vb.rate_.start_input(t);
+  };
 
   auto read_input = [&] {
     uint8_t buf[4096];
@@ -388,12 +422,14 @@ void TwinBoard::session(VirtualBoard& vb) {
     for (uint8_t b : in) {
       RxFrame f{b};
       transport(vb.host_pin_, vb.gp_, vb.clk_, f, start);
+      rx_log.emplace_back(start, b);
       start += frame;
     }
     bytes_in += in.size();
     in.clear();
     line_next = start;
-    act = std::max(act, start - 2);  // the last frame's stop bit ends on start - 1
+    act_host = start - 2;  // the last frame's stop bit ends on start - 1
+    act = std::max(act, act_host);
     never_active = false;
   };
   Cycle notified_deadline = -1;
@@ -437,25 +473,135 @@ void TwinBoard::session(VirtualBoard& vb) {
     quiet_.store(quiet && out.empty());
   };
 
+  // Pin activity (act) of an edge.
+  auto pin_act = [&](const models::Edge& e) {
+    if (e.signal < models::kDir0) {
+      act = std::max(act, static_cast<Cycle>(e.cycle) - (e.value ? 0 : 1));
+      never_active = false;
+    }
+  };
+  // A MOTION frame the twins did not know (VirtualBoard::on_motion): run again from the reset
+  // with every host byte at its clock and the requests of every MOTION frame so far known up
+  // front, up to `now`. What was released is the same again (checked): the answers decided (tx
+  // bytes taken) and the edges up to the published cycle; the edges after it are replaced.
+  auto replay = [&](bool force) {
+    for (int runs = 0;; ++runs) {
+      if (!vb.settle_motion()) force = true;
+      if (!force) break;
+      force = false;
+      if (runs > 64) throw std::logic_error("twin board: the MOTION requests do not settle");
+      vb.reset(axis_timing(opt_));
+      press_requests();
+      vb.pins_.record_tx = true;
+      for (const auto& [c, b] : rx_log) {
+        RxFrame f{b};
+        transport(vb.host_pin_, vb.gp_, vb.clk_, f, c);
+      }
+      vb.dec_.advance(now + 1);
+      while (vb.enc_.step(now + 1)) {
+      }
+    }
+    ++replays_;
+    if (vb.tx_bytes_.size() < tx_log.size() ||
+        !std::equal(tx_log.begin(), tx_log.end(), vb.tx_bytes_.begin()))
+      throw std::logic_error("twin board: the answers before a MOTION frame changed in its replay");
+    vb.tx_bytes_.erase(vb.tx_bytes_.begin(),
+                       vb.tx_bytes_.begin() + static_cast<std::ptrdiff_t>(tx_log.size()));
+    std::vector<models::Edge> all = vb.pins_.take_sorted();
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      std::vector<models::Edge> old = edges_;
+      old.insert(old.end(), batch_out.begin(), batch_out.end());
+      sort_edges(old);
+      const auto released = [&](const std::vector<models::Edge>& v) {
+        return std::upper_bound(v.begin(), v.end(), st_.cycles,
+                                [](uint64_t c, const models::Edge& e) { return c < e.cycle; }) -
+               v.begin();
+      };
+      std::vector<models::Edge> mine;
+      for (const models::Edge& e : all)
+        if (e.signal != models::kTx || opt_.record_tx) mine.push_back(e);
+      sort_edges(mine);
+      const auto n = released(old);
+      if (released(mine) != n || !std::equal(old.begin(), old.begin() + n, mine.begin(),
+                                             [](const models::Edge& a, const models::Edge& b) {
+                                               return a.cycle == b.cycle && a.signal == b.signal &&
+                                                      a.value == b.value;
+                                             }))
+        throw std::logic_error("twin board: the edges before a MOTION frame changed in its replay");
+      edges_ = std::move(mine);
+      batch_out.clear();
+    }
+    // The activity again: the host's bytes and the answers as before, the pins and the entries
+    // as they are now (a hold delays them, a resume brings them forward).
+    act = std::max({act_host, act_tx, act_buttons});
+    for (const models::Edge& e : all) pin_act(e);
+    if (!vb.entry_ends_.empty()) act = std::max(act, vb.entry_ends_.back() - 1);
+  };
+
+  // Buttons pressed by the host: pressed from the next edge (SimBoard::press_button).
+  auto take_presses = [&] {
+    std::vector<int> req;
+    {
+      std::lock_guard<std::mutex> l(mu_);
+      req.swap(press_req_);
+      if (!req.empty()) {
+        press_taken_ += req.size();
+        press_edge_ = static_cast<uint64_t>(now + 1);
+      }
+    }
+    if (req.empty()) return false;
+    press_cv_.notify_all();
+    for (int b : req) {
+      presses.push_back(ButtonPress{b, now + 1, kPress});
+      act_buttons = std::max(act_buttons, now + 1 + kPress + kFilter + 8 - 1);
+    }
+    act = std::max(act, act_buttons);
+    never_active = false;
+    return true;
+  };
+
+  // Held at the host's timer until the host writes, presses a button or waits for a later clock
+  // (at most 5 s of wall time: a host that went away does not stop the board). A press keeps the
+  // timer (the board takes it at this clock and holds here again).
+  auto hold_at_timer = [&](Cycle host_at) {
+    publish(false);
+    const auto give_up = wall_clock::now() + std::chrono::seconds(5);
+    bool input = false, press = false;
+    auto press_pending = [&] {
+      std::lock_guard<std::mutex> l(mu_);
+      return !press_req_.empty();
+    };
+    while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
+           !stop_.load() && !(press = press_pending()))
+      input = wait_input(std::min(give_up, wall_clock::now() + std::chrono::milliseconds(10)));
+    if (host_deadline_.load() == host_at && !press) host_deadline_.store(-1);
+  };
+
   while (!stop_.load(std::memory_order_relaxed)) {
     read_input();
+    const bool pressed = take_presses();
     admit();
     // Answers that start by `now` are final: no host byte can start before now + 1.
     vb.dec_.advance(now + 1);
     while (vb.enc_.step(now + 1)) {
     }
+    if (vb.motion_mismatch_ || pressed) replay(pressed);
+    if (pressed && !opt_.realtime && host_deadline_.load() == now) {
+      hold_at_timer(now);  // pressed at the host's timer: held there again
+      continue;
+    }
     for (const auto& b : vb.tx_bytes_) {
       pending.push_back(b);
-      act = std::max(act, b.first + dec_off + stop_tail - 1);
+      tx_log.push_back(b);
+      act_tx = std::max(act_tx, b.first + dec_off + stop_tail - 1);
+      act = std::max(act, act_tx);
       never_active = false;
       hold_at = -1;
     }
     vb.tx_bytes_.clear();
     for (const models::Edge& e : vb.pins_.take_sorted()) {
-      if (e.signal < models::kDir0) {
-        act = std::max(act, static_cast<Cycle>(e.cycle) - (e.value ? 0 : 1));
-        never_active = false;
-      }
+      pin_act(e);
       if (e.signal != models::kTx || opt_.record_tx) batch_out.push_back(e);
     }
     if (!vb.entry_ends_.empty()) {
@@ -505,8 +651,15 @@ void TwinBoard::session(VirtualBoard& vb) {
     if (hold_at > now) e = std::min(e, hold_at);
     // The host's next timer: stop there (not past it) so that it can poll during a long move.
     const Cycle host_at = host_deadline_.load();
-    const bool to_host = !opt_.realtime && host_at > now && e != kNone && host_at < e;
+    const bool to_host = !opt_.realtime && host_at > now && e != kNone && host_at <= e;
     if (to_host) e = host_at;
+    if (!opt_.realtime && !to_host && e != kNone && e >= kHeldForever / 2) {
+      // Held for good (the motion rate at 0 with nothing to end it): the clock does not run on
+      // its own to the end of a hold that never ends; it moves on to the host's deadlines.
+      publish(false);
+      wait_input(wall_clock::now() + std::chrono::milliseconds(100));
+      continue;
+    }
     if (e == kNone) {
       // Quiet: time stands still until the host writes.
       publish(true);
@@ -536,17 +689,7 @@ void TwinBoard::session(VirtualBoard& vb) {
       if (wait_input(last_write + grace)) continue;
     }
     now = e;
-    if (to_host) {
-      // Held at the host's timer until the host writes or waits for a later one (at most 5 s
-      // of wall time: a host that went away does not stop the board).
-      publish(false);
-      const auto give_up = wall_clock::now() + std::chrono::seconds(5);
-      bool input = false;
-      while (!input && host_deadline_.load() == host_at && wall_clock::now() < give_up &&
-             !stop_.load())
-        input = wait_input(std::min(give_up, wall_clock::now() + std::chrono::milliseconds(10)));
-      if (host_deadline_.load() == host_at) host_deadline_.store(-1);
-    }
+    if (to_host) hold_at_timer(host_at);
   }
   // Final figures: violations as cnc_core counts them (clocks with a `violation` strobe).
   std::vector<Cycle> strobes = vb.exec_.arc_violation_cycles;

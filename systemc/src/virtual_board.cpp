@@ -49,13 +49,14 @@ VirtualBoard::VirtualBoard(sc_core::sc_module_name name, const CoreParams& p, bo
   prep_.on_output = [this](Cycle h, const OutputCmd& o) { exec_.output(h, o); };
   exec_.entry_ends = &entry_ends_;
   exec_.rate = &rate_;
+  fifo_.flushes = &flush_edges_;
+  fifo_.entry_ends = &entry_ends_;
+  prep_.flushes = &flush_edges_;
+  prep_.accept_probe = [this](const Segment& s, Cycle v) { return exec_.accept_edge(s, v); };
   dec_.on_motion = [this](const MotionReq& m) {
     const size_t i = observed_motion_.size();
     observed_motion_.push_back(m);
-    if (live_motion_)
-      rate_.motion(m.from, m.hold || m.cancel, m.resume, m.feed, m.rapid, m.ramp);
-    else if (i >= known_motion_.size() || !(known_motion_[i] == m))
-      motion_mismatch_ = true;
+    if (i >= known_motion_.size() || !(known_motion_[i] == m)) motion_mismatch_ = true;
   };
   make_axis_twins(exec_, clk_, p_, pins_, dda_, pulse_);
   for (auto& pulse : pulse_) pulse->keep_history = true;
@@ -85,8 +86,20 @@ void VirtualBoard::reset(const std::array<AxisTiming, kAxes>& timing) {
   observed_motion_.clear();
   motion_mismatch_ = false;
   for (const MotionReq& m : known_motion_)
-    rate_.motion(m.from, m.hold || m.cancel, m.resume, m.feed, m.rapid, m.ramp);
+    rate_.motion(m.from, m.hold, m.resume, m.feed, m.rapid, m.ramp, m.cancel);
   for (auto& p : pulse_) p->reset();
+  // The flushes of the CANCELs known up front: the rate's hold ends, the FIFO, prep and executor
+  // drop what they hold on the abort edge (the clock after the flush clock).
+  flush_edges_.clear();
+  known_flush_.resize(known_motion_.size(), kFlushUnknown);
+  for (size_t k = 0; k < known_motion_.size(); ++k) {
+    if (known_flush_[k] < 0) continue;
+    const Cycle x = known_flush_[k] + 1;
+    rate_.flush(x);
+    flush_edges_.push_back(x);
+    AbortSpan a{x, x};
+    transport(abort_, gp_, clk_, a, x);
+  }
   enc_.reset();
   tx_.reset();
   tx_bytes_.clear();
@@ -165,21 +178,52 @@ size_t VirtualBoard::deliver(Cycle before, bool one) {
   return n;
 }
 
+std::vector<Cycle> VirtualBoard::observe_flushes() {
+  std::vector<Cycle> f(known_motion_.size(), kFlushNone);
+  Cycle last = -1;  // the last flush clock
+  for (size_t k = 0; k < known_motion_.size(); ++k) {
+    const MotionReq& m = known_motion_[k];
+    if (!m.cancel || m.from <= last) continue;  // a CANCEL before that flush: the same cancel
+    const Cycle c = rate_.first_stop(m.from);
+    if (c == FeedRate::kNever) {
+      f[k] = kFlushUnknown;
+      break;
+    }
+    f[k] = last = c;
+  }
+  return f;
+}
+
+bool VirtualBoard::settle_motion() {
+  if (motion_mismatch_) {
+    // The requests up to the first one this run did not know (everything before it was exact);
+    // that one's flush is not known yet.
+    if (observed_motion_.empty()) throw std::logic_error("virtual board: MOTION mismatch, none");
+    const size_t i = observed_motion_.size() - 1;
+    known_motion_ = observed_motion_;
+    known_flush_.resize(i);
+    known_flush_.push_back(known_motion_[i].cancel ? kFlushUnknown : kFlushNone);
+    return false;
+  }
+  std::vector<Cycle> f = observe_flushes();
+  if (f == known_flush_) return true;
+  known_flush_ = std::move(f);
+  return false;
+}
+
 RunResult VirtualBoard::run_job(const TwinJob& job) {
-  // Runs until the MOTION requests known up front are the ones the run accepts (see the header).
-  // A run stops at the first MOTION frame accepted that it did not know (or knew otherwise):
-  // everything before it was exact, so the next run knows that request too.
+  // Runs until the MOTION requests and the flush clocks of their CANCELs known up front are the
+  // ones the run has (see the header).
   known_motion_.clear();
-  live_motion_ = false;
+  known_flush_.clear();
   dec_.accept_motion = true;
   for (runs_ = 1;; ++runs_) {
     // (a run again takes no SystemC time: the job's time passed in its first run)
     RunResult r = run_once(job, runs_ == 1);
     r.runs = runs_;
-    if (!motion_mismatch_) return r;
-    if (observed_motion_.size() <= known_motion_.size())
-      throw std::logic_error("virtual board: a MOTION request known up front came otherwise");
-    known_motion_ = observed_motion_;
+    if (settle_motion()) return r;
+    if (static_cast<size_t>(runs_) > 4 * known_motion_.size() + 16)
+      throw std::logic_error("virtual board: the MOTION requests and flushes do not settle");
   }
 }
 
@@ -203,6 +247,10 @@ RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   RunResult r;
   bool woke = false;
   while (!host->done()) {
+    if (flush_unknown_before(host->ready())) {  // run again with that flush known (run_job)
+      host_ = nullptr;
+      return r;
+    }
     if (host->waiting()) {
       // Nothing comes from the host until an answer: the next tx byte, computing the next
       // frame of the encoder when none is queued. The host decides again right after the
@@ -273,6 +321,7 @@ RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   r.frames_ok = d.frames_ok;
   r.clamped = prep_.clamped;
   r.zero_gap = exec_.zero_gap;
+  r.flushed = fifo_.dropped + prep_.dropped + (flush_edges_.empty() ? 0 : exec_.aborted);
   for (const MotionReq& m : observed_motion_) {
     r.motion_from.push_back(m.from);
     size_t k = 3;
@@ -290,6 +339,12 @@ RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   }
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+
+bool VirtualBoard::flush_unknown_before(Cycle t) const {
+  for (size_t k = 0; k < known_motion_.size() && k < known_flush_.size(); ++k)
+    if (known_flush_[k] == kFlushUnknown) return known_motion_[k].from + 3 <= t;
+  return false;
 }
 
 void VirtualBoard::host_thread() {

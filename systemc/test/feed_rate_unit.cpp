@@ -70,7 +70,7 @@ Case random_case(std::mt19937_64& g, Cycle n) {
 void send(FeedRate& f, const Req& q) {
   switch (q.kind) {
     case 0:
-      f.motion(q.t, q.hold, q.resume, q.feed, q.rapid, q.ramp);
+      f.motion(q.t, q.hold, q.resume, q.feed, q.rapid, q.ramp, q.cancel);
       break;
     case 1:
       f.hold_input(q.t);
@@ -155,6 +155,73 @@ TEST(FeedRate, ClosedFormAgainstClockByClock) {
     EXPECT_EQ(h.late(), 0u) << "seed " << seed;
     compare(h, ref, kN, g, "requests in time order", seed);
   }
+}
+
+// CANCEL: random cases with one to three MOTION frames turned into CANCELs (and resumes and
+// holds around them); the twin finds each flush clock (first_stop from the CANCEL's clock, the
+// one of a CANCEL within a cancel in progress skipped) and is told it (flush), as the virtual board
+// does; every answer and every flush clock against the reference.
+TEST(FeedRate, CancelFlushAgainstClockByClock) {
+  constexpr Cycle kN = 30'000;
+  int flushes = 0, ignored_resumes = 0;
+  for (int seed = 0; seed < 60; ++seed) {
+    std::mt19937_64 g(static_cast<uint64_t>(seed) * 104'729 + 3);
+    Case c = random_case(g, kN);
+    std::vector<size_t> motions;
+    for (size_t i = 0; i < c.reqs.size(); ++i)
+      if (c.reqs[i].kind == 0) motions.push_back(i);
+    if (motions.empty()) {
+      Req q{};
+      q.t = std::uniform_int_distribution<Cycle>(0, kN / 2)(g);
+      q.ramp = std::uniform_int_distribution<uint32_t>(1u << 24, 0xffffffffu)(g);
+      c.reqs.push_back(q);
+      motions.push_back(c.reqs.size() - 1);
+    }
+    const int n = std::uniform_int_distribution<int>(1, 3)(g);
+    for (int i = 0; i < n; ++i) {
+      Req& q = c.reqs[motions[std::uniform_int_distribution<size_t>(0, motions.size() - 1)(g)]];
+      q.cancel = true;
+      q.resume = false;
+      q.hold = std::uniform_int_distribution<int>(0, 3)(g) == 0;  // HOLD with CANCEL is allowed
+      // a resume soon after it (often while the cancel is in progress: ignored)
+      Req r{};
+      r.t = q.t + std::uniform_int_distribution<Cycle>(1, 3000)(g);
+      r.kind = std::uniform_int_distribution<int>(0, 1)(g) == 0 ? 0 : 2;
+      r.resume = true;
+      r.ramp = q.ramp;
+      c.reqs.push_back(r);
+    }
+    const Reference ref(c.reqs, c.phase, c.log2k, c.ramp0, kN);
+    FeedRate f(c.phase, c.log2k, c.ramp0);
+    for (const Req& q : c.reqs) send(f, q);
+    std::vector<Req> cancels;
+    for (const Req& q : c.reqs)
+      if (q.kind == 0 && q.cancel) cancels.push_back(q);
+    std::stable_sort(cancels.begin(), cancels.end(),
+                     [](const Req& a, const Req& b) { return a.t < b.t; });
+    std::vector<Cycle> got;
+    Cycle last = -1;
+    for (const Req& q : cancels) {
+      if (q.t <= last) continue;  // within the cancel in progress: the same flush
+      const Cycle fc = f.first_stop(q.t, kN - q.t);
+      if (fc == FeedRate::kNever || fc >= kN) break;
+      got.push_back(fc);
+      f.flush(fc + 1);
+      last = fc;
+    }
+    // only the flushes within the reference's clocks (a later one needs no answer here)
+    std::vector<Cycle> want = ref.flushes;
+    ASSERT_EQ(got, want) << "flush clocks, seed " << seed;
+    flushes += static_cast<int>(want.size());
+    for (const Req& q : c.reqs)
+      if (q.resume && q.t < kN && ref.hold[static_cast<size_t>(q.t)] != 0) ++ignored_resumes;
+    compare(f, ref, kN, g, "with CANCELs", seed);
+  }
+  // not vacuous: flushes happened, and resumes came while a cancel was in progress
+  EXPECT_GT(flushes, 30);
+  EXPECT_GT(ignored_resumes, 5);
+  std::printf("60 cases: %d flushes, %d resumes with the hold still set after them\n", flushes,
+              ignored_resumes);
 }
 
 TEST(FeedRate, NoRequestIsFullRate) {

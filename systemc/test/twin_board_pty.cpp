@@ -27,7 +27,10 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <string>
+#include <thread>
+#include <tuple>
 
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/serial_link.h"
@@ -208,6 +211,344 @@ TEST(TwinBoardPty, PyserialClientGetsTheAck) {
   EXPECT_EQ(n[0], 320);  // the example's X +320, Y -160 steps (docs/protocol.md, "v1")
   EXPECT_EQ(n[1], -160);
   EXPECT_EQ(board.stats().moves_done, 1u);
+}
+
+// ---- MOTION through the pty at given board clocks ----
+// A host that writes either when the board is idle for the host (as the lockstep host) or at a
+// given board clock while the board is busy: the twin board stops at the host's deadline
+// (set_host_deadline) and the Verilated board is run in this thread (not started) up to that
+// clock, so the bytes start on the next clock on both, whatever the wall time.
+class ClockedHost {
+ public:
+  virtual ~ClockedHost() = default;
+  virtual void write(const std::vector<uint8_t>& b) = 0;
+  // Runs the board to clock `c` (busy all the way); returns the clock reached.
+  virtual uint64_t run_to(uint64_t c) = 0;
+  // Runs the board until it is idle for the host (every answer read).
+  virtual void run_idle() = 0;
+  virtual uint64_t cycle() const = 0;
+  virtual uint64_t press(sb::Button b) = 0;
+  std::vector<uint8_t> received;
+};
+
+class TwinHost : public ClockedHost {
+ public:
+  explicit TwinHost(tw::TwinBoard& b) : b_(b) {
+    b_.start();
+    lk_ = std::make_unique<fpgacnc::link::SerialLink>(b_.path(), b_.options().baud);
+  }
+  void write(const std::vector<uint8_t>& b) override {
+    lk_->write(b);
+    written_ += b.size();
+  }
+  uint64_t run_to(uint64_t c) override {
+    b_.set_host_deadline(static_cast<int64_t>(c));
+    // Liveness only (the verdict counts board clocks).
+    const auto give_up = std::chrono::steady_clock::now() + 60s;
+    while (std::chrono::steady_clock::now() < give_up) {
+      read();
+      if (b_.cycle() >= c) break;
+      if (b_.stats().bytes_in >= written_ && b_.idle_for_host()) break;  // quiet before c
+      std::this_thread::sleep_for(50us);
+    }
+    return b_.cycle();
+  }
+  void run_idle() override {
+    b_.set_host_deadline(-1);  // no timer: a board held at one goes on
+    const auto give_up = std::chrono::steady_clock::now() + 60s;
+    while (std::chrono::steady_clock::now() < give_up) {
+      read();
+      if (b_.stats().bytes_in >= written_ && b_.idle_for_host() &&
+          received.size() >= b_.stats().bytes_out)
+        return;
+      std::this_thread::sleep_for(50us);
+    }
+    ADD_FAILURE() << "twin board not idle after 60 s";
+  }
+  uint64_t cycle() const override { return b_.cycle(); }
+  uint64_t press(sb::Button b) override { return b_.press_button(b); }
+
+ private:
+  void read() {
+    while (const auto b = lk_->read_byte(std::chrono::milliseconds(0))) received.push_back(*b);
+  }
+  tw::TwinBoard& b_;
+  std::unique_ptr<fpgacnc::link::SerialLink> lk_;
+  uint64_t written_ = 0;
+};
+
+class RtlHost : public ClockedHost {
+ public:
+  explicit RtlHost(sb::SimBoard& b) : b_(b) {
+    lk_ = std::make_unique<fpgacnc::link::SerialLink>(b_.path(), b_.options().baud);
+  }
+  void write(const std::vector<uint8_t>& b) override { lk_->write(b); }
+  uint64_t run_to(uint64_t c) override {
+    if (c > b_.cycle()) b_.run_cycles_until_quiet(c - b_.cycle());
+    read(false);
+    return b_.cycle();
+  }
+  void run_idle() override {
+    b_.run_cycles_until_quiet(uint64_t{1} << 40);
+    read(true);
+  }
+  uint64_t cycle() const override { return b_.cycle(); }
+  uint64_t press(sb::Button b) override { return b_.press_button(b); }
+
+ private:
+  void read(bool all) {
+    const uint64_t out = b_.bytes_to_host();
+    while (received.size() < out) {
+      const auto b = lk_->read_byte(all ? std::chrono::milliseconds(2000) : 0ms);
+      if (!b) break;
+      received.push_back(*b);
+    }
+  }
+  sb::SimBoard& b_;
+  std::unique_ptr<fpgacnc::link::SerialLink> lk_;
+};
+
+// The session (both boards): HELLO; three LINE frames (X 2000 steps in 1 M clocks, X back 1500
+// in 600 k, Y 800 in 400 k; code 1 without power: the feed rate), then at fixed clocks after
+// they were written: a HOLD (ramp 1/40 of 100 % per 256 clocks) during the first, a STATUS_QUERY
+// while held, a RESUME, a 50 % feed rate, a STATUS_QUERY, a CANCEL (back to 100 %) with the
+// first LINE still running and the others queued; when idle a new LINE (X -300, Y -200), then a
+// STATUS_QUERY. Returns the clock the first LINE frames were written at (0 on a failure).
+uint64_t motion_session(ClockedHost& h) {
+  namespace v2 = tw::v2;
+  h.write(v2::frame(0, v2::kHello));
+  h.run_idle();
+  v2::FrameParser parser;
+  uint8_t seq = 0;
+  bool ident = false;
+  for (uint8_t b : h.received)
+    if (const auto f = parser.feed(b); f && f->type == v2::kIdent) {
+      seq = f->u8(16);
+      ident = true;
+    }
+  EXPECT_TRUE(ident) << "no IDENT";
+  const uint64_t c0 = h.cycle();
+  std::vector<uint8_t> lines;
+  for (const auto& [t, x, y] : {std::tuple<uint32_t, int32_t, int32_t>{1'000'000, 2000, 0},
+                                {600'000, -1500, 300},
+                                {400'000, 0, 800}}) {
+    const std::array<int32_t, 4> steps{x, y, 0, 0};
+    const auto f = v2::frame(seq++, v2::kLine, v2::line_payload(1, 0, t, steps, false));
+    lines.insert(lines.end(), f.begin(), f.end());
+  }
+  h.write(lines);
+  const uint32_t ramp = static_cast<uint32_t>((uint64_t{1} << 32) / 40);
+  auto motion = [&](uint8_t flags, uint16_t rate) {
+    return v2::frame(0, fpgacnc::spec::kTypeMotion, v2::motion_payload(flags, rate, rate, ramp));
+  };
+  const std::vector<std::pair<uint64_t, std::vector<uint8_t>>> timed{
+      {400'000, motion(static_cast<uint8_t>(fpgacnc::spec::kMotionHold), 0x8000)},
+      {600'000, v2::frame(0, v2::kStatusQuery)},
+      {900'000, motion(static_cast<uint8_t>(fpgacnc::spec::kMotionResume), 0x8000)},
+      {1'100'000, motion(0, 0x4000)},
+      {1'300'000, v2::frame(0, v2::kStatusQuery)},
+      {1'500'000, motion(static_cast<uint8_t>(fpgacnc::spec::kMotionCancel), 0x8000)},
+  };
+  for (const auto& [dt, bytes] : timed) {
+    const uint64_t at = c0 + dt;
+    const uint64_t got = h.run_to(at);
+    EXPECT_EQ(got, at) << "the board was not busy at clock " << at;
+    if (got != at) return 0;
+    h.write(bytes);
+  }
+  h.run_idle();
+  // after the CANCEL: a new move from where the machine stopped
+  const std::array<int32_t, 4> back{-300, -200, 0, 0};
+  h.write(v2::frame(seq++, v2::kLine, v2::line_payload(1, 0, 150'000, back, false)));
+  h.run_idle();
+  h.write(v2::frame(0, v2::kStatusQuery));
+  h.run_idle();
+  return c0;
+}
+
+// Runs `session` on the twin board and on the Verilated board and compares them: the STEP/DIR
+// edges identical; every answer byte starting on the same clock; the device frames identical but
+// for the heater block of STATUS (the Verilated core samples its heaters every
+// kSimboardSampleClks, the twins model cnc_core's SAMPLE_CLKS of one second: their first sample
+// comes later).
+struct BothRuns {
+  tw::LockstepRun rtl, tlm;
+  uint64_t replays = 0;
+};
+BothRuns run_both(const std::function<uint64_t(ClockedHost&)>& session) {
+  const cfgns::MachineConfig cfg;
+  BothRuns r;
+  tw::LockstepRun &a = r.rtl, &b = r.tlm;
+  sb::BoardOptions ro = sb::SimBoard::options_from_config(cfg);
+  ro.record_tx = true;
+  sb::SimBoard rtl(ro);
+  tw::TwinBoardOptions to = tw::TwinBoard::options_from_config(cfg);
+  to.record_tx = true;
+  // The board does not pass the end of the bytes written at a timer until 50 ms after the write:
+  // time for this thread to name its next timer first, also on a loaded machine.
+  to.host_grace = std::chrono::milliseconds(50);
+  tw::TwinBoard tlm(to);
+  {
+    TwinHost h(tlm);
+    b.model = "tlm";
+    EXPECT_NE(session(h), 0u);
+    b.received = h.received;
+  }
+  tlm.stop();
+  EXPECT_EQ(tlm.error(), "");
+  b.edges = tlm.edges();
+  b.stats = tlm.stats();
+  r.replays = tlm.replays();
+  {
+    RtlHost h(rtl);
+    a.model = "rtl";
+    EXPECT_NE(session(h), 0u);
+    a.received = h.received;
+  }
+  a.edges = rtl.edges();
+  a.stats = rtl.stats();
+  auto pins = [](const std::vector<models::Edge>& e) {
+    std::vector<std::tuple<uint64_t, int, int>> v;
+    for (const auto& x : e)
+      if (x.signal != models::kTx) v.emplace_back(x.cycle, x.signal, x.value);
+    return v;
+  };
+  auto starts = [&](const std::vector<models::Edge>& e) {
+    std::vector<uint64_t> v;
+    for (const auto& [c, byte] :
+         tw::tx_bytes_from_edges(e, static_cast<double>(cfg.clk_hz), cfg.baud))
+      v.push_back(c);
+    return v;
+  };
+  auto frames = [](const std::vector<uint8_t>& rx) {
+    std::vector<std::pair<uint8_t, std::vector<uint8_t>>> v;
+    tw::v2::FrameParser fp;
+    constexpr size_t kHeat = 30 + 4 * models::kBoardAxes;  // the heater block's first byte
+    for (uint8_t x : rx)
+      if (auto f = fp.feed(x)) {
+        if (f->type == tw::v2::kStatus && f->payload.size() > kHeat)
+          std::fill(f->payload.begin() + kHeat, f->payload.end(), uint8_t{0});
+        v.emplace_back(f->type, f->payload);
+      }
+    return v;
+  };
+  EXPECT_TRUE(pins(a.edges) == pins(b.edges)) << "STEP/DIR edges differ";
+  EXPECT_TRUE(starts(a.edges) == starts(b.edges)) << "answer byte clocks differ";
+  EXPECT_EQ(a.received.size(), b.received.size());
+  const auto fa = frames(a.received), fb = frames(b.received);
+  EXPECT_EQ(fa.size(), fb.size());
+  for (size_t k = 0; k < std::min(fa.size(), fb.size()); ++k) {
+    EXPECT_EQ(fa[k].first, fb[k].first) << "device frame #" << k;
+    EXPECT_EQ(fa[k].second, fb[k].second) << "device frame #" << k;
+  }
+  EXPECT_EQ(a.stats.cycles, b.stats.cycles);
+  return r;
+}
+
+// The STATUS frames the host received, in order.
+std::vector<std::vector<uint8_t>> statuses(const std::vector<uint8_t>& rx) {
+  std::vector<std::vector<uint8_t>> v;
+  tw::v2::FrameParser parser;
+  for (uint8_t x : rx)
+    if (const auto f = parser.feed(x); f && f->type == tw::v2::kStatus) v.push_back(f->payload);
+  return v;
+}
+
+// The session above on the twin board and on the Verilated board (run_both).
+TEST(TwinBoardPty, MotionAtBoardClocksSameAsVerilatedBoard) {
+  const auto r = run_both(motion_session);
+  const tw::LockstepRun &a = r.rtl, &b = r.tlm;
+  // Not vacuous: the hold stopped the board (a STATUS with HOLD and STOPPED); the CANCEL came
+  // with the first LINE still running (held, then at 50 %) and dropped it and the two queued:
+  // X short of the first's 2000 steps, no Y but the new move's; no fault, the hold over, not
+  // busy (the last STATUS); one move done (the one after the CANCEL); the twin board replayed
+  // its session at each MOTION frame.
+  const auto n = models::net_steps(a.edges);
+  EXPECT_GT(n[0], 0);
+  EXPECT_LT(n[0], 2000 - 300);
+  EXPECT_EQ(n[1], -200) << "the third LINE (Y 800) was dropped";
+  const auto st = statuses(a.received);
+  int held = 0;
+  for (const auto& f : st) {
+    const uint8_t want = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
+    if ((f.at(0) & want) == want) ++held;
+  }
+  EXPECT_GE(st.size(), 5u);
+  EXPECT_GE(held, 1) << "no STATUS with HOLD and STOPPED";
+  ASSERT_FALSE(st.empty());
+  const std::vector<uint8_t>& last = st.back();
+  ASSERT_GE(last.size(), 30u);
+  EXPECT_EQ(last[0] & (fpgacnc::spec::kStateBusy | fpgacnc::spec::kStateHold |
+                       fpgacnc::spec::kStateFault),
+            0)
+      << "busy, held or a fault after the CANCEL and the new move";
+  EXPECT_EQ(r.replays, 4u);
+  EXPECT_EQ(a.stats.moves_done, 1u);
+  EXPECT_EQ(b.stats.moves_done, 1u);
+  std::printf("%zu answer bytes, %zu edges, %llu cycles; %llu replays\n", a.received.size(),
+              a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
+              static_cast<unsigned long long>(r.replays));
+}
+
+// The buttons at board clocks: HELLO, a MOTION setting a short hold ramp, a LINE (X 3000 steps
+// in 1.5 M clocks); the feed hold button
+// pressed 300 000 clocks after it was written, a STATUS_QUERY 800 000 clocks after it, the
+// cycle-start button at 1 000 000; when idle a STATUS_QUERY. Both boards press for
+// SimBoard::kButtonPressClks from the next edge.
+uint64_t button_session(ClockedHost& h) {
+  namespace v2 = tw::v2;
+  h.write(v2::frame(0, v2::kHello));
+  h.run_idle();
+  v2::FrameParser parser;
+  uint8_t seq = 0;
+  for (uint8_t b : h.received)
+    if (const auto f = parser.feed(b); f && f->type == v2::kIdent) seq = f->u8(16);
+  // the ramp of a hold: 1/40 of 100 % per 256 clocks (the default takes 0.1 s)
+  h.write(v2::frame(
+      0, fpgacnc::spec::kTypeMotion,
+      v2::motion_payload(0, 0x8000, 0x8000, static_cast<uint32_t>((uint64_t{1} << 32) / 40))));
+  h.run_idle();
+  const uint64_t c0 = h.cycle();
+  const std::array<int32_t, 4> steps{3000, 0, 0, 0};
+  h.write(v2::frame(seq, v2::kLine, v2::line_payload(1, 0, 1'500'000, steps, false)));
+  for (const auto& [dt, what] :
+       {std::pair<uint64_t, int>{300'000, 0}, {800'000, 2}, {1'000'000, 1}}) {
+    const uint64_t at = c0 + dt;
+    const uint64_t got = h.run_to(at);
+    EXPECT_EQ(got, at) << "the board was not busy at clock " << at;
+    if (got != at) return 0;
+    if (what == 2) {
+      h.write(v2::frame(0, v2::kStatusQuery));
+    } else {
+      EXPECT_EQ(h.press(what == 0 ? sb::Button::kHold : sb::Button::kStart), at + 1);
+    }
+  }
+  h.run_idle();
+  h.write(v2::frame(0, v2::kStatusQuery));
+  h.run_idle();
+  return c0;
+}
+
+// The feed hold and cycle-start buttons of the twin board against the Verilated board's: identical
+// edges and answers (run_both); the hold stopped the move (a STATUS with HOLD and STOPPED), the
+// cycle start resumed it (the move done, X at 3000, HOLD clear at the end), and the board took
+// longer than the move's 1.5 M clocks.
+TEST(TwinBoardPty, ButtonsAtBoardClocksSameAsVerilatedBoard) {
+  const auto r = run_both(button_session);
+  const tw::LockstepRun& a = r.rtl;
+  EXPECT_EQ(models::net_steps(a.edges)[0], 3000);
+  EXPECT_EQ(a.stats.moves_done, 1u);
+  EXPECT_EQ(r.tlm.stats.moves_done, 1u);
+  const auto st = statuses(a.received);
+  ASSERT_EQ(st.size(), 3u);  // the MOTION's, the two STATUS_QUERYs'
+  const uint8_t both = fpgacnc::spec::kStateHold | fpgacnc::spec::kStateStopped;
+  EXPECT_EQ(st[1].at(0) & both, both) << "not held at rest 500 000 clocks after the press";
+  EXPECT_EQ(st[2].at(0) & (both | fpgacnc::spec::kStateBusy), 0);
+  EXPECT_GT(a.stats.cycles, 1'500'000u + 500'000u) << "held for about 600 000 clocks";
+  EXPECT_EQ(r.replays, 3u);  // the MOTION, the two presses
+  std::printf("%zu answer bytes, %zu edges, %llu cycles; %llu replays\n", a.received.size(),
+              a.edges.size(), static_cast<unsigned long long>(a.stats.cycles),
+              static_cast<unsigned long long>(r.replays));
 }
 
 }  // namespace

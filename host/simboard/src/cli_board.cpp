@@ -213,8 +213,7 @@ constexpr const char* kCommands =
 
 std::string press(Board& board, Button b) {
   const uint64_t edge = board.press_button(b);
-  const auto* sb = dynamic_cast<const SimBoard*>(&board);
-  const uint64_t len = sb ? SimBoard::kButtonPressClks : 0;
+  const uint64_t len = SimBoard::kButtonPressClks;  // the twin board presses as long
   return fmt::format("ok {} pressed from clock edge {} for {} clocks (released at edge {})",
                      button_name(b), edge, len, edge + len);
 }
@@ -222,7 +221,7 @@ std::string press(Board& board, Button b) {
 std::string board_state(const Board& board) {
   const auto* sb = dynamic_cast<const SimBoard*>(&board);
   if (!sb) {
-    return fmt::format("ok model={} cycle={} (no e-stop, buttons or limit switches are modelled)",
+    return fmt::format("ok model={} cycle={} (no e-stop or limit switches are modelled)",
                        board.model(), board.cycle());
   }
   const BoardPins p = sb->pins();

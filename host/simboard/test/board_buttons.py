@@ -20,7 +20,8 @@ Checks:
   4. `estop on` / `estop off` show in STATUS (state bit 3); `limit x max on` shows in `state`,
      first at the pin and then, after the filter, in the core's filtered level.
   5. SIGTERM stops the board with status 0 and the socket file is gone.
-  6. On the twin board (--model tlm) `hold` is an error naming it and --model rtl.
+  6. On the twin board (--model tlm) `hold` presses its button (answered ok with the press's
+     edge and length); `estop on` is an error naming the twin board and --model rtl.
 Every wait is for an answer, a printed line or the board's clock; the wall-clock limits only end
 a hung run.
 """
@@ -230,7 +231,7 @@ def main():
         check(board.returncode == 0, "the board exits with status 0 on SIGTERM")
         check(not os.path.exists(sock_path), "the control socket is removed at exit")
 
-        # 6. The twin board has no buttons: a clear error, nothing pressed.
+        # 6. The twin board has the buttons but no e-stop input: a clear error.
         tb = subprocess.Popen([sys.argv[1], "board", "--model", "tlm", "--control", sock_path],
                               stdin=subprocess.DEVNULL, stdout=subprocess.PIPE)
         try:
@@ -240,8 +241,11 @@ def main():
                     raise Failed("the twin board exited before printing its control socket")
             ctl = Control(sock_path)
             a = ctl.ask("hold")
-            check(a.startswith("error: hold: ") and "twin board" in a and "--model rtl" in a,
-                  "tlm: hold is answered by an error naming the twin board and --model rtl")
+            check(re.match(r"^ok hold pressed from clock edge \d+ for 200000 clocks", a)
+                  is not None, f"tlm: hold presses the button ({a!r})")
+            a = ctl.ask("estop on")
+            check(a.startswith("error: estop: ") and "twin board" in a and "--model rtl" in a,
+                  "tlm: estop is answered by an error naming the twin board and --model rtl")
             check(ctl.state().get("model") == "tlm", "tlm: state answers")
             ctl.close()
         finally:

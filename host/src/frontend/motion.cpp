@@ -33,16 +33,12 @@ void push_config_axes(link::V2Session& session, const v2::Ident& ident,
 void sync_to(const plan::Steps4& steps, const config::MachineConfig& cfg, gcode::Dialect dialect,
              gcode::Params& params, gcode::Interpreter& interp, plan::Planner& planner,
              const std::vector<std::string>& lines) {
-  std::string sync = "G53 G0";
-  bool moved = false;
+  std::string sync = "G21 G90 G53 G0";
   for (size_t a = 0; a < 3; ++a) {
-    if (steps[a] == 0) continue;
     sync += fmt::format(" {}{:.9f}", config::kAxisNames[a],
                         static_cast<double>(steps[a]) / cfg.steps_per_mm[a]);
-    moved = true;
   }
-  std::vector<std::string> all;
-  if (moved) all.push_back(sync);
+  std::vector<std::string> all{sync};
   all.insert(all.end(), lines.begin(), lines.end());
   const auto& syntax = gcode::dialect_rules(dialect).syntax;
   for (const auto& line : all) {

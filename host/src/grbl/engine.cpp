@@ -231,9 +231,10 @@ void Engine::receive(std::string_view bytes) {
         realtime_.push_back(ch);
         break;
       default:
-        // 0x80..0xFF: overrides (0x90..0x9D); safety door, jog cancel, coolant toggles ignored.
+        // 0x80..0xFF: jog cancel (0x85), overrides (0x90..0x9D); safety door and coolant toggles
+        // ignored.
         if (c >= 0x80) {
-          if (c >= 0x90 && c <= 0x9D) realtime_.push_back(ch);
+          if (c == 0x85 || (c >= 0x90 && c <= 0x9D)) realtime_.push_back(ch);
           break;
         }
         rx_.push_back(ch);
@@ -268,6 +269,10 @@ void Engine::realtime(unsigned char c) {
       send_motion(false, true);
       ++stats_.resumes;
     }
+    return;
+  }
+  if (c == 0x85 || (c == '!' && jog_)) {  // jog cancel; grbl's feed hold cancels a jog too
+    if (jog_ && !jog_cancel_) start_jog_cancel();
     return;
   }
   if (c == '!') {
@@ -346,6 +351,7 @@ State Engine::state() const {
   if (sleep_) return State::kSleep;
   if (alarm_) return State::kAlarm;
   if (check_) return State::kCheck;
+  if (jog_cancel_ || (jog_ && motion_pending())) return State::kJog;
   if (board_held()) {
     // Hold:0 once the board reports the hold complete (HOLD and STOPPED), Hold:1 before.
     const uint8_t b = session_->last_status().state;
@@ -357,7 +363,7 @@ State Engine::state() const {
 }
 
 bool Engine::busy() const {
-  return motion_pending() || report_pending_ || resetting_ || pause_pending_ ||
+  return motion_pending() || report_pending_ || resetting_ || pause_pending_ || jog_cancel_ ||
          (line_ready() && can_take_line());
 }
 
@@ -374,7 +380,7 @@ bool Engine::line_ready() const {
 }
 
 bool Engine::can_take_line() const {
-  return !resetting_ && !critical_ && !held_ && !pause_pending_ && !limit_alarm_ &&
+  return !resetting_ && !jog_cancel_ && !critical_ && !held_ && !pause_pending_ && !limit_alarm_ &&
          session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
 }
 
@@ -384,6 +390,7 @@ void Engine::step(milliseconds wait) {
   }
   realtime_.clear();
   if (resetting_) continue_reset();
+  if (jog_cancel_ && !resetting_) continue_jog_cancel();
   if (!resetting_) {
     while (line_ready() && can_take_line()) take_line();
     // Flush rule (file comment of engine.h).
@@ -402,7 +409,7 @@ void Engine::step(milliseconds wait) {
       session_->request_status();
     }
   }
-  const bool waiting = motion_pending() || report_asked_ || resetting_;
+  const bool waiting = motion_pending() || report_asked_ || resetting_ || jog_cancel_;
   try {
     session_->poll(waiting ? wait : milliseconds(0));
   } catch (const link::Error&) {
@@ -411,6 +418,10 @@ void Engine::step(milliseconds wait) {
   if (report_asked_ && session_->status_answers() >= report_answers_) {
     write_report();
     report_pending_ = report_asked_ = false;
+  }
+  if (jog_ && !jog_cancel_ && !motion_pending()) {  // the jogs have run: the parser follows
+    jog_ = false;
+    resync_parser(planner_->position());
   }
   if (pause_pending_ && session_->complete()) {
     pause_pending_ = false;
@@ -444,8 +455,8 @@ void Engine::process_line(const std::string& raw) {
       rc = 0;
       reset_after = true;
     }
-  } else if (alarm_ || sleep_) {
-    rc = 9;
+  } else if (alarm_ || sleep_ || jog_ || jog_cancel_) {
+    rc = 9;  // grbl: G-code is locked out in Alarm, Sleep and Jog
   } else if (!std::isalpha(static_cast<unsigned char>(cmd[0]))) {
     rc = 1;  // a value without its letter
   } else {
@@ -633,7 +644,8 @@ void Engine::write_report() {
                      rx_.size() >= kRxBuffer ? 0 : kRxBuffer - rx_.size());
   }
   double feed = 0.0, s = 0.0;
-  if (st == State::kRun && !fifo_info_.empty()) std::tie(feed, s) = fifo_info_.front();
+  if ((st == State::kRun || st == State::kJog) && !fifo_info_.empty())
+    std::tie(feed, s) = fifo_info_.front();
   r += fmt::format("|FS:{:.0f},{:.0f}", feed / div, s);
   // Pn: the limit pins asserted now (grbl 1.1: X, Y, Z letters; omitted when none).
   // (STATUS reports only the switches the board wires.)
@@ -746,8 +758,8 @@ int Engine::system_command(const std::string& cmd) {
     }
     return 0;
   }
-  if (cmd == "$H") return 5;               // homing is not enabled ($22 = 0; no limit inputs yet)
-  if (cmd.rfind("$J=", 0) == 0) return 3;  // jogging needs jog cancel in hardware
+  if (cmd == "$H") return 5;  // homing is not enabled ($22 = 0; no limit inputs yet)
+  if (cmd.rfind("$J", 0) == 0) return jog_line(cmd);
   if (cmd == "$SLP") {
     if (int rc = need_idle()) return rc;
     sleep_ = true;
@@ -866,6 +878,7 @@ void Engine::soft_reset() {
     }
   }
   hold_ = false;
+  jog_ = jog_cancel_ = false;  // a jog cancel's CANCEL, if any, was sent: the reset waits as well
   // grbl restores the overrides at a reset (the next session's MOTION carries them).
   if (ov_ != Overrides{}) ov_report_ = true;
   ov_ = Overrides{};
@@ -878,6 +891,112 @@ void Engine::soft_reset() {
   resetting_ = true;
   reset_asked_ = false;
   continue_reset();
+}
+
+int Engine::jog_line(const std::string& cmd) {
+  if (cmd.size() < 3 || cmd[2] != '=') return 3;
+  const State st = state();
+  if (st != State::kIdle && st != State::kJog) return 8;
+  if (!motion_ok_) return 3;  // no jog cancel on a board without the motion rate
+  std::optional<double> target[3], feed;
+  bool inches = modal_.units == "G20", incremental = modal_.distance == "G91", machine = false;
+  try {
+    const auto& syntax = gcode::dialect_rules(gcode::Dialect::kGrbl).syntax;
+    gcode::Reader reader("grbl", cmd.substr(3), syntax, *params_);
+    gcode::Block b;
+    std::string seen;
+    while (reader.next(b)) {
+      if (b.kind != gcode::BlockKind::kWords) return 16;
+      for (int i = 0; i < b.count; ++i) {
+        const auto& w = b.words[static_cast<size_t>(i)];
+        if (w.letter != 'G' && seen.find(w.letter) != std::string::npos) return 25;
+        seen += w.letter;
+        switch (w.letter) {
+          case 'G':
+            if (w.value == 20 || w.value == 21) {
+              inches = w.value == 20;
+            } else if (w.value == 90 || w.value == 91) {
+              incremental = w.value == 91;
+            } else if (w.value == 53) {
+              machine = true;
+            } else {
+              return 16;  // only units, distance mode and G53 may come with a jog
+            }
+            break;
+          case 'X':
+          case 'Y':
+          case 'Z':
+            target[w.letter - 'X'] = w.value;
+            break;
+          case 'F':
+            feed = w.value;
+            break;
+          case 'N':
+            break;
+          default:
+            return 16;
+        }
+      }
+    }
+  } catch (const gcode::Error& e) {
+    return error_code(e.message());
+  }
+  if (!feed || *feed <= 0.0) return 22;  // a jog carries its own feed rate
+  if (!target[0] && !target[1] && !target[2]) return 16;
+  if (check_) return 0;  // check mode: parsed, nothing moves
+  const double unit = inches ? 25.4 : 1.0;
+  const auto off = wco();
+  gcode::Move m;
+  m.motion = gcode::Motion::kLinear;
+  for (size_t a = 0; a < 4; ++a)
+    m.start[a] = static_cast<double>(planner_->position()[a]) / cfg_.steps_per_mm[a];
+  m.end = m.start;
+  for (size_t a = 0; a < 3; ++a) {
+    if (!target[a]) continue;
+    const double v = *target[a] * unit;
+    m.end[a] = incremental ? m.start[a] + v : machine ? v : v + off[a];
+  }
+  m.feed_mm_min = *feed * unit;
+  m.spindle_on = false;  // a jog never fires the laser or turns the spindle
+  try {
+    planner_->add(m);
+  } catch (const plan::TravelError&) {
+    planner_->take_items();
+    return 15;  // grbl: the jog target exceeds the machine travel; nothing moves
+  }
+  push_items(planner_->take_items());
+  jog_ = true;
+  return 0;
+}
+
+void Engine::start_jog_cancel() {
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  stats_.aborted += session_->abandon();
+  send_motion(false, false, true);  // CANCEL: decelerate with the hold ramp, drop the queue
+  jog_ = false;
+  jog_cancel_ = true;
+  jog_answers_ = session_->status_answers();
+}
+
+void Engine::continue_jog_cancel() {
+  if (!session_->settled() || session_->motion_pending()) return;
+  // At rest and flushed: a STATUS newer than the CANCEL's answer shows neither BUSY nor HOLD.
+  session_->request_status();
+  if (session_->status_answers() == jog_answers_) return;
+  jog_answers_ = session_->status_answers();
+  if (session_->last_status().state & (v2::kStateBusy | v2::kStateHold)) return;
+  jog_cancel_ = false;
+  new_session();
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  resync_parser(pos);
+}
+
+void Engine::resync_parser(const plan::Steps4& steps) {
+  std::vector<std::string> lines{modal_.units + " " + modal_.distance};
+  if (modal_.motion == "G1") lines.push_back("G1");  // sync_to leaves G0 in force
+  frontend::sync_to(steps, cfg_, gcode::Dialect::kGrbl, *params_, *interp_, *planner_, lines);
 }
 
 void Engine::continue_reset() {

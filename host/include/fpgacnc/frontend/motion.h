@@ -25,7 +25,8 @@ void push_config_axes(link::V2Session& session, const protocol::v2::Ident& ident
 
 // Runs `lines` (G-code of `dialect`) through the interpreter and the planner and drops what the
 // planner made of them: the machine is there already. First the parser and planner are moved to
-// `steps` (a G53 G0 to the machine position), as grbl's gc_sync_position.
+// `steps` (G21 G90 G53 G0 to the machine position, as grbl's gc_sync_position: the parser is
+// left in G21, G90 and G0; `lines` restore other modes).
 void sync_to(const plan::Steps4& steps, const config::MachineConfig& cfg, gcode::Dialect dialect,
              gcode::Params& params, gcode::Interpreter& interp, plan::Planner& planner,
              const std::vector<std::string>& lines = {});

@@ -27,6 +27,11 @@
 // without MOTION (NAK UNKNOWN_TYPE) `!` and the feed / rapid overrides are ignored as by a grbl
 // built without them. A soft reset during a hold sends MOTION CANCEL: the board drops its queue
 // at rest, positions kept.
+// Jogging (docs/grbl.md "Jogging"): `$J=` in Idle or Jog, on a board that takes MOTION, plans one
+// straight move (laser off) after the jogs already queued; the state is Jog until they have run.
+// 0x85 (and `!` while jogging) is the jog cancel: MOTION CANCEL (the board decelerates with the
+// hold ramp and drops its queue at rest), then a new session from the board's STATUS, the parser
+// and planner moved to where the machine stopped with their modal state kept; Idle again.
 #pragma once
 
 #include <array>
@@ -160,6 +165,13 @@ class Engine {
   bool board_held() const;  // a hold in effect: ours ('!') or the board's (its hold pin)
   void soft_reset();
   void continue_reset();
+  // `$J=...`: 0 or grbl's error code (docs/grbl.md "Jogging").
+  int jog_line(const std::string& cmd);
+  void start_jog_cancel();
+  void continue_jog_cancel();
+  // The parser and the planner moved to `steps` (machine position), the parser's units, distance
+  // and G0/G1 motion modes kept.
+  void resync_parser(const plan::Steps4& steps);
   // The session threw: a hard-limit alarm on the board (ALARM:1 while running; quietly while
   // already in alarm) is handled, anything else rethrown.
   void on_session_error();
@@ -203,8 +215,11 @@ class Engine {
   bool held_ = false;           // at rest after M0 until '~'
   bool resetting_ = false;
   bool estop_pressed_ = false;
-  bool motion_ok_ = false;  // the board took MOTION (session start)
-  bool hold_ = false;       // '!' sent MOTION HOLD; '~' ends it
+  bool motion_ok_ = false;   // the board took MOTION (session start)
+  bool hold_ = false;        // '!' sent MOTION HOLD; '~' ends it
+  bool jog_ = false;         // jog motion queued (state Jog while it runs)
+  bool jog_cancel_ = false;  // MOTION CANCEL sent for a jog cancel: waiting for the board at rest
+  size_t jog_answers_ = 0;   // the status answer count the jog cancel waits beyond
   Overrides ov_;
   bool ov_report_ = false;  // Ov in the next report (an override changed)
   std::string realtime_;    // real-time commands received, acted on in step()

@@ -11,8 +11,12 @@
 //
 // Requests (each names the first clock with its new value): motion() (an accepted MOTION frame,
 // on edge L + 2 of its last byte), hold_input() / start_input() (the filtered inputs' rising
-// levels), segment_code() (the executor accepted a segment: its code from the accept edge on). A
-// HOLD and a RESUME in one clock: HOLD wins.
+// levels), segment_code() (the executor accepted a segment: its code from the accept edge on),
+// flush() (the clock after the flush clock of a CANCEL). A HOLD and a RESUME in one clock: HOLD
+// wins. CANCEL: a hold that also sets `cancel`; while cancel is set a resume (frame or input)
+// does not end the hold; a flush clears hold and cancel (a hold or a CANCEL in the same clock
+// sets them again). The flush clock itself, the first clock with cancel and r = 0
+// (first_stop()), is the caller's to find and hand back with flush().
 //
 // The twin keeps the rate as pieces of constant r: one per period while r ramps, one per steady
 // stretch (until the next request that changes the target), so its cost grows with the ramp
@@ -65,13 +69,17 @@ class FeedRate {
   Cycle phase() const { return phase_; }
 
   // ---- requests (clock t: the first clock with the new value) ----
-  void motion(Cycle t, bool hold, bool resume, uint16_t feed, uint16_t rapid, uint32_t ramp) {
+  void motion(Cycle t, bool hold, bool resume, uint16_t feed, uint16_t rapid, uint32_t ramp,
+              bool cancel = false) {
     add(Event{t + phase_,
-              hold     ? kHold
+              cancel   ? kCancel
+              : hold   ? kHold
               : resume ? kResume
                        : uint8_t{0},
               true, feed, rapid, ramp, false});
   }
+  // The flush of a CANCEL in clock t - 1: hold and cancel clear from clock t.
+  void flush(Cycle t) { add(Event{t + phase_, kFlush, false, 0, 0, 0, false}); }
   void hold_input(Cycle t) { add(Event{t + phase_, kHold, false, 0, 0, 0, false}); }
   void start_input(Cycle t) { add(Event{t + phase_, kResume, false, 0, 0, 0, false}); }
   void segment_code(Cycle t, uint8_t code) {
@@ -113,18 +121,16 @@ class FeedRate {
   }
   // The hold register in clock t.
   bool hold(Cycle t) const {
-    bool h = false;
-    const Cycle u = t + phase_;
-    for (size_t i = 0; i < events_.size() && events_[i].clock <= u;) {
-      const Cycle c = events_[i].clock;
-      bool set = false, clr = false;
-      for (; i < events_.size() && events_[i].clock == c; ++i) {
-        set = set || events_[i].kind == kHold;
-        clr = clr || events_[i].kind == kResume;
-      }
-      h = set || (h && !clr);
-    }
-    return h;
+    Regs r;
+    size_t i = 0;
+    apply_group(r, events_, i, t + phase_);
+    return r.hold;
+  }
+  // The first clock in t .. t + horizon - 1 with r = 0 (kNever: none). Its cost is that of the
+  // pieces up to it: one per ramp period.
+  Cycle first_stop(Cycle t, Cycle horizon = Cycle{1} << 40) {
+    const auto s = stopped(t, t + horizon);
+    return s.empty() ? kNever : std::max(s.front().first, t);
   }
   // The spans [a, b) of clocks with r = 0 that overlap clocks from .. to - 1 (b = kNever: for
   // good), in order.
@@ -153,10 +159,10 @@ class FeedRate {
   size_t pieces() const { return pieces_.size(); }
 
  private:
-  static constexpr uint8_t kHold = 1, kResume = 2, kCode = 3;
+  static constexpr uint8_t kHold = 1, kResume = 2, kCode = 3, kCancel = 4, kFlush = 5;
   struct Event {
     Cycle clock;   // u
-    uint8_t kind;  // 0, kHold, kResume (a MOTION frame may carry one), kCode
+    uint8_t kind;  // 0, kHold, kResume, kCancel (a MOTION frame may carry one), kCode, kFlush
     bool frame;    // a MOTION frame: sets feed, rapid, ramp
     uint16_t feed, rapid;
     uint32_t ramp;
@@ -164,6 +170,7 @@ class FeedRate {
   };
   struct Regs {
     bool hold = false;
+    bool cancel = false;
     uint16_t feed = 0x8000, rapid = 0x8000;
     uint32_t ramp = 0;
     bool code0 = true;  // the code register after rst is 0 (rapid)
@@ -207,7 +214,7 @@ class FeedRate {
   static void apply_group(Regs& r, const std::vector<Event>& ev, size_t& i, Cycle upto) {
     while (i < ev.size() && ev[i].clock <= upto) {
       const Cycle c = ev[i].clock;
-      bool set = false, clr = false;
+      bool set = false, clr = false, cancel = false, flush = false;
       for (; i < ev.size() && ev[i].clock == c; ++i) {
         const Event& e = ev[i];
         if (e.frame) {
@@ -216,10 +223,13 @@ class FeedRate {
           r.ramp = e.ramp;
         }
         if (e.kind == kCode) r.code0 = e.code0;
-        set = set || e.kind == kHold;
-        clr = clr || e.kind == kResume;
+        set = set || e.kind == kHold || e.kind == kCancel;
+        cancel = cancel || e.kind == kCancel;
+        flush = flush || e.kind == kFlush;
+        clr = clr || (e.kind == kResume && !r.cancel);  // cancel in the clock of the request
       }
-      r.hold = set || (r.hold && !clr);
+      r.hold = set || (r.hold && !(clr || flush));
+      r.cancel = cancel || (r.cancel && !flush);
     }
   }
   // The first period boundary b (r's first clock of a period) whose r a change of the target or

@@ -18,8 +18,8 @@
 //   HELLO / STATUS_QUERY (not sequenced): IDENT / STATUS request;
 //   MOTION (not sequenced; BAD_FIELD: flag bits 7:3, RESUME with HOLD or CANCEL, a feed or rapid
 //   rate outside 1..0x8000, ramp 0): STATUS request, and on_motion(L, the request) (the motion
-//   rate takes it on L + 2, feed_rate.h; CANCEL holds there, its drop of the running segment and
-//   the queue is not modelled);
+//   rate takes it on L + 2, feed_rate.h; CANCEL holds there, and its flush at rest is the
+//   virtual board's, virtual_board.h);
 //   sequenced frames by SEQ against next_seq: equal -> accepted (a FIFO frame only with a free
 //   slot, else NAK FIFO_FULL), next_seq + 1, ACK; a duplicate (next_seq - 1 .. - 128) -> ACK
 //   only; ahead -> NAK OUT_OF_ORDER. Accepted: LINE / DWELL / NUMERATORS / LINE_PROFILE / ARC

@@ -123,7 +123,9 @@ inline std::vector<HostPacket> job_packets(const protocol::v1::Job& job, uint64_
 //   is ready, while credit = free - (FIFO frames sent, not acknowledged) > 0 for FIFO frames
 //   and fewer than 127 frames are unacknowledged; a NAK of any reason goes back to its
 //   next_seq (go-back-N); ACK, DONE and NAK carry next_seq and free slots;
-//   when every frame is acknowledged and `segments done` counts every FIFO frame:
+//   when every frame is acknowledged and `segments done` counts every FIFO frame (with a MOTION
+//   CANCEL among the side frames, which drops frames: when every frame is acknowledged; then
+//   the STATUS_QUERY is repeated kRequeryGap clocks after each STATUS that says busy):
 //   STATUS_QUERY (wait for STATUS), then RELEASE (wait for its ACK).
 // A frame with `corrupt` is sent once with a wrong CRC (the device NAKs BAD_CRC); `pre` bytes go
 // out once before it. `side` frames (unsequenced, e.g. MOTION: SEQ 0, no credit needed) go out
@@ -170,7 +172,13 @@ class V2StreamHost : public Host {
     corrupted_.assign(s_.items.size(), false);
     pre_done_.assign(s_.items.size(), false);
     side_done_.assign(s_.items.size(), 0);
-    for (const V2Item& i : s_.items) has_side_ = has_side_ || !i.side.empty();
+    for (const V2Item& i : s_.items) {
+      has_side_ = has_side_ || !i.side.empty();
+      for (const V2Side& f : i.side)
+        if (f.type == spec::kTypeMotion && !f.payload.empty() &&
+            (f.payload[0] & spec::kMotionCancel) != 0)
+          has_cancel_ = true;
+    }
   }
 
   bool done() const override { return phase_ == Phase::Done; }
@@ -190,7 +198,7 @@ class V2StreamHost : public Host {
           return send(v2::frame(0, f.type, f.payload), f.gap, false);
         }
         if (can_send()) return send_item();
-        if (acked_ + 1 == s_.items.size() && done_ == fifo_total_) {
+        if (acked_ + 1 == s_.items.size() && (done_ == fifo_total_ || has_cancel_)) {
           if (s_.status_at_end) {
             phase_ = Phase::Status;
             auto q = send(v2::frame(0, v2::kStatusQuery), 1, true);
@@ -199,6 +207,14 @@ class V2StreamHost : public Host {
           }
           phase_ = Phase::Release;
           return send_item();
+        }
+        break;
+      case Phase::Status:
+        if (requery_) {  // (after a CANCEL) the board still busy: ask again
+          requery_ = false;
+          auto q = send(v2::frame(0, v2::kStatusQuery), kRequeryGap, true);
+          query_last_ = ready_ - sender_.frame();
+          return q;
         }
         break;
       case Phase::Release:
@@ -305,7 +321,11 @@ class V2StreamHost : public Host {
       next_ = acked_;
     } else if (f.type == v2::kStatus && phase_ == Phase::Status && start > query_last_) {
       statuses.push_back(f);
-      phase_ = Phase::Release;
+      if (has_cancel_ && !f.payload.empty() && (f.u8(0) & spec::kStateBusy) != 0 &&
+          ++requeries_ < kMaxRequeries)
+        requery_ = true;
+      else
+        phase_ = Phase::Release;
     } else if (f.type == v2::kStatus && has_side_) {  // a side frame's answer (or several's)
       statuses.push_back(f);
     } else {
@@ -326,6 +346,11 @@ class V2StreamHost : public Host {
   std::vector<bool> corrupted_, pre_done_;
   std::vector<size_t> side_done_;  // side frames sent per item
   bool has_side_ = false;          // the script has side frames
+  bool has_cancel_ = false;        // a MOTION CANCEL among them (frames dropped: no DONE)
+  bool requery_ = false;           // the final STATUS said busy: another STATUS_QUERY
+  uint32_t requeries_ = 0;
+  static constexpr int64_t kRequeryGap = 5000;
+  static constexpr uint32_t kMaxRequeries = 10'000;
   // The start edge of the final STATUS_QUERY's last byte: a STATUS starting by then answers side
   // frames (one decided later answers every request pending then, the query's too).
   Cycle query_last_ = 0;

@@ -35,6 +35,8 @@ struct RunResult {
   // the values of each accepted MOTION frame (L + 2); the segments their requests took effect
   // in, by the executor's kind: LINE (and dwell), PROFILE, ARC, none (idle, between segments).
   int runs = 1;
+  uint64_t flushed =
+      0;  // FIFO entries dropped by a CANCEL's flush (in the FIFO, prepared, running)
   std::vector<Cycle> motion_from;
   std::array<uint64_t, 4> motion_in{};
   double wall_s = 0.0;

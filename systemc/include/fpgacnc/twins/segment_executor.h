@@ -52,7 +52,7 @@
 //   from edge X, the executor idle after X. No segment is accepted on an abort edge, and from IDLE
 //   only from edge last + max(largest DIR setup, 1) + 1 (settle_reg). An offer held through the
 //   abort is accepted then (the block bench); in cnc_core segment_prep drops it (the prep twin
-//   and the virtual board do not model the abort yet).
+//   models that for CANCEL's flush: accept_edge).
 // Target `status` (read): ExecIdle, the edge after which the executor and every pulse are idle.
 // output(H, cmd): an OUTPUT entry handed over on edge H (segment_prep's on_output). It takes effect
 //   on edge max(H, end edge of the last segment accepted), the edge that ends the segment in
@@ -221,6 +221,18 @@ class SegmentExecutorTwin : public sc_core::sc_module {
   }
 
  public:
+  // The edge on which a segment offered from edge `valid` would be accepted (on_segment's rule),
+  // without taking it: segment_prep drops a prepared segment the executor would take on or after
+  // an abort edge (cnc_core).
+  Cycle accept_edge(const Segment& s, Cycle valid) {
+    const bool moves = s.arc || s.prof || s.total != 0;
+    bool change = false;
+    for (int a = 0; a < kAxes && moves; ++a)
+      if (s.steps[a] != 0 && pulse_state(a, valid).dir != s.dir[a]) change = true;
+    const bool on_last_tick = running_ && valid < run_end_;
+    if (on_last_tick && moves && (!change || s.dir_fast)) return run_end_;
+    return on_last_tick ? run_end_ : ready_from(std::max(valid + 1, idle_after_ + 1));
+  }
   void output(Cycle h, const OutputCmd& o) {
     const Cycle e = std::max(h, idle_after_);
     if (pend_n_ > 0 && e != pend_edge_) flush_group();

@@ -8,6 +8,10 @@
 // entries written on edges <= t and not popped on edges <= t (FIFO level / free in ACK and
 // STATUS). Everything is computed when the entry is written: the reader's accept edge is known
 // then (segment_prep answers at once).
+// Flush (`flushes`: the abort edges X of CANCELs, sorted, known before any entry that can reach
+// them): the FIFO is empty after edge X; an entry written on X, or not popped before X (the
+// reader answers X: no pop on an abort edge), is dropped on X (counted as popped there, its end
+// X in `entry_ends`).
 #pragma once
 
 #include <algorithm>
@@ -34,7 +38,11 @@ class SegmentFifoTwin : public sc_core::sc_module {
   void reset() {
     writes_.clear();
     pops_.clear();
+    dropped = 0;
   }
+  const std::vector<Cycle>* flushes = nullptr;
+  std::vector<Cycle>* entry_ends = nullptr;
+  uint64_t dropped = 0;  // entries dropped by a flush while in the FIFO
   uint32_t depth() const { return depth_; }
   uint32_t level_after(Cycle t) const {
     const auto w = std::upper_bound(writes_.begin(), writes_.end(), t) - writes_.begin();
@@ -58,9 +66,18 @@ class SegmentFifoTwin : public sc_core::sc_module {
     Cycle valid = w + kFifoWriteToValid;
     if (!pops_.empty()) valid = std::max(valid, pops_.back() + kFifoPopToValid);
     writes_.push_back(w);
+    if (flushes) {
+      const auto f = std::lower_bound(flushes->begin(), flushes->end(), w);
+      e.flush = f == flushes->end() ? -1 : *f;
+    }
     // The reader answers with its accept (pop) edge; the entry is valid from `valid - 1` so
     // that the reader's "first edge after V" is `valid`.
-    pops_.push_back(transport(out, gp_, clk_, e, valid - 1));
+    const Cycle pop = e.flush == w ? w : transport(out, gp_, clk_, e, valid - 1);
+    pops_.push_back(pop);
+    if (pop == e.flush) {
+      ++dropped;
+      if (entry_ends) entry_ends->push_back(pop);
+    }
   }
 
   const CycleClock& clk_;

@@ -1,5 +1,6 @@
-// Twin of rtl/motion/segment_prep.v: the command FIFO entry becomes a prepared segment (docs/protocol.md
-// "Timing semantics" and "LINE", docs/timing.md "Segment length" and "Queued segments").
+// Twin of rtl/motion/segment_prep.v: the command FIFO entry becomes a prepared segment
+// (docs/protocol.md "Timing semantics" and "LINE", docs/timing.md "Segment length" and "Queued
+// segments").
 //
 // Target `commands`: a FifoEntry valid from the delay's edge V. It is accepted (popped) on the
 // first edge after V on which the block is idle (its previous segment taken by the executor);
@@ -34,6 +35,12 @@
 // dir_fast when every moving axis that reverses has floor(T / n_dom) >= its DIR hold + setup.
 // It is offered on initiator `segments`; the block is idle again from the edge after the
 // executor takes it.
+// Flush (a CANCEL's abort on edge X = FifoEntry::flush): an entry that would be accepted on or
+// after X is not taken (the FIFO drops it: the delay returned names X); a prepared segment the
+// executor would take on or after X (accept_probe) is dropped on X (not offered, its end X in
+// `entry_ends`, the block idle after X); every axis's DIR is unknown for the entries accepted
+// after X (unk_reg); a `clamped` strobe after X is not counted. Not modelled: an OUTPUT entry
+// handed to the executor before X and still pending there (the executor twin keeps it).
 #pragma once
 
 #include <functional>
@@ -83,6 +90,8 @@ class SegmentPrepTwin : public sc_core::sc_module {
 
   void reset() {
     free_from_ = 0;
+    last_flush_ = -1;
+    dropped = 0;
     num_x = num_y = p_.default_numerator;
     last_period = 0;
     last_feed = 0;
@@ -105,20 +114,33 @@ class SegmentPrepTwin : public sc_core::sc_module {
   // OUTPUT entries: the executor's output port (segment_executor s_out_*), called with the edge
   // the entry is handed over on (its accept edge) in entry order.
   std::function<void(Cycle, const OutputCmd&)> on_output;
+  // The executor's accept edge of a segment offered from an edge
+  // (SegmentExecutorTwin::accept_edge).
+  std::function<Cycle(const Segment&, Cycle)> accept_probe;
+  const std::vector<Cycle>* flushes = nullptr;  // abort edges of CANCELs (sorted)
+  uint64_t dropped = 0;                         // prepared segments dropped by a flush
 
  private:
   void b_transport(tlm::tlm_generic_payload& gp, sc_core::sc_time& delay) {
     const FifoEntry c = payload<FifoEntry>(gp);
     Cycle accept = std::max(clk_.at(delay) + 1, free_from_);
+    if (c.kind == kEntryNumerators) {
+      ExecIdle idle{0};
+      transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
+      accept = std::max(accept, idle.edge + 1);
+    }
+    gp.set_response_status(tlm::TLM_OK_RESPONSE);
+    if (c.flush >= 0 && accept >= c.flush) {  // flushed in the FIFO
+      delay = clk_.delay_to(c.flush);
+      return;
+    }
+    if (flush_before(accept)) unknown_.fill(true);
     if (c.kind == kEntryOutput && !c.v2) {
       OutputCmd o{static_cast<uint8_t>(c.t >> 16), static_cast<uint8_t>(c.t >> 8),
                   static_cast<uint8_t>(c.t)};
       if (on_output) on_output(accept, o);
       free_from_ = accept + 1;
     } else if (c.kind == kEntryNumerators) {
-      ExecIdle idle{0};
-      transport(exec_status, gp_, clk_, idle, clk_.at(delay), tlm::TLM_READ_COMMAND);
-      accept = std::max(accept, idle.edge + 1);
       num_x = c.steps[0];
       num_y = c.steps[1];
       free_from_ = accept + 1;
@@ -185,7 +207,7 @@ class SegmentPrepTwin : public sc_core::sc_module {
         s.period = t.period;
         s.v2 = true;
         latency = t.n_dom == 0 ? kPrepLatencyDwell : kPrepLatencyV2;
-        if (t.clamped) {
+        if (t.clamped && (c.flush < 0 || accept + kPrepClampStrobe <= c.flush)) {
           latency += kPrepClampExtra;
           ++clamped;
           clamp_cycles.push_back(accept + kPrepClampStrobe);
@@ -216,18 +238,33 @@ class SegmentPrepTwin : public sc_core::sc_module {
       // After an arc prep does not know the X / Y DIR levels: no dir_fast for a segment moving X
       // or Y until that axis has moved in a prepared non-arc segment.
       if (s.arc) unknown_[arc_axes(s.plane).u] = unknown_[arc_axes(s.plane).v] = true;
+      if (c.flush >= 0 && accept_probe && accept_probe(s, accept + latency) >= c.flush) {
+        ++dropped;  // prepared or waiting on the abort edge: dropped
+        if (entry_ends) entry_ends->push_back(c.flush);
+        free_from_ = c.flush + 1;
+        delay = clk_.delay_to(accept);
+        return;
+      }
       const Cycle taken = transport(segments, gp_, clk_, s, accept + latency);
       free_from_ = taken + 1;
       last_period = s.period;
       last_code = s.code;
     }
     delay = clk_.delay_to(accept);
-    gp.set_response_status(tlm::TLM_OK_RESPONSE);
+  }
+  // Whether a flush edge lies after the last accept and on or before `accept` (then remembered).
+  bool flush_before(Cycle accept) {
+    if (!flushes) return false;
+    const auto f = std::upper_bound(flushes->begin(), flushes->end(), last_flush_);
+    if (f == flushes->end() || *f > accept) return false;
+    last_flush_ = *(std::upper_bound(flushes->begin(), flushes->end(), accept) - 1);
+    return true;
   }
 
   const CycleClock& clk_;
   const CoreParams& p_;
-  Cycle free_from_ = 0;  // first edge on which a command can be accepted
+  Cycle free_from_ = 0;    // first edge on which a command can be accepted
+  Cycle last_flush_ = -1;  // the last flush edge that made every DIR unknown
   std::array<bool, kAxes> dir_track_{};
   std::array<bool, kAxes> unknown_{};  // DIR unknown after an arc (unk_reg)
   tlm::tlm_generic_payload gp_;

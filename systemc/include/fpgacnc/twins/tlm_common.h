@@ -98,6 +98,9 @@ struct FifoEntry {
   bool arc = false;
   std::array<uint8_t, spec::kArcRawBytes> arc_raw{};
   // ARC: t = the plane (flags bits 3:2: 0 XY, 1 ZX, 2 YZ)
+  // The first flush edge (a CANCEL's abort) on or after the entry's write edge; -1: none. Set by
+  // the FIFO twin for segment_prep.
+  Cycle flush = -1;
 };
 // The axes of an ARC plane: the walk's u and v axes and the helix axis (docs/protocol.md "ARC").
 struct ArcAxes {

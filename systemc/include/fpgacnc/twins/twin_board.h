@@ -29,6 +29,27 @@
 // time follows the wall clock (50 M clocks per second at 50 MHz, times realtime_speed) while the
 // board is busy; no holds.
 //
+// MOTION (feed hold, resume, feed and rapid rates): the twins compute a segment's edges and its
+// end when the executor accepts it, ahead of the board's time, so a MOTION frame changes edges
+// already computed. The board keeps a log of every host byte with its start clock; at a MOTION
+// frame the twins did not know up front, it runs the session again from the reset up to `now`
+// with the requests of every MOTION frame so far known up front (VirtualBoard::run_job's way),
+// in the same thread, without waiting: the answers already decided and the edges already
+// released (up to the published cycle) come out the same (checked: a difference ends the
+// session with error()), the edges after them are replaced. A replay costs the host bytes and
+// the edges of the session so far, never its clocks (replays()). A board held for good (rate 0,
+// nothing to end it) does not run its clock on its own: it moves on to the host's deadlines
+// (set_host_deadline) or its next bytes. The host's timer stops the board at that clock also
+// when an event falls on it (bytes written then start on the next clock, as with SimBoard).
+//
+// Buttons (press_button): as on SimBoard, the pin is high from the edge after the board's
+// clock for SimBoard::kButtonPressClks edges (a press while the same button is held lengthens
+// it) and the board counts as active until kFilterClks + 8 clocks after the release; the filtered
+// rise requests a hold or a resume (input_filter.h). A press is a request the twins did not know
+// up front: the board replays its session with it, as for a MOTION frame. A press while the
+// board stands at the host's deadline keeps it there until the host writes or names another
+// deadline, so that the press lands on the same edge as on SimBoard.
+//
 // No heaters (the twins model idle heaters: STATUS reports them so), no line fault injection, no
 // e-stop input (set_estop throws BoardError), no limit switches (set_limit throws BoardError). The
 // SystemC kernel runs in a thread of its own, one per process, elaborated by the first TwinBoard;
@@ -39,6 +60,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <mutex>
@@ -88,6 +110,9 @@ class TwinBoard : public simboard::Board {
   std::vector<models::Edge> edges() const override;
   std::array<int64_t, models::kBoardAxes> net_steps() const override;
   void set_estop(bool pressed) override;
+  // The feed hold and cycle-start buttons, pressed as on SimBoard (see above); throws BoardError
+  // when no session runs.
+  uint64_t press_button(simboard::Button b) override;
   // No limit switches are modelled: set_limit throws BoardError, limit_switches() is 0.
   uint64_t set_limit(int axis, bool max_side, bool pressed) override;
   uint16_t limit_switches() const override { return 0; }
@@ -101,6 +126,8 @@ class TwinBoard : public simboard::Board {
   void set_host_deadline(int64_t cycle) override;
   // An error that ended the session (a twin's logic error), "" when none.
   std::string error() const;
+  // Replays of this session so far (one per MOTION frame the twins did not know; see above).
+  uint64_t replays() const { return replays_.load(); }
 
  private:
   void session(VirtualBoard& vb);
@@ -120,6 +147,12 @@ class TwinBoard : public simboard::Board {
   bool running_ = false;
   std::atomic<bool> stop_{false};
   std::atomic<bool> quiet_{true};
+  std::atomic<uint64_t> replays_{0};
+  // Button presses asked by the host, taken by the session (under mu_): requests, answers.
+  std::vector<int> press_req_;
+  uint64_t press_asked_ = 0, press_taken_ = 0;
+  uint64_t press_edge_ = 0;  // the edge of the last press taken
+  std::condition_variable press_cv_;
   std::atomic<int64_t> host_deadline_{-1};
   std::atomic<bool> session_done_{true};
   std::chrono::steady_clock::time_point t_start_{};

@@ -18,11 +18,15 @@
 // frames known up front (their clocks and fields, from the previous run), whose MOTION frames
 // are accepted exactly there, is the job's run. A run stops at the first MOTION frame it did not
 // know: the effect of a request starts two edges after its frame ends, so everything before was
-// exact and the next run knows that request too (a job with n MOTION frames runs n + 1 times,
-// all but the last cut short at a MOTION frame). A live session (TwinBoard) cannot run again:
-// its decoder refuses MOTION (NAK UNKNOWN_TYPE, as a core without the motion rate), so a host
-// keeps its holds to itself (live_motion_ would hand each request to the rate when its frame is
-// accepted, with the segments computed before keeping their clocks: FeedRate::late()).
+// exact and the next run knows that request too (a job with n MOTION frames without CANCEL runs
+// n + 1 times, all but the last cut short at a MOTION frame). A CANCEL's flush (the first clock
+// with cancel and r = 0: the rate's hold and cancel clear, the FIFO, the prep and the executor
+// drop what they hold on the next edge) is settled the same way: a run knows the flush clocks
+// the run before found (known_flush_), stops once its host's time passes a CANCEL whose flush it
+// does not know, and the job runs again until the flushes it knows are the ones it finds
+// (settle_motion). A live session (TwinBoard) does the same from its own log: at a MOTION frame
+// it did not know it runs again from the reset with every host byte so far at its clock and the
+// requests known up front (twin_board.h).
 //
 // The host sends each packet with its delay; the response encoder computes the answers lazily,
 // in time order, up to the edge before which every input is known (docs/systemc.md "Time").
@@ -100,9 +104,21 @@ class VirtualBoard : public sc_core::sc_module {
   SegmentPrepTwin prep_;
   SegmentExecutorTwin exec_;
   FeedRate rate_;
-  std::vector<MotionReq> known_motion_;     // requests known up front (a job's later runs)
+  std::vector<MotionReq> known_motion_;  // requests known up front (a job's later runs)
+  // Per known request: the flush clock of a CANCEL (the first clock with cancel and r = 0),
+  // kFlushNone (not a CANCEL, or one within a cancel in progress), kFlushUnknown.
+  static constexpr Cycle kFlushNone = -1, kFlushUnknown = -2;
+  std::vector<Cycle> known_flush_;
+  std::vector<Cycle> flush_edges_;  // their abort edges (flush clock + 1), in order
+  // The flushes as this run's rate has them (for the requests known up front).
+  std::vector<Cycle> observe_flushes();
+  // After a run (or a replay): true when the requests and flushes known up front are this run's;
+  // otherwise they are updated for the next run.
+  bool settle_motion();
+  // A CANCEL with its flush unknown whose effect has begun by clock t: everything that can come
+  // before its flush is known, so the run stops and the next one knows it.
+  bool flush_unknown_before(Cycle t) const;
   std::vector<MotionReq> observed_motion_;  // MOTION frames accepted in this run
-  bool live_motion_ = false;                // a live session: requests go to the rate at once
   bool motion_mismatch_ = false;            // a MOTION frame accepted that was not known
   int runs_ = 0;
   std::array<std::unique_ptr<DdaLinearTwin>, kAxes> dda_;
