@@ -475,6 +475,37 @@ TEST(Trigger, ProbeBounceDoesNotFire) {
   EXPECT_EQ(r.pos[0], b.pos_at(0, p + 1 + kProbeFilter));
 }
 
+// Switch bounce during a HOME: pulses of X max shorter than the switch filter while X moves toward
+// it neither fire the trigger nor trip; the level held the filter length fires, latched at its
+// filtered edge.
+TEST(Trigger, HomeSwitchBounceDoesNotFire) {
+  TriggerBench b;
+  b.model_switches = false;
+  ASSERT_EQ(b.exchange(trigger(b.seq++, kHome, 0x0100)).type, v2::kAck);
+  ASSERT_EQ(b.exchange(v2::line(b.seq++, 0, 0, 80000, {2000, 0}, true)).type, v2::kAck);
+  b.idle(5000);
+  ASSERT_TRUE(b.dut().running);
+  for (uint64_t len : {uint64_t{1}, uint64_t{50}, kFilter - 1}) {
+    b.dut().limit_max = 1;
+    b.idle(len);
+    b.dut().limit_max = 0;
+    b.idle(200);
+  }
+  auto r = b.report();
+  EXPECT_EQ(r.flags, kArmed) << "a bounce fired the HOME";
+  EXPECT_EQ(r.fired, 0u);
+  EXPECT_TRUE(b.trip_cycles.empty());
+  ASSERT_TRUE(b.dut().running);
+  const uint64_t p = b.cycle() + 1;
+  b.dut().limit_max = 1;
+  b.run_until_idle(200000);
+  r = b.report();
+  EXPECT_EQ(r.flags, kDone);
+  EXPECT_EQ(r.pos[0], b.pos_at(0, p + 1 + kFilter));
+  EXPECT_EQ(b.pins_pos[0], r.pos[0]);
+  EXPECT_TRUE(b.trip_cycles.empty());
+}
+
 // SET_POSITION: sets the counters (STATUS, the travel check's queued end), refused while busy,
 // clears POS_UNTRUSTED after a hard-limit trip.
 TEST(Trigger, SetPosition) {
