@@ -554,6 +554,24 @@ TEST(Trigger, SetPosition) {
   EXPECT_EQ(st.u32(13), 0u);
 }
 
+// The worked frames of docs/protocol.md (CRCs computed there by an independent bit-serial
+// CRC-16/CCITT-FALSE) are the frames this bench sends, and the device takes them.
+TEST(Trigger, DocumentedFrames) {
+  EXPECT_EQ(v2::hex(trigger(5, kHome, 0x0300)), "A5 03 05 0A 01 03 00 E9 6F");
+  EXPECT_EQ(v2::hex(trigger(6, kProbe, 0)), "A5 03 06 0A 02 00 00 0B BE");
+  EXPECT_EQ(v2::hex(set_position(7, 0x0003, 0, -10)),
+            "A5 0A 07 0B 00 03 00 00 00 00 FF FF FF F6 5E 0D");
+  EXPECT_EQ(v2::hex(v2::frame(spec::kTypeTriggerQuery, 0, {})), "A5 00 00 0C 0D 10");
+  TriggerBench b;
+  while (b.seq < 5) ASSERT_EQ(b.exchange(v2::dwell(b.seq++, 10)).type, v2::kAck);
+  ASSERT_EQ(b.exchange(trigger(5, kHome, 0x0300)).type, v2::kAck);
+  EXPECT_EQ(b.report().flags, kArmed);
+  ASSERT_EQ(b.exchange(trigger(6, kProbe, 0)).type, v2::kAck);
+  EXPECT_EQ(b.report().mode, kProbe);
+  ASSERT_EQ(b.exchange(set_position(7, 0x0003, 0, -10)).type, v2::kAck);
+  EXPECT_EQ(static_cast<int32_t>(b.status().u32(13)), -10);
+}
+
 // Bad frames: reserved modes, masks beyond N_AXES, masks where none belongs, wrong lengths. A
 // TRIGGER lost on the wire makes the LINE after it OUT_OF_ORDER.
 TEST(Trigger, BadFramesAreRefused) {
