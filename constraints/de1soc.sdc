@@ -1,8 +1,8 @@
 # Timing constraints for de1soc_top on the DE1-SoC.
 create_clock -name clk -period 20.000 [get_ports {clk}]
 derive_clock_uncertainty
-# Asynchronous inputs: the reset button and the UART line pass two-flop synchronizers.
-set_false_path -from [get_ports {rst_n rx estop_n hold_n start_n ADC_SDO}]
+# Asynchronous inputs: the reset button, the UART line and the probe pass two-flop synchronizers.
+set_false_path -from [get_ports {rst_n rx estop_n hold_n start_n probe_n ADC_SDO}]
 # estop_n and ADC_SDO also pass two-flop synchronizers; the LTC2308 master (rtl/heater/ltc2308_spi.v)
 # samples the synchronized SDO SCK_DIV (5) clocks after the chip shifts it, so no I/O timing on it.
 # Outputs drive stepper drivers, a laser, LEDs and displays: microsecond timing, no I/O timing

@@ -182,3 +182,10 @@ set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_y_min
 set_location_assignment PIN_AH19 -to lim_y_max
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to lim_y_max
 set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_y_max
+
+# Probe (docs/machine.md "Homing and probing (hardware)"): GPIO_0[21] (pin from the Terasic
+# DE1-SoC manual), weak pull-up on, active low: a touch plate or a normally-open probe switch to
+# ground reads low at contact.
+set_location_assignment PIN_AJ20 -to probe_n
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to probe_n
+set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to probe_n

@@ -37,6 +37,19 @@
 //                    is the planned one at any rate; the laser is low while the rate is 0. A
 //                    CANCEL holds and, at rest, flushes as the e-stop does (positions kept, no
 //                    fault). STATUS state bits 5 HOLD and 6 STOPPED.
+//   homing, probing  (v2, TRIGGER) rtl/machine/trigger_latch.v (docs/machine.md "Homing and
+//                    probing (hardware)"): probe_in passes its own input_filter (PROBE_ENABLE,
+//                    PROBE_ACTIVE_LOW, PROBE_FILTER_CLKS; STATUS state bit 7 PROBE, probe_state).
+//                    A TRIGGER frame arms HOME (a mask of switches: their hard-limit trips are
+//                    suppressed, their step block stays; each switch's filtered rise latches its
+//                    axis's position; when all have fired, motion_abort for one clock: FIFO, prep
+//                    and executor dropped, no fault, positions kept) or PROBE (the filtered probe's
+//                    edge to the level latches every position and starts feed_rate's CANCEL).
+//                    TRIGGER_QUERY is answered by TRIGGER_REPORT. SET_POSITION (only while quiet,
+//                    else NAK BUSY) sets the chosen axes' positions (rtl/machine/position_offset.v:
+//                    `position` = the executor's STEP counters + an offset per axis, from the
+//                    next clock), resyncs travel_guard's queued end on the clock after and clears
+//                    state bit 4 (positions not trusted).
 //   cfg_wr, cfg_addr, cfg_wdata   step timing write port, address axis * 4 + field (0 STEP
 //                    high, 1 STEP low, 2 DIR setup, 3 DIR hold, clocks). Like CONFIG_AXIS frames it
 //                    writes a shadow set that becomes active only while the FIFO is empty and
@@ -51,8 +64,8 @@
 // Build options (docs/synthesis.md "Build options"; named configurations in spec/configs.toml):
 //   PROTO_V2 = 0 is the original v1 controller (packet_decoder_v1, no FIFO, no response_encoder,
 //   faults clear only at rst) and implies PROFILES = ARCS = HEATERS = OUTPUTS = 0; with PROTO_V2 =
-//   1 each of PROFILES, ARCS, HEATERS, OUTPUTS = 0 removes its block and answers its frames NAK
-//   UNKNOWN_TYPE. LEAN_TRIM = 1 and STEP_CFG = 0 (PROTO_V2 = 0 only) trim the v1 datapath and fix
+//   1 each of PROFILES, ARCS, HEATERS, OUTPUTS, TRIGGER = 0 removes its block and answers its frames
+//   NAK UNKNOWN_TYPE (TRIGGER: TRIGGER, SET_POSITION, TRIGGER_QUERY; probe_in unused). LEAN_TRIM = 1 and STEP_CFG = 0 (PROTO_V2 = 0 only) trim the v1 datapath and fix
 //   the step timing at its parameters, with the same pins on every clock. N_AXES 2..15. An illegal
 //   combination stops elaboration (a module named cnc_core_illegal_<rule> is instantiated, which
 //   does not exist).
@@ -92,7 +105,12 @@ module cnc_core #(
     parameter [1:0] BUTTON_ENABLE     = 2'b11,  // buttons wired (a button not wired reads released)
     parameter [1:0] BUTTON_ACTIVE_LOW = 2'b00,  // asserted at a low pin
     parameter RATE_PERIOD_LOG2        = `FPGACNC_DEF_RATE_PERIOD_LOG2,  // motion rate period
-    parameter [31:0] RATE_RAMP        = `FPGACNC_DEF_RATE_RAMP  // motion rate ramp after rst
+    parameter [31:0] RATE_RAMP        = `FPGACNC_DEF_RATE_RAMP,  // motion rate ramp after rst
+    // homing and probing trigger (docs/machine.md "Homing and probing (hardware)"), v2 only
+    parameter TRIGGER                 = PROTO_V2,  // 1: PROTO_V2 = 1 only
+    parameter PROBE_FILTER_CLKS       = `FPGACNC_DEF_PROBE_FILTER_CLKS,  // probe debounce, clocks
+    parameter PROBE_ENABLE            = `FPGACNC_DEF_PROBE_ENABLE,  // probe wired (else released)
+    parameter PROBE_ACTIVE_LOW        = `FPGACNC_DEF_PROBE_ACTIVE_LOW  // asserted at a low pin
 ) (
     input wire clk,
     input wire rst,
@@ -114,6 +132,7 @@ module cnc_core #(
     input  wire [N_AXES-1:0] limit_max,
     input  wire       hold_in,     // feed hold button, asynchronous (BUTTON_* parameters)
     input  wire       start_in,    // cycle start (resume) button, asynchronous
+    input  wire       probe_in,    // probe, asynchronous (PROBE_* parameters)
     output wire [1:0] heater,      // 0 hot end, 1 bed
     output wire       adc_convst,  // LTC2308
     output wire       adc_sck,
@@ -154,7 +173,8 @@ module cnc_core #(
     output wire [        15:0] clamped,        // v2 segments whose T was raised
     output wire [        15:0] naks,           // NAK frames requested
     output wire [2*N_AXES-1:0] limit_state,    // filtered switches {max, min}, 1 = asserted
-    output wire                limit_trip      // the hard-limit alarm (faults bit 2)
+    output wire                limit_trip,     // the hard-limit alarm (faults bit 2)
+    output wire                probe_state     // the filtered probe, 1 = asserted (STATUS bit 7)
 );
 
   // FIFO entry (segment_prep header, LINE_PROFILE and ARC fields): 839 bits for 4 axes
@@ -165,6 +185,7 @@ module cnc_core #(
   localparam integer ARC_EN = (V2_EN != 0 && ARCS != 0) ? 1 : 0;
   localparam integer HEAT_EN = (V2_EN != 0 && HEATERS != 0) ? 1 : 0;
   localparam integer OUT_EN = (V2_EN != 0 && OUTPUTS != 0) ? 1 : 0;
+  localparam integer TRIG_EN = (V2_EN != 0 && TRIGGER != 0) ? 1 : 0;
   // v1-only datapath trims (segment_prep V1_ONLY, executor LEAN_DDA)
   localparam integer TRIM_EN = (V2_EN == 0 && LEAN_TRIM != 0) ? 1 : 0;
   // v1 build with the step timing fixed at STEP_HIGH / STEP_LOW / DIR_SETUP / DIR_HOLD
@@ -219,6 +240,21 @@ module cnc_core #(
     if (PROTO_V2 != 0 && STEP_CFG == 0) begin : g_v2_step_cfg
       cnc_core_illegal_STEP_CFG_0_needs_PROTO_V2_0 u_err ();
     end
+    if (TRIGGER != 0 && TRIGGER != 1) begin : g_bad_trigger
+      cnc_core_illegal_TRIGGER_not_0_or_1 u_err ();
+    end
+    if (PROTO_V2 == 0 && TRIGGER != 0) begin : g_v1_trigger
+      cnc_core_illegal_TRIGGER_needs_PROTO_V2_1 u_err ();
+    end
+    if (PROBE_ENABLE != 0 && PROBE_ENABLE != 1) begin : g_bad_probe_enable
+      cnc_core_illegal_PROBE_ENABLE_not_0_or_1 u_err ();
+    end
+    if (PROBE_ACTIVE_LOW != 0 && PROBE_ACTIVE_LOW != 1) begin : g_bad_probe_active_low
+      cnc_core_illegal_PROBE_ACTIVE_LOW_not_0_or_1 u_err ();
+    end
+    if (PROBE_FILTER_CLKS < 0 || PROBE_FILTER_CLKS > 16777215) begin : g_bad_probe_filter
+      cnc_core_illegal_PROBE_FILTER_CLKS_not_0_to_2p24m1 u_err ();
+    end
     if (LIMIT_FILTER_CLKS < 0 || LIMIT_FILTER_CLKS > 16777215) begin : g_bad_limit_filter
       cnc_core_illegal_LIMIT_FILTER_CLKS_not_0_to_2p24m1 u_err ();
     end
@@ -269,6 +305,14 @@ module cnc_core #(
   wire estop_stop;  // e-stop active or latched (below)
   // e-stop, hard-limit alarm or a MOTION CANCEL at rest: FIFO flushed, prep and executor aborted
   wire motion_abort;
+  // TRIGGER, SET_POSITION, TRIGGER_QUERY (v2 with TRIGGER), their payload
+  wire dec_trig_wr, dec_setpos_wr, dec_trig_query;
+  wire [8*(2+4*N_AXES)-1:0] dec_ctl_data;
+  wire quiet;  // FIFO empty, nothing prepared or running
+  wire [2*N_AXES-1:0] trig_suppress;  // trigger_latch: switches whose trips are suppressed
+  wire trig_flush, trig_cancel, probe_lvl;
+  wire [32*N_AXES-1:0] exec_position;  // the executor's STEP counters (position: + SET_POSITION's offset)
+  reg setpos_q_reg;  // a SET_POSITION wrote the position counters on the last edge
 
   generate
     if (V2_EN != 0) begin : g_v2
@@ -279,7 +323,8 @@ module cnc_core #(
           .PROFILES     (PROF_EN),
           .ARCS         (ARC_EN),
           .OUTPUTS      (OUT_EN),
-          .HEATERS      (HEAT_EN)
+          .HEATERS      (HEAT_EN),
+          .TRIGGER      (TRIG_EN)
       ) u_front (
           .clk          (clk),
           .rst          (rst),
@@ -290,6 +335,7 @@ module cnc_core #(
           .m_axis_tvalid(cmd_tvalid),
           .m_axis_tready(cmd_tready),
           .flush        (motion_abort),
+          .resync       (setpos_q_reg),
           .position     (position),
           .level        (fifo_level_w),
           .free         (fifo_free_w),
@@ -305,6 +351,11 @@ module cnc_core #(
           .status_req   (dec_status),
           .motion_set   (dec_motion_set),
           .motion_data  (dec_motion_data),
+          .trig_wr      (dec_trig_wr),
+          .setpos_wr    (dec_setpos_wr),
+          .trig_query   (dec_trig_query),
+          .ctl_data     (dec_ctl_data),
+          .motion_quiet (quiet),
           .ack_req      (dec_ack),
           .nak          (dec_nak),
           .nak_seq      (dec_nak_seq),
@@ -346,6 +397,13 @@ module cnc_core #(
       assign dec_status       = 1'b0;
       assign dec_motion_set   = 1'b0;
       assign dec_motion_data  = 72'd0;
+      assign dec_trig_wr      = 1'b0;
+      assign dec_setpos_wr    = 1'b0;
+      assign dec_trig_query   = 1'b0;
+      assign dec_ctl_data     = {8 * (2 + 4 * N_AXES) {1'b0}};
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_setpos = &{1'b0, setpos_q_reg};  // no SET_POSITION in v1
+      /* verilator lint_on UNUSEDSIGNAL */
       assign dec_ack          = 1'b0;
       assign dec_nak_seq      = 8'd0;
       assign dec_nak_reason   = 8'd0;
@@ -417,6 +475,9 @@ module cnc_core #(
       .dir      (dir),
       .busy     (exec_busy),
       .clear    (dec_fault_clear),
+      .sup_min  (trig_suppress[N_AXES-1:0]),
+      .sup_max  (trig_suppress[2*N_AXES-1:N_AXES]),
+      .trust    (dec_setpos_wr),
       .block    (exec_step_block),
       .trip     (limit_trip_w),
       .trip_axis(limit_trip_axis),
@@ -425,6 +486,117 @@ module cnc_core #(
   );
   assign limit_state = {lim_max_w, lim_min_w};
   assign limit_trip  = limit_trip_w;
+
+  // ---------------------------------------------------------------- homing and probing
+  // the probe through its own filter, trigger_latch (TRIGGER frames), SET_POSITION's write of the
+  // position counters (docs/machine.md "Homing and probing (hardware)")
+  wire [31:0] trig_state;  // TRIGGER_REPORT bytes 0..3: mode, flags, fired u16
+  wire [32*N_AXES-1:0] trig_pos;
+  wire [N_AXES-1:0] setpos_wr;
+  wire [32*N_AXES-1:0] setpos_data;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [15:0] setpos_mask16 = {dec_ctl_data[7:0], dec_ctl_data[15:8]};  // bits < N_AXES used
+  /* verilator lint_on UNUSEDSIGNAL */
+
+  genvar ga;
+  generate
+    for (ga = 0; ga < N_AXES; ga = ga + 1) begin : g_setpos
+      assign setpos_wr[ga] = dec_setpos_wr && setpos_mask16[ga];
+      assign setpos_data[32*ga+:32] = {dec_ctl_data[8*(2+4*ga)+:8], dec_ctl_data[8*(3+4*ga)+:8],
+                                       dec_ctl_data[8*(4+4*ga)+:8], dec_ctl_data[8*(5+4*ga)+:8]};
+    end
+  endgenerate
+  always @(posedge clk) begin
+    setpos_q_reg <= dec_setpos_wr;
+    if (rst) setpos_q_reg <= 1'b0;
+  end
+
+  generate
+    if (TRIG_EN != 0) begin : g_trig
+      wire [0:0] probe_q, probe_strobe;
+      input_filter #(
+          .N          (1),
+          .FILTER_CLKS(PROBE_FILTER_CLKS),
+          .ACTIVE_LOW (PROBE_ACTIVE_LOW[0])
+      ) u_probe_filter (
+          .clk   (clk),
+          .rst   (rst),
+          .din   (probe_in),
+          .q     (probe_q),
+          .strobe(probe_strobe)
+      );
+      assign probe_lvl = probe_q[0] && (PROBE_ENABLE != 0);
+
+      // TRIGGER mask u16 (payload bytes 1, 2): bit a = min of axis a, 8 + a its max (axes 0..7)
+      wire [15:0] mask16 = {dec_ctl_data[15:8], dec_ctl_data[23:16]};
+      reg [2*N_AXES-1:0] mask_w;
+      reg [15:0] fired16;
+      wire [2*N_AXES-1:0] fired_w;
+      wire trig_armed, trig_done;
+      wire [1:0] trig_mode;
+      integer i;
+      always @(*) begin
+        mask_w  = {2 * N_AXES{1'b0}};
+        fired16 = 16'd0;
+        for (i = 0; i < N_AXES && i < 8; i = i + 1) begin
+          mask_w[i]          = mask16[i];
+          mask_w[N_AXES+i]   = mask16[8+i];
+          fired16[i]         = fired_w[i];
+          fired16[8+i]       = fired_w[N_AXES+i];
+        end
+      end
+
+      trigger_latch #(
+          .N_AXES(N_AXES)
+      ) u_trigger (
+          .clk         (clk),
+          .rst         (rst),
+          .wr          (dec_trig_wr),
+          .wr_mode     (dec_ctl_data[1:0]),
+          .wr_mask     (mask_w),
+          .sw_rise     (lim_strobe & {lim_max_w, lim_min_w}),
+          .probe_strobe(probe_strobe[0] && (PROBE_ENABLE != 0)),
+          .probe_q     (probe_lvl),
+          .position    (position),
+          .suppress    (trig_suppress),
+          .flush       (trig_flush),
+          .cancel      (trig_cancel),
+          .armed       (trig_armed),
+          .done        (trig_done),
+          .mode        (trig_mode),
+          .fired       (fired_w),
+          .latched     (trig_pos)
+      );
+      assign trig_state = {6'd0, trig_mode, 6'd0, trig_done, trig_armed, fired16};
+
+      // SET_POSITION: the position is the executor's counter plus an offset per axis
+      position_offset #(
+          .N_AXES(N_AXES)
+      ) u_pos_offset (
+          .clk     (clk),
+          .rst     (rst),
+          .raw     (exec_position),
+          .wr      (setpos_wr),
+          .wdata   (setpos_data),
+          .position(position)
+      );
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_ctl = &{1'b0, dec_ctl_data[7:2]};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end else begin : g_notrig
+      assign probe_lvl     = 1'b0;
+      assign trig_suppress = {2 * N_AXES{1'b0}};
+      assign trig_flush    = 1'b0;
+      assign trig_cancel   = 1'b0;
+      assign trig_state    = 32'd0;
+      assign trig_pos      = {32 * N_AXES{1'b0}};
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_trig = &{1'b0, probe_in, dec_trig_wr, setpos_wr, setpos_data};
+      assign position = exec_position;
+      /* verilator lint_on UNUSEDSIGNAL */
+    end
+  endgenerate
+  assign probe_state = probe_lvl;
 
   // ---------------------------------------------------------------- motion rate
   // feed hold, resume and the feed / rapid rates (docs/timing.md "Feed hold and overrides"):
@@ -467,6 +639,7 @@ module cnc_core #(
                        dec_motion_data[71:64]}),
           .hold_req  (btn_rise[0]),
           .resume_req(btn_rise[1]),
+          .cancel_req(trig_cancel),
           .rapid_seg (exec_rapid),
           .adv       (rate_adv),
           .hold      (rate_hold),
@@ -483,7 +656,8 @@ module cnc_core #(
       assign rate_stopped = 1'b0;
       assign rate_flush   = 1'b0;
       /* verilator lint_off UNUSEDSIGNAL */
-      wire unused_rate = &{1'b0, btn_rise, exec_rapid, dec_motion_set, dec_motion_data};
+      wire unused_rate = &{1'b0, btn_rise, exec_rapid, dec_motion_set, dec_motion_data,
+                           trig_cancel};
       /* verilator lint_on UNUSEDSIGNAL */
     end
   endgenerate
@@ -496,7 +670,7 @@ module cnc_core #(
   wire exec_idle;
   wire prep_busy;
   wire fifo_empty = (fifo_level_w == 16'd0);
-  wire quiet = exec_idle && !prep_busy && fifo_empty;
+  assign quiet = exec_idle && !prep_busy && fifo_empty;
 
   step_config #(
       .N_AXES   (N_AXES),
@@ -545,7 +719,8 @@ module cnc_core #(
   wire [944:0] seg_arc;  // ARC segments: segment_prep -> segment_executor (arc_dda's inputs)
   wire [1:0] seg_arc_plane;  // and their plane (0 XY, 1 ZX, 2 YZ)
   // e-stop or limit alarm: prep and executor drop what they hold, stay idle
-  assign motion_abort = estop_stop || limit_trip_w || rate_flush;
+  // (or a completed HOME: trigger_latch's flush)
+  assign motion_abort = estop_stop || limit_trip_w || rate_flush || trig_flush;
   wire out_tvalid, out_tready;  // OUTPUT entries: segment_prep -> segment_executor
   wire [23:0] out_tdata;
 
@@ -674,7 +849,7 @@ module cnc_core #(
       .seg_start      (seg_start),
       .seg_done       (seg_done),
       .seg_done_v2    (seg_done_v2),
-      .position       (position),
+      .position       (exec_position),
       .violation      (exec_violation),
       .arc_err        (exec_arc_err),
       .coolant_flood  (exec_flood),
@@ -830,6 +1005,7 @@ module cnc_core #(
       .rst            (rst),
       .ident_req      (dec_hello),
       .status_req     (dec_status),
+      .trig_req       (dec_trig_query),
       .nak_req        (dec_nak),
       .nak_seq        (dec_nak_seq),
       .nak_reason     (dec_nak_reason),
@@ -846,6 +1022,7 @@ module cnc_core #(
       .limit_untrusted(limit_untrusted),
       .hold           (rate_hold),
       .stopped        (rate_stopped),
+      .probe          (probe_lvl),
       .faults         (faults_w),
       .position       (position),
       .counters       ({frames_ok_w, crc_errors_w, length_errors_w, unknown_types_w, timeouts_w,
@@ -855,6 +1032,8 @@ module cnc_core #(
       .lim_min        (lim_min_w),
       .lim_max        (lim_max_w),
       .heat_status    (heat_status),
+      .trig_state     (trig_state),
+      .trig_pos       (trig_pos),
       .m_axis_tdata   (enc_tdata),
       .m_axis_tvalid  (enc_tvalid),
       .m_axis_tready  (tx_tready)

@@ -79,6 +79,11 @@ illegal "$both" "PROTO_V2=0 OUTPUTS=1" OUTPUTS_needs_PROTO_V2_1
 illegal "$both" "LEAN_TRIM=1" LEAN_TRIM_needs_PROTO_V2_0
 illegal "$both" "N_AXES=2 STEP_CFG=0" STEP_CFG_0_needs_PROTO_V2_0
 illegal "$both" "LIMIT_FILTER_CLKS=16777216" LIMIT_FILTER_CLKS_not_0_to_2p24m1
+illegal "$both" "TRIGGER=2" TRIGGER_not_0_or_1
+illegal "$both" "PROTO_V2=0 TRIGGER=1" TRIGGER_needs_PROTO_V2_1
+illegal "$both" "PROBE_ENABLE=2" PROBE_ENABLE_not_0_or_1
+illegal "$both" "PROBE_ACTIVE_LOW=2" PROBE_ACTIVE_LOW_not_0_or_1
+illegal "$both" "PROBE_FILTER_CLKS=16777216" PROBE_FILTER_CLKS_not_0_to_2p24m1
 illegal "$both" "FIFO_DEPTH=48" FIFO_DEPTH_not_power_of_2_in_2_to_32768 front_v2
 illegal "$both" "STEP_HIGH=65536" timing_not_0_to_65535 step_config
 illegal "$both" "FAN_PWM_HZ=0" FAN_PWM_HZ_out_of_range machine_outputs
@@ -89,8 +94,10 @@ legal "$both" "N_AXES=2 PROTO_V2=0 LEAN_TRIM=0 STEP_CFG=0"
 legal "$both" "N_AXES=3 PROFILES=0 ARCS=1 HEATERS=0 OUTPUTS=0"
 legal "$both" "N_AXES=3 LIMIT_FILTER_CLKS=0 LIMIT_ENABLE=458759 LIMIT_ACTIVE_LOW=65537"
 legal "$both" "FIFO_DEPTH=2 STEP_HIGH=65535"
+legal "$both" "TRIGGER=0 PROBE_ENABLE=1"
+legal "$both" "N_AXES=3 PROBE_ENABLE=1 PROBE_ACTIVE_LOW=1 PROBE_FILTER_CLKS=0"
 
 if [ $fail -eq 0 ]; then
-  echo "config_guards: $checked elaborations as expected (19 illegal combinations refused by name, 6 legal ones accepted)"
+  echo "config_guards: $checked elaborations as expected (24 illegal combinations refused by name, 8 legal ones accepted)"
 fi
 exit $fail

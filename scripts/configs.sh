@@ -8,16 +8,16 @@
 #   FPGACNC_CONFIG_DOC[name]      what it is for
 FPGACNC_CONFIGS=(v1-board v1-board-fixed v1-board-untrimmed v1-4axis v1-4axis-fixed lines-2axis no-arcs-4axis no-profiles-heaters-4axis full-2axis full-4axis)
 declare -A FPGACNC_CONFIG_PARAMS=(
-  [v1-board]="N_AXES=2 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 LEAN_TRIM=1 STEP_CFG=1"
-  [v1-board-fixed]="N_AXES=2 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 LEAN_TRIM=1 STEP_CFG=0"
-  [v1-board-untrimmed]="N_AXES=2 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 LEAN_TRIM=0 STEP_CFG=1"
-  [v1-4axis]="N_AXES=4 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 LEAN_TRIM=1 STEP_CFG=1"
-  [v1-4axis-fixed]="N_AXES=4 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 LEAN_TRIM=1 STEP_CFG=0"
-  [lines-2axis]="N_AXES=2 PROTO_V2=1 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=1 LEAN_TRIM=0 STEP_CFG=1"
-  [no-arcs-4axis]="N_AXES=4 PROTO_V2=1 PROFILES=1 ARCS=0 HEATERS=1 OUTPUTS=1 LEAN_TRIM=0 STEP_CFG=1"
-  [no-profiles-heaters-4axis]="N_AXES=4 PROTO_V2=1 PROFILES=0 ARCS=1 HEATERS=0 OUTPUTS=1 LEAN_TRIM=0 STEP_CFG=1"
-  [full-2axis]="N_AXES=2 PROTO_V2=1 PROFILES=1 ARCS=1 HEATERS=1 OUTPUTS=1 LEAN_TRIM=0 STEP_CFG=1"
-  [full-4axis]="N_AXES=4 PROTO_V2=1 PROFILES=1 ARCS=1 HEATERS=1 OUTPUTS=1 LEAN_TRIM=0 STEP_CFG=1"
+  [v1-board]="N_AXES=2 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 TRIGGER=0 LEAN_TRIM=1 STEP_CFG=1"
+  [v1-board-fixed]="N_AXES=2 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 TRIGGER=0 LEAN_TRIM=1 STEP_CFG=0"
+  [v1-board-untrimmed]="N_AXES=2 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 TRIGGER=0 LEAN_TRIM=0 STEP_CFG=1"
+  [v1-4axis]="N_AXES=4 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 TRIGGER=0 LEAN_TRIM=1 STEP_CFG=1"
+  [v1-4axis-fixed]="N_AXES=4 PROTO_V2=0 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=0 TRIGGER=0 LEAN_TRIM=1 STEP_CFG=0"
+  [lines-2axis]="N_AXES=2 PROTO_V2=1 PROFILES=0 ARCS=0 HEATERS=0 OUTPUTS=1 TRIGGER=0 LEAN_TRIM=0 STEP_CFG=1"
+  [no-arcs-4axis]="N_AXES=4 PROTO_V2=1 PROFILES=1 ARCS=0 HEATERS=1 OUTPUTS=1 TRIGGER=1 LEAN_TRIM=0 STEP_CFG=1"
+  [no-profiles-heaters-4axis]="N_AXES=4 PROTO_V2=1 PROFILES=0 ARCS=1 HEATERS=0 OUTPUTS=1 TRIGGER=1 LEAN_TRIM=0 STEP_CFG=1"
+  [full-2axis]="N_AXES=2 PROTO_V2=1 PROFILES=1 ARCS=1 HEATERS=1 OUTPUTS=1 TRIGGER=1 LEAN_TRIM=0 STEP_CFG=1"
+  [full-4axis]="N_AXES=4 PROTO_V2=1 PROFILES=1 ARCS=1 HEATERS=1 OUTPUTS=1 TRIGGER=1 LEAN_TRIM=0 STEP_CFG=1"
 )
 declare -A FPGACNC_CONFIG_BOARD_TOP=(
   [v1-board]=''
@@ -37,7 +37,7 @@ declare -A FPGACNC_CONFIG_DOC=(
   [v1-board-untrimmed]='v1-board with the general datapath (LEAN_TRIM 0): the lockstep reference of the v1 trims'
   [v1-4axis]='protocol v1 only with 4 axes (axes 3 and 4 never move: v1 packets carry X and Y)'
   [v1-4axis-fixed]='v1-4axis with the step timing fixed at the defaults (no cfg port)'
-  [lines-2axis]='protocols v1 and v2 with LINE, DWELL and OUTPUT only (no profiles, arcs or heaters), 2 axes'
+  [lines-2axis]='protocols v1 and v2 with LINE, DWELL and OUTPUT only (no profiles, arcs, heaters or homing / probing trigger), 2 axes'
   [no-arcs-4axis]='everything but the circular DDA, 4 axes'
   [no-profiles-heaters-4axis]='v2 with arcs at constant feed but no trapezoidal profiles and no heaters, 4 axes'
   [full-2axis]='every feature, 2 axes: the DE1-SoC board'\''s core'

@@ -45,6 +45,9 @@ JOBS=(
   "limit_guard         cover   8"
   "travel_guard        prove   4"
   "travel_guard        cover   8"
+  "trigger_latch       sat     6"
+  "trigger_latch       satcover 12"
+  "position_offset     sat     4"
   "feed_rate           sat     6"
   "feed_rate           satcover 16"
 )

@@ -28,7 +28,7 @@ declare -A BLK=(
   [dda_linear]="rtl/motion/dda_linear.v|"
   [pid_incr]="rtl/heater/pid_incr.v|"
   [heater_channel]="rtl/heater/heater_channel.v rtl/heater/pid_incr.v rtl/heater/heater_safety.v rtl/machine/pwm.v|"
-  [frame_decoder]="rtl/protocol/frame_decoder.v rtl/protocol/frame_fields.v rtl/protocol/entry_pack.v rtl/protocol/crc16_ccitt.v rtl/machine/travel_guard.v|-set N_AXES 2"
+  [frame_decoder]="rtl/protocol/frame_decoder.v rtl/protocol/frame_fields.v rtl/protocol/entry_pack.v rtl/protocol/crc16_ccitt.v rtl/machine/travel_guard.v|-set N_AXES 2 -set TRIGGER 1"
   [response_encoder]="rtl/protocol/response_encoder.v rtl/protocol/crc16_ccitt.v|-set N_AXES 2 -set HEAT_BYTES 16"
   [segment_prep]="rtl/motion/segment_prep.v rtl/motion/prep_profile.v rtl/motion/prep_arc.v rtl/motion/prep_dir_tracker.v|-set N_AXES 2"
   [step_pulse]="rtl/motion/step_pulse.v|"
@@ -36,6 +36,8 @@ declare -A BLK=(
   [uart_tx]="rtl/protocol/uart_tx.v|"
   [input_filter]="rtl/machine/input_filter.v|-set N 4 -set FILTER_CLKS 50000"
   [limit_guard]="rtl/machine/limit_guard.v|-set N_AXES 2"
+  [trigger_latch]="rtl/machine/trigger_latch.v|-set N_AXES 2"
+  [position_offset]="rtl/machine/position_offset.v|-set N_AXES 2"
   [travel_guard]="rtl/machine/travel_guard.v|-set N_AXES 2"
   [step_config]="rtl/motion/step_config.v|-set N_AXES 2"
   [feed_rate]="rtl/motion/feed_rate.v|"
@@ -57,8 +59,8 @@ declare -A BLK=(
 )
 # segment_prep (2 axes, full build) does not fit the HX8K with the wrapper; only on request
 blocks=${BLOCKS:-"arc_dda segment_executor profile_gen dda_profile dda_linear step_pulse frame_decoder
-  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard travel_guard
-  step_config feed_rate status_counters estop_latch machine_outputs answer_source"}
+  segment_fifo response_encoder heater_block heater_channel pid_incr heater_safety ltc2308_spi pwm uart_rx uart_tx input_filter limit_guard trigger_latch
+  position_offset travel_guard step_config feed_rate status_counters estop_latch machine_outputs answer_source"}
 for tool in yosys nextpnr-ice40 python3; do
   command -v "$tool" >/dev/null || { echo "ice40_blocks: $tool not found"; exit 2; }
 done

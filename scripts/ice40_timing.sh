@@ -36,6 +36,7 @@ module ice40_cnc_top #(
     parameter ARCS      = 1,
     parameter HEATERS   = 1,
     parameter OUTPUTS   = 1,
+    parameter TRIGGER   = 1,
     parameter LEAN_TRIM = 0,
     parameter STEP_CFG  = 1
 ) (
@@ -72,7 +73,7 @@ module ice40_cnc_top #(
   wire [31:0] segments_done;
   cnc_core #(
       .N_AXES(N_AXES), .PROTO_V2(PROTO_V2), .PROFILES(PROFILES), .ARCS(ARCS), .HEATERS(HEATERS),
-      .OUTPUTS(OUTPUTS), .LEAN_TRIM(LEAN_TRIM), .STEP_CFG(STEP_CFG)
+      .OUTPUTS(OUTPUTS), .TRIGGER(TRIGGER), .LEAN_TRIM(LEAN_TRIM), .STEP_CFG(STEP_CFG)
   ) u_core (
       .clk(clk), .rst(rst), .rx(rx), .tx(tx), .step(step), .dir(dir), .laser(laser),
       .estop(estop), .heater(heater), .adc_convst(adc_convst), .adc_sck(adc_sck),

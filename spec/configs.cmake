@@ -3,22 +3,22 @@
 # FPGACNC_CONFIG_ARGS_<name> (Verilator -G arguments; fpgacnc_verilated(... CONFIG <name>)).
 set(FPGACNC_CONFIGS v1-board v1-board-fixed v1-board-untrimmed v1-4axis v1-4axis-fixed lines-2axis no-arcs-4axis no-profiles-heaters-4axis full-2axis full-4axis)
 # v1-board: the original 2-axis protocol-v1 controller (no FIFO, no v2), with the runtime step-timing port
-set(FPGACNC_CONFIG_ARGS_v1-board -GN_AXES=2 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GLEAN_TRIM=1 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_v1-board -GN_AXES=2 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GTRIGGER=0 -GLEAN_TRIM=1 -GSTEP_CFG=1)
 # v1-board-fixed: v1-board with the step timing fixed at the defaults (no cfg port): the original controller's feature set
-set(FPGACNC_CONFIG_ARGS_v1-board-fixed -GN_AXES=2 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GLEAN_TRIM=1 -GSTEP_CFG=0)
+set(FPGACNC_CONFIG_ARGS_v1-board-fixed -GN_AXES=2 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GTRIGGER=0 -GLEAN_TRIM=1 -GSTEP_CFG=0)
 # v1-board-untrimmed: v1-board with the general datapath (LEAN_TRIM 0): the lockstep reference of the v1 trims
-set(FPGACNC_CONFIG_ARGS_v1-board-untrimmed -GN_AXES=2 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GLEAN_TRIM=0 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_v1-board-untrimmed -GN_AXES=2 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GTRIGGER=0 -GLEAN_TRIM=0 -GSTEP_CFG=1)
 # v1-4axis: protocol v1 only with 4 axes (axes 3 and 4 never move: v1 packets carry X and Y)
-set(FPGACNC_CONFIG_ARGS_v1-4axis -GN_AXES=4 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GLEAN_TRIM=1 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_v1-4axis -GN_AXES=4 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GTRIGGER=0 -GLEAN_TRIM=1 -GSTEP_CFG=1)
 # v1-4axis-fixed: v1-4axis with the step timing fixed at the defaults (no cfg port)
-set(FPGACNC_CONFIG_ARGS_v1-4axis-fixed -GN_AXES=4 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GLEAN_TRIM=1 -GSTEP_CFG=0)
-# lines-2axis: protocols v1 and v2 with LINE, DWELL and OUTPUT only (no profiles, arcs or heaters), 2 axes
-set(FPGACNC_CONFIG_ARGS_lines-2axis -GN_AXES=2 -GPROTO_V2=1 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_v1-4axis-fixed -GN_AXES=4 -GPROTO_V2=0 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=0 -GTRIGGER=0 -GLEAN_TRIM=1 -GSTEP_CFG=0)
+# lines-2axis: protocols v1 and v2 with LINE, DWELL and OUTPUT only (no profiles, arcs, heaters or homing / probing trigger), 2 axes
+set(FPGACNC_CONFIG_ARGS_lines-2axis -GN_AXES=2 -GPROTO_V2=1 -GPROFILES=0 -GARCS=0 -GHEATERS=0 -GOUTPUTS=1 -GTRIGGER=0 -GLEAN_TRIM=0 -GSTEP_CFG=1)
 # no-arcs-4axis: everything but the circular DDA, 4 axes
-set(FPGACNC_CONFIG_ARGS_no-arcs-4axis -GN_AXES=4 -GPROTO_V2=1 -GPROFILES=1 -GARCS=0 -GHEATERS=1 -GOUTPUTS=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_no-arcs-4axis -GN_AXES=4 -GPROTO_V2=1 -GPROFILES=1 -GARCS=0 -GHEATERS=1 -GOUTPUTS=1 -GTRIGGER=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
 # no-profiles-heaters-4axis: v2 with arcs at constant feed but no trapezoidal profiles and no heaters, 4 axes
-set(FPGACNC_CONFIG_ARGS_no-profiles-heaters-4axis -GN_AXES=4 -GPROTO_V2=1 -GPROFILES=0 -GARCS=1 -GHEATERS=0 -GOUTPUTS=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_no-profiles-heaters-4axis -GN_AXES=4 -GPROTO_V2=1 -GPROFILES=0 -GARCS=1 -GHEATERS=0 -GOUTPUTS=1 -GTRIGGER=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
 # full-2axis: every feature, 2 axes: the DE1-SoC board's core
-set(FPGACNC_CONFIG_ARGS_full-2axis -GN_AXES=2 -GPROTO_V2=1 -GPROFILES=1 -GARCS=1 -GHEATERS=1 -GOUTPUTS=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_full-2axis -GN_AXES=2 -GPROTO_V2=1 -GPROFILES=1 -GARCS=1 -GHEATERS=1 -GOUTPUTS=1 -GTRIGGER=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
 # full-4axis: every feature, 4 axes: cnc_core's defaults, the simulated board, the twins' RTL and the benches
-set(FPGACNC_CONFIG_ARGS_full-4axis -GN_AXES=4 -GPROTO_V2=1 -GPROFILES=1 -GARCS=1 -GHEATERS=1 -GOUTPUTS=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)
+set(FPGACNC_CONFIG_ARGS_full-4axis -GN_AXES=4 -GPROTO_V2=1 -GPROFILES=1 -GARCS=1 -GHEATERS=1 -GOUTPUTS=1 -GTRIGGER=1 -GLEAN_TRIM=0 -GSTEP_CFG=1)

@@ -237,7 +237,7 @@ TEST(CncCoreLean, V2FrameIsNotUnderstood) {
   EXPECT_EQ(b.dut().segments_done, 0u);
 }
 
-// v2 build with LINE/DWELL only: LINE_PROFILE, ARC and heater frames are unknown types.
+// v2 build with LINE/DWELL only: LINE_PROFILE, ARC, heater and trigger frames are unknown types.
 TEST(CncCoreLean, LinesOnlyBuildAnswersUnknownType) {
   namespace v2 = fpgacnc::tb::v2;
   fpgacnc::tb::PinHarness<Vcnc_core_lines_2axis> b(kAxes,
@@ -260,8 +260,10 @@ TEST(CncCoreLean, LinesOnlyBuildAnswersUnknownType) {
     return std::nullopt;
   };
   // type, payload length (the length each type requires when it is built)
+  // (TRIGGER 0x0A, SET_POSITION 0x0B, TRIGGER_QUERY 0x0C: lines-2axis has TRIGGER 0)
   const std::pair<uint8_t, size_t> off[] = {{0x12, 36}, {0x13, 63}, {0x20, 20}, {0x21, 3},
-                                            {0x22, 4},  {0x23, 13}, {0x24, 2}};
+                                            {0x22, 4},  {0x23, 13}, {0x24, 2},  {0x0A, 3},
+                                            {0x0B, 10}, {0x0C, 0}};
   uint16_t unknown = 0;
   for (const auto& [type, len] : off) {
     b.send(v2::frame(type, 0, std::vector<uint8_t>(len, 0)));

@@ -35,10 +35,11 @@ constexpr fpgacnc::tb::PinAccess<Vde1soc_top> kBoardPins{
     [](Vde1soc_top& m, bool asserted) { m.rst_n = asserted ? 0 : 1; },
     [](const Vde1soc_top& m) { return static_cast<uint32_t>(m.step_x | (m.step_y << 1)); },
     [](const Vde1soc_top& m) { return static_cast<uint32_t>(m.dir_x | (m.dir_y << 1)); },
-    [](Vde1soc_top& m) {  // e-stop, hold and cycle-start buttons released (active low)
+    [](Vde1soc_top& m) {  // e-stop, hold and cycle-start buttons, probe released (active low)
       m.estop_n = 1;
       m.hold_n = 1;
       m.start_n = 1;
+      m.probe_n = 1;
     },
 };
 

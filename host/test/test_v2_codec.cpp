@@ -427,9 +427,9 @@ TEST(V2Codec, DecodersRejectWrongTypeAndLength) {
   EXPECT_NO_THROW(v2::decode_nak(n));
   n.payload[1] = 0;
   EXPECT_THROW(v2::decode_nak(n), v2::ProtocolError);
-  n.payload[1] = fpgacnc::spec::kNakTravel;  // the last reason
+  n.payload[1] = fpgacnc::spec::kNakBusy;  // the last reason
   EXPECT_NO_THROW(v2::decode_nak(n));
-  n.payload[1] = fpgacnc::spec::kNakTravel + 1;
+  n.payload[1] = fpgacnc::spec::kNakBusy + 1;
   EXPECT_THROW(v2::decode_nak(n), v2::ProtocolError);
   n.payload.push_back(0);
   EXPECT_THROW(v2::decode_nak(n), v2::ProtocolError);

@@ -23,6 +23,9 @@
 // Feed hold and cycle start (docs/machine.md): the push buttons KEY[1] (hold_n) and KEY[2]
 // (start_n), active low (the board's buttons read low while pressed and are debounced on the
 // board; the core filters them again).
+// Probe (docs/machine.md "Homing and probing (hardware)"): probe_n GPIO_0[21], weak pull-up on,
+// active low (PROBE_ACTIVE_LOW 1): a touch plate or a normally-open probe switch to ground reads
+// low at contact; an unconnected pin reads high, released, so PROBE_ENABLE is 1 by default.
 // The reset button is synchronized (two flops) and released synchronously.
 // Its cnc_core is the configuration full-2axis of spec/configs.toml (fpgacnc_configs.vh).
 `default_nettype none
@@ -35,7 +38,10 @@ module de1soc_top #(
     parameter FAN_PWM_HZ = 1000,
     parameter LIMIT_FILTER_CLKS = `FPGACNC_DEF_LIMIT_FILTER_CLKS,
     parameter [31:0] LIMIT_ENABLE = `FPGACNC_DEF_LIMIT_ENABLE,
-    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW
+    parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW,
+    parameter PROBE_FILTER_CLKS = `FPGACNC_DEF_PROBE_FILTER_CLKS,
+    parameter PROBE_ENABLE = 1,
+    parameter PROBE_ACTIVE_LOW = 1
 ) (
     input  wire       clk,
     input  wire       rst_n,
@@ -64,6 +70,7 @@ module de1soc_top #(
     input  wire       lim_y_max,
     input  wire       hold_n,
     input  wire       start_n,
+    input  wire       probe_n,
     output wire       heater_hotend,
     output wire       heater_bed,
     output wire       ADC_CONVST,
@@ -94,6 +101,7 @@ module de1soc_top #(
   wire [1:0] heater_w;
   wire [3:0] limit_state;
   wire limit_trip;
+  wire probe_state;
   assign heater_hotend = heater_w[0];
   assign heater_bed    = heater_w[1];
 
@@ -106,13 +114,17 @@ module de1soc_top #(
       .ARCS      (`FPGACNC_CFG_FULL_2AXIS_ARCS),
       .HEATERS   (`FPGACNC_CFG_FULL_2AXIS_HEATERS),
       .OUTPUTS   (`FPGACNC_CFG_FULL_2AXIS_OUTPUTS),
+      .TRIGGER   (`FPGACNC_CFG_FULL_2AXIS_TRIGGER),
       .LEAN_TRIM (`FPGACNC_CFG_FULL_2AXIS_LEAN_TRIM),
       .STEP_CFG  (`FPGACNC_CFG_FULL_2AXIS_STEP_CFG),
       .FAN_PWM_HZ(FAN_PWM_HZ),
       .LIMIT_FILTER_CLKS(LIMIT_FILTER_CLKS),
       .LIMIT_ENABLE     (LIMIT_ENABLE),
       .LIMIT_ACTIVE_LOW (LIMIT_ACTIVE_LOW),
-      .BUTTON_ACTIVE_LOW(2'b11)
+      .BUTTON_ACTIVE_LOW(2'b11),
+      .PROBE_FILTER_CLKS(PROBE_FILTER_CLKS),
+      .PROBE_ENABLE     (PROBE_ENABLE),
+      .PROBE_ACTIVE_LOW (PROBE_ACTIVE_LOW)
   ) u_core (
       .clk         (clk),
       .rst         (rst),
@@ -130,6 +142,7 @@ module de1soc_top #(
       .limit_max   ({lim_y_max, lim_x_max}),
       .hold_in     (hold_n),
       .start_in    (start_n),
+      .probe_in    (probe_n),
       .heater      (heater_w),
       .adc_convst  (ADC_CONVST),
       .adc_sck     (ADC_SCK),
@@ -167,7 +180,8 @@ module de1soc_top #(
       .clamped      (clamped),
       .naks         (naks),
       .limit_state  (limit_state),
-      .limit_trip   (limit_trip)
+      .limit_trip   (limit_trip),
+      .probe_state  (probe_state)
   );
 
   // The status the board does not display.
@@ -176,7 +190,8 @@ module de1soc_top #(
                          numerator_y, packet_count[15:8], frame_errors[15:1], timeouts[15:1],
                          overruns[15:1], violations, last_feed[15:8], fifo_level, next_seq,
                          segments_done, faults[7:1], frames_ok, crc_errors, length_errors,
-                         unknown_types, noise_bytes, clamped, naks, limit_state, limit_trip};
+                         unknown_types, noise_bytes, clamped, naks, limit_state, limit_trip,
+                         probe_state};
   /* verilator lint_on UNUSEDSIGNAL */
 
   reg [HB_W-1:0] hb_cnt_reg;

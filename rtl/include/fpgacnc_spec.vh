@@ -65,6 +65,20 @@
 `define FPGACNC_T_MOTION 8'h08
 `define FPGACNC_LEN_MOTION 8'd9
 `define FPGACNC_LENI_MOTION 9
+// TRIGGER: mode u8 (0 DISARM, 1 HOME, 2 PROBE to contact, 3 PROBE to release), switch mask u16 (HOME): arms the homing / probing trigger, see below
+`define FPGACNC_T_TRIGGER 8'h0A
+`define FPGACNC_LEN_TRIGGER 8'd3
+`define FPGACNC_LENI_TRIGGER 3
+// SET_POSITION: axis mask u16, then int32 per axis (all N_AXES): sets those position counters, clears POS_UNTRUSTED, see below
+`define FPGACNC_T_SET_POSITION 8'h0B
+`define FPGACNC_LEN_SET_POSITION_HEADER 8'd2
+`define FPGACNC_LEN_SET_POSITION_PER_AXIS 8'd4
+`define FPGACNC_LENI_SET_POSITION_HEADER 2
+`define FPGACNC_LENI_SET_POSITION_PER_AXIS 4
+// TRIGGER_QUERY: asks for the TRIGGER_REPORT frame
+`define FPGACNC_T_TRIGGER_QUERY 8'h0C
+`define FPGACNC_LEN_TRIGGER_QUERY 8'd0
+`define FPGACNC_LENI_TRIGGER_QUERY 0
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 `define FPGACNC_T_LINE 8'h10
 `define FPGACNC_LEN_LINE_HEADER 8'd6
@@ -127,6 +141,12 @@
 `define FPGACNC_T_IDENT 8'h84
 `define FPGACNC_LEN_IDENT 8'd18
 `define FPGACNC_LENI_IDENT 18
+// TRIGGER_REPORT: mode u8, flags u8 (bit 0 ARMED, bit 1 DONE), switches fired u16, latched position int32 per axis; see below
+`define FPGACNC_T_TRIGGER_REPORT 8'h85
+`define FPGACNC_LEN_TRIGGER_REPORT_HEADER 8'd4
+`define FPGACNC_LEN_TRIGGER_REPORT_PER_AXIS 8'd4
+`define FPGACNC_LENI_TRIGGER_REPORT_HEADER 4
+`define FPGACNC_LENI_TRIGGER_REPORT_PER_AXIS 4
 
 // ---- NAK reasons (8 bits)
 // CRC mismatch
@@ -145,6 +165,8 @@
 `define FPGACNC_NAK_BAD_FIELD 8'd7
 // a LINE, LINE_PROFILE or ARC whose end leaves the travel of an axis with soft limits on (CONFIG_TRAVEL); not queued
 `define FPGACNC_NAK_TRAVEL 8'd8
+// a SET_POSITION while the motion is not idle (FIFO not empty, a segment prepared or running); nothing changed
+`define FPGACNC_NAK_BUSY 8'd9
 
 // ---- STATUS
 // bytes per heater channel in STATUS
@@ -159,12 +181,14 @@
 `define FPGACNC_STATE_FAULT_BIT 2
 // the e-stop input is active now
 `define FPGACNC_STATE_ESTOP_BIT 3
-// positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR)
+// positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR; cleared by SET_POSITION)
 `define FPGACNC_STATE_POS_UNTRUSTED_BIT 4
 // a feed hold is in effect (MOTION HOLD or the hold input; until MOTION RESUME or the cycle-start input)
 `define FPGACNC_STATE_HOLD_BIT 5
 // the motion rate is 0: motion is frozen (a hold is complete when HOLD is set too)
 `define FPGACNC_STATE_STOPPED_BIT 6
+// the probe input is asserted (filtered; 0 in builds without the trigger or with the probe not wired)
+`define FPGACNC_STATE_PROBE_BIT 7
 // STEP timing violation (in an ARC also a step within DIR setup of a DIR change)
 `define FPGACNC_FAULT_STEP_TIMING_BIT 0
 // an ARC frame inconsistent with its walk
@@ -238,6 +262,18 @@
 `define FPGACNC_MOTION_RESERVED 248
 // MOTION feed and rapid rates: Q1.15, 0x8000 = 100 % (the planned speed); 1 .. 0x8000, else BAD_FIELD
 `define FPGACNC_RATE_ONE 32_768
+// TRIGGER mode 0 DISARM: the trigger does nothing (mask 0)
+`define FPGACNC_TRIGGER_DISARM 0
+// TRIGGER mode 1 HOME: mask bit a = min switch of axis a, bit 8 + a its max switch (axes 0..7); non-zero, only axes < N_AXES
+`define FPGACNC_TRIGGER_HOME 1
+// TRIGGER mode 2 PROBE: fires when the filtered probe becomes asserted (G38.2 / G38.3; mask 0)
+`define FPGACNC_TRIGGER_PROBE 2
+// TRIGGER mode 3 PROBE: fires when the filtered probe becomes released (G38.4 / G38.5; mask 0); modes above 3: BAD_FIELD
+`define FPGACNC_TRIGGER_PROBE_RELEASE 3
+// TRIGGER_REPORT flags bit 0 ARMED: waiting for its edge
+`define FPGACNC_TRIGGER_ARMED 1
+// TRIGGER_REPORT flags bit 1 DONE: fired (HOME: every armed switch), positions latched
+`define FPGACNC_TRIGGER_DONE 2
 // Q1.15 duty 100 % (largest duty_max and manual duty)
 `define FPGACNC_DUTY_ONE 16'h8000
 // coolant flood (M8 on, M9 off)
@@ -335,6 +371,12 @@
 `define FPGACNC_DEF_LIMIT_FILTER_CLKS 50_000
 // LIMIT_ENABLE: limit switches wired, bit a = min of axis a, bit 16 + a = max (0: none; a board enables those it has)
 `define FPGACNC_DEF_LIMIT_ENABLE 0
+// PROBE_FILTER_CLKS: probe input debounce, clocks (10 us at 50 MHz: a probe's contact must not wait a switch's millisecond)
+`define FPGACNC_DEF_PROBE_FILTER_CLKS 500
+// PROBE_ENABLE: the probe input is wired (0: it reads released; a board enables it)
+`define FPGACNC_DEF_PROBE_ENABLE 0
+// PROBE_ACTIVE_LOW: the probe is asserted at a low pin
+`define FPGACNC_DEF_PROBE_ACTIVE_LOW 0
 // LIMIT_ACTIVE_LOW: switches asserted at a low pin, bits as LIMIT_ENABLE (0: high = asserted, a normally-closed switch to ground with a pull-up)
 `define FPGACNC_DEF_LIMIT_ACTIVE_LOW 0
 

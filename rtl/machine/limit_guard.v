@@ -13,15 +13,21 @@
 //                  request's clock is the direction of that step.
 //   busy           the executor holds a segment (running, or waiting DIR hold / setup).
 //   clear          FAULT_CLEAR (1-clock strobe).
+//   sup_min[a], sup_max[a]   the switch's trips are suppressed in this clock (a HOME armed on it:
+//                  rtl/machine/trigger_latch.v): neither its rise nor a step request toward it
+//                  trips; its block stays.
+//   trust          SET_POSITION (1-clock strobe): the positions are trusted again.
 //   block[a]       1: no step request of axis a may be issued in this clock (its step would go
 //                  toward an asserted switch, or the alarm is latched). From registers only.
 //   trip           the alarm, latched: set on the edge after a clock in which an enabled switch
-//                  rose while busy, or a step request went toward an asserted switch; cleared
+//                  rose while busy, or a step request went toward an asserted switch (switches
+//                  not suppressed); cleared
 //                  on the edge after a clear while the switch that tripped is released (a
 //                  clear while it is held does nothing). cnc_core aborts motion while it is high.
 //   trip_axis, trip_max   the switch that tripped (the lowest axis, min before max, when several
 //                  trip in the same clock); kept after the clear until the next trip.
-//   untrusted      set with trip; cleared by rst only (position counters kept, not homed).
+//   untrusted      set with trip; cleared by rst, and by trust while the alarm is not latched
+//                  (and no trip on that edge).
 // Stop bound: a switch whose filtered level rises in clock c blocks its axis's steps toward it
 // in clock c itself (no STEP rise toward it from edge c + 1); other axes may still issue a step
 // request in c (STEP rising on edge c + 1), none from clock c + 1 (trip, hence abort, is high).
@@ -41,6 +47,9 @@ module limit_guard #(
     input wire [N_AXES-1:0] dir,
     input wire              busy,
     input wire              clear,
+    input wire [N_AXES-1:0] sup_min,
+    input wire [N_AXES-1:0] sup_max,
+    input wire              trust,
 
     output wire [N_AXES-1:0] block,
     output wire              trip,
@@ -59,8 +68,10 @@ module limit_guard #(
   reg [3:0] trip_axis_reg;
 
   wire [N_AXES-1:0] toward = (dir & lim_max) | (~dir & lim_min);  // a step now would go into a switch
-  wire [N_AXES-1:0] cause_min = ({N_AXES{busy}} & rise_min) | (step_want & ~dir & lim_min);
-  wire [N_AXES-1:0] cause_max = ({N_AXES{busy}} & rise_max) | (step_want & dir & lim_max);
+  wire [N_AXES-1:0] cause_min = (({N_AXES{busy}} & rise_min) | (step_want & ~dir & lim_min)) &
+                                ~sup_min;
+  wire [N_AXES-1:0] cause_max = (({N_AXES{busy}} & rise_max) | (step_want & dir & lim_max)) &
+                                ~sup_max;
   wire trip_now = |{cause_min, cause_max};
 
   // the first cause, axis 0 first, min before max
@@ -89,6 +100,7 @@ module limit_guard #(
   always @(posedge clk) begin
     trip_reg <= trip_now || stays;
     if (trip_now) untrusted_reg <= 1'b1;
+    else if (trust && !trip_reg) untrusted_reg <= 1'b0;
     if (trip_now && !stays) begin
       trip_axis_reg <= id_axis;
       trip_max_reg  <= id_max;
@@ -128,7 +140,10 @@ module limit_guard #(
     end
 
   reg [15:0] f_cmin_q, f_cmax_q;  // the causes of the previous clock
+  reg [15:0] f_smin_q, f_smax_q;  // the suppressed switches of the previous clock
   always @(posedge clk) begin
+    f_smin_q <= {{(16 - N_AXES) {1'b0}}, sup_min};
+    f_smax_q <= {{(16 - N_AXES) {1'b0}}, sup_max};
     f_cmin_q <= {{(16 - N_AXES) {1'b0}}, cause_min};
     f_cmax_q <= {{(16 - N_AXES) {1'b0}}, cause_max};
   end
@@ -155,9 +170,12 @@ module limit_guard #(
       // The switch named is one that caused the trip.
       if (!$past(trip_reg) && trip_reg)
         assert (trip_max_reg ? f_cmax_q[trip_axis_reg] : f_cmin_q[trip_axis_reg]);
-      // Set only by a cause; the flag is never cleared but by rst.
+      // Set only by a cause; the flag is cleared only by rst or a trust (SET_POSITION).
       if (!$past(trip_reg) && trip_reg) assert ($past(trip_now));
-      if ($past(untrusted_reg)) assert (untrusted_reg);
+      if ($past(untrusted_reg) && !$past(trust)) assert (untrusted_reg);
+      // A suppressed switch never trips (its HOME is armed).
+      if (!$past(trip_reg) && trip_reg)
+        assert (trip_max_reg ? !f_smax_q[trip_axis_reg] : !f_smin_q[trip_axis_reg]);
       cover (!$past(trip_reg) && trip_reg && $past(busy) && ($past(rise_min) != 0));
       cover ($past(trip_reg) && !trip_reg);
     end

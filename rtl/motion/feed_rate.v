@@ -23,6 +23,8 @@
 //             running segment and the queue as on an e-stop, positions kept) and on its edge cancel
 //             and hold clear (a hold request in that clock keeps the hold). A resume does not end
 //             the hold of a cancel in progress.
+//   cancel_req   1-clock strobe (the probe trigger, rtl/machine/trigger_latch.v): a CANCEL as
+//             set_cancel with load, without changing the rates or the ramp.
 //   hold      the hold latch; stopped = (r == 0), a register.
 // After rst: r = 2^32, acc = 0, adv = 1, p = 0, hold = 0, feed = rapid = 0x8000, ramp = RAMP0: adv
 // is high in every clock until a MOTION frame or a hold request changes the target.
@@ -49,6 +51,7 @@ module feed_rate #(
     input wire        set_cancel,
     input wire        hold_req,
     input wire        resume_req,
+    input wire        cancel_req,
     input wire        rapid_seg,
 
     output wire        adv,
@@ -109,9 +112,9 @@ module feed_rate #(
       rapid_reg <= set_rapid;
       ramp_reg  <= set_ramp;
     end
-    if ((load && (set_hold || set_cancel)) || hold_req) hold_reg <= 1'b1;
+    if ((load && (set_hold || set_cancel)) || hold_req || cancel_req) hold_reg <= 1'b1;
     else if (flush_w || (((load && set_resume) || resume_req) && !cancel_reg)) hold_reg <= 1'b0;
-    if (load && set_cancel) cancel_reg <= 1'b1;
+    if ((load && set_cancel) || cancel_req) cancel_reg <= 1'b1;
     else if (flush_w) cancel_reg <= 1'b0;
     if (rst) begin
       r_reg       <= ONE;

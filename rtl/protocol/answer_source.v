@@ -6,12 +6,12 @@
 //   m_axis_*     bytes for uart_tx, held until taken.
 //   PROTO_V2 = 1 response_encoder (rtl/protocol/response_encoder.v) with 64-byte payloads and the 16 heater
 //                bytes of STATUS: the request strobes (ident_req .. v1_ack) and the live state go to
-//                it; this module forms STATUS's state byte {0, stopped, hold, limit_untrusted,
+//                it; this module forms STATUS's state byte {probe, stopped, hold, limit_untrusted,
 //                estop_active, faults != 0, v2_mode, busy} and its limit bytes {0, 0, 0,
 //                limit_trip_max, limit_trip_axis} and the switch states u16 (bit a = lim_min of axis
 //                a, bit 8 + a = lim_max; axes 0..7 only); counters are STATUS's nine u16 in order
 //                (frames_ok, crc_errors, length_errors, unknown_types, timeouts, frame_errors,
-//                overruns, noise_bytes, clamped).
+//                overruns, noise_bytes, clamped); trig_req, trig_state, trig_pos: TRIGGER_REPORT.
 //   PROTO_V2 = 0 an 8-bit count of the 0xAA answers owed: v1_ack (a completed v1 move) adds one, each
 //                0xAA taken subtracts one; 0xAA is offered while the count is not 0. The v2
 //                requests and state are not read.
@@ -34,6 +34,7 @@ module answer_source #(
 
     input wire       ident_req,
     input wire       status_req,
+    input wire       trig_req,
     input wire       nak_req,
     input wire [7:0] nak_seq,
     input wire [7:0] nak_reason,
@@ -51,6 +52,7 @@ module answer_source #(
     input wire                 limit_untrusted,
     input wire                 hold,            // feed hold in effect (feed_rate)
     input wire                 stopped,         // motion rate 0 (feed_rate)
+    input wire                 probe,           // the filtered probe input (trigger builds)
     input wire [          7:0] faults,
     input wire [32*N_AXES-1:0] position,
     input wire [     16*9-1:0] counters,
@@ -59,6 +61,8 @@ module answer_source #(
     input wire [   N_AXES-1:0] lim_min,
     input wire [   N_AXES-1:0] lim_max,
     input wire [        127:0] heat_status,
+    input wire [         31:0] trig_state,
+    input wire [32*N_AXES-1:0] trig_pos,
 
     output wire [7:0] m_axis_tdata,
     output wire       m_axis_tvalid,
@@ -79,7 +83,7 @@ module answer_source #(
       /* verilator lint_off UNUSEDSIGNAL */
       wire enc_frame_start;  // not needed here
       /* verilator lint_on UNUSEDSIGNAL */
-      wire [7:0] state_w = {1'b0, stopped, hold, limit_untrusted, estop_active, faults != 8'd0,
+      wire [7:0] state_w = {probe, stopped, hold, limit_untrusted, estop_active, faults != 8'd0,
                             v2_mode, busy};
       /* verilator lint_off UNUSEDSIGNAL */
       wire [15:0] lim_min16 = {{(16 - N_AXES) {1'b0}}, lim_min};  // axes 8..14 not reported
@@ -100,6 +104,7 @@ module answer_source #(
           .rst          (rst),
           .ident_req    (ident_req),
           .status_req   (status_req),
+          .trig_req     (trig_req),
           .nak_req      (nak_req),
           .nak_seq      (nak_seq),
           .nak_reason   (nak_reason),
@@ -116,6 +121,8 @@ module answer_source #(
           .counters     (counters),
           .limits       (limits_w),
           .heat_status  (heat_status),
+          .trig_state   (trig_state),
+          .trig_pos     (trig_pos),
           .m_axis_tdata (m_axis_tdata),
           .m_axis_tvalid(m_axis_tvalid),
           .m_axis_tready(m_axis_tready),
@@ -137,7 +144,8 @@ module answer_source #(
       wire unused_v2 = &{1'b0, ident_req, status_req, nak_req, nak_seq, nak_reason, ack_req,
                          done_evt, next_seq, fifo_free, fifo_level, segments_done, busy, v2_mode,
                          estop_active, limit_untrusted, hold, stopped, faults, position, counters,
-                         limit_trip_max, limit_trip_axis, lim_min, lim_max, heat_status};
+                         limit_trip_max, limit_trip_axis, lim_min, lim_max, heat_status,
+                         trig_req, probe, trig_state, trig_pos};
     end
   endgenerate
 

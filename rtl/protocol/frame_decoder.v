@@ -28,9 +28,17 @@
 //               with it), with motion_data {flags, feed, rapid, ramp} (payload bytes 0..8; valid
 //               with the strobe). Field rules: flags bits 7:3 0 and RESUME not with HOLD or
 //               CANCEL, feed and rapid 1 .. 0x8000, ramp >= 1 (else NAK BAD_FIELD).
+//   trig_wr, setpos_wr, trig_query (TRIGGER = 1)   an accepted TRIGGER (sequenced: fields mode
+//               0..3, mask u16 non-zero with bits of axes < min(N_AXES, 8) only for HOME (1), 0 for
+//               the other modes, else NAK BAD_FIELD), an accepted SET_POSITION (sequenced: LEN 2 +
+//               4 N_AXES, mask non-zero with bits < N_AXES only, else BAD_FIELD; after the SEQ
+//               rules NAK BUSY unless motion_quiet), a TRIGGER_QUERY (unsequenced, LEN 0); their
+//               payload in ctl_data (bytes 0 .. 1 + 4 N_AXES, byte i in [8*i+:8]; valid with the
+//               strobe). With TRIGGER = 0 the three types are unknown.
 //   frame_ok    a v2 frame that passed every check (HELLO, STATUS_QUERY, accepted, duplicate).
 //   crc_error, length_error, unknown_type   a v2 frame rejected for that reason (length_error
-//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER, FIFO_FULL or TRAVEL.
+//               also at the LEN byte); no strobe for BAD_FIELD, OUT_OF_ORDER, FIFO_FULL, TRAVEL or
+//               BUSY.
 //   timeout     a started v1 packet or v2 frame with no byte for WATCHDOG_CLKS clocks (v2: also
 //               NAK TIMEOUT, SEQ as received or 0 before the SEQ byte).
 //   noise       a byte dropped in HUNT. v1_packet   a v1 packet written to the FIFO.
@@ -39,7 +47,8 @@
 //   strobes above high from L + 1 to L + 2 (noise: the clock after its byte; BAD_LENGTH at the
 //   LEN byte: the clock after it; timeout: WATCHDOG_CLKS clocks after the last byte's clock).
 // Build options: PROFILES, ARCS, OUTPUTS, HEATERS = 0 make LINE_PROFILE, ARC, OUTPUT, the heater
-//   frames unknown types (their entry fields and heat_* constant 0).
+//   frames unknown types (their entry fields and heat_* constant 0); TRIGGER = 0 TRIGGER,
+//   SET_POSITION and TRIGGER_QUERY.
 // Requires N_AXES >= 2, MAX_PAYLOAD <= 127. rst is synchronous, active high (auto mode,
 //   next_seq = 0).
 `default_nettype none
@@ -53,7 +62,8 @@ module frame_decoder #(
     parameter PROFILES      = 1,  // 0: LINE_PROFILE (0x12) is an unknown type
     parameter ARCS          = 1,  // 0: ARC (0x13) is an unknown type
     parameter OUTPUTS       = 1,  // 0: OUTPUT (0x15) is an unknown type
-    parameter HEATERS       = 1   // 0: heater frames (0x20..0x24) are unknown types
+    parameter HEATERS       = 1,  // 0: heater frames (0x20..0x24) are unknown types
+    parameter TRIGGER       = 0   // 0: TRIGGER, SET_POSITION, TRIGGER_QUERY are unknown types
 ) (
     input wire clk,
     input wire rst,
@@ -81,6 +91,11 @@ module frame_decoder #(
     output wire       status_req,
     output wire        motion_set,
     output wire [71:0] motion_data,
+    output wire        trig_wr,
+    output wire        setpos_wr,
+    output wire        trig_query,
+    output wire [8*(2+4*N_AXES)-1:0] ctl_data,
+    input  wire        motion_quiet,  // FIFO empty, nothing prepared or running (SET_POSITION)
     output wire       ack_req,
     output wire       nak,
     output wire [7:0] nak_seq,
@@ -127,7 +142,18 @@ module frame_decoder #(
   localparam [7:0] R_BAD_CRC = `FPGACNC_NAK_BAD_CRC, R_BAD_LENGTH = `FPGACNC_NAK_BAD_LENGTH,
                    R_UNKNOWN_TYPE = `FPGACNC_NAK_UNKNOWN_TYPE, R_TIMEOUT = `FPGACNC_NAK_TIMEOUT,
                    R_OUT_OF_ORDER = `FPGACNC_NAK_OUT_OF_ORDER, R_FIFO_FULL = `FPGACNC_NAK_FIFO_FULL,
-                   R_BAD_FIELD = `FPGACNC_NAK_BAD_FIELD, R_TRAVEL = `FPGACNC_NAK_TRAVEL;
+                   R_BAD_FIELD = `FPGACNC_NAK_BAD_FIELD, R_TRAVEL = `FPGACNC_NAK_TRAVEL,
+                   R_BUSY = `FPGACNC_NAK_BUSY;
+  localparam [7:0] T_TRIG = `FPGACNC_T_TRIGGER, T_SETPOS = `FPGACNC_T_SET_POSITION,
+                   T_TQUERY = `FPGACNC_T_TRIGGER_QUERY;
+  // TRIGGER HOME mask: bit a (min) and 8 + a (max) of the axes < min(N_AXES, 8)
+  localparam integer NSW_I = (N_AXES > 8) ? 8 : N_AXES;
+  localparam integer SWM_I = (1 << NSW_I) - 1;
+  localparam [15:0] SW_MASK = {SWM_I[7:0], SWM_I[7:0]};
+  localparam integer AXM_I = (1 << N_AXES) - 1;
+  localparam [15:0] AX_MASK = AXM_I[15:0];  // SET_POSITION mask: axes < N_AXES
+  localparam integer SPLEN_I = 2 + 4 * N_AXES;
+  localparam [7:0] SPLEN = SPLEN_I[7:0];
 
   localparam integer MOT_RSV_I = `FPGACNC_MOTION_RESERVED;
   localparam [7:0] MOT_RSV = MOT_RSV_I[7:0];
@@ -157,7 +183,7 @@ module frame_decoder #(
   reg  [       7:0] next_seq_reg;
 
   reg cfg_wr_reg, heat_wr_reg, fault_clear_reg, release_reg, hello_reg, status_reg, ack_reg, nak_reg;
-  reg motion_reg;
+  reg motion_reg, trig_wr_reg, setpos_wr_reg, trig_query_reg;
   reg [7:0] nak_seq_reg, nak_reason_reg;
   reg frame_ok_reg, crc_error_reg, length_error_reg, unknown_type_reg, timeout_reg, noise_reg;
   reg v1_packet_reg, v1_overrun_reg;
@@ -197,6 +223,9 @@ module frame_decoder #(
   wire t_dwell = (type_reg == T_DWELL);
   wire t_ctrav = (type_reg == T_CTRAV);
   wire t_motion = (type_reg == T_MOTION);
+  wire t_trig = (TRIGGER != 0) && (type_reg == T_TRIG);
+  wire t_setpos = (TRIGGER != 0) && (type_reg == T_SETPOS);
+  wire t_tquery = (TRIGGER != 0) && (type_reg == T_TQUERY);
   // ---- heater frames
   wire t_hcfg = (type_reg == T_HCFG);
   wire t_hset = (type_reg == T_HSET);
@@ -210,7 +239,7 @@ module frame_decoder #(
   // TYPE and LEN rules, formed (block-local regs) and registered on the edge that takes the
   // frame's last byte, as the field rules are: LEN, TYPE and the flag byte are complete then and
   // stay until the CHECK clock, the only clock that reads them.
-  reg known_reg, len_ok_reg, ctrav_ok_reg, motion_ok_reg;
+  reg known_reg, len_ok_reg, ctrav_ok_reg, motion_ok_reg, trig_ok_reg, setpos_ok_reg;
   always @(posedge clk) begin : len_rules
     reg short_steps, line_len_ok, prof_len_ok, heat_len_ok;
     reg [7:0] len_m6, len_m28;
@@ -219,7 +248,17 @@ module frame_decoder #(
       len_ok_reg   <= 1'b0;
       ctrav_ok_reg <= 1'b0;
       motion_ok_reg <= 1'b0;
+      trig_ok_reg   <= 1'b0;
+      setpos_ok_reg <= 1'b0;
     end else if (take && st_reg == ST_CRC2) begin
+      // TRIGGER: mode 0..3; HOME (1): mask non-zero, switches of axes < min(N_AXES, 8) only;
+      // other modes: mask 0
+      trig_ok_reg <= pb(0) <= 8'd3 &&
+                     ((pb(0) == 8'd1) ? ({pb(1), pb(2)} != 16'd0 &&
+                                         ({pb(1), pb(2)} & ~SW_MASK) == 16'd0)
+                                      : {pb(1), pb(2)} == 16'd0);
+      // SET_POSITION: mask non-zero, axes < N_AXES only
+      setpos_ok_reg <= {pb(0), pb(1)} != 16'd0 && ({pb(0), pb(1)} & ~AX_MASK) == 16'd0;
       // CONFIG_TRAVEL: axis < N_AXES, flag bits 7:1 0, and MIN <= MAX when enabled
       ctrav_ok_reg <= pb(0) < NAX8 && pay_reg[15:9] == 7'd0 &&
                       (!pay_reg[8] || $signed(be32p(2)) <= $signed(be32p(6)));
@@ -247,8 +286,10 @@ module frame_decoder #(
                     (t_hsaf && len_reg == `FPGACNC_LEN_HEATER_SAFETY) ||
                     (t_hwd && len_reg == `FPGACNC_LEN_HEATER_WATCHDOG));
       known_reg <= t_hello || t_status || t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell ||
-               t_lprof || t_arc || t_out || t_heat || t_ctrav || t_motion;
-      len_ok_reg <= ((t_hello || t_status || t_fclr || t_rel) && len_reg == 8'd0) ||
+               t_lprof || t_arc || t_out || t_heat || t_ctrav || t_motion || t_trig || t_setpos ||
+               t_tquery;
+      len_ok_reg <= ((t_hello || t_status || t_fclr || t_rel || t_tquery) && len_reg == 8'd0) ||
+                (t_trig && len_reg == `FPGACNC_LEN_TRIGGER) || (t_setpos && len_reg == SPLEN) ||
                 (t_cfg && len_reg == `FPGACNC_LEN_CONFIG_AXIS) ||
                 (t_ctrav && len_reg == `FPGACNC_LEN_CONFIG_TRAVEL) ||
                 (t_motion && len_reg == `FPGACNC_LEN_MOTION) ||
@@ -262,7 +303,8 @@ module frame_decoder #(
   // payload, LEN and TYPE are complete then and stay until the CHECK clock, so field_ok holds the
   // rules of the frame being checked.
   wire field_ok_f;
-  wire field_ok = field_ok_f && (!t_ctrav || ctrav_ok_reg) && (!t_motion || motion_ok_reg);
+  wire field_ok = field_ok_f && (!t_ctrav || ctrav_ok_reg) && (!t_motion || motion_ok_reg) &&
+                  (!t_trig || trig_ok_reg) && (!t_setpos || setpos_ok_reg);
   frame_fields #(
       .N_AXES(N_AXES),
       .PB    (PB)
@@ -285,7 +327,7 @@ module frame_decoder #(
       .ok     (field_ok_f)
   );
   wire sequenced = t_fclr || t_cfg || t_num || t_rel || t_line || t_dwell || t_lprof || t_arc ||
-                   t_out || t_heat || t_ctrav;
+                   t_out || t_heat || t_ctrav || t_trig || t_setpos;
   wire to_fifo = t_num || t_line || t_dwell || t_lprof || t_arc || t_out;
   wire [7:0] seq_diff = seq_reg - next_seq_reg;
   wire seq_new = (seq_diff == 8'd0);
@@ -295,7 +337,8 @@ module frame_decoder #(
   wire moves = t_line || t_lprof || t_arc;  // the frames travel_guard checks
   wire travel_ok;
   wire v2_accept = v2_chk && (crc == 16'd0) && known_reg && len_ok_reg && field_ok && sequenced && seq_new &&
-                   (!moves || travel_ok) && (!to_fifo || m_axis_tready);
+                   (!moves || travel_ok) && (!t_setpos || motion_quiet) &&
+                   (!to_fifo || m_axis_tready);
   wire v1_write = chk_reg && chk_v1_reg && m_axis_tready;
 
   // The FIFO entry (entry_pack), packed in the CHECK clock only (don't-care in other clocks: the
@@ -345,6 +388,9 @@ module frame_decoder #(
     hello_reg        <= 1'b0;
     status_reg       <= 1'b0;
     motion_reg       <= 1'b0;
+    trig_wr_reg      <= 1'b0;
+    setpos_wr_reg    <= 1'b0;
+    trig_query_reg   <= 1'b0;
     ack_reg          <= 1'b0;
     nak_reg          <= 1'b0;
     frame_ok_reg     <= 1'b0;
@@ -380,6 +426,7 @@ module frame_decoder #(
           hello_reg    <= t_hello;
           status_reg   <= t_status || t_motion;
           motion_reg   <= t_motion;
+          trig_query_reg <= t_tquery;
         end else if (!seq_new && !seq_dup) begin
           nak_reg        <= 1'b1;
           nak_seq_reg    <= seq_reg;
@@ -392,6 +439,10 @@ module frame_decoder #(
           nak_reg        <= 1'b1;
           nak_seq_reg    <= seq_reg;
           nak_reason_reg <= R_TRAVEL;
+        end else if (t_setpos && !motion_quiet) begin
+          nak_reg        <= 1'b1;
+          nak_seq_reg    <= seq_reg;
+          nak_reason_reg <= R_BUSY;
         end else if (to_fifo && !m_axis_tready) begin
           nak_reg        <= 1'b1;
           nak_seq_reg    <= seq_reg;
@@ -404,6 +455,8 @@ module frame_decoder #(
           heat_wr_reg     <= t_heat;
           fault_clear_reg <= t_fclr;
           release_reg     <= t_rel;
+          trig_wr_reg     <= t_trig;
+          setpos_wr_reg   <= t_setpos;
           if (t_rel) v2_mode_reg <= 1'b0;
         end
       end
@@ -495,6 +548,9 @@ module frame_decoder #(
       hello_reg        <= 1'b0;
       status_reg       <= 1'b0;
       motion_reg       <= 1'b0;
+      trig_wr_reg      <= 1'b0;
+      setpos_wr_reg    <= 1'b0;
+      trig_query_reg   <= 1'b0;
       ack_reg          <= 1'b0;
       nak_reg          <= 1'b0;
       nak_seq_reg      <= 8'd0;
@@ -621,6 +677,10 @@ module frame_decoder #(
   assign status_req    = status_reg;
   assign motion_set    = motion_reg;
   assign motion_data   = pay_reg[71:0];
+  assign trig_wr       = trig_wr_reg;
+  assign setpos_wr     = setpos_wr_reg;
+  assign trig_query    = trig_query_reg;
+  assign ctl_data      = pay_reg[8*(2+4*N_AXES)-1:0];
   assign ack_req       = ack_reg;
   assign nak           = nak_reg;
   assign nak_seq       = nak_seq_reg;

@@ -12,10 +12,13 @@
 //   flush        empties the FIFO on this edge (an entry offered on it is dropped) and resyncs
 //                frame_decoder's queued end positions (travel_guard) to position: cnc_core holds it
 //                high on e-stop and on the hard-limit alarm.
+//   resync       resyncs the queued end positions only (the clock after a SET_POSITION wrote the
+//                position counters).
 //   level, free  entries in the FIFO and free slots (the ACK credit), registers.
 //   cfg_*, heat_*, fault_clear, hello, status_req, ack_req, nak*, next_seq, v2_mode, partial and
-//                the status strobes: frame_decoder's (rtl/protocol/frame_decoder.v); RELEASE is not used.
-// Build options (cnc_core passes its own): PROFILES, ARCS, OUTPUTS, HEATERS 0 or 1 (a frame of a
+//                the status strobes, trig_wr, setpos_wr, trig_query, ctl_data, motion_quiet:
+//                frame_decoder's (rtl/protocol/frame_decoder.v); RELEASE is not used.
+// Build options (cnc_core passes its own): PROFILES, ARCS, OUTPUTS, HEATERS, TRIGGER 0 or 1 (a frame of a
 // kind not built is answered NAK UNKNOWN_TYPE); FIFO_DEPTH a power of two, 2..32768. An illegal
 // value instantiates a module named front_v2_illegal_<rule>, which does not exist.
 `default_nettype none
@@ -28,7 +31,8 @@ module front_v2 #(
     parameter PROFILES      = 1,
     parameter ARCS          = 1,
     parameter OUTPUTS       = 1,
-    parameter HEATERS       = 1
+    parameter HEATERS       = 1,
+    parameter TRIGGER       = 0
 ) (
     input wire clk,
     input wire rst,
@@ -42,6 +46,7 @@ module front_v2 #(
     input  wire                                  m_axis_tready,
 
     input  wire                flush,
+    input  wire                resync,
     input  wire [32*N_AXES-1:0] position,
     output wire [        15:0] level,
     output wire [        15:0] free,
@@ -58,6 +63,11 @@ module front_v2 #(
     output wire         status_req,
     output wire         motion_set,
     output wire [ 71:0] motion_data,
+    output wire         trig_wr,
+    output wire         setpos_wr,
+    output wire         trig_query,
+    output wire [8*(2+4*N_AXES)-1:0] ctl_data,
+    input  wire         motion_quiet,
     output wire         ack_req,
     output wire         nak,
     output wire [  7:0] nak_seq,
@@ -94,6 +104,9 @@ module front_v2 #(
     if (HEATERS != 0 && HEATERS != 1) begin : g_bad_heaters
       front_v2_illegal_HEATERS_not_0_or_1 u_err ();
     end
+    if (TRIGGER != 0 && TRIGGER != 1) begin : g_bad_trigger
+      front_v2_illegal_TRIGGER_not_0_or_1 u_err ();
+    end
     if (FIFO_DEPTH < 2 || FIFO_DEPTH > 32768 || (FIFO_DEPTH & (FIFO_DEPTH - 1)) != 0)
     begin : g_bad_fifo_depth
       front_v2_illegal_FIFO_DEPTH_not_power_of_2_in_2_to_32768 u_err ();
@@ -113,7 +126,8 @@ module front_v2 #(
       .PROFILES     (PROFILES),
       .ARCS         (ARCS),
       .OUTPUTS      (OUTPUTS),
-      .HEATERS      (HEATERS)
+      .HEATERS      (HEATERS),
+      .TRIGGER      (TRIGGER)
   ) u_dec (
       .clk          (clk),
       .rst          (rst),
@@ -136,11 +150,16 @@ module front_v2 #(
       .status_req   (status_req),
       .motion_set   (motion_set),
       .motion_data  (motion_data),
+      .trig_wr      (trig_wr),
+      .setpos_wr    (setpos_wr),
+      .trig_query   (trig_query),
+      .ctl_data     (ctl_data),
+      .motion_quiet (motion_quiet),
       .ack_req      (ack_req),
       .nak          (nak),
       .nak_seq      (nak_seq),
       .nak_reason   (nak_reason),
-      .travel_resync(flush),
+      .travel_resync(flush || resync),
       .position     (position),
       .next_seq     (next_seq),
       .v2_mode      (v2_mode),

@@ -1,16 +1,17 @@
 // response_encoder: the device's answers as a byte stream for uart_tx: v2 ACK, NAK, DONE, STATUS,
-// IDENT frames with their CRC, and protocol v1's 0xAA (payloads: docs/protocol.md "Device to
+// IDENT, TRIGGER_REPORT frames with their CRC, and protocol v1's 0xAA (payloads: docs/protocol.md "Device to
 // host"; generated layout constants from fpgacnc_spec.vh).
 //
 // Contract
-//   ident_req, status_req, nak_req (+ nak_seq, nak_reason), ack_req, done_evt, v1_ack
+//   ident_req, status_req, trig_req, nak_req (+ nak_seq, nak_reason), ack_req, done_evt, v1_ack
 //               1-clock request strobes, any clock. One pending flag per frame kind, no queue: a
 //               request while its flag is set merges with it (a NAK keeps the latest seq and
 //               reason). A request on the clock a frame of its kind starts stays pending.
 //   Order       when nothing is being sent: first every counted 0xAA (v1_ack adds one, up to 255),
-//               then the highest pending kind of IDENT, STATUS, NAK, ACK, DONE. Starting an ACK
+//               then the highest pending kind of IDENT, STATUS, TRIGGER_REPORT, NAK, ACK, DONE. Starting an ACK
 //               also clears a pending DONE (same fields).
-//   next_seq .. heat_status   live state (limits: STATUS bytes 27 + 4 N_AXES .. + 2); all fields of a frame are snapshotted in one clock,
+//   next_seq .. trig_pos   live state (limits: STATUS bytes 27 + 4 N_AXES .. + 2; trig_state:
+//               TRIGGER_REPORT bytes 0..3, trig_pos its positions, axis a in [32*a+:32]); all fields of a frame are snapshotted in one clock,
 //               the clock before its 0xA5 is offered; frame_start is high in the clock after it.
 //   Device SEQ  0 after rst, +1 (mod 256) after each v2 frame's last CRC byte is taken.
 //   HEAT_BYTES  heater bytes appended to STATUS (the top bytes of heat_status; 0: none).
@@ -35,6 +36,7 @@ module response_encoder #(
 
     input wire       ident_req,
     input wire       status_req,
+    input wire       trig_req,
     input wire       nak_req,
     input wire [7:0] nak_seq,
     input wire [7:0] nak_reason,
@@ -54,6 +56,8 @@ module response_encoder #(
     /* verilator lint_off UNUSEDSIGNAL */
     input wire [127:0] heat_status,  // its top HEAT_BYTES bytes are sent
     /* verilator lint_on UNUSEDSIGNAL */
+    input wire [          31:0] trig_state,  // mode, flags, fired u16
+    input wire [32*N_AXES-1:0] trig_pos,     // latched positions
 
     output wire [7:0] m_axis_tdata,
     output wire       m_axis_tvalid,
@@ -83,6 +87,9 @@ module response_encoder #(
   localparam [31:0] BUILD32 = BUILD_ID;
   localparam [7:0] MAXP8 = MAXP_I[7:0];
   localparam [7:0] SLEN8 = SLEN_I[7:0];
+  localparam integer TLEN_I = `FPGACNC_LENI_TRIGGER_REPORT_HEADER +
+                              `FPGACNC_LENI_TRIGGER_REPORT_PER_AXIS * N_AXES;
+  localparam [7:0] TLEN8 = TLEN_I[7:0];
 
   localparam [2:0] E_IDLE = 3'd0, E_SYNC = 3'd1, E_BODY = 3'd2, E_CRCH = 3'd3, E_CRCL = 3'd4;
 
@@ -91,7 +98,7 @@ module response_encoder #(
   reg [6:0] body_cnt_reg;  // body bytes (LEN, SEQ, TYPE, payload) still to send
   reg [7:0] dseq_reg;
   reg [7:0] aa_cnt_reg;
-  reg ident_p_reg, status_p_reg, nak_p_reg, ack_p_reg, done_p_reg;
+  reg ident_p_reg, status_p_reg, trig_p_reg, nak_p_reg, ack_p_reg, done_p_reg;
   reg [7:0] nak_seq_reg, nak_reason_reg;
   reg [7:0] tdata_reg;
   reg tvalid_reg;
@@ -101,10 +108,13 @@ module response_encoder #(
   wire take = tvalid_reg && m_axis_tready;
 
   // ---------------------------------------------------------------- frame images
-  reg [32*N_AXES-1:0] pos_be;  // axis 0 first (most significant)
+  reg [32*N_AXES-1:0] pos_be, tpos_be;  // axis 0 first (most significant)
   integer a;
   always @(*)
-    for (a = 0; a < N_AXES; a = a + 1) pos_be[32*(N_AXES-1-a)+:32] = position[32*a+:32];
+    for (a = 0; a < N_AXES; a = a + 1) begin
+      pos_be[32*(N_AXES-1-a)+:32]  = position[32*a+:32];
+      tpos_be[32*(N_AXES-1-a)+:32] = trig_pos[32*a+:32];
+    end
 
   /* verilator lint_off UNUSEDSIGNAL */
   wire [8*(3+STATUS_BASE)+127:0] img_status_full = {SLEN8, dseq_reg, `FPGACNC_T_STATUS, state,
@@ -120,7 +130,10 @@ module response_encoder #(
                                 ack_p_reg ? `FPGACNC_T_ACK : `FPGACNC_T_DONE};
   wire [8*10-1:0] img_ack = {img_ack_hdr, next_seq, fifo_free, segments_done};
 
-  wire any_p = ident_p_reg || status_p_reg || nak_p_reg || ack_p_reg || done_p_reg;
+  wire [8*(3+TLEN_I)-1:0] img_trig = {TLEN8, dseq_reg, `FPGACNC_T_TRIGGER_REPORT, trig_state,
+                                      tpos_be};
+
+  wire any_p = ident_p_reg || status_p_reg || trig_p_reg || nak_p_reg || ack_p_reg || done_p_reg;
   wire start = (st_reg == E_IDLE) && !tvalid_reg && (aa_cnt_reg == 8'd0) && any_p;
 
   reg [SHW-1:0] img;
@@ -133,6 +146,9 @@ module response_encoder #(
     end else if (status_p_reg) begin
       img[SHW-1-:8*(3+STATUS_LEN)] = img_status;
       img_bytes = 7'd3 + SLEN8[6:0];
+    end else if (trig_p_reg) begin
+      img[SHW-1-:8*(3+TLEN_I)] = img_trig;
+      img_bytes = 7'd3 + TLEN8[6:0];
     end else if (nak_p_reg) begin
       img[SHW-1-:8*8] = img_nak;
       img_bytes = 7'd8;
@@ -156,11 +172,13 @@ module response_encoder #(
     // Pending flags: sets win over the clear of a frame starting on the same edge.
     ident_p_reg  <= ident_req || (ident_p_reg && !(start && ident_p_reg));
     status_p_reg <= status_req || (status_p_reg && !(start && !ident_p_reg));
-    nak_p_reg    <= nak_req || (nak_p_reg && !(start && !ident_p_reg && !status_p_reg));
-    ack_p_reg    <= ack_req ||
-                    (ack_p_reg && !(start && !ident_p_reg && !status_p_reg && !nak_p_reg));
-    done_p_reg   <= done_evt ||
-                    (done_p_reg && !(start && !ident_p_reg && !status_p_reg && !nak_p_reg));
+    trig_p_reg   <= trig_req || (trig_p_reg && !(start && !ident_p_reg && !status_p_reg));
+    nak_p_reg    <= nak_req ||
+                    (nak_p_reg && !(start && !ident_p_reg && !status_p_reg && !trig_p_reg));
+    ack_p_reg    <= ack_req || (ack_p_reg && !(start && !ident_p_reg && !status_p_reg &&
+                                               !trig_p_reg && !nak_p_reg));
+    done_p_reg   <= done_evt || (done_p_reg && !(start && !ident_p_reg && !status_p_reg &&
+                                                 !trig_p_reg && !nak_p_reg));
     if (nak_req) begin
       nak_seq_reg    <= nak_seq;
       nak_reason_reg <= nak_reason;
@@ -231,6 +249,7 @@ module response_encoder #(
       aa_cnt_reg     <= 8'd0;
       ident_p_reg    <= 1'b0;
       status_p_reg   <= 1'b0;
+      trig_p_reg     <= 1'b0;
       nak_p_reg      <= 1'b0;
       ack_p_reg      <= 1'b0;
       done_p_reg     <= 1'b0;

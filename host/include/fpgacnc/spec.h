@@ -67,6 +67,16 @@ inline constexpr size_t kLenConfigTravel = 10;
 // MOTION: flags u8 (bit 0 HOLD, bit 1 RESUME, bit 2 CANCEL), feed rate u16, rapid rate u16 (Q1.15, 1..0x8000), ramp u32: feed hold, resume and overrides, see below
 inline constexpr uint8_t kTypeMotion = 0x08;
 inline constexpr size_t kLenMotion = 9;
+// TRIGGER: mode u8 (0 DISARM, 1 HOME, 2 PROBE to contact, 3 PROBE to release), switch mask u16 (HOME): arms the homing / probing trigger, see below
+inline constexpr uint8_t kTypeTrigger = 0x0A;
+inline constexpr size_t kLenTrigger = 3;
+// SET_POSITION: axis mask u16, then int32 per axis (all N_AXES): sets those position counters, clears POS_UNTRUSTED, see below
+inline constexpr uint8_t kTypeSetPosition = 0x0B;
+inline constexpr size_t kLenSetPositionHeader = 2;
+inline constexpr size_t kLenSetPositionPerAxis = 4;
+// TRIGGER_QUERY: asks for the TRIGGER_REPORT frame
+inline constexpr uint8_t kTypeTriggerQuery = 0x0C;
+inline constexpr size_t kLenTriggerQuery = 0;
 // LINE: flags, power, T u32, signed steps for axes 0..k-1 (int16 or int32), see below
 inline constexpr uint8_t kTypeLine = 0x10;
 inline constexpr size_t kLenLineHeader = 6;
@@ -114,6 +124,10 @@ inline constexpr size_t kLenStatusPerAxis = 4;
 // IDENT: version u8, N_AXES u8, FIFO depth u16, CLK_HZ u32, BAUD u32, build id u32, next_seq u8, MAX_PAYLOAD u8
 inline constexpr uint8_t kTypeIdent = 0x84;
 inline constexpr size_t kLenIdent = 18;
+// TRIGGER_REPORT: mode u8, flags u8 (bit 0 ARMED, bit 1 DONE), switches fired u16, latched position int32 per axis; see below
+inline constexpr uint8_t kTypeTriggerReport = 0x85;
+inline constexpr size_t kLenTriggerReportHeader = 4;
+inline constexpr size_t kLenTriggerReportPerAxis = 4;
 struct TypeInfo {
   uint8_t value;
   std::string_view name;
@@ -121,7 +135,7 @@ struct TypeInfo {
   bool sequenced;  // host frames: checked against next_seq
   bool fifo;       // host frames: written to the command FIFO
 };
-inline constexpr std::array<TypeInfo, 23> kTypes{{
+inline constexpr std::array<TypeInfo, 27> kTypes{{
     {0x01, "HELLO", true, false, false},
     {0x02, "STATUS_QUERY", true, false, false},
     {0x03, "FAULT_CLEAR", true, true, false},
@@ -130,6 +144,9 @@ inline constexpr std::array<TypeInfo, 23> kTypes{{
     {0x06, "RELEASE", true, true, false},
     {0x07, "CONFIG_TRAVEL", true, true, false},
     {0x08, "MOTION", true, false, false},
+    {0x0A, "TRIGGER", true, true, false},
+    {0x0B, "SET_POSITION", true, true, false},
+    {0x0C, "TRIGGER_QUERY", true, false, false},
     {0x10, "LINE", true, true, true},
     {0x11, "DWELL", true, true, true},
     {0x12, "LINE_PROFILE", true, true, true},
@@ -145,6 +162,7 @@ inline constexpr std::array<TypeInfo, 23> kTypes{{
     {0x82, "DONE", false, false, false},
     {0x83, "STATUS", false, false, false},
     {0x84, "IDENT", false, false, false},
+    {0x85, "TRIGGER_REPORT", false, false, false},
 }};
 
 // ---- NAK reasons
@@ -164,11 +182,13 @@ inline constexpr uint8_t kNakFifoFull = 6;
 inline constexpr uint8_t kNakBadField = 7;
 // TRAVEL: a LINE, LINE_PROFILE or ARC whose end leaves the travel of an axis with soft limits on (CONFIG_TRAVEL); not queued
 inline constexpr uint8_t kNakTravel = 8;
+// BUSY: a SET_POSITION while the motion is not idle (FIFO not empty, a segment prepared or running); nothing changed
+inline constexpr uint8_t kNakBusy = 9;
 struct NakInfo {
   uint8_t value;
   std::string_view name;
 };
-inline constexpr std::array<NakInfo, 8> kNakReasons{{
+inline constexpr std::array<NakInfo, 9> kNakReasons{{
     {1, "BAD_CRC"},
     {2, "BAD_LENGTH"},
     {3, "UNKNOWN_TYPE"},
@@ -177,6 +197,7 @@ inline constexpr std::array<NakInfo, 8> kNakReasons{{
     {6, "FIFO_FULL"},
     {7, "BAD_FIELD"},
     {8, "TRAVEL"},
+    {9, "BUSY"},
 }};
 
 // ---- STATUS
@@ -192,12 +213,14 @@ inline constexpr uint8_t kStateV2 = 0x02;
 inline constexpr uint8_t kStateFault = 0x04;
 // bit 3: the e-stop input is active now
 inline constexpr uint8_t kStateEstop = 0x08;
-// bit 4: positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR)
+// bit 4: positions not trusted: a hard limit tripped since reset (kept after FAULT_CLEAR; cleared by SET_POSITION)
 inline constexpr uint8_t kStatePosUntrusted = 0x10;
 // bit 5: a feed hold is in effect (MOTION HOLD or the hold input; until MOTION RESUME or the cycle-start input)
 inline constexpr uint8_t kStateHold = 0x20;
 // bit 6: the motion rate is 0: motion is frozen (a hold is complete when HOLD is set too)
 inline constexpr uint8_t kStateStopped = 0x40;
+// bit 7: the probe input is asserted (filtered; 0 in builds without the trigger or with the probe not wired)
+inline constexpr uint8_t kStateProbe = 0x80;
 // bit 0: STEP timing violation (in an ARC also a step within DIR setup of a DIR change)
 inline constexpr uint8_t kFaultStepTiming = 0x01;
 // bit 1: an ARC frame inconsistent with its walk
@@ -273,6 +296,18 @@ inline constexpr size_t kMotionCancel = 4;
 inline constexpr size_t kMotionReserved = 248;
 // MOTION feed and rapid rates: Q1.15, 0x8000 = 100 % (the planned speed); 1 .. 0x8000, else BAD_FIELD
 inline constexpr size_t kRateOne = 32768;
+// TRIGGER mode 0 DISARM: the trigger does nothing (mask 0)
+inline constexpr size_t kTriggerDisarm = 0;
+// TRIGGER mode 1 HOME: mask bit a = min switch of axis a, bit 8 + a its max switch (axes 0..7); non-zero, only axes < N_AXES
+inline constexpr size_t kTriggerHome = 1;
+// TRIGGER mode 2 PROBE: fires when the filtered probe becomes asserted (G38.2 / G38.3; mask 0)
+inline constexpr size_t kTriggerProbe = 2;
+// TRIGGER mode 3 PROBE: fires when the filtered probe becomes released (G38.4 / G38.5; mask 0); modes above 3: BAD_FIELD
+inline constexpr size_t kTriggerProbeRelease = 3;
+// TRIGGER_REPORT flags bit 0 ARMED: waiting for its edge
+inline constexpr size_t kTriggerArmed = 1;
+// TRIGGER_REPORT flags bit 1 DONE: fired (HOME: every armed switch), positions latched
+inline constexpr size_t kTriggerDone = 2;
 // Q1.15 duty 100 % (largest duty_max and manual duty)
 inline constexpr uint16_t kDutyOne = 0x8000;
 // OUTPUT bit 0: coolant flood (M8 on, M9 off)
@@ -366,6 +401,12 @@ inline constexpr uint32_t kDefaultRateRamp = 0x3'5AFE;
 inline constexpr uint32_t kDefaultLimitFilterClks = 50000;
 // LIMIT_ENABLE: limit switches wired, bit a = min of axis a, bit 16 + a = max (0: none; a board enables those it has)
 inline constexpr uint32_t kDefaultLimitEnable = 0;
+// PROBE_FILTER_CLKS: probe input debounce, clocks (10 us at 50 MHz: a probe's contact must not wait a switch's millisecond)
+inline constexpr uint32_t kDefaultProbeFilterClks = 500;
+// PROBE_ENABLE: the probe input is wired (0: it reads released; a board enables it)
+inline constexpr uint32_t kDefaultProbeEnable = 0;
+// PROBE_ACTIVE_LOW: the probe is asserted at a low pin
+inline constexpr uint32_t kDefaultProbeActiveLow = 0;
 // LIMIT_ACTIVE_LOW: switches asserted at a low pin, bits as LIMIT_ENABLE (0: high = asserted, a normally-closed switch to ground with a pull-up)
 inline constexpr uint32_t kDefaultLimitActiveLow = 0;
 
