@@ -71,10 +71,11 @@ enum class NakReason : uint8_t {
 
 // "HELLO", "ACK", ..., or "0x12" for a value not in the table.
 std::string type_name(uint8_t type);
-// "BAD_CRC", ..., or "reason 9".
+// "BAD_CRC", ..., or "reason 10" for a value not in the table.
 std::string nak_reason_name(uint8_t reason);
-// Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE, LINE, DWELL,
-// LINE_PROFILE, ARC, OUTPUT, the heater frames).
+// Host frames the device sequences (FAULT_CLEAR, CONFIG_AXIS, NUMERATORS, RELEASE,
+// CONFIG_TRAVEL, TRIGGER, SET_POSITION, LINE, DWELL, LINE_PROFILE, ARC, OUTPUT, the heater
+// frames: spec/protocol.toml's `sequenced`).
 bool is_sequenced(uint8_t type);
 // Host frames that go to the command FIFO (NUMERATORS, LINE, DWELL, LINE_PROFILE, ARC, OUTPUT).
 bool is_fifo(uint8_t type);
