@@ -117,13 +117,19 @@ Engine::Engine(link::Link& link, config::MachineConfig base, Settings settings, 
       cfg_(apply_settings(base_, settings)),
       settings_(std::move(settings)),
       opt_(std::move(opt)) {
-  if (!opt_.limit_switches) settings_.values[21] = 0.0;  // no switches: no hard limits
+  if (!opt_.limit_switches) {  // no switches: no hard limits, no homing
+    settings_.values[21] = 0.0;
+    settings_.values[22] = 0.0;
+    cfg_ = apply_settings(base_, settings_);
+  }
 }
 
 Engine::~Engine() = default;
 
 void Engine::connect() {
   ident_ = link::handshake_v2(link_, opt_.v2, rep_, std::nullopt);
+  // grbl with homing enabled starts in alarm until `$H` (or `$X`).
+  if (settings_.values.at(22) != 0.0) alarm_ = true;
   restart();
 }
 
@@ -139,6 +145,10 @@ void Engine::new_session() {
   motion_ok_ = session_->configure_motion(motion_frame(false, (st.state & v2::kStateHold) != 0));
   if (motion_ok_) ++stats_.motions;
   frontend::push_config_axes(*session_, ident_, cfg_);
+  if (disarm_next_) {  // a HOME left armed keeps its switches' trips suppressed
+    session_->push({v2::trigger(0, v2::TriggerMode::Disarm)});
+    disarm_next_ = false;
+  }
   fifo_info_.clear();
   fifo_base_ = 0;
 }
@@ -349,6 +359,7 @@ bool Engine::motion_pending() const {
 
 State Engine::state() const {
   if (sleep_) return State::kSleep;
+  if (homing_) return State::kHome;
   if (alarm_) return State::kAlarm;
   if (check_) return State::kCheck;
   if (jog_cancel_ || (jog_ && motion_pending())) return State::kJog;
@@ -364,7 +375,7 @@ State Engine::state() const {
 
 bool Engine::busy() const {
   return motion_pending() || report_pending_ || resetting_ || pause_pending_ || jog_cancel_ ||
-         (line_ready() && can_take_line());
+         homing_ || (line_ready() && can_take_line());
 }
 
 std::array<double, 4> Engine::mpos() const {
@@ -380,8 +391,8 @@ bool Engine::line_ready() const {
 }
 
 bool Engine::can_take_line() const {
-  return !resetting_ && !jog_cancel_ && !critical_ && !held_ && !pause_pending_ && !limit_alarm_ &&
-         session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
+  return !resetting_ && !jog_cancel_ && !homing_ && !critical_ && !held_ && !pause_pending_ &&
+         !limit_alarm_ && session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
 }
 
 void Engine::step(milliseconds wait) {
@@ -390,6 +401,15 @@ void Engine::step(milliseconds wait) {
   }
   realtime_.clear();
   if (resetting_) continue_reset();
+  if (homing_ && !resetting_) {
+    // The cycle polls its own sessions; a report shows the last STATUS it saw (state Home).
+    if (report_pending_) {
+      write_report();
+      report_pending_ = report_asked_ = false;
+    }
+    continue_homing(wait);
+    return;
+  }
   if (jog_cancel_ && !resetting_) continue_jog_cancel();
   if (!resetting_) {
     while (line_ready() && can_take_line()) take_line();
@@ -462,7 +482,8 @@ void Engine::process_line(const std::string& raw) {
   } else {
     rc = gcode_line(raw, check_);
   }
-  if (rc == kSoftLimit) {  // grbl: alarm, then nothing until a reset (which sends the ok)
+  if (rc == kHomingStarted) return;  // answered when the cycle ends (finish_homing)
+  if (rc == kSoftLimit) {            // grbl: alarm, then nothing until a reset (which sends the ok)
     ++stats_.errors;
     alarm_ = critical_ = true;
     say("ALARM:2");
@@ -758,7 +779,7 @@ int Engine::system_command(const std::string& cmd) {
     }
     return 0;
   }
-  if (cmd == "$H") return 5;  // homing is not enabled ($22 = 0; no limit inputs yet)
+  if (cmd == "$H") return start_homing();
   if (cmd.rfind("$J", 0) == 0) return jog_line(cmd);
   if (cmd == "$SLP") {
     if (int rc = need_idle()) return rc;
@@ -877,6 +898,20 @@ void Engine::soft_reset() {
       estop_pressed_ = true;
     }
   }
+  if (homing_) {
+    // grbl: a reset during homing is ALARM:6; the board stops (CANCEL, or the e-stop) and the
+    // next session disarms the trigger.
+    homing_.reset();
+    if (!alarm_) say("ALARM:6");
+    alarm_ = true;
+    disarm_next_ = true;
+    if (motion_ok_) {
+      send_motion(false, false, true);
+    } else if (opt_.estop_press && opt_.estop_release) {
+      opt_.estop_press();
+      estop_pressed_ = true;
+    }
+  }
   hold_ = false;
   jog_ = jog_cancel_ = false;  // a jog cancel's CANCEL, if any, was sent: the reset waits as well
   // grbl restores the overrides at a reset (the next session's MOTION carries them).
@@ -991,6 +1026,74 @@ void Engine::continue_jog_cancel() {
   const auto& st = session_->last_status();
   for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
   resync_parser(pos);
+}
+
+int Engine::start_homing() {
+  if (settings_.values.at(22) == 0.0) return 5;  // homing not enabled
+  if (check_) return 8;
+  const State st = state();
+  if (st != State::kIdle && st != State::kAlarm) return 8;
+  if (limit_alarm_ || (session_->last_status().faults & v2::kFaultLimit)) return 9;
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  // The cycle's sessions: the board keeps its MOTION rates and CONFIG_AXIS timing, so only the
+  // session itself (the cycle switches the device's soft limits off in it).
+  homing_ = std::make_unique<link::HomingCycle>(
+      link_, cfg_, ident_, opt_.limit_switches, [this]() -> link::V2Session& {
+        session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
+        session_->start();
+        fifo_info_.clear();
+        fifo_base_ = 0;
+        return *session_;
+      });
+  if (homing_->empty()) {
+    homing_.reset();
+    return 5;  // no switch on any homing side: as homing not enabled
+  }
+  return kHomingStarted;
+}
+
+void Engine::continue_homing(milliseconds wait) {
+  try {
+    if (homing_->step(wait)) finish_homing();
+  } catch (const link::Error&) {
+    homing_.reset();
+    disarm_next_ = true;
+    ++stats_.errors;
+    say("ALARM:9");  // the cycle failed on the way (a switch not armed tripped: ALARM:1 below)
+    on_session_error();
+  }
+}
+
+void Engine::finish_homing() {
+  const link::HomingResult r = homing_->result();
+  homing_.reset();
+  ++stats_.oks;
+  if (!r.ok) {
+    // grbl: the alarm, the `$H` line's ok, then a reset into the alarm state.
+    say(fmt::format("ALARM:{}", r.alarm));
+    say(fmt::format("[MSG:{}]", r.message));
+    say("ok");
+    alarm_ = true;
+    restart();
+    return;
+  }
+  for (const auto& h : r.axes) {
+    const double spm = cfg_.steps_per_mm[h.axis];
+    say(fmt::format("[MSG:Homed {} {}: switch latched at {} (step {}), set to {}]",
+                    config::kAxisNames[h.axis], h.max_side ? "max" : "min",
+                    fmt3(static_cast<double>(h.latched) / spm), h.latched,
+                    fmt3(static_cast<double>(h.home) / spm)));
+  }
+  alarm_ = false;
+  // A session with the machine's soft limits again (the board kept its MOTION rates).
+  session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
+  session_->start();
+  frontend::push_config_axes(*session_, ident_, cfg_);
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  rebuild_pipeline(pos);
+  say("ok");
 }
 
 void Engine::resync_parser(const plan::Steps4& steps) {
