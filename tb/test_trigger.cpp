@@ -475,6 +475,37 @@ TEST(Trigger, ProbeBounceDoesNotFire) {
   EXPECT_EQ(r.pos[0], b.pos_at(0, p + 1 + kProbeFilter));
 }
 
+// Switch bounce during a HOME: pulses of X max shorter than the switch filter while X moves toward
+// it neither fire the trigger nor trip; the level held the filter length fires, latched at its
+// filtered edge.
+TEST(Trigger, HomeSwitchBounceDoesNotFire) {
+  TriggerBench b;
+  b.model_switches = false;
+  ASSERT_EQ(b.exchange(trigger(b.seq++, kHome, 0x0100)).type, v2::kAck);
+  ASSERT_EQ(b.exchange(v2::line(b.seq++, 0, 0, 80000, {2000, 0}, true)).type, v2::kAck);
+  b.idle(5000);
+  ASSERT_TRUE(b.dut().running);
+  for (uint64_t len : {uint64_t{1}, uint64_t{50}, kFilter - 1}) {
+    b.dut().limit_max = 1;
+    b.idle(len);
+    b.dut().limit_max = 0;
+    b.idle(200);
+  }
+  auto r = b.report();
+  EXPECT_EQ(r.flags, kArmed) << "a bounce fired the HOME";
+  EXPECT_EQ(r.fired, 0u);
+  EXPECT_TRUE(b.trip_cycles.empty());
+  ASSERT_TRUE(b.dut().running);
+  const uint64_t p = b.cycle() + 1;
+  b.dut().limit_max = 1;
+  b.run_until_idle(200000);
+  r = b.report();
+  EXPECT_EQ(r.flags, kDone);
+  EXPECT_EQ(r.pos[0], b.pos_at(0, p + 1 + kFilter));
+  EXPECT_EQ(b.pins_pos[0], r.pos[0]);
+  EXPECT_TRUE(b.trip_cycles.empty());
+}
+
 // SET_POSITION: sets the counters (STATUS, the travel check's queued end), refused while busy,
 // clears POS_UNTRUSTED after a hard-limit trip.
 TEST(Trigger, SetPosition) {
@@ -521,6 +552,24 @@ TEST(Trigger, SetPosition) {
   EXPECT_EQ(st.u8(0) & kStatePosUntrusted, 0u) << "SET_POSITION did not trust the positions";
   EXPECT_EQ(st.u32(9), 0u);
   EXPECT_EQ(st.u32(13), 0u);
+}
+
+// The worked frames of docs/protocol.md (CRCs computed there by an independent bit-serial
+// CRC-16/CCITT-FALSE) are the frames this bench sends, and the device takes them.
+TEST(Trigger, DocumentedFrames) {
+  EXPECT_EQ(v2::hex(trigger(5, kHome, 0x0300)), "A5 03 05 0A 01 03 00 E9 6F");
+  EXPECT_EQ(v2::hex(trigger(6, kProbe, 0)), "A5 03 06 0A 02 00 00 0B BE");
+  EXPECT_EQ(v2::hex(set_position(7, 0x0003, 0, -10)),
+            "A5 0A 07 0B 00 03 00 00 00 00 FF FF FF F6 5E 0D");
+  EXPECT_EQ(v2::hex(v2::frame(spec::kTypeTriggerQuery, 0, {})), "A5 00 00 0C 0D 10");
+  TriggerBench b;
+  while (b.seq < 5) ASSERT_EQ(b.exchange(v2::dwell(b.seq++, 10)).type, v2::kAck);
+  ASSERT_EQ(b.exchange(trigger(5, kHome, 0x0300)).type, v2::kAck);
+  EXPECT_EQ(b.report().flags, kArmed);
+  ASSERT_EQ(b.exchange(trigger(6, kProbe, 0)).type, v2::kAck);
+  EXPECT_EQ(b.report().mode, kProbe);
+  ASSERT_EQ(b.exchange(set_position(7, 0x0003, 0, -10)).type, v2::kAck);
+  EXPECT_EQ(static_cast<int32_t>(b.status().u32(13)), -10);
 }
 
 // Bad frames: reserved modes, masks beyond N_AXES, masks where none belongs, wrong lengths. A

@@ -82,6 +82,8 @@ SC_MODULE(RtlHarness) {
   sc_core::sc_signal<bool> limit_trip;
   // Feed hold and cycle-start buttons (Job::script.buttons).
   sc_core::sc_signal<bool> hold_in, start_in;
+  // Probe: not touched (the twins have no probe; cnc_core's default PROBE_ENABLE is 0 anyway).
+  sc_core::sc_signal<bool> probe_in, probe_state;
   sc_core::sc_signal<sc_dt::sc_bv<128>> position;
   Vcnc_core_sc dut;
   const std::vector<Job>* jobs = nullptr;
@@ -132,6 +134,8 @@ SC_MODULE(RtlHarness) {
     dut.limit_max(limit_max);
     dut.hold_in(hold_in);
     dut.start_in(start_in);
+    dut.probe_in(probe_in);
+    dut.probe_state(probe_state);
     dut.limit_state(limit_state);
     dut.limit_trip(limit_trip);
     dut.heater(heater);
@@ -171,6 +175,7 @@ SC_MODULE(RtlHarness) {
       cfg_wr.write(false);
       hold_in.write(false);
       start_in.write(false);
+      probe_in.write(false);
       for (int i = 0; i < kSettleEdges; ++i) edge();
       Cycle c = 0;
       size_t press = 0;  // the first button press not over
