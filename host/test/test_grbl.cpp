@@ -415,7 +415,7 @@ TEST(Grbl, ErrorCodes) {
       {"G4", "error:28"},             // missing P
       {"G59.1", "error:29"},          // G59.x
       {"G2 X10 Y0", "error:35"},      // arc without offsets
-      {"$J=G91 X1 F100", "error:3"},  // jogging: not available (docs/grbl.md)
+      {"$J G91 X1 F100", "error:3"},  // $J without '=' (the jog refusals: test_grbl_motion.cpp)
       {"$100=-1", "error:4"},
       {"$21=1", "error:3"},  // hard limits: not available
   };
@@ -606,14 +606,13 @@ TEST(Grbl, SoftLimitLineRaisesAlarm2AndMovesNothing) {
 }
 
 // Features that need hardware not built yet answer as grbl does without them (docs/grbl.md):
-// $H error:5, $J= error:3, jog cancel ignored; the spindle override is kept and reported (Ov)
+// $H error:5, a jog cancel outside Jog ignored; the spindle override is kept and reported (Ov)
 // with nothing to drive; M0 holds at rest until '~'.
 TEST(Grbl, FeaturesNotAvailableAndProgramPause) {
   Rig rig;
   EXPECT_EQ(rig.command("$H")[0], "error:5");
-  EXPECT_EQ(rig.command("$J=G91 X10 F500")[0], "error:3");
   EXPECT_EQ(rig.command("G0 X5")[0], "ok");
-  rig.send("\x9A\x85");  // spindle override +10 %, jog cancel (not available)
+  rig.send("\x9A\x85");  // spindle override +10 %, jog cancel (not jogging: nothing)
   const Report r = rig.wait_idle();
   expect_at(r, {800, 0, 0}, MachineConfig{});
   size_t ov = 0;

@@ -689,8 +689,9 @@ TEST(V2Packer, AxesPowerAndRapids) {
   EXPECT_EQ(l[3], (v2::Line{1, 128, 25'000'000, true, {0, 0, 0, 500}}));
   // S1 -> 0.255 rounds to 0, raised to 1 (S > 0 is never off); 298 mm = 47680 steps: int32.
   EXPECT_EQ(l[4], (v2::Line{1, 1, 1'490'000'000, false, {47'680, 0}}));
-  // After M5: laser off, code 0, power 0, still at the programmed feed.
-  EXPECT_EQ(l[5].code, 0);
+  // After M5: laser off, power 0, still at the programmed feed and a feed move (code 1: the
+  // device's feed rate, not its rapid rate, applies).
+  EXPECT_EQ(l[5].code, 1);
   EXPECT_EQ(l[5].power, 0);
   EXPECT_EQ(l[5].t, 1'500'000'000u);  // 300 mm at 600 mm/min
   EXPECT_EQ(job.max_axes, 4u);

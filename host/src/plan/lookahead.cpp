@@ -278,6 +278,7 @@ void Lookahead::push(const Segment& s, size_t segment_index) {
     p.segment_index = segment_index;
     p.source_line = s.source_line;
     p.code = s.code;
+    p.rapid = s.rapid;
     p.spindle_s = s.spindle_s;
     p.split = parts > 1;
     int64_t n = 0;

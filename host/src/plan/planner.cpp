@@ -300,6 +300,7 @@ void Planner::add_straight(const gcode::Vec4& target_mm, uint8_t code, double fe
   for (int64_t k = 1; k <= parts; ++k) {
     Segment s;
     s.code = code;
+    s.rapid = rapid;
     s.source_line = line;
     s.feed_mm_min = feed;
     s.exec_feed_mm_min = eff;

@@ -312,7 +312,7 @@ void pack_constant(const plan::Plan& plan, const config::MachineConfig& cfg, Job
           job.target[a] += steps[a];
         }
         JobFrame jf;
-        jf.frame = line(0, s->code, power, static_cast<uint32_t>(t),
+        jf.frame = line(0, frame_code(s->code, s->rapid), power, static_cast<uint32_t>(t),
                         std::span<const int32_t>(s32.data(), k));
         jf.segment_index = seg_index;
         jf.source_line = s->source_line;
@@ -409,7 +409,7 @@ Frame profile_frame(const plan::Profile& p, const config::MachineConfig& cfg) {
   std::array<int32_t, 4> s32{};
   for (size_t a = 0; a < 4; ++a) s32[a] = static_cast<int32_t>(p.steps[a]);
   return line_profile(0,
-                      to_line_profile(p.code, laser_power(s, cfg), p.fields,
+                      to_line_profile(frame_code(p.code, p.rapid), laser_power(s, cfg), p.fields,
                                       std::span<const int32_t>(s32.data(), frame_axes(p.steps))));
 }
 

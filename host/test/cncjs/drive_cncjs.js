@@ -284,11 +284,13 @@ async function main() {
     if (seen.sender.sent >= total) {
       fail(`every line was sent before the pause at line ${at}: the job is too short for --pause`);
     }
-    // The lines in flight are answered; then nothing more is sent and the machine comes to rest:
-    // Idle (a board without feed hold: the queue ran out) or Hold:0 (the '!' held it mid-job).
-    await until('the machine at rest with every line sent answered', () =>
-      seen.sender.received === seen.sender.sent && (activeState() === 'Idle' ||
-        (activeState() === 'Hold' && seen.status.subState === 0)));
+    // Nothing more is sent and the machine comes to rest: Idle (a board without feed hold: the
+    // lines in flight are answered and the queue runs out) or Hold:0 (the '!' held it mid-job;
+    // lines in flight stay unanswered while the front end's pipeline is full, as on a grbl whose
+    // planner buffer is full).
+    await until('the machine at rest (Idle with every line sent answered, or Hold:0)', () =>
+      (activeState() === 'Idle' && seen.sender.received === seen.sender.sent) ||
+        (activeState() === 'Hold' && seen.status.subState === 0));
     // At rest with lines left: a sender that was not held would have sent them (the front end
     // takes lines whenever its look-ahead has room, and it is empty now).
     const held = { ...senderCounts() };

@@ -111,6 +111,7 @@ struct Profile {
   size_t segment_index = 0;  // index of the plan segment it comes from
   int source_line = 0;
   uint8_t code = 0;
+  bool rapid = false;  // Segment::rapid
   double spindle_s = -1.0;
   Steps4 steps{};
   bool split = false;  // part of a move split because n_dom >= 2^24

@@ -24,6 +24,10 @@ struct Segment {
   // 0 rapid / laser off, 1 G1, 2 G2 chord, 3 G3 chord. A non-cutting G1/G2/G3 (laser off)
   // is code 0 but keeps its programmed feed.
   uint8_t code = 0;
+  // G0. Protocol v2 frames carry the motion code apart from the laser power: a non-cutting
+  // G1/G2/G3 goes as code 1 with power 0, so the device runs it at its feed rate, a G0 as code 0
+  // at its rapid rate (docs/protocol.md "MOTION").
+  bool rapid = false;
   Steps4 steps{};            // relative steps of this segment
   uint16_t feed_v1 = 1;      // dominant axis feed, mm/min, in [1, 65535]
   double length_mm = 0.0;    // XYZ path length of the segment

@@ -12,6 +12,9 @@
 //   else int32; k = axes up to the last moving one, at least 2 (X, Y); Z and E are driven.
 // - Laser power: 0 for code 0 (rapid / laser off); else the S word in force scaled by
 //   cfg.laser_s_max to 0..255 (S > 0 never rounds to 0; no S given: 255).
+// - Frame code (frame_code): the segment's code, but a non-cutting G1/G2/G3 (plan code 0, not
+//   rapid) is code 1 with power 0: the laser stays off and the device's feed rate, not its rapid
+//   rate, applies to it (MOTION; G0 alone is code 0).
 // - T (clocks) = round(length / feed * 60 * clk_hz) at the executed feed (override and axis max
 //   feeds applied; rapids at the rapid feed), length over X, Y, Z from the step deltas (E alone:
 //   its own length and max feed). A step-file segment (no executed feed) keeps v1's timing:
@@ -136,6 +139,10 @@ std::vector<Frame> dwell_frames(double seconds, uint64_t clk_hz);
 // The LINE / LINE_PROFILE power byte of a segment (the rule in the file comment: 0 for code 0,
 // S scaled by laser_s_max, S > 0 never 0, no S: 255).
 uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg);
+// The LINE / LINE_PROFILE code of a segment (file comment).
+constexpr uint8_t frame_code(uint8_t code, bool rapid) {
+  return code != 0 || rapid ? code : 1;
+}
 
 // An output command as the OUTPUT frame's fields (merged into `set`: later ones win).
 void add_output(OutputSet& set, const gcode::Output& o);
