@@ -1166,6 +1166,39 @@ TEST(Grbl, HomingMissingSwitchIsAlarm9) {
   expect_at(idle_soon(rig), {0, 0, 400}, cfg);
 }
 
+// A soft reset while $H runs: ALARM:6 (grbl), the board stopped by its e-stop, the banner
+// into the alarm; the next session disarms the trigger, so after $X a move into the X switch's
+// side trips the hard limit again (an armed HOME would suppress it) and a new $H homes.
+TEST(Grbl, HomingSoftResetIsAlarm6) {
+  MachineConfig cfg = homing_config();
+  cfg.homing.cycles = {0b001};
+  Rig rig("", cfg, true, {{0, true, 80}});
+  rig.send("$H\n");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.status().state == "Home"; }));
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:6");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.status().state, "Alarm");
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  const Report at = rig.status();
+  EXPECT_EQ(rig.command("G91 G1 X1 F3000").back(), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return !rig.lines().empty(); }, milliseconds(2000)))
+      << "X from " << at.mpos[0] << " mm: no alarm; board X " << rig.board().net_steps()[0];
+  EXPECT_EQ(rig.next_line(), "ALARM:1") << "the X max switch trips: the trigger is disarmed";
+  EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:Check Limits]");
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.board().pull_off_endstops(), 1);
+  rig.link().wait_until(rig.link().now() + milliseconds(5));
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  // (The pull-off by hand moved the carriage against the step count: the switch's step is no
+  // longer 80, so only the cycle's end is checked.)
+  EXPECT_EQ(home_once(rig, cfg, 1).size(), 1u);
+}
+
 // $22=0 (the default): $H is error:5 as in grbl; $22=1 is refused on a board without switches.
 TEST(Grbl, HomingDisabledIsError5) {
   Rig rtl("", MachineConfig{}, true);

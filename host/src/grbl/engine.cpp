@@ -881,34 +881,30 @@ void Engine::soft_reset() {
   }
   rx_.clear();  // grbl empties its receive buffer
   realtime_.clear();
+  // grbl: a reset during homing is ALARM:6 (not 3); the board is stopped below as a running job
+  // (its e-stop, else MOTION CANCEL) and the next session disarms the trigger.
+  const bool homing = homing_ != nullptr;
+  if (homing) {
+    homing_.reset();
+    say("ALARM:6");
+    alarm_ = true;
+    disarm_next_ = true;
+  }
   // A hold counts as motion (grbl: a reset during a feed hold is ALARM:3 too).
-  const bool moving = (motion_pending() || (motion_ok_ && board_held())) && !check_;
+  const bool moving = (homing || motion_pending() || (motion_ok_ && board_held())) && !check_;
   limit_alarm_ = false;  // a reset ends the critical alarm (the FAULT_CLEAR comes with it)
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   stats_.aborted += session_->abandon();
   if (moving) {
     if (!alarm_) say("ALARM:3");  // not after ALARM:2: the alarm is already raised
     alarm_ = true;
-    if (motion_ok_ && board_held()) {
-      // A hold in effect: MOTION CANCEL drops the board's queue once it is at rest, positions
-      // kept, no fault (docs/machine.md "Cancel").
+    if (motion_ok_ && (board_held() || (homing && !opt_.estop_press))) {
+      // A hold in effect, or a homing move on a board without an e-stop input: MOTION CANCEL
+      // drops the board's queue once it is at rest, positions kept, no fault (docs/machine.md
+      // "Cancel").
       send_motion(false, false, true);
     } else if (opt_.estop_press && opt_.estop_release) {
       opt_.estop_press();  // running: the board drops its queue at once
-      estop_pressed_ = true;
-    }
-  }
-  if (homing_) {
-    // grbl: a reset during homing is ALARM:6; the board stops (CANCEL, or the e-stop) and the
-    // next session disarms the trigger.
-    homing_.reset();
-    if (!alarm_) say("ALARM:6");
-    alarm_ = true;
-    disarm_next_ = true;
-    if (motion_ok_) {
-      send_motion(false, false, true);
-    } else if (opt_.estop_press && opt_.estop_release) {
-      opt_.estop_press();
       estop_pressed_ = true;
     }
   }
@@ -1055,12 +1051,19 @@ int Engine::start_homing() {
 void Engine::continue_homing(milliseconds wait) {
   try {
     if (homing_->step(wait)) finish_homing();
-  } catch (const link::Error&) {
+  } catch (const link::Error& e) {
     homing_.reset();
-    disarm_next_ = true;
-    ++stats_.errors;
-    say("ALARM:9");  // the cycle failed on the way (a switch not armed tripped: ALARM:1 below)
-    on_session_error();
+    if (session_->last_status().faults & v2::kFaultLimit) {
+      disarm_next_ = true;  // a switch not armed tripped: ALARM:1, lines wait for a reset
+      on_session_error();
+      return;
+    }
+    // The board refused the cycle's frames or stopped answering: a homing failure.
+    say("ALARM:9");
+    say(fmt::format("[MSG:homing: {}]", e.what()));
+    say("ok");
+    alarm_ = true;
+    restart();
   }
 }
 

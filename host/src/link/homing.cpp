@@ -231,10 +231,13 @@ bool HomingCycle::step(milliseconds wait) {
         locate_.resize(group_ + 1);
         locate_[group_] = s().last_trigger();
       }
+      // Frames of the dropped move not sent yet are given up; those on the line must be
+      // acknowledged before the next session starts at the board's next_seq.
+      s().abandon();
       ask_status();
       return false;
     }
-    if (!status_fresh()) {
+    if (!status_fresh() || !s().settled()) {
       s().request_status();
       return false;
     }
