@@ -114,6 +114,7 @@ void HomingCycle::move(uint32_t axes, bool toward, const std::array<double, 3>& 
 
 void HomingCycle::arm(uint16_t switches) {
   s().push({v2::trigger(0, v2::TriggerMode::Home, switches, ident_.n_axes)});
+  trigger_item_ = s().pushed() - 1;
 }
 
 void HomingCycle::ask_status() {
@@ -128,6 +129,9 @@ bool HomingCycle::status_fresh() const {
 
 void HomingCycle::ask_trigger() {
   const auto now = link_.now();
+  // Only once the TRIGGER is acknowledged: an answer to a query ahead of it would show the
+  // previous trigger's state.
+  if (s().acked() <= trigger_item_) return;
   if (trigger_asked_ && now - trigger_asked_at_ < kTriggerResend) return;
   trigger_target_ = s().trigger_answers() + 1;
   s().request_trigger();

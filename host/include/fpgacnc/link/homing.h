@@ -114,6 +114,7 @@ class HomingCycle {
   size_t status_target_ = 0;
   size_t trigger_target_ = 0;
   bool trigger_asked_ = false;
+  size_t trigger_item_ = 0;  // the session item of the TRIGGER HOME being watched
   Link::Time trigger_asked_at_{};
   uint16_t pressed_ = 0;  // pre-pull: the switches pressed at the start of the group
   std::vector<protocol::v2::TriggerReport> locate_;  // per group: the locate's report
