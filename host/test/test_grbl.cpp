@@ -1100,6 +1100,8 @@ TEST(Grbl, HomingRepeatability) {
   Rig rig("", cfg, true, {{0, true, edge[0]}, {1, true, edge[1]}});
   std::array<int64_t, 2> lo{INT64_MAX, INT64_MAX}, hi{INT64_MIN, INT64_MIN};
   const char* away[] = {"G0 X-0.3 Y-0.2", "G0 X-0.15 Y-0.35"};
+  // A setting right before $H: its frames (CONFIG_AXIS, MOTION) go out before the cycle's.
+  EXPECT_EQ(rig.command("$24=300").back(), "ok");
   for (int run = 0; run < 3; ++run) {
     const auto steps = home_once(rig, cfg, 2);
     ASSERT_EQ(steps.size(), 2u) << "run " << run;

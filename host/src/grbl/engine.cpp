@@ -1045,11 +1045,19 @@ int Engine::start_homing() {
     homing_.reset();
     return 5;  // no switch on any homing side: as homing not enabled
   }
+  homing_started_ = false;
   return kHomingStarted;
 }
 
 void Engine::continue_homing(milliseconds wait) {
   try {
+    if (!homing_started_) {
+      // The frames of the session before (a `$N=` just before `$H`) go out and are acknowledged
+      // before the cycle's first session starts at the board's next_seq.
+      session_->poll(wait);
+      if (!session_->complete()) return;
+      homing_started_ = true;
+    }
     if (homing_->step(wait)) finish_homing();
   } catch (const link::Error& e) {
     homing_.reset();

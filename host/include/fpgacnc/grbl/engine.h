@@ -218,9 +218,10 @@ class Engine {
   bool check_ = false;
   bool sleep_ = false;
   std::unique_ptr<link::HomingCycle> homing_;  // `$H` in progress (state Home)
-  bool disarm_next_ = false;    // a homing was cut short: the next session sends TRIGGER DISARM
-  bool pause_pending_ = false;  // M0/M1/M6 planned: Hold:0 once the board is at rest
-  bool held_ = false;           // at rest after M0 until '~'
+  bool homing_started_ = false;  // the cycle's first session is open (the one before settled)
+  bool disarm_next_ = false;     // a homing was cut short: the next session sends TRIGGER DISARM
+  bool pause_pending_ = false;   // M0/M1/M6 planned: Hold:0 once the board is at rest
+  bool held_ = false;            // at rest after M0 until '~'
   bool resetting_ = false;
   bool estop_pressed_ = false;
   bool motion_ok_ = false;   // the board took MOTION (session start)
