@@ -106,6 +106,21 @@ void run_decoders(const v2::Frame& f) {
           if (v2::motion(m, f.seq).payload != f.payload) fail("decode_motion: rebuilt differs");
           break;
         }
+        case v2::Type::Trigger: {
+          const auto [mode, mask] = v2::decode_trigger(f, axes);
+          if (!v2::trigger_field_error(mode, mask, axes).empty())
+            fail("decode_trigger: bad field accepted");
+          if (v2::trigger(f.seq, mode, mask, axes).payload != f.payload)
+            fail("decode_trigger: rebuilt differs");
+          break;
+        }
+        case v2::Type::SetPosition: {
+          const auto [mask, pos] = v2::decode_set_position(f, axes);
+          if (pos.size() != axes) fail("decode_set_position: wrong axis count accepted");
+          if (v2::set_position(f.seq, mask, pos).payload != f.payload)
+            fail("decode_set_position: rebuilt differs");
+          break;
+        }
         default:
           host_type = false;
       }

@@ -22,7 +22,10 @@
 # Exits 1 when a figure exceeds its budget, 2 when Yosys fails or prints a warning.
 # Usage: scripts/synth_report.sh [OUT_DIR]     env: BUDGET_FILE (default constraints/resource_budget.txt),
 #                                                   CONFIGS (default "v1-board full-2axis full-4axis"),
-#                                                   EXTRA (configurations after CONFIGS)
+#                                                   EXTRA (configurations after CONFIGS),
+#                                                   SYNTH_NAMES (0: without Yosys's autoname pass,
+#                                                   as the CTest runs it: the same figures, less
+#                                                   readable path names)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=scripts/configs.sh
@@ -43,7 +46,16 @@ run() {
   local cfg=$1 top=$2 pre=$3
   local log="$out/report_$cfg.log" stat="$out/report_${cfg}_stat.txt" ltp="$out/report_${cfg}_ltp.txt"
   local t0=$SECONDS
-  if ! yosys -q -l "$log" -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; $pre synth_intel_alm -family cyclonev -top $top; \
+  local synth="synth_intel_alm -family cyclonev -top $top"
+  if [ "${SYNTH_NAMES:-1}" = 0 ]; then
+    # synth_intel_alm's own steps without its autoname pass (about a sixth of the run on
+    # full-2axis): the same cells; only the longest path's endpoints keep Yosys's internal names.
+    synth="$synth -run :map_luts; techmap -map +/intel_alm/common/abc9_map.v; \
+      abc9 -maxlut 6 -W 600; techmap -map +/intel_alm/common/abc9_unmap.v; \
+      techmap -map +/intel_alm/common/alm_map.v; opt -fast; clean; \
+      synth_intel_alm -family cyclonev -top $top -run check:quartus"
+  fi
+  if ! yosys -q -l "$log" -p "read_verilog -Irtl/include rtl/*.v rtl/*/*.v; $pre $synth; \
       tee -q -o $stat stat; delete t:MISTRAL_FF t:MISTRAL_M10K t:MISTRAL_MLAB; tee -q -o $ltp ltp -noff" \
       >/dev/null; then
     echo "synth_report: Yosys failed for $cfg (see $log)"; exit 2

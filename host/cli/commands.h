@@ -110,6 +110,10 @@ void register_sim(CLI::App& app);
 // default link (the simulated board).
 void register_autotune(CLI::App& app, StreamHooks hooks);
 
+// fpgacnc home [--config F] [--port DEV --limit-switches LIST | --endstop AXIS-SIDE=MM]: the
+// homing cycle ([homing]), the latched switch positions printed (host/cli/home_cmd.cpp).
+void register_home(CLI::App& app);
+
 // fpgacnc status [--port DEV] [--config F]: one STATUS decoded (state, faults, the hard-limit
 // alarm and switches, positions, counters; host/cli/status_cmd.cpp). Without --port: the hooks'
 // default link (the simulated board).

@@ -159,6 +159,10 @@ class FakeV2Device : public link::Link {
   const std::vector<v2::Frame>& executed() const { return executed_; }
   const std::vector<v2::ConfigAxis>& configs() const { return configs_; }
   const std::vector<v2::Motion>& motions() const { return motions_; }  // MOTION frames taken
+  // TRIGGER and SET_POSITION: the trigger's state as TRIGGER_REPORT gives it (armed by a HOME or
+  // PROBE, nothing ever fires here) and the positions set.
+  const v2::TriggerReport& trigger() const { return trigger_; }
+  size_t set_positions() const { return set_positions_; }
   bool held() const { return hold_; }
   size_t cancelled() const { return cancelled_; }
   size_t fifo_level() const { return fifo_.size(); }
@@ -328,6 +332,10 @@ class FakeV2Device : public link::Link {
       pend_status_ = true;
       return;
     }
+    if (type == v2::Type::TriggerQuery) {
+      pend_trigger_ = true;
+      return;
+    }
     if (type == v2::Type::Motion) {  // unsequenced, answered with STATUS
       const v2::Motion m = v2::decode_motion(f);
       motions_.push_back(m);
@@ -364,6 +372,23 @@ class FakeV2Device : public link::Link {
       st_.max_fifo_level = std::max(st_.max_fifo_level, fifo_.size());
     } else if (type == v2::Type::ConfigAxis) {
       configs_.push_back(v2::decode_config_axis(f, o_.n_axes));
+    } else if (type == v2::Type::Trigger) {
+      const auto [mode, mask] = v2::decode_trigger(f, o_.n_axes);
+      if (mode != v2::TriggerMode::Disarm) {  // arming clears what was latched
+        trigger_.fired = 0;
+        trigger_.latched.assign(o_.n_axes, 0);
+      }
+      trigger_.mode = mode;
+      trigger_.flags = mode == v2::TriggerMode::Disarm ? 0 : v2::kTriggerArmed;
+    } else if (type == v2::Type::SetPosition) {
+      if (!fifo_.empty() || running_) {  // only while the motion is idle
+        nak(f.seq, v2::NakReason::Busy);
+        return;
+      }
+      const auto [mask, pos] = v2::decode_set_position(f, o_.n_axes);
+      for (size_t a = 0; a < pos.size() && a < position_.size(); ++a)
+        if ((mask >> a) & 1u) position_[a] = pos[a];
+      ++set_positions_;
     } else if (f.type >= 0x20 && f.type <= 0x24) {
       heater_frame(f);
     } else if (type == v2::Type::FaultClear) {
@@ -419,6 +444,11 @@ class FakeV2Device : public link::Link {
         }
       }
       f = v2::status(dev_seq_, s);
+    } else if (pend_trigger_) {
+      pend_trigger_ = false;
+      v2::TriggerReport r = trigger_;
+      r.latched.resize(o_.n_axes);
+      f = v2::trigger_report(dev_seq_, r);
     } else if (pend_nak_) {
       pend_nak_ = false;
       f = v2::nak(dev_seq_, v2::Nak{nak_seq_, nak_reason_, next_seq_, free_slots()});
@@ -466,6 +496,9 @@ class FakeV2Device : public link::Link {
   bool hold_ = false;     // MOTION HOLD until MOTION RESUME
   size_t cancelled_ = 0;  // FIFO frames dropped by MOTION CANCEL
   std::vector<v2::Motion> motions_;
+  v2::TriggerReport trigger_;
+  size_t set_positions_ = 0;
+  bool pend_trigger_ = false;
   clock::time_point last_advance_ = clock::now();
   uint8_t next_seq_ = 0;
   // answers

@@ -154,3 +154,33 @@ TEST(Config, HoldDecelSetsTheMotionRamp) {
     EXPECT_NE(w.find("hold_decel_mm_s2"), std::string::npos) << w;
   }
 }
+
+// [homing]: grbl's $22-$27 and the cycles; bad values name the key.
+TEST(Config, HomingKeys) {
+  const auto d = fpgacnc::config::parse_machine_config("", "m.toml");
+  EXPECT_FALSE(d.homing.enabled);
+  EXPECT_EQ(d.homing.cycles, (std::vector<uint32_t>{4, 3}));
+  const auto c = fpgacnc::config::parse_machine_config(
+      "[homing]\nenabled = true\ndir_invert_mask = 5\nlocate_feed_mm_min = 30\n"
+      "seek_feed_mm_min = 800.5\ndebounce_ms = 0\npulloff_mm = 2\ncycles = [\"xy\", \"Z\"]\n"
+      "max_travel_mm = { x = 300, z = 80 }\n",
+      "m.toml");
+  EXPECT_TRUE(c.homing.enabled);
+  EXPECT_EQ(c.homing.dir_invert_mask, 5u);
+  EXPECT_EQ(c.homing.locate_feed_mm_min, 30.0);
+  EXPECT_EQ(c.homing.seek_feed_mm_min, 800.5);
+  EXPECT_EQ(c.homing.debounce_ms, 0.0);
+  EXPECT_EQ(c.homing.pulloff_mm, 2.0);
+  EXPECT_EQ(c.homing.cycles, (std::vector<uint32_t>{3, 4}));
+  EXPECT_EQ(c.homing.max_travel_mm, (std::array<double, 3>{300.0, 0.0, 80.0}));
+  for (const char* bad : {"[homing]\ndir_invert_mask = 8\n", "[homing]\npulloff_mm = 0\n",
+                          "[homing]\ncycles = [\"XQ\"]\n", "[homing]\nbogus = 1\n"}) {
+    try {
+      fpgacnc::config::parse_machine_config(bad, "m.toml");
+      ADD_FAILURE() << bad;
+    } catch (const fpgacnc::config::Error& e) {
+      EXPECT_EQ(e.line(), 2) << bad;
+      EXPECT_NE(std::string(e.what()).find("homing."), std::string::npos) << e.what();
+    }
+  }
+}

@@ -12,6 +12,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <regex>
 #include <sstream>
@@ -978,3 +979,237 @@ TEST(Grbl, JogAndJogCancelOnTheTwinBoard) {
   EXPECT_EQ(rig.command("G91 G1 Y0.1 F1200").back(), "ok") << "G-code after the jogs";
   expect_at(rig.wait_idle(), {at[0] - 16, 16, 0}, cfg);
 }
+
+namespace {
+
+// ---- Homing on the Verilated board (docs/grbl.md "Homing", docs/machine.md "Homing and probing
+// (host)"). Short travels and fast feeds keep each run to a fraction of a second of board time.
+
+MachineConfig homing_config() {
+  MachineConfig cfg;
+  // A quick machine: the cycle's short moves are not spent accelerating.
+  cfg.max_accel_mm_s2 = {10000.0, 10000.0, 10000.0, 1000.0};
+  cfg.max_feed_mm_min[2] = 3000.0;
+  cfg.homing.enabled = true;  // grbl's $22=1: the engine starts in alarm until $H
+  cfg.homing.seek_feed_mm_min = 3000.0;
+  cfg.homing.locate_feed_mm_min = 300.0;
+  cfg.homing.pulloff_mm = 0.1;
+  cfg.homing.max_travel_mm = {1.0, 1.0, 1.0};  // seek 1.5 mm at most
+  return cfg;
+}
+
+// Status reports back to back until Idle (a few ms of board time each).
+Report idle_soon(Rig& rig) {
+  Report r;
+  EXPECT_TRUE(rig.pump_until([&] {
+    r = rig.status();
+    return r.state == "Idle";
+  })) << r.state;
+  return r;
+}
+
+struct Homed {
+  char axis = 0;
+  int32_t step = 0;  // latched, machine steps after homing
+};
+
+// "[MSG:Homed X max: switch latched at 1.234 (step 197), set to -0.250]"
+std::vector<Homed> homed_messages(const std::vector<std::string>& lines) {
+  static const std::regex re(
+      R"(^\[MSG:Homed ([XYZ]) max: switch latched at -?[\d.]+ \(step (-?\d+)\), set to -?[\d.]+\]$)");
+  std::vector<Homed> out;
+  for (const auto& l : lines) {
+    std::smatch m;
+    if (std::regex_match(l, m, re)) out.push_back({m[1].str()[0], std::stoi(m[2])});
+  }
+  return out;
+}
+
+// The filter (1 ms of board clocks) lets at most this many steps through after the pin, at the
+// locate feed: the latched position is the endstop's step plus 0 .. this.
+int64_t filter_steps(const MachineConfig& cfg, size_t a) {
+  const double rate = cfg.homing.locate_feed_mm_min / 60.0 * cfg.steps_per_mm[a];
+  return static_cast<int64_t>(std::ceil(rate * 50'002.0 / 50e6));
+}
+
+// One $H with reports asked at 10 Hz: the homed messages, the board step count of each latched
+// position (machine steps minus the offset SET_POSITION gave, taken from where the board stands
+// now), and checks: Home while it ran, ok, Idle at MPos = -pull-off on the homed axes.
+std::map<char, int64_t> home_once(Rig& rig, const MachineConfig& cfg, size_t n_homed) {
+  rig.polling = true;
+  rig.send("$H\n");
+  std::vector<std::string> ans;
+  for (;;) {
+    ans.push_back(rig.next_line());
+    if (ans.back().empty() || ans.back() == "ok" || ans.back().rfind("ALARM", 0) == 0) break;
+  }
+  rig.polling = false;
+  std::map<char, int64_t> out;
+  EXPECT_EQ(ans.back(), "ok");
+  bool saw_home = false;
+  for (const auto& r : rig.reports()) saw_home |= r.rfind("<Home|", 0) == 0;
+  EXPECT_TRUE(saw_home) << "status reports during $H say Home";
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Idle");
+  const auto homed = homed_messages(ans);
+  EXPECT_EQ(homed.size(), n_homed);
+  const auto net = rig.board().net_steps();
+  for (const auto& h : homed) {
+    const size_t a = static_cast<size_t>(h.axis - 'X');
+    EXPECT_NEAR(r.mpos[a], -cfg.homing.pulloff_mm, 1e-9) << h.axis;
+    const int64_t offset = std::llround(r.mpos[a] * cfg.steps_per_mm[a]) - net[a];
+    out[h.axis] = h.step - offset;
+  }
+  if (!homed.empty()) {
+    EXPECT_EQ(homed[0].axis, n_homed == 3 ? 'Z' : 'X') << "Z first (grbl)";
+  }
+  return out;
+}
+
+// $H with X, Y and Z switches (all toward max, $23=0): starts in alarm ($22=1), Home while it
+// runs, ok at the end, Idle at MPos = -pull-off on every axis (grbl 1.1 without
+// HOMING_FORCE_SET_ORIGIN), each latched position the board's step count at its switch's edge
+// (the endstop's step plus what the filter lets through); G-code then moves from machine zero.
+TEST(Grbl, HomingOnTheVerilatedBoard) {
+  const MachineConfig cfg = homing_config();
+  const std::array<int64_t, 3> edge{80, 64, 100};  // x-max 0.5 mm, y-max 0.4 mm, z-max 0.25 mm
+  Rig rig("", cfg, true, {{0, true, edge[0]}, {1, true, edge[1]}, {2, true, edge[2]}});
+  EXPECT_EQ(rig.status().state, "Alarm") << "$22=1: alarm until $H";
+  EXPECT_EQ(rig.command("G0 X1").back(), "error:9");
+  const auto steps = home_once(rig, cfg, 3);
+  ASSERT_EQ(steps.size(), 3u);
+  for (const auto& [axis, st] : steps) {
+    const size_t a = static_cast<size_t>(axis - 'X');
+    EXPECT_GE(st, edge[a]) << axis;
+    EXPECT_LE(st, edge[a] + filter_steps(cfg, a)) << axis;
+  }
+  EXPECT_EQ(rig.command("G0 X-0.3 Z-0.2").back(), "ok");
+  const Report m = idle_soon(rig);
+  EXPECT_NEAR(m.mpos[0], -0.3, 1e-9);
+  EXPECT_NEAR(m.mpos[1], -0.1, 1e-9);
+  EXPECT_NEAR(m.mpos[2], -0.2, 1e-9);
+  expect_at(m, {-48, -16, -80}, cfg);
+}
+
+// Three $H of X and Y from different places: the latched board steps stay within what the
+// filter allows at the locate feed (printed: the spread in steps).
+TEST(Grbl, HomingRepeatability) {
+  MachineConfig cfg = homing_config();
+  cfg.homing.cycles = {0b011};  // X and Y together
+  const std::array<int64_t, 2> edge{80, 64};
+  Rig rig("", cfg, true, {{0, true, edge[0]}, {1, true, edge[1]}});
+  std::array<int64_t, 2> lo{INT64_MAX, INT64_MAX}, hi{INT64_MIN, INT64_MIN};
+  const char* away[] = {"G0 X-0.3 Y-0.2", "G0 X-0.15 Y-0.35"};
+  // A setting right before $H: its frames (CONFIG_AXIS, MOTION) go out before the cycle's.
+  EXPECT_EQ(rig.command("$24=300").back(), "ok");
+  for (int run = 0; run < 3; ++run) {
+    const auto steps = home_once(rig, cfg, 2);
+    ASSERT_EQ(steps.size(), 2u) << "run " << run;
+    for (size_t a = 0; a < 2; ++a) {
+      const int64_t st = steps.at("XY"[a]);
+      EXPECT_GE(st, edge[a]) << "run " << run;
+      EXPECT_LE(st, edge[a] + filter_steps(cfg, a)) << "run " << run;
+      lo[a] = std::min(lo[a], st);
+      hi[a] = std::max(hi[a], st);
+    }
+    if (run < 2) {
+      EXPECT_EQ(rig.command(away[run]).back(), "ok");
+      idle_soon(rig);
+    }
+  }
+  for (size_t a = 0; a < 2; ++a) {
+    std::printf("homing repeatability %c: latched board steps %lld..%lld (spread %lld steps)\n",
+                "XY"[a], static_cast<long long>(lo[a]), static_cast<long long>(hi[a]),
+                static_cast<long long>(hi[a] - lo[a]));
+    EXPECT_LE(hi[a] - lo[a], filter_steps(cfg, a));
+  }
+}
+
+// A switch already pressed when $H starts (x-max at step 0: pressed from reset): the cycle
+// pulls off it first, then homes as usual.
+TEST(Grbl, HomingStartsOnAPressedSwitch) {
+  MachineConfig cfg = homing_config();
+  cfg.homing.cycles = {0b001};  // X only
+  Rig rig("", cfg, true, {{0, true, 0}});
+  rig.link().wait_until(rig.link().now() + milliseconds(5));
+  const Report before = rig.status();
+  EXPECT_EQ(before.state, "Alarm");
+  EXPECT_NE(rig.reports().back().find("|Pn:X"), std::string::npos) << rig.reports().back();
+  const auto ans = rig.command("$H");
+  ASSERT_EQ(ans.back(), "ok");
+  const auto homed = homed_messages(ans);
+  ASSERT_EQ(homed.size(), 1u);
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Idle");
+  EXPECT_NEAR(r.mpos[0], -0.1, 1e-9);
+  EXPECT_EQ(rig.reports().back().find("|Pn:"), std::string::npos) << rig.reports().back();
+  const int64_t offset = std::llround(r.mpos[0] * 160.0) - rig.board().net_steps()[0];
+  EXPECT_GE(homed[0].step - offset, 0);
+  EXPECT_LE(homed[0].step - offset, 1);
+}
+
+// Z has a switch wired but no endstop on the simulated board: the seek ends without it,
+// ALARM:9 naming Z max, the line's ok, a reset into the alarm; the trigger is disarmed.
+TEST(Grbl, HomingMissingSwitchIsAlarm9) {
+  const MachineConfig cfg = homing_config();
+  Rig rig("", cfg, true, {{0, true, 80}, {1, true, 64}});
+  const auto ans = rig.command("$H");
+  ASSERT_GE(ans.size(), 3u);
+  EXPECT_EQ(ans[0], "ALARM:9");
+  EXPECT_NE(ans[1].find("Z max not found"), std::string::npos) << ans[1];
+  EXPECT_EQ(ans.back(), "ok");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Alarm");
+  EXPECT_NEAR(r.mpos[2], 1.5, 1e-9) << "the whole seek of 1.5 x 1 mm ran";
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G0 Z1").back(), "ok");
+  expect_at(idle_soon(rig), {0, 0, 400}, cfg);
+}
+
+// A soft reset while $H runs: ALARM:6 (grbl), the board stopped by its e-stop, the banner
+// into the alarm; the next session disarms the trigger, so after $X a move into the X switch's
+// side trips the hard limit again (an armed HOME would suppress it) and a new $H homes.
+TEST(Grbl, HomingSoftResetIsAlarm6) {
+  MachineConfig cfg = homing_config();
+  cfg.homing.cycles = {0b001};
+  Rig rig("", cfg, true, {{0, true, 80}});
+  rig.send("$H\n");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.status().state == "Home"; }));
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:6");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.status().state, "Alarm");
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  const Report at = rig.status();
+  EXPECT_EQ(rig.command("G91 G1 X1 F3000").back(), "ok");
+  ASSERT_TRUE(rig.pump_until([&] { return !rig.lines().empty(); }, milliseconds(2000)))
+      << "X from " << at.mpos[0] << " mm: no alarm; board X " << rig.board().net_steps()[0];
+  EXPECT_EQ(rig.next_line(), "ALARM:1") << "the X max switch trips: the trigger is disarmed";
+  EXPECT_EQ(rig.next_line(), "[MSG:Reset to continue]");
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:Check Limits]");
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  EXPECT_EQ(rig.board().pull_off_endstops(), 1);
+  rig.link().wait_until(rig.link().now() + milliseconds(5));
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  // (The pull-off by hand moved the carriage against the step count: the switch's step is no
+  // longer 80, so only the cycle's end is checked.)
+  EXPECT_EQ(home_once(rig, cfg, 1).size(), 1u);
+}
+
+// $22=0 (the default): $H is error:5 as in grbl; $22=1 is refused on a board without switches.
+TEST(Grbl, HomingDisabledIsError5) {
+  Rig rtl("", MachineConfig{}, true);
+  EXPECT_EQ(rtl.command("$H").back(), "error:5");
+  EXPECT_EQ(rtl.command("$22=1").back(), "ok") << "the Verilated board has switches";
+  EXPECT_EQ(rtl.command("$22=0").back(), "ok");
+  EXPECT_EQ(rtl.command("$H").back(), "error:5");
+  Rig twin;
+  EXPECT_EQ(twin.command("$22=1").back(), "error:3") << "the twin board has no switches";
+}
+
+}  // namespace

@@ -789,3 +789,101 @@ TEST(V2Packer, SessionFramesCarryConsecutiveSequenceNumbers) {
   }
   EXPECT_EQ(frames.back()[3], static_cast<uint8_t>(v2::Type::Release));
 }
+
+namespace {
+
+// TRIGGER, SET_POSITION, TRIGGER_QUERY and TRIGGER_REPORT: the worked examples of
+// docs/protocol.md byte for byte, both ways, and the device's field rules.
+TEST(V2Codec, TriggerFramesMatchTheDocs) {
+  // seq 5, HOME on X max and Y max (mask 0x0300); seq 6, PROBE to contact.
+  EXPECT_EQ(v2::encode(v2::trigger(5, v2::TriggerMode::Home, 0x0300, 2)),
+            from_hex("A5 03 05 0A 01 03 00 E9 6F"));
+  EXPECT_EQ(v2::encode(v2::trigger(6, v2::TriggerMode::Probe)),
+            from_hex("A5 03 06 0A 02 00 00 0B BE"));
+  const auto home = v2::decode_trigger(parse_one(from_hex("A5 03 05 0A 01 03 00 E9 6F")), 2);
+  EXPECT_EQ(home.first, v2::TriggerMode::Home);
+  EXPECT_EQ(home.second, 0x0300);
+  // 2 axes: seq 7, X = 0, Y = -10.
+  const std::vector<int32_t> pos{0, -10};
+  const Bytes sp = from_hex("A5 0A 07 0B 00 03 00 00 00 00 FF FF FF F6 5E 0D");
+  EXPECT_EQ(v2::encode(v2::set_position(7, 0x0003, pos)), sp);
+  const auto dsp = v2::decode_set_position(parse_one(sp), 2);
+  EXPECT_EQ(dsp.first, 0x0003);
+  EXPECT_EQ(dsp.second, pos);
+  EXPECT_EQ(v2::encode(v2::trigger_query()), from_hex("A5 00 00 0C 0D 10"));
+  // Device seq 3: HOME done, X max and Y max fired, X latched 312, Y 132.
+  const Bytes rb = from_hex("A5 0C 03 85 01 02 03 00 00 00 01 38 00 00 00 84 02 9F");
+  const v2::TriggerReport r = v2::decode_trigger_report(parse_one(rb), 2);
+  EXPECT_EQ(r.mode, v2::TriggerMode::Home);
+  EXPECT_TRUE(r.done());
+  EXPECT_FALSE(r.armed());
+  EXPECT_EQ(r.fired, 0x0300);  // bytes 03 00: X max and Y max as the doc's mask
+  EXPECT_EQ(r.latched, (std::vector<int32_t>{312, 132}));
+  EXPECT_EQ(v2::encode(v2::trigger_report(3, r)), rb);
+
+  // Sequenced, not FIFO; the query unsequenced.
+  EXPECT_TRUE(v2::is_sequenced(0x0A));
+  EXPECT_TRUE(v2::is_sequenced(0x0B));
+  EXPECT_FALSE(v2::is_sequenced(0x0C));
+  EXPECT_FALSE(v2::is_fifo(0x0A));
+  EXPECT_FALSE(v2::is_fifo(0x0B));
+  EXPECT_EQ(v2::nak_reason_name(9), "BUSY");
+}
+
+TEST(V2Codec, TriggerFieldRules) {
+  // Builders refuse what the device would NAK BAD_FIELD (docs/protocol.md "TRIGGER").
+  EXPECT_THROW(v2::trigger(0, v2::TriggerMode::Home, 0), std::invalid_argument);
+  EXPECT_THROW(v2::trigger(0, v2::TriggerMode::Home, v2::switch_bit(2, true), 2),
+               std::invalid_argument);  // axis 2 on a 2-axis board
+  EXPECT_THROW(v2::trigger(0, v2::TriggerMode::Probe, 0x0001), std::invalid_argument);
+  EXPECT_THROW(v2::trigger(0, v2::TriggerMode::Disarm, 0x0100), std::invalid_argument);
+  EXPECT_THROW(v2::trigger(0, static_cast<v2::TriggerMode>(4)), std::invalid_argument);
+  EXPECT_NO_THROW(v2::trigger(0, v2::TriggerMode::Home, v2::switch_bit(3, false), 4));
+  const std::vector<int32_t> two{1, 2};
+  EXPECT_THROW(v2::set_position(0, 0, two), std::invalid_argument);
+  EXPECT_THROW(v2::set_position(0, 0x0004, two), std::invalid_argument);  // axis 2
+  EXPECT_THROW(v2::set_position(0, 0x8000, two), std::invalid_argument);  // bit 15
+  EXPECT_THROW(v2::set_position(0, 1, std::vector<int32_t>{}), std::invalid_argument);
+
+  // check_host_frame: the device's answers to frames built by hand.
+  auto tr = [](std::vector<uint8_t> p) {
+    return v2::check_host_frame(v2::Frame{0, 0x0A, std::move(p)}, 2);
+  };
+  EXPECT_EQ(tr({0x01, 0x03, 0x00}), std::nullopt);
+  EXPECT_EQ(tr({0x04, 0x00, 0x00}), v2::NakReason::BadField);  // mode 4
+  EXPECT_EQ(tr({0x01, 0x00, 0x00}), v2::NakReason::BadField);  // HOME without switches
+  EXPECT_EQ(tr({0x01, 0x04, 0x00}), v2::NakReason::BadField);  // axis 2 max on 2 axes
+  EXPECT_EQ(tr({0x02, 0x00, 0x01}), v2::NakReason::BadField);  // PROBE with a mask
+  EXPECT_EQ(tr({0x00, 0x01, 0x00}), v2::NakReason::BadField);  // DISARM with a mask
+  EXPECT_EQ(tr({0x01, 0x03}), v2::NakReason::BadLength);
+  auto sp = [](std::vector<uint8_t> p) {
+    return v2::check_host_frame(v2::Frame{0, 0x0B, std::move(p)}, 2);
+  };
+  const std::vector<uint8_t> good{0x00, 0x03, 0, 0, 0, 0, 0, 0, 0, 0};
+  EXPECT_EQ(sp(good), std::nullopt);
+  auto mask = [&](uint8_t hi, uint8_t lo) {
+    auto p = good;
+    p[0] = hi;
+    p[1] = lo;
+    return sp(p);
+  };
+  EXPECT_EQ(mask(0, 0), v2::NakReason::BadField);
+  EXPECT_EQ(mask(0, 4), v2::NakReason::BadField);                     // axis 2
+  EXPECT_EQ(mask(0x80, 1), v2::NakReason::BadField);                  // bit 15
+  EXPECT_EQ(sp({0x00, 0x01, 0, 0, 0, 0}), v2::NakReason::BadLength);  // 1 axis of 2
+  EXPECT_EQ(v2::check_host_frame(v2::Frame{0, 0x0C, {0}}, 2), v2::NakReason::BadLength);
+
+  // TRIGGER_REPORT decoder: length, mode, reserved flag bits.
+  const v2::Frame rep =
+      v2::trigger_report(0, {v2::TriggerMode::Probe, v2::kTriggerArmed, 0, {5, -6}});
+  EXPECT_EQ(v2::decode_trigger_report(rep, 2).latched, (std::vector<int32_t>{5, -6}));
+  EXPECT_THROW(v2::decode_trigger_report(rep, 3), v2::ProtocolError);
+  auto rp = rep;
+  rp.payload[1] = 0x04;
+  EXPECT_THROW(v2::decode_trigger_report(rp, 2), v2::ProtocolError);
+  rp = rep;
+  rp.payload[0] = 4;
+  EXPECT_THROW(v2::decode_trigger_report(rp, 2), v2::ProtocolError);
+}
+
+}  // namespace

@@ -105,3 +105,39 @@ TEST(V2Session, AbandonDropsWhatWasNeverSent) {
   EXPECT_EQ(dev.position()[0], static_cast<int32_t>(s.pushed()));
   EXPECT_LT(dev.position()[0], 40);
 }
+
+// TRIGGER and SET_POSITION go as sequenced frames in order with the moves; TRIGGER_QUERY's
+// answer reaches last_trigger(); a SET_POSITION is taken only with the device idle
+// (docs/protocol.md "SET_POSITION").
+TEST(V2Session, TriggerAndSetPosition) {
+  FakeV2Device::Options o;
+  o.fifo_depth = 4;
+  o.exec_period = std::chrono::microseconds(5'000);
+  FakeV2Device dev(o);
+  lk::StreamV2Report rep;
+  const v2::Ident id = lk::handshake_v2(dev, options(), rep, std::nullopt);
+  lk::V2Session s(dev, options(), id, rep);
+  s.start();
+  s.push({v2::trigger(0, v2::TriggerMode::Home, v2::switch_bit(0, true), id.n_axes)});
+  s.drain();
+  EXPECT_EQ(s.trigger_answers(), 0u);
+  s.request_trigger();
+  while (s.trigger_answers() == 0) s.poll(milliseconds(5));
+  EXPECT_EQ(s.last_trigger().mode, v2::TriggerMode::Home);
+  EXPECT_TRUE(s.last_trigger().armed());
+  EXPECT_FALSE(s.last_trigger().done());
+  EXPECT_EQ(s.last_trigger().latched.size(), id.n_axes);
+
+  // Moves, then SET_POSITION pushed behind them: the device takes it only once idle (NAK BUSY
+  // while they run, resent by the session), so X ends at the value set whatever the timing.
+  for (int i = 0; i < 3; ++i) s.push({move(10, 0), true});
+  std::vector<int32_t> pos(id.n_axes, 0);
+  pos[0] = -160;
+  s.push({v2::set_position(0, 0x0001, pos)});
+  s.push({v2::trigger(0, v2::TriggerMode::Disarm)});
+  s.drain();
+  EXPECT_EQ(dev.set_positions(), 1u);
+  EXPECT_EQ(dev.position()[0], -160);
+  EXPECT_EQ(dev.trigger().mode, v2::TriggerMode::Disarm);
+  EXPECT_EQ(dev.trigger().flags, 0);
+}

@@ -66,6 +66,56 @@ class Reader {
     }
   }
 
+  // [homing]: grbl's $22..$27 and the cycles (docs/machine.md "Homing and probing (host)").
+  void homing(const toml::value& v, const std::string& key, Homing& h) {
+    if (!v.is_table()) fail(v, key, "expected a table");
+    for (const auto& [k, sub] : v.as_table()) {
+      const std::string full = key + "." + k;
+      auto feed = [&]() {
+        const double x = number(sub, full);
+        if (!(x > 0.0)) fail(sub, full, "must be > 0");
+        return x;
+      };
+      if (k == "enabled") {
+        h.enabled = boolean(sub, full);
+      } else if (k == "dir_invert_mask") {
+        h.dir_invert_mask = static_cast<uint32_t>(unsigned_int(sub, full, 7));
+      } else if (k == "locate_feed_mm_min") {
+        h.locate_feed_mm_min = feed();
+      } else if (k == "seek_feed_mm_min") {
+        h.seek_feed_mm_min = feed();
+      } else if (k == "debounce_ms") {
+        h.debounce_ms = number(sub, full);
+        if (!(h.debounce_ms >= 0.0)) fail(sub, full, "must be >= 0");
+      } else if (k == "pulloff_mm") {
+        h.pulloff_mm = feed();
+      } else if (k == "cycles") {
+        // ["Z", "XY"]: the axes homed together, in order.
+        if (!sub.is_array()) fail(sub, full, "expected an array of axis strings (\"Z\", \"XY\")");
+        h.cycles.clear();
+        for (const auto& e : sub.as_array()) {
+          uint32_t m = 0;
+          for (const char ch : string(e, full)) {
+            const char u = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+            if (u != 'X' && u != 'Y' && u != 'Z') fail(e, full, "axes are X, Y and Z");
+            m |= 1u << (u - 'X');
+          }
+          if (m == 0) fail(e, full, "an empty cycle");
+          h.cycles.push_back(m);
+        }
+      } else if (k == "max_travel_mm") {
+        std::array<double, kAxes> t{};
+        axes(sub, full, t);
+        for (size_t a = 0; a < 3; ++a) {
+          if (t[a] < 0.0) fail(sub, full, "must be >= 0");
+          h.max_travel_mm[a] = t[a];
+        }
+      } else {
+        fail(sub, full, "unknown key");
+      }
+    }
+  }
+
   // [travel]: x = { min = A, max = B } per axis (soft limits).
   void travel(const toml::value& v, const std::string& key, std::array<Travel, kAxes>& out) {
     if (!v.is_table()) fail(v, key, "expected a table with keys x, y, z, e (or a)");
@@ -203,6 +253,8 @@ class Reader {
             fail(gv, full, "unknown key");
           }
         }
+      } else if (k == "homing") {
+        homing(v, k, c.homing);
       } else if (k == "heater") {  // host/src/heat/heater_config.cpp
         heat::read_heater_toml(v, c.heaters, name_);
       } else {

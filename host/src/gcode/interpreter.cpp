@@ -660,8 +660,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       const std::string& t = b.text;
       if (t.size() >= 2 && (t[1] == 'H' || t[1] == 'h'))
         throw fail(b, b.text_col,
-                   "'$H' homing cycle: this controller has no homing yet; home the machine before "
-                   "the job and remove the line");
+                   "'$H' homing cycle in a job: home the machine before the job (`fpgacnc home`, "
+                   "or '$H' in `fpgacnc grbl`) and remove the line");
       if (t.size() >= 2 && (t[1] == 'J' || t[1] == 'j'))
         throw fail(b, b.text_col, "'$J=' jogging is not a job command");
       warn(fmt::format("grbl system line '{}' ignored", t), b.line);

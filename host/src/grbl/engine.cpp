@@ -117,13 +117,19 @@ Engine::Engine(link::Link& link, config::MachineConfig base, Settings settings, 
       cfg_(apply_settings(base_, settings)),
       settings_(std::move(settings)),
       opt_(std::move(opt)) {
-  if (!opt_.limit_switches) settings_.values[21] = 0.0;  // no switches: no hard limits
+  if (!opt_.limit_switches) {  // no switches: no hard limits, no homing
+    settings_.values[21] = 0.0;
+    settings_.values[22] = 0.0;
+    cfg_ = apply_settings(base_, settings_);
+  }
 }
 
 Engine::~Engine() = default;
 
 void Engine::connect() {
   ident_ = link::handshake_v2(link_, opt_.v2, rep_, std::nullopt);
+  // grbl with homing enabled starts in alarm until `$H` (or `$X`).
+  if (settings_.values.at(22) != 0.0) alarm_ = true;
   restart();
 }
 
@@ -139,6 +145,10 @@ void Engine::new_session() {
   motion_ok_ = session_->configure_motion(motion_frame(false, (st.state & v2::kStateHold) != 0));
   if (motion_ok_) ++stats_.motions;
   frontend::push_config_axes(*session_, ident_, cfg_);
+  if (disarm_next_) {  // a HOME left armed keeps its switches' trips suppressed
+    session_->push({v2::trigger(0, v2::TriggerMode::Disarm)});
+    disarm_next_ = false;
+  }
   fifo_info_.clear();
   fifo_base_ = 0;
 }
@@ -349,6 +359,7 @@ bool Engine::motion_pending() const {
 
 State Engine::state() const {
   if (sleep_) return State::kSleep;
+  if (homing_) return State::kHome;
   if (alarm_) return State::kAlarm;
   if (check_) return State::kCheck;
   if (jog_cancel_ || (jog_ && motion_pending())) return State::kJog;
@@ -364,7 +375,7 @@ State Engine::state() const {
 
 bool Engine::busy() const {
   return motion_pending() || report_pending_ || resetting_ || pause_pending_ || jog_cancel_ ||
-         (line_ready() && can_take_line());
+         homing_ || (line_ready() && can_take_line());
 }
 
 std::array<double, 4> Engine::mpos() const {
@@ -380,8 +391,8 @@ bool Engine::line_ready() const {
 }
 
 bool Engine::can_take_line() const {
-  return !resetting_ && !jog_cancel_ && !critical_ && !held_ && !pause_pending_ && !limit_alarm_ &&
-         session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
+  return !resetting_ && !jog_cancel_ && !homing_ && !critical_ && !held_ && !pause_pending_ &&
+         !limit_alarm_ && session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
 }
 
 void Engine::step(milliseconds wait) {
@@ -390,6 +401,15 @@ void Engine::step(milliseconds wait) {
   }
   realtime_.clear();
   if (resetting_) continue_reset();
+  if (homing_ && !resetting_) {
+    // The cycle polls its own sessions; a report shows the last STATUS it saw (state Home).
+    if (report_pending_) {
+      write_report();
+      report_pending_ = report_asked_ = false;
+    }
+    continue_homing(wait);
+    return;
+  }
   if (jog_cancel_ && !resetting_) continue_jog_cancel();
   if (!resetting_) {
     while (line_ready() && can_take_line()) take_line();
@@ -462,7 +482,8 @@ void Engine::process_line(const std::string& raw) {
   } else {
     rc = gcode_line(raw, check_);
   }
-  if (rc == kSoftLimit) {  // grbl: alarm, then nothing until a reset (which sends the ok)
+  if (rc == kHomingStarted) return;  // answered when the cycle ends (finish_homing)
+  if (rc == kSoftLimit) {            // grbl: alarm, then nothing until a reset (which sends the ok)
     ++stats_.errors;
     alarm_ = critical_ = true;
     say("ALARM:2");
@@ -758,7 +779,7 @@ int Engine::system_command(const std::string& cmd) {
     }
     return 0;
   }
-  if (cmd == "$H") return 5;  // homing is not enabled ($22 = 0; no limit inputs yet)
+  if (cmd == "$H") return start_homing();
   if (cmd.rfind("$J", 0) == 0) return jog_line(cmd);
   if (cmd == "$SLP") {
     if (int rc = need_idle()) return rc;
@@ -860,17 +881,27 @@ void Engine::soft_reset() {
   }
   rx_.clear();  // grbl empties its receive buffer
   realtime_.clear();
+  // grbl: a reset during homing is ALARM:6 (not 3); the board is stopped below as a running job
+  // (its e-stop, else MOTION CANCEL) and the next session disarms the trigger.
+  const bool homing = homing_ != nullptr;
+  if (homing) {
+    homing_.reset();
+    say("ALARM:6");
+    alarm_ = true;
+    disarm_next_ = true;
+  }
   // A hold counts as motion (grbl: a reset during a feed hold is ALARM:3 too).
-  const bool moving = (motion_pending() || (motion_ok_ && board_held())) && !check_;
+  const bool moving = (homing || motion_pending() || (motion_ok_ && board_held())) && !check_;
   limit_alarm_ = false;  // a reset ends the critical alarm (the FAULT_CLEAR comes with it)
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   stats_.aborted += session_->abandon();
   if (moving) {
     if (!alarm_) say("ALARM:3");  // not after ALARM:2: the alarm is already raised
     alarm_ = true;
-    if (motion_ok_ && board_held()) {
-      // A hold in effect: MOTION CANCEL drops the board's queue once it is at rest, positions
-      // kept, no fault (docs/machine.md "Cancel").
+    if (motion_ok_ && (board_held() || (homing && !opt_.estop_press))) {
+      // A hold in effect, or a homing move on a board without an e-stop input: MOTION CANCEL
+      // drops the board's queue once it is at rest, positions kept, no fault (docs/machine.md
+      // "Cancel").
       send_motion(false, false, true);
     } else if (opt_.estop_press && opt_.estop_release) {
       opt_.estop_press();  // running: the board drops its queue at once
@@ -991,6 +1022,89 @@ void Engine::continue_jog_cancel() {
   const auto& st = session_->last_status();
   for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
   resync_parser(pos);
+}
+
+int Engine::start_homing() {
+  if (settings_.values.at(22) == 0.0) return 5;  // homing not enabled
+  if (check_) return 8;
+  const State st = state();
+  if (st != State::kIdle && st != State::kAlarm) return 8;
+  if (limit_alarm_ || (session_->last_status().faults & v2::kFaultLimit)) return 9;
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  // The cycle's sessions: the board keeps its MOTION rates and CONFIG_AXIS timing, so only the
+  // session itself (the cycle switches the device's soft limits off in it).
+  homing_ = std::make_unique<link::HomingCycle>(
+      link_, cfg_, ident_, opt_.limit_switches, [this]() -> link::V2Session& {
+        session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
+        session_->start();
+        fifo_info_.clear();
+        fifo_base_ = 0;
+        return *session_;
+      });
+  if (homing_->empty()) {
+    homing_.reset();
+    return 5;  // no switch on any homing side: as homing not enabled
+  }
+  homing_started_ = false;
+  return kHomingStarted;
+}
+
+void Engine::continue_homing(milliseconds wait) {
+  try {
+    if (!homing_started_) {
+      // The frames of the session before (a `$N=` just before `$H`) go out and are acknowledged
+      // before the cycle's first session starts at the board's next_seq.
+      session_->poll(wait);
+      if (!session_->complete()) return;
+      homing_started_ = true;
+    }
+    if (homing_->step(wait)) finish_homing();
+  } catch (const link::Error& e) {
+    homing_.reset();
+    if (session_->last_status().faults & v2::kFaultLimit) {
+      disarm_next_ = true;  // a switch not armed tripped: ALARM:1, lines wait for a reset
+      on_session_error();
+      return;
+    }
+    // The board refused the cycle's frames or stopped answering: a homing failure.
+    say("ALARM:9");
+    say(fmt::format("[MSG:homing: {}]", e.what()));
+    say("ok");
+    alarm_ = true;
+    restart();
+  }
+}
+
+void Engine::finish_homing() {
+  const link::HomingResult r = homing_->result();
+  homing_.reset();
+  ++stats_.oks;
+  if (!r.ok) {
+    // grbl: the alarm, the `$H` line's ok, then a reset into the alarm state.
+    say(fmt::format("ALARM:{}", r.alarm));
+    say(fmt::format("[MSG:{}]", r.message));
+    say("ok");
+    alarm_ = true;
+    restart();
+    return;
+  }
+  for (const auto& h : r.axes) {
+    const double spm = cfg_.steps_per_mm[h.axis];
+    say(fmt::format("[MSG:Homed {} {}: switch latched at {} (step {}), set to {}]",
+                    config::kAxisNames[h.axis], h.max_side ? "max" : "min",
+                    fmt3(static_cast<double>(h.latched) / spm), h.latched,
+                    fmt3(static_cast<double>(h.home) / spm)));
+  }
+  alarm_ = false;
+  // A session with the machine's soft limits again (the board kept its MOTION rates).
+  session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
+  session_->start();
+  frontend::push_config_axes(*session_, ident_, cfg_);
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  rebuild_pipeline(pos);
+  say("ok");
 }
 
 void Engine::resync_parser(const plan::Steps4& steps) {

@@ -36,16 +36,18 @@ Settings settings_from_config(const config::MachineConfig& cfg) {
   v[11] = cfg.junction_deviation_mm;
   v[12] = cfg.arc_tolerance_mm;
   v[13] = 0;  // report in mm
-  for (int n : {21, 22, 23}) v[n] = 0;
+  v[21] = 0;
+  v[22] = cfg.homing.enabled ? 1 : 0;
+  v[23] = cfg.homing.dir_invert_mask;
   // Soft limits: on when the configuration gives a travel for X, Y or Z ([travel]).
   v[20] = cfg.travel[config::kX].enabled || cfg.travel[config::kY].enabled ||
                   cfg.travel[config::kZ].enabled
               ? 1
               : 0;
-  v[24] = 25.0;
-  v[25] = 500.0;
-  v[26] = 250;
-  v[27] = 1.0;
+  v[24] = cfg.homing.locate_feed_mm_min;
+  v[25] = cfg.homing.seek_feed_mm_min;
+  v[26] = cfg.homing.debounce_ms;
+  v[27] = cfg.homing.pulloff_mm;
   v[30] = cfg.laser_s_max;
   v[31] = 0;
   v[32] = 1;  // laser mode: S changes never stop the motion (LINE_PROFILE carries the power)
@@ -54,7 +56,8 @@ Settings settings_from_config(const config::MachineConfig& cfg) {
     v[110 + a] = cfg.max_feed_mm_min[static_cast<size_t>(a)];
     v[120 + a] = cfg.max_accel_mm_s2[static_cast<size_t>(a)];
     const config::Travel& t = cfg.travel[static_cast<size_t>(a)];
-    v[130 + a] = t.enabled ? t.max_mm - t.min_mm : 200.0;  // grbl's default 200 mm
+    const double h = cfg.homing.max_travel_mm[static_cast<size_t>(a)];
+    v[130 + a] = h > 0.0 ? h : t.enabled ? t.max_mm - t.min_mm : 200.0;  // grbl's default 200 mm
   }
   return s;
 }
@@ -76,6 +79,13 @@ config::MachineConfig apply_settings(const config::MachineConfig& base, const Se
     cfg.max_accel_mm_s2[i] = get(120 + a);
     rapid = std::max(rapid, get(110 + a));
   }
+  cfg.homing.enabled = get(22) != 0.0;
+  cfg.homing.dir_invert_mask = static_cast<uint32_t>(get(23)) & 7u;
+  cfg.homing.locate_feed_mm_min = get(24);
+  cfg.homing.seek_feed_mm_min = get(25);
+  cfg.homing.debounce_ms = get(26);
+  cfg.homing.pulloff_mm = get(27);
+  for (size_t a = 0; a < 3; ++a) cfg.homing.max_travel_mm[a] = get(130 + static_cast<int>(a));
   // G0 runs at each axis's maximum rate (grbl): the planner limits every axis to its own.
   cfg.rapid_feed_mm_min = rapid;
   // $20 on: an axis the configuration gives a travel travels $130-$132 mm from its min; when
@@ -108,8 +118,17 @@ int set_value(Settings& s, int number, double value, bool hard_limits) {
     case 21:  // hard limits: only where the board has limit switches
       if (value != 0.0 && !hard_limits) return 3;
       break;
-    case 22:  // homing is not built yet
-      if (value != 0.0) return 3;
+    case 22:  // homing: only where the board has limit switches
+      if (value != 0.0 && !hard_limits) return 3;
+      value = value != 0.0 ? 1.0 : 0.0;
+      break;
+    case 24:
+    case 25:
+    case 27:
+    case 130:
+    case 131:
+    case 132:
+      if (value == 0.0) return 4;  // feeds and distances of the homing cycle
       break;
     case 0:
     case 11:

@@ -546,6 +546,11 @@ void V2Session::handle(const v2::Frame& f) {
       case v2::Type::Status:
         on_status(v2::decode_status(f, ident_.n_axes));
         break;
+      case v2::Type::TriggerReport:
+        last_trigger_ = v2::decode_trigger_report(f, ident_.n_axes);
+        ++trigger_answers_;
+        trigger_outstanding_ = false;
+        break;
       default:
         break;  // IDENT (late), anything else: ignored
     }
@@ -571,6 +576,11 @@ void V2Session::request_status(bool fresh) {
   asked_status();
   ++rep_.status_polls;
   last_poll_ = now;
+}
+
+void V2Session::request_trigger() {
+  io_.send(v2::trigger_query());
+  trigger_outstanding_ = true;
 }
 
 void V2Session::poll(milliseconds wait) {
@@ -632,8 +642,9 @@ void V2Session::poll_once(milliseconds wait) {
     return;
   }
   if (complete()) {
-    // Nothing in flight but a STATUS_QUERY or MOTION of the caller's: wait for its answer.
-    if (status_outstanding_) {
+    // Nothing in flight but a STATUS_QUERY, MOTION or TRIGGER_QUERY of the caller's: wait for
+    // its answer.
+    if (status_outstanding_ || trigger_outstanding_) {
       if (const auto f = io_.receive(wait)) handle(*f);
     }
     return;

@@ -48,6 +48,26 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
         return NakReason::BadField;
       return std::nullopt;
     }
+    case Type::Trigger: {
+      if (n != spec::kLenTrigger) return NakReason::BadLength;
+      if (f.payload[0] > spec::kTriggerProbeRelease) return NakReason::BadField;
+      if (!trigger_field_error(static_cast<TriggerMode>(f.payload[0]), get16(f.payload, 1), n_axes)
+               .empty())
+        return NakReason::BadField;
+      return std::nullopt;
+    }
+    case Type::SetPosition: {
+      const size_t h = spec::kLenSetPositionHeader, w = spec::kLenSetPositionPerAxis;
+      if (n_axes ? n != h + w * n_axes : (n < h + w || (n - h) % w != 0))
+        return NakReason::BadLength;
+      const size_t axes = (n - h) / w;
+      const uint16_t mask = get16(f.payload, 0);
+      if (mask == 0 || (axes < 16 && (mask >> axes) != 0)) return NakReason::BadField;
+      return std::nullopt;
+    }
+    case Type::TriggerQuery:
+      if (n != 0) return NakReason::BadLength;
+      return std::nullopt;
     case Type::Numerators:
       if (n != spec::kLenNumerators) return NakReason::BadLength;
       return std::nullopt;

@@ -259,6 +259,95 @@ ConfigAxis decode_config_axis(const Frame& f, size_t n_axes) {
   return ConfigAxis{p[0], get16(p, 1), get16(p, 3), get16(p, 5), get16(p, 7)};
 }
 
+// ---- Homing and probing ----
+
+std::string trigger_field_error(TriggerMode mode, uint16_t switches, size_t n_axes) {
+  const auto m = static_cast<uint8_t>(mode);
+  if (m > spec::kTriggerProbeRelease) return fmt::format("mode {} (0..3)", m);
+  if (mode != TriggerMode::Home) {
+    if (switches != 0)
+      return fmt::format("switch mask 0x{:04X} with mode {} (only HOME takes switches)", switches,
+                         m);
+    return {};
+  }
+  if (switches == 0) return "HOME without switches";
+  const size_t axes = n_axes == 0 || n_axes > 8 ? 8 : n_axes;
+  const uint16_t axis_bits = static_cast<uint16_t>((1u << axes) - 1u);
+  const uint16_t allowed = static_cast<uint16_t>(axis_bits | (axis_bits << 8));
+  if (switches & ~allowed)
+    return fmt::format("switch mask 0x{:04X} names an axis the device does not have ({} axes)",
+                       switches, axes);
+  return {};
+}
+
+Frame trigger(uint8_t seq, TriggerMode mode, uint16_t switches, size_t n_axes) {
+  if (const std::string e = trigger_field_error(mode, switches, n_axes); !e.empty())
+    throw std::invalid_argument("TRIGGER frame: " + e);
+  std::vector<uint8_t> p{static_cast<uint8_t>(mode)};
+  put16(p, switches);
+  return make(seq, Type::Trigger, std::move(p));
+}
+
+Frame set_position(uint8_t seq, uint16_t mask, std::span<const int32_t> position) {
+  const size_t n = position.size();
+  if (n == 0 || spec::kLenSetPositionHeader + spec::kLenSetPositionPerAxis * n > kMaxPayload)
+    throw std::invalid_argument(fmt::format("SET_POSITION frame: {} axes", n));
+  if (mask == 0) throw std::invalid_argument("SET_POSITION frame: axis mask 0");
+  if (n < 16 && (mask >> n) != 0)
+    throw std::invalid_argument(
+        fmt::format("SET_POSITION frame: axis mask 0x{:04X} names an axis beyond {}", mask, n));
+  std::vector<uint8_t> p;
+  put16(p, mask);
+  for (const int32_t x : position) put32(p, static_cast<uint32_t>(x));
+  return make(seq, Type::SetPosition, std::move(p));
+}
+
+Frame trigger_query(uint8_t seq) {
+  return make(seq, Type::TriggerQuery);
+}
+
+TriggerReport decode_trigger_report(const Frame& f, size_t n_axes) {
+  expect(f, Type::TriggerReport,
+         spec::kLenTriggerReportHeader + spec::kLenTriggerReportPerAxis * n_axes);
+  const auto& p = f.payload;
+  if (p[0] > spec::kTriggerProbeRelease)
+    throw ProtocolError(fmt::format("TRIGGER_REPORT: mode {} (0..3)", p[0]));
+  if (p[1] & ~(kTriggerArmed | kTriggerDone))
+    throw ProtocolError(fmt::format("TRIGGER_REPORT: flags 0x{:02X}: bits 7..2 must be 0", p[1]));
+  TriggerReport r;
+  r.mode = static_cast<TriggerMode>(p[0]);
+  r.flags = p[1];
+  r.fired = get16(p, 2);
+  r.latched.resize(n_axes);
+  for (size_t a = 0; a < n_axes; ++a) r.latched[a] = static_cast<int32_t>(get32(p, 4 + 4 * a));
+  return r;
+}
+
+Frame trigger_report(uint8_t dev_seq, const TriggerReport& r) {
+  std::vector<uint8_t> p{static_cast<uint8_t>(r.mode), r.flags};
+  put16(p, r.fired);
+  for (const int32_t x : r.latched) put32(p, static_cast<uint32_t>(x));
+  if (p.size() > kMaxPayload) {
+    throw std::invalid_argument(
+        fmt::format("TRIGGER_REPORT frame: {} axes do not fit a frame", r.latched.size()));
+  }
+  return make(dev_seq, Type::TriggerReport, std::move(p));
+}
+
+std::pair<TriggerMode, uint16_t> decode_trigger(const Frame& f, size_t n_axes) {
+  check_or_throw(f, Type::Trigger, n_axes);
+  return {static_cast<TriggerMode>(f.payload[0]), get16(f.payload, 1)};
+}
+
+std::pair<uint16_t, std::vector<int32_t>> decode_set_position(const Frame& f, size_t n_axes) {
+  check_or_throw(f, Type::SetPosition, n_axes);
+  std::vector<int32_t> pos((f.payload.size() - spec::kLenSetPositionHeader) /
+                           spec::kLenSetPositionPerAxis);
+  for (size_t a = 0; a < pos.size(); ++a)
+    pos[a] = static_cast<int32_t>(get32(f.payload, spec::kLenSetPositionHeader + 4 * a));
+  return {get16(f.payload, 0), std::move(pos)};
+}
+
 std::string limit_switch_name(uint8_t limit) {
   static constexpr std::string_view kNames = "XYZABCUVW";
   const unsigned axis = limit & 0x0F;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "fpgacnc/error.h"
 #include "fpgacnc/heat/heater_config.h"
@@ -30,6 +31,22 @@ struct Travel {
   bool enabled = false;
   double min_mm = 0.0;
   double max_mm = 0.0;
+};
+
+// [homing]: the homing cycle (docs/machine.md "Homing and probing (host)"; grbl's $22..$27).
+struct Homing {
+  bool enabled = false;              // $22: `$H` allowed (and required at power-up in grbl)
+  uint32_t dir_invert_mask = 0;      // $23: bit a set = axis a homes toward its min switch
+  double locate_feed_mm_min = 25.0;  // $24
+  double seek_feed_mm_min = 500.0;   // $25
+  double debounce_ms = 250.0;        // $26: kept for senders; the FPGA filters the switches
+  double pulloff_mm = 1.0;           // $27
+  // The axes homed together, in order (grbl's HOMING_CYCLE_0, _1: Z, then X and Y); bit a =
+  // axis a. Only axes with a switch on their homing side take part.
+  std::vector<uint32_t> cycles{0b100, 0b011};
+  // Each axis's travel for the seek (1.5 x) and the position of machine zero (toward min:
+  // -max_travel + pull-off); grbl's $130..$132. 0: [travel] max - min, else 200 mm.
+  std::array<double, 3> max_travel_mm{0.0, 0.0, 0.0};
 };
 
 struct MachineConfig {
@@ -77,6 +94,7 @@ struct MachineConfig {
     bool optional_stop = false;     // M1 pauses like M0
     bool block_delete = false;      // lines starting with '/' are skipped
   } gcode;
+  Homing homing;
   // [heater.hotend], [heater.bed]: heater channels (fpgacnc/heat/heater_config.h).
   heat::HeaterSet heaters;
 };

@@ -48,6 +48,7 @@
 #include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/gcode/reader.h"
 #include "fpgacnc/grbl/settings.h"
+#include "fpgacnc/link/homing.h"
 #include "fpgacnc/link/link.h"
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/link/v2_session.h"
@@ -153,6 +154,11 @@ class Engine {
   // 0, grbl's error code, or kSoftLimit (a move leaves the travel: nothing of the line queued).
   int gcode_line(const std::string& raw, bool check_only);
   static constexpr int kSoftLimit = -2;
+  static constexpr int kHomingStarted = -3;  // `$H` runs: its answer comes at the end
+  // `$H` (docs/grbl.md "Homing"): 0 when started (kHomingStarted), else grbl's error code.
+  int start_homing();
+  void continue_homing(std::chrono::milliseconds wait);
+  void finish_homing();
   void push_items(std::vector<plan::PlanItem> items);
   void flush_lookahead();
   void emit_profiles();
@@ -211,8 +217,11 @@ class Engine {
       false;  // ALARM:1 given: lines wait until a soft reset (grbl's critical alarm)
   bool check_ = false;
   bool sleep_ = false;
-  bool pause_pending_ = false;  // M0/M1/M6 planned: Hold:0 once the board is at rest
-  bool held_ = false;           // at rest after M0 until '~'
+  std::unique_ptr<link::HomingCycle> homing_;  // `$H` in progress (state Home)
+  bool homing_started_ = false;  // the cycle's first session is open (the one before settled)
+  bool disarm_next_ = false;     // a homing was cut short: the next session sends TRIGGER DISARM
+  bool pause_pending_ = false;   // M0/M1/M6 planned: Hold:0 once the board is at rest
+  bool held_ = false;            // at rest after M0 until '~'
   bool resetting_ = false;
   bool estop_pressed_ = false;
   bool motion_ok_ = false;   // the board took MOTION (session start)

@@ -25,9 +25,10 @@ Settings settings_from_config(const config::MachineConfig& cfg);
 config::MachineConfig apply_settings(const config::MachineConfig& cfg, const Settings& s);
 
 // Checks `$N=value` against grbl's rules; returns 0 and stores it, or grbl's error code:
-// 3 unknown setting (also a feature this controller does not have: homing, and hard limits
-// `$21=1` unless `hard_limits`: the board has limit switches), 4 negative value, 6 step pulse
-// under 3 us. $20 is stored as 0 or 1.
+// 3 unknown setting (also a feature the board lacks: hard limits `$21=1` and homing `$22=1`
+// unless `hard_limits`: the board has limit switches), 4 negative value (or 0 for a value the
+// planner or the homing cycle divides by or moves), 6 step pulse under 3 us. $20 and $22 are
+// stored as 0 or 1.
 int set_value(Settings& s, int number, double value, bool hard_limits = false);
 
 // `$N=value` lines in number order, as `$$` prints them.

@@ -103,6 +103,12 @@ class V2Session {
   // A STATUS_QUERY now (unless one is outstanding and `fresh` is false); the answer goes to
   // last_status().
   void request_status(bool fresh = false);
+  // A TRIGGER_QUERY now (unsequenced, resent by calling again; docs/protocol.md "TRIGGER_QUERY");
+  // its TRIGGER_REPORT goes to last_trigger(), counted by trigger_answers(). TRIGGER and
+  // SET_POSITION are pushed as any sequenced frame (push({frame}), not FIFO frames).
+  void request_trigger();
+  size_t trigger_answers() const { return trigger_answers_; }
+  const protocol::v2::TriggerReport& last_trigger() const { return last_trigger_; }
   // Frames sent that the device answers with STATUS (STATUS_QUERY, MOTION) whose answers have not
   // come yet (those older than a retransmission timeout count as lost). The answers come in
   // order: a STATUS that reflects the device after a given moment is the one numbered
@@ -194,6 +200,9 @@ class V2Session {
   Link::Time status_sent_{};
   size_t status_answers_ = 0;
   protocol::v2::Status last_status_;
+  size_t trigger_answers_ = 0;
+  bool trigger_outstanding_ = false;
+  protocol::v2::TriggerReport last_trigger_;
   bool was_complete_ = false;  // complete at the last poll (the caller had nothing to send)
   bool aborting_ = false;
   std::vector<uint8_t> batch_;

@@ -38,6 +38,9 @@ enum class Type : uint8_t {
   ConfigAxis = spec::kTypeConfigAxis,
   ConfigTravel = spec::kTypeConfigTravel,  // soft limits of one axis
   Motion = spec::kTypeMotion,              // feed hold, resume, rates (unsequenced)
+  Trigger = spec::kTypeTrigger,            // homing / probing trigger (sequenced, not queued)
+  SetPosition = spec::kTypeSetPosition,    // position counters (sequenced, not queued)
+  TriggerQuery = spec::kTypeTriggerQuery,  // asks for TRIGGER_REPORT (unsequenced)
   Numerators = spec::kTypeNumerators,
   Release = spec::kTypeRelease,
   Line = spec::kTypeLine,
@@ -55,7 +58,8 @@ enum class Type : uint8_t {
   Nak = spec::kTypeNak,
   Done = spec::kTypeDone,
   Status = spec::kTypeStatus,
-  Ident = spec::kTypeIdent
+  Ident = spec::kTypeIdent,
+  TriggerReport = spec::kTypeTriggerReport
 };
 
 enum class NakReason : uint8_t {
@@ -66,7 +70,8 @@ enum class NakReason : uint8_t {
   OutOfOrder = spec::kNakOutOfOrder,
   FifoFull = spec::kNakFifoFull,
   BadField = spec::kNakBadField,
-  Travel = spec::kNakTravel  // the frame's end leaves the travel (CONFIG_TRAVEL): never retried
+  Travel = spec::kNakTravel,  // the frame's end leaves the travel (CONFIG_TRAVEL): never retried
+  Busy = spec::kNakBusy       // a SET_POSITION while the motion is not idle: resent when idle
 };
 
 // "HELLO", "ACK", ..., or "0x12" for a value not in the table.
@@ -463,6 +468,50 @@ uint16_t rate_from_percent(double pct);
 // hold never decelerates harder than a_hold), clamped to 1 .. 2^32 - 1. Throws
 // std::invalid_argument for a non-positive or non-finite argument.
 uint32_t hold_ramp(double a_hold_steps_s2, double v_max_steps_s, double clk_hz);
+
+// TRIGGER (TYPE 0x0A, 3 bytes), SET_POSITION (0x0B, 2 + 4 N_AXES), TRIGGER_QUERY (0x0C, 0) and
+// the device's TRIGGER_REPORT (0x85, 4 + 4 N_AXES): docs/protocol.md "TRIGGER" .. "TRIGGER_REPORT",
+// docs/machine.md "Homing and probing (hardware)". Switch masks as STATUS's switches: bit a the
+// min switch of axis a, bit 8 + a its max switch.
+enum class TriggerMode : uint8_t {
+  Disarm = spec::kTriggerDisarm,
+  Home = spec::kTriggerHome,
+  Probe = spec::kTriggerProbe,                // fires when the probe becomes asserted
+  ProbeRelease = spec::kTriggerProbeRelease,  // fires when it becomes released
+};
+constexpr uint8_t kTriggerArmed = spec::kTriggerArmed;  // TRIGGER_REPORT flags
+constexpr uint8_t kTriggerDone = spec::kTriggerDone;
+constexpr uint8_t kStateProbe = spec::kStateProbe;  // STATUS state bit 7: the probe touches
+// The switch bit of axis `axis`'s min or max switch.
+constexpr uint16_t switch_bit(size_t axis, bool max_side) {
+  return static_cast<uint16_t>(1u << (axis + (max_side ? 8 : 0)));
+}
+// Empty when the device accepts a TRIGGER with these fields, else the rule broken: HOME needs a
+// non-zero mask of switches of axes < n_axes (n_axes 0: axes 0..7); the other modes a mask of 0.
+std::string trigger_field_error(TriggerMode mode, uint16_t switches, size_t n_axes = 0);
+// Builder; throws std::invalid_argument for fields the device would refuse (trigger_field_error).
+Frame trigger(uint8_t seq, TriggerMode mode, uint16_t switches = 0, size_t n_axes = 0);
+// SET_POSITION: the axes in `mask` take `position[a]` (position.size() = N_AXES, every axis sent).
+// Throws std::invalid_argument for a mask of 0, bits of axes >= position.size(), or no axis.
+Frame set_position(uint8_t seq, uint16_t mask, std::span<const int32_t> position);
+Frame trigger_query(uint8_t seq = 0);
+
+struct TriggerReport {  // TRIGGER_REPORT payload
+  TriggerMode mode = TriggerMode::Disarm;
+  uint8_t flags = 0;             // kTriggerArmed, kTriggerDone
+  uint16_t fired = 0;            // HOME: the switches fired (bits as the mask)
+  std::vector<int32_t> latched;  // per axis: the position at its edge (0: not latched)
+  bool armed() const { return (flags & kTriggerArmed) != 0; }
+  bool done() const { return (flags & kTriggerDone) != 0; }
+  bool operator==(const TriggerReport&) const = default;
+};
+// Decoder: LEN 4 + 4 n_axes, mode <= 3, flags bits 7..2 0 (ProtocolError naming the rule).
+TriggerReport decode_trigger_report(const Frame& f, size_t n_axes);
+// Device frame builder (fake devices, tests).
+Frame trigger_report(uint8_t dev_seq, const TriggerReport& r);
+// Host frame decoders (fake devices, tests): the device's LEN and field rules.
+std::pair<TriggerMode, uint16_t> decode_trigger(const Frame& f, size_t n_axes = 0);
+std::pair<uint16_t, std::vector<int32_t>> decode_set_position(const Frame& f, size_t n_axes);
 
 // Hex dump "A5 0A 07 10 ..." (upper case, space separated).
 std::string hex(std::span<const uint8_t> bytes);
