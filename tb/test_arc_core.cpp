@@ -21,6 +21,7 @@
 #include "common/pin_harness.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
+#include "common/v2_exchange.h"
 #include "common/v2_frames.h"
 #include "fpgacnc/models/arc_walk.h"
 
@@ -43,15 +44,7 @@ class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
 
   // Sends a frame and runs until an answer other than DONE comes; returns it.
   v2::DeviceMsg exchange(const std::vector<uint8_t>& f) {
-    const size_t n0 = msgs.size();
-    send(f);
-    for (int i = 0; i < 60000; ++i) {
-      for (size_t k = n0; k < msgs.size(); ++k)
-        if (msgs[k].type != v2::kDone) return msgs[k];
-      tick();
-    }
-    ADD_FAILURE() << "no answer to frame " << v2::hex(f);
-    return {};
+    return v2::exchange(*this, msgs, f, 60000);
   }
 
  protected:

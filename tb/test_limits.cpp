@@ -16,6 +16,7 @@
 
 #include "Vcnc_core_limits.h"
 #include "common/pin_harness.h"
+#include "common/v2_exchange.h"
 #include "common/v2_frames.h"
 #include "fpgacnc/models/arc_walk.h"
 
@@ -71,22 +72,10 @@ class LimitBench : public fpgacnc::tb::PinHarness<Model> {
   int64_t pins_pos[kAxes] = {0, 0};
   int short_pulses = 0;
 
-  bool wait_msg(uint64_t limit = 200000) {
-    const size_t n = msgs.size();
-    for (uint64_t i = 0; i < limit && msgs.size() == n; ++i) tick();
-    return msgs.size() > n;
-  }
+  bool wait_msg(uint64_t limit = 200000) { return v2::wait_msg(*this, msgs, limit); }
   // Sends a frame and returns the first answer that is not a DONE.
   v2::DeviceMsg exchange(const std::vector<uint8_t>& f) {
-    const size_t n0 = msgs.size();
-    send(f);
-    for (int i = 0; i < 200000; ++i) {
-      for (size_t k = n0; k < msgs.size(); ++k)
-        if (msgs[k].type != v2::kDone) return msgs[k];
-      tick();
-    }
-    ADD_FAILURE() << "no answer to frame " << v2::hex(f);
-    return {};
+    return v2::exchange(*this, msgs, f, 200000);
   }
   v2::DeviceMsg status() {
     const auto m = exchange(v2::status_query());

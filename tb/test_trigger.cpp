@@ -17,6 +17,7 @@
 
 #include "Vcnc_core_trigger.h"
 #include "common/pin_harness.h"
+#include "common/v2_exchange.h"
 #include "common/v2_frames.h"
 #include "fpgacnc/spec.h"
 
@@ -110,22 +111,10 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
   };
   std::vector<PinChange> pin_changes;
 
-  bool wait_msg(uint64_t limit = 200000) {
-    const size_t n = msgs.size();
-    for (uint64_t i = 0; i < limit && msgs.size() == n; ++i) tick();
-    return msgs.size() > n;
-  }
+  bool wait_msg(uint64_t limit = 200000) { return v2::wait_msg(*this, msgs, limit); }
   // Sends a frame and returns the first answer that is not a DONE.
   v2::DeviceMsg exchange(const std::vector<uint8_t>& f) {
-    const size_t n0 = msgs.size();
-    send(f);
-    for (int i = 0; i < 200000; ++i) {
-      for (size_t k = n0; k < msgs.size(); ++k)
-        if (msgs[k].type != v2::kDone) return msgs[k];
-      tick();
-    }
-    ADD_FAILURE() << "no answer to frame " << v2::hex(f);
-    return {};
+    return v2::exchange(*this, msgs, f, 200000);
   }
   v2::DeviceMsg status() {
     const auto m = exchange(v2::status_query());
