@@ -16,7 +16,7 @@
 
 #include "Vcnc_core_limits.h"
 #include "common/pin_harness.h"
-#include "common/v2_exchange.h"
+#include "common/v2_core_bench.h"
 #include "common/v2_frames.h"
 #include "fpgacnc/models/arc_walk.h"
 
@@ -50,65 +50,30 @@ constexpr fpgacnc::tb::PinAccess<Model> kPins{
     },
 };
 
-struct Rise {
-  uint64_t cycle;
-  int axis;
-  bool dir;
-};
+using Rise = fpgacnc::tb::StepRise;
 
-class LimitBench : public fpgacnc::tb::PinHarness<Model> {
+class LimitBench : public fpgacnc::tb::V2CoreBench<Model, kAxes> {
  public:
-  LimitBench() : PinHarness(kAxes, kPins, true, 3'000'000.0) {
-    reset(2, 1);
-    send(v2::hello());
-    EXPECT_TRUE(wait_msg()) << "no IDENT";
-    for (uint8_t ax = 0; ax < kAxes; ++ax)  // STEP high 5, low 5, DIR setup 10, hold 10 clocks
-      EXPECT_EQ(exchange(v2::config_axis(seq++, ax, 5, 5, 10, 10)).type, v2::kAck);
-  }
-  uint8_t seq = 0;
-  std::vector<v2::DeviceMsg> msgs;
-  std::vector<Rise> rises;
-  std::vector<uint64_t> trip_cycles, state_changes, laser_falls;
-  int64_t pins_pos[kAxes] = {0, 0};
+  LimitBench() : V2CoreBench(kPins) {}
+  std::vector<uint64_t> state_changes, laser_falls;
   int short_pulses = 0;
 
-  bool wait_msg(uint64_t limit = 200000) { return v2::wait_msg(*this, msgs, limit); }
-  // Sends a frame and returns the first answer that is not a DONE.
-  v2::DeviceMsg exchange(const std::vector<uint8_t>& f) {
-    return v2::exchange(*this, msgs, f, 200000);
-  }
   v2::DeviceMsg status() {
-    const auto m = exchange(v2::status_query());
-    EXPECT_EQ(m.type, v2::kStatus);
+    const auto m = V2CoreBench::status();
     EXPECT_EQ(m.payload.size(), size_t{30 + 4 * kAxes + 16});
     return m;
   }
-  uint64_t last_rise() const { return rises.empty() ? 0 : rises.back().cycle; }
-  void run_until_idle(uint64_t limit) {
-    for (uint64_t i = 0; i < limit && (dut().busy || !rx_idle()); ++i) tick();
-  }
 
  protected:
-  void observe() override {
+  void observe_more() override {
     const Model& m = dut();
-    if (tx_bytes().size() != tx_seen_) {
-      tx_seen_ = tx_bytes().size();
-      if (auto x = parser_.push(tx_bytes().back().value, tx_bytes().back().start_cycle))
-        msgs.push_back(*x);
-    }
     for (int a = 0; a < kAxes; ++a) {
-      const bool s = (m.step >> a) & 1u, d = (m.dir >> a) & 1u;
-      if (s && !((step_prev_ >> a) & 1u)) {
-        rises.push_back(Rise{cycle(), a, d});
-        pins_pos[a] += d ? 1 : -1;
-        rose_at_[a] = cycle();
-      }
+      const bool s = (m.step >> a) & 1u;
+      if (s && !((step_prev_ >> a) & 1u)) rose_at_[a] = cycle();
       // Every STEP pulse keeps its high time (5 clocks), a trip included.
       if (!s && ((step_prev_ >> a) & 1u) && cycle() - rose_at_[a] != 5) ++short_pulses;
     }
     step_prev_ = m.step;
-    if (m.limit_trip && !trip_prev_) trip_cycles.push_back(cycle());
-    trip_prev_ = m.limit_trip;
     if (m.limit_state != lstate_prev_) state_changes.push_back(cycle());
     lstate_prev_ = m.limit_state;
     if (!m.laser && laser_prev_) laser_falls.push_back(cycle());
@@ -116,10 +81,8 @@ class LimitBench : public fpgacnc::tb::PinHarness<Model> {
   }
 
  private:
-  size_t tx_seen_ = 0;
-  v2::DeviceParser parser_;
   uint32_t step_prev_ = 0;
-  bool trip_prev_ = false, laser_prev_ = false;
+  bool laser_prev_ = false;
   uint32_t lstate_prev_ = 0;
   uint64_t rose_at_[kAxes] = {0, 0};
 };

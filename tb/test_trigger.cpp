@@ -17,7 +17,7 @@
 
 #include "Vcnc_core_trigger.h"
 #include "common/pin_harness.h"
-#include "common/v2_exchange.h"
+#include "common/v2_core_bench.h"
 #include "common/v2_frames.h"
 #include "fpgacnc/spec.h"
 
@@ -52,11 +52,7 @@ constexpr fpgacnc::tb::PinAccess<Model> kPins{
     },
 };
 
-struct Rise {
-  uint64_t cycle;  // the edge on which STEP rose
-  int axis;
-  bool dir;
-};
+using Rise = fpgacnc::tb::StepRise;
 
 std::vector<uint8_t> trigger(uint8_t seq, uint8_t mode, uint16_t mask) {
   std::vector<uint8_t> p{mode};
@@ -84,20 +80,9 @@ struct Report {
   int32_t pos[kAxes] = {0, 0};
 };
 
-class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
+class TriggerBench : public fpgacnc::tb::V2CoreBench<Model, kAxes> {
  public:
-  TriggerBench() : PinHarness(kAxes, kPins, true, 3'000'000.0) {
-    reset(2, 1);
-    send(v2::hello());
-    EXPECT_TRUE(wait_msg()) << "no IDENT";
-    for (uint8_t ax = 0; ax < kAxes; ++ax)  // STEP high 5, low 5, DIR setup 10, hold 10 clocks
-      EXPECT_EQ(exchange(v2::config_axis(seq++, ax, 5, 5, 10, 10)).type, v2::kAck);
-  }
-  uint8_t seq = 0;
-  std::vector<v2::DeviceMsg> msgs;
-  std::vector<Rise> rises;
-  std::vector<uint64_t> trip_cycles;
-  int64_t pins_pos[kAxes] = {0, 0};
+  TriggerBench() : V2CoreBench(kPins) {}
   // The machine: max endstop of each axis (pressed at or beyond), the probe rule.
   int64_t endstop_max[kAxes] = {kNone, kNone};
   std::function<bool(const int64_t*)> probe_rule;
@@ -111,16 +96,6 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
   };
   std::vector<PinChange> pin_changes;
 
-  bool wait_msg(uint64_t limit = 200000) { return v2::wait_msg(*this, msgs, limit); }
-  // Sends a frame and returns the first answer that is not a DONE.
-  v2::DeviceMsg exchange(const std::vector<uint8_t>& f) {
-    return v2::exchange(*this, msgs, f, 200000);
-  }
-  v2::DeviceMsg status() {
-    const auto m = exchange(v2::status_query());
-    EXPECT_EQ(m.type, v2::kStatus);
-    return m;
-  }
   Report report() {
     const auto m = exchange(v2::frame(spec::kTypeTriggerQuery, 0, {}));
     EXPECT_EQ(m.type, spec::kTypeTriggerReport);
@@ -136,9 +111,6 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
     for (int a = 0; a < kAxes; ++a) r.pos[a] = static_cast<int32_t>(m.u32(4 + 4 * a));
     return r;
   }
-  void run_until_idle(uint64_t limit) {
-    for (uint64_t i = 0; i < limit && (dut().busy || !rx_idle()); ++i) tick();
-  }
   // STEP rises of axis a on edges <= e: the position counter's value in clock e.
   int64_t pos_at(int a, uint64_t e) const {
     int64_t p = 0;
@@ -147,7 +119,6 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
     return p + pos0[a];
   }
   int64_t pos0[kAxes] = {0, 0};  // position counters when the rise record started
-  uint64_t last_rise() const { return rises.empty() ? 0 : rises.back().cycle; }
   const PinChange* first_change(int what, bool level) const {
     for (const auto& c : pin_changes)
       if (c.what == what && c.level == level) return &c;
@@ -155,23 +126,8 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
   }
 
  protected:
-  void observe() override {
+  void observe_more() override {
     Model& m = dut();
-    if (tx_bytes().size() != tx_seen_) {
-      tx_seen_ = tx_bytes().size();
-      if (auto x = parser_.push(tx_bytes().back().value, tx_bytes().back().start_cycle))
-        msgs.push_back(*x);
-    }
-    for (int a = 0; a < kAxes; ++a) {
-      const bool s = (m.step >> a) & 1u, d = (m.dir >> a) & 1u;
-      if (s && !((step_prev_ >> a) & 1u)) {
-        rises.push_back(Rise{cycle(), a, d});
-        pins_pos[a] += d ? 1 : -1;
-      }
-    }
-    step_prev_ = m.step;
-    if (m.limit_trip && !trip_prev_) trip_cycles.push_back(cycle());
-    trip_prev_ = m.limit_trip;
     // The machine's switches and probe, from the STEP count: the new level is first sampled on
     // the next edge.
     uint32_t maxes = 0;
@@ -191,12 +147,6 @@ class TriggerBench : public fpgacnc::tb::PinHarness<Model> {
       }
     }
   }
-
- private:
-  size_t tx_seen_ = 0;
-  v2::DeviceParser parser_;
-  uint32_t step_prev_ = 0;
-  bool trip_prev_ = false;
 };
 
 // HOME on X max and Y max together, the switches at different positions: the LINE drives both
