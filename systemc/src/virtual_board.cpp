@@ -291,15 +291,24 @@ RunResult VirtualBoard::run_once(const TwinJob& job, bool sync) {
   if (sync) qk.sync();
   host_ = nullptr;
   exec_.flush_outputs(host->ready());
-  r.edges = pins_.take_sorted();
+  Cycle last_edge = 0;
+  if (pins_.summary_only) {
+    const EdgeSummary sum = pins_.take_summary();
+    r.net_steps = sum.net;
+    r.edge_count = sum.edges;
+    last_edge = sum.last;
+  } else {
+    r.edges = pins_.take_sorted();
+    r.net_steps = models::net_steps(r.edges);
+    r.edge_count = r.edges.size();
+    if (!r.edges.empty()) last_edge = static_cast<Cycle>(r.edges.back().cycle);
+  }
   pins_.clear();
   r.acks = host->acks;
   r.packet_done = dec_.packet_done_cycles;
   r.seg_start = exec_.seg_start_cycles;
   r.seg_done = enc_.seg_done_cycles;
-  r.end_cycle = host->ready();
-  if (!r.edges.empty())
-    r.end_cycle = std::max<Cycle>(r.end_cycle, static_cast<Cycle>(r.edges.back().cycle));
+  r.end_cycle = std::max<Cycle>(host->ready(), last_edge);
   // cnc_core counts the clocks with a `violation` strobe (any axis, or an arc's DIR check)
   std::vector<Cycle> strobes = exec_.arc_violation_cycles;
   for (int a = 0; a < kAxes; ++a) {

@@ -174,15 +174,16 @@ void run_corpus() {
     jobs.emplace_back(path, tw::TwinJob{std::move(script), p.timing, [path](tw::RunResult&& r) {
                                           Outcome& out = outcomes()[path];
                                           out.ran = true;
-                                          out.net = fpgacnc::models::net_steps(r.edges);
+                                          out.net = r.net_steps;
                                           out.host_error = r.error;
                                           out.cycles = r.end_cycle;
-                                          out.edges = r.edges.size();
+                                          out.edges = r.edge_count;
                                         }});
   }
   const auto t1 = std::chrono::steady_clock::now();
   if (!board_params) return;
   tw::VirtualBoard board("virtual_board", *board_params);
+  board.summary_only(true);
   for (auto& j : jobs) board.add_job(std::move(j.second));
   sc_core::sc_start();
   const auto t2 = std::chrono::steady_clock::now();

@@ -5,6 +5,7 @@
 // against a plain sort. Fixed seeds; exit status 1 on any difference. Options: --profiles N,
 // --arcs N, --seed S.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cstdlib>
 #include <random>
@@ -322,9 +323,11 @@ void arcs(std::mt19937_64& g, int count) {
 // rise removed: per-signal streams mostly in time order (as the twins add them), some not, ties
 // across signals, chunk boundaries (streams longer than a chunk).
 void pin_recorder(std::mt19937_64& g) {
-  PinRecorder rec;
+  PinRecorder rec, sum;
+  sum.summary_only = true;
   for (int round = 0; round < 60; ++round) {
     rec.record_tx = pick(g, 0, 1) == 1;
+    sum.record_tx = rec.record_tx;
     std::vector<Edge> all;
     const size_t n = round < 3 ? pick(g, 300'000, 600'000) : pick(g, 0, 3000);
     std::array<uint64_t, fpgacnc::models::kSignalCount> t{};
@@ -335,6 +338,7 @@ void pin_recorder(std::mt19937_64& g) {
       const uint64_t c = messy && pick(g, 0, 9) == 0 ? pick(g, 0, t[s] + 10) : t[s];
       const auto v = static_cast<uint8_t>(pick(g, 0, 1));
       rec.add(static_cast<Cycle>(c), s, v);
+      sum.add(static_cast<Cycle>(c), s, v);
       if (s != fpgacnc::models::kTx || rec.record_tx) all.push_back(Edge{c, s, v});
     }
     std::sort(all.begin(), all.end(), [](const Edge& a, const Edge& b) {
@@ -360,6 +364,15 @@ void pin_recorder(std::mt19937_64& g) {
            got[i].value == want[i].value;
     if (!eq) fail(fmt::format("PinRecorder round {} ({} edges, messy {})", round, n, messy));
     if (rec.size() != 0) fail("PinRecorder not empty after take_sorted");
+    // take_summary() (STEP falls not stored) against the same list
+    const EdgeSummary got_sum = sum.take_summary();
+    const auto want_net = fpgacnc::models::net_steps(want);
+    const Cycle want_last = want.empty() ? 0 : static_cast<Cycle>(want.back().cycle);
+    if (got_sum.net != want_net || got_sum.edges != want.size() || got_sum.last != want_last)
+      fail(fmt::format("PinRecorder summary round {}: net {} / {}, edges {} / {}, last {} / {}",
+                       round, fmt::join(got_sum.net, " "), fmt::join(want_net, " "), got_sum.edges,
+                       want.size(), got_sum.last, want_last));
+    if (sum.size() != 0) fail("PinRecorder not empty after take_summary");
   }
 }
 

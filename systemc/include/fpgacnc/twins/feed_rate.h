@@ -55,6 +55,7 @@ class FeedRate {
   }
   void reset() {
     events_.clear();
+    hold_events_.clear();
     pieces_.clear();
     Regs r;
     r.ramp = ramp0_;
@@ -123,7 +124,7 @@ class FeedRate {
   bool hold(Cycle t) const {
     Regs r;
     size_t i = 0;
-    apply_group(r, events_, i, t + phase_);
+    apply_group(r, hold_events_, i, t + phase_);
     return r.hold;
   }
   // The first clock in t .. t + horizon - 1 with r = 0 (kNever: none). Its cost is that of the
@@ -196,10 +197,13 @@ class FeedRate {
     // A request at u changes r from boundary(u), adv from the clock after it.
     const Cycle reach = boundary(e.clock) + 1;
     if (queried_ > reach) ++late_;
-    auto it = std::upper_bound(events_.begin(), events_.end(), e.clock,
-                               [](Cycle c, const Event& x) { return c < x.clock; });
+    auto later = [](Cycle c, const Event& x) { return c < x.clock; };
+    auto it = std::upper_bound(events_.begin(), events_.end(), e.clock, later);
     const bool appended = it == events_.end();
     events_.insert(it, e);
+    if (e.kind == kHold || e.kind == kResume || e.kind == kCancel || e.kind == kFlush)
+      hold_events_.insert(
+          std::upper_bound(hold_events_.begin(), hold_events_.end(), e.clock, later), e);
     // Pieces starting after the request are computed again; the one holding it gets a new end
     // (a steady one continues its scan when the request comes after every other).
     bool popped = false;
@@ -341,6 +345,8 @@ class FeedRate {
   Cycle k_;
   uint32_t ramp0_;
   std::vector<Event> events_;  // in clock order
+  // The events that set or clear hold and cancel (hold(): a segment's code does not), in order.
+  std::vector<Event> hold_events_;
   std::vector<Piece> pieces_;
   Cycle queried_ = -1;  // the latest clock an answer depended on
   uint64_t late_ = 0;

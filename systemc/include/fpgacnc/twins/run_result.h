@@ -13,7 +13,11 @@
 namespace fpgacnc::twins {
 
 struct RunResult {
-  std::vector<models::Edge> edges;    // STEP/DIR/LASER (and TX) by (cycle, signal)
+  std::vector<models::Edge> edges;  // STEP/DIR/LASER (and TX) by (cycle, signal)
+  // Net steps per axis from the STEP/DIR edges and the number of edges: from `edges`, or with
+  // VirtualBoard::summary_only() (then `edges` is empty) from the recorder's summary.
+  std::array<int64_t, 4> net_steps{};
+  uint64_t edge_count = 0;
   std::vector<Cycle> acks;            // start edge of each ACK byte the host received
   std::vector<Cycle> packet_done;     // decoder: edge after which packet_done is high
   std::vector<Cycle> seg_start;       // executor: edge after which seg_start is high

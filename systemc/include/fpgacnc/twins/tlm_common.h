@@ -222,15 +222,78 @@ inline void drop_laser_pairs(std::vector<Edge>& edges) {
   edges.resize(w);
 }
 
+// What take_summary() gives instead of the edge list: the net steps per axis as
+// models::net_steps() counts them, the number of edges and the cycle of the last one, all of the
+// list take_sorted() would have returned (0 when it is empty).
+struct EdgeSummary {
+  std::array<int64_t, models::kBoardAxes> net{};
+  uint64_t edges = 0;
+  Cycle last = 0;
+};
+
 class PinRecorder {
  public:
   bool record_tx = false;
+  // Summary only (take_summary()): a STEP fall is counted, not stored, so a job of hundreds of
+  // millions of edges keeps 8 bytes per STEP rise and DIR edge instead of the sorted list.
+  bool summary_only = false;
   void add(Cycle c, uint8_t signal, uint8_t value) {
     if (signal == models::kTx && !record_tx) return;
     if (signal >= kSignals || c < 0 || c >= (Cycle{1} << 56))
       throw std::logic_error("twins: pin edge out of range");
+    if (summary_only && signal < models::kBoardAxes && value == 0) {
+      ++uncounted_falls_;
+      uncounted_last_ = std::max(uncounted_last_, c);
+      return;
+    }
     streams_[signal].push((static_cast<uint64_t>(c) << 8) | value);
     ++size_;
+  }
+  // The summary of the recorded edges (the recorder is empty afterwards). The net steps walk each
+  // axis's STEP rises against its DIR edges in (cycle, signal) order: a DIR edge on the clock of
+  // a STEP rise comes after it, as in the sorted list.
+  EdgeSummary take_summary() {
+    EdgeSummary out;
+    out.edges = size_ + uncounted_falls_;
+    out.last = uncounted_last_;
+    for (int sig = 0; sig < kSignals; ++sig) {
+      Stream& st = streams_[static_cast<size_t>(sig)];
+      if (st.size == 0) continue;
+      st.sort_if_needed();
+      if (sig != models::kLaser)
+        out.last = std::max(out.last, static_cast<Cycle>(st.chunks.back().back() >> 8));
+    }
+    for (int a = 0; a < models::kBoardAxes; ++a) {
+      Reader dir(streams_[static_cast<size_t>(models::dir_signal(a))]);
+      Reader step(streams_[static_cast<size_t>(models::step_signal(a))]);
+      bool fwd = false;
+      int64_t net = 0;
+      for (; !step.done(); step.next()) {
+        const uint64_t k = step.key();
+        if ((k & 0xff) == 0) continue;
+        for (; !dir.done() && (dir.key() >> 8) < (k >> 8); dir.next())
+          fwd = (dir.key() & 0xff) != 0;
+        net += fwd ? 1 : -1;
+      }
+      out.net[static_cast<size_t>(a)] = net;
+    }
+    // Back-to-back cutting segments: a laser fall and rise on one clock are not edges.
+    constexpr uint64_t kNone = ~uint64_t{0};
+    uint64_t prev = kNone;  // the laser edge before, not yet known to stay
+    auto keep = [&](uint64_t k) { out.last = std::max(out.last, static_cast<Cycle>(k >> 8)); };
+    for (Reader las(streams_[models::kLaser]); !las.done(); las.next()) {
+      const uint64_t k = las.key();
+      if (prev != kNone && (prev >> 8) == (k >> 8) && (prev & 0xff) != (k & 0xff)) {
+        out.edges -= 2;
+        prev = kNone;
+        continue;
+      }
+      if (prev != kNone) keep(prev);
+      prev = k;
+    }
+    if (prev != kNone) keep(prev);
+    clear();
+    return out;
   }
   // Sorts and hands the list over (the recorder is empty afterwards).
   std::vector<Edge> take_sorted() {
@@ -300,6 +363,8 @@ class PinRecorder {
   void clear() {
     for (Stream& s : streams_) s = Stream{};
     size_ = 0;
+    uncounted_falls_ = 0;
+    uncounted_last_ = 0;
   }
 
  private:
@@ -334,8 +399,28 @@ class PinRecorder {
       sorted = true;
     }
   };
+  // Walks a sorted stream's keys in order.
+  struct Reader {
+    const Stream& st;
+    size_t chunk = 0, i = 0;
+    explicit Reader(const Stream& s) : st(s) { skip(); }
+    void skip() {
+      while (chunk < st.chunks.size() && i == st.chunks[chunk].size()) {
+        ++chunk;
+        i = 0;
+      }
+    }
+    bool done() const { return chunk == st.chunks.size(); }
+    uint64_t key() const { return st.chunks[chunk][i]; }
+    void next() {
+      ++i;
+      skip();
+    }
+  };
   std::array<Stream, kSignals> streams_{};
   size_t size_ = 0;
+  uint64_t uncounted_falls_ = 0;  // summary_only: STEP falls counted, not stored
+  Cycle uncounted_last_ = 0;      // and the last one's cycle
 };
 
 }  // namespace fpgacnc::twins

@@ -77,6 +77,9 @@ class VirtualBoard : public sc_core::sc_module {
   // Machine outputs (OUTPUT frames) as pin edges: coolant, fan PWM, digital outputs (off: the
   // edge list has STEP/DIR/LASER/TX only, as the Verilated board records it).
   void record_outputs(bool on) { exec_.record_outputs = on; }
+  // A job's RunResult without its edge list: the net steps and the edge count only
+  // (PinRecorder::summary_only; for whole files of hundreds of millions of edges).
+  void summary_only(bool on) { pins_.summary_only = on; }
   // Runs of the last job (1 without MOTION frames; see above).
   int runs() const { return runs_; }
   // Called in the host thread after the jobs: a TwinBoard's pty sessions (twin_board.h).
