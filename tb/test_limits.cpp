@@ -14,7 +14,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "Vcnc_core_limits.h"
+#include "Vcnc_core_machine.h"
 #include "common/pin_harness.h"
 #include "common/v2_core_bench.h"
 #include "common/v2_frames.h"
@@ -24,7 +24,7 @@ namespace {
 
 namespace v2 = fpgacnc::tb::v2;
 namespace arc = fpgacnc::models::arc;
-using Model = Vcnc_core_limits;
+using Model = Vcnc_core_machine;
 
 constexpr int kAxes = 2;
 constexpr uint64_t kFilter = 500;  // LIMIT_FILTER_CLKS of this build (tb/limits.cmake)
@@ -47,6 +47,7 @@ constexpr fpgacnc::tb::PinAccess<Model> kPins{
       m.cfg_wr = 0;
       m.limit_min = 1;  // X min is active low: released = high
       m.limit_max = 0;
+      m.probe_in = 0;  // the probe (wired in this build) released
     },
 };
 

@@ -1,6 +1,6 @@
 // Homing and probing through cnc_core's pins (docs/machine.md "Homing and probing (hardware)"): a
-// 2-axis core (full-2axis) at 3 Mbaud, its four limit switches wired (active high, kFilter clocks
-// of debounce) and the probe (active high, kProbeFilter clocks). The bench plays the machine: a
+// 2-axis core (full-2axis) at 3 Mbaud, its four limit switches wired (X min active low, the others
+// active high, kFilter clocks of debounce) and the probe (active high, kProbeFilter clocks). The bench plays the machine: a
 // max endstop per axis is pressed while the axis's STEP count at the pins is at or beyond its
 // position, and the probe follows a rule on the X count (a plate). Every latched position is
 // checked against the STEP rising edges counted at the pins up to the clock of the filtered edge
@@ -15,7 +15,7 @@
 #include <limits>
 #include <vector>
 
-#include "Vcnc_core_trigger.h"
+#include "Vcnc_core_machine.h"
 #include "common/pin_harness.h"
 #include "common/v2_core_bench.h"
 #include "common/v2_frames.h"
@@ -25,10 +25,10 @@ namespace {
 
 namespace v2 = fpgacnc::tb::v2;
 namespace spec = fpgacnc::spec;
-using Model = Vcnc_core_trigger;
+using Model = Vcnc_core_machine;
 
 constexpr int kAxes = 2;
-constexpr uint64_t kFilter = 500;       // LIMIT_FILTER_CLKS of this build (tb/trigger.cmake)
+constexpr uint64_t kFilter = 500;       // LIMIT_FILTER_CLKS of this build (tb/limits.cmake)
 constexpr uint64_t kProbeFilter = 200;  // PROBE_FILTER_CLKS
 constexpr uint8_t kStatePosUntrusted = spec::kStatePosUntrusted;
 constexpr uint8_t kStateProbe = spec::kStateProbe;
@@ -46,7 +46,7 @@ constexpr fpgacnc::tb::PinAccess<Model> kPins{
     [](const Model& m) { return static_cast<uint32_t>(m.dir); },
     [](Model& m) {
       m.cfg_wr = 0;
-      m.limit_min = 0;
+      m.limit_min = 1;  // X min is active low: released = high
       m.limit_max = 0;
       m.probe_in = 0;
     },
