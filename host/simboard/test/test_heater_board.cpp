@@ -99,14 +99,19 @@ TEST(HeaterBoard, AutotuneBedCriticalPeriodNear53s) {
 
 TEST(HeaterBoard, PartGcodeStartWithHeaters) {
   // Start sequence + the first 11 lines of part.gcode: N = 3 moves (Z up, the travel to the start
-  // point, the prime: 1.5 s of machine time at the file's feeds, 0.85 s at the 200 % feed override
-  // used here to keep the test short: the travel runs at the X/Y limit of 12000 mm/min), then
-  // heaters off. The whole file runs behind `make soak` (soak_part_heaters).
+  // point, the prime: 1.5 s of machine time at the file's feeds), then heaters off. The moves are
+  // not what is tested here, and each second of machine time is 50 M board clocks: a 1000 % feed
+  // override on a fast machine (X/Y 60 000 mm/min at 10 000 mm/s^2, Z 3 000 mm/min) runs them in
+  // about 0.2 s. The whole file runs behind `make soak` (soak_part_heaters).
   const size_t kPartLines = 11;
   const std::string g = std::string(kStart) + part_lines(kPartLines) + "M104 S0\nM140 S0\n";
-  const auto cfg = board_config();
+  auto cfg = board_config();
+  cfg.max_feed_mm_min[0] = cfg.max_feed_mm_min[1] = 60000.0;
+  cfg.max_accel_mm_s2[0] = cfg.max_accel_mm_s2[1] = 10000.0;
+  cfg.max_feed_mm_min[2] = 3000.0;
+  cfg.max_accel_mm_s2[2] = 1000.0;
   plan::PlanOptions po;
-  po.feed_override_pct = 200.0;
+  po.feed_override_pct = 1000.0;
   const auto p = plan::plan_program(fpgacnc::gcode::parse_string(g, "part-start.gcode"), cfg, po);
   sb::BoardLink link(sb::BoardOptions{});
   auto& board = link.board();
