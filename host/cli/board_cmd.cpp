@@ -175,6 +175,7 @@ void register_board(CLI::App& app) {
   struct Args {
     simboard::BoardCommandArgs board;
     std::vector<std::string> endstops;
+    simboard::SwitchNoise noise;
     std::string model = "tlm";
     bool realtime = false;
   };
@@ -201,6 +202,17 @@ void register_board(CLI::App& app) {
                   "pressed while the axis is at or beyond MM (machine position from reset); "
                   "SIGHUP pulls the carriages off their endstops by hand (repeatable)")
       ->type_name("AXIS-SIDE=MM");
+  sub->add_option("--endstop-bounce", args->noise.bounce_clks,
+                  "rtl: each endstop change bounces: 2 to 6 more toggles of its pin within this "
+                  "many clocks (default 0: clean)")
+      ->type_name("CLOCKS");
+  sub->add_option("--endstop-jitter", args->noise.jitter_steps,
+                  "rtl: each actuation of an endstop trips up to this many steps before or "
+                  "after its position (uniform; default 0)")
+      ->type_name("STEPS")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--endstop-seed", args->noise.seed, "rtl: seed of the bounce and jitter")
+      ->type_name("N");
   sub->add_option("--control", args->board.control_path,
                   "listen on a Unix-domain control socket at PATH (removed at exit): one command "
                   "a line, answered 'ok ...' or 'error: ...': hold, start (rtl: the feed hold "
@@ -218,9 +230,9 @@ void register_board(CLI::App& app) {
     if (args->model == "tlm") {
       check_tlm_options("fpgacnc board --model tlm", !args->board.fst_path.empty(),
                         args->board.line_faults.any());
-      if (!args->endstops.empty())
+      if (!args->endstops.empty() || args->noise.bounce_clks || args->noise.jitter_steps)
         throw std::invalid_argument(
-            "fpgacnc board: --endstop: the twin board has no limit switches; use --model rtl");
+            "fpgacnc board: --endstop*: the twin board has no limit switches; use --model rtl");
       board = make_twin_board(cfg, args->realtime);
     } else {
       if (args->realtime) {
@@ -233,6 +245,7 @@ void register_board(CLI::App& app) {
       o.line_faults = args->board.line_faults;
       for (const auto& e : args->endstops)
         o.endstops.push_back(simboard::parse_endstop_option(e, cfg));
+      o.switch_noise = args->noise;
       board = std::make_unique<simboard::SimBoard>(o);
     }
     const int rc = simboard::run_board_command(args->board, *board, cfg.baud);

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <random>
 
 #include "fpgacnc/models/ltc2308_model.h"
 #include "fpgacnc/models/thermal_plant.h"
@@ -126,6 +127,14 @@ struct SimBoard::Model {
   std::vector<Endstop> endstops;
   std::array<int64_t, models::kBoardAxes> steps{};  // STEP rising edges counted (endstops)
   std::vector<LimitEvent> lim_events;
+  // Switch noise (BoardOptions::switch_noise): each endstop's trip offset (steps), the endstop
+  // pins a bounce holds inverted now, the bounce toggles to come (edge, pin bit) in edge order.
+  SwitchNoise noise;
+  std::mt19937_64 noise_rng;
+  std::vector<int64_t> trip_offset;
+  std::vector<uint8_t> redraw;  // released: a new offset once the axis is out of the jitter band
+  uint8_t lim_flip = 0;
+  std::vector<std::pair<uint64_t, uint8_t>> bounces;
   // Machine buttons: pins held (bit 0 hold, bit 1 cycle start), the edge each is released on,
   // and the clock until which the board runs for them (the filter sees the release).
   uint8_t btn_pins = 0;
@@ -149,10 +158,11 @@ constexpr uint8_t pin_bit(int axis, bool max_side) {
   return static_cast<uint8_t>(1u << (axis + (max_side ? 4 : 0)));
 }
 
-// Drives the limit pins with manual | endstop; records the changes, sampled on edge `edge`.
+// Drives the limit pins with manual | endstop (inverted where a bounce holds it); records the
+// changes, sampled on edge `edge`.
 template <class M>
 void drive_limits(M& m, SimBoard::Model& s, uint64_t edge, bool by_endstop) {
-  const uint8_t pins = static_cast<uint8_t>(s.lim_manual | s.lim_endstop);
+  const uint8_t pins = static_cast<uint8_t>(s.lim_manual | (s.lim_endstop ^ s.lim_flip));
   uint8_t diff = static_cast<uint8_t>(pins ^ s.lim_pins);
   while (diff) {
     const int b = __builtin_ctz(diff);
@@ -181,6 +191,47 @@ void release_buttons(M& m, SimBoard::Model& s, uint64_t edge) {
   drive_buttons(m, s);
 }
 
+// Switch noise: a new trip offset for endstop i (uniform in -jitter .. +jitter steps).
+void draw_trip_offset(SimBoard::Model& s, size_t i) {
+  const int64_t j = s.noise.jitter_steps;
+  s.trip_offset[i] = j > 0 ? std::uniform_int_distribution<int64_t>(-j, j)(s.noise_rng) : 0;
+  s.redraw[i] = 0;
+}
+
+// A released endstop draws its next offset once its axis has left the band in which any offset
+// would press it (so that it never presses while the axis moves away).
+void redraw_when_clear(SimBoard::Model& s, size_t i) {
+  const Endstop& es = s.endstops[i];
+  const int64_t p = s.steps[static_cast<size_t>(es.axis)], j = s.noise.jitter_steps;
+  if (es.max_side ? p < es.position - j : p > es.position + j) draw_trip_offset(s, i);
+}
+
+// The level of endstop `bit` changed on edge `edge`: its pending bounce is dropped and a new one
+// scheduled (2 * k toggles on edges edge + 1 .. edge + bounce_clks).
+void schedule_bounce(SimBoard::Model& s, uint8_t bit, uint64_t edge) {
+  std::erase_if(s.bounces, [bit](const auto& b) { return b.second == bit; });
+  s.lim_flip = static_cast<uint8_t>(s.lim_flip & ~bit);
+  if (s.noise.bounce_clks == 0) return;
+  const int k =
+      std::uniform_int_distribution<int>(1, std::max(1, s.noise.max_bounces))(s.noise_rng);
+  std::uniform_int_distribution<uint64_t> at(edge + 1, edge + s.noise.bounce_clks);
+  std::vector<uint64_t> t(static_cast<size_t>(2 * k));
+  for (auto& x : t) x = at(s.noise_rng);
+  std::sort(t.begin(), t.end());
+  for (const uint64_t x : t) s.bounces.emplace_back(x, bit);
+  std::stable_sort(s.bounces.begin(), s.bounces.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+}
+
+// The bounce toggles due on edge `edge` (two on one edge cancel).
+template <class M>
+void apply_bounces(M& m, SimBoard::Model& s, uint64_t edge) {
+  size_t n = 0;
+  while (n < s.bounces.size() && s.bounces[n].first <= edge) s.lim_flip ^= s.bounces[n++].second;
+  s.bounces.erase(s.bounces.begin(), s.bounces.begin() + static_cast<std::ptrdiff_t>(n));
+  drive_limits(m, s, edge, true);
+}
+
 // After STEP edges: the step counts and the endstops they press or release.
 template <class M>
 void update_endstops(M& m, SimBoard::Model& s, uint32_t sig, uint32_t prev, uint64_t cyc) {
@@ -190,14 +241,23 @@ void update_endstops(M& m, SimBoard::Model& s, uint32_t sig, uint32_t prev, uint
     if ((rise >> a) & 1u) s.steps[static_cast<size_t>(a)] += ((prev >> (4 + a)) & 1u) ? 1 : -1;
   }
   uint8_t e = 0;
-  for (const Endstop& es : s.endstops) {
+  for (size_t i = 0; i < s.endstops.size(); ++i) {
+    if (s.redraw[i]) redraw_when_clear(s, i);
+    const Endstop& es = s.endstops[i];
     const int64_t p = s.steps[static_cast<size_t>(es.axis)];
-    if (es.max_side ? p >= es.position : p <= es.position) e |= pin_bit(es.axis, es.max_side);
+    const int64_t at = es.position + s.trip_offset[i];
+    if (es.max_side ? p >= at : p <= at) e |= pin_bit(es.axis, es.max_side);
   }
-  if (e != s.lim_endstop) {
-    s.lim_endstop = e;
-    drive_limits(m, s, cyc + 1, true);
+  if (e == s.lim_endstop) return;
+  const uint8_t changed = static_cast<uint8_t>(e ^ s.lim_endstop);
+  s.lim_endstop = e;
+  for (size_t i = 0; i < s.endstops.size(); ++i) {
+    const uint8_t bit = pin_bit(s.endstops[i].axis, s.endstops[i].max_side);
+    if (!(changed & bit)) continue;
+    if (!(e & bit)) s.redraw[i] = 1;  // released: the next actuation trips elsewhere
+    schedule_bounce(s, bit, cyc + 1);
   }
+  drive_limits(m, s, cyc + 1, true);
 }
 
 [[noreturn]] void sys_fail(const std::string& what) {
@@ -235,6 +295,8 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
   while (cyc < end) {
     if (s.btn_pins) [[unlikely]]
       release_buttons(m, s, cyc + 1);
+    if (!s.bounces.empty() && s.bounces.front().first <= cyc + 1) [[unlikely]]
+      apply_bounces(m, s, cyc + 1);
     if (!drv_idle) {
       m.rx = static_cast<uint8_t>(drv.tick(cyc + 1));
       drv_idle = drv.idle();
@@ -277,7 +339,7 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
     // watchdog drops it (and NAKs a v2 frame with TIMEOUT) as on the real board.
     if (m.busy || m.step || m.rx_partial || !drv_idle || tx == 0 || mon.busy() ||
         cyc < s.tx_stop_end || h.active || ((s.lim_pins ^ m.limit_state) & s.lim_wired) ||
-        cyc < s.btn_settle) {
+        cyc < s.btn_settle || !s.bounces.empty()) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;
@@ -401,6 +463,13 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
     }
   }
   model_->endstops = opt_.endstops;
+  if (opt_.switch_noise.jitter_steps < 0 || opt_.switch_noise.max_bounces < 1)
+    throw BoardError("simulated board: switch noise: jitter_steps must be >= 0, max_bounces >= 1");
+  model_->noise = opt_.switch_noise;
+  model_->noise_rng.seed(opt_.switch_noise.seed);
+  model_->trip_offset.assign(opt_.endstops.size(), 0);
+  model_->redraw.assign(opt_.endstops.size(), 0);
+  for (size_t i = 0; i < opt_.endstops.size(); ++i) draw_trip_offset(*model_, i);
   if (opt_.record_tx) model_->sig_mask |= 1u << models::kTx;
   if (opt_.record_rx) model_->sig_mask |= 1u << models::kRx;
   if (!opt_.fst_path.empty()) {
@@ -421,8 +490,10 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
   reset_and_configure();
   // Endstops the axes already rest on (step counts 0) are pressed from the start.
   uint8_t e = 0;
-  for (const Endstop& es : opt_.endstops) {
-    if (es.max_side ? es.position <= 0 : es.position >= 0) e |= pin_bit(es.axis, es.max_side);
+  for (size_t i = 0; i < opt_.endstops.size(); ++i) {
+    const Endstop& es = opt_.endstops[i];
+    const int64_t at = es.position + model_->trip_offset[i];
+    if (es.max_side ? at <= 0 : at >= 0) e |= pin_bit(es.axis, es.max_side);
   }
   if (e) {
     model_->lim_endstop = e;
@@ -884,10 +955,15 @@ int SimBoard::pull_off_endstops() {
   {
     OtherThreadLock l(*this);
     Model& s = *model_;
-    for (const Endstop& es : s.endstops) {
-      if (!(s.lim_endstop & pin_bit(es.axis, es.max_side))) continue;
-      s.steps[static_cast<size_t>(es.axis)] = es.position + (es.max_side ? -1 : 1);
-      s.lim_endstop = static_cast<uint8_t>(s.lim_endstop & ~pin_bit(es.axis, es.max_side));
+    for (size_t i = 0; i < s.endstops.size(); ++i) {
+      const Endstop& es = s.endstops[i];
+      const uint8_t bit = pin_bit(es.axis, es.max_side);
+      if (!(s.lim_endstop & bit)) continue;
+      const int64_t at = es.position + s.trip_offset[i];
+      s.steps[static_cast<size_t>(es.axis)] = at + (es.max_side ? -1 : 1);
+      s.lim_endstop = static_cast<uint8_t>(s.lim_endstop & ~bit);
+      s.redraw[i] = 1;
+      schedule_bounce(s, bit, s.cycle + 1);
       ++released;
     }
     if (!released) return 0;

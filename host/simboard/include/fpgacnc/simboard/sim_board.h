@@ -107,6 +107,19 @@ struct Endstop {
   int64_t position = 0;
 };
 
+// What makes simulated endstops imperfect (BoardOptions::switch_noise, docs/machine.md "Simulated
+// board"). Trigger jitter: an endstop trips at its position plus an offset, uniform in
+// -jitter_steps .. +jitter_steps and drawn again each time the switch releases (every actuation
+// trips somewhere else). Bounce: each time an endstop's level changes, its pin toggles 2 * k more
+// times (k uniform in 1 .. max_bounces) on random clock edges within bounce_clks of the change
+// and then stays at the new level. Seeded: a run is reproducible.
+struct SwitchNoise {
+  uint64_t bounce_clks = 0;  // 0: no bounce
+  int max_bounces = 3;
+  int64_t jitter_steps = 0;  // 0: every actuation at the position
+  uint64_t seed = 1;
+};
+
 // A limit pin changed: `cycle` is the first clock edge that samples the new level (the pin
 // reaches the synchronizer on that edge).
 struct LimitEvent {
@@ -154,6 +167,7 @@ struct BoardOptions {
   std::array<double, 2> initial_c{20.0, 20.0};
   // Simulated endstops at travel ends (see the file comment); SimBoard only.
   std::vector<Endstop> endstops;
+  SwitchNoise switch_noise;  // their bounce and trigger jitter (default: none)
 };
 
 enum class SensorFault { kNone, kOpen, kShort };
