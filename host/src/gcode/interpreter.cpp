@@ -688,8 +688,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       const int c = code10(wd);
       const int grp = g_group(c);
       if (grp < 0 && rules->unknown_m_warns && c >= 290 && c <= 299) {
-        warn(fmt::format("{} bed levelling skipped: no probe on this machine yet (the line is not "
-                         "run)",
+        warn(fmt::format("{} bed levelling skipped: no bed levelling on this machine (the line is "
+                         "not run)",
                          gname(c)),
              b.line);
         return true;
@@ -703,7 +703,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         else if (c == 520)
           why = "G52 local offsets are not supported (use G92 or G10 L2)";
         else if (c == 290 || c == 291 || c == 292 || c == 293)
-          why = "bed levelling needs a probe (not on this machine yet)";
+          why = "bed levelling is not built on this machine";
         throw fail(b, wd.col, fmt::format("{}: {}", gname(c), why));
       }
       if (w.g[grp + 1])
