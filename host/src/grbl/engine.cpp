@@ -562,8 +562,8 @@ int Engine::gcode_line(const std::string& raw, bool check_only) {
       const auto* m = std::get_if<gcode::Move>(&c);
       if (m && plan::check_travel(*m, cfg_)) return kSoftLimit;
     }
+    // (A probe in check mode leaves the parser at its target, as grbl's does.)
     if (probe && plan::check_travel(probe->move, cfg_)) return kSoftLimit;
-    if (probe) resync_parser(planner_->position());  // nothing moved
     return 0;
   }
   if (probe && plan::check_travel(probe->move, cfg_)) return kSoftLimit;
