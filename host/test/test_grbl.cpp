@@ -1352,8 +1352,11 @@ TEST(Grbl, ProbeMissIsAlarm5) {
   EXPECT_EQ(rig.command("G0 Z0").back(), "error:9");
   EXPECT_EQ(rig.command("$X").back(), "ok");
   EXPECT_EQ(rig.command("G1 Z-1.5 F600").back(), "ok");
+  // An armed PROBE would end this move 50 steps past the plate (no DONE: never Idle).
+  ASSERT_TRUE(
+      rig.pump_until([&] { return rig.board().net_steps()[2] == -600; }, milliseconds(2000)))
+      << "a trigger left armed: Z at " << rig.board().net_steps()[2];
   expect_at(idle_soon(rig), {0, 0, -600}, cfg);
-  EXPECT_EQ(rig.board().net_steps()[2], -600) << "no trigger left armed";
 }
 
 // G38.3 that ends before the plate: [PRB:...:0], ok, no alarm (grbl's G38.3).
@@ -1408,6 +1411,30 @@ TEST(Grbl, ProbeTouchingIsAlarm4AndG38_4LatchesTheRelease) {
   EXPECT_EQ(again[0], "ALARM:4");
   EXPECT_EQ(again.back(), "ok");
   EXPECT_EQ(rig.board().net_steps()[2], board_z) << "nothing moved";
+}
+
+// A soft reset while the probe moves: ALARM:3 (grbl), the board stopped by its e-stop, the
+// banner into the alarm; the next session disarms the trigger, so after $X a G1 through the
+// plate runs to its end.
+TEST(Grbl, ProbeSoftResetIsAlarm3AndDisarms) {
+  const MachineConfig cfg = probe_config();
+  Rig rig("", cfg, true, {}, fpgacnc::simboard::ProbePlate{2, true, -400});
+  rig.send("G38.2 Z-2 F600\n");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.board().net_steps()[2] < -40; }));
+  EXPECT_EQ(rig.status().state, "Run");
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const int64_t at = rig.board().net_steps()[2];
+  EXPECT_GT(at, -400) << "stopped before the plate";
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G1 Z-1.5 F600").back(), "ok");
+  // An armed PROBE would end this move 50 steps past the plate (no DONE: never Idle).
+  ASSERT_TRUE(
+      rig.pump_until([&] { return rig.board().net_steps()[2] == -600; }, milliseconds(2000)))
+      << "a trigger left armed: Z at " << rig.board().net_steps()[2];
+  expect_at(idle_soon(rig), {0, 0, -600}, cfg);
 }
 
 // The twin board models no trigger: G38.2 is error:20 with a message; on any board a probe
