@@ -425,7 +425,7 @@ void Engine::step(milliseconds wait) {
     return;
   }
   if (probe_ && !resetting_) {
-    // The cycle polls its sessions (STATUS with its queries): a report shows the last STATUS.
+    // The cycle polls its own sessions: a report shows the last STATUS seen.
     if (report_pending_) {
       write_report();
       report_pending_ = report_asked_ = false;
@@ -562,7 +562,7 @@ int Engine::gcode_line(const std::string& raw, bool check_only) {
       const auto* m = std::get_if<gcode::Move>(&c);
       if (m && plan::check_travel(*m, cfg_)) return kSoftLimit;
     }
-    // (A probe in check mode leaves the parser at its target, as grbl's does.)
+    // A probe in check mode is checked; the parser stays at its target, as grbl's does.
     if (probe && plan::check_travel(probe->move, cfg_)) return kSoftLimit;
     return 0;
   }
