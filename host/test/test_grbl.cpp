@@ -413,7 +413,7 @@ TEST(Grbl, ErrorCodes) {
       {"G99", "error:20"},            // unsupported G code
       {"M104 S200", "error:20"},      // unsupported M code
       {"G1 X1 E2", "error:20"},       // a letter grbl does not have
-      {"G38.2 Z-1 F10", "error:20"},  // no probe input
+      {"G38.2 Z-1 F10", "error:20"},  // the twin board: no probe input, no trigger
       {"G1 G0 X1", "error:21"},       // modal group violation
       {"G1 X1 X2", "error:25"},       // repeated word
       {"G4", "error:28"},             // missing P
