@@ -3,5 +3,7 @@
 set(FPGACNC_SPEC_SIMBOARD_SAMPLE_CLKS 102400)
 # LIMIT_ENABLE of the simulated board's Verilated core: X, Y, Z min and max switches wired (docs/machine.md)
 set(FPGACNC_SPEC_SIMBOARD_LIMIT_ENABLE 458759)
+# PROBE_ENABLE of the simulated board's Verilated core: the probe input wired, a pin high is contact (docs/machine.md)
+set(FPGACNC_SPEC_SIMBOARD_PROBE_ENABLE 1)
 # SAMPLE_CLKS of the heater benches and the heater co-simulation
 set(FPGACNC_SPEC_BENCH_SAMPLE_CLKS 4096)

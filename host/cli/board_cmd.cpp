@@ -176,6 +176,7 @@ void register_board(CLI::App& app) {
     simboard::BoardCommandArgs board;
     std::vector<std::string> endstops;
     simboard::SwitchNoise noise;
+    std::string probe_plate;
     std::string model = "tlm";
     bool realtime = false;
   };
@@ -213,11 +214,15 @@ void register_board(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--endstop-seed", args->noise.seed, "rtl: seed of the bounce and jitter")
       ->type_name("N");
+  sub->add_option("--probe-plate", args->probe_plate,
+                  "rtl: a simulated probe plate, AXIS-SIDE=MM (z-min=-2: the probe touches while "
+                  "Z is at or below -2 mm, machine position from reset; x-max=5: at or above)")
+      ->type_name("AXIS-SIDE=MM");
   sub->add_option("--control", args->board.control_path,
                   "listen on a Unix-domain control socket at PATH (removed at exit): one command "
                   "a line, answered 'ok ...' or 'error: ...': hold, start (rtl: the feed hold "
                   "and cycle start buttons), estop on|off, limit AXIS min|max on|off (rtl), "
-                  "state, help (docs/protocol.md \"The simulated board\")")
+                  "probe on|off (rtl), state, help (docs/protocol.md \"The simulated board\")")
       ->type_name("PATH");
   add_line_fault_options(*sub, [args](const std::string& name, const std::string& v) {
     apply_line_fault(args->board.line_faults, name, v);
@@ -233,6 +238,10 @@ void register_board(CLI::App& app) {
       if (!args->endstops.empty() || args->noise.bounce_clks || args->noise.jitter_steps)
         throw std::invalid_argument(
             "fpgacnc board: --endstop*: the twin board has no limit switches; use --model rtl");
+      if (!args->probe_plate.empty())
+        throw std::invalid_argument(
+            "fpgacnc board: --probe-plate: the twin board (tlm) models neither the probe input "
+            "nor the trigger; use --model rtl");
       board = make_twin_board(cfg, args->realtime);
     } else {
       if (args->realtime) {
@@ -246,6 +255,8 @@ void register_board(CLI::App& app) {
       for (const auto& e : args->endstops)
         o.endstops.push_back(simboard::parse_endstop_option(e, cfg));
       o.switch_noise = args->noise;
+      if (!args->probe_plate.empty())
+        o.probe_plate = simboard::parse_probe_plate_option(args->probe_plate, cfg);
       board = std::make_unique<simboard::SimBoard>(o);
     }
     const int rc = simboard::run_board_command(args->board, *board, cfg.baud);

@@ -113,6 +113,10 @@ void register_autotune(CLI::App& app, StreamHooks hooks);
 // fpgacnc home [--config F] [--port DEV --limit-switches LIST | --endstop AXIS-SIDE=MM]: the
 // homing cycle ([homing]), the latched switch positions printed (host/cli/home_cmd.cpp).
 void register_home(CLI::App& app);
+// fpgacnc probe --axis A --dist MM --feed F [--away] [--no-error] [--port DEV | --probe-plate
+// AXIS-SIDE=MM]: one probing move (G38.2 .. G38.5), the latched position printed
+// (host/cli/probe_cmd.cpp).
+void register_probe(CLI::App& app);
 
 // fpgacnc status [--port DEV] [--config F]: one STATUS decoded (state, faults, the hard-limit
 // alarm and switches, positions, counters; host/cli/status_cmd.cpp). Without --port: the hooks'

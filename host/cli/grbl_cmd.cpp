@@ -44,6 +44,7 @@ void run(const Args& args) {
   eo.estop_press = board.estop_press;
   eo.estop_release = board.estop_release;
   eo.limit_switches = board.limit_switches;
+  eo.probe = board.probe;
   const std::string& behind = board.description;
   fmt::print("grbl 1.1 front end for {}; settings {}\n", behind, settings_path);
   std::fflush(stdout);

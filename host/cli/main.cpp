@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   fpgacnc::cli::register_autotune(app, fpgacnc::cli::simboard_stream_hooks());
   fpgacnc::cli::register_status(app, fpgacnc::cli::simboard_stream_hooks());
   fpgacnc::cli::register_home(app);
+  fpgacnc::cli::register_probe(app);
 
   try {
     app.parse(argc, argv);

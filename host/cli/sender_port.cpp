@@ -60,6 +60,10 @@ void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& mo
                   "rtl: a simulated endstop, AXIS-SIDE=MM (x-max=200): the switch is pressed while "
                   "the axis is at or beyond MM; SIGHUP pulls the carriages off (repeatable)")
       ->type_name("AXIS-SIDE=MM");
+  sub->add_option("--probe-plate", choice.probe_plate,
+                  "rtl: a simulated probe plate, AXIS-SIDE=MM (z-min=-2: the probe touches while "
+                  "Z is at or below -2 mm; x-max=5: at or above 5 mm)")
+      ->type_name("AXIS-SIDE=MM");
   sub->add_option("--limit-switches", choice.limit_switches,
                   "--port: the limit switches the board wires (its LIMIT_ENABLE), e.g. "
                   "x-min,x-max,y-min,y-max (M119, $21)")
@@ -74,6 +78,10 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
     throw std::invalid_argument("--speed: a number > 0, with --realtime");
   if (!choice.endstops.empty() && (!choice.port.empty() || choice.model != "rtl"))
     throw std::invalid_argument("--endstop needs the Verilated board (--model rtl, no --port)");
+  if (!choice.probe_plate.empty() && (!choice.port.empty() || choice.model != "rtl"))
+    throw std::invalid_argument(
+        "--probe-plate needs the Verilated board (--model rtl, no --port): the twin board (tlm) "
+        "models neither the probe input nor the trigger");
   if (!choice.limit_switches.empty() && choice.port.empty())
     throw std::invalid_argument(
         "--limit-switches is for a real board (--port); the simulated boards report their own");
@@ -81,6 +89,7 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
     b.link = std::make_unique<link::SerialLink>(choice.port, cfg.baud);
     b.description = choice.port;
     b.limit_switches = simboard::parse_limit_switches_option(choice.limit_switches);
+    b.probe = true;
   } else if (choice.model == "tlm") {
     twins::TwinBoardOptions o = twins::TwinBoard::options_from_config(cfg);
     o.realtime = choice.realtime;
@@ -91,9 +100,12 @@ BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoic
     simboard::BoardOptions o = simboard::SimBoard::options_from_config(cfg);
     for (const auto& e : choice.endstops)
       o.endstops.push_back(simboard::parse_endstop_option(e, cfg));
+    if (!choice.probe_plate.empty())
+      o.probe_plate = simboard::parse_probe_plate_option(choice.probe_plate, cfg);
     b.link = simboard::make_board_link(std::make_unique<simboard::SimBoard>(o), cfg.baud, {});
     b.description = "the simulated board (rtl)";
     b.rtl = true;
+    b.probe = simboard::SimBoard::kProbeEnable;
     if (auto* bl = dynamic_cast<simboard::BoardLink*>(b.link.get())) {
       b.estop_press = [bl] { bl->board().set_estop(true); };
       b.estop_release = [bl] { bl->board().set_estop(false); };

@@ -26,9 +26,10 @@ struct BoardChoice {
   double speed = 1.0;                 // with realtime: simulated seconds per wall second
   std::vector<std::string> endstops;  // --endstop (rtl): simulated endstops
   std::string limit_switches;         // --limit-switches (--port): the switches the board wires
+  std::string probe_plate;            // --probe-plate (rtl): a simulated probe plate
 };
-// Adds --port, --model (with `model_help`), --endstop and --limit-switches to a front end's
-// subcommand.
+// Adds --port, --model (with `model_help`), --endstop, --probe-plate and --limit-switches to a
+// front end's subcommand.
 void add_board_options(CLI::App* sub, BoardChoice& choice, const std::string& model_help);
 
 // The FPGA behind a front end, opened.
@@ -42,8 +43,11 @@ struct BoardBehind {
   uint16_t limit_switches = 0;
   // The operator pulls the carriages off their simulated endstops (rtl with --endstop; SIGHUP).
   std::function<void()> pull_off;
+  // The board has the probe input and the trigger (rtl, a port; not the twin board).
+  bool probe = false;
 };
-// Opens the board of `choice` (throws std::invalid_argument for --realtime without tlm).
+// Opens the board of `choice` (throws std::invalid_argument for --realtime without tlm, and for
+// --endstop or --probe-plate without rtl).
 BoardBehind open_board_behind(const config::MachineConfig& cfg, const BoardChoice& choice);
 
 // A sender's end: the pty master or a TCP connection, with what is still to be written.

@@ -252,3 +252,46 @@ TEST(GCode, RotaryFourthAxisA) {
   EXPECT_EQ(dialect_error_of("G0 X1 A1", gc::Dialect::kLinuxCnc),
             "t.gcode:1:7: error: no A axis on this machine (its axes are X Y Z E)");
 }
+
+// G38.2 .. G38.5 (grbl, LinuxCNC): Probe commands in machine mm with the feed in force where the
+// caller runs the probing cycle (Options::probing: fpgacnc grbl); refused with file:line:col in
+// a streamed job, in the printer dialects, and with a target equal to the position.
+TEST(GCode, ProbeMovesAreGrblsAndLinuxCncs) {
+  gc::Options o;
+  o.probing = true;
+  const auto p = run_dialect("G21 G90 G10 L2 P1 Z5\nG0 X1\nG38.2 Z-10 F100\nG38.5 X4 F50\n",
+                             gc::Dialect::kGrbl, o);
+  const auto probes = all<gc::Probe>(p);
+  ASSERT_EQ(probes.size(), 2u);
+  EXPECT_EQ(probes[0].code, 382);
+  EXPECT_TRUE(probes[0].toward());
+  EXPECT_TRUE(probes[0].error_on_miss());
+  EXPECT_EQ(probes[0].line, 3);
+  EXPECT_DOUBLE_EQ(probes[0].move.start[0], 1.0);
+  EXPECT_DOUBLE_EQ(probes[0].move.end[2], -5.0) << "work offset Z5 applied: machine mm";
+  EXPECT_DOUBLE_EQ(probes[0].move.feed_mm_min, 100.0);
+  EXPECT_EQ(probes[1].code, 385);
+  EXPECT_FALSE(probes[1].toward());
+  EXPECT_FALSE(probes[1].error_on_miss());
+  EXPECT_DOUBLE_EQ(probes[1].move.end[0], 4.0);
+  const auto ngc = run_dialect("#1 = 2\nG38.3 Y[#1] F20\n", gc::Dialect::kLinuxCnc, o);
+  ASSERT_EQ(all<gc::Probe>(ngc).size(), 1u);
+  EXPECT_DOUBLE_EQ(all<gc::Probe>(ngc)[0].move.end[1], 2.0);
+  gc::Options grbl = o;
+  grbl.dialect = gc::Dialect::kGrbl;
+  gc::Options streamed = grbl;
+  streamed.probing = false;
+  gc::test::expect_error("G38.2 Z-1 F100\n", 1, 1, "split the job at the probe", streamed,
+                         "t.gcode");
+  gc::test::expect_error("G1 X1 F100\nG38.2 X1\n", 2, 1, "the probe target is the current position",
+                         grbl, "t.gcode");
+  gc::test::expect_error("G38.2 Z-1 E1 F100\n", 1, 1, "X, Y and Z only", grbl, "t.gcode");
+  gc::Options marlin = o;
+  marlin.dialect = gc::Dialect::kMarlin;
+  gc::test::expect_error("G38.2 Z-1 F100\n", 1, 1, "not a probing code in the marlin dialect",
+                         marlin, "t.gcode");
+  // The plan never takes a probe (its end is the board's).
+  fpgacnc::config::MachineConfig cfg;
+  fpgacnc::plan::Planner planner(cfg, {}, "t.gcode");
+  EXPECT_THROW(planner.add(probes[0]), gc::Error);
+}

@@ -67,11 +67,12 @@ std::optional<Report> parse_report(const std::string& line) {
 class Rig {
  public:
   // `rtl`: the Verilated board (with its e-stop input and limit switches) instead of the twins;
-  // `endstops`: simulated endstops on it.
+  // `endstops`, `plate`: simulated endstops and a probe plate on it.
   explicit Rig(std::string settings_path = "", MachineConfig cfg = {}, bool rtl = false,
-               std::vector<fpgacnc::simboard::Endstop> endstops = {})
+               std::vector<fpgacnc::simboard::Endstop> endstops = {},
+               std::optional<fpgacnc::simboard::ProbePlate> plate = std::nullopt)
       : cfg_(cfg),
-        link_(rtl ? rtl_link(cfg, std::move(endstops))
+        link_(rtl ? rtl_link(cfg, std::move(endstops), plate)
                   : fpgacnc::simboard::make_board_link(
                         std::make_unique<fpgacnc::twins::TwinBoard>(
                             fpgacnc::twins::TwinBoard::options_from_config(cfg)),
@@ -87,15 +88,18 @@ class Rig {
       o.estop_release = [bl] { bl->board().set_estop(false); };
     }
     o.limit_switches = fpgacnc::simboard::any_board_of(*link_)->limit_switches();
+    o.probe = rtl;
     engine_ = std::make_unique<grbl::Engine>(*link_, cfg, s, o);
     engine_->connect();
     engine_->take_output();  // as fpgacnc grbl: the banner goes to a sender when it connects
   }
 
   static std::unique_ptr<fpgacnc::link::Link> rtl_link(
-      const MachineConfig& cfg, std::vector<fpgacnc::simboard::Endstop> endstops) {
+      const MachineConfig& cfg, std::vector<fpgacnc::simboard::Endstop> endstops,
+      std::optional<fpgacnc::simboard::ProbePlate> plate) {
     auto o = fpgacnc::simboard::SimBoard::options_from_config(cfg);
     o.endstops = std::move(endstops);
+    o.probe_plate = plate;
     return fpgacnc::simboard::make_board_link(std::make_unique<fpgacnc::simboard::SimBoard>(o),
                                               cfg.baud, {});
   }
@@ -409,7 +413,7 @@ TEST(Grbl, ErrorCodes) {
       {"G99", "error:20"},            // unsupported G code
       {"M104 S200", "error:20"},      // unsupported M code
       {"G1 X1 E2", "error:20"},       // a letter grbl does not have
-      {"G38.2 Z-1 F10", "error:20"},  // no probe input
+      {"G38.2 Z-1 F10", "error:20"},  // the twin board: no probe input, no trigger
       {"G1 G0 X1", "error:21"},       // modal group violation
       {"G1 X1 X2", "error:25"},       // repeated word
       {"G4", "error:28"},             // missing P
@@ -1215,6 +1219,242 @@ TEST(Grbl, HomingDisabledIsError5) {
   EXPECT_EQ(rtl.command("$H").back(), "error:5");
   Rig twin;
   EXPECT_EQ(twin.command("$22=1").back(), "error:3") << "the twin board has no switches";
+}
+
+}  // namespace
+
+namespace {
+
+// ---- Probing on the Verilated board (docs/grbl.md "Probing", docs/machine.md "Homing and
+// probing (host)"): a probe plate under Z (the probe pin high while the Z step count at the pins
+// is at or below the plate). The machine: fast accelerations, 3000 mm/min on X, Y, Z and E and a
+// hold deceleration of 2000 mm/s^2, so that the stop after the contact (the board's CANCEL ramp,
+// MOTION's ramp: the rate falls from 100 % to 0 in 1 / 40 s) is short and each probe takes a
+// fraction of a second of board time.
+
+MachineConfig probe_config() {
+  MachineConfig cfg;
+  cfg.max_accel_mm_s2 = {10000.0, 10000.0, 10000.0, 10000.0};
+  cfg.max_feed_mm_min = {3000.0, 3000.0, 3000.0, 3000.0};
+  cfg.hold_decel_mm_s2 = 2000.0;
+  return cfg;
+}
+
+constexpr double kProbeFeed = 600.0;  // mm/min: Z 10 mm/s, 4000 steps/s
+
+// "[PRB:0.000,0.000,-0.500:1]" -> the position (mm) and the flag.
+struct Prb {
+  std::array<double, 3> mm{};
+  int ok = -1;
+};
+std::optional<Prb> parse_prb(const std::string& line) {
+  static const std::regex re(R"(^\[PRB:(-?[\d.]+),(-?[\d.]+),(-?[\d.]+):([01])\]$)");
+  std::smatch m;
+  if (!std::regex_match(line, m, re)) return std::nullopt;
+  Prb p;
+  for (int i = 0; i < 3; ++i) p.mm[static_cast<size_t>(i)] = std::stod(m[i + 1]);
+  p.ok = std::stoi(m[4]);
+  return p;
+}
+std::optional<Prb> find_prb(const std::vector<std::string>& lines) {
+  for (const auto& l : lines)
+    if (auto p = parse_prb(l)) return p;
+  return std::nullopt;
+}
+
+// Steps of Z a probe latch may lie beyond the plate: the pin changes on the STEP that reaches the
+// plate, the filter passes it PROBE_FILTER_CLKS + 1 clocks later (+1 for the sampling edge), and
+// the latch counts every STEP up to that clock: at v steps/s, ceil(v (F + 2) / clk) steps.
+int64_t latch_bound(const MachineConfig& cfg) {
+  const double v = kProbeFeed / 60.0 * cfg.steps_per_mm[2];
+  return static_cast<int64_t>(
+      std::ceil(v * static_cast<double>(fpgacnc::simboard::SimBoard::kProbeFilterClks + 2) /
+                static_cast<double>(cfg.clk_hz)));
+}
+
+// The stop after the latch (steps of Z): the rate falls by ramp / 2^32 per 256 clocks from the
+// end of the period after the edge, so from v it stops in T = 2^32 * 256 / (ramp * clk) over
+// v T / 2, plus up to two periods at full speed (the period in progress and its quantization).
+std::pair<double, double> stop_bounds(const MachineConfig& cfg) {
+  const double v = kProbeFeed / 60.0 * cfg.steps_per_mm[2];
+  const double clk = static_cast<double>(cfg.clk_hz);
+  const double ramp = fpgacnc::link::machine_hold_ramp(cfg, 4);
+  const double t = std::ldexp(1.0, 32) * 256.0 / (ramp * clk);
+  return {v * t / 2.0 - 1.0, v * (t / 2.0 + 2.0 * 256.0 / clk) + 1.0};
+}
+
+// G38.2 Z- onto a plate at Z -0.5 mm (step -200): Run while it probes, [PRB:] with Z at the plate
+// (within the latch bound), ok; the machine stops past the plate by the stopping distance and
+// the report shows the board's position (its STATUS, not the target); $# keeps the PRB; the
+// parser continues from there (G0 Z0 returns to step 0 exactly). The figures are printed.
+TEST(Grbl, ProbeFindsThePlate) {
+  const MachineConfig cfg = probe_config();
+  const int64_t plate = -200;
+  Rig rig("", cfg, true, {}, fpgacnc::simboard::ProbePlate{2, true, plate});
+  rig.polling = true;
+  const auto ans = rig.command("G38.2 Z-1 F600");
+  rig.polling = false;
+  ASSERT_EQ(ans.back(), "ok");
+  ASSERT_EQ(ans.size(), 2u) << ans[0];
+  const auto prb = parse_prb(ans[0]);
+  ASSERT_TRUE(prb.has_value()) << ans[0];
+  EXPECT_EQ(prb->ok, 1);
+  bool saw_run = false;
+  for (const auto& r : rig.reports()) saw_run |= r.rfind("<Run|", 0) == 0;
+  EXPECT_TRUE(saw_run) << "status reports while probing say Run";
+  const int64_t latched = std::llround(prb->mm[2] * cfg.steps_per_mm[2]);
+  EXPECT_LE(plate - latched, latch_bound(cfg)) << "latched Z " << latched;
+  EXPECT_GE(plate - latched, 0) << "latched Z " << latched;
+  EXPECT_EQ(prb->mm[0], 0.0);
+  EXPECT_EQ(prb->mm[1], 0.0);
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Idle");
+  const int64_t board_z = rig.board().net_steps()[2];
+  EXPECT_NEAR(r.mpos[2], static_cast<double>(board_z) / cfg.steps_per_mm[2], 0.0005 + 1e-9)
+      << "the report shows the board's position (3 decimals)";
+  const double past = static_cast<double>(latched - board_z);
+  const auto [lo, hi] = stop_bounds(cfg);
+  EXPECT_GE(past, lo);
+  EXPECT_LE(past, hi);
+  std::printf(
+      "probe G38.2 Z- at %.0f mm/min: plate at step %lld, latched %lld (bound %lld), stopped at "
+      "%lld: %.0f steps (%.4f mm) past the latch (bounds %.1f .. %.1f)\n",
+      kProbeFeed, static_cast<long long>(plate), static_cast<long long>(latched),
+      static_cast<long long>(latch_bound(cfg)), static_cast<long long>(board_z), past,
+      past / cfg.steps_per_mm[2], lo, hi);
+  const auto st = rig.board().stats();
+  std::printf("board: %llu clocks at %.2f M clocks/s\n", static_cast<unsigned long long>(st.cycles),
+              st.clocks_per_s / 1e6);
+  const auto events = rig.board().probe_events();
+  ASSERT_GE(events.size(), 1u);
+  EXPECT_TRUE(events[0].contact);
+  EXPECT_TRUE(events[0].plate);
+  const auto hash = rig.command("$#");
+  const auto kept = find_prb(hash);
+  ASSERT_TRUE(kept.has_value());
+  EXPECT_EQ(kept->mm, prb->mm);
+  EXPECT_EQ(kept->ok, 1);
+  EXPECT_EQ(rig.command("G0 Z0").back(), "ok");
+  expect_at(idle_soon(rig), {0, 0, 0}, cfg);
+  EXPECT_EQ(rig.board().net_steps()[2], 0) << "the parser went on from the board's position";
+}
+
+// G38.2 that ends before the plate: ALARM:5, [PRB:...:0] at the move's end, ok, Alarm; the
+// trigger is disarmed after it: after $X, a G1 through the plate runs to its end.
+TEST(Grbl, ProbeMissIsAlarm5) {
+  const MachineConfig cfg = probe_config();
+  Rig rig("", cfg, true, {}, fpgacnc::simboard::ProbePlate{2, true, -400});
+  const auto ans = rig.command("G38.2 Z-0.5 F600");
+  ASSERT_GE(ans.size(), 4u);
+  EXPECT_EQ(ans[0], "ALARM:5");
+  EXPECT_NE(ans[1].find("no contact"), std::string::npos) << ans[1];
+  const auto prb = parse_prb(ans[2]);
+  ASSERT_TRUE(prb.has_value()) << ans[2];
+  EXPECT_EQ(prb->ok, 0);
+  EXPECT_EQ(prb->mm[2], -0.5);
+  EXPECT_EQ(ans.back(), "ok");
+  EXPECT_EQ(rig.status().state, "Alarm");
+  EXPECT_EQ(rig.command("G0 Z0").back(), "error:9");
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G1 Z-1.5 F600").back(), "ok");
+  // An armed PROBE would end this move 50 steps past the plate (no DONE: never Idle).
+  ASSERT_TRUE(
+      rig.pump_until([&] { return rig.board().net_steps()[2] == -600; }, milliseconds(2000)))
+      << "a trigger left armed: Z at " << rig.board().net_steps()[2];
+  expect_at(idle_soon(rig), {0, 0, -600}, cfg);
+}
+
+// G38.3 that ends before the plate: [PRB:...:0], ok, no alarm (grbl's G38.3).
+TEST(Grbl, ProbeMissWithG38_3IsNoAlarm) {
+  const MachineConfig cfg = probe_config();
+  Rig rig("", cfg, true, {}, fpgacnc::simboard::ProbePlate{2, true, -400});
+  const auto ans = rig.command("G38.3 Z-0.5 F600");
+  ASSERT_EQ(ans.size(), 2u) << ans[0];
+  const auto prb = parse_prb(ans[0]);
+  ASSERT_TRUE(prb.has_value()) << ans[0];
+  EXPECT_EQ(prb->ok, 0);
+  EXPECT_EQ(ans[1], "ok");
+  const Report r = idle_soon(rig);
+  EXPECT_NEAR(r.mpos[2], -0.5, 1e-9);
+  EXPECT_EQ(rig.command("$G").front().find("G38.3"), 4u) << "the probe mode stays modal";
+}
+
+// The probe touches while Z is at or below step 0 (touching from reset); the tool goes down to
+// Z -0.5 mm in contact: G38.2 there is ALARM:4 and nothing moves; after $X, G38.4 lifting off
+// latches the release (the first step above the plate, at the probing speed) and G38.4 again,
+// clear of the plate, is ALARM:4.
+TEST(Grbl, ProbeTouchingIsAlarm4AndG38_4LatchesTheRelease) {
+  const MachineConfig cfg = probe_config();
+  Rig rig("", cfg, true, {}, fpgacnc::simboard::ProbePlate{2, true, 0});
+  EXPECT_EQ(rig.command("G0 Z-0.5").back(), "ok");
+  idle_soon(rig);
+  const auto a4 = rig.command("G38.2 Z-1 F600");
+  ASSERT_GE(a4.size(), 2u);
+  EXPECT_EQ(a4[0], "ALARM:4");
+  EXPECT_NE(a4[1].find("already touching"), std::string::npos) << a4[1];
+  EXPECT_EQ(a4.back(), "ok");
+  EXPECT_EQ(rig.board().net_steps()[2], -200) << "nothing moved";
+  EXPECT_EQ(rig.status().state, "Alarm");
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  const auto ans = rig.command("G38.4 Z0.5 F600");
+  ASSERT_EQ(ans.size(), 2u) << ans[0];
+  const auto prb = parse_prb(ans[0]);
+  ASSERT_TRUE(prb.has_value()) << ans[0];
+  EXPECT_EQ(prb->ok, 1);
+  const int64_t latched = std::llround(prb->mm[2] * cfg.steps_per_mm[2]);
+  EXPECT_GE(latched, 1) << "released on the first step above the plate";
+  EXPECT_LE(latched, 1 + latch_bound(cfg));
+  const Report r = idle_soon(rig);
+  const int64_t board_z = rig.board().net_steps()[2];
+  EXPECT_NEAR(r.mpos[2], static_cast<double>(board_z) / cfg.steps_per_mm[2], 0.0005 + 1e-9);
+  const auto [lo, hi] = stop_bounds(cfg);
+  EXPECT_GE(static_cast<double>(board_z - latched), lo);
+  EXPECT_LE(static_cast<double>(board_z - latched), hi);
+  std::printf("probe G38.4 Z+ at %.0f mm/min: released at step %lld, stopped at %lld\n", kProbeFeed,
+              static_cast<long long>(latched), static_cast<long long>(board_z));
+  const auto again = rig.command("G38.4 Z1 F600");
+  EXPECT_EQ(again[0], "ALARM:4");
+  EXPECT_EQ(again.back(), "ok");
+  EXPECT_EQ(rig.board().net_steps()[2], board_z) << "nothing moved";
+}
+
+// A soft reset while the probe moves: ALARM:3 (grbl), the board stopped by its e-stop, the
+// banner into the alarm; the next session disarms the trigger, so after $X a G1 through the
+// plate runs to its end.
+TEST(Grbl, ProbeSoftResetIsAlarm3AndDisarms) {
+  const MachineConfig cfg = probe_config();
+  Rig rig("", cfg, true, {}, fpgacnc::simboard::ProbePlate{2, true, -400});
+  rig.send("G38.2 Z-2 F600\n");
+  ASSERT_TRUE(rig.pump_until([&] { return rig.board().net_steps()[2] < -40; }));
+  EXPECT_EQ(rig.status().state, "Run");
+  rig.send("\x18");
+  EXPECT_EQ(rig.next_line(), "ALARM:3");
+  EXPECT_EQ(rig.next_line(), grbl::kBanner);
+  EXPECT_EQ(rig.next_line(), "[MSG:'$H'|'$X' to unlock]");
+  const int64_t at = rig.board().net_steps()[2];
+  EXPECT_GT(at, -400) << "stopped before the plate";
+  EXPECT_EQ(rig.command("$X").back(), "ok");
+  EXPECT_EQ(rig.command("G1 Z-1.5 F600").back(), "ok");
+  // An armed PROBE would end this move 50 steps past the plate (no DONE: never Idle).
+  ASSERT_TRUE(
+      rig.pump_until([&] { return rig.board().net_steps()[2] == -600; }, milliseconds(2000)))
+      << "a trigger left armed: Z at " << rig.board().net_steps()[2];
+  expect_at(idle_soon(rig), {0, 0, -600}, cfg);
+}
+
+// The twin board models no trigger: G38.2 is error:20 with a message; on any board a probe
+// target equal to the position is error:33 and G38.x with E is refused.
+TEST(Grbl, ProbeNeedsTheTrigger) {
+  Rig twin;
+  const auto ans = twin.command("G38.2 Z-1 F100");
+  ASSERT_EQ(ans.size(), 2u);
+  EXPECT_NE(ans[0].find("probing needs"), std::string::npos) << ans[0];
+  EXPECT_EQ(ans[1], "error:20");
+  Rig rtl("", probe_config(), true);
+  EXPECT_EQ(rtl.command("G38.2 Z0 F100").back(), "error:33");
+  EXPECT_EQ(rtl.command("G38.2 Z-1 F100 M2").back(), "error:20");
+  EXPECT_EQ(rtl.command("G0 Z0").back(), "ok") << "the parser is where the board is";
+  expect_at(idle_soon(rtl), {0, 0, 0}, probe_config());
 }
 
 }  // namespace

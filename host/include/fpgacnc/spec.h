@@ -415,6 +415,8 @@ inline constexpr uint32_t kDefaultLimitActiveLow = 0;
 inline constexpr uint64_t kSimboardSampleClks = 0x1'9000;
 // LIMIT_ENABLE of the simulated board's Verilated core: X, Y, Z min and max switches wired (docs/machine.md)
 inline constexpr uint64_t kSimboardLimitEnable = 0x7'0007;
+// PROBE_ENABLE of the simulated board's Verilated core: the probe input wired, a pin high is contact (docs/machine.md)
+inline constexpr uint64_t kSimboardProbeEnable = 1;
 // SAMPLE_CLKS of the heater benches and the heater co-simulation
 inline constexpr uint64_t kBenchSampleClks = 4096;
 

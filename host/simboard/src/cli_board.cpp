@@ -161,6 +161,19 @@ Endstop parse_endstop_option(std::string_view v, const config::MachineConfig& cf
   return e;
 }
 
+ProbePlate parse_probe_plate_option(std::string_view v, const config::MachineConfig& cfg) {
+  Endstop e;
+  try {
+    e = parse_endstop_option(v, cfg);
+  } catch (const std::invalid_argument&) {
+    throw std::invalid_argument(
+        fmt::format("--probe-plate {}: expected AXIS-SIDE=MM with AXIS x, y or z and SIDE min (the "
+                    "probe touches at or below MM) or max (at or above), e.g. z-min=-2",
+                    v));
+  }
+  return ProbePlate{e.axis, !e.max_side, e.position};
+}
+
 uint16_t parse_limit_switches_option(std::string_view value) {
   uint16_t bits = 0;
   size_t b = 0;
@@ -209,7 +222,7 @@ std::vector<std::string_view> split_words(std::string_view line) {
 }
 
 constexpr const char* kCommands =
-    "hold, start, estop on|off, limit AXIS min|max on|off, state, help";
+    "hold, start, estop on|off, limit AXIS min|max on|off, probe on|off, state, help";
 
 std::string press(Board& board, Button b) {
   const uint64_t edge = board.press_button(b);
@@ -227,10 +240,11 @@ std::string board_state(const Board& board) {
   const BoardPins p = sb->pins();
   return fmt::format(
       "ok model={} cycle={} estop={} hold={} start={} limit_pins={} limit_filtered={} "
-      "limit_wired={} faults=0x{:02x}",
+      "limit_wired={} probe_pin={} probe_filtered={} faults=0x{:02x}",
       board.model(), p.cycle, p.estop ? "on" : "off", (p.buttons & 1u) ? "on" : "off",
       (p.buttons & 2u) ? "on" : "off", switch_list(p.limit_pins), switch_list(p.limit_filtered),
-      switch_list(p.limit_wired), p.faults);
+      switch_list(p.limit_wired), p.probe_pin ? "on" : "off", p.probe_filtered ? "on" : "off",
+      p.faults);
 }
 
 // on / off as a bool; nullopt for anything else.
@@ -282,6 +296,14 @@ std::string board_control_command(Board& board, std::string_view line) {
       return fmt::format("ok {} {} from clock edge {}",
                          limit_switch_name(static_cast<int>(axis), max_side),
                          *on ? "pressed" : "released", edge);
+    }
+    if (cmd == "probe") {
+      if (w.size() < 2) return "error: probe: expected probe on|off";
+      const auto on = on_off(w[1]);
+      if (!on) return fmt::format("error: probe: '{}' is not on or off", w[1]);
+      if (auto e = extra(2); !e.empty()) return e;
+      const uint64_t edge = board.set_probe(*on);
+      return fmt::format("ok probe {} from clock edge {}", *on ? "touching" : "lifted", edge);
     }
   } catch (const BoardError& e) {
     return fmt::format("error: {}: {}", cmd, e.what());
@@ -462,6 +484,10 @@ void key_command(Board& board, char key) {
     const auto* sb = dynamic_cast<const SimBoard*>(&board);
     const bool pressed = sb && sb->pins().estop;
     answer = board_control_command(board, pressed ? "estop off" : "estop on");
+  } else if (key == 'p') {
+    const auto* sb = dynamic_cast<const SimBoard*>(&board);
+    const bool touching = sb && sb->pins().probe_pin;
+    answer = board_control_command(board, touching ? "probe off" : "probe on");
   } else {
     return;
   }
@@ -534,7 +560,8 @@ int run_board_command(const BoardCommandArgs& args, Board& board, uint32_t baud)
       "(kill -USR1 {}); SIGHUP pulls the carriages off their endstops\n",
       static_cast<long>(getpid()));
   TerminalKeys keys;
-  if (keys.active()) fmt::print("keys: h feed hold, s cycle start, e e-stop on/off\n");
+  if (keys.active())
+    fmt::print("keys: h feed hold, s cycle start, e e-stop on/off, p probe touch/lift\n");
   std::fflush(stdout);
   std::thread served;
   if (control || keys.active())

@@ -135,6 +135,13 @@ struct SimBoard::Model {
   std::vector<uint8_t> redraw;  // released: a new offset once the axis is out of the jitter band
   uint8_t lim_flip = 0;
   std::vector<std::pair<uint64_t, uint8_t>> bounces;
+  // Probe: the pin is manual | plate; the plate follows the step counts.
+  bool probe_manual = false;  // set_probe()
+  bool probe_plate = false;   // the plate touches
+  bool probe_pin = false;     // what the pin carries
+  std::optional<ProbePlate> plate;
+  std::vector<ProbeEvent> probe_events;
+  bool count_steps = false;  // endstops or a plate: STEP rises are counted
   // Machine buttons: pins held (bit 0 hold, bit 1 cycle start), the edge each is released on,
   // and the clock until which the board runs for them (the filter sees the release).
   uint8_t btn_pins = 0;
@@ -232,13 +239,33 @@ void apply_bounces(M& m, SimBoard::Model& s, uint64_t edge) {
   drive_limits(m, s, edge, true);
 }
 
-// After STEP edges: the step counts and the endstops they press or release.
+// Drives the probe pin with manual | plate; records a change, sampled on edge `edge`.
+template <class M>
+void drive_probe(M& m, SimBoard::Model& s, uint64_t edge, bool by_plate) {
+  const bool pin = s.probe_manual || s.probe_plate;
+  if (pin != s.probe_pin) s.probe_events.push_back({edge, pin, by_plate});
+  s.probe_pin = pin;
+  m.probe_in = pin ? 1 : 0;
+}
+
+bool plate_touches(const ProbePlate& p, int64_t steps) {
+  return p.below ? steps <= p.position : steps >= p.position;
+}
+
+// After STEP edges: the step counts and the endstops and the probe plate they press or release.
 template <class M>
 void update_endstops(M& m, SimBoard::Model& s, uint32_t sig, uint32_t prev, uint64_t cyc) {
   const uint32_t rise = sig & ~prev & 0xfu;
   if (!rise) return;
   for (int a = 0; a < models::kBoardAxes; ++a) {
     if ((rise >> a) & 1u) s.steps[static_cast<size_t>(a)] += ((prev >> (4 + a)) & 1u) ? 1 : -1;
+  }
+  if (s.plate) {
+    const bool t = plate_touches(*s.plate, s.steps[static_cast<size_t>(s.plate->axis)]);
+    if (t != s.probe_plate) {
+      s.probe_plate = t;
+      drive_probe(m, s, cyc + 1, true);
+    }
   }
   uint8_t e = 0;
   for (size_t i = 0; i < s.endstops.size(); ++i) {
@@ -322,7 +349,7 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
         diff &= diff - 1;
         s.rec.add(cyc, static_cast<uint8_t>(b), static_cast<uint8_t>((sig >> b) & 1u));
       }
-      if (!s.endstops.empty()) update_endstops(m, s, sig, prev, cyc);
+      if (s.count_steps) update_endstops(m, s, sig, prev, cyc);
       prev = sig;
     }
     if (m.seg_done) [[unlikely]]
@@ -339,7 +366,8 @@ uint64_t run_cycles(M& m, SimBoard::Model& s, uint64_t max_cycles, uint64_t quie
     // watchdog drops it (and NAKs a v2 frame with TIMEOUT) as on the real board.
     if (m.busy || m.step || m.rx_partial || !drv_idle || tx == 0 || mon.busy() ||
         cyc < s.tx_stop_end || h.active || ((s.lim_pins ^ m.limit_state) & s.lim_wired) ||
-        cyc < s.btn_settle || !s.bounces.empty()) {
+        cyc < s.btn_settle || !s.bounces.empty() ||
+        (SimBoard::kProbeEnable && s.probe_pin != (m.probe_state != 0))) {
       last_active = cyc;
     } else if (got_byte || cyc - last_active > quiet_cycles) {
       break;
@@ -360,6 +388,7 @@ void reset_and_cfg(M& m, SimBoard::Model& s, const BoardOptions& o) {
   m.estop = 0;
   m.limit_min = 0;
   m.limit_max = 0;
+  m.probe_in = 0;
   m.hold_in = 0;
   m.start_in = 0;
   m.adc_sdo = 0;
@@ -470,6 +499,16 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
   model_->trip_offset.assign(opt_.endstops.size(), 0);
   model_->redraw.assign(opt_.endstops.size(), 0);
   for (size_t i = 0; i < opt_.endstops.size(); ++i) draw_trip_offset(*model_, i);
+  if (opt_.probe_plate) {
+    if (opt_.probe_plate->axis < 0 || opt_.probe_plate->axis >= models::kBoardAxes) {
+      throw BoardError(fmt::format("simulated board: probe plate on axis {}: no such axis (0..{})",
+                                   opt_.probe_plate->axis, models::kBoardAxes - 1));
+    }
+    if (!kProbeEnable)
+      throw BoardError("simulated board: probe plate: the Verilated core has no probe wired");
+  }
+  model_->plate = opt_.probe_plate;
+  model_->count_steps = !opt_.endstops.empty() || opt_.probe_plate.has_value();
   if (opt_.record_tx) model_->sig_mask |= 1u << models::kTx;
   if (opt_.record_rx) model_->sig_mask |= 1u << models::kRx;
   if (!opt_.fst_path.empty()) {
@@ -503,6 +542,15 @@ SimBoard::SimBoard(BoardOptions options) : opt_(std::move(options)) {
       drive_limits(*model_->core_trace, *model_, 1, true);
     model_->never_active = false;
   }
+  // A plate the tool already rests on (step count 0) touches from the start.
+  if (opt_.probe_plate && plate_touches(*opt_.probe_plate, 0)) {
+    model_->probe_plate = true;
+    if (model_->core)
+      drive_probe(*model_->core, *model_, 1, true);
+    else
+      drive_probe(*model_->core_trace, *model_, 1, true);
+    model_->never_active = false;
+  }
 }
 
 SimBoard::~SimBoard() {
@@ -529,6 +577,11 @@ uint64_t Board::press_button(Button b) {
   throw BoardError(fmt::format("the {} board has no {} button; use --model rtl",
                                model() == "tlm" ? "twin" : model(),
                                b == Button::kHold ? "feed hold" : "cycle start"));
+}
+
+uint64_t Board::set_probe(bool) {
+  throw BoardError(fmt::format("the {} board has no probe input; use --model rtl",
+                               model() == "tlm" ? "twin" : model()));
 }
 
 void Board::notify_progress() const {
@@ -994,6 +1047,42 @@ uint16_t SimBoard::limit_state() const {
 
 namespace fpgacnc::simboard {
 
+// ---- Probe ----
+
+uint64_t SimBoard::set_probe(bool contact) {
+  if (!kProbeEnable) throw BoardError("simulated board: the Verilated core has no probe wired");
+  uint64_t edge;
+  {
+    OtherThreadLock l(*this);
+    Model& s = *model_;
+    s.probe_manual = contact;
+    edge = s.cycle + 1;
+    if (s.core)
+      drive_probe(*s.core, s, edge, false);
+    else
+      drive_probe(*s.core_trace, s, edge, false);
+    s.never_active = false;
+    s.last_active = s.cycle;  // the probe filter runs from here
+  }
+  const uint64_t one = 1;
+  [[maybe_unused]] ssize_t n = ::write(wake_, &one, sizeof one);
+  return edge;
+}
+
+std::vector<ProbeEvent> SimBoard::probe_events() const {
+  OtherThreadLock l(*this);
+  return model_->probe_events;
+}
+
+bool SimBoard::probe_state() const {
+  OtherThreadLock l(*this);
+  return (model_->core ? model_->core->probe_state : model_->core_trace->probe_state) != 0;
+}
+
+}  // namespace fpgacnc::simboard
+
+namespace fpgacnc::simboard {
+
 // ---- Machine buttons ----
 
 const char* button_name(Button b) {
@@ -1037,7 +1126,9 @@ BoardPins SimBoard::pins() const {
     p.estop = m.estop != 0;
     p.limit_filtered = static_cast<uint16_t>((m.limit_state & 0xfu) | ((m.limit_state >> 4) << 8));
     p.faults = m.faults;
+    p.probe_filtered = m.probe_state != 0;
   };
+  p.probe_pin = s.probe_pin;
   if (s.core)
     fill(*s.core);
   else

@@ -37,18 +37,18 @@ constexpr Syntax kPrinterSyntax{.ngc = false,
 
 // The table of meanings (docs/gcode.md, "Dialects").
 // Columns: dwell P in ms, G10 retract, T = extruder, unknown M warns, G28 homes, E is an axis,
-// modal arc as line, feed required, A is the extruder, M100-M199 warn.
+// modal arc as line, feed required, A is the extruder, M100-M199 warn, G38.x probes.
 constexpr std::array<DialectRules, 5> kRules{{
     {Dialect::kGrbl, "grbl", kCamSyntax, false, false, false, false, false, true, true, false,
-     false, true},
-    {Dialect::kLinuxCnc, "linuxcnc", kNgcSyntax, false, false, false, false, false, false, false,
-     true, false, false},
-    {Dialect::kMarlin, "marlin", kPrinterSyntax, true, true, true, true, true, true, true, false,
-     false, true},
-    {Dialect::kRepRap, "reprap", kPrinterSyntax, true, true, true, true, true, true, true, false,
-     false, true},
-    {Dialect::kMakerbot, "makerbot", kPrinterSyntax, true, true, true, true, true, true, true,
      false, true, true},
+    {Dialect::kLinuxCnc, "linuxcnc", kNgcSyntax, false, false, false, false, false, false, false,
+     true, false, false, true},
+    {Dialect::kMarlin, "marlin", kPrinterSyntax, true, true, true, true, true, true, true, false,
+     false, true, false},
+    {Dialect::kRepRap, "reprap", kPrinterSyntax, true, true, true, true, true, true, true, false,
+     false, true, false},
+    {Dialect::kMakerbot, "makerbot", kPrinterSyntax, true, true, true, true, true, true, true,
+     false, true, true, false},
 }};
 
 std::string lower(std::string_view s) {

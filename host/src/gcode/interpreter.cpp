@@ -688,8 +688,8 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
       const int c = code10(wd);
       const int grp = g_group(c);
       if (grp < 0 && rules->unknown_m_warns && c >= 290 && c <= 299) {
-        warn(fmt::format("{} bed levelling skipped: no probe on this machine yet (the line is not "
-                         "run)",
+        warn(fmt::format("{} bed levelling skipped: no bed levelling on this machine (the line is "
+                         "not run)",
                          gname(c)),
              b.line);
         return true;
@@ -703,7 +703,7 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
         else if (c == 520)
           why = "G52 local offsets are not supported (use G92 or G10 L2)";
         else if (c == 290 || c == 291 || c == 292 || c == 293)
-          why = "bed levelling needs a probe (not on this machine yet)";
+          why = "bed levelling is not built on this machine";
         throw fail(b, wd.col, fmt::format("{}: {}", gname(c), why));
       }
       if (w.g[grp + 1])
@@ -1465,10 +1465,19 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
   // 17. Motion.
   if (const Word* g = gw(1)) {
     int c = code10(*g);
-    if (c >= 380 && c <= 385)
-      throw fail(
-          b, g->col,
-          fmt::format("{}: probing needs the probe input (not on this machine yet)", gname(c)));
+    if (c >= 380 && c <= 385) {
+      if (c < 382 || !rules->probing)
+        throw fail(b, g->col,
+                   fmt::format("{}: not a probing code in the {} dialect (G38.2 .. G38.5 probe "
+                               "in grbl and LinuxCNC programs)",
+                               gname(c), rules->name));
+      if (!opt.probing)
+        throw fail(b, g->col,
+                   fmt::format("{}: probing runs in `fpgacnc grbl` or `fpgacnc probe`, not in a "
+                               "streamed job (where the probe stops is known only on the "
+                               "machine): split the job at the probe",
+                               gname(c)));
+    }
     if (c == 840 || c == 860 || c == 870 || c == 880)
       throw fail(b, g->col,
                  fmt::format("{}: this cycle needs spindle control (orient, stop or tapping) that "
@@ -1529,6 +1538,43 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
                    polar_a);
     }
     if (w.get('E')) throw fail(b, w.get('E')->col, "E in a canned cycle");
+  } else if (has_axis && motion >= 382 && motion <= 385) {
+    // G38.2 .. G38.5: a straight move at the feed in force that the board ends at the probe.
+    const int col = gw(1) ? gw(1)->col : 1;
+    move_col = col;
+    if (g53)
+      throw fail(b, nm->col, "G53 with a probe move: only G0/G1 may use machine coordinates");
+    if (comp_on())
+      throw fail(b, col,
+                 fmt::format("{} with cutter radius compensation on (G40 first)", gname(motion)));
+    if (inverse_time)
+      throw fail(b, col, fmt::format("{} in inverse time mode (G93): G94 first", gname(motion)));
+    Vec4 t = target(false);
+    apply_polar(t);
+    apply_e(t);
+    if (t[3] != pos[3])
+      throw fail(b, col, fmt::format("{}: a probe move runs X, Y and Z only", gname(motion)));
+    if (rules->feed_required && !feed_given && !w.get('F'))
+      throw fail(b, col, fmt::format("no feed given yet: {} needs F", gname(motion)));
+    if (feed <= 0.0) {
+      const Word* fw = w.get('F');
+      throw fail(b, fw ? fw->col : col, fmt::format("feed is 0: {} needs F > 0", gname(motion)));
+    }
+    if (t[0] == pos[0] && t[1] == pos[1] && t[2] == pos[2])
+      throw fail(b, col,
+                 fmt::format("{}: the probe target is the current position", gname(motion)));
+    Probe pr;
+    pr.move = make_move(Motion::kLinear, t, b.line, feed * feed_factor);
+    pr.code = motion;
+    pr.line = b.line;
+    // The front end moves the interpreter to where the board stopped; until then, the target.
+    pos = t;
+    pos_tlo = tlo;
+    move_tlo = tlo;
+    out.emplace_back(pr);
+    ++stats.moves;
+    produced = true;
+    write_position();
   } else if (has_axis || (arc_mode && arc_words && (gw(1) || true) && (has_axis || arc_words))) {
     const Word* first_axis = nullptr;
     for (int i = 0; i < b.count && !first_axis; ++i) {

@@ -27,6 +27,7 @@ int error_code(const std::string& msg) {
   if (has("integer")) return 23;
   if (has("negative")) return 4;
   if (has("radius")) return 34;
+  if (has("probe target")) return 33;
   if (has("needs P") || has("needs a P") || has("needs L") || has("needs both P")) return 28;
   if (has("arc") || has("G2") || has("G3")) return 33;
   if (has("letter")) return 1;
@@ -59,9 +60,9 @@ std::string strip_line(const std::string& raw) {
 // error code for the first word outside them.
 int grbl_words(const gcode::Block& b) {
   static const std::string kLetters = "FGIJKLMNPRSTXYZ";
-  static const double kG[] = {0,    1,  2,    3,  4,    10,   17, 18,   19, 20, 21, 28,
-                              28.1, 30, 30.1, 40, 43.1, 49,   53, 54,   55, 56, 57, 58,
-                              59,   61, 80,   90, 91,   91.1, 92, 92.1, 93, 94};
+  static const double kG[] = {0,  1,    2,    3,    4,    10,   17, 18,   19, 20,   21, 28, 28.1,
+                              30, 30.1, 38.2, 38.3, 38.4, 38.5, 40, 43.1, 49, 53,   54, 55, 56,
+                              57, 58,   59,   61,   80,   90,   91, 91.1, 92, 92.1, 93, 94};
   static const double kM[] = {0, 1, 2, 3, 4, 5, 7, 8, 9, 30, 56};
   bool arc = false, offsets = false;
   for (int i = 0; i < b.count; ++i) {
@@ -69,8 +70,8 @@ int grbl_words(const gcode::Block& b) {
     if (kLetters.find(w.letter) == std::string::npos) return 20;
     const double v = std::round(w.value * 10.0) / 10.0;
     if (w.letter == 'G') {
-      if (v > 59 && v < 60) return 29;                                            // G59.1..G59.3
-      if (std::find(std::begin(kG), std::end(kG), v) == std::end(kG)) return 20;  // G38.x too
+      if (v > 59 && v < 60) return 29;  // G59.1..G59.3
+      if (std::find(std::begin(kG), std::end(kG), v) == std::end(kG)) return 20;
       arc |= v == 2 || v == 3;
     } else if (w.letter == 'M') {
       if (std::find(std::begin(kM), std::end(kM), v) == std::end(kM)) return 20;
@@ -83,6 +84,16 @@ int grbl_words(const gcode::Block& b) {
 
 std::string fmt3(double v) {
   return fmt::format("{:.3f}", v);
+}
+
+// A G38.2 .. G38.5 word on the line.
+bool block_probes(const gcode::Block& b) {
+  for (int i = 0; i < b.count; ++i) {
+    const auto& w = b.words[static_cast<size_t>(i)];
+    const double v = std::round(w.value * 10.0) / 10.0;
+    if (w.letter == 'G' && v >= 38.2 && v <= 38.5) return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -180,6 +191,7 @@ void Engine::rebuild_pipeline(const plan::Steps4& steps) {
   go.dialect = gcode::Dialect::kGrbl;
   go.dialect_source = "fpgacnc grbl";
   go.tool_change_pause = false;  // grbl 1.1 takes M6 and T and does nothing with them
+  go.probing = true;             // G38.x: Probe commands, run by the probing cycle
   gcode::DialectChoice dc;
   dc.dialect = gcode::Dialect::kGrbl;
   dc.reason = "fpgacnc grbl";
@@ -360,6 +372,7 @@ bool Engine::motion_pending() const {
 State Engine::state() const {
   if (sleep_) return State::kSleep;
   if (homing_) return State::kHome;
+  if (probe_) return State::kRun;
   if (alarm_) return State::kAlarm;
   if (check_) return State::kCheck;
   if (jog_cancel_ || (jog_ && motion_pending())) return State::kJog;
@@ -375,7 +388,7 @@ State Engine::state() const {
 
 bool Engine::busy() const {
   return motion_pending() || report_pending_ || resetting_ || pause_pending_ || jog_cancel_ ||
-         homing_ || (line_ready() && can_take_line());
+         homing_ || probe_ || (line_ready() && can_take_line());
 }
 
 std::array<double, 4> Engine::mpos() const {
@@ -391,8 +404,9 @@ bool Engine::line_ready() const {
 }
 
 bool Engine::can_take_line() const {
-  return !resetting_ && !jog_cancel_ && !homing_ && !critical_ && !held_ && !pause_pending_ &&
-         !limit_alarm_ && session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
+  return !resetting_ && !jog_cancel_ && !homing_ && !probe_ && !critical_ && !held_ &&
+         !pause_pending_ && !limit_alarm_ &&
+         session_->unsent() < std::max<size_t>(cfg_.lookahead_segments, 1);
 }
 
 void Engine::step(milliseconds wait) {
@@ -408,6 +422,15 @@ void Engine::step(milliseconds wait) {
       report_pending_ = report_asked_ = false;
     }
     continue_homing(wait);
+    return;
+  }
+  if (probe_ && !resetting_) {
+    // The cycle polls its own sessions: a report shows the last STATUS seen.
+    if (report_pending_) {
+      write_report();
+      report_pending_ = report_asked_ = false;
+    }
+    continue_probe(wait);
     return;
   }
   if (jog_cancel_ && !resetting_) continue_jog_cancel();
@@ -482,8 +505,8 @@ void Engine::process_line(const std::string& raw) {
   } else {
     rc = gcode_line(raw, check_);
   }
-  if (rc == kHomingStarted) return;  // answered when the cycle ends (finish_homing)
-  if (rc == kSoftLimit) {            // grbl: alarm, then nothing until a reset (which sends the ok)
+  if (rc == kHomingStarted || rc == kProbeStarted) return;  // answered when the cycle ends
+  if (rc == kSoftLimit) {  // grbl: alarm, then nothing until a reset (which sends the ok)
     ++stats_.errors;
     alarm_ = critical_ = true;
     say("ALARM:2");
@@ -513,21 +536,40 @@ int Engine::gcode_line(const std::string& raw, bool check_only) {
         continue;
       }
       if (int rc = grbl_words(b)) return rc;
+      if (!opt_.probe && block_probes(b)) {
+        say("[MSG:probing needs a board with the probe input and its trigger: the Verilated "
+            "board (--model rtl) or a --port]");
+        return 20;
+      }
       if (!interp_->execute(b, cmds)) ended = true;
       track_modal(b);
     }
   } catch (const gcode::Error& e) {
     return error_code(e.message());
   }
+  // A probe is the line's last command (its end is the board's).
+  const gcode::Probe* probe = nullptr;
+  for (const auto& c : cmds) {
+    if (const auto* p = std::get_if<gcode::Probe>(&c)) probe = p;
+  }
+  if (probe && (ended || !std::holds_alternative<gcode::Probe>(cmds.back()))) {
+    resync_parser(planner_->position());
+    say("[MSG:a probe move must be the last command of its line]");
+    return 20;
+  }
   if (check_only) {  // grbl checks soft limits in check mode too
     for (const auto& c : cmds) {
       const auto* m = std::get_if<gcode::Move>(&c);
       if (m && plan::check_travel(*m, cfg_)) return kSoftLimit;
     }
+    // A probe in check mode is checked; the parser stays at its target, as grbl's does.
+    if (probe && plan::check_travel(probe->move, cfg_)) return kSoftLimit;
     return 0;
   }
+  if (probe && plan::check_travel(probe->move, cfg_)) return kSoftLimit;
   try {
-    for (const auto& c : cmds) planner_->add(c);
+    for (const auto& c : cmds)
+      if (!std::holds_alternative<gcode::Probe>(c)) planner_->add(c);
     push_items(planner_->take_items());
   } catch (const plan::TravelError&) {
     planner_->take_items();  // the moves of this line before the offending one are not sent
@@ -535,6 +577,7 @@ int Engine::gcode_line(const std::string& raw, bool check_only) {
   } catch (const std::invalid_argument&) {
     return 33;  // a target the planner cannot turn into frames
   }
+  if (probe) return start_probe(*probe);
   if (ended) {
     flush_lookahead();
     say("[MSG:Pgm End]");
@@ -731,7 +774,7 @@ int Engine::system_command(const std::string& cmd) {
     say(fmt::format("[G30:{}]", p3(5181)));
     say(fmt::format("[G92:{}]", p3(5211)));
     say(fmt::format("[TLO:{}]", fmt3(params_->get(5403))));
-    say("[PRB:0.000,0.000,0.000:0]");  // no probe input: never probed
+    say(prb_line());
     return 0;
   }
   if (cmd == "$I") {
@@ -890,15 +933,22 @@ void Engine::soft_reset() {
     alarm_ = true;
     disarm_next_ = true;
   }
+  // A reset while probing: ALARM:3 (below) as for any motion; the next session disarms.
+  const bool probing = probe_ != nullptr;
+  if (probing) {
+    probe_.reset();
+    disarm_next_ = true;
+  }
   // A hold counts as motion (grbl: a reset during a feed hold is ALARM:3 too).
-  const bool moving = (homing || motion_pending() || (motion_ok_ && board_held())) && !check_;
+  const bool moving =
+      (homing || probing || motion_pending() || (motion_ok_ && board_held())) && !check_;
   limit_alarm_ = false;  // a reset ends the critical alarm (the FAULT_CLEAR comes with it)
   la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
   stats_.aborted += session_->abandon();
   if (moving) {
     if (!alarm_) say("ALARM:3");  // not after ALARM:2: the alarm is already raised
     alarm_ = true;
-    if (motion_ok_ && (board_held() || (homing && !opt_.estop_press))) {
+    if (motion_ok_ && (board_held() || ((homing || probing) && !opt_.estop_press))) {
       // A hold in effect, or a homing move on a board without an e-stop input: MOTION CANCEL
       // drops the board's queue once it is at rest, positions kept, no fault (docs/machine.md
       // "Cancel").
@@ -1107,9 +1157,94 @@ void Engine::finish_homing() {
   say("ok");
 }
 
+int Engine::start_probe(const gcode::Probe& p) {
+  la_ = std::make_unique<plan::Lookahead>(plan::motion_limits(cfg_));
+  link::ProbeRequest req;
+  for (size_t a = 0; a < 3; ++a) req.target_mm[a] = p.move.end[a];
+  req.feed_mm_min = p.move.feed_mm_min;
+  req.toward = p.toward();
+  req.error_on_miss = p.error_on_miss();
+  // The cycle's sessions: the board keeps its MOTION rates, CONFIG_AXIS timing and travel.
+  probe_ =
+      std::make_unique<link::ProbeCycle>(link_, cfg_, ident_, req, [this]() -> link::V2Session& {
+        session_ = std::make_unique<link::V2Session>(link_, opt_.v2, ident_, rep_);
+        session_->start();
+        fifo_info_.clear();
+        fifo_base_ = 0;
+        return *session_;
+      });
+  probe_started_ = false;
+  return kProbeStarted;
+}
+
+void Engine::continue_probe(milliseconds wait) {
+  try {
+    if (!probe_started_) {
+      // grbl synchronizes first: the motion queued before the probe runs out, and every frame
+      // of the session is acknowledged before the cycle's first session starts.
+      session_->request_status();
+      session_->poll(wait);
+      if (!session_->complete()) return;
+      probe_started_ = true;
+    }
+    if (probe_->step(wait)) finish_probe();
+  } catch (const link::Error& e) {
+    probe_.reset();
+    disarm_next_ = true;
+    if (session_->last_status().faults & v2::kFaultLimit) {
+      on_session_error();  // a switch tripped: ALARM:1, lines wait for a reset
+      return;
+    }
+    // The board refused the cycle's frames or stopped answering.
+    say(fmt::format("[MSG:probe: {}]", e.what()));
+    ++stats_.errors;
+    say("error:20");
+    new_session();
+    plan::Steps4 pos{};
+    const auto& st = session_->last_status();
+    for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+    resync_parser(pos);
+  }
+}
+
+void Engine::finish_probe() {
+  const link::ProbeResult r = probe_->result();
+  probe_.reset();
+  ++stats_.oks;
+  if (r.alarm == 4) {
+    say("ALARM:4");
+    say(fmt::format("[MSG:{}]", r.message));
+    alarm_ = true;
+  } else {
+    for (size_t a = 0; a < 3 && a < r.latched.size(); ++a)
+      prb_mm_[a] = static_cast<double>(r.latched[a]) / cfg_.steps_per_mm[a];
+    prb_ok_ = r.found;
+    if (r.alarm) {
+      say(fmt::format("ALARM:{}", r.alarm));
+      say(fmt::format("[MSG:{}]", r.message));
+      alarm_ = true;
+    }
+    say(prb_line());
+  }
+  say("ok");
+  // The parser and the planner at the board's position (past the contact by the stop).
+  plan::Steps4 pos{};
+  const auto& st = session_->last_status();
+  for (size_t a = 0; a < 4 && a < st.position.size(); ++a) pos[a] = st.position[a];
+  resync_parser(pos);
+}
+
+std::string Engine::prb_line() const {
+  const bool inches = settings_.values.at(13) != 0.0;
+  const auto v = [&](double mm) { return inches ? fmt::format("{:.4f}", mm / 25.4) : fmt3(mm); };
+  return fmt::format("[PRB:{},{},{}:{}]", v(prb_mm_[0]), v(prb_mm_[1]), v(prb_mm_[2]),
+                     prb_ok_ ? 1 : 0);
+}
+
 void Engine::resync_parser(const plan::Steps4& steps) {
   std::vector<std::string> lines{modal_.units + " " + modal_.distance};
-  if (modal_.motion == "G1") lines.push_back("G1");  // sync_to leaves G0 in force
+  // sync_to leaves G0 in force; G38.x alone sets the probe mode again.
+  if (modal_.motion == "G1" || modal_.motion.rfind("G38", 0) == 0) lines.push_back(modal_.motion);
   frontend::sync_to(steps, cfg_, gcode::Dialect::kGrbl, *params_, *interp_, *planner_, lines);
 }
 

@@ -206,6 +206,10 @@ void Planner::add(const gcode::Command& command) {
     ++plan_.stats.messages;
   } else if (const auto* l = std::get_if<gcode::Limits>(&command)) {
     add_limits(*l);
+  } else if (const auto* pr = std::get_if<gcode::Probe>(&command)) {
+    // A probe's end is the board's: the front end runs it (link::ProbeCycle), never the plan.
+    throw gcode::Error(source_, pr->line, 0,
+                       "a probe move (G38.2 .. G38.5) is run by the probing cycle, not planned");
   }
 }
 

@@ -39,6 +39,7 @@ struct DialectRules {
   // M100..M199 (LinuxCNC's user M codes, vendors' extensions such as Mr Beam's compressor):
   // skipped with a warning; else an error like any unknown M code.
   bool user_m_warns;
+  bool probing;  // G38.2 .. G38.5 are probe moves (grbl, LinuxCNC); else unknown G codes
 };
 
 const DialectRules& dialect_rules(Dialect d);

@@ -108,7 +108,20 @@ struct Limits {
   int line = 0;
 };
 
-using Command = std::variant<Move, Dwell, Heater, Pause, Output, Message, Limits>;
+// G38.2 .. G38.5 (grbl, LinuxCNC; only with Options::probing): a straight move at the feed in
+// force toward `move.end` that the board ends at the probe's contact (G38.2 / G38.3) or release
+// (G38.4 / G38.5). A front end runs it with link::ProbeCycle; where the machine stops is the
+// board's (docs/machine.md "Homing and probing (host)"), so the front end moves the interpreter
+// there afterwards.
+struct Probe {
+  Move move;       // motion kLinear, start and end in machine mm, feed
+  int code = 382;  // 382 .. 385: G38.2 .. G38.5
+  int line = 0;
+  bool toward() const { return code == 382 || code == 383; }  // contact (else release)
+  bool error_on_miss() const { return code == 382 || code == 384; }
+};
+
+using Command = std::variant<Move, Dwell, Heater, Pause, Output, Message, Limits, Probe>;
 
 struct Options {
   double default_feed_mm_min = 1000.0;
@@ -130,6 +143,9 @@ struct Options {
   // Splines (G5, G5.1) run as straight pieces within this distance of the curve (mm): the
   // machine's arc_tolerance_mm.
   double arc_tolerance_mm = 0.01;
+  // G38.2 .. G38.5 give Probe commands (a front end that runs the probing cycle: fpgacnc grbl);
+  // else they are refused with their line (a streamed job cannot know where a probe stops).
+  bool probing = false;
 };
 
 // A warning kept in the statistics: once per kind, with its count and first line.

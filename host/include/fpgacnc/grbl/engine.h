@@ -32,6 +32,10 @@
 // 0x85 (and `!` while jogging) is the jog cancel: MOTION CANCEL (the board decelerates with the
 // hold ramp and drops its queue at rest), then a new session from the board's STATUS, the parser
 // and planner moved to where the machine stopped with their modal state kept; Idle again.
+// Probing (docs/grbl.md "Probing"): G38.2 .. G38.5 on a board with a probe input run
+// link::ProbeCycle once the motion before them has run (state Run), then [PRB:x,y,z:1|0] in
+// machine coordinates (kept for `$#`), ALARM:4 / ALARM:5 as grbl, the line's ok; the parser and
+// planner continue from where the board stopped (its STATUS), past the contact.
 #pragma once
 
 #include <array>
@@ -50,6 +54,7 @@
 #include "fpgacnc/grbl/settings.h"
 #include "fpgacnc/link/homing.h"
 #include "fpgacnc/link/link.h"
+#include "fpgacnc/link/probe.h"
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/link/v2_session.h"
 #include "fpgacnc/plan/lookahead.h"
@@ -80,6 +85,9 @@ struct EngineOptions {
   // max), from the board model (simboard::Board::limit_switches): 0 = none. With switches, `$21=1`
   // is accepted; a hard-limit alarm is reported whatever it says (docs/grbl.md).
   uint16_t limit_switches = 0;
+  // The board has a probe input and TRIGGER (the Verilated board, a real port): G38.2 .. G38.5
+  // run; else they are error:20 with a message (the twin board models no trigger).
+  bool probe = false;
 };
 
 // Counters for tests and the exit summary.
@@ -159,6 +167,12 @@ class Engine {
   int start_homing();
   void continue_homing(std::chrono::milliseconds wait);
   void finish_homing();
+  static constexpr int kProbeStarted = -4;  // G38.x runs: the line's answer comes at the end
+  // The line's G38.x: the probing cycle starts once the motion before it has run.
+  int start_probe(const gcode::Probe& p);
+  void continue_probe(std::chrono::milliseconds wait);
+  void finish_probe();
+  std::string prb_line() const;  // [PRB:x,y,z:s] of the last probe
   void push_items(std::vector<plan::PlanItem> items);
   void flush_lookahead();
   void emit_profiles();
@@ -219,9 +233,13 @@ class Engine {
   bool sleep_ = false;
   std::unique_ptr<link::HomingCycle> homing_;  // `$H` in progress (state Home)
   bool homing_started_ = false;  // the cycle's first session is open (the one before settled)
-  bool disarm_next_ = false;     // a homing was cut short: the next session sends TRIGGER DISARM
-  bool pause_pending_ = false;   // M0/M1/M6 planned: Hold:0 once the board is at rest
-  bool held_ = false;            // at rest after M0 until '~'
+  bool disarm_next_ = false;     // a homing or probe was cut short: the next session sends DISARM
+  std::unique_ptr<link::ProbeCycle> probe_;  // G38.x in progress (state Run)
+  bool probe_started_ = false;      // the cycle's first session is open (the motion before has run)
+  std::array<double, 3> prb_mm_{};  // the last probe's position (machine mm) and success
+  bool prb_ok_ = false;
+  bool pause_pending_ = false;  // M0/M1/M6 planned: Hold:0 once the board is at rest
+  bool held_ = false;           // at rest after M0 until '~'
   bool resetting_ = false;
   bool estop_pressed_ = false;
   bool motion_ok_ = false;   // the board took MOTION (session start)

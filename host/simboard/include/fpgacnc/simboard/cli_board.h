@@ -57,6 +57,10 @@ bool parse_line_fault_option(std::string_view name, std::string_view value, Line
 // --endstop AXIS-SIDE=MM (x-max=200, z-min=-5): a simulated endstop of the Verilated board at MM
 // (steps from `cfg`'s steps/mm). Throws std::invalid_argument naming the option for a bad value.
 Endstop parse_endstop_option(std::string_view value, const config::MachineConfig& cfg);
+// --probe-plate AXIS-SIDE=MM (z-min=-2: the probe touches while Z is at or below -2 mm; x-max=5:
+// at or above 5 mm): a simulated probe plate of the Verilated board (steps from `cfg`'s
+// steps/mm). Throws std::invalid_argument naming the option for a bad value.
+ProbePlate parse_probe_plate_option(std::string_view value, const config::MachineConfig& cfg);
 // --limit-switches x-min,x-max,...: the switches a real board wires (its LIMIT_ENABLE), as
 // STATUS's switch bits (bit a min of axis a, bit 8 + a max); "" = none. Throws
 // std::invalid_argument naming the option for an unknown name.

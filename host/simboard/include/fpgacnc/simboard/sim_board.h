@@ -68,6 +68,14 @@
 // differs from the core's filtered level the board counts as active (its clock runs through the
 // debounce filter without host traffic).
 //
+// Probe (docs/machine.md "Simulated board"). The Verilated core is built with the probe input
+// wired (PROBE_ENABLE = kProbeEnable, spec/protocol.toml sim.simboard_probe_enable; the default
+// filter PROBE_FILTER_CLKS and polarity: a pin high is contact). set_probe() touches or lifts it
+// from outside; BoardOptions::probe_plate places a plate: the pin is high while the plate's
+// axis's step count (STEP rises counted at the pins, as for the endstops) is at or beyond the
+// plate's position. probe_events() records each pin change with the first edge that samples it.
+// While the pin differs from the core's filtered level the board counts as active.
+//
 // Machine buttons (docs/machine.md "Simulated board"). press_button() drives cnc_core's hold_in or
 // start_in high for kButtonPressClks board clocks and then low again; the release happens inside
 // the clock loop on its exact edge, and the board's clock runs through the press and the filter's
@@ -130,6 +138,22 @@ struct LimitEvent {
   bool endstop = false;  // by an endstop (else by set_limit)
 };
 
+// A simulated probe plate: the probe pin is high (contact) while the step count of `axis`
+// (0..3) is at or below `position` (below: a plate under the tool, probed toward min) or, with
+// below false, at or above it.
+struct ProbePlate {
+  int axis = 2;
+  bool below = true;
+  int64_t position = 0;
+};
+
+// The probe pin changed: `cycle` is the first clock edge that samples the new level.
+struct ProbeEvent {
+  uint64_t cycle = 0;
+  bool contact = false;
+  bool plate = false;  // by the plate (else by set_probe)
+};
+
 // "X min", "Z max": a switch's name as STATUS messages and the CLI write it.
 std::string limit_switch_name(int axis, bool max_side);
 
@@ -147,6 +171,8 @@ struct BoardPins {
   uint16_t limit_filtered = 0;  // the core's filtered switch levels, same bits
   uint16_t limit_wired = 0;     // the switches wired (limit_switches())
   uint8_t faults = 0;           // the core's latched faults (STATUS byte 1)
+  bool probe_pin = false;       // the probe pin (set_probe or the plate): contact
+  bool probe_filtered = false;  // the core's filtered probe (STATUS state bit 7)
 };
 
 struct BoardOptions {
@@ -168,6 +194,8 @@ struct BoardOptions {
   // Simulated endstops at travel ends (see the file comment); SimBoard only.
   std::vector<Endstop> endstops;
   SwitchNoise switch_noise;  // their bounce and trigger jitter (default: none)
+  // A simulated probe plate (see the file comment); SimBoard only.
+  std::optional<ProbePlate> probe_plate;
 };
 
 enum class SensorFault { kNone, kOpen, kShort };
@@ -240,6 +268,9 @@ class Board {
   // that samples the pin pressed. The default (a model without the buttons, the twin board)
   // throws BoardError.
   virtual uint64_t press_button(Button b);
+  // Touches (true) or lifts (false) the probe: its pin from the next clock edge, returned. The
+  // default (a model without the probe input, the twin board) throws BoardError.
+  virtual uint64_t set_probe(bool contact);
   // Nothing in flight and every answer byte already written to the pty: nothing more comes
   // until the host writes (bytes the host wrote that the board has not read yet count as
   // written only once stats().bytes_in counts them).
@@ -283,6 +314,11 @@ class SimBoard : public Board {
   static constexpr uint32_t kLimitEnable = static_cast<uint32_t>(spec::kSimboardLimitEnable);
   static constexpr uint16_t kLimitSwitches =
       static_cast<uint16_t>((kLimitEnable & 0xffu) | (((kLimitEnable >> 16) & 0xffu) << 8));
+  // cnc_core PROBE_ENABLE of the Verilated core and its probe filter (the default
+  // PROBE_FILTER_CLKS): a pin first sampled on edge p is the filtered level from edge p + 1 +
+  // kProbeFilterClks.
+  static constexpr bool kProbeEnable = spec::kSimboardProbeEnable != 0;
+  static constexpr uint64_t kProbeFilterClks = spec::kDefaultProbeFilterClks;
 
   // Creates the pty and the model, resets the core and writes the step timing. Throws
   // BoardError.
@@ -370,6 +406,11 @@ class SimBoard : public Board {
   int pull_off_endstops();
   // The core's filtered switch levels now (bits as limit_switches()).
   uint16_t limit_state() const;
+
+  // ---- Probe ----
+  uint64_t set_probe(bool contact) override;
+  std::vector<ProbeEvent> probe_events() const;  // copy, in order
+  bool probe_state() const;                      // the core's filtered probe: contact
 
   // ---- Machine buttons ----
   // The core's input filter (cnc_core LIMIT_FILTER_CLKS, the board's default: buttons and switches
