@@ -67,12 +67,14 @@ std::optional<Report> parse_report(const std::string& line) {
 class Rig {
  public:
   // `rtl`: the Verilated board (with its e-stop input and limit switches) instead of the twins;
-  // `endstops`, `plate`: simulated endstops and a probe plate on it.
+  // `endstops`, `plate`: simulated endstops and a probe plate on it; `noise`: the endstops'
+  // bounce and trigger jitter.
   explicit Rig(std::string settings_path = "", MachineConfig cfg = {}, bool rtl = false,
                std::vector<fpgacnc::simboard::Endstop> endstops = {},
-               std::optional<fpgacnc::simboard::ProbePlate> plate = std::nullopt)
+               std::optional<fpgacnc::simboard::ProbePlate> plate = std::nullopt,
+               fpgacnc::simboard::SwitchNoise noise = {})
       : cfg_(cfg),
-        link_(rtl ? rtl_link(cfg, std::move(endstops), plate)
+        link_(rtl ? rtl_link(cfg, std::move(endstops), plate, noise)
                   : fpgacnc::simboard::make_board_link(
                         std::make_unique<fpgacnc::twins::TwinBoard>(
                             fpgacnc::twins::TwinBoard::options_from_config(cfg)),
@@ -96,10 +98,11 @@ class Rig {
 
   static std::unique_ptr<fpgacnc::link::Link> rtl_link(
       const MachineConfig& cfg, std::vector<fpgacnc::simboard::Endstop> endstops,
-      std::optional<fpgacnc::simboard::ProbePlate> plate) {
+      std::optional<fpgacnc::simboard::ProbePlate> plate, fpgacnc::simboard::SwitchNoise noise) {
     auto o = fpgacnc::simboard::SimBoard::options_from_config(cfg);
     o.endstops = std::move(endstops);
     o.probe_plate = plate;
+    o.switch_noise = noise;
     return fpgacnc::simboard::make_board_link(std::make_unique<fpgacnc::simboard::SimBoard>(o),
                                               cfg.baud, {});
   }
@@ -1100,13 +1103,25 @@ TEST(Grbl, HomingOnTheVerilatedBoard) {
   expect_at(m, {-48, -16, -80}, cfg);
 }
 
-// Three $H of X and Y from different places: the latched board steps stay within what the
-// filter allows at the locate feed (printed: the spread in steps).
+// Three $H of X and Y from different places, on switches that bounce (2 to 6 more toggles within
+// 10 000 clocks of each change) and trip within +-2 steps of their place: the latched board
+// steps stay within the jitter and what the bounce and the filter allow at the locate feed
+// (printed: the spread in steps).
 TEST(Grbl, HomingRepeatability) {
   MachineConfig cfg = homing_config();
   cfg.homing.cycles = {0b011};  // X and Y together
   const std::array<int64_t, 2> edge{80, 64};
-  Rig rig("", cfg, true, {{0, true, edge[0]}, {1, true, edge[1]}});
+  fpgacnc::simboard::SwitchNoise noise;
+  noise.bounce_clks = 10'000;
+  noise.jitter_steps = 2;
+  noise.seed = 7;
+  // The filtered rise comes at most bounce + filter clocks after the pin's first rise.
+  auto late = [&](size_t a) {
+    const double rate = cfg.homing.locate_feed_mm_min / 60.0 * cfg.steps_per_mm[a];
+    return static_cast<int64_t>(
+        std::ceil(rate * static_cast<double>(noise.bounce_clks + 50'002) / 50e6));
+  };
+  Rig rig("", cfg, true, {{0, true, edge[0]}, {1, true, edge[1]}}, std::nullopt, noise);
   std::array<int64_t, 2> lo{INT64_MAX, INT64_MAX}, hi{INT64_MIN, INT64_MIN};
   const char* away[] = {"G0 X-0.3 Y-0.2", "G0 X-0.15 Y-0.35"};
   // A setting right before $H: its frames (CONFIG_AXIS, MOTION) go out before the cycle's.
@@ -1116,8 +1131,8 @@ TEST(Grbl, HomingRepeatability) {
     ASSERT_EQ(steps.size(), 2u) << "run " << run;
     for (size_t a = 0; a < 2; ++a) {
       const int64_t st = steps.at("XY"[a]);
-      EXPECT_GE(st, edge[a]) << "run " << run;
-      EXPECT_LE(st, edge[a] + filter_steps(cfg, a)) << "run " << run;
+      EXPECT_GE(st, edge[a] - noise.jitter_steps) << "run " << run;
+      EXPECT_LE(st, edge[a] + noise.jitter_steps + late(a)) << "run " << run;
       lo[a] = std::min(lo[a], st);
       hi[a] = std::max(hi[a], st);
     }
@@ -1126,11 +1141,19 @@ TEST(Grbl, HomingRepeatability) {
       idle_soon(rig);
     }
   }
+  // The switches did bounce: more pin changes than the 24 presses and releases of 2 switches in 3
+  // cycles of a seek and a locate.
+  size_t changes = 0;
+  for (const auto& e : rig.board().limit_events()) changes += e.endstop ? 1 : 0;
+  EXPECT_GT(changes, 24u);
   for (size_t a = 0; a < 2; ++a) {
-    std::printf("homing repeatability %c: latched board steps %lld..%lld (spread %lld steps)\n",
-                "XY"[a], static_cast<long long>(lo[a]), static_cast<long long>(hi[a]),
-                static_cast<long long>(hi[a] - lo[a]));
-    EXPECT_LE(hi[a] - lo[a], filter_steps(cfg, a));
+    std::printf(
+        "homing repeatability %c (bounce %llu clocks, jitter +-%lld steps, %zu pin changes): "
+        "latched board steps %lld..%lld (spread %lld steps)\n",
+        "XY"[a], static_cast<unsigned long long>(noise.bounce_clks),
+        static_cast<long long>(noise.jitter_steps), changes, static_cast<long long>(lo[a]),
+        static_cast<long long>(hi[a]), static_cast<long long>(hi[a] - lo[a]));
+    EXPECT_LE(hi[a] - lo[a], 2 * noise.jitter_steps + late(a));
   }
 }
 
