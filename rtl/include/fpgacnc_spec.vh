@@ -95,7 +95,7 @@
 `define FPGACNC_T_ARC 8'h13
 `define FPGACNC_LEN_ARC 8'd63
 `define FPGACNC_LENI_ARC 63
-// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty, see below
+// OUTPUT: machine outputs (coolant, fan, digital outputs, laser power mode M3 / M4) in order with the motion: mask, value, fan duty, see below
 `define FPGACNC_T_OUTPUT 8'h15
 `define FPGACNC_LEN_OUTPUT 8'd3
 `define FPGACNC_LENI_OUTPUT 3

@@ -88,7 +88,8 @@
 // out_done_n = the number of entries applied (segments_done counts each). Levels: coolant_flood,
 // coolant_mist, dout[3:0] (mask bits 0, 1, 3..6, value bits the same), fan_duty (mask bit 2,
 // the duty byte), laser_dyn (mask bit 7: M4 dynamic laser power, read by machine_outputs'
-// laser PWM with power, prof_run, prof_v and prof_vc). abort clears the levels and the pending entry (outputs off from the edge after
+// laser PWM with power, prof_run, prof_v and prof_vc). abort clears the levels but laser_dyn (a
+// mode, not an output: cleared by rst only) and the pending entry (outputs off from the edge after
 // the abort clock; cnc_core also gates them at once) and s_out_tready is low in an abort clock.
 // Build options (cnc_core passes them): PROFILES = 0 leaves profile_gen and the dda_profile per
 // axis out, ARCS = 0 leaves arc_dda and the in-arc DIR checks out; a segment of a kind left out is
@@ -606,7 +607,7 @@ module segment_executor #(
         end
         pend_duty_reg <= m_duty;
         if (abort || rst) begin
-          lvl_reg       <= 7'd0;
+          lvl_reg[5:0]  <= 6'd0;  // laser_dyn is a mode, not an output: kept (cleared by rst)
           duty_reg      <= 8'd0;
           pend_n_reg    <= 16'd0;
           pend_mask_reg <= 8'd0;
@@ -614,7 +615,10 @@ module segment_executor #(
           pend_duty_reg <= 8'd0;
           done_reg      <= 1'b0;
         end
-        if (rst) done_n_reg <= 16'd0;
+        if (rst) begin
+          done_n_reg <= 16'd0;
+          lvl_reg[6] <= 1'b0;
+        end
       end
       assign s_out_tready  = !abort && (pend_n_reg != 16'hFFFF);
       assign coolant_flood = lvl_reg[0];

@@ -89,7 +89,7 @@ inline constexpr size_t kLenLineProfileHeader = 28;
 // ARC: circular / helical arc in the XY, ZX or YZ plane, see below
 inline constexpr uint8_t kTypeArc = 0x13;
 inline constexpr size_t kLenArc = 63;
-// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty, see below
+// OUTPUT: machine outputs (coolant, fan, digital outputs, laser power mode M3 / M4) in order with the motion: mask, value, fan duty, see below
 inline constexpr uint8_t kTypeOutput = 0x15;
 inline constexpr size_t kLenOutput = 3;
 // HEATER_CONFIG: channel, mode, gains, limits (see "Heater frames")
