@@ -69,10 +69,15 @@ module laser_scale #(
   reg [ 7:0] duty_reg;
   reg        done_reg;
 
-  wire [46:0] rem_sub = acc_reg[46:0] - opnd_reg;  // rem - V_cruise when ge (then < 2^47)
-  wire        ge = (acc_reg >= {1'b0, opnd_reg});
-  wire [47:0] mul1_next = {acc_reg[46:0], 1'b0} + (qr_reg[16] ? {31'd0, q_reg} : 48'd0);
-  wire [47:0] mul2_next = {acc_reg[46:0], 1'b0} + (p_reg[7] ? {1'b0, opnd_reg} : 48'd0);
+  // DIV: rem - V_cruise; its borrow is the quotient bit (then the difference is < 2^47)
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [48:0] diff = {1'b0, acc_reg} - {2'b00, opnd_reg};  // [47]: 0 whenever ge
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire        ge = !diff[48];
+  // MUL1, MUL2 (one adder): acc = 2 acc + the multiplicand where the multiplier's top bit is set
+  wire [47:0] addend = (phase_reg == P_MUL1) ? (qr_reg[16] ? {31'd0, q_reg} : 48'd0) :
+                                               (p_reg[7] ? {1'b0, opnd_reg} : 48'd0);
+  wire [47:0] mul_next = {acc_reg[46:0], 1'b0} + addend;
 
   always @(posedge clk) begin
     done_reg <= 1'b0;
@@ -80,7 +85,7 @@ module laser_scale #(
       P_DIV: begin
         // rem < 2 V_cruise: one quotient bit, then rem = 2 (rem - bit * V_cruise)
         if (div_reg) q_reg <= {q_reg[15:0], ge};
-        acc_reg <= {(ge ? rem_sub : acc_reg[46:0]), 1'b0};
+        acc_reg <= {(ge ? diff[46:0] : acc_reg[46:0]), 1'b0};
         k_reg   <= k_reg - 5'd1;
         if (k_reg == 5'd0) begin
           phase_reg <= P_MUL1;
@@ -89,24 +94,24 @@ module laser_scale #(
         end
       end
       P_MUL1: begin
-        acc_reg <= mul1_next;
+        acc_reg <= mul_next;
         qr_reg  <= {qr_reg[15:0], 1'b0};
         k_reg   <= k_reg - 5'd1;
         if (k_reg == 5'd0) begin
           phase_reg <= P_MUL2;
           k_reg     <= P_LAST;
-          opnd_reg  <= mul1_next[46:0];
+          opnd_reg  <= mul_next[46:0];
           acc_reg   <= 48'd0;
         end
       end
       P_MUL2: begin
-        acc_reg <= mul2_next;
+        acc_reg <= mul_next;
         p_reg   <= {p_reg[6:0], 1'b0};
         k_reg   <= k_reg - 5'd1;
         if (k_reg == 5'd0) begin
           phase_reg <= P_IDLE;
           done_reg  <= 1'b1;
-          duty_reg  <= mul2_next[39:32];  // dyn 0: q_r = q_v = 2^16, the power
+          duty_reg  <= mul_next[39:32];  // dyn 0: q_r = q_v = 2^16, the power
         end
       end
       default: ;
