@@ -189,3 +189,9 @@ set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to lim_y_max
 set_location_assignment PIN_AJ20 -to probe_n
 set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to probe_n
 set_instance_assignment -name WEAK_PULL_UP_RESISTOR ON -to probe_n
+
+# Laser power / spindle speed PWM (docs/machine.md "Laser and spindle PWM"): GPIO_0[22] (pin from
+# the Terasic DE1-SoC manual), high = on, to the laser driver's PWM / TTL input or a spindle
+# controller's PWM input.
+set_location_assignment PIN_AH20 -to spindle_pwm
+set_instance_assignment -name IO_STANDARD "3.3-V LVTTL" -to spindle_pwm

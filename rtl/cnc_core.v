@@ -9,6 +9,10 @@
 //   step, dir, laser the motion pins (docs/timing.md); coolant_flood, coolant_mist, fan (PWM at
 //                    about FAN_PWM_HZ), dout: machine outputs set by OUTPUT entries on the edge
 //                    that ends the segment before them; low after rst and on e-stop.
+//   spindle_pwm      (OUTPUTS) laser power / spindle speed: PWM at about LASER_PWM_HZ while
+//                    `laser` is high (low whenever it is low), duty = the segment's power byte;
+//                    with OUTPUT mask bit 7 set to 1 (M4) scaled by the actual speed over the
+//                    programmed one (docs/machine.md "Laser and spindle PWM").
 //   heater, adc_*    the two heater channels and the LTC2308 (docs/heater.md; SAMPLE_CLKS clocks a
 //                    sample tick).
 //   estop            active high, asynchronous (the board top inverts its estop_n pin): two-flop
@@ -95,6 +99,7 @@ module cnc_core #(
     parameter HEATERS           = PROTO_V2,
     parameter OUTPUTS           = PROTO_V2,
     parameter FAN_PWM_HZ        = 1000,                // fan PWM frequency (256 counts a period)
+    parameter LASER_PWM_HZ      = `FPGACNC_DEF_LASER_PWM_HZ,  // spindle_pwm frequency (256 counts)
     parameter LEAN_TRIM         = (PROTO_V2 == 0) ? 1 : 0,  // 1: PROTO_V2 = 0 only
     parameter STEP_CFG          = 1,                   // 0: PROTO_V2 = 0 only
     // hard limits (docs/machine.md): bit a = min switch of axis a, bit 16 + a = max switch
@@ -126,6 +131,7 @@ module cnc_core #(
     output wire       coolant_mist,
     output wire       fan,            // part-cooling fan PWM
     output wire [3:0] dout,           // digital outputs (M62..M65 P0..P3)
+    output wire       spindle_pwm,    // laser power / spindle speed PWM (M3 / M4 S)
 
     input  wire       estop,       // e-stop, active high, asynchronous
     input  wire [N_AXES-1:0] limit_min,  // limit switches, asynchronous (LIMIT_* parameters)
@@ -605,6 +611,7 @@ module cnc_core #(
   wire [1:0] btn_q, btn_strobe;
   wire [1:0] btn_rise = btn_strobe & btn_q & BUTTON_ENABLE;
   wire rate_adv, rate_hold, rate_stopped, rate_flush, exec_rapid;
+  wire [32:0] rate_r;  // the motion rate (2^32 = 100 %): the M4 laser power's scale
 
   input_filter #(
       .N          (2),
@@ -620,9 +627,6 @@ module cnc_core #(
 
   generate
     if (V2_EN != 0) begin : g_rate
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire [32:0] rate_nc;  // the rate itself: for benches and waveforms
-      /* verilator lint_on UNUSEDSIGNAL */
       feed_rate #(
           .PERIOD_LOG2(RATE_PERIOD_LOG2),
           .RAMP0      (RATE_RAMP)
@@ -645,7 +649,7 @@ module cnc_core #(
           .hold      (rate_hold),
           .stopped   (rate_stopped),
           .flush     (rate_flush),
-          .rate      (rate_nc)
+          .rate      (rate_r)
       );
       /* verilator lint_off UNUSEDSIGNAL */
       wire unused_motion = &{1'b0, dec_motion_data[7:3]};
@@ -655,6 +659,7 @@ module cnc_core #(
       assign rate_hold    = 1'b0;
       assign rate_stopped = 1'b0;
       assign rate_flush   = 1'b0;
+      assign rate_r       = 33'h1_0000_0000;
       /* verilator lint_off UNUSEDSIGNAL */
       wire unused_rate = &{1'b0, btn_rise, exec_rapid, dec_motion_set, dec_motion_data,
                            trig_cancel};
@@ -789,6 +794,9 @@ module cnc_core #(
   wire exec_flood, exec_mist;
   wire [3:0] exec_dout;
   wire [7:0] exec_fan_duty;
+  wire exec_laser_dyn, exec_prof_run;
+  wire [7:0] exec_power;
+  wire [46:0] exec_prof_v, exec_prof_vc;
   wire out_done;
   wire [15:0] out_done_n;
 
@@ -856,6 +864,11 @@ module cnc_core #(
       .coolant_mist   (exec_mist),
       .dout           (exec_dout),
       .fan_duty       (exec_fan_duty),
+      .laser_dyn      (exec_laser_dyn),
+      .power          (exec_power),
+      .prof_run       (exec_prof_run),
+      .prof_v         (exec_prof_v),
+      .prof_vc        (exec_prof_vc),
       .out_done       (out_done),
       .out_done_n     (out_done_n)
   );
@@ -864,6 +877,7 @@ module cnc_core #(
   machine_outputs #(
       .CLK_HZ    (CLK_HZ),
       .FAN_PWM_HZ(FAN_PWM_HZ),
+      .LASER_PWM_HZ(LASER_PWM_HZ),
       .OUTPUTS   (OUT_EN)
   ) u_outputs (
       .clk          (clk),
@@ -874,11 +888,18 @@ module cnc_core #(
       .exec_mist    (exec_mist),
       .exec_dout    (exec_dout),
       .exec_fan_duty(exec_fan_duty),
+      .exec_power   (exec_power),
+      .exec_dyn     (exec_laser_dyn),
+      .exec_prof    (exec_prof_run),
+      .exec_v       (exec_prof_v),
+      .exec_vc      (exec_prof_vc),
+      .rate         (rate_r),
       .laser        (laser),
       .coolant_flood(coolant_flood),
       .coolant_mist (coolant_mist),
       .dout         (dout),
-      .fan          (fan)
+      .fan          (fan),
+      .spindle_pwm  (spindle_pwm)
   );
 
   // ---------------------------------------------------------------- status

@@ -87,6 +87,7 @@ illegal "$both" "PROBE_FILTER_CLKS=16777216" PROBE_FILTER_CLKS_not_0_to_2p24m1
 illegal "$both" "FIFO_DEPTH=48" FIFO_DEPTH_not_power_of_2_in_2_to_32768 front_v2
 illegal "$both" "STEP_HIGH=65536" timing_not_0_to_65535 step_config
 illegal "$both" "FAN_PWM_HZ=0" FAN_PWM_HZ_out_of_range machine_outputs
+illegal "$both" "LASER_PWM_HZ=300000" LASER_PWM_HZ_out_of_range machine_outputs
 
 legal "$both" ""
 legal "$both yosys" "PROTO_V2=0"

@@ -43,7 +43,7 @@ declare -A BLK=(
   [feed_rate]="rtl/motion/feed_rate.v|"
   [status_counters]="rtl/protocol/status_counters.v|"
   [estop_latch]="rtl/machine/estop_latch.v|"
-  [machine_outputs]="rtl/machine/machine_outputs.v rtl/machine/pwm.v|"
+  [machine_outputs]="rtl/machine/machine_outputs.v rtl/machine/pwm.v rtl/machine/laser_scale.v rtl/machine/laser_pwm.v|"
   [answer_source]="rtl/protocol/answer_source.v rtl/protocol/response_encoder.v rtl/protocol/crc16_ccitt.v|-set N_AXES 2"
   # the v1-only builds' front end (v1-board's parameters; those builds are timed whole by
   # ice40_timing.sh): only on request

@@ -549,7 +549,8 @@ TEST(CncCoreV2, OutputRulesIdleAndEstop) {
   };
   const std::vector<Bad> bad = {
       {v2::output(0, 0, 0, 0), v2::kBadField, "empty mask"},
-      {v2::output(0, 0x80, 0, 0), v2::kBadField, "mask bit 7"},
+      {v2::output(0, v2::kOutFlood, fpgacnc::spec::kOutLaserDyn, 0), v2::kBadField,
+       "value bit 7 outside the mask"},
       {v2::output(0, v2::kOutFlood, v2::kOutMist, 0), v2::kBadField, "value outside the mask"},
       {v2::output(0, v2::kOutFan, v2::kOutFan, 10), v2::kBadField, "value bit 2"},
       {v2::output(0, v2::kOutFlood, 1, 7), v2::kBadField, "duty without the fan bit"},

@@ -266,16 +266,20 @@ TEST(GrblMotion, JogCancelStopsAndFlushes) {
 }
 
 // The motion code the board chooses its rate by: G0 is code 0 (the rapid rate), a G1 with the
-// laser off code 1 with power 0 (the feed rate, the laser dark), a G1 under M3 code 1 with power.
+// laser off code 1 with power 0 (the feed rate, the laser dark), a G1 under M3 code 1 with power
+// (after the OUTPUT of the M3 mode: constant power).
 TEST(GrblMotion, FeedMovesWithTheLaserOffAreCode1WithPower0) {
   FakeRig rig;
   for (const char* l : {"G21 G90 G0 X1", "G1 X2 F600", "M3 S1000", "G1 X3", "M5"})
     EXPECT_EQ(rig.command(l), "ok") << l;
   ASSERT_TRUE(rig.pump_until([&] { return FakeRig::state(rig.report()) == "Idle"; }, 2'000));
-  ASSERT_EQ(rig.dev_.executed().size(), 3u);
+  ASSERT_EQ(rig.dev_.executed().size(), 4u);
   const auto g0 = v2::decode_line_profile(rig.dev_.executed()[0], 4);
   const auto dark = v2::decode_line_profile(rig.dev_.executed()[1], 4);
-  const auto lit = v2::decode_line_profile(rig.dev_.executed()[2], 4);
+  const auto m3 = v2::decode_output(rig.dev_.executed()[2]);
+  ASSERT_TRUE(m3.laser_dyn.has_value());
+  EXPECT_FALSE(*m3.laser_dyn);
+  const auto lit = v2::decode_line_profile(rig.dev_.executed()[3], 4);
   EXPECT_EQ(g0.code, 0);
   EXPECT_EQ(g0.power, 0);
   EXPECT_EQ(dark.code, 1);

@@ -176,10 +176,13 @@ TEST(Interpreter, DwellSpindleHeater) {
   grbl.dialect = gc::Dialect::kGrbl;
   const auto p = gc::parse_string("M3 S80\nG4 P0.5\nM104 S200\nM109 S210\nM140 S60\nM190 S60\nM5",
                                   "t.gcode", grbl);
-  ASSERT_EQ(p.commands.size(), 5u);
-  EXPECT_DOUBLE_EQ(std::get<gc::Dwell>(p.commands[0]).seconds, 0.5);
-  EXPECT_EQ(std::get<gc::Heater>(p.commands[1]).mcode, 104);
-  EXPECT_DOUBLE_EQ(*std::get<gc::Heater>(p.commands[1]).s, 200.0);
+  ASSERT_EQ(p.commands.size(), 6u);
+  // M3: the laser / spindle mode (constant power), in step with the motion
+  EXPECT_EQ(std::get<gc::Output>(p.commands[0]).kind, gc::Output::Kind::kLaserMode);
+  EXPECT_DOUBLE_EQ(std::get<gc::Output>(p.commands[0]).value, 0.0);
+  EXPECT_DOUBLE_EQ(std::get<gc::Dwell>(p.commands[1]).seconds, 0.5);
+  EXPECT_EQ(std::get<gc::Heater>(p.commands[2]).mcode, 104);
+  EXPECT_DOUBLE_EQ(*std::get<gc::Heater>(p.commands[2]).s, 200.0);
   const auto m = last_move("M3 S80\nG1 X1 F100");
   EXPECT_TRUE(m.spindle_on);
   EXPECT_DOUBLE_EQ(*m.spindle_s, 80.0);

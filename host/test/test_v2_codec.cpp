@@ -614,7 +614,9 @@ TEST(V2Codec, OutputRoundTripAndFieldRules) {
     return v2::Frame{0, static_cast<uint8_t>(v2::Type::Output), std::move(p)};
   };
   EXPECT_EQ(v2::check_host_frame(raw({0, 0, 0}), 4), R::BadField) << "empty mask";
-  EXPECT_EQ(v2::check_host_frame(raw({0x80, 0, 0}), 4), R::BadField) << "mask bit 7";
+  EXPECT_EQ(v2::check_host_frame(raw({0x80, 0x80, 0}), 4), std::nullopt) << "M4 (mask bit 7)";
+  EXPECT_EQ(v2::check_host_frame(raw({0x80, 0, 0}), 4), std::nullopt) << "M3 (mask bit 7)";
+  EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x80, 0}), 4), R::BadField) << "bit 7 not in mask";
   EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x02, 0}), 4), R::BadField) << "value not in mask";
   EXPECT_EQ(v2::check_host_frame(raw({0x04, 0x04, 9}), 4), R::BadField) << "value bit 2";
   EXPECT_EQ(v2::check_host_frame(raw({0x01, 0x01, 9}), 4), R::BadField) << "duty without fan";

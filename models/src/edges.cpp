@@ -19,6 +19,7 @@ std::string signal_name(uint8_t signal) {
   if (signal == kMist) return "coolant_mist";
   if (signal == kFan) return "fan";
   if (signal >= kDout0 && signal < kDout0 + 4) return fmt::format("dout{}", signal - kDout0);
+  if (signal == kSpindlePwm) return "spindle_pwm";
   return fmt::format("signal{}", signal);
 }
 

@@ -26,6 +26,8 @@
 // Probe (docs/machine.md "Homing and probing (hardware)"): probe_n GPIO_0[21], weak pull-up on,
 // active low (PROBE_ACTIVE_LOW 1): a touch plate or a normally-open probe switch to ground reads
 // low at contact; an unconnected pin reads high, released, so PROBE_ENABLE is 1 by default.
+// Laser power / spindle speed (docs/machine.md "Laser and spindle PWM"): spindle_pwm GPIO_0[22],
+// PWM at about LASER_PWM_HZ while `laser` is high (M3 / M4 S), low otherwise.
 // The reset button is synchronized (two flops) and released synchronously.
 // Its cnc_core is the configuration full-2axis of spec/configs.toml (fpgacnc_configs.vh).
 `default_nettype none
@@ -36,6 +38,7 @@ module de1soc_top #(
     parameter CLK_HZ = 50_000_000,
     parameter BAUD   = 115_200,
     parameter FAN_PWM_HZ = 1000,
+    parameter LASER_PWM_HZ = `FPGACNC_DEF_LASER_PWM_HZ,
     parameter LIMIT_FILTER_CLKS = `FPGACNC_DEF_LIMIT_FILTER_CLKS,
     parameter [31:0] LIMIT_ENABLE = `FPGACNC_DEF_LIMIT_ENABLE,
     parameter [31:0] LIMIT_ACTIVE_LOW = `FPGACNC_DEF_LIMIT_ACTIVE_LOW,
@@ -56,6 +59,7 @@ module de1soc_top #(
     output wire       coolant_mist,
     output wire       fan,
     output wire [3:0] dout,
+    output wire       spindle_pwm,
     output wire [9:0] LEDR,
     output wire [6:0] HEX0,
     output wire [6:0] HEX1,
@@ -118,6 +122,7 @@ module de1soc_top #(
       .LEAN_TRIM (`FPGACNC_CFG_FULL_2AXIS_LEAN_TRIM),
       .STEP_CFG  (`FPGACNC_CFG_FULL_2AXIS_STEP_CFG),
       .FAN_PWM_HZ(FAN_PWM_HZ),
+      .LASER_PWM_HZ(LASER_PWM_HZ),
       .LIMIT_FILTER_CLKS(LIMIT_FILTER_CLKS),
       .LIMIT_ENABLE     (LIMIT_ENABLE),
       .LIMIT_ACTIVE_LOW (LIMIT_ACTIVE_LOW),
@@ -137,6 +142,7 @@ module de1soc_top #(
       .coolant_mist (coolant_mist),
       .fan          (fan),
       .dout         (dout),
+      .spindle_pwm  (spindle_pwm),
       .estop       (!estop_n),
       .limit_min   ({lim_y_min, lim_x_min}),
       .limit_max   ({lim_y_max, lim_x_max}),

@@ -95,7 +95,7 @@
 `define FPGACNC_T_ARC 8'h13
 `define FPGACNC_LEN_ARC 8'd63
 `define FPGACNC_LENI_ARC 63
-// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty, see below
+// OUTPUT: machine outputs (coolant, fan, digital outputs, laser power mode M3 / M4) in order with the motion: mask, value, fan duty, see below
 `define FPGACNC_T_OUTPUT 8'h15
 `define FPGACNC_LEN_OUTPUT 8'd3
 `define FPGACNC_LENI_OUTPUT 3
@@ -284,8 +284,8 @@
 `define FPGACNC_OUT_FAN_BIT 2
 // digital output 0; dout[n] is bit 3 + n (M62/M64 on, M63/M65 off)
 `define FPGACNC_OUT_DOUT0_BIT 3
-// reserved: 0 in mask and value
-`define FPGACNC_OUT_RESERVED_BIT 7
+// laser / spindle power mode: value 1 M4 dynamic (power scaled with the actual speed), 0 M3 constant
+`define FPGACNC_OUT_LASER_DYN_BIT 7
 
 // ---- command-FIFO entry: steps[32*N_AXES-1:0], then each field at
 // [32*N_AXES + FPGACNC_E_<field> +: FPGACNC_E_<field>_W]
@@ -377,6 +377,10 @@
 `define FPGACNC_DEF_PROBE_ENABLE 0
 // PROBE_ACTIVE_LOW: the probe is asserted at a low pin
 `define FPGACNC_DEF_PROBE_ACTIVE_LOW 0
+// the laser PWM's duty computation (rtl/machine/laser_scale.v, which checks it): clocks from its sample to its result; spindle_pwm's first rise is this + 1 clocks after the laser's
+`define FPGACNC_DEF_LASER_SCALE_CLKS 43
+// LASER_PWM_HZ: the spindle_pwm pin's frequency (laser power / spindle speed; grbl's 1 kHz): 256 counts of round(CLK_HZ / (256 * LASER_PWM_HZ)) clocks
+`define FPGACNC_DEF_LASER_PWM_HZ 1000
 // LIMIT_ACTIVE_LOW: switches asserted at a low pin, bits as LIMIT_ENABLE (0: high = asserted, a normally-closed switch to ground with a pull-up)
 `define FPGACNC_DEF_LIMIT_ACTIVE_LOW 0
 

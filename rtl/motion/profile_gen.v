@@ -39,8 +39,10 @@ module profile_gen (
 
     input wire tick,
 
-    output wire       last,
-    output wire [1:0] op
+    output wire        last,
+    output wire [ 1:0] op,
+    output wire [46:0] v,       // V of the current tick (V(j) during tick j; V(1) after load)
+    output wire [46:0] vcruise_q  // the loaded V_cruise
 );
 
   localparam [1:0] OP_INC = 2'd0, OP_DEC = 2'd1, OP_CRU = 2'd2, OP_EXIT = 2'd3;
@@ -121,6 +123,8 @@ module profile_gen (
 
   assign last = last_reg;
   assign op   = op_reg;
+  assign v         = v_reg;
+  assign vcruise_q = vc_reg;
 
 endmodule
 

@@ -87,7 +87,9 @@
 // they are applied together. out_done strobes for one clock after the edge of the change with
 // out_done_n = the number of entries applied (segments_done counts each). Levels: coolant_flood,
 // coolant_mist, dout[3:0] (mask bits 0, 1, 3..6, value bits the same), fan_duty (mask bit 2,
-// the duty byte). abort clears the levels and the pending entry (outputs off from the edge after
+// the duty byte), laser_dyn (mask bit 7: M4 dynamic laser power, read by machine_outputs'
+// laser PWM with power, prof_run, prof_v and prof_vc). abort clears the levels but laser_dyn (a
+// mode, not an output: cleared by rst only) and the pending entry (outputs off from the edge after
 // the abort clock; cnc_core also gates them at once) and s_out_tready is low in an abort clock.
 // Build options (cnc_core passes them): PROFILES = 0 leaves profile_gen and the dda_profile per
 // axis out, ARCS = 0 leaves arc_dda and the in-arc DIR checks out; a segment of a kind left out is
@@ -169,6 +171,11 @@ module segment_executor #(
     output wire        coolant_mist,
     output wire [ 3:0] dout,
     output wire [ 7:0] fan_duty,
+    output wire        laser_dyn,      // M4 dynamic laser power (OUTPUT mask bit 7)
+    output wire [ 7:0] power,          // the power byte of the segment last accepted
+    output wire        prof_run,       // the segment last accepted is a PROFILE
+    output wire [46:0] prof_v,         // its V now (profile_gen) and V_cruise
+    output wire [46:0] prof_vc,
     output wire        out_done,       // 1-clock strobe after the edge OUTPUT entries took effect
     output wire [15:0] out_done_n      // with out_done: how many entries
 );
@@ -265,11 +272,15 @@ module segment_executor #(
         .n_dom   (s_axis_prof_n_dom),
         .tick    (prof_tick),
         .last    (prof_last),
-        .op      (prof_op)
+        .op      (prof_op),
+        .v       (prof_v),
+        .vcruise_q(prof_vc)
     );
     end else begin : g_noprof
       assign prof_last = 1'b0;
       assign prof_op   = 2'd0;
+      assign prof_v    = 47'd0;
+      assign prof_vc   = 47'd0;
       // the profile fields are not used without profiles
       wire unused_prof = &{1'b0, s_axis_prof_u1, s_axis_prof_v1, s_axis_prof_op1,
                            s_axis_prof_accel, s_axis_prof_vcruise, s_axis_prof_vexit,
@@ -559,26 +570,26 @@ module segment_executor #(
   // ---------------------------------------------------------------- machine outputs
   generate
     if (OUTPUTS != 0) begin : g_out
-      reg [5:0] lvl_reg;  // {dout[3:0], mist, flood}
+      reg [6:0] lvl_reg;  // {laser_dyn, dout[3:0], mist, flood}
       reg [7:0] duty_reg;
       reg [15:0] pend_n_reg;  // OUTPUT entries handed over and not applied yet (0: none)
-      reg [6:0] pend_mask_reg;  // {dout[3:0], fan, mist, flood}
-      reg [6:0] pend_val_reg;  // the same bits (fan: 0)
+      reg [7:0] pend_mask_reg;  // {laser_dyn, dout[3:0], fan, mist, flood}
+      reg [7:0] pend_val_reg;  // the same bits (fan: 0)
       reg [7:0] pend_duty_reg;
       reg done_reg;
       reg [15:0] done_n_reg;
       wire take_out = s_out_tvalid && !abort && (pend_n_reg != 16'hFFFF);
       // the pending entry with the one handed over in this clock merged in (its bits win)
-      wire [6:0] in_mask = s_out_tdata[22:16];
-      wire [6:0] in_val = s_out_tdata[14:8];
-      wire [6:0] m_mask = take_out ? (pend_mask_reg | in_mask) : pend_mask_reg;
-      wire [6:0] m_val = take_out ? ((pend_val_reg & ~in_mask) | (in_val & in_mask)) : pend_val_reg;
+      wire [7:0] in_mask = s_out_tdata[23:16];
+      wire [7:0] in_val = s_out_tdata[15:8];
+      wire [7:0] m_mask = take_out ? (pend_mask_reg | in_mask) : pend_mask_reg;
+      wire [7:0] m_val = take_out ? ((pend_val_reg & ~in_mask) | (in_val & in_mask)) : pend_val_reg;
       wire [7:0] m_duty = (take_out && in_mask[2]) ? s_out_tdata[7:0] : pend_duty_reg;
       wire [15:0] m_n = pend_n_reg + {15'd0, take_out};
       // the segment in progress (if any) ends on this edge
       wire ends_now = (state_reg == S_IDLE) || (state_reg == S_ZERO) || run_last;
-      wire [5:0] lvl_mask = {m_mask[6:3], m_mask[1:0]};
-      wire [5:0] lvl_val = {m_val[6:3], m_val[1:0]};
+      wire [6:0] lvl_mask = {m_mask[7:3], m_mask[1:0]};
+      wire [6:0] lvl_val = {m_val[7:3], m_val[1:0]};
       always @(posedge clk) begin
         done_reg <= 1'b0;
         if (m_n != 16'd0 && ends_now) begin
@@ -587,8 +598,8 @@ module segment_executor #(
           done_reg      <= 1'b1;
           done_n_reg    <= m_n;
           pend_n_reg    <= 16'd0;
-          pend_mask_reg <= 7'd0;
-          pend_val_reg  <= 7'd0;
+          pend_mask_reg <= 8'd0;
+          pend_val_reg  <= 8'd0;
         end else begin
           pend_n_reg    <= m_n;
           pend_mask_reg <= m_mask;
@@ -596,32 +607,34 @@ module segment_executor #(
         end
         pend_duty_reg <= m_duty;
         if (abort || rst) begin
-          lvl_reg       <= 6'd0;
+          lvl_reg[5:0]  <= 6'd0;  // laser_dyn is a mode, not an output: kept (cleared by rst)
           duty_reg      <= 8'd0;
           pend_n_reg    <= 16'd0;
-          pend_mask_reg <= 7'd0;
-          pend_val_reg  <= 7'd0;
+          pend_mask_reg <= 8'd0;
+          pend_val_reg  <= 8'd0;
           pend_duty_reg <= 8'd0;
           done_reg      <= 1'b0;
         end
-        if (rst) done_n_reg <= 16'd0;
+        if (rst) begin
+          done_n_reg <= 16'd0;
+          lvl_reg[6] <= 1'b0;
+        end
       end
       assign s_out_tready  = !abort && (pend_n_reg != 16'hFFFF);
       assign coolant_flood = lvl_reg[0];
       assign coolant_mist  = lvl_reg[1];
       assign dout          = lvl_reg[5:2];
+      assign laser_dyn     = lvl_reg[6];
       assign fan_duty      = duty_reg;
       assign out_done      = done_reg;
       assign out_done_n    = done_n_reg;
-      /* verilator lint_off UNUSEDSIGNAL */
-      wire unused_out = &{1'b0, s_out_tdata[23], s_out_tdata[15]};
-      /* verilator lint_on UNUSEDSIGNAL */
     end else begin : g_noout
       assign s_out_tready  = 1'b0;
       assign coolant_flood = 1'b0;
       assign coolant_mist  = 1'b0;
       assign dout          = 4'd0;
       assign fan_duty      = 8'd0;
+      assign laser_dyn     = 1'b0;
       assign out_done      = 1'b0;
       assign out_done_n    = 16'd0;
       wire unused_out = &{1'b0, s_out_tvalid, s_out_tdata};
@@ -634,6 +647,8 @@ module segment_executor #(
   assign idle          = (state_reg == S_IDLE) && (&pulse_idle);
   assign running       = (state_reg == S_RUN);
   assign rapid_seg     = (code_reg == 2'd0);
+  assign power         = power_reg;
+  assign prof_run      = (kind_reg == K_PROFILE);
   assign seg_start     = seg_start_reg;
   assign seg_done      = seg_done_reg;
   assign seg_done_v2   = seg_done_v2_reg;

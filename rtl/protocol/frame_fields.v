@@ -15,7 +15,7 @@
 // 3:2) 0..2 and 0 when N_AXES < 3, start and end not at the centre, |coordinates| about the
 // centre < 2^22, DZ != -2^31 (and DZ = 0 when N_AXES < 3), N_RAMP >= 1, 1 <= C_TOTAL < 2^46,
 // V_cruise < 2^63, V_entry and V_exit <= V_cruise, V_exit >= 1, A >= 1 or V_entry >= 1; OUTPUT
-// mask != 0 with bit 7 clear, value bits 7 and 2 clear and only where the mask is set, fan duty 0
+// mask != 0, value bit 2 clear and value bits only where the mask is set, fan duty 0
 // unless mask bit 2; heater frames channel <= 1 (not HEATER_WATCHDOG), HEATER_CONFIG mode <= 4,
 // duty_max and manual <= 0x8000, THERMISTOR_TABLE first <= 64 and first + n <= 65,
 // HEATER_SAFETY Tmin < Tmax.
@@ -137,9 +137,9 @@ module frame_fields #(
                (ctot != 48'd0) && (ctot[47:46] == 2'b00) && !a_vc[63] && (a_ve <= a_vc) &&
                (a_vx <= a_vc) && (a_vx != 64'd0) && (acc != 48'd0 || a_ve != 64'd0);
 
-      // OUTPUT: mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs 0..3; bit 7 reserved),
-      // value (the same bits; 2 and 7 reserved), fan duty (used with mask bit 2)
-      out_ok = (pb(0) != 8'd0) && !pay[`FPGACNC_OUT_RESERVED_BIT] && ((pb(1) & ~pb(0)) == 8'd0) &&
+      // OUTPUT: mask (bit 0 flood, 1 mist, 2 fan, 3..6 digital outputs 0..3, 7 laser M4 dynamic
+      // power), value (the same bits; 2 reserved), fan duty (used with mask bit 2)
+      out_ok = (pb(0) != 8'd0) && ((pb(1) & ~pb(0)) == 8'd0) &&
                !pay[8+`FPGACNC_OUT_FAN_BIT] && (pay[`FPGACNC_OUT_FAN_BIT] || pb(2) == 8'd0);
 
       // heater frames

@@ -75,7 +75,7 @@ SC_MODULE(RtlHarness) {
   sc_core::sc_signal<bool> estop, adc_convst, adc_sck, adc_sdi, adc_sdo;
   sc_core::sc_signal<uint32_t> heater;
   // Machine outputs (OUTPUT frames), compared as pin edges.
-  sc_core::sc_signal<bool> coolant_flood, coolant_mist, fan;
+  sc_core::sc_signal<bool> coolant_flood, coolant_mist, fan, spindle_pwm;
   sc_core::sc_signal<uint32_t> dout;
   // Limit switches: none (the twins have none; cnc_core's default LIMIT_ENABLE is 0 anyway).
   sc_core::sc_signal<uint32_t> limit_min, limit_max, limit_state;
@@ -146,6 +146,7 @@ SC_MODULE(RtlHarness) {
     dut.coolant_flood(coolant_flood);
     dut.coolant_mist(coolant_mist);
     dut.fan(fan);
+    dut.spindle_pwm(spindle_pwm);
     dut.dout(dout);
     SC_THREAD(run);
   }
@@ -192,12 +193,13 @@ SC_MODULE(RtlHarness) {
           if (start_in.read() != level[1]) start_in.write(level[1]);
         }
         edge();
-        drv.after_edge(c, RtlDriver::Outputs{step.read(), dir.read(), laser.read(), tx.read(),
-                                             busy.read(), seg_start.read(), seg_done.read(),
-                                             static_cast<uint16_t>(packet_count.read()),
-                                             (coolant_flood.read() ? 1u : 0u) |
-                                                 (coolant_mist.read() ? 2u : 0u) |
-                                                 (fan.read() ? 4u : 0u) | (dout.read() << 3)});
+        drv.after_edge(
+            c, RtlDriver::Outputs{step.read(), dir.read(), laser.read(), tx.read(), busy.read(),
+                                  seg_start.read(), seg_done.read(),
+                                  static_cast<uint16_t>(packet_count.read()),
+                                  (coolant_flood.read() ? 1u : 0u) |
+                                      (coolant_mist.read() ? 2u : 0u) | (fan.read() ? 4u : 0u) |
+                                      (dout.read() << 3) | (spindle_pwm.read() ? 128u : 0u)});
         if ((c & 1023) == 0) drv.check_stall();
       }
       std::array<int64_t, kAxes> pos{};
@@ -302,8 +304,9 @@ bool g_v2_arcs = true;             // ARC frames in the random v2 sessions
 uint64_t g_v2_arc_frames = 0, g_v2_bad_arcs = 0;
 // OUTPUT frames in the random v2 sessions: drawn from a generator of their own, so the other
 // frames of a session are the same with or without them. After about one frame in five an OUTPUT
-// with a random mask, levels and fan duty (0, 1..254 or 255); the session ends with one turning
-// everything off (M9 M107 M65 P0..3), so the fan's PWM stops and the job can end.
+// with a random mask, levels (bit 7: the laser's M3 / M4 mode, so the spindle_pwm pin's duty
+// follows the rate and the profiles at times) and fan duty (0, 1..254 or 255); the session ends
+// with one turning everything off (M9 M107 M65 P0..3), so the fan's PWM stops and the job can end.
 bool g_v2_outputs = true;
 uint64_t g_v2_output_frames = 0;
 
@@ -524,8 +527,8 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
     }
     sc.items.push_back(std::move(it));
     if (g_v2_outputs && !cancels && pick(go, 0, 4) == 0) {
-      auto mask = static_cast<uint8_t>(pick(go, 1, 0x7F));
-      const auto value = static_cast<uint8_t>(pick(go, 0, 0x7F) & mask & ~0x04u);
+      auto mask = static_cast<uint8_t>(pick(go, 1, 0xFF));
+      const auto value = static_cast<uint8_t>(pick(go, 0, 0xFF) & mask & ~0x04u);
       const uint32_t dk = pick(go, 0, 3);
       const auto duty = static_cast<uint8_t>((mask & 0x04) == 0 ? 0
                                              : dk == 0          ? 0

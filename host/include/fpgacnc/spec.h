@@ -89,7 +89,7 @@ inline constexpr size_t kLenLineProfileHeader = 28;
 // ARC: circular / helical arc in the XY, ZX or YZ plane, see below
 inline constexpr uint8_t kTypeArc = 0x13;
 inline constexpr size_t kLenArc = 63;
-// OUTPUT: machine outputs (coolant, fan, digital outputs) in order with the motion: mask, value, fan duty, see below
+// OUTPUT: machine outputs (coolant, fan, digital outputs, laser power mode M3 / M4) in order with the motion: mask, value, fan duty, see below
 inline constexpr uint8_t kTypeOutput = 0x15;
 inline constexpr size_t kLenOutput = 3;
 // HEATER_CONFIG: channel, mode, gains, limits (see "Heater frames")
@@ -318,8 +318,8 @@ inline constexpr uint8_t kOutMist = 0x02;
 inline constexpr uint8_t kOutFan = 0x04;
 // OUTPUT bit 3: digital output 0; dout[n] is bit 3 + n (M62/M64 on, M63/M65 off)
 inline constexpr uint8_t kOutDout0 = 0x08;
-// OUTPUT bit 7: reserved: 0 in mask and value
-inline constexpr uint8_t kOutReserved = 0x80;
+// OUTPUT bit 7: laser / spindle power mode: value 1 M4 dynamic (power scaled with the actual speed), 0 M3 constant
+inline constexpr uint8_t kOutLaserDyn = 0x80;
 
 // ---- command-FIFO entry: steps[32*N_AXES-1:0], then each field at
 // [32*N_AXES + lsb +: width]
@@ -407,6 +407,10 @@ inline constexpr uint32_t kDefaultProbeFilterClks = 500;
 inline constexpr uint32_t kDefaultProbeEnable = 0;
 // PROBE_ACTIVE_LOW: the probe is asserted at a low pin
 inline constexpr uint32_t kDefaultProbeActiveLow = 0;
+// the laser PWM's duty computation (rtl/machine/laser_scale.v, which checks it): clocks from its sample to its result; spindle_pwm's first rise is this + 1 clocks after the laser's
+inline constexpr uint32_t kDefaultLaserScaleClks = 43;
+// LASER_PWM_HZ: the spindle_pwm pin's frequency (laser power / spindle speed; grbl's 1 kHz): 256 counts of round(CLK_HZ / (256 * LASER_PWM_HZ)) clocks
+inline constexpr uint32_t kDefaultLaserPwmHz = 1000;
 // LIMIT_ACTIVE_LOW: switches asserted at a low pin, bits as LIMIT_ENABLE (0: high = asserted, a normally-closed switch to ground with a pull-up)
 inline constexpr uint32_t kDefaultLimitActiveLow = 0;
 

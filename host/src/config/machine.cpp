@@ -186,6 +186,8 @@ class Reader {
         c.retransmit_timeout_s = positive(v, k);
       } else if (k == "laser_s_max") {
         c.laser_s_max = positive(v, k);
+      } else if (k == "laser_s_min") {
+        c.laser_s_min = number(v, k);
       } else if (k == "feed_override") {
         c.feed_override_pct = positive(v, k);
       } else if (k == "hold_decel_mm_s2") {
@@ -323,6 +325,8 @@ void validate(const MachineConfig& c, const std::string& name) {
     throw Error(name, 0, 0, "protocol: expected \"auto\", \"v1\" or \"v2\"");
   }
   if (!(c.laser_s_max > 0.0)) throw Error(name, 0, 0, "laser_s_max must be > 0");
+  if (!(c.laser_s_min >= 0.0 && c.laser_s_min < c.laser_s_max))
+    throw Error(name, 0, 0, "laser_s_min must be >= 0 and below laser_s_max");
   if (!(c.retransmit_timeout_s > 0.0)) throw Error(name, 0, 0, "retransmit_timeout_s must be > 0");
   if (c.clk_hz == 0 || c.baud == 0) throw Error(name, 0, 0, "clk_hz and baud must be > 0");
   if (!(c.feed_override_pct > 0.0)) throw Error(name, 0, 0, "feed_override must be > 0");

@@ -264,6 +264,7 @@ struct Interpreter::Impl {
   double feed_factor = 1.0;  // M220
   double flow = 1.0;         // M221
   bool spindle_on = false;
+  std::optional<bool> laser_m4;  // the last M3 / M4 was M4 (unset before the first one)
   std::optional<double> spindle_s;
   int tool = 0;
   int next_tool = 0;
@@ -878,6 +879,13 @@ bool Interpreter::Impl::execute(const Block& b, std::vector<Command>& out) {
     if (w.mcodes[k] >= 3 && w.mcodes[k] <= 5) {
       spindle_on = w.mcodes[k] != 5;
       did = true;
+      // M3 constant power, M4 dynamic (scaled with the speed): an output in step with motion
+      // (the first one sets it whatever the machine holds from before)
+      if (w.mcodes[k] != 5 && (!laser_m4 || (w.mcodes[k] == 4) != *laser_m4)) {
+        laser_m4 = w.mcodes[k] == 4;
+        out.emplace_back(Output{Output::Kind::kLaserMode, 0, *laser_m4 ? 1.0 : 0.0, false, b.line});
+        ++stats.outputs;
+      }
     }
   // 7b. Saving and restoring the modal state (LinuxCNC's M70-M73), after F, S and the spindle and
   // before the modes of the line's G codes (units excepted: they are read first here).

@@ -49,7 +49,7 @@ Settings settings_from_config(const config::MachineConfig& cfg) {
   v[26] = cfg.homing.debounce_ms;
   v[27] = cfg.homing.pulloff_mm;
   v[30] = cfg.laser_s_max;
-  v[31] = 0;
+  v[31] = cfg.laser_s_min;
   v[32] = 1;  // laser mode: S changes never stop the motion (LINE_PROFILE carries the power)
   for (int a = 0; a < 3; ++a) {
     v[100 + a] = cfg.steps_per_mm[static_cast<size_t>(a)];
@@ -71,6 +71,8 @@ config::MachineConfig apply_settings(const config::MachineConfig& base, const Se
   cfg.junction_deviation_mm = get(11);
   cfg.arc_tolerance_mm = get(12);
   if (get(30) > 0) cfg.laser_s_max = get(30);
+  // $31 below $30 (else the map from S to the power byte would be empty: the last good one stays)
+  if (get(31) >= 0 && get(31) < cfg.laser_s_max) cfg.laser_s_min = get(31);
   double rapid = 0.0;
   for (int a = 0; a < 3; ++a) {
     const auto i = static_cast<size_t>(a);

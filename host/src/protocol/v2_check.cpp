@@ -85,7 +85,7 @@ std::optional<NakReason> check_host_frame(const Frame& f, size_t n_axes) {
     case Type::Output: {
       if (n != kOutputPayload) return NakReason::BadLength;
       const uint8_t mask = f.payload[0], value = f.payload[1], duty = f.payload[2];
-      if (mask == 0 || (mask & 0x80) != 0 || (value & ~mask) != 0 || (value & kOutFan) != 0 ||
+      if (mask == 0 || (value & ~mask) != 0 || (value & kOutFan) != 0 ||
           ((mask & kOutFan) == 0 && duty != 0))
         return NakReason::BadField;
       return std::nullopt;

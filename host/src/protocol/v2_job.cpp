@@ -356,13 +356,18 @@ void add_output(OutputSet& set, const gcode::Output& o) {
       if (o.index >= 0 && static_cast<size_t>(o.index) < kDigitalOutputs)
         set.dout[static_cast<size_t>(o.index)] = o.value != 0.0;
       break;
+    case gcode::Output::Kind::kLaserMode:
+      set.laser_dyn = o.value != 0.0;
+      break;
   }
 }
 
 uint8_t laser_power(const plan::Segment& s, const config::MachineConfig& cfg) {
   if (s.code == 0) return 0;
   if (s.spindle_s < 0.0) return 255;
-  const double scaled = s.spindle_s / cfg.laser_s_max * 255.0;
+  if (s.spindle_s <= 0.0) return 0;
+  const double scaled =
+      (s.spindle_s - cfg.laser_s_min) / (cfg.laser_s_max - cfg.laser_s_min) * 255.0;
   long long p = std::llround(std::clamp(scaled, 0.0, 255.0));
   if (p == 0 && s.spindle_s > 0.0) p = 1;
   return static_cast<uint8_t>(p);

@@ -65,7 +65,7 @@ Frame dwell(uint8_t seq, uint32_t t) {
 
 // ---- OUTPUT (TYPE 0x15) ----
 bool OutputSet::empty() const {
-  if (flood || mist || fan) return false;
+  if (flood || mist || fan || laser_dyn) return false;
   for (const auto& d : dout)
     if (d) return false;
   return true;
@@ -82,6 +82,7 @@ Frame output_frame(uint8_t seq, const OutputSet& o) {
   put(o.flood, kOutFlood);
   put(o.mist, kOutMist);
   for (size_t n = 0; n < kDigitalOutputs; ++n) put(o.dout[n], static_cast<uint8_t>(kOutDout0 << n));
+  put(o.laser_dyn, kOutLaserDyn);
   if (o.fan) {
     mask |= kOutFan;
     duty = *o.fan;
@@ -297,6 +298,7 @@ OutputSet decode_output(const Frame& f) {
   o.mist = get(kOutMist);
   for (size_t n = 0; n < kDigitalOutputs; ++n)
     o.dout[n] = get(static_cast<uint8_t>(kOutDout0 << n));
+  o.laser_dyn = get(kOutLaserDyn);
   if ((mask & kOutFan) != 0) o.fan = f.payload[2];
   return o;
 }

@@ -64,6 +64,9 @@ struct MachineConfig {
   double ack_timeout_s = 10.0;        // v1: per move; v2: no answer at all from the device
   double retransmit_timeout_s = 0.3;  // v2: go-back-N when nothing is acknowledged this long
   double laser_s_max = 1000.0;        // v2: S word giving laser power 255 (GRBL's $30 default)
+  // v2: S word at the bottom of the power map (grbl's $31): S in (0, min] gives power 1, S in
+  // [min, max] power (S - min) / (max - min) * 255 rounded (at least 1), the spindle_pwm duty.
+  double laser_s_min = 0.0;
   double feed_override_pct = 100.0;
   // true: G1/G2/G3 cut only while M3/M4 is active with S>0 (or no S given);
   // false: original v1 semantics, every G1/G2/G3 is laser-on.

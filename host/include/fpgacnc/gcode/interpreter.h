@@ -81,7 +81,9 @@ struct Pause {
 
 // Machine outputs in step with motion (FIFO entries between segments on protocol v2).
 struct Output {
-  enum class Kind : uint8_t { kFlood, kMist, kFan, kDigital };
+  // kLaserMode: the spindle / laser power mode, value 1 for M4 (dynamic power: scaled with the
+  // actual speed), 0 for M3 (constant); emitted at the first M3 / M4 and where one changes it.
+  enum class Kind : uint8_t { kFlood, kMist, kFan, kDigital, kLaserMode };
   Kind kind = Kind::kFlood;
   int index = 0;           // kDigital: output number (M62-M65 P); kFan: fan number (0)
   double value = 0.0;      // 0/1 for switches; fan duty 0..1

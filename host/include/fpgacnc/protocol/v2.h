@@ -407,17 +407,20 @@ Arc decode_arc(const Frame& f);
 // (no gap in the motion); answered ACK, later DONE. Each field left empty keeps its output as it
 // is, so one frame can set several: M8 flood = true; M7 mist = true; M9 flood = mist = false;
 // M106 S<s> fan = s (0..255, 255 = always on); M107 fan = 0; M62/M64 P<n> dout[n] = true,
-// M63/M65 P<n> dout[n] = false (n = 0..3).
+// M63/M65 P<n> dout[n] = false (n = 0..3); M4 laser_dyn = true (the laser / spindle power scaled
+// with the actual speed, docs/machine.md "Laser and spindle PWM"), M3 laser_dyn = false.
 constexpr size_t kOutputPayload = spec::kLenOutput;
 constexpr size_t kDigitalOutputs = spec::kDigitalOutputs;
 constexpr uint8_t kOutFlood = spec::kOutFlood;  // mask / value bits
 constexpr uint8_t kOutMist = spec::kOutMist;
-constexpr uint8_t kOutFan = spec::kOutFan;      // mask only: the duty is byte 2
-constexpr uint8_t kOutDout0 = spec::kOutDout0;  // dout[n]: kOutDout0 << n
+constexpr uint8_t kOutFan = spec::kOutFan;            // mask only: the duty is byte 2
+constexpr uint8_t kOutDout0 = spec::kOutDout0;        // dout[n]: kOutDout0 << n
+constexpr uint8_t kOutLaserDyn = spec::kOutLaserDyn;  // M4 dynamic laser power (value 1) / M3
 struct OutputSet {
   std::optional<bool> flood, mist;
   std::optional<uint8_t> fan;  // PWM duty, 255 = always on
   std::array<std::optional<bool>, kDigitalOutputs> dout{};
+  std::optional<bool> laser_dyn;  // true: M4 dynamic power, false: M3 constant
   bool empty() const;
   bool operator==(const OutputSet&) const = default;
 };

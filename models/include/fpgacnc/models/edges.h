@@ -16,7 +16,7 @@ inline constexpr int kBoardAxes = 4;  // cnc_core N_AXES (X, Y, Z, E); v1 drives
 
 // Signal numbers: STEP[n] = n, DIR[n] = 4 + n, LASER = 8, TX = 9, RX = 10, the machine outputs
 // (OUTPUT frames; recorded by the co-simulation) COOLANT_FLOOD = 11, COOLANT_MIST = 12, FAN = 13,
-// DOUT[n] = 14 + n.
+// DOUT[n] = 14 + n, and the laser / spindle PWM SPINDLE_PWM = 18.
 enum Signal : uint8_t {
   kStep0 = 0,
   kDir0 = 4,
@@ -27,7 +27,8 @@ enum Signal : uint8_t {
   kMist = 12,
   kFan = 13,
   kDout0 = 14,
-  kSignalCount = 18,
+  kSpindlePwm = 18,
+  kSignalCount = 19,
 };
 inline constexpr uint8_t step_signal(int axis) {
   return static_cast<uint8_t>(kStep0 + axis);
@@ -35,7 +36,8 @@ inline constexpr uint8_t step_signal(int axis) {
 inline constexpr uint8_t dir_signal(int axis) {
   return static_cast<uint8_t>(kDir0 + axis);
 }
-// "step_x", "dir_y", "laser", "tx", "rx", "coolant_flood", "coolant_mist", "fan", "dout0".
+// "step_x", "dir_y", "laser", "tx", "rx", "coolant_flood", "coolant_mist", "fan", "dout0",
+// "spindle_pwm".
 std::string signal_name(uint8_t signal);
 
 // 16 bytes: (cycle, signal, new value). `cycle` counts rising clock edges since reset release.

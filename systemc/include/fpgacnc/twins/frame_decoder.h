@@ -295,12 +295,11 @@ class FrameDecoderTwin : public sc_core::sc_module {
            be32(&payload_[5]) != 0;
   }
 
-  // OUTPUT field rules (docs/protocol.md "OUTPUT"): mask != 0, mask bit 7, value bits 2 and 7
-  // clear, value only where the mask is set, duty 0 unless mask bit 2.
+  // OUTPUT field rules (docs/protocol.md "OUTPUT"): mask != 0, value bit 2 clear, value only
+  // where the mask is set, duty 0 unless mask bit 2.
   bool output_fields_ok() const {
     const uint8_t m = payload_[0], v = payload_[1], d = payload_[2];
-    return m != 0 && (m & 0x80) == 0 && (v & ~m) == 0 && (v & 0x04) == 0 &&
-           ((m & 0x04) != 0 || d == 0);
+    return m != 0 && (v & ~m) == 0 && (v & 0x04) == 0 && ((m & 0x04) != 0 || d == 0);
   }
 
   // Soft limits: an axis's travel in steps and the queued end position (docs/machine.md).

@@ -65,7 +65,7 @@ class RtlDriver {
     uint32_t step, dir;
     bool laser, tx, busy, seg_start, seg_done;
     uint16_t packet_count;
-    // machine outputs: bit 0 coolant_flood, 1 coolant_mist, 2 fan, 3..6 dout[0..3]
+    // machine outputs: bit 0 coolant_flood, 1 coolant_mist, 2 fan, 3..6 dout[0..3], 7 spindle_pwm
     uint32_t outputs = 0;
   };
   // Outputs seen after edge c.
@@ -81,11 +81,11 @@ class RtlDriver {
       prev_sig_ = sig;
     }
     if (outputs_ && o.outputs != prev_out_) {
-      static constexpr uint8_t kSig[7] = {models::kFlood,    models::kMist,      models::kFan,
-                                          models::kDout0,    models::kDout0 + 1, models::kDout0 + 2,
-                                          models::kDout0 + 3};
+      static constexpr uint8_t kSig[8] = {
+          models::kFlood,     models::kMist,      models::kFan,       models::kDout0,
+          models::kDout0 + 1, models::kDout0 + 2, models::kDout0 + 3, models::kSpindlePwm};
       const uint32_t ch = o.outputs ^ prev_out_;
-      for (int b = 0; b < 7; ++b)
+      for (int b = 0; b < 8; ++b)
         if (ch >> b & 1u)
           r_.edges.push_back(models::Edge{static_cast<uint64_t>(c), kSig[b],
                                           static_cast<uint8_t>(o.outputs >> b & 1u)});

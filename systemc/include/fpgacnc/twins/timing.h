@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <numeric>
+#include <utility>
 #include <vector>
 
 #include "fpgacnc/models/ramp.h"
@@ -55,6 +56,13 @@ struct CoreParams {
   uint32_t button_filter_clks = spec::kDefaultLimitFilterClks;
   uint32_t fan_div() const {
     return static_cast<uint32_t>((clk_hz + 128 * fan_pwm_hz) / (256 * fan_pwm_hz));
+  }
+  // Laser / spindle PWM (cnc_core LASER_PWM_HZ, rtl/machine/laser_pwm.v): 256 counts of
+  // laser_div() clocks, periods started laser_lat + 1 clocks after the laser pin rises.
+  uint32_t laser_pwm_hz = spec::kDefaultLaserPwmHz;
+  uint32_t laser_lat = spec::kDefaultLaserScaleClks;
+  uint32_t laser_div() const {
+    return static_cast<uint32_t>((clk_hz + 128 * laser_pwm_hz) / (256 * laser_pwm_hz));
   }
 
   // The executor's minimum period: max over axes of STEP high + STEP low, a setting of 0 counting
@@ -329,7 +337,24 @@ struct ProfileRun {
   uint64_t ticks_total = 0;  // J
   bool cruised = false;  // V reached V_cruise (false: a triangle, or a ramp that never gets there)
   std::array<std::vector<uint64_t>, kAxes> ticks;
+  // (j, V(j)) at j = 0 and around every event; V is linear in j between two of them
+  // (profile_v_at).
+  std::vector<std::pair<uint64_t, uint64_t>> v_points;
 };
+// V(j) from ProfileRun::v_points, 0 <= j <= J (the last point's V beyond it).
+inline uint64_t profile_v_at(const std::vector<std::pair<uint64_t, uint64_t>>& pts, uint64_t j) {
+  auto it = std::upper_bound(pts.begin(), pts.end(), j,
+                             [](uint64_t x, const auto& p) { return x < p.first; });
+  if (it == pts.begin()) return pts.empty() ? 0 : pts.front().second;
+  const auto& a = *(it - 1);
+  if (it == pts.end() || a.first == j) return a.second;
+  const auto& b = *it;
+  const __int128 dv = static_cast<__int128>(b.second) - static_cast<__int128>(a.second);
+  return static_cast<uint64_t>(static_cast<__int128>(a.second) +
+                               dv * static_cast<__int128>(j - a.first) /
+                                   static_cast<__int128>(b.first - a.first));
+}
+
 inline ProfileRun run_profile(const ProfileParams& p,
                               const std::array<uint32_t, kAxes>& abs_steps) {
   ProfileRun r;
@@ -359,6 +384,7 @@ inline ProfileRun run_profile(const ProfileParams& p,
   uint64_t v = p.v_entry;
   r.cruised = v == p.v_cruise;
   uint64_t j = 0;
+  r.v_points.emplace_back(0, v);
   while (u < m) {
     // The ramp from here: V changes by `step` per clock (rising or falling) for at most `limit`
     // clocks before profile_update saturates it; no ramp (limit 0) when the next clock saturates.
@@ -392,11 +418,13 @@ inline ProfileRun run_profile(const ProfileParams& p,
           r.cruised = true;
         v = v_end;
         j += i;
+        r.v_points.emplace_back(j, v);
       }
     }
     ++j;
     u += v;
     profile_update(p, u >= d, v);
+    r.v_points.emplace_back(j, v);
     r.cruised = r.cruised || v == p.v_cruise;
     for (int a = 0; a < kAxes; ++a) {
       if (k[a] < abs_steps[a] && u >= next[a]) {
