@@ -14,8 +14,6 @@ namespace v2 = protocol::v2;
 using std::chrono::milliseconds;
 
 namespace {
-// A TRIGGER_QUERY whose answer has not come within this (link time) is sent again.
-constexpr milliseconds kTriggerResend{300};
 constexpr double kSeekScale = 1.5;    // seek: 1.5 x max travel (grbl's HOMING_AXIS_SEARCH_SCALAR)
 constexpr double kLocateScale = 2.0;  // locate: 2 x pull-off
 }  // namespace
@@ -114,7 +112,7 @@ void HomingCycle::move(uint32_t axes, bool toward, const std::array<double, 3>& 
 
 void HomingCycle::arm(uint16_t switches) {
   s().push({v2::trigger(0, v2::TriggerMode::Home, switches, ident_.n_axes)});
-  trigger_item_ = s().pushed() - 1;
+  watch_.armed(s());
 }
 
 void HomingCycle::ask_status() {
@@ -125,18 +123,6 @@ void HomingCycle::ask_status() {
 
 bool HomingCycle::status_fresh() const {
   return session_->status_answers() >= status_target_;
-}
-
-void HomingCycle::ask_trigger() {
-  const auto now = link_.now();
-  // Only once the TRIGGER is acknowledged: an answer to a query ahead of it would show the
-  // previous trigger's state.
-  if (s().acked() <= trigger_item_) return;
-  if (trigger_asked_ && now - trigger_asked_at_ < kTriggerResend) return;
-  trigger_target_ = s().trigger_answers() + 1;
-  s().request_trigger();
-  trigger_asked_ = true;
-  trigger_asked_at_ = now;
 }
 
 void HomingCycle::fail(int alarm, std::string msg) {
@@ -163,7 +149,6 @@ void HomingCycle::enter(Phase p) {
       for (size_t a = 0; a < 3; ++a) d[a] = kSeekScale * homing_max_travel(cfg_, a);
       arm(g.switches);
       move(g.axes, true, d, cfg_.homing.seek_feed_mm_min);
-      trigger_asked_ = false;
       break;
     }
     case Phase::kPull1:
@@ -174,7 +159,6 @@ void HomingCycle::enter(Phase p) {
       const double l = kLocateScale * po;
       arm(g.switches);
       move(g.axes, true, {l, l, l}, cfg_.homing.locate_feed_mm_min);
-      trigger_asked_ = false;
       break;
     }
     default:
@@ -197,27 +181,17 @@ bool HomingCycle::step(milliseconds wait) {
     // Watch the trigger while the move runs; a move that completed without DONE gets one more
     // query sent after its completion (the switch may have fired on its last step).
     if (wait_ == Wait::kMoveDone) {
-      if (s().trigger_answers() >= trigger_target_ && trigger_asked_) {
-        trigger_asked_ = false;
-        if (s().last_trigger().done()) {
-          wait_ = Wait::kNone;
-        }
-      }
+      if (watch_.answered(s()) && s().last_trigger().done()) wait_ = Wait::kNone;
       if (wait_ == Wait::kMoveDone) {
-        if (s().complete() && !trigger_asked_) {
-          wait_ = Wait::kTriggerFinal;
-          ask_trigger();
-        } else {
-          ask_trigger();
-        }
+        if (s().complete() && !watch_.asked()) wait_ = Wait::kTriggerFinal;
+        watch_.ask(s(), link_.now());
         return false;
       }
     } else if (wait_ == Wait::kTriggerFinal) {
-      if (s().trigger_answers() < trigger_target_) {
-        ask_trigger();
+      if (!watch_.answered(s())) {
+        watch_.ask(s(), link_.now());
         return false;
       }
-      trigger_asked_ = false;
       if (!s().last_trigger().done()) {
         const uint16_t missing = static_cast<uint16_t>(g.switches & ~s().last_trigger().fired);
         const std::string where = phase_ == Phase::kSeek

@@ -12,11 +12,6 @@ namespace fpgacnc::link {
 namespace v2 = protocol::v2;
 using std::chrono::milliseconds;
 
-namespace {
-// A TRIGGER_QUERY whose answer has not come within this (link time) is sent again.
-constexpr milliseconds kProbeQueryResend{300};
-}  // namespace
-
 ProbeCycle::ProbeCycle(Link& link, const config::MachineConfig& cfg, const v2::Ident& ident,
                        ProbeRequest request, std::function<V2Session&()> open_session)
     : link_(link), cfg_(cfg), ident_(ident), req_(request), open_session_(std::move(open_session)) {
@@ -32,18 +27,6 @@ std::vector<int32_t> ProbeCycle::position() const {
 void ProbeCycle::ask_status() {
   s().request_status(true);
   status_target_ = s().status_answers() + s().status_unanswered();
-}
-
-void ProbeCycle::ask_trigger() {
-  const auto now = link_.now();
-  // Only once the TRIGGER is acknowledged: an answer to a query ahead of it would show the
-  // previous trigger's state.
-  if (s().acked() <= trigger_item_) return;
-  if (trigger_asked_ && now - trigger_asked_at_ < kProbeQueryResend) return;
-  trigger_target_ = s().trigger_answers() + 1;
-  s().request_trigger();
-  trigger_asked_ = true;
-  trigger_asked_at_ = now;
 }
 
 void ProbeCycle::start() {
@@ -86,7 +69,7 @@ void ProbeCycle::start() {
   m.spindle_on = false;
   s().push({v2::trigger(0, req_.toward ? v2::TriggerMode::Probe : v2::TriggerMode::ProbeRelease, 0,
                         ident_.n_axes)});
-  trigger_item_ = s().pushed() - 1;
+  watch_.armed(s());
   plan::Planner planner(cfg_, plan::PlanOptions{}, "probe");
   plan::Lookahead la(plan::motion_limits(cfg_));
   planner.add(m);
@@ -95,7 +78,6 @@ void ProbeCycle::start() {
     if (const auto* seg = std::get_if<plan::Segment>(&item)) la.push(*seg, idx++);
   la.stop();
   for (const auto& p : la.take()) s().push({v2::profile_frame(p, cfg_), true});
-  trigger_asked_ = false;
   phase_ = Phase::kMove;
 }
 
@@ -110,8 +92,7 @@ bool ProbeCycle::step(milliseconds wait) {
     // TRIGGER_QUERY only, no STATUS polling while the move runs: the device's answer encoder
     // sends a pending STATUS before a pending TRIGGER_REPORT, and STATUS_QUERY after STATUS_QUERY
     // can keep the report from ever going out (seen with a front end's polls).
-    const bool answered = trigger_asked_ && s().trigger_answers() >= trigger_target_;
-    if (answered) trigger_asked_ = false;
+    const bool answered = watch_.answered(s());
     if (answered && s().last_trigger().done()) {
       // The board latched the edge and cancels the move along its ramp (no DONE for it): the
       // frames not sent yet are given up, those on the line must be acknowledged before the
@@ -132,8 +113,8 @@ bool ProbeCycle::step(milliseconds wait) {
     }
     // The move complete without DONE: one more query after it (the edge may have come on its
     // last step).
-    if (phase_ == Phase::kMove && s().complete() && !trigger_asked_) phase_ = Phase::kFinal;
-    ask_trigger();
+    if (phase_ == Phase::kMove && s().complete() && !watch_.asked()) phase_ = Phase::kFinal;
+    watch_.ask(s(), link_.now());
     return false;
   }
   if (phase_ == Phase::kRest) {

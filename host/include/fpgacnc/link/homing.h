@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/link/trigger_watch.h"
 #include "fpgacnc/link/v2_session.h"
 #include "fpgacnc/protocol/v2.h"
 
@@ -95,7 +96,6 @@ class HomingCycle {
   void arm(uint16_t switches);
   void ask_status();
   bool status_fresh() const;
-  void ask_trigger();
   void enter(Phase p);
   void fail(int alarm, std::string msg);
   uint32_t axes_of(uint16_t switches) const;
@@ -112,10 +112,7 @@ class HomingCycle {
   Phase phase_ = Phase::kOpen;
   Wait wait_ = Wait::kNone;
   size_t status_target_ = 0;
-  size_t trigger_target_ = 0;
-  bool trigger_asked_ = false;
-  size_t trigger_item_ = 0;  // the session item of the TRIGGER HOME being watched
-  Link::Time trigger_asked_at_{};
+  TriggerWatch watch_;    // the TRIGGER HOME of the seek or locate
   uint16_t pressed_ = 0;  // pre-pull: the switches pressed at the start of the group
   std::vector<protocol::v2::TriggerReport> locate_;  // per group: the locate's report
   HomingResult result_;

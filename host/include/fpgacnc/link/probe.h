@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "fpgacnc/config/machine.h"
+#include "fpgacnc/link/trigger_watch.h"
 #include "fpgacnc/link/v2_session.h"
 #include "fpgacnc/protocol/v2.h"
 
@@ -68,7 +69,6 @@ class ProbeCycle {
   void start();
   void ask_status();
   bool status_fresh() const { return session_->status_answers() >= status_target_; }
-  void ask_trigger();
   std::vector<int32_t> position() const;
 
   Link& link_;
@@ -79,10 +79,7 @@ class ProbeCycle {
   V2Session* session_ = nullptr;
   Phase phase_ = Phase::kOpen;
   size_t status_target_ = 0;
-  size_t trigger_target_ = 0;
-  bool trigger_asked_ = false;
-  size_t trigger_item_ = 0;  // the session item of the TRIGGER PROBE
-  Link::Time trigger_asked_at_{};
+  TriggerWatch watch_;         // the TRIGGER PROBE
   bool status_asked_ = false;  // kRest / kDisarm: the fresh STATUS asked
   ProbeResult result_;
 };
