@@ -5,8 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "fpgacnc/plan/lookahead.h"
-#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/link/cycle_move.h"
 #include "fpgacnc/protocol/v2_job.h"
 
 namespace fpgacnc::link {
@@ -99,14 +98,7 @@ void HomingCycle::move(uint32_t axes, bool toward, const std::array<double, 3>& 
   // Every axis at the feed (grbl scales the rate by sqrt(axes) for the same reason).
   m.feed_mm_min = feed * std::sqrt(static_cast<double>(std::max<size_t>(n, 1)));
   m.spindle_on = false;
-  plan::Planner planner(cfg_, plan::PlanOptions{}, "homing");
-  plan::Lookahead la(plan::motion_limits(cfg_));
-  planner.add(m);
-  size_t idx = 0;
-  for (auto& item : planner.take_items())
-    if (const auto* seg = std::get_if<plan::Segment>(&item)) la.push(*seg, idx++);
-  la.stop();
-  for (const auto& p : la.take()) s().push({v2::profile_frame(p, cfg_), true});
+  push_cycle_move(s(), cfg_, m, "homing");
   wait_ = Wait::kMoveDone;
 }
 

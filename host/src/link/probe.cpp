@@ -4,8 +4,7 @@
 
 #include <cmath>
 
-#include "fpgacnc/plan/lookahead.h"
-#include "fpgacnc/plan/planner.h"
+#include "fpgacnc/link/cycle_move.h"
 #include "fpgacnc/protocol/v2_job.h"
 
 namespace fpgacnc::link {
@@ -70,14 +69,7 @@ void ProbeCycle::start() {
   s().push({v2::trigger(0, req_.toward ? v2::TriggerMode::Probe : v2::TriggerMode::ProbeRelease, 0,
                         ident_.n_axes)});
   watch_.armed(s());
-  plan::Planner planner(cfg_, plan::PlanOptions{}, "probe");
-  plan::Lookahead la(plan::motion_limits(cfg_));
-  planner.add(m);
-  size_t idx = 0;
-  for (auto& item : planner.take_items())
-    if (const auto* seg = std::get_if<plan::Segment>(&item)) la.push(*seg, idx++);
-  la.stop();
-  for (const auto& p : la.take()) s().push({v2::profile_frame(p, cfg_), true});
+  push_cycle_move(s(), cfg_, m, "probe");
   phase_ = Phase::kMove;
 }
 
