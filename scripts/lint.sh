@@ -24,23 +24,28 @@ for f in "${files[@]}"; do
     echo "FAIL iverilog: $f"; cat "$log"; fail=1
   fi
 done
-# Yosys: the files are read once and each top elaborated from a saved copy; only when that run
-# fails or warns is each top run alone, so the failure names its file.
+# Yosys: one run elaborates every module with its default parameters (hierarchy without a top
+# keeps them all) and a wrapper instantiates cnc_core once per named configuration, so each
+# distinct parametrisation is processed and checked once; only when that run fails or warns is
+# each top run alone, so the failure names its file or configuration.
 yosys_one() {  # top, chparam arguments ("" for the default build)
   local chp=""
   [ -n "$2" ] && chp="chparam$2 $1;"
-  echo "design -load base; $chp hierarchy -check -top $1; proc; check -assert;"
+  echo "read_verilog -Irtl/include ${files[*]}; $chp hierarchy -check -top $1; proc; check -assert"
 }
-script="read_verilog -Irtl/include ${files[*]}; design -save base;"
-for f in "${files[@]}"; do script="$script $(yosys_one "$(basename "$f" .v)" "")"; done
+wrapper=$(mktemp --suffix=.v)
+trap 'rm -f "$log" "$wrapper"' EXIT
 declare -A ygs=()
 # cnc_core's named configurations (the default build is checked above).
 configs=("${FPGACNC_CONFIGS[@]}")
+echo "module lint_configs;" >"$wrapper"
+i=0
 for name in "${configs[@]}"; do
   params=${FPGACNC_CONFIG_PARAMS[$name]}
-  vg=() ig=() yg=""
+  vg=() ig=() yg="" wp=""
   for pv in $params; do
     vg+=("-G$pv"); ig+=("-Pcnc_core.$pv"); yg="$yg -set ${pv%=*} ${pv#*=}"
+    wp="$wp${wp:+, }.${pv%=*}(${pv#*=})"
   done
   if ! verilator --lint-only -Wall "${FPGACNC_RTL_VSEARCH[@]}" --top-module cnc_core "${vg[@]}" rtl/cnc_core.v >"$log" 2>&1 || [ -s "$log" ]; then
     echo "FAIL verilator: cnc_core $name ($params)"; cat "$log"; fail=1
@@ -49,22 +54,26 @@ for name in "${configs[@]}"; do
     echo "FAIL iverilog: cnc_core $name ($params)"; cat "$log"; fail=1
   fi
   ygs[$name]="$yg"
-  script="$script $(yosys_one cnc_core "$yg")"
+  echo "  cnc_core #($wp) config_$i ();" >>"$wrapper"
+  i=$((i + 1))
 done
-if ! yosys -q -l "$log" -p "$script" >/dev/null 2>&1 || grep -qi "warning" "$log"; then
+echo "endmodule" >>"$wrapper"
+if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]} $wrapper; hierarchy -check; proc; check -assert" >/dev/null 2>&1 \
+    || grep -qi "warning" "$log"; then
   for f in "${files[@]}"; do
-    if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; design -save base; $(yosys_one "$(basename "$f" .v)" "")" >/dev/null 2>&1 \
+    if ! yosys -q -l "$log" -p "$(yosys_one "$(basename "$f" .v)" "")" >/dev/null 2>&1 \
         || grep -qi "warning" "$log"; then
       echo "FAIL yosys: $f"; grep -i -E "warning|error" "$log"; fail=1
     fi
   done
   for name in "${configs[@]}"; do
     params=${FPGACNC_CONFIG_PARAMS[$name]}
-    if ! yosys -q -l "$log" -p "read_verilog -Irtl/include ${files[*]}; design -save base; $(yosys_one cnc_core "${ygs[$name]}")" >/dev/null 2>&1 \
+    if ! yosys -q -l "$log" -p "$(yosys_one cnc_core "${ygs[$name]}")" >/dev/null 2>&1 \
         || grep -qi "warning" "$log"; then
       echo "FAIL yosys: cnc_core $name ($params)"; grep -i -E "warning|error" "$log"; fail=1
     fi
   done
+  [ $fail -ne 0 ] || { echo "FAIL yosys: the run of every module and configuration together (log below)"; cat "$log"; fail=1; }
 fi
 # Every RTL path the sources, scripts and docs name (rtl/<folder>/<module>.v) exists.
 while read -r p; do
