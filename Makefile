@@ -9,7 +9,7 @@ DEMO_ARGS ?= --plot $(BUILD)/demo-path.svg
 DEMO_RTL_MOVES ?= 100
 DEMO_RTL_ARGS ?= --config examples/demo-machine.toml
 
-.PHONY: all deps configure build test lint bench demo synth quartus formal format clean spec
+.PHONY: all deps configure build test lint bench demo synth synth-budget quartus formal format clean spec
 
 all: build
 
@@ -106,6 +106,11 @@ demo: configure
 # Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz;
 # every block of the full design must meet 50 MHz alone on the iCE40 on each seed of SYNTH_SEEDS.
 SYNTH_SEEDS ?= 1 2 3
+# The DE1-SoC board's Cyclone V resources (full-2axis, de1soc_top) against its budget: about 3
+# CPU-minutes of Yosys, so a step of its own (CI runs it after `make formal`) rather than a CTest.
+synth-budget: deps
+	CONFIGS=full-2axis SYNTH_NAMES=0 ./scripts/synth_report.sh $(BUILD)/synth-budget
+
 synth: deps
 	EXTRA=v1-board-fixed ./scripts/synth_report.sh $(BUILD)/synth
 	./scripts/ice40_timing.sh $(BUILD)/synth

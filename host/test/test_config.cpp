@@ -35,6 +35,7 @@ TEST(Config, ExampleFileLoadsAndEqualsDefaults) {
   EXPECT_EQ(c.arc_tolerance_mm, d.arc_tolerance_mm);
   EXPECT_EQ(c.ack_timeout_s, d.ack_timeout_s);
   EXPECT_EQ(c.feed_override_pct, d.feed_override_pct);
+  EXPECT_EQ(c.dwell_time_pct, d.dwell_time_pct);
   EXPECT_EQ(c.laser_requires_m3, d.laser_requires_m3);
   EXPECT_EQ(c.step_timing.dir_hold, d.step_timing.dir_hold);
   EXPECT_EQ(c.protocol, d.protocol);
@@ -69,9 +70,12 @@ TEST(Config, ProtocolAndV2Keys) {
 
 TEST(Config, ParsesValues) {
   const auto c = fpgacnc::config::parse_machine_config(
-      "baud = 1000000\nport = \"/dev/ttyUSB1\"\nlaser_requires_m3 = false\n"
+      "baud = 1000000\nport = \"/dev/ttyUSB1\"\nlaser_requires_m3 = false\ndwell_time = 4\n"
       "[steps_per_mm]\nx = 80\n[step_timing]\nstep_high = 1\n",
       "m.toml");
+  EXPECT_EQ(c.dwell_time_pct, 4.0);
+  EXPECT_THROW(fpgacnc::config::parse_machine_config("dwell_time = 0\n", "m.toml"),
+               fpgacnc::config::Error);
   EXPECT_EQ(c.baud, 1000000u);
   EXPECT_EQ(c.port, "/dev/ttyUSB1");
   EXPECT_FALSE(c.laser_requires_m3);

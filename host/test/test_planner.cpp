@@ -153,6 +153,18 @@ TEST(Planner, ZEOnlyMovesAndDwellAndHeater) {
   EXPECT_EQ(job.steps[0].packet, fpgacnc::protocol::v1::pack_motion(1, 0, 0, 100));
 }
 
+// dwell_time scales G4 (a test configuration's compressed job); feeds are the feed override's.
+TEST(Planner, DwellTimeScalesDwellsOnly) {
+  MachineConfig c = laser_always();
+  c.dwell_time_pct = 4.0;
+  const auto p = plan_text("G1 X1 F100\nG4 P0.5\nG1 X2", c);
+  ASSERT_EQ(p.items.size(), 3u);
+  EXPECT_DOUBLE_EQ(std::get<pl::Dwell>(p.items[1]).seconds, 0.02);
+  EXPECT_EQ(std::get<pl::Segment>(p.items[0]).feed_mm_min,
+            std::get<pl::Segment>(plan_text("G1 X1 F100").items[0]).feed_mm_min);
+  EXPECT_NEAR(p.stats.estimated_time_s, 2 * 60.0 / 100.0 + 0.02, 1e-9);
+}
+
 TEST(Planner, StreamingFilePlanEqualsProgramPlan) {
   const std::string path = std::string(FPGACNC_CORPUS_DIR) + "/jsdc-laser.gcode";
   MachineConfig c;

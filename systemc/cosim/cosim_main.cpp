@@ -12,7 +12,7 @@
 // Jobs: `--seeds` random jobs of `--segments` random segments each (random step timing per job,
 // random numerators, codes, steps, feeds, a watchdog timeout and mid-stream init packets), and
 // the first `--corpus-moves` moves of jsdc-laser.gcode and Circle_Diamond_Square_Calibration.gcode
-// packed by the host (feed override `--corpus-feed-override` percent).
+// packed by the host (feeds and dwells at `--corpus-feed-override` percent).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -277,13 +277,22 @@ Job random_job(uint64_t seed, size_t segments) {
   return j;
 }
 
+// A corpus file planned at a feed override, its dwells shortened by the same factor: the
+// sequence of segments and dwells the RTL and the twins compare is the job's, in less board time
+// (jsdc-laser's G4 P0.5 alone is 25 M clocks at 100 %).
+fpgacnc::plan::Plan plan_at_override(const std::string& path, fpgacnc::config::MachineConfig cfg,
+                                     double feed_override) {
+  cfg.dwell_time_pct = 100.0 * 100.0 / feed_override;
+  return fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
+}
+
 Job corpus_job(const std::string& path, size_t max_moves, double feed_override) {
   fpgacnc::config::MachineConfig cfg;
   cfg.rapid_feed_mm_min = 12'000.0;  // the axes' max feed: short rapids, less RTL time
-  const auto plan = fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
+  const auto plan = plan_at_override(path, cfg, feed_override);
   const auto packed = fpgacnc::protocol::v1::pack_job(plan);
   Job j;
-  j.name = fmt::format("{} (first {} moves, feed override {}%, rapids 12000 mm/min)", path,
+  j.name = fmt::format("{} (first {} moves, feeds and dwells at {}%, rapids 12000 mm/min)", path,
                        max_moves, feed_override);
   j.script.v1 = job_packets(packed, 50'000'000, max_moves);
   j.segments = j.script.v1.size() - 1;
@@ -557,12 +566,12 @@ Job random_v2_job(uint64_t seed, size_t segments, uint64_t watchdog) {
 Job corpus_v2_job(const std::string& path, size_t max_frames, double feed_override) {
   fpgacnc::config::MachineConfig cfg;
   cfg.rapid_feed_mm_min = 12'000.0;
-  const auto plan = fpgacnc::plan::plan_input_file(path, cfg, {feed_override});
+  const auto plan = plan_at_override(path, cfg, feed_override);
   const auto packed = fpgacnc::protocol::v2::pack_job(fpgacnc::plan::plan_motion(plan, cfg), cfg,
                                                       {.heaters = false});
   Job j;
-  j.name = fmt::format("{} as v2 frames (first {} LINE/DWELL, feed override {}%)", path, max_frames,
-                       feed_override);
+  j.name = fmt::format("{} as v2 frames (first {} LINE/DWELL, feeds and dwells at {}%)", path,
+                       max_frames, feed_override);
   j.script.v2 = job_script(packed, max_frames);
   j.segments = j.script.v2->items.size();
   return j;

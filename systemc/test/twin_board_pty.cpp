@@ -26,13 +26,11 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <string>
 #include <thread>
 #include <tuple>
 
-#include "fpgacnc/gcode/interpreter.h"
 #include "fpgacnc/link/serial_link.h"
 #include "fpgacnc/link/stream_v2.h"
 #include "fpgacnc/plan/motion_plan.h"
@@ -70,29 +68,22 @@ fpgacnc::protocol::v2::Job pack_motion(const plan::Plan& p, const cfgns::Machine
 }
 
 // The demo job 25 times faster than written (examples/demo-machine.toml: feed override 2500 %,
-// rapids at 20 000 mm/min, accelerations 625 times the defaults): short moves, many answers per
-// second of board time, so that the Verilated side stays short.
+// dwells at 4 %, rapids at 20 000 mm/min, accelerations 625 times the defaults): short moves,
+// many answers per second of board time, so that the Verilated side stays short.
 cfgns::MachineConfig job_config() {
   cfgns::MachineConfig cfg;
   cfg.feed_override_pct = 2500.0;
+  cfg.dwell_time_pct = 4.0;
   cfg.rapid_feed_mm_min = 20000.0;
   cfg.max_feed_mm_min[0] = cfg.max_feed_mm_min[1] = 60000.0;
   cfg.max_accel_mm_s2 = {625000.0, 625000.0, 62500.0, 625000.0};
   return cfg;
 }
 
-// The job without its dwells (G4 P0.5 after the laser comes on: 25 M clocks of waiting that
-// would only make the Verilated side longer).
 plan::Plan job_plan(const cfgns::MachineConfig& cfg) {
-  const std::string path = std::string(FPGACNC_EXAMPLES_DIR) + "/jsdc-laser.gcode";
-  std::ifstream in(path);
-  std::string line, g;
-  while (std::getline(in, line)) {
-    if (!line.starts_with("G4")) g += line + "\n";
-  }
   plan::PlanOptions po;
   po.feed_override_pct = cfg.feed_override_pct;
-  return plan::plan_program(fpgacnc::gcode::parse_string(g, path), cfg, po);
+  return plan::plan_input_file(std::string(FPGACNC_EXAMPLES_DIR) + "/jsdc-laser.gcode", cfg, po);
 }
 
 void expect_same(const tw::HostScript& script, const cfgns::MachineConfig& cfg,

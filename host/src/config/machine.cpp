@@ -190,6 +190,8 @@ class Reader {
         c.laser_s_min = number(v, k);
       } else if (k == "feed_override") {
         c.feed_override_pct = positive(v, k);
+      } else if (k == "dwell_time") {
+        c.dwell_time_pct = positive(v, k);
       } else if (k == "hold_decel_mm_s2") {
         c.hold_decel_mm_s2 = positive(v, k);
       } else if (k == "max_accel_mm_s2") {

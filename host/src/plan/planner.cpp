@@ -188,9 +188,10 @@ void Planner::add(const gcode::Command& command) {
   if (const auto* m = std::get_if<gcode::Move>(&command)) {
     add_move(*m);
   } else if (const auto* d = std::get_if<gcode::Dwell>(&command)) {
-    plan_.items.emplace_back(Dwell{d->seconds, d->line});
+    const double seconds = d->seconds * cfg_.dwell_time_pct / 100.0;
+    plan_.items.emplace_back(Dwell{seconds, d->line});
     ++plan_.stats.dwells;
-    plan_.stats.estimated_time_s += d->seconds;
+    plan_.stats.estimated_time_s += seconds;
   } else if (const auto* h = std::get_if<gcode::Heater>(&command)) {
     plan_.items.emplace_back(
         HeaterCommand{h->mcode, h->s.value_or(0.0), h->s.has_value(), h->line});

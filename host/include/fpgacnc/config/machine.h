@@ -68,6 +68,10 @@ struct MachineConfig {
   // [min, max] power (S - min) / (max - min) * 255 rounded (at least 1), the spindle_pwm duty.
   double laser_s_min = 0.0;
   double feed_override_pct = 100.0;
+  // G4 dwells last this percentage of their programmed time (100 = as written); with
+  // feed_override, a configuration that compresses a whole job in time
+  // (examples/demo-machine.toml).
+  double dwell_time_pct = 100.0;
   // true: G1/G2/G3 cut only while M3/M4 is active with S>0 (or no S given);
   // false: original v1 semantics, every G1/G2/G3 is laser-on.
   bool laser_requires_m3 = true;
