@@ -55,6 +55,7 @@ soak: build
 	FPGACNC_V2_SEGMENTS=10000 $(BUILD)/host/simboard/simboard_v2_system_tests --gtest_filter='*ZeroGap*'
 	FPGACNC_V2_FAULT_SEGMENTS=2000 $(BUILD)/host/simboard/simboard_v2_system_tests --gtest_filter='*LineFaults*'
 	FPGACNC_EXEC_BATCHES=400 $(BUILD)/tb/test_segment_executor --gtest_filter='*RandomSegmentsExactTiming*'
+	FPGACNC_PROFILE_STREAMS=400 $(BUILD)/tb/test_profile --gtest_filter='*RandomSegmentsEdgeForEdge*'
 	$(BUILD)/host/simboard/simboard_tests --gtest_filter='SimBoardCorpus.*'
 	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v1 --config examples/demo-machine.toml
 	$(BUILD)/host/fpgacnc sim $(CORPUS)/Circle_Diamond_Square_Calibration.gcode --model both --protocol v1 --config systemc/cosim/corpus-fast-mill.toml

@@ -545,9 +545,14 @@ Figures run_random(uint64_t seed, int streams, int per_stream, double p_rev) {
   return f;
 }
 
+// FPGACNC_PROFILE_STREAMS streams of 20 segments (50 in CTest, 400 in `make soak`); the counts
+// below scale with them.
 TEST(Profile, RandomSegmentsEdgeForEdgeWithTheReference) {
   const uint64_t seed = fpgacnc::tb::test_seed(20261106, "Profile.RandomSegments");
-  const Figures f = run_random(seed, 100, 20, 0.1);
+  const char* ns = std::getenv("FPGACNC_PROFILE_STREAMS");
+  const int streams = ns ? std::max(1, std::atoi(ns)) : 50;
+  const uint64_t n = static_cast<uint64_t>(streams) * 20;
+  const Figures f = run_random(seed, streams, 20, 0.1);
   std::printf(
       "%llu segments, %llu steps, %llu clocks; %llu planned stops (%llu reached V_exit), "
       "%llu ended below cruise, %llu tiny A, %llu zero-gap joins, %llu reversal holds, "
@@ -558,12 +563,12 @@ TEST(Profile, RandomSegmentsEdgeForEdgeWithTheReference) {
       (unsigned long long)f.triangles, (unsigned long long)f.tiny_a, (unsigned long long)f.zero_gap,
       (unsigned long long)f.holds, (unsigned long long)f.jumps, f.worst_speed_margin,
       f.worst_accel_ratio);
-  EXPECT_GE(f.segments, 2000u);
-  EXPECT_GT(f.planned, 1000u);
+  EXPECT_GE(f.segments, n);
+  EXPECT_GT(f.planned, n / 2);
   EXPECT_EQ(f.reached_exit, f.planned);
-  EXPECT_GT(f.zero_gap, 500u);
-  EXPECT_GT(f.holds, 50u);
-  EXPECT_GT(f.tiny_a, 20u);
+  EXPECT_GT(f.zero_gap, n / 4);
+  EXPECT_GT(f.holds, n / 40);
+  EXPECT_GT(f.tiny_a, n / 100);
 }
 
 // The worked example of docs/protocol.md: 5 972 080 clocks, V_exit reached before the end.

@@ -754,7 +754,10 @@ bool poll_reports(Rig& rig, std::vector<std::string>& states, P pred,
 // edge for a while of polling); '~' runs the rest and the job ends where the plan ends, on
 // the board's own step counters.
 TEST(Grbl, FeedHoldMidJobThenResumeEndsOnThePlan) {
-  const MachineConfig cfg;
+  // The rate ramps from 100 % to rest in 40 ms (X: 5000 mm/s^2 at its 200 mm/s top feed), not the
+  // default 200 ms: the same hold and resume in a fifth of the board time.
+  MachineConfig cfg;
+  cfg.hold_decel_mm_s2 = 5000.0;
   Rig rig("", cfg, true);
   ASSERT_TRUE(rig.engine().motion_available()) << "the Verilated board refuses MOTION";
   for (const char* l : {"G21 G90 F2400", "G1 X3 Y1", "G1 X6 Y0", "G1 X8 Y2"})

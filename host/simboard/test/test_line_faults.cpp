@@ -645,7 +645,8 @@ TEST(BoardLineFaults, LostAndCorruptedAcks) {
 // middle of the motion packet (at the cycle its 4th byte would start) makes the core's 100 ms
 // watchdog drop the cut packet.
 TEST(BoardLineFaults, StallDelaysTheNextByteExactly) {
-  constexpr uint64_t kD = 10'000'000;  // 200 ms at 50 MHz
+  constexpr uint64_t kD = 1'000'000;    // 20 ms at 50 MHz: between packets
+  constexpr uint64_t kMid = 6'000'000;  // 120 ms: mid-packet, past the 100 ms watchdog
   const auto base = run_raw(sb::BoardOptions{}, example_job(), 1);
   ASSERT_EQ(base.rx_log.size(), 20u);
 
@@ -669,19 +670,19 @@ TEST(BoardLineFaults, StallDelaysTheNextByteExactly) {
   // Mid-packet, by cycle.
   sb::BoardOptions m;
   const uint64_t c12 = base.rx_log[12].start_cycle;
-  m.line_faults.stalls = {{sb::LineStall::Trigger::kCycle, c12, kD}};
+  m.line_faults.stalls = {{sb::LineStall::Trigger::kCycle, c12, kMid}};
   const auto t = run_raw(m, example_job(), 0);
   ASSERT_EQ(t.rx_log.size(), 20u);
   EXPECT_EQ(t.rx_log[11].start_cycle, base.rx_log[11].start_cycle);
-  EXPECT_EQ(t.rx_log[12].start_cycle, c12 + kD);
-  EXPECT_EQ(t.stats.line.stall_clocks, kD);
+  EXPECT_EQ(t.rx_log[12].start_cycle, c12 + kMid);
+  EXPECT_EQ(t.stats.line.stall_clocks, kMid);
   EXPECT_GE(t.stats.timeouts, 1) << "the 100 ms watchdog drops the cut packet";
   EXPECT_EQ(t.stats.moves_done, 0u);
   EXPECT_TRUE(t.received.empty());
   fmt::print(
-      "stall of {} clocks: between packets the move starts {} clocks later; mid-packet the "
-      "core's watchdog fired {} time(s)\n",
-      kD, s.move_done[0] - base.move_done[0], t.stats.timeouts);
+      "stall of {} clocks between packets: the move starts {} clocks later; a stall of {} "
+      "clocks mid-packet: the core's watchdog fired {} time(s)\n",
+      kD, s.move_done[0] - base.move_done[0], kMid, t.stats.timeouts);
 }
 
 }  // namespace

@@ -242,7 +242,7 @@ TEST(V2System, ZeroGapThroughThePinsAndV1Comparison) {
 
 // (b) Line faults both ways: the job completes, no segment lost or run twice.
 TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
-  const size_t n = env_size("FPGACNC_V2_FAULT_SEGMENTS", 120);
+  const size_t n = env_size("FPGACNC_V2_FAULT_SEGMENTS", 60);
   const uint64_t seed = env_size("FPGACNC_SEED", 5);
   std::printf("seed %llu (FPGACNC_SEED)\n", static_cast<unsigned long long>(seed));
   cfgns::MachineConfig cfg;
@@ -264,8 +264,8 @@ TEST(V2System, LineFaultsJobCompletesExactlyOnce) {
   bo.line_faults.drop = 5e-4;
   bo.line_faults.dup = 5e-4;
   bo.line_faults.lose_frames = 0.01;
-  // One 200 ms stall (10 000 000 clocks) before the 3000th byte on the line: mid-job.
-  bo.line_faults.stalls.push_back({sb::LineStall::Trigger::kBytes, 3000, 10'000'000});
+  // One 50 ms stall (2 500 000 clocks) before the 1500th byte on the line: mid-job.
+  bo.line_faults.stalls.push_back({sb::LineStall::Trigger::kBytes, 1500, 2'500'000});
   lk::StreamV2Options so;  // defaults: 300 ms retransmission timeout, 10 s answer timeout
   const V2Run r = run_v2(p, cfg, bo, so);
   ASSERT_EQ(r.protocol, "v2");
