@@ -26,9 +26,13 @@ HANG = 300.0
 os.makedirs(WORK, exist_ok=True)
 JOB = os.path.join(WORK, "hold-job.gcode")
 with open(JOB, "w") as f:
-    # 3 mm at 600 mm/min: 0.3 s of board time per move (15 M clocks), far more than the few
-    # thousand clocks a key takes to arrive.
-    f.write("G21 G90 F600\nG1 X3\nG1 X0 Y1\n")
+    # 3 mm at 1800 mm/min: 0.1 s of board time per move (5 M clocks, seconds of simulation), far
+    # more than the few thousand clocks a key takes to arrive.
+    f.write("G21 G90 F1800\nG1 X3\nG1 X0 Y1\n")
+CONFIG = os.path.join(WORK, "hold-machine.toml")
+with open(CONFIG, "w") as f:
+    # Holds and resumes ramp in 40 ms instead of the default 200 ms (less board time to simulate).
+    f.write("hold_decel_mm_s2 = 5000.0\n")
 
 
 def fail(msg, out):
@@ -56,7 +60,7 @@ def read_until(fd, out, pattern):
 # 1. A terminal.
 pid, fd = pty.fork()
 if pid == 0:
-    os.execv(FPGACNC, [FPGACNC, "stream", JOB, "--model", "rtl"])
+    os.execv(FPGACNC, [FPGACNC, "stream", JOB, "--model", "rtl", "--config", CONFIG])
 out = read_until(fd, b"", r"keys: ! or space")
 os.write(fd, b"!")
 out = read_until(fd, out, r"feed hold \(~ or c resumes\)")
@@ -78,7 +82,7 @@ if os.waitstatus_to_exitcode(status) != 0:
 print("terminal: hold, resume, SIGINT hold and question, resume: the job ends on the plan")
 
 # 2. No terminal.
-p = subprocess.Popen([FPGACNC, "stream", JOB, "--model", "rtl"], stdin=subprocess.PIPE,
+p = subprocess.Popen([FPGACNC, "stream", JOB, "--model", "rtl", "--config", CONFIG], stdin=subprocess.PIPE,
                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
 out = read_until(p.stdout.fileno(), b"", r"SIGINT: feed hold, then the job stops at rest")
 p.send_signal(signal.SIGINT)

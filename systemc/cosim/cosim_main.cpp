@@ -277,6 +277,8 @@ Job random_job(uint64_t seed, size_t segments) {
   return j;
 }
 
+constexpr double kCorpusRapid = 60'000.0;  // mm/min, and the X and Y max feeds
+
 // A corpus file planned at a feed override, its dwells shortened by the same factor: the
 // sequence of segments and dwells the RTL and the twins compare is the job's, in less board time
 // (jsdc-laser's G4 P0.5 alone is 25 M clocks at 100 %).
@@ -288,12 +290,15 @@ fpgacnc::plan::Plan plan_at_override(const std::string& path, fpgacnc::config::M
 
 Job corpus_job(const std::string& path, size_t max_moves, double feed_override) {
   fpgacnc::config::MachineConfig cfg;
-  cfg.rapid_feed_mm_min = 12'000.0;  // the axes' max feed: short rapids, less RTL time
+  // Short rapids and fast feeds, less RTL time (jsdc-laser's first move, 52 mm at F1500, is 2.6 M
+  // clocks at 4000 %).
+  cfg.rapid_feed_mm_min = kCorpusRapid;
+  cfg.max_feed_mm_min[0] = cfg.max_feed_mm_min[1] = kCorpusRapid;
   const auto plan = plan_at_override(path, cfg, feed_override);
   const auto packed = fpgacnc::protocol::v1::pack_job(plan);
   Job j;
-  j.name = fmt::format("{} (first {} moves, feeds and dwells at {}%, rapids 12000 mm/min)", path,
-                       max_moves, feed_override);
+  j.name = fmt::format("{} (first {} moves, feeds and dwells at {}%, rapids {} mm/min)", path,
+                       max_moves, feed_override, kCorpusRapid);
   j.script.v1 = job_packets(packed, 50'000'000, max_moves);
   j.segments = j.script.v1.size() - 1;
   return j;
@@ -582,7 +587,7 @@ Job corpus_v2_job(const std::string& path, size_t max_frames, double feed_overri
 int sc_main(int argc, char* argv[]) {
   uint64_t seed = 1, seeds = 20, v2_seeds = 20;
   size_t segments = 100, corpus_moves = 12, v2_corpus_frames = 200;
-  double corpus_override = 1000.0;
+  double corpus_override = 4000.0;
   std::string corpus_dir = FPGACNC_CORPUS_DIR, examples_dir = FPGACNC_EXAMPLES_DIR;
   fpgacnc::cosim::Options opts("cosim");
   opts.flag("--zero-pulse", &g_zero_pulse).u64("--seed", &seed).u64("--seeds", &seeds);

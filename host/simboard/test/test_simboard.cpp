@@ -384,11 +384,13 @@ void run_corpus_job(const std::string& name, const cfgns::MachineConfig& cfg, lo
 
 // Test machine: the original 160 steps/mm, 115200 baud and DRV8825 step timing, with the
 // motion sped up so that each job is simulated cycle by cycle in about a minute on one core:
-// the scaled figures are the feed override, the rapid feed and the axis max feeds (the UART,
-// packets, ACKs and pulse timing rules stay those of the real machine).
+// the scaled figures are the feed override (dwells shortened by the same factor), the rapid feed
+// and the axis max feeds (the UART, packets, ACKs and pulse timing rules stay those of the real
+// machine).
 cfgns::MachineConfig fast_config(double override_pct, double rapid) {
   cfgns::MachineConfig c;
   c.feed_override_pct = override_pct;
+  c.dwell_time_pct = 100.0 * 100.0 / override_pct;
   c.rapid_feed_mm_min = rapid;
   c.max_feed_mm_min = {60000.0, 60000.0, 60000.0, 60000.0};
   return c;
