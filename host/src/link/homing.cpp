@@ -108,13 +108,8 @@ void HomingCycle::arm(uint16_t switches) {
 }
 
 void HomingCycle::ask_status() {
-  s().request_status(true);
-  status_target_ = s().status_answers() + s().status_unanswered();
+  status_.ask(s());
   wait_ = Wait::kStatus;
-}
-
-bool HomingCycle::status_fresh() const {
-  return session_->status_answers() >= status_target_;
 }
 
 void HomingCycle::fail(int alarm, std::string msg) {
@@ -207,14 +202,7 @@ bool HomingCycle::step(milliseconds wait) {
       ask_status();
       return false;
     }
-    if (!status_fresh() || !s().settled()) {
-      s().request_status();
-      return false;
-    }
-    if (s().last_status().state & v2::kStateBusy) {
-      ask_status();
-      return false;
-    }
+    if (!status_.at_rest(s())) return false;  // wait_ is kStatus, set when the STATUS was asked
     const Phase next = phase_ == Phase::kSeek ? Phase::kPull1 : Phase::kPull2;
     open();
     enter(next);

@@ -23,11 +23,6 @@ std::vector<int32_t> ProbeCycle::position() const {
   return session_->last_status().position;
 }
 
-void ProbeCycle::ask_status() {
-  s().request_status(true);
-  status_target_ = s().status_answers() + s().status_unanswered();
-}
-
 void ProbeCycle::start() {
   session_ = &open_session_();
   const v2::Status& st = s().last_status();
@@ -110,14 +105,7 @@ bool ProbeCycle::step(milliseconds wait) {
     return false;
   }
   if (phase_ == Phase::kRest) {
-    if (!status_fresh() || !s().settled()) {
-      s().request_status();
-      return false;
-    }
-    if (s().last_status().state & v2::kStateBusy) {
-      ask_status();
-      return false;
-    }
+    if (!status_.at_rest(s())) return false;
     // At rest: a new session, and the trigger disarmed in it.
     session_ = &open_session_();
     s().push({v2::trigger(0, v2::TriggerMode::Disarm)});

@@ -95,7 +95,7 @@ class HomingCycle {
   void move(uint32_t axes, bool toward, const std::array<double, 3>& dist_mm, double feed);
   void arm(uint16_t switches);
   void ask_status();
-  bool status_fresh() const;
+  bool status_fresh() const { return status_.fresh(*session_); }
   void enter(Phase p);
   void fail(int alarm, std::string msg);
   uint32_t axes_of(uint16_t switches) const;
@@ -111,7 +111,7 @@ class HomingCycle {
   size_t group_ = 0;
   Phase phase_ = Phase::kOpen;
   Wait wait_ = Wait::kNone;
-  size_t status_target_ = 0;
+  StatusWait status_;
   TriggerWatch watch_;    // the TRIGGER HOME of the seek or locate
   uint16_t pressed_ = 0;  // pre-pull: the switches pressed at the start of the group
   std::vector<protocol::v2::TriggerReport> locate_;  // per group: the locate's report

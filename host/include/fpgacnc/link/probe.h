@@ -67,8 +67,8 @@ class ProbeCycle {
 
   V2Session& s() { return *session_; }
   void start();
-  void ask_status();
-  bool status_fresh() const { return session_->status_answers() >= status_target_; }
+  void ask_status() { status_.ask(s()); }
+  bool status_fresh() const { return status_.fresh(*session_); }
   std::vector<int32_t> position() const;
 
   Link& link_;
@@ -78,7 +78,7 @@ class ProbeCycle {
   std::function<V2Session&()> open_session_;
   V2Session* session_ = nullptr;
   Phase phase_ = Phase::kOpen;
-  size_t status_target_ = 0;
+  StatusWait status_;
   TriggerWatch watch_;         // the TRIGGER PROBE
   bool status_asked_ = false;  // kRest / kDisarm: the fresh STATUS asked
   ProbeResult result_;

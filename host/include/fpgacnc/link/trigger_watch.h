@@ -2,13 +2,16 @@
 // link::ProbeCycle; docs/machine.md "Homing and probing (host)"): a query is sent only once that
 // TRIGGER is acknowledged (an answer to a query ahead of it would show the previous trigger's
 // state) and again when no answer came within kResend of link time; answered() tells when the
-// TRIGGER_REPORT of the query in flight has arrived (V2Session::last_trigger()).
+// TRIGGER_REPORT of the query in flight has arrived (V2Session::last_trigger()). StatusWait is
+// the STATUS side of the same cycles: a STATUS newer than a point of the session, and the board
+// at rest after a move it dropped.
 #pragma once
 
 #include <chrono>
 #include <cstddef>
 
 #include "fpgacnc/link/v2_session.h"
+#include "fpgacnc/protocol/v2.h"
 
 namespace fpgacnc::link {
 
@@ -44,6 +47,32 @@ class TriggerWatch {
   size_t target_ = 0;  // trigger_answers() once the query in flight is answered
   bool asked_ = false;
   Link::Time asked_at_{};
+};
+
+class StatusWait {
+ public:
+  // Asks for a STATUS now; fresh() once it (and every STATUS owed before it) has come.
+  void ask(V2Session& s) {
+    s.request_status(true);
+    target_ = s.status_answers() + s.status_unanswered();
+  }
+  bool fresh(const V2Session& s) const { return s.status_answers() >= target_; }
+  // After ask() behind a move the board drops: true once a fresh STATUS shows the session
+  // settled and the motion idle; otherwise polls, or asks again while the board is busy.
+  bool at_rest(V2Session& s) {
+    if (!fresh(s) || !s.settled()) {
+      s.request_status();
+      return false;
+    }
+    if (s.last_status().state & protocol::v2::kStateBusy) {
+      ask(s);
+      return false;
+    }
+    return true;
+  }
+
+ private:
+  size_t target_ = 0;  // status_answers() once the STATUS asked has come
 };
 
 }  // namespace fpgacnc::link
