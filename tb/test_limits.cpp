@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "Vcnc_core_machine.h"
+#include "common/machine_pins.h"
 #include "common/pin_harness.h"
 #include "common/v2_core_bench.h"
 #include "common/v2_frames.h"
@@ -39,23 +40,11 @@ constexpr uint8_t kFaultLimit = fpgacnc::spec::kFaultLimit;
 constexpr size_t kLimitByte = 9 + 4 * kAxes + 18;
 constexpr size_t kSwitches = kLimitByte + 1;
 
-constexpr fpgacnc::tb::PinAccess<Model> kPins{
-    [](Model& m, bool asserted) { m.rst = asserted ? 1 : 0; },
-    [](const Model& m) { return static_cast<uint32_t>(m.step); },
-    [](const Model& m) { return static_cast<uint32_t>(m.dir); },
-    [](Model& m) {
-      m.cfg_wr = 0;
-      m.limit_min = 1;  // X min is active low: released = high
-      m.limit_max = 0;
-      m.probe_in = 0;  // the probe (wired in this build) released
-    },
-};
-
 using Rise = fpgacnc::tb::StepRise;
 
 class LimitBench : public fpgacnc::tb::V2CoreBench<Model, kAxes> {
  public:
-  LimitBench() : V2CoreBench(kPins) {}
+  LimitBench() : V2CoreBench(fpgacnc::tb::kMachinePins) {}
   std::vector<uint64_t> state_changes, laser_falls;
   int short_pulses = 0;
 

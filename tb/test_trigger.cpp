@@ -1,12 +1,12 @@
 // Homing and probing through cnc_core's pins (docs/machine.md "Homing and probing (hardware)"): a
 // 2-axis core (full-2axis) at 3 Mbaud, its four limit switches wired (X min active low, the others
-// active high, kFilter clocks of debounce) and the probe (active high, kProbeFilter clocks). The bench plays the machine: a
-// max endstop per axis is pressed while the axis's STEP count at the pins is at or beyond its
-// position, and the probe follows a rule on the X count (a plate). Every latched position is
-// checked against the STEP rising edges counted at the pins up to the clock of the filtered edge
-// (pin first sampled on edge p: filtered from edge p + 1 + F, input_filter's contract), the
-// stopping distance after a probe contact against the ramp, the positions in STATUS against the
-// pins; TRIGGER_REPORT, SET_POSITION and the refusals of bad frames through the UART.
+// active high, kFilter clocks of debounce) and the probe (active high, kProbeFilter clocks). The
+// bench plays the machine: a max endstop per axis is pressed while the axis's STEP count at the
+// pins is at or beyond its position, and the probe follows a rule on the X count (a plate). Every
+// latched position is checked against the STEP rising edges counted at the pins up to the clock of
+// the filtered edge (pin first sampled on edge p: filtered from edge p + 1 + F, input_filter's
+// contract), the stopping distance after a probe contact against the ramp, the positions in STATUS
+// against the pins; TRIGGER_REPORT, SET_POSITION and the refusals of bad frames through the UART.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "Vcnc_core_machine.h"
+#include "common/machine_pins.h"
 #include "common/pin_harness.h"
 #include "common/v2_core_bench.h"
 #include "common/v2_frames.h"
@@ -39,18 +40,6 @@ constexpr uint8_t kDisarm = 0, kHome = 1, kProbe = 2, kProbeRelease = 3;
 constexpr uint8_t kArmed = 0x01, kDone = 0x02;  // TRIGGER_REPORT flags
 // MOTION ramp of the probe tests: 100 % to 0 in 100 rate periods of 256 clocks.
 constexpr uint32_t kRamp = 42949673;  // ceil(2^32 / 100)
-
-constexpr fpgacnc::tb::PinAccess<Model> kPins{
-    [](Model& m, bool asserted) { m.rst = asserted ? 1 : 0; },
-    [](const Model& m) { return static_cast<uint32_t>(m.step); },
-    [](const Model& m) { return static_cast<uint32_t>(m.dir); },
-    [](Model& m) {
-      m.cfg_wr = 0;
-      m.limit_min = 1;  // X min is active low: released = high
-      m.limit_max = 0;
-      m.probe_in = 0;
-    },
-};
 
 using Rise = fpgacnc::tb::StepRise;
 
@@ -82,7 +71,7 @@ struct Report {
 
 class TriggerBench : public fpgacnc::tb::V2CoreBench<Model, kAxes> {
  public:
-  TriggerBench() : V2CoreBench(kPins) {}
+  TriggerBench() : V2CoreBench(fpgacnc::tb::kMachinePins) {}
   // The machine: max endstop of each axis (pressed at or beyond), the probe rule.
   int64_t endstop_max[kAxes] = {kNone, kNone};
   std::function<bool(const int64_t*)> probe_rule;
