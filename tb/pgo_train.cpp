@@ -3,9 +3,10 @@
 // through its pins: HELLO, the CONFIG_AXIS frames, then a short job the host plans and packs
 // (LINE_PROFILE frames, ARC frames in XY, a laser on and off, a dwell, a Z move) until the
 // machine is at rest, with idle clocks before and after: 12 M clocks, about 10 s of the
-// instrumented model (33 M and 29 s at the default accelerations, for a profile 1-3 % faster). A workload of its own, not the speed bench's v1 move. It exits non-zero
-// (and the build stops) when the model did not execute every segment of the job.
-// FPGACNC_PGO_MODEL names the model's class; its header is FPGACNC_PGO_HEADER.
+// instrumented model (33 M and 29 s at the default accelerations, for a profile 1-3 % faster). A
+// workload of its own, not the speed bench's v1 move. It exits non-zero (and the build stops) when
+// the model did not execute every segment of the job. FPGACNC_PGO_MODEL names the model's class;
+// its header is FPGACNC_PGO_HEADER.
 #include <cstdio>
 #include <string>
 

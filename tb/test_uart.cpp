@@ -1,5 +1,5 @@
-// Bench for rtl/protocol/uart_rx.v and rtl/protocol/uart_tx.v (CLK_HZ 50 MHz at 115200, 1 000 000 and 3 000 000
-// baud, one Verilated pair per rate).
+// Bench for rtl/protocol/uart_rx.v and rtl/protocol/uart_tx.v (CLK_HZ 50 MHz at 115200, 1 000 000
+// and 3 000 000 baud, one Verilated pair per rate).
 //
 // Each test owns a VerilatedContext, drives the clock itself and asserts on observed cycles.
 // Cycle numbering: observation k happens just before rising edge k (inputs applied, outputs

@@ -80,8 +80,8 @@ inline models::arc::Frame random_arc_frame(std::mt19937_64& g, const ArcStimulus
   }
 }
 
-// segment_prep's m_axis_arc (rtl/motion/segment_prep.v: arc_dda's load inputs, LSB first, 945 bits):
-// put(lsb, value, width) for each field.
+// segment_prep's m_axis_arc (rtl/motion/segment_prep.v: arc_dda's load inputs, LSB first, 945
+// bits): put(lsb, value, width) for each field.
 template <class Put>
 void put_arc_load(const models::arc::Frame& f, Put&& put) {
   const models::arc::Derived d = models::arc::derive(f);

@@ -1,9 +1,9 @@
 // Corpus arcs through the circular DDA (CTest label cosim): every G2/G3 of the G-code corpus
 // (host interpreter, machine mm) is put on the lattice as the host does (160 and 157.48 steps/mm on
 // X, Y and Z; position = the rounded end of the previous move), planned
-// with arc::plan, and run through the Verilated rtl/motion/arc_dda.v and the reference: the RTL must
-// match the reference edge for edge and end exactly on the rounded G-code end point (X, Y and the
-// helix's Z). Arcs whose rounded radii differ by more than 2 steps are counted (the host cuts
+// with arc::plan, and run through the Verilated rtl/motion/arc_dda.v and the reference: the RTL
+// must match the reference edge for edge and end exactly on the rounded G-code end point (X, Y and
+// the helix's Z). Arcs whose rounded radii differ by more than 2 steps are counted (the host cuts
 // them into chords). The simulated speed is 0.05 steps per clock (the feed is not simulated: the
 // check is the geometry). Usage: arc_corpus_rtl [corpus dir]. Exit status 1 on any failure.
 #include "common/arc_rtl.h"

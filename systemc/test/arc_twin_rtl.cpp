@@ -1,6 +1,6 @@
 // RTL against twin for the circular DDA (CTest label cosim): the SystemC ArcDdaTwin
-// (fpgacnc/twins/arc_dda.h) and the Verilated rtl/motion/arc_dda.v run the same random arcs, single and
-// in zero-gap chains (each next arc loaded on the edge of the previous one's last move); every
+// (fpgacnc/twins/arc_dda.h) and the Verilated rtl/motion/arc_dda.v run the same random arcs, single
+// and in zero-gap chains (each next arc loaded on the edge of the previous one's last move); every
 // step edge (axis, direction, edge number) must agree, and the twin's end edge must be the RTL's
 // last-move edge. Usage: arc_twin_rtl [--seed N] [--arcs N]. Exit status 1 on any disagreement,
 // naming the arc and the first differing edge.

@@ -101,9 +101,9 @@ class Dda {
   bool err() const { return err_; }
   bool late() const { return late_; }
   uint64_t next_clock() const { return c_; }
-  // rtl/motion/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before clock()): the
-  // walk has chosen the tangent signs of the next move from the second clock of its preparation
-  // (W1) on: valid unless the clock is the move's first (W0, clock r_k - 3).
+  // rtl/motion/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before
+  // clock()): the walk has chosen the tangent signs of the next move from the second clock of its
+  // preparation (W1) on: valid unless the clock is the move's first (W0, clock r_k - 3).
   bool dir_valid() const { return c_ + (WALK_CLOCKS - 1) != ready_; }
   bool next_x_pos() const { return pa_ > 0; }
   bool next_y_pos() const { return pb_ > 0; }

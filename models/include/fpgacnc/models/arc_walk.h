@@ -44,8 +44,9 @@ namespace fpgacnc::models::arc {
 using u128 = unsigned __int128;
 using i128 = __int128;
 
-inline constexpr int WALK_CLOCKS = 4;  // clocks between two moves at the fastest (rtl/motion/arc_dda.v)
-inline constexpr int FRAC = 48;        // fractional bits of U, V, A
+inline constexpr int WALK_CLOCKS =
+    4;                           // clocks between two moves at the fastest (rtl/motion/arc_dda.v)
+inline constexpr int FRAC = 48;  // fractional bits of U, V, A
 
 struct Geometry {
   int32_t i = 0, j = 0;    // centre - start
@@ -322,9 +323,9 @@ struct RunResult {
   bool late = false;            // some move waited for the walk
 };
 
-// The block (rtl/motion/arc_dda.v's registers in exact integers): clock() runs one clock; skip_quiet()
-// jumps over the clocks in which nothing happens, in closed form (the cost of a run grows with its
-// moves and Z steps, not with its clocks).
+// The block (rtl/motion/arc_dda.v's registers in exact integers): clock() runs one clock;
+// skip_quiet() jumps over the clocks in which nothing happens, in closed form (the cost of a run
+// grows with its moves and Z steps, not with its clocks).
 class Dda {
  public:
   explicit Dda(const Frame& f)
@@ -347,9 +348,9 @@ class Dda {
   bool err() const { return err_; }
   bool late() const { return late_; }
   uint64_t next_clock() const { return c_; }
-  // rtl/motion/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before clock()): the
-  // walk has chosen the tangent signs of the next move from the second clock of its preparation
-  // (W1) on: valid unless the clock is the move's first (W0, clock r_k - 3).
+  // rtl/motion/arc_dda.v's dir_valid, nx_dir, ny_dir in the clock next_clock() (ask before
+  // clock()): the walk has chosen the tangent signs of the next move from the second clock of its
+  // preparation (W1) on: valid unless the clock is the move's first (W0, clock r_k - 3).
   bool dir_valid() const { return c_ + (WALK_CLOCKS - 1) != ready_; }
   bool next_x_pos() const { return pa_ > 0; }
   bool next_y_pos() const { return pb_ > 0; }

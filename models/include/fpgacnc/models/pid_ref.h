@@ -1,8 +1,8 @@
 // Double-precision reference of the heater control law (heater.md, docs/heater.md "Control law").
 // Header-only, no dependencies. Output u is a duty in [0, umax] (fraction of full power); inputs
-// in degC. The RTL (rtl/heater/pid_incr.v) computes the same law in fixed point; with the coefficients
-// quantised as the RTL holds them (quantise()), its duty equals floor(u * 2^PWM_BITS) of this
-// reference for every sample (the RTL's accumulator is exact, the PWM drops the low bits).
+// in degC. The RTL (rtl/heater/pid_incr.v) computes the same law in fixed point; with the
+// coefficients quantised as the RTL holds them (quantise()), its duty equals floor(u * 2^PWM_BITS)
+// of this reference for every sample (the RTL's accumulator is exact, the PWM drops the low bits).
 //
 // Modes (HEATER_CONFIG mode byte):
 //   0 OFF     u = 0

@@ -1,4 +1,5 @@
-// Twin of rtl/motion/arc_dda.v: the circular / helical DDA of one ARC segment (docs/motion.md "Arcs").
+// Twin of rtl/motion/arc_dda.v: the circular / helical DDA of one ARC segment (docs/motion.md
+// "Arcs").
 //
 // Target `load`: an ArcLoad (the frame fields; prep's products are derived with arc::derive), the
 // delay naming the load edge L (the edge on which the RTL takes `load`); clock c of the arc is

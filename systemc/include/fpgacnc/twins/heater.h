@@ -1,6 +1,6 @@
-// Twins of the heater RTL (docs/heater.md): rtl/machine/pwm.v, rtl/heater/pid_incr.v, rtl/heater/heater_safety.v and
-// the channel glue of rtl/heater/heater_channel.v / heater_block.v (settings, enable, watchdog), with the
-// same integer arithmetic.
+// Twins of the heater RTL (docs/heater.md): rtl/machine/pwm.v, rtl/heater/pid_incr.v,
+// rtl/heater/heater_safety.v and the channel glue of rtl/heater/heater_channel.v / heater_block.v
+// (settings, enable, watchdog), with the same integer arithmetic.
 //
 //   PidTwin      u(k) in Q1.28 from e = set - T (Q11.4), gains Q8.24, limits Q1.15: the
 //                incremental law with conditional integration, exactly as pid_incr computes it

@@ -1,4 +1,5 @@
-// Twin of rtl/protocol/uart_tx.v: 8N1 transmitter with a fractional bit timer (docs/timing.md "ACK").
+// Twin of rtl/protocol/uart_tx.v: 8N1 transmitter with a fractional bit timer (docs/timing.md
+// "ACK").
 //
 // Target `bytes`: a TxByte offered from the delay's edge; accepted on that edge if the line is
 // idle, or on the last-stop-bit edge of the frame on the line (the next frame then follows back
