@@ -57,6 +57,7 @@ soak: build
 	FPGACNC_EXEC_BATCHES=400 $(BUILD)/tb/test_segment_executor --gtest_filter='*RandomSegmentsExactTiming*'
 	FPGACNC_PROFILE_STREAMS=400 $(BUILD)/tb/test_profile --gtest_filter='*RandomSegmentsEdgeForEdge*'
 	$(BUILD)/host/simboard/simboard_tests --gtest_filter='SimBoardCorpus.*'
+	$(BUILD)/systemc/corpus_files_tests
 	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v1 --config examples/demo-machine.toml
 	$(BUILD)/host/fpgacnc sim $(CORPUS)/Circle_Diamond_Square_Calibration.gcode --model both --protocol v1 --config systemc/cosim/corpus-fast-mill.toml
 	$(BUILD)/host/fpgacnc sim examples/jsdc-laser.gcode --model both --protocol v2 --config systemc/cosim/jsdc-constant.toml
@@ -77,9 +78,10 @@ soak-part-heaters: build
 heater-plot: build
 	$(BUILD)/host/fpgacnc stream examples/bed-warmup.gcode --config examples/bed-warmup.toml --heater-plot docs/images/bed-warmup.svg
 
-# libFuzzer targets (clang, ASan + UBSan; separate tree $(BUILD)/fuzz): `make fuzz` runs each
-# FUZZ_TIME seconds (the fuzz_smoke test of `make test` runs 20 s each), `make fuzz-soak`
-# FUZZ_SOAK_TIME seconds each, keeping the working corpus between runs.
+# libFuzzer targets (clang, ASan + UBSan; separate tree $(BUILD)/fuzz): `make fuzz` (a step of
+# .ci/run) runs each FUZZ_TIME seconds from a fresh working corpus, `make fuzz-soak`
+# FUZZ_SOAK_TIME seconds each, keeping the working corpus between runs. `make test` replays the
+# seed corpora through gcc builds of the same targets (CTest fuzz_replay_*), without libFuzzer.
 FUZZ_TIME ?= 30
 FUZZ_SOAK_TIME ?= 600
 FUZZ_SEED ?= 1
@@ -107,10 +109,11 @@ demo: configure
 # Open-tool synthesis: Cyclone V resource report against the budget, iCE40 place and route at 50 MHz;
 # every block of the full design must meet 50 MHz alone on the iCE40 on each seed of SYNTH_SEEDS.
 SYNTH_SEEDS ?= 1 2 3
-# The DE1-SoC board's Cyclone V resources (full-2axis, de1soc_top) against its budget: about 3
+# The Cyclone V resources of the original controller's feature set (v1-board) and of the DE1-SoC
+# board (full-2axis, de1soc_top) against their budgets; fails on a Yosys warning too. About 4
 # CPU-minutes of Yosys, so a step of its own (CI runs it after `make formal`) rather than a CTest.
 synth-budget: deps
-	CONFIGS=full-2axis SYNTH_NAMES=0 ./scripts/synth_report.sh $(BUILD)/synth-budget
+	CONFIGS="v1-board full-2axis" SYNTH_NAMES=0 ./scripts/synth_report.sh $(BUILD)/synth-budget
 
 synth: deps
 	EXTRA=v1-board-fixed ./scripts/synth_report.sh $(BUILD)/synth
