@@ -1,9 +1,9 @@
 // RTL/twin co-simulation (CTest label cosim; docs/systemc.md "Co-simulation").
 //
-// One SystemC elaboration holds the Verilated SystemC model of cnc_core (Vcnc_core_sc, built
-// with BAUD = 3 000 000 and WATCHDOG_CLKS = 20 000 to keep UART time short) clocked by an
-// sc_clock, and the virtual board made of the twins with the same parameters. Both run the same
-// list of jobs; each job is a stop-and-wait byte stream (host_schedule.h) with its own step
+// The Verilated C++ model of cnc_core (Vcnc_core_cosim, built with BAUD = 3 000 000 and
+// WATCHDOG_CLKS = 20 000 to keep UART time short) clocked by a loop, and the virtual board made
+// of the twins (one SystemC elaboration) with the same parameters. Both run the same list of
+// jobs, the RTL first; each job is a stop-and-wait byte stream (host_schedule.h) with its own step
 // timing. After the run every job's results are compared event by event (compare.h): pin edges
 // with their cycles at system level, and per block the decoder's packet_done, the executor's
 // seg_start/seg_done, the ACK start edges on tx, counters and positions. The first difference
@@ -18,21 +18,21 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
 #include <systemc>
 
 #include "arc_stimulus.h"
 #include "cosim_args.h"
+#include "cosim_rtl.h"
 
-#include "Vcnc_core_sc.h"
 #include "fpgacnc/config/machine.h"
 #include "fpgacnc/plan/motion_plan.h"
 #include "fpgacnc/plan/planner.h"
 #include "fpgacnc/protocol/v1.h"
 #include "fpgacnc/protocol/v2_job.h"
 #include "fpgacnc/twins/compare.h"
-#include "fpgacnc/twins/rtl_driver.h"
 #include "fpgacnc/twins/v2_frames.h"
 #include "fpgacnc/twins/virtual_board.h"
 
@@ -52,168 +52,7 @@ uint32_t pulse(uint32_t v) {
   return g_zero_pulse ? v : std::max<uint32_t>(v, 1);
 }
 
-struct Job {
-  std::string name;
-  HostScript script;
-  std::array<AxisTiming, kAxes> timing;
-  size_t segments = 0;
-};
-
-// The Verilated SystemC cnc_core and the thread that drives it clock by clock through an
-// RtlDriver: inputs change after a falling edge, outputs are sampled at the next falling edge
-// (they then show the rising edge between).
-SC_MODULE(RtlHarness) {
-  sc_core::sc_in<bool> clk;
-  sc_core::sc_signal<bool> rst, rx, tx, laser, cfg_wr, busy, running, seg_start, seg_done;
-  sc_core::sc_signal<uint32_t> step, dir, cfg_addr, cfg_wdata, last_code, last_feed, packet_count,
-      frame_errors, timeouts, overruns, violations, last_period, numerator_x, numerator_y;
-  sc_core::sc_signal<uint32_t> fifo_level, next_seq, segments_done, faults, frames_ok, crc_errors,
-      length_errors, unknown_types, noise_bytes, clamped, naks;
-  sc_core::sc_signal<bool> v2_mode;
-  sc_core::sc_signal<bool> rx_partial;
-  // Heater and e-stop pins: e-stop released, ADC SDO low, heater outputs unobserved.
-  sc_core::sc_signal<bool> estop, adc_convst, adc_sck, adc_sdi, adc_sdo;
-  sc_core::sc_signal<uint32_t> heater;
-  // Machine outputs (OUTPUT frames), compared as pin edges.
-  sc_core::sc_signal<bool> coolant_flood, coolant_mist, fan, spindle_pwm;
-  sc_core::sc_signal<uint32_t> dout;
-  // Limit switches: none (the twins have none; cnc_core's default LIMIT_ENABLE is 0 anyway).
-  sc_core::sc_signal<uint32_t> limit_min, limit_max, limit_state;
-  sc_core::sc_signal<bool> limit_trip;
-  // Feed hold and cycle-start buttons (Job::script.buttons).
-  sc_core::sc_signal<bool> hold_in, start_in;
-  // Probe: not touched (the twins have no probe; cnc_core's default PROBE_ENABLE is 0 anyway).
-  sc_core::sc_signal<bool> probe_in, probe_state;
-  sc_core::sc_signal<sc_dt::sc_bv<128>> position;
-  Vcnc_core_sc dut;
-  const std::vector<Job>* jobs = nullptr;
-  CoreParams params;
-  std::vector<RunResult> results;
-
-  SC_CTOR(RtlHarness) : clk("clk"), dut("cnc_core") {
-    dut.clk(clk);
-    dut.rst(rst);
-    dut.rx(rx);
-    dut.tx(tx);
-    dut.step(step);
-    dut.dir(dir);
-    dut.laser(laser);
-    dut.cfg_wr(cfg_wr);
-    dut.cfg_addr(cfg_addr);
-    dut.cfg_wdata(cfg_wdata);
-    dut.busy(busy);
-    dut.running(running);
-    dut.seg_start(seg_start);
-    dut.seg_done(seg_done);
-    dut.last_code(last_code);
-    dut.last_feed(last_feed);
-    dut.packet_count(packet_count);
-    dut.frame_errors(frame_errors);
-    dut.timeouts(timeouts);
-    dut.overruns(overruns);
-    dut.violations(violations);
-    dut.last_period(last_period);
-    dut.numerator_x(numerator_x);
-    dut.numerator_y(numerator_y);
-    dut.position(position);
-    dut.fifo_level(fifo_level);
-    dut.next_seq(next_seq);
-    dut.v2_mode(v2_mode);
-    dut.rx_partial(rx_partial);
-    dut.segments_done(segments_done);
-    dut.faults(faults);
-    dut.frames_ok(frames_ok);
-    dut.crc_errors(crc_errors);
-    dut.length_errors(length_errors);
-    dut.unknown_types(unknown_types);
-    dut.noise_bytes(noise_bytes);
-    dut.clamped(clamped);
-    dut.naks(naks);
-    dut.estop(estop);
-    dut.limit_min(limit_min);
-    dut.limit_max(limit_max);
-    dut.hold_in(hold_in);
-    dut.start_in(start_in);
-    dut.probe_in(probe_in);
-    dut.probe_state(probe_state);
-    dut.limit_state(limit_state);
-    dut.limit_trip(limit_trip);
-    dut.heater(heater);
-    dut.adc_convst(adc_convst);
-    dut.adc_sck(adc_sck);
-    dut.adc_sdi(adc_sdi);
-    dut.adc_sdo(adc_sdo);
-    dut.coolant_flood(coolant_flood);
-    dut.coolant_mist(coolant_mist);
-    dut.fan(fan);
-    dut.spindle_pwm(spindle_pwm);
-    dut.dout(dout);
-    SC_THREAD(run);
-  }
-
-  void edge() {
-    wait(clk.negedge_event());
-  }
-
-  void run() {
-    for (const Job& job : *jobs) {
-      const auto t0 = std::chrono::steady_clock::now();
-      CoreParams p = params;
-      p.timing = job.timing;
-      RtlDriver drv(p, job.script, true, true);
-      rst.write(true);
-      rx.write(true);
-      cfg_wr.write(false);
-      for (int i = 0; i < kResetEdges; ++i) edge();
-      rst.write(false);
-      edge();
-      for (const CfgWrite& w : cfg_writes(p.timing)) {
-        cfg_wr.write(true);
-        cfg_addr.write(w.addr);
-        cfg_wdata.write(w.data);
-        edge();
-      }
-      cfg_wr.write(false);
-      hold_in.write(false);
-      start_in.write(false);
-      probe_in.write(false);
-      for (int i = 0; i < kSettleEdges; ++i) edge();
-      Cycle c = 0;
-      size_t press = 0;  // the first button press not over
-      while (!drv.finished()) {
-        ++c;
-        rx.write(drv.rx_for(c) != 0);
-        {  // the buttons' levels for edge c
-          const auto& bp = job.script.buttons;
-          while (press < bp.size() && bp[press].from + bp[press].clocks <= c) ++press;
-          bool level[2] = {false, false};
-          for (size_t k = press; k < bp.size() && bp[k].from <= c; ++k)
-            if (c < bp[k].from + bp[k].clocks) level[bp[k].button & 1] = true;
-          if (hold_in.read() != level[0]) hold_in.write(level[0]);
-          if (start_in.read() != level[1]) start_in.write(level[1]);
-        }
-        edge();
-        drv.after_edge(
-            c, RtlDriver::Outputs{step.read(), dir.read(), laser.read(), tx.read(), busy.read(),
-                                  seg_start.read(), seg_done.read(),
-                                  static_cast<uint16_t>(packet_count.read()),
-                                  (coolant_flood.read() ? 1u : 0u) |
-                                      (coolant_mist.read() ? 2u : 0u) | (fan.read() ? 4u : 0u) |
-                                      (dout.read() << 3) | (spindle_pwm.read() ? 128u : 0u)});
-        if ((c & 1023) == 0) drv.check_stall();
-      }
-      std::array<int64_t, kAxes> pos{};
-      const sc_dt::sc_bv<128> pv = position.read();
-      for (int a = 0; a < kAxes; ++a)
-        pos[a] = static_cast<int32_t>(pv.range(32 * a + 31, 32 * a).to_uint());
-      RunResult r = drv.take_result(pos, timeouts.read(), overruns.read(), frame_errors.read(),
-                                    violations.read());
-      r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      results.push_back(std::move(r));
-    }
-    sc_core::sc_stop();
-  }
-};
+using Job = CosimJob;
 
 uint32_t pick(std::mt19937_64& g, uint32_t lo, uint32_t hi) {
   return std::uniform_int_distribution<uint32_t>(lo, hi)(g);
@@ -619,18 +458,14 @@ int sc_main(int argc, char* argv[]) {
   CoreParams p;
   p.baud = 3'000'000;
   p.watchdog_clks = 20'000;
-  sc_core::sc_clock clk("clk", sc_core::sc_time(20, sc_core::SC_NS));
-  RtlHarness rtl("rtl");
-  rtl.clk(clk);
-  rtl.jobs = &jobs;
-  rtl.params = p;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<RunResult> rtl_results = run_cosim_rtl(p, jobs);
   VirtualBoard twins("twins", p, true);
   twins.record_outputs(true);
   std::vector<RunResult> twin_results;
   for (const Job& j : jobs)
     twins.add_job(
         TwinJob{j.script, j.timing, [&](RunResult&& r) { twin_results.push_back(std::move(r)); }});
-  const auto t0 = std::chrono::steady_clock::now();
   sc_core::sc_start();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -638,12 +473,12 @@ int sc_main(int argc, char* argv[]) {
   uint64_t total_segments = 0, total_edges = 0, total_cycles = 0;
   double rtl_wall = 0, twin_wall = 0;
   for (size_t i = 0; i < jobs.size(); ++i) {
-    if (i >= rtl.results.size() || i >= twin_results.size()) {
+    if (i >= rtl_results.size() || i >= twin_results.size()) {
       fmt::print("FAIL {}: not run\n", jobs[i].name);
       ++bad;
       continue;
     }
-    const RunResult& a = rtl.results[i];
+    const RunResult& a = rtl_results[i];
     const RunResult& b = twin_results[i];
     const std::string diff = compare_runs(a, b);
     total_segments += jobs[i].segments;

@@ -1,5 +1,5 @@
-// The clock-by-clock side of every RTL harness (the Verilated C++ model in rtl_runner.cpp, the
-// Verilated SystemC model in the co-simulation): the reset and configuration sequence, the rx
+// The clock-by-clock side of every RTL harness (the Verilated C++ models in rtl_runner.cpp and in
+// the co-simulation's cosim_rtl.cpp): the reset and configuration sequence, the rx
 // pin level before each edge (the StopAndWaitHost's frames, SenderTiming bit boundaries), and
 // after each edge the recording of pins and block events in the same form the twins give.
 // Cycle numbering: reset is held for 8 edges, released on the next (cycle -20), 16 cfg writes
