@@ -50,6 +50,8 @@ JOBS=(
   "position_offset     sat     4"
   "feed_rate           sat     6"
   "feed_rate           satcover 16"
+  "laser_pwm           sat     4"
+  "laser_pwm           satcover 270"
 )
 
 want=("$@")

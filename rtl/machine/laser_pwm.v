@@ -100,6 +100,75 @@ module laser_pwm #(
   assign sample = sample_start || sample_run;
   assign out    = out_reg && en;
 
+`ifdef FORMAL
+  // Formal properties (scripts/formal.sh set laser_pwm: induction with Yosys's SAT engine, and a
+  // cover trace). Reset in the first clock; en, duty and done are free. f_hi counts the clocks of
+  // the running period so far in which out was high.
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) assume (rst);
+
+  reg [16:0] f_hi;
+  always @(posedge clk) begin
+    if (run_reg && out_reg) f_hi <= f_hi + 17'd1;
+    if ((run_reg && boundary) || (wait_reg && done) || !en || rst) f_hi <= 17'd0;
+  end
+
+  // The high clocks an exact PWM has had before the clock at (cnt_reg, div_reg) of a period of
+  // duty active_reg.
+  localparam [16:0] F_DIV = DIV_I;
+  wire [16:0] f_hi_want = ({1'b0, cnt_reg} < active_reg) ?
+      {9'd0, cnt_reg} * F_DIV + {{(17 - DW) {1'b0}}, div_reg} : {8'd0, active_reg} * F_DIV;
+
+  always @(*) begin
+    // out is low whenever en is low, in the same clock.
+    if (!en) assert (!out);
+    if (f_past_valid) begin
+      assert (!(run_reg && wait_reg));
+      assert (active_reg <= 9'd256);
+      assert (div_reg <= DIV_LAST);
+      // Out of a period everything is at rest: no pulse before the first duty is known.
+      if (!run_reg) assert (!out_reg && cnt_reg == 8'd0 && div_reg == {DW{1'b0}} && active_reg == 9'd0);
+      // out in each clock of a period: high for the first `active` counts, low after them...
+      assert (out_reg == ({1'b0, cnt_reg} < active_reg));
+      // ... so the high time so far is exactly that of a PWM of this duty: at the end of a
+      // period, duty * DIV clocks (256 * DIV at duty 255).
+      if (run_reg) assert (f_hi == f_hi_want);
+      else assert (f_hi == 17'd0);
+    end
+  end
+
+  always @(posedge clk)
+    if (f_past_valid && !$past(rst) && $past(en) && en) begin
+      // A period starts only on the scaler's result while waiting for it, with its duty.
+      if (run_reg && !$past(run_reg)) begin
+        assert ($past(wait_reg && done));
+        assert (active_reg == $past(duty9));
+      end
+      // The duty changes only where a period ends, to the scaler's result held then.
+      if ($past(run_reg) && run_reg) begin
+        if ($past(boundary)) assert (active_reg == $past(duty9));
+        else assert (active_reg == $past(active_reg));
+      end
+    end
+
+  // Cover: a period of duty 1 ending, and the next one starting at duty 255 (always high).
+  // scripts/formal.sh (mode satcover) reads this file with FORMAL_COVER and asks Yosys's SAT
+  // solver for a trace that violates the assertion below.
+  reg f_seen_end = 1'b0, f_seen_next = 1'b0;
+  always @(posedge clk) begin
+    if (!rst && en && run_reg && boundary && active_reg == 9'd1) f_seen_end <= 1'b1;
+    if (!rst && f_seen_end && run_reg && active_reg == 9'd256 && cnt_reg == 8'd1) f_seen_next <= 1'b1;
+    if (rst) begin
+      f_seen_end  <= 1'b0;
+      f_seen_next <= 1'b0;
+    end
+  end
+`ifdef FORMAL_COVER
+  always @(*) if (f_past_valid) assert (!f_seen_next);
+`endif
+`endif
+
 endmodule
 
 `default_nettype wire
