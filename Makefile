@@ -1,6 +1,9 @@
 # fpgacnc top-level Makefile: thin wrapper over CMake/CTest.
 BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+# The build runs one job more than there are cores: the cores stay busy while a job waits (the
+# PGO training runs, links, Verilator) instead of sitting idle.
+BUILD_JOBS ?= $(shell echo $$(( $(JOBS) + 1 )))
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 DEMO_JOB ?= examples/jsdc-laser.gcode
 DEMO_ARGS ?= --plot $(BUILD)/demo-path.svg
@@ -23,7 +26,7 @@ configure: deps
 # An RTL edit re-runs Verilator while CMake configures (fpgacnc_verilate() in CMakeLists.txt), so
 # a build compiles the models' current file lists the first time.
 build: configure
-	cmake --build $(BUILD) -j $(JOBS)
+	cmake --build $(BUILD) -j $(BUILD_JOBS)
 
 # Regenerate the files written from spec/protocol.toml and spec/configs.toml (Verilog and C++
 # headers, spec.cmake, the worked-frame vectors, the configurations for CMake and the scripts, the

@@ -5,4 +5,4 @@ fpgacnc_bench(test_arc_dda LABEL rtl SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_ar
               LIBS varc fmt::fmt)
 # ARC frames through cnc_core's pins (decoder -> FIFO -> prep -> executor -> arc_dda)
 fpgacnc_bench(test_arc_core LABEL rtl SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_arc_core.cpp
-              LIBS vcore_3m fmt::fmt)
+              LIBS vcore_heat fmt::fmt)

@@ -10,9 +10,9 @@ fpgacnc_bench(test_response_encoder LABEL rtl
 fpgacnc_bench(test_cnc_core LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core.cpp LIBS vcore fmt::fmt)
 fpgacnc_bench(test_cnc_core_v2 LABEL system
-              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core_v2.cpp LIBS vcore_3m fmt::fmt)
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_cnc_core_v2.cpp LIBS vcore_heat fmt::fmt)
 fpgacnc_bench(test_feed_hold LABEL system
-              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_feed_hold.cpp LIBS vcore_3m fmt::fmt)
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_feed_hold.cpp LIBS vcore_heat fmt::fmt)
 fpgacnc_bench(test_de1soc_top LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_de1soc_top.cpp LIBS vde1soc fmt::fmt)
 

@@ -19,9 +19,13 @@ fpgacnc_verilated(vcrc TOP crc16_ccitt SOURCES ${FPGACNC_RTL_DIR}/protocol/crc16
 fpgacnc_verilated(vencoder TOP response_encoder
                   SOURCES ${FPGACNC_RTL_DIR}/protocol/response_encoder.v ${FPGACNC_RTL_DIR}/protocol/crc16_ccitt.v)
 fpgacnc_verilated(vcore TOP cnc_core CONFIG full-4axis PGO SOURCES ${FPGACNC_CORE_RTL})
-# cnc_core at 3 Mbaud for the v2 system bench (fast UART, same RTL).
-fpgacnc_verilated(vcore_3m TOP cnc_core PREFIX Vcnc_core_3m CONFIG full-4axis
-                  SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=3000000)
+# cnc_core at 3 Mbaud (fast UART, same RTL) with the heaters' sample tick scaled to 4096 clocks
+# and their PWM to 1024 clocks: the v2 system benches (test_cnc_core_v2, test_feed_hold,
+# test_profile, test_arc_core) and the heater core bench (tb/heater.cmake). Heaters stay off
+# unless a bench configures them.
+fpgacnc_verilated(vcore_heat TOP cnc_core PREFIX Vcnc_core_heat CONFIG full-4axis
+                  SOURCES ${FPGACNC_CORE_RTL}
+                  ARGS -GBAUD=3000000 -GSAMPLE_CLKS=${FPGACNC_SPEC_BENCH_SAMPLE_CLKS} -GHEAT_PWM_DIV=1)
 # The DE1-SoC top: its cnc_core is the configuration full-2axis (spec/configs.toml).
 fpgacnc_verilated(vde1soc TOP de1soc_top
                   SOURCES ${FPGACNC_CORE_RTL} ${FPGACNC_RTL_DIR}/board/hex7seg.v
@@ -33,4 +37,4 @@ fpgacnc_bench(test_segment_executor LABEL rtl
 fpgacnc_bench(test_segment_prep LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_segment_prep.cpp LIBS vprep fmt::fmt)
 fpgacnc_bench(test_profile LABEL rtl
-              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_profile.cpp LIBS vexec vprep vcore_3m fmt::fmt)
+              SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_profile.cpp LIBS vexec vprep vcore_heat fmt::fmt)

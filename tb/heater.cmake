@@ -12,8 +12,6 @@ fpgacnc_bench(test_heater_units LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_units.cpp LIBS vpwm vpid vadc vtable)
 fpgacnc_bench(test_heater_block LABEL rtl
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_block.cpp LIBS vheat)
-# cnc_core with heaters at 3 Mbaud, scaled sample tick (4096 clocks) and heater PWM (1024 clocks).
-fpgacnc_verilated(vcore_heat TOP cnc_core PREFIX Vcnc_core_heat CONFIG full-4axis
-                  SOURCES ${FPGACNC_CORE_RTL} ARGS -GBAUD=3000000 -GSAMPLE_CLKS=${FPGACNC_SPEC_BENCH_SAMPLE_CLKS} -GHEAT_PWM_DIV=1)
+# vcore_heat (tb/core.cmake): cnc_core with heaters at 3 Mbaud, scaled sample tick and PWM.
 fpgacnc_bench(test_heater_core LABEL system
               SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/test_heater_core.cpp LIBS vcore_heat)

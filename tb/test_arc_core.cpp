@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "Vcnc_core_3m.h"
+#include "Vcnc_core_heat.h"
 #include "common/core_pins.h"
 #include "common/pin_harness.h"
 #include "common/seed.h"
@@ -34,9 +34,9 @@ constexpr int kAxes = 4;
 constexpr uint64_t kLatency = 2;  // arc clock c -> STEP rise seen at seg_start cycle + c + 2
 const fpgacnc::tb::AxisTiming kTiming{2, 2, 4, 4};
 
-class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
+class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core_heat> {
  public:
-  CoreBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_3m>(), true, 3'000'000.0) {
+  CoreBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_heat>(), true, 3'000'000.0) {
     fpgacnc::tb::reset_core(*this);
   }
   std::vector<uint64_t> starts;

@@ -14,7 +14,7 @@
 #include <random>
 #include <vector>
 
-#include "Vcnc_core_3m.h"
+#include "Vcnc_core_heat.h"
 #include "common/core_pins.h"
 #include "common/seed.h"
 #include "common/step_monitor.h"
@@ -38,9 +38,9 @@ struct Interval {
   uint64_t from, to;
 };
 
-class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
+class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_heat> {
  public:
-  V2Bench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_3m>(), true, kBaud3M) {
+  V2Bench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_heat>(), true, kBaud3M) {
     fpgacnc::tb::reset_core(*this);
   }
 
@@ -94,7 +94,7 @@ class V2Bench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
 
  protected:
   void observe() override {
-    const Vcnc_core_3m& m = dut();
+    const Vcnc_core_heat& m = dut();
     if (tx_bytes().size() != tx_seen_) {
       const auto& b = tx_bytes().back();
       tx_seen_ = tx_bytes().size();

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "Vcnc_core_3m.h"
+#include "Vcnc_core_heat.h"
 #include "common/core_pins.h"
 #include "common/pin_harness.h"
 #include "common/v2_frames.h"
@@ -38,9 +38,9 @@ constexpr uint64_t kOne = uint64_t{1} << 48;  // LINE_PROFILE speeds: UQ0.48 ste
 constexpr uint64_t kPeriod = uint64_t{1} << spec::kDefaultRatePeriodLog2;
 constexpr double kClkHz = 50e6;
 
-class Core : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
+class Core : public fpgacnc::tb::PinHarness<Vcnc_core_heat> {
  public:
-  Core() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_3m>(), true, 3'000'000.0) {
+  Core() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_heat>(), true, 3'000'000.0) {
     fpgacnc::tb::reset_core(*this);
   }
   std::vector<v2::DeviceMsg> msgs;

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "Vcnc_core_3m.h"
+#include "Vcnc_core_heat.h"
 #include "Vsegment_executor.h"
 #include "Vsegment_prep.h"
 #include "common/core_pins.h"
@@ -666,9 +666,9 @@ TEST(Profile, AbortDropsRunningAndPreparedSegments) {
 // reference from each segment's seg_start, zero gap between the queued segments (no reversal),
 // DONE counts; then frames breaking each field rule are NAKed BAD_FIELD (BAD_LENGTH for a short
 // payload) and nothing moves.
-class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core_3m> {
+class CoreBench : public fpgacnc::tb::PinHarness<Vcnc_core_heat> {
  public:
-  CoreBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_3m>(), true, 3'000'000.0) {
+  CoreBench() : PinHarness(kAxes, fpgacnc::tb::core_pins<Vcnc_core_heat>(), true, 3'000'000.0) {
     fpgacnc::tb::reset_core(*this);
   }
   std::vector<uint64_t> starts;
