@@ -2,8 +2,8 @@
 # Builds and runs the libFuzzer targets of fuzz/ (clang, AddressSanitizer + UBSan).
 #
 #   scripts/fuzz.sh smoke [--time S]   each target S seconds (default 30) from the seed corpus
-#                                      (fresh working corpus), fixed seed; `make test` (CTest
-#                                      fuzz_smoke, label fuzz)
+#                                      (fresh working corpus), fixed seed; `make fuzz`, a step
+#                                      of .ci/run
 #   scripts/fuzz.sh soak  [--time S]   each target S seconds (default 600), working corpus kept
 #                                      between runs; `make fuzz-soak` / `make soak`
 #   scripts/fuzz.sh build              configure and build only
