@@ -18,9 +18,10 @@ class RtlHarness {
  public:
   explicit RtlHarness(const CoreParams& params) : params_(params) {}
 
-  std::vector<RunResult> run(const std::vector<CosimJob>& jobs) {
+  std::vector<RunResult> run(const std::vector<CosimJob>& jobs, const std::vector<Cycle>& ends) {
     std::vector<RunResult> results;
-    for (const CosimJob& job : jobs) results.push_back(run_job(job));
+    for (size_t i = 0; i < jobs.size(); ++i)
+      results.push_back(run_job(jobs[i], i < ends.size() ? 2 * ends[i] + 1'000'000 : 0));
     return results;
   }
 
@@ -32,7 +33,7 @@ class RtlHarness {
     m_.eval();
   }
 
-  RunResult run_job(const CosimJob& job) {
+  RunResult run_job(const CosimJob& job, Cycle limit) {
     const auto t0 = std::chrono::steady_clock::now();
     CoreParams p = params_;
     p.timing = job.timing;
@@ -63,7 +64,12 @@ class RtlHarness {
     Cycle c = 0;
     size_t press = 0;  // the first button press not over
     const auto& bp = job.script.buttons;
+    bool over = false;
     while (!drv.finished()) {
+      if (limit > 0 && c >= limit) {
+        over = true;
+        break;
+      }
       ++c;
       m_.rx = drv.rx_for(c) != 0;
       // The buttons' levels for edge c.
@@ -85,6 +91,9 @@ class RtlHarness {
     std::array<int64_t, kAxes> pos{};
     for (int a = 0; a < kAxes; ++a) pos[a] = static_cast<int32_t>(m_.position[a]);
     RunResult r = drv.take_result(pos, m_.timeouts, m_.overruns, m_.frame_errors, m_.violations);
+    if (over)
+      r.error = "RTL job not finished at clock " + std::to_string(c) + " (the twins' end: " +
+                std::to_string((limit - 1'000'000) / 2) + ")";
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
   }
@@ -96,8 +105,9 @@ class RtlHarness {
 
 }  // namespace
 
-std::vector<RunResult> run_cosim_rtl(const CoreParams& params, const std::vector<CosimJob>& jobs) {
-  return RtlHarness(params).run(jobs);
+std::vector<RunResult> run_cosim_rtl(const CoreParams& params, const std::vector<CosimJob>& jobs,
+                                     const std::vector<Cycle>& twin_ends) {
+  return RtlHarness(params).run(jobs, twin_ends);
 }
 
 }  // namespace fpgacnc::twins

@@ -22,6 +22,10 @@ struct CosimJob {
 };
 
 // Runs every job on the Verilated cnc_core, each from reset, and returns their results in order.
-std::vector<RunResult> run_cosim_rtl(const CoreParams& params, const std::vector<CosimJob>& jobs);
+// twin_ends[i] (when given) is job i's end cycle on the twins: the RTL's run of it stops at twice
+// that plus 1 000 000 clocks with the error "RTL job not finished ...", which the comparison then
+// reports, instead of running for ever.
+std::vector<RunResult> run_cosim_rtl(const CoreParams& params, const std::vector<CosimJob>& jobs,
+                                     const std::vector<Cycle>& twin_ends = {});
 
 }  // namespace fpgacnc::twins

@@ -81,7 +81,7 @@ TEST(HeaterBoard, AutotuneBedCriticalPeriodNear53s) {
   o.relay.setpoint_c = 60.0;
   o.relay.u_high = 12.0;  // the reference relay test: 0/12 V
   o.relay.skip_cycles = 1;
-  o.relay.cycles = 3;
+  o.relay.cycles = 2;  // the simulated cycles are alike (58.0 s each with 2, 3 or more)
   o.max_plant_s = 1200.0;
   o.poll = 2ms;  // board time: about one plant second
   o.plant_time = [&board] { return board.plant_seconds(); };
@@ -101,15 +101,16 @@ TEST(HeaterBoard, PartGcodeStartWithHeaters) {
   // Start sequence + the first 11 lines of part.gcode: N = 3 moves (Z up, the travel to the start
   // point, the prime: 1.5 s of machine time at the file's feeds), then heaters off. The moves are
   // not what is tested here, and each second of machine time is 50 M board clocks: a 1000 % feed
-  // override on a fast machine (X/Y 60 000 mm/min at 10 000 mm/s^2, Z 3 000 mm/min) runs them in
-  // about 0.2 s. The whole file runs behind `make soak` (soak_part_heaters).
+  // override on a fast machine (X/Y 120 000 mm/min at 40 000 mm/s^2, Z 3 000 mm/min, Z and E at
+  // 10 000 mm/s^2) runs them in about 0.1 s. The whole file runs behind `make soak`
+  // (soak_part_heaters).
   const size_t kPartLines = 11;
   const std::string g = std::string(kStart) + part_lines(kPartLines) + "M104 S0\nM140 S0\n";
   auto cfg = board_config();
-  cfg.max_feed_mm_min[0] = cfg.max_feed_mm_min[1] = 60000.0;
-  cfg.max_accel_mm_s2[0] = cfg.max_accel_mm_s2[1] = 10000.0;
+  cfg.max_feed_mm_min[0] = cfg.max_feed_mm_min[1] = 120000.0;
+  cfg.max_accel_mm_s2[0] = cfg.max_accel_mm_s2[1] = 40000.0;
   cfg.max_feed_mm_min[2] = 3000.0;
-  cfg.max_accel_mm_s2[2] = 1000.0;
+  cfg.max_accel_mm_s2[2] = cfg.max_accel_mm_s2[3] = 10000.0;
   plan::PlanOptions po;
   po.feed_override_pct = 1000.0;
   const auto p = plan::plan_program(fpgacnc::gcode::parse_string(g, "part-start.gcode"), cfg, po);
