@@ -92,8 +92,8 @@ class RtlHarness {
     for (int a = 0; a < kAxes; ++a) pos[a] = static_cast<int32_t>(m_.position[a]);
     RunResult r = drv.take_result(pos, m_.timeouts, m_.overruns, m_.frame_errors, m_.violations);
     if (over)
-      r.error = "RTL job not finished at clock " + std::to_string(c) + " (the twins' end: " +
-                std::to_string((limit - 1'000'000) / 2) + ")";
+      r.error = "RTL job not finished at clock " + std::to_string(c) +
+                " (the twins' end: " + std::to_string((limit - 1'000'000) / 2) + ")";
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
   }
