@@ -3,7 +3,7 @@
 # Run as root (or through sudo). Safe to run again: apt-get skips what is present.
 set -euo pipefail
 PKGS=(
-  build-essential cmake pkg-config make git clang-format
+  build-essential cmake ninja-build pkg-config make git clang-format
   clang libclang-rt-14-dev
   verilator zlib1g-dev
   libsystemc-dev
