@@ -545,12 +545,12 @@ Figures run_random(uint64_t seed, int streams, int per_stream, double p_rev) {
   return f;
 }
 
-// FPGACNC_PROFILE_STREAMS streams of 20 segments (50 in CTest, 400 in `make soak`); the counts
+// FPGACNC_PROFILE_STREAMS streams of 20 segments (30 in CTest, 400 in `make soak`); the counts
 // below scale with them.
 TEST(Profile, RandomSegmentsEdgeForEdgeWithTheReference) {
   const uint64_t seed = fpgacnc::tb::test_seed(20261106, "Profile.RandomSegments");
   const char* ns = std::getenv("FPGACNC_PROFILE_STREAMS");
-  const int streams = ns ? std::max(1, std::atoi(ns)) : 50;
+  const int streams = ns ? std::max(1, std::atoi(ns)) : 30;
   const uint64_t n = static_cast<uint64_t>(streams) * 20;
   const Figures f = run_random(seed, streams, 20, 0.1);
   std::printf(
