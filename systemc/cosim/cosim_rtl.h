@@ -23,8 +23,8 @@ struct CosimJob {
 
 // Runs every job on the Verilated cnc_core, each from reset, and returns their results in order.
 // twin_ends[i] (when given) is job i's end cycle on the twins: the RTL's run of it stops at twice
-// that plus 1 000 000 clocks with the error "RTL job not finished ...", which the comparison then
-// reports, instead of running for ever.
+// that plus 1 000 000 clocks with the error "RTL job not finished at clock N (limit L)", which the
+// comparison then reports, instead of running for ever.
 std::vector<RunResult> run_cosim_rtl(const CoreParams& params, const std::vector<CosimJob>& jobs,
                                      const std::vector<Cycle>& twin_ends = {});
 

@@ -194,4 +194,76 @@ class RtlDriver {
   Cycle cycle_ = 0;
 };
 
+// One run of a job on a Verilated cnc_core model `m` (any build of it: the ports are the same)
+// through `drv`, the loop of every harness: reset, the cfg port's step timing, the settle edges,
+// then one clock per edge until the host is done. Each clock the inputs are set (rx from the
+// host, the hold and cycle-start buttons from `buttons`; e-stop released, no switch, no probe,
+// ADC SDO low), then the rising and the falling edge are evaluated and the outputs read. With
+// limit > 0 the run stops at that edge with RunResult::error saying so, instead of running on.
+template <class Core>
+RunResult run_core(Core& m, RtlDriver& drv, const std::array<AxisTiming, kAxes>& timing,
+                   const std::vector<ButtonPress>& buttons, Cycle limit = 0) {
+  auto edge = [&m] {
+    m.clk = 1;
+    m.eval();
+    m.clk = 0;
+    m.eval();
+  };
+  m.estop = 0;
+  m.limit_min = 0;
+  m.limit_max = 0;
+  m.probe_in = 0;
+  m.adc_sdo = 0;
+  m.hold_in = 0;
+  m.start_in = 0;
+  m.rst = 1;
+  m.rx = 1;
+  m.cfg_wr = 0;
+  m.clk = 0;
+  m.eval();
+  for (int i = 0; i < kResetEdges; ++i) edge();
+  m.rst = 0;
+  edge();
+  for (const CfgWrite& w : cfg_writes(timing)) {
+    m.cfg_wr = 1;
+    m.cfg_addr = w.addr;
+    m.cfg_wdata = w.data;
+    edge();
+  }
+  m.cfg_wr = 0;
+  for (int i = 0; i < kSettleEdges; ++i) edge();
+  Cycle c = 0;
+  size_t press = 0;  // the first button press not over
+  bool over = false;
+  while (!drv.finished()) {
+    if (limit > 0 && c >= limit) {
+      over = true;
+      break;
+    }
+    ++c;
+    m.rx = drv.rx_for(c) != 0;
+    while (press < buttons.size() && buttons[press].from + buttons[press].clocks <= c) ++press;
+    bool level[2] = {false, false};
+    for (size_t k = press; k < buttons.size() && buttons[k].from <= c; ++k)
+      if (c < buttons[k].from + buttons[k].clocks) level[buttons[k].button & 1] = true;
+    m.hold_in = level[0];
+    m.start_in = level[1];
+    edge();
+    drv.after_edge(
+        c, RtlDriver::Outputs{m.step, m.dir, m.laser != 0, m.tx != 0, m.busy != 0, m.seg_start != 0,
+                              m.seg_done != 0, static_cast<uint16_t>(m.packet_count),
+                              (m.coolant_flood ? 1u : 0u) | (m.coolant_mist ? 2u : 0u) |
+                                  (m.fan ? 4u : 0u) | (static_cast<uint32_t>(m.dout) << 3) |
+                                  (m.spindle_pwm ? 128u : 0u)});
+    if ((c & 1023) == 0) drv.check_stall();
+  }
+  std::array<int64_t, kAxes> pos{};
+  for (int a = 0; a < kAxes; ++a) pos[a] = static_cast<int32_t>(m.position[a]);
+  RunResult r = drv.take_result(pos, m.timeouts, m.overruns, m.frame_errors, m.violations);
+  if (over)
+    r.error = "RTL job not finished at clock " + std::to_string(c) + " (limit " +
+              std::to_string(limit) + ")";
+  return r;
+}
+
 }  // namespace fpgacnc::twins
